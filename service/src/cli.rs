@@ -1,0 +1,202 @@
+//! Command-line flags of `corridor` and their dispatch to the library.
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand};
+use corridor_service::runner::{self, RunOptions};
+use corridor_shared::config::{BiasPrior, Config, ConfigFile, Mode};
+use corridor_shared::imu_csv::ImuCsvOptions;
+use corridor_shared::injection::{BiasInjection, parse_vec3};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "corridor",
+    version,
+    about = "Gyro-bias and attitude estimation for foot-mounted IMUs from map headings"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run the estimator over a CSV log and write estimates, innovations and a summary.
+    Run(RunArgs),
+    /// Run a suite of recordings through the baselines and the bias modes; print the table.
+    Eval(EvalArgs),
+}
+
+#[derive(Args, Debug)]
+struct EvalArgs {
+    /// Suite file (TOML with [[recording]] tables).
+    #[arg(long)]
+    suite: PathBuf,
+    /// Also write the table (Markdown) and the rows (JSON) into this directory.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Configuration flags shared by every command that runs the estimator.
+#[derive(Args, Debug, Clone)]
+pub struct ModelArgs {
+    /// Configuration file (TOML); built-in defaults when absent.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Corridor map (TOML with [[corridor]] tables); switches the heading source to the map.
+    #[arg(long)]
+    pub map: Option<PathBuf>,
+    /// Walking direction at the start, degrees in the map frame (overrides the config).
+    #[arg(long)]
+    pub start_heading_deg: Option<f64>,
+    /// Orientation of the building's dominant directions, degrees (overrides the config).
+    #[arg(long)]
+    pub grid_deg: Option<f64>,
+    /// Estimation mode: zupt, paper, rotation_aware or eskf (overrides the config).
+    #[arg(long)]
+    pub mode: Option<String>,
+    /// Gyro-bias prior: none or rest_mean (overrides the config).
+    #[arg(long)]
+    pub prior: Option<String>,
+}
+
+impl ModelArgs {
+    /// Reads the config file and applies the overrides; errors name the key and the value.
+    pub fn config(&self) -> Result<Config> {
+        let mut file = match &self.config {
+            Some(p) => ConfigFile::read(p)?,
+            None => ConfigFile::default(),
+        };
+        if let Some(v) = self.start_heading_deg {
+            file.heading.start_heading_deg = Some(v);
+        }
+        if let Some(v) = self.grid_deg {
+            file.heading.grid_deg = Some(v);
+        }
+        if let Some(m) = &self.mode {
+            file.estimator.mode = Some(
+                toml::Value::String(m.clone())
+                    .try_into::<Mode>()
+                    .with_context(|| {
+                        format!("--mode {m:?}: expected zupt, paper, rotation_aware or eskf")
+                    })?,
+            );
+        }
+        if let Some(p) = &self.prior {
+            file.alignment.gyro_bias_prior = Some(
+                toml::Value::String(p.clone())
+                    .try_into::<BiasPrior>()
+                    .with_context(|| format!("--prior {p:?}: expected none or rest_mean"))?,
+            );
+        }
+        let path = self
+            .config
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("<built-in defaults>"));
+        Ok(file
+            .validate()
+            .map_err(|e| corridor_shared::config::with_path(e, &path))?)
+    }
+}
+
+#[derive(Args, Debug)]
+struct RunArgs {
+    /// IMU log (CSV: t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2,...).
+    #[arg(long)]
+    imu: PathBuf,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Footprint ground truth (ground_truth.csv) to evaluate against.
+    #[arg(long)]
+    truth: Option<PathBuf>,
+    /// Constant gyro bias to add, X,Y,Z in rad/s.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    inject_gyro_bias: Option<[f64; 3]>,
+    /// Linearly growing gyro bias to add, X,Y,Z in rad/s².
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    inject_gyro_bias_ramp: Option<[f64; 3]>,
+    /// Start the injection at this time instead of 0, s.
+    #[arg(long, default_value_t = 0.0)]
+    inject_after_s: f64,
+    /// Write the figures (SVG).
+    #[arg(long)]
+    plots: bool,
+    /// Output directory.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+pub fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let cli = Cli::parse();
+    match dispatch(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn dispatch(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Run(a) => {
+            let opts = RunOptions {
+                imu: a.imu.clone(),
+                config: a.model.config()?,
+                map: a.model.map.clone(),
+                truth: a.truth.clone(),
+                injection: BiasInjection {
+                    constant_rad_s: a.inject_gyro_bias.unwrap_or_default(),
+                    ramp_rad_s2: a.inject_gyro_bias_ramp.unwrap_or_default(),
+                    after_s: a.inject_after_s,
+                },
+                plots: a.plots,
+                out_dir: a.out.clone(),
+                csv: ImuCsvOptions::default(),
+            };
+            let s = runner::run(&opts)?;
+            println!("{}", serde_json::to_string_pretty(&brief(&s))?);
+            Ok(())
+        }
+        Command::Eval(a) => {
+            let rows = corridor_service::suite::run_suite(&a.suite)?;
+            let md = corridor_service::suite::markdown(&rows);
+            print!("{md}");
+            if let Some(dir) = a.out {
+                std::fs::create_dir_all(&dir)
+                    .with_context(|| format!("creating {}", dir.display()))?;
+                std::fs::write(dir.join("results.md"), &md)?;
+                std::fs::write(
+                    dir.join("results.json"),
+                    serde_json::to_string_pretty(&rows)? + "\n",
+                )?;
+            }
+            Ok(())
+        }
+    }
+}
+
+fn brief(s: &runner::Summary) -> serde_json::Value {
+    let e = s.eval.as_ref();
+    serde_json::json!({
+        "mode": s.mode,
+        "bias_rad_s": s.bias_rad_s,
+        "bias_sd_rad_s": s.bias_sd_rad_s,
+        "converged_at_s": s.converged_at_s,
+        "mount_yaw_deg": s.mount_yaw_deg,
+        "stances": s.stances,
+        "heading_used": s.heading_observations_used,
+        "heading_rejected": s.heading_observations_rejected,
+        "gcp_rms_m": e.and_then(|e| e.rms_error_m),
+        "gcp_rms_pct": e.and_then(|e| e.rms_error_pct_of_path),
+        "final_gcp_error_m": e.and_then(|e| e.final_gcp_error_m),
+    })
+}

@@ -1,0 +1,634 @@
+//! The estimator: one IMU sample in, one [`Estimate`] out. Pure: no IO, no clock, no threads,
+//! no allocation per sample. The offline runner and the daemon both drive this type.
+//!
+//! Phases:
+//! 1. **Aligning**: while the foot rests, the mean specific force and gyro rate are accumulated.
+//!    When motion starts after at least `alignment.min_rest_s` of rest, roll and pitch come from
+//!    the mean specific force, gravity from its magnitude, the optional bias prior from the mean
+//!    rate, and the yaw is provisionally 0.
+//! 2. **Calibrating**: the first stance after the first stride fixes the map frame (that stride
+//!    points along `heading.start_heading_deg`); the next `heading.calibration_strides` stances fix
+//!    the sensor's yaw on the foot (mounting yaw plus toe-out), assuming the walk goes on straight.
+//!    The sensor's tilt on the foot is its tilt during the initial rest (the foot is flat there).
+//! 3. **Tracking**: at each stance, once, the foot heading is tested for a straight walk and
+//!    associated with a map direction; an accepted direction becomes a heading observation for the
+//!    configured mode.
+
+use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
+use super::eskf::{Eskf, EskfNoise, Innovation};
+use super::heading::{HeadingAid, Rejection, StraightWalk};
+use super::rotation::{euler_zyx, from_euler_zyx, rot_z, tilt_from_specific_force, wrap_pi, yaw};
+use super::stance::StanceDetector;
+use corridor_shared::config::{BiasPrior, Config, Mode};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+
+/// One IMU sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImuInput {
+    /// Sensor time, s.
+    pub t_s: f64,
+    /// Angular rate, rad/s, sensor axes.
+    pub gyro_rad_s: [f64; 3],
+    /// Specific force, m/s², sensor axes (points up at rest).
+    pub accel_m_s2: [f64; 3],
+}
+
+/// A sample the estimator refused; it changed nothing.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum SampleError {
+    /// A component is NaN or infinite.
+    #[error("sample at t = {t_s} s: {field} is not finite ({value})")]
+    NonFinite {
+        /// Sample time.
+        t_s: f64,
+        /// Which field.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// The time does not increase.
+    #[error("sample at t = {t_s} s does not follow the previous one at {prev_t_s} s")]
+    TimeNotIncreasing {
+        /// Sample time.
+        t_s: f64,
+        /// The previous accepted time.
+        prev_t_s: f64,
+    },
+}
+
+/// Estimator phase.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Phase {
+    /// Waiting for the end of the initial rest.
+    #[default]
+    Aligning,
+    /// Fixing the map frame and the sensor's yaw on the foot.
+    Calibrating,
+    /// Heading observations in use.
+    Tracking,
+}
+
+/// What happened to one heading observation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeadingEvent {
+    /// Foot heading before the update, rad, map frame.
+    pub foot_heading_rad: f64,
+    /// Associated direction, rad (NaN when rejected).
+    pub direction_rad: f64,
+    /// `Ok` with the filter innovation, or why it was not used.
+    pub outcome: Result<Innovation, Rejection>,
+    /// Elapsed time since the observer epoch (bias-filter modes), s.
+    pub baseline_s: f64,
+}
+
+/// Running counters.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Samples accepted.
+    pub samples: u64,
+    /// Samples refused because a value was not finite.
+    pub rejected_non_finite: u64,
+    /// Samples refused because time did not increase.
+    pub rejected_time: u64,
+    /// Steps longer than `estimator.max_dt_s` (integrated over their real length).
+    pub gaps: u64,
+    /// Stances since alignment.
+    pub stances: u64,
+    /// ZUPT updates.
+    pub zupts: u64,
+    /// Heading observations used.
+    pub heading_used: u64,
+    /// Rejected: not walking straight.
+    pub heading_not_straight: u64,
+    /// Rejected: no direction within the gate.
+    pub heading_outside_gate: u64,
+    /// Rejected: outside every corridor.
+    pub heading_outside_map: u64,
+    /// Times the initial rest was too short and alignment started over.
+    pub alignment_restarts: u64,
+}
+
+/// The estimate after one sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// Sample time, s.
+    pub t_s: f64,
+    /// Phase.
+    pub phase: Phase,
+    /// Position, m, map frame.
+    pub p_m: [f64; 3],
+    /// Velocity, m/s, map frame.
+    pub v_m_s: [f64; 3],
+    /// Attitude `nav_from_body` as (w, x, y, z).
+    pub nav_from_body: [f64; 4],
+    /// ZYX roll, rad.
+    pub roll_rad: f64,
+    /// ZYX pitch, rad.
+    pub pitch_rad: f64,
+    /// ZYX yaw, rad.
+    pub yaw_rad: f64,
+    /// Gyro bias, rad/s, sensor axes.
+    pub gyro_bias_rad_s: [f64; 3],
+    /// Its σ, rad/s.
+    pub gyro_bias_sd_rad_s: [f64; 3],
+    /// Stance flag.
+    pub stance: bool,
+    /// Zero-velocity detector statistic.
+    pub detector_statistic: f64,
+    /// Bias σ below the configured bound on every axis (and tracking).
+    pub converged: bool,
+    /// ZUPT innovation, when one was applied on this sample.
+    pub zupt: Option<Innovation>,
+    /// Heading observation event, when one was taken on this sample.
+    pub heading: Option<HeadingEvent>,
+}
+
+impl Default for Estimate {
+    fn default() -> Self {
+        Self {
+            t_s: f64::NAN,
+            phase: Phase::Aligning,
+            p_m: [0.0; 3],
+            v_m_s: [0.0; 3],
+            nav_from_body: [1.0, 0.0, 0.0, 0.0],
+            roll_rad: 0.0,
+            pitch_rad: 0.0,
+            yaw_rad: 0.0,
+            gyro_bias_rad_s: [0.0; 3],
+            gyro_bias_sd_rad_s: [f64::NAN; 3],
+            stance: false,
+            detector_statistic: f64::NAN,
+            converged: false,
+            zupt: None,
+            heading: None,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Default)]
+struct RestSums {
+    n: u64,
+    t_first_s: f64,
+    f: Vector3<f64>,
+    w: Vector3<f64>,
+}
+
+/// The bias filter of the `paper` and `rotation_aware` modes.
+#[derive(Debug, Clone)]
+enum BiasFilter {
+    /// The ESKF owns the bias (`zupt`, `eskf`).
+    InEskf,
+    /// The paper: bias in the foot frame, H = I.
+    Paper {
+        kf: BiasKf,
+        obs: Option<PaperObserver>,
+    },
+    /// Rotation-aware: bias in sensor axes, H = ∫C.
+    RotationAware {
+        kf: BiasKf,
+        obs: Option<RotationAwareObserver>,
+    },
+}
+
+/// The estimator.
+#[derive(Debug, Clone)]
+pub struct Estimator {
+    cfg: Config,
+    aid: HeadingAid,
+    detector: StanceDetector,
+    phase: Phase,
+    counters: Counters,
+    last: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+    rest: RestSums,
+    eskf: Option<Eskf>,
+    bias: BiasFilter,
+    /// Tilt of the sensor on the flat foot: `R_y(pitch)·R_x(roll)` of the initial rest.
+    tilt0: UnitQuaternion<f64>,
+    /// Sensor yaw minus foot heading.
+    mount_yaw_rad: f64,
+    mount_sum: (f64, f64, usize),
+    straight: StraightWalk,
+    in_stance: bool,
+    stance_obs_done: bool,
+    stance_f_sum: (Vector3<f64>, u64),
+    pending_heading: Option<(f64, f64)>,
+    converged_at_s: Option<f64>,
+    out: Estimate,
+}
+
+impl Estimator {
+    /// A new estimator with its heading source.
+    pub fn new(cfg: Config, aid: HeadingAid) -> Self {
+        let detector = StanceDetector::new(&cfg.detector, 9.80665);
+        let straight = StraightWalk::new(
+            cfg.heading.straight_strides,
+            cfg.heading.straight_max_change_rad.get(),
+        );
+        Self {
+            detector,
+            straight,
+            aid,
+            phase: Phase::Aligning,
+            counters: Counters::default(),
+            last: None,
+            rest: RestSums::default(),
+            eskf: None,
+            bias: BiasFilter::InEskf,
+            tilt0: UnitQuaternion::identity(),
+            mount_yaw_rad: 0.0,
+            mount_sum: (0.0, 0.0, 0),
+            in_stance: false,
+            stance_obs_done: false,
+            stance_f_sum: (Vector3::zeros(), 0),
+            pending_heading: None,
+            converged_at_s: None,
+            out: Estimate::default(),
+            cfg,
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    /// Counters so far.
+    pub fn counters(&self) -> &Counters {
+        &self.counters
+    }
+
+    /// The phase.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// First time the bias counted as converged.
+    pub fn converged_at_s(&self) -> Option<f64> {
+        self.converged_at_s
+    }
+
+    /// The sensor's yaw on the foot (mounting yaw and toe-out), rad, once calibrated.
+    pub fn mount_yaw_rad(&self) -> Option<f64> {
+        (self.phase == Phase::Tracking).then_some(self.mount_yaw_rad)
+    }
+
+    /// An external observation of the walking (foot) heading in the map frame with its σ; it is
+    /// used at the next stance instead of the map.
+    pub fn queue_heading(&mut self, heading_rad: f64, sd_rad: f64) {
+        self.pending_heading = Some((heading_rad, sd_rad));
+    }
+
+    /// Processes one sample. On error nothing changed and the sample is counted as rejected.
+    pub fn step(&mut self, s: &ImuInput) -> Result<&Estimate, SampleError> {
+        let w = Vector3::from(s.gyro_rad_s);
+        let f = Vector3::from(s.accel_m_s2);
+        if let Err(e) = check_finite(s) {
+            self.counters.rejected_non_finite += 1;
+            return Err(e);
+        }
+        let prev = self.last;
+        if let Some((t_prev, _, _)) = prev
+            && s.t_s <= t_prev
+        {
+            self.counters.rejected_time += 1;
+            return Err(SampleError::TimeNotIncreasing {
+                t_s: s.t_s,
+                prev_t_s: t_prev,
+            });
+        }
+        self.counters.samples += 1;
+        self.last = Some((s.t_s, w, f));
+        let decision = self.detector.push(s.t_s, &w, &f);
+        let out = &mut self.out;
+        out.t_s = s.t_s;
+        out.stance = decision.stance;
+        out.detector_statistic = decision.statistic;
+        out.zupt = None;
+        out.heading = None;
+
+        if self.phase == Phase::Aligning {
+            self.align_step(s.t_s, &w, &f, decision.stance);
+            if self.phase == Phase::Aligning {
+                return Ok(&self.out);
+            }
+        }
+        let Some((t_prev, w_prev, f_prev)) = prev else {
+            return Ok(&self.out);
+        };
+        let dt = s.t_s - t_prev;
+        if dt > self.cfg.max_dt_s.get() {
+            self.counters.gaps += 1;
+        }
+        let w_avg = (w + w_prev) * 0.5;
+        let f_avg = (f + f_prev) * 0.5;
+        self.navigate(
+            s.t_s,
+            dt,
+            &w_avg,
+            &f_avg,
+            &f,
+            decision.stance,
+            decision.stance_age_s,
+        );
+        self.fill_output();
+        Ok(&self.out)
+    }
+
+    fn align_step(&mut self, t_s: f64, w: &Vector3<f64>, f: &Vector3<f64>, stance: bool) {
+        if stance {
+            if self.rest.n == 0 {
+                self.rest.t_first_s = t_s;
+            }
+            self.rest.n += 1;
+            self.rest.f += f;
+            self.rest.w += w;
+            let mean_f = self.rest.f / self.rest.n as f64;
+            let (roll, pitch) = tilt_from_specific_force(&mean_f);
+            let q = from_euler_zyx(roll, pitch, 0.0);
+            self.out.nav_from_body = [q.w, q.i, q.j, q.k];
+            self.out.roll_rad = roll;
+            self.out.pitch_rad = pitch;
+            return;
+        }
+        let rest_s = if self.rest.n > 0 {
+            t_s - self.rest.t_first_s
+        } else {
+            0.0
+        };
+        if rest_s < self.cfg.alignment.min_rest_s.get() {
+            if self.rest.n > 0 {
+                self.counters.alignment_restarts += 1;
+            }
+            self.rest = RestSums::default();
+            return;
+        }
+        let n = self.rest.n as f64;
+        let mean_f = self.rest.f / n;
+        let mean_w = self.rest.w / n;
+        let g = self
+            .cfg
+            .alignment
+            .gravity_m_s2
+            .map_or(mean_f.norm(), |g| g.get());
+        self.detector.set_gravity(g);
+        let (roll, pitch) = tilt_from_specific_force(&mean_f);
+        self.tilt0 = from_euler_zyx(roll, pitch, 0.0);
+        let (b0, sd0) = match self.cfg.alignment.gyro_bias_prior {
+            BiasPrior::RestMean => (mean_w, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get()),
+            BiasPrior::None => (
+                Vector3::zeros(),
+                self.cfg.eskf.gyro_bias_initial_sd_rad_s.get(),
+            ),
+        };
+        let e = &self.cfg.eskf;
+        let own_bias = matches!(self.cfg.mode, Mode::Zupt | Mode::Eskf);
+        let noise = EskfNoise {
+            accel_m_s2: e.accel_noise_m_s2.get(),
+            gyro_rad_s: e.gyro_noise_rad_s.get(),
+            gyro_bias_rw: e.gyro_bias_rw_rad_s_sqrt_s,
+            zupt_m_s: e.zupt_sd_m_s.get(),
+        };
+        self.eskf = Some(Eskf::new(
+            self.tilt0,
+            if own_bias { b0 } else { Vector3::zeros() },
+            e.initial_tilt_sd_rad.get(),
+            sd0,
+            g,
+            noise,
+            own_bias,
+        ));
+        let rw = self.cfg.bias_kf.bias_rw_rad_s_sqrt_s;
+        self.bias = match self.cfg.mode {
+            Mode::Zupt | Mode::Eskf => BiasFilter::InEskf,
+            // The paper's filter works on a foot-frame bias; the foot frame is the sensor frame
+            // rotated by the mounting, fixed later. Start from the prior expressed in the foot
+            // frame with the tilt only (the mounting yaw is applied when known).
+            Mode::Paper => BiasFilter::Paper {
+                kf: BiasKf::new(self.tilt0 * b0, sd0, rw, t_s),
+                obs: None,
+            },
+            Mode::RotationAware => BiasFilter::RotationAware {
+                kf: BiasKf::new(b0, sd0, rw, t_s),
+                obs: None,
+            },
+        };
+        self.phase = Phase::Calibrating;
+    }
+
+    /// Foot-from-sensor rotation: `R_z(mount_yaw)·tilt0`.
+    fn foot_from_sensor(&self) -> UnitQuaternion<f64> {
+        rot_z(self.mount_yaw_rad) * self.tilt0
+    }
+
+    /// Gyro bias in sensor axes and its σ.
+    fn bias_sensor(&self) -> (Vector3<f64>, Vector3<f64>) {
+        match &self.bias {
+            BiasFilter::InEskf => {
+                let e = self.eskf.as_ref().expect("aligned");
+                (e.gyro_bias_rad_s, e.gyro_bias_sd())
+            }
+            BiasFilter::Paper { kf, .. } => {
+                let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
+                let p = c.transpose() * kf.p * c;
+                (
+                    c.transpose() * kf.b_rad_s,
+                    p.diagonal().map(|v| v.max(0.0).sqrt()),
+                )
+            }
+            BiasFilter::RotationAware { kf, .. } => (kf.b_rad_s, kf.sd()),
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn navigate(
+        &mut self,
+        t_s: f64,
+        dt: f64,
+        w_avg: &Vector3<f64>,
+        f_avg: &Vector3<f64>,
+        f_now: &Vector3<f64>,
+        stance: bool,
+        stance_age_s: f64,
+    ) {
+        let (bias, _) = self.bias_sensor();
+        match &mut self.bias {
+            BiasFilter::InEskf => {}
+            BiasFilter::Paper { obs, .. } => {
+                if let Some(o) = obs {
+                    o.propagate(w_avg, dt);
+                }
+            }
+            BiasFilter::RotationAware { obs, .. } => {
+                if let Some(o) = obs {
+                    o.propagate(w_avg, &bias, dt);
+                }
+            }
+        }
+        let eskf = self.eskf.as_mut().expect("aligned");
+        eskf.propagate(&(w_avg - bias), f_avg, dt);
+        if stance {
+            self.out.zupt = Some(eskf.zupt());
+            self.counters.zupts += 1;
+            if !self.in_stance {
+                self.in_stance = true;
+                self.stance_obs_done = false;
+                self.stance_f_sum = (Vector3::zeros(), 0);
+                self.counters.stances += 1;
+            }
+            self.stance_f_sum.0 += f_now;
+            self.stance_f_sum.1 += 1;
+            if !self.stance_obs_done && stance_age_s >= self.cfg.heading.obs_delay_s {
+                self.stance_obs_done = true;
+                self.stance_observation(t_s);
+            }
+        } else {
+            self.in_stance = false;
+        }
+    }
+
+    /// Once per stance: calibration or a heading observation.
+    fn stance_observation(&mut self, t_s: f64) {
+        let h = self.cfg.heading.clone();
+        let eskf = self.eskf.as_mut().expect("aligned");
+        if self.phase == Phase::Calibrating {
+            let n = self.mount_sum.2;
+            if n == 0 {
+                let d = eskf.p_m;
+                if d.x.hypot(d.y) < 0.2 {
+                    return; // not a stride yet (a shuffle in place)
+                }
+                eskf.rotate_frame(h.start_heading_rad - d.y.atan2(d.x));
+                eskf.set_heading_variance(1e-8);
+            }
+            let m = wrap_pi(yaw(&eskf.nav_from_body) - h.start_heading_rad);
+            self.mount_sum.0 += m.cos();
+            self.mount_sum.1 += m.sin();
+            self.mount_sum.2 += 1;
+            self.straight.push(h.start_heading_rad);
+            if self.mount_sum.2 >= h.calibration_strides {
+                self.mount_yaw_rad = self.mount_sum.1.atan2(self.mount_sum.0);
+                self.phase = Phase::Tracking;
+                let q = eskf.nav_from_body;
+                match &mut self.bias {
+                    BiasFilter::InEskf => {}
+                    BiasFilter::Paper { kf, obs } => {
+                        // Re-express the prior with the now known mounting yaw.
+                        kf.b_rad_s = rot_z(self.mount_yaw_rad) * kf.b_rad_s;
+                        *obs = Some(PaperObserver::new(q, t_s));
+                    }
+                    BiasFilter::RotationAware { obs, .. } => {
+                        *obs = Some(RotationAwareObserver::new(q));
+                    }
+                }
+            }
+            return;
+        }
+        let foot_heading = wrap_pi(yaw(&eskf.nav_from_body) - self.mount_yaw_rad);
+        let straight = self.straight.push(foot_heading);
+        let xy = [eskf.p_m.x, eskf.p_m.y];
+        let (direction, sd) = match self.pending_heading.take() {
+            Some((dir, sd)) => (Ok(dir), sd),
+            None if self.cfg.mode == Mode::Zupt => (Err(Rejection::NoSource), h.sigma_rad.get()),
+            None if !straight => (Err(Rejection::NotStraight), h.sigma_rad.get()),
+            None => (
+                self.aid.associate(xy, foot_heading, h.gate_rad.get()),
+                h.sigma_rad.get(),
+            ),
+        };
+        let mut event = HeadingEvent {
+            foot_heading_rad: foot_heading,
+            direction_rad: f64::NAN,
+            outcome: Err(Rejection::NoSource),
+            baseline_s: 0.0,
+        };
+        match direction {
+            Err(r) => {
+                match r {
+                    Rejection::NotStraight => self.counters.heading_not_straight += 1,
+                    Rejection::OutsideGate => self.counters.heading_outside_gate += 1,
+                    Rejection::OutsideMap => self.counters.heading_outside_map += 1,
+                    Rejection::NoSource => {}
+                }
+                event.outcome = Err(r);
+            }
+            Ok(dir) => {
+                event.direction_rad = dir;
+                let sensor_yaw = dir + self.mount_yaw_rad;
+                let tilt_sd = self.cfg.bias_kf.tilt_sd_rad.get();
+                let innovation = match &mut self.bias {
+                    BiasFilter::InEskf => Some(eskf.heading_update(sensor_yaw, sd)),
+                    BiasFilter::Paper { kf, obs } => {
+                        let q_true = rot_z(sensor_yaw) * self.tilt0;
+                        obs.as_ref()
+                            .and_then(|o| o.observe(&q_true, t_s))
+                            .map(|(y, el)| {
+                                event.baseline_s = el;
+                                kf.predict(t_s);
+                                let r = Vector3::new(tilt_sd / el, tilt_sd / el, sd / el)
+                                    .map(|v| v * v);
+                                kf.update(&y, &Matrix3::identity(), &r)
+                            })
+                    }
+                    BiasFilter::RotationAware { kf, obs } => {
+                        let (sum, n) = self.stance_f_sum;
+                        let (roll, pitch) = tilt_from_specific_force(&(sum / n.max(1) as f64));
+                        let q_true = rot_z(sensor_yaw) * from_euler_zyx(roll, pitch, 0.0);
+                        obs.as_ref().map(|o| {
+                            let (y, hm) = o.observe(&q_true);
+                            kf.predict(t_s);
+                            let r = Vector3::new(tilt_sd, tilt_sd, sd).map(|v| v * v);
+                            kf.update(&y, &hm, &r)
+                        })
+                    }
+                };
+                if let Some(i) = innovation {
+                    self.counters.heading_used += 1;
+                    event.outcome = Ok(i);
+                }
+            }
+        }
+        self.out.heading = Some(event);
+    }
+
+    fn fill_output(&mut self) {
+        let (b, sd) = self.bias_sensor();
+        let e = self.eskf.as_ref().expect("aligned");
+        let q = e.nav_from_body;
+        let (roll, pitch, yaw) = euler_zyx(&q);
+        let out = &mut self.out;
+        out.phase = self.phase;
+        out.p_m = e.p_m.into();
+        out.v_m_s = e.v_m_s.into();
+        out.nav_from_body = [q.w, q.i, q.j, q.k];
+        out.roll_rad = roll;
+        out.pitch_rad = pitch;
+        out.yaw_rad = yaw;
+        out.gyro_bias_rad_s = b.into();
+        out.gyro_bias_sd_rad_s = sd.into();
+        out.converged = self.phase == Phase::Tracking
+            && sd.iter().all(|&s| s < self.cfg.converged_sd_rad_s.get());
+        if out.converged && self.converged_at_s.is_none() {
+            self.converged_at_s = Some(out.t_s);
+        }
+    }
+}
+
+fn check_finite(s: &ImuInput) -> Result<(), SampleError> {
+    let fields = [
+        ("t_s", s.t_s),
+        ("gx_rad_s", s.gyro_rad_s[0]),
+        ("gy_rad_s", s.gyro_rad_s[1]),
+        ("gz_rad_s", s.gyro_rad_s[2]),
+        ("ax_m_s2", s.accel_m_s2[0]),
+        ("ay_m_s2", s.accel_m_s2[1]),
+        ("az_m_s2", s.accel_m_s2[2]),
+    ];
+    match fields.iter().find(|(_, v)| !v.is_finite()) {
+        Some(&(field, value)) => Err(SampleError::NonFinite {
+            t_s: s.t_s,
+            field,
+            value,
+        }),
+        None => Ok(()),
+    }
+}

@@ -1,0 +1,313 @@
+//! Heading sources behind one interface: map-free dominant directions (a building grid), a
+//! corridor map, or nothing; the ψ/ψ+π association and the straight-walk test.
+//!
+//! A source answers one question: given the foot's position and its (estimated) walking heading
+//! in the map frame, which direction should it be walking in, if any? External heading
+//! observations (magnetometer, GNSS, a map matcher) bypass the source: the estimator queues them.
+
+use super::rotation::wrap_pi;
+use serde::Deserialize;
+use std::f64::consts::PI;
+
+/// One straight corridor: a segment with a width, in the map frame.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Corridor {
+    /// Name, for logs.
+    #[serde(default)]
+    pub name: String,
+    /// One end, metres.
+    pub from_m: [f64; 2],
+    /// The other end, metres.
+    pub to_m: [f64; 2],
+    /// Full width, metres.
+    pub width_m: f64,
+}
+
+impl Corridor {
+    /// Direction of the corridor axis (from → to), rad.
+    pub fn axis_rad(&self) -> f64 {
+        (self.to_m[1] - self.from_m[1]).atan2(self.to_m[0] - self.from_m[0])
+    }
+
+    /// Whether `xy` lies inside the corridor (within half the width of the segment).
+    pub fn contains(&self, xy: [f64; 2]) -> bool {
+        let (ax, ay) = (self.from_m[0], self.from_m[1]);
+        let (dx, dy) = (self.to_m[0] - ax, self.to_m[1] - ay);
+        let len2 = dx * dx + dy * dy;
+        if len2 <= 0.0 {
+            return false;
+        }
+        let s = ((xy[0] - ax) * dx + (xy[1] - ay) * dy) / len2;
+        if !(0.0..=1.0).contains(&s) {
+            return false;
+        }
+        let (px, py) = (ax + s * dx - xy[0], ay + s * dy - xy[1]);
+        (px * px + py * py).sqrt() <= 0.5 * self.width_m
+    }
+}
+
+/// A corridor map file: `[[corridor]]` tables.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CorridorMap {
+    /// The corridors.
+    #[serde(default, rename = "corridor")]
+    pub corridors: Vec<Corridor>,
+}
+
+/// A map that could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum MapError {
+    /// IO error.
+    #[error("{path}: cannot read map: {source}")]
+    Io {
+        /// File.
+        path: std::path::PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// TOML error (names the key).
+    #[error("{path}: {message}")]
+    Toml {
+        /// File.
+        path: std::path::PathBuf,
+        /// Parser message.
+        message: String,
+    },
+    /// A corridor with a bad geometry.
+    #[error("{path}: corridor {index} ({name:?}): {problem}")]
+    Geometry {
+        /// File.
+        path: std::path::PathBuf,
+        /// 0-based index in the file.
+        index: usize,
+        /// Its name.
+        name: String,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+impl CorridorMap {
+    /// Reads and checks a map file.
+    pub fn read(path: &std::path::Path) -> Result<Self, MapError> {
+        let text = std::fs::read_to_string(path).map_err(|source| MapError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let map: CorridorMap = toml::from_str(&text).map_err(|e| MapError::Toml {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        for (index, c) in map.corridors.iter().enumerate() {
+            let bad = |problem: String| MapError::Geometry {
+                path: path.to_owned(),
+                index,
+                name: c.name.clone(),
+                problem,
+            };
+            if !(c.width_m.is_finite() && c.width_m > 0.0) {
+                return Err(bad(format!("width_m = {} must be > 0", c.width_m)));
+            }
+            if c.from_m.iter().chain(&c.to_m).any(|v| !v.is_finite()) || c.from_m == c.to_m {
+                return Err(bad("from_m and to_m must be finite and distinct".into()));
+            }
+        }
+        Ok(map)
+    }
+}
+
+/// Where heading observations come from.
+#[derive(Debug, Clone)]
+pub enum HeadingAid {
+    /// None.
+    None,
+    /// Dominant directions `grid_rad + k·step_rad`.
+    Grid {
+        /// Orientation.
+        grid_rad: f64,
+        /// Spacing.
+        step_rad: f64,
+    },
+    /// Corridor map.
+    Map(CorridorMap),
+}
+
+/// Why a heading observation was not used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Rejection {
+    /// The foot turned too much over the last strides.
+    NotStraight,
+    /// No direction within the gate.
+    OutsideGate,
+    /// Not inside any corridor of the map.
+    OutsideMap,
+    /// No heading source.
+    NoSource,
+}
+
+impl Rejection {
+    /// Stable name for counters and CSV.
+    pub fn name(self) -> &'static str {
+        match self {
+            Rejection::NotStraight => "not_straight",
+            Rejection::OutsideGate => "outside_gate",
+            Rejection::OutsideMap => "outside_map",
+            Rejection::NoSource => "no_source",
+        }
+    }
+}
+
+impl HeadingAid {
+    /// The associated direction (rad, map frame) for a foot at `xy` walking at `heading_rad`,
+    /// the nearest of the candidate directions within `gate_rad`.
+    pub fn associate(
+        &self,
+        xy: [f64; 2],
+        heading_rad: f64,
+        gate_rad: f64,
+    ) -> Result<f64, Rejection> {
+        match self {
+            HeadingAid::None => Err(Rejection::NoSource),
+            HeadingAid::Grid { grid_rad, step_rad } => {
+                let k = ((heading_rad - grid_rad) / step_rad).round();
+                let dir = wrap_pi(grid_rad + k * step_rad);
+                if wrap_pi(heading_rad - dir).abs() <= gate_rad {
+                    Ok(dir)
+                } else {
+                    Err(Rejection::OutsideGate)
+                }
+            }
+            HeadingAid::Map(map) => {
+                let mut inside = false;
+                let mut best: Option<(f64, f64)> = None;
+                for c in map.corridors.iter().filter(|c| c.contains(xy)) {
+                    inside = true;
+                    for dir in [c.axis_rad(), c.axis_rad() + PI] {
+                        let d = wrap_pi(heading_rad - dir).abs();
+                        if best.is_none_or(|(bd, _)| d < bd) {
+                            best = Some((d, wrap_pi(dir)));
+                        }
+                    }
+                }
+                match best {
+                    Some((d, dir)) if d <= gate_rad => Ok(dir),
+                    Some(_) => Err(Rejection::OutsideGate),
+                    None if !inside => Err(Rejection::OutsideMap),
+                    None => Err(Rejection::OutsideGate),
+                }
+            }
+        }
+    }
+}
+
+/// The straight-walk test: the foot heading at this stance and at the previous `n` stances
+/// all lie within `max_change_rad` of each other. Fixed capacity, no allocation after `new`.
+#[derive(Debug, Clone)]
+pub struct StraightWalk {
+    history: Vec<f64>,
+    len: usize,
+    next: usize,
+    max_change_rad: f64,
+}
+
+impl StraightWalk {
+    /// Looks back over `n` stances.
+    pub fn new(n: usize, max_change_rad: f64) -> Self {
+        Self {
+            history: vec![0.0; n.max(1)],
+            len: 0,
+            next: 0,
+            max_change_rad,
+        }
+    }
+
+    /// Records this stance's heading and says whether the walk was straight.
+    pub fn push(&mut self, heading_rad: f64) -> bool {
+        let n = self.history.len();
+        let straight = self.len == n
+            && self
+                .history
+                .iter()
+                .all(|h| wrap_pi(heading_rad - h).abs() <= self.max_change_rad);
+        self.history[self.next] = heading_rad;
+        self.next = (self.next + 1) % n;
+        self.len = (self.len + 1).min(n);
+        straight
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_associates_psi_or_psi_plus_pi() {
+        let aid = HeadingAid::Grid {
+            grid_rad: 0.0,
+            step_rad: PI,
+        };
+        let gate = 20f64.to_radians();
+        assert_eq!(aid.associate([0.0; 2], 5f64.to_radians(), gate), Ok(0.0));
+        let back = aid.associate([0.0; 2], 170f64.to_radians(), gate).unwrap();
+        assert!((wrap_pi(back - PI)).abs() < 1e-12);
+        let back2 = aid.associate([0.0; 2], -175f64.to_radians(), gate).unwrap();
+        assert!((wrap_pi(back2 - PI)).abs() < 1e-12);
+        assert_eq!(
+            aid.associate([0.0; 2], 90f64.to_radians(), gate),
+            Err(Rejection::OutsideGate)
+        );
+        let grid90 = HeadingAid::Grid {
+            grid_rad: 10f64.to_radians(),
+            step_rad: PI / 2.0,
+        };
+        let d = grid90
+            .associate([0.0; 2], 95f64.to_radians(), gate)
+            .unwrap();
+        assert!((d - 100f64.to_radians()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn map_association_needs_a_corridor() {
+        let map = CorridorMap {
+            corridors: vec![Corridor {
+                name: "main".into(),
+                from_m: [0.0, 0.0],
+                to_m: [39.0, 0.0],
+                width_m: 2.4,
+            }],
+        };
+        let aid = HeadingAid::Map(map);
+        let gate = 15f64.to_radians();
+        assert_eq!(aid.associate([10.0, 1.0], 0.1, gate), Ok(0.0));
+        assert!((aid.associate([10.0, -1.0], 3.1, gate).unwrap().abs() - PI).abs() < 1e-12);
+        assert_eq!(
+            aid.associate([10.0, 1.3], 0.0, gate),
+            Err(Rejection::OutsideMap)
+        );
+        assert_eq!(
+            aid.associate([40.0, 0.0], 0.0, gate),
+            Err(Rejection::OutsideMap)
+        );
+        assert_eq!(
+            aid.associate([5.0, 0.0], 1.0, gate),
+            Err(Rejection::OutsideGate)
+        );
+    }
+
+    #[test]
+    fn straight_walk_needs_history_and_small_changes() {
+        let mut s = StraightWalk::new(2, 10f64.to_radians());
+        assert!(!s.push(0.0));
+        assert!(!s.push(0.02));
+        assert!(s.push(-0.03));
+        assert!(!s.push(0.5)); // a turn
+        assert!(!s.push(0.5)); // the turn is still in the look-back
+        assert!(s.push(0.52));
+        // across the ±π seam
+        let mut t = StraightWalk::new(1, 10f64.to_radians());
+        t.push(PI - 0.01);
+        assert!(t.push(-PI + 0.01));
+    }
+}

@@ -1,0 +1,17 @@
+//! The pure estimation core: numbers in, numbers out. No IO, no clock, no threads, no channels.
+//!
+//! - [`rotation`]: quaternion exponential/logarithm (closed form and Newton), Euler angles.
+//! - [`stance`]: SHOE / ARE / MV zero-velocity detection.
+//! - [`eskf`]: the ZUPT-aided error-state Kalman filter (position, velocity, attitude, gyro bias).
+//! - [`bias_kf`]: the paper's 3-state bias filter and its observers.
+//! - [`heading`]: heading sources (grid, corridor map), association, straight-walk test.
+//! - [`estimator`]: the per-sample pipeline that ties them together.
+
+pub mod bias_kf;
+pub mod eskf;
+pub mod estimator;
+pub mod heading;
+pub mod rotation;
+pub mod stance;
+
+pub use estimator::{Counters, Estimate, Estimator, ImuInput, Phase, SampleError};

@@ -1,0 +1,191 @@
+//! Rotation helpers: the quaternion exponential and logarithm (closed form and the paper's
+//! Newton iteration), ZYX Euler angles, heading of a body axis and its Jacobian, angle wrapping.
+//!
+//! Conventions: `nav_from_body` quaternions rotate body-frame vectors into the navigation frame
+//! (ENU-like local level, z up). The "half-angle vector" `x` of the paper is the vector with
+//! `q = exp(x) = [cos|x|, sin|x|·x/|x|]`; the rotation vector is `2x`.
+
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use std::f64::consts::{PI, TAU};
+
+/// Wraps an angle to [-π, π).
+pub fn wrap_pi(a: f64) -> f64 {
+    (a + PI).rem_euclid(TAU) - PI
+}
+
+/// The skew-symmetric (cross-product) matrix of `v`.
+pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+}
+
+/// The rotation by the rotation vector `rotvec_rad` (axis × angle).
+pub fn exp_rotvec(rotvec_rad: &Vector3<f64>) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_scaled_axis(*rotvec_rad)
+}
+
+/// Closed-form logarithm: the half-angle vector `x` with `q = exp(x)`, taking the
+/// representative with a non-negative scalar part (|x| ≤ π/2).
+pub fn log_half_closed_form(q: &UnitQuaternion<f64>) -> Vector3<f64> {
+    let q = canonical(q);
+    let v = q.imag();
+    let n = v.norm();
+    if n < 1e-300 {
+        return Vector3::zeros();
+    }
+    v * (n.atan2(q.w) / n)
+}
+
+/// The paper's logarithm: Newton iteration on `vec(exp(x)) = vec(q)` starting from `x = vec(q)`.
+/// Returns the half-angle vector and the number of iterations used. Agrees with
+/// [`log_half_closed_form`] to `tol` for rotations up to π (|x| < π/2).
+pub fn log_half_newton(
+    q: &UnitQuaternion<f64>,
+    tol: f64,
+    max_iter: usize,
+) -> (Vector3<f64>, usize) {
+    let q = canonical(q);
+    let target = q.imag();
+    let mut x = target;
+    for it in 0..max_iter {
+        let a = x.norm();
+        let (s, ds) = sinc_and_derivative(a);
+        let f = x * s - target;
+        if f.norm() <= tol {
+            return (x, it);
+        }
+        // d/dx [s(|x|) x] = s I + s'(a) x xᵀ / a
+        let mut j = Matrix3::identity() * s;
+        if a > 1e-12 {
+            j += x * x.transpose() * (ds / a);
+        }
+        match j.try_inverse() {
+            Some(ji) => x -= ji * f,
+            None => break,
+        }
+    }
+    (x, max_iter)
+}
+
+/// sin(a)/a and its derivative, with series near 0.
+fn sinc_and_derivative(a: f64) -> (f64, f64) {
+    if a < 1e-4 {
+        (1.0 - a * a / 6.0, -a / 3.0)
+    } else {
+        let (s, c) = a.sin_cos();
+        (s / a, (a * c - s) / (a * a))
+    }
+}
+
+/// The representative with a non-negative scalar part (q and -q are the same rotation).
+pub fn canonical(q: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+    if q.w < 0.0 {
+        UnitQuaternion::new_unchecked(-q.into_inner())
+    } else {
+        *q
+    }
+}
+
+/// The rotation vector (axis × angle, rad) of `q`, angle in [0, π].
+pub fn log_rotvec(q: &UnitQuaternion<f64>) -> Vector3<f64> {
+    log_half_closed_form(q) * 2.0
+}
+
+/// ZYX Euler angles (roll, pitch, yaw) of `nav_from_body`.
+pub fn euler_zyx(q: &UnitQuaternion<f64>) -> (f64, f64, f64) {
+    q.euler_angles()
+}
+
+/// `nav_from_body` from ZYX Euler angles.
+pub fn from_euler_zyx(roll: f64, pitch: f64, yaw: f64) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_euler_angles(roll, pitch, yaw)
+}
+
+/// A rotation about the navigation z axis.
+pub fn rot_z(angle_rad: f64) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_axis_angle(&Vector3::z_axis(), angle_rad)
+}
+
+/// ZYX yaw of `nav_from_body`: the heading of the body x axis projected on the horizontal.
+pub fn yaw(q: &UnitQuaternion<f64>) -> f64 {
+    let x = q * Vector3::x();
+    x.y.atan2(x.x)
+}
+
+/// Jacobian of [`yaw`] with respect to a small navigation-frame rotation `δθ` applied as
+/// `exp(δθ)·q`.
+pub fn yaw_jacobian(q: &UnitQuaternion<f64>) -> Vector3<f64> {
+    let c = q * Vector3::x();
+    let n2 = (c.x * c.x + c.y * c.y).max(1e-12);
+    Vector3::new(-c.x * c.z / n2, -c.y * c.z / n2, 1.0)
+}
+
+/// Roll and pitch (ZYX) of a body frame whose measured specific force (pointing up at rest)
+/// is `f_body`.
+pub fn tilt_from_specific_force(f_body: &Vector3<f64>) -> (f64, f64) {
+    let roll = f_body.y.atan2(f_body.z);
+    let pitch = (-f_body.x).atan2((f_body.y * f_body.y + f_body.z * f_body.z).sqrt());
+    (roll, pitch)
+}
+
+/// The quaternion from its four components (w, x, y, z), normalised.
+pub fn quat(w: f64, x: f64, y: f64, z: f64) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn newton_and_closed_form_logarithms_agree() {
+        let mut worst: f64 = 0.0;
+        for i in 0..200 {
+            let f = i as f64;
+            let axis =
+                Vector3::new((f * 0.37).sin(), (f * 0.73).cos(), (f * 1.1).sin() + 0.1).normalize();
+            let angle = (f / 200.0) * 3.1; // up to ~178°
+            let q = UnitQuaternion::from_axis_angle(&nalgebra::Unit::new_normalize(axis), angle);
+            let a = log_half_closed_form(&q);
+            let (b, iters) = log_half_newton(&q, 1e-14, 50);
+            assert!(iters < 50, "no convergence at angle {angle}");
+            worst = worst.max((a - b).norm());
+            assert!(((a * 2.0).norm() - angle).abs() < 1e-9);
+        }
+        assert!(worst < 1e-12, "worst disagreement {worst}");
+    }
+
+    #[test]
+    fn exp_log_round_trip() {
+        let v = Vector3::new(0.3, -1.2, 0.7);
+        assert!((log_rotvec(&exp_rotvec(&v)) - v).norm() < 1e-12);
+    }
+
+    #[test]
+    fn yaw_jacobian_matches_finite_difference() {
+        let q = from_euler_zyx(0.4, -0.6, 1.0);
+        let j = yaw_jacobian(&q);
+        for k in 0..3 {
+            let mut d = Vector3::zeros();
+            d[k] = 1e-7;
+            let num = wrap_pi(yaw(&(exp_rotvec(&d) * q)) - yaw(&q)) / 1e-7;
+            assert!((num - j[k]).abs() < 1e-5, "axis {k}: {num} vs {}", j[k]);
+        }
+        let (_, _, y) = euler_zyx(&q);
+        assert!((y - yaw(&q)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tilt_from_gravity_recovers_roll_pitch() {
+        let q = from_euler_zyx(0.3, -0.4, 2.0);
+        let f_body = q.inverse() * Vector3::new(0.0, 0.0, 9.81);
+        let (r, p) = tilt_from_specific_force(&f_body);
+        assert!((r - 0.3).abs() < 1e-12 && (p + 0.4).abs() < 1e-12);
+    }
+
+    #[test]
+    fn wrap_is_in_range() {
+        assert!((wrap_pi(3.0 * PI) + PI).abs() < 1e-12);
+        assert!((wrap_pi(-0.5) + 0.5).abs() < 1e-15);
+        assert!((wrap_pi(7.0) - (7.0 - TAU)).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,14 @@
+//! corridor-service: the gyro-bias and attitude estimator for foot-mounted IMUs, its offline
+//! runner and its daemon.
+//!
+//! Map of the modules:
+//! - [`core`]: the pure estimator (no IO); everything else is an adapter around it.
+//! - [`eval`]: footprint-error evaluation, a port of the reference `eval_traj.py`.
+//! - [`plot`]: dependency-free SVG figures.
+//! - [`runner`]: the offline runner (CSV log in, estimates, innovations and summary out).
+//! - [`suite`]: the results table over several recordings (`corridor eval`).
+pub mod core;
+pub mod eval;
+pub mod plot;
+pub mod runner;
+pub mod suite;

@@ -1,0 +1,1038 @@
+//! Minimal SVG line charts with no dependency, for the paper's figures.
+//!
+//! A [`Figure`] is a title over one or more [`Panel`]s stacked vertically; each panel has
+//! its own axes, grid, legend and [`Series`]. That covers the three figure kinds needed:
+//!
+//! * a 2-D trajectory: one panel with `equal_aspect`, polylines for the estimates and a
+//!   [`Style::Markers`] series with point labels for the ground-truth footprints;
+//! * a time series: several lines per panel, optionally with a shaded ±σ band;
+//! * stacked panels sharing the x axis ([`Figure::shared_x`]), e.g. bias x/y/z.
+//!
+//! Ticks are at 1-2-5 steps, colours are assigned by series order in a panel
+//! (colour-blind-safe palette), non-finite points break lines and bands, long series are
+//! decimated to at most [`MAX_POINTS_PER_SERIES`] points (keeping each bucket's extremes so
+//! spikes survive) and all text is XML-escaped.
+//!
+//! ```no_run
+//! use corridor_service::plot::{Figure, Panel, Series};
+//! let t: Vec<f64> = (0..100).map(|i| i as f64 * 0.1).collect();
+//! let b: Vec<f64> = t.iter().map(|t| (t * 0.3).sin()).collect();
+//! let fig = Figure::new("Gyro bias").with_panel(
+//!     Panel::new("x", "time (s)", "bias (deg/h)")
+//!         .with_series(Series::line("estimate", t.clone(), b).with_band(vec![0.2; 100])),
+//! );
+//! fig.write_svg(std::path::Path::new("/tmp/bias.svg")).unwrap();
+//! ```
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Longest series written: longer ones are decimated (min/max per bucket).
+pub const MAX_POINTS_PER_SERIES: usize = 4000;
+
+/// Okabe–Ito colour-blind-safe palette (yellow left out: unreadable on white).
+const PALETTE: [&str; 7] = [
+    "#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000",
+];
+
+const FONT: &str = "DejaVu Sans, Helvetica, Arial, sans-serif";
+const CHAR_W: f64 = 6.8; // rough width of one 12 px character, for layout only
+const LEFT: f64 = 78.0;
+const BOTTOM: f64 = 50.0;
+const RIGHT_PAD: f64 = 16.0;
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Style {
+    /// Solid polyline.
+    #[default]
+    Line,
+    /// Dashed polyline.
+    Dashed,
+    /// A filled circle at each point, no line.
+    Markers,
+}
+
+/// One data series of a panel.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Series {
+    /// Legend text; an empty label keeps the series out of the legend.
+    pub label: String,
+    /// x values.
+    pub x: Vec<f64>,
+    /// y values (same length as `x`; extra values of either are ignored).
+    pub y: Vec<f64>,
+    /// Optional ± half-width per point, drawn as a shaded band around the line
+    /// (missing or non-finite values break the band).
+    pub band: Option<Vec<f64>>,
+    /// Line, dashed line or markers.
+    pub style: Style,
+    /// Optional text drawn next to each point (e.g. GCP numbers); empty strings draw nothing.
+    pub point_labels: Option<Vec<String>>,
+}
+
+impl Series {
+    /// A series with the given style and no band or point labels.
+    pub fn new(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>, style: Style) -> Self {
+        Self {
+            label: label.into(),
+            x,
+            y,
+            style,
+            band: None,
+            point_labels: None,
+        }
+    }
+
+    /// A solid line.
+    pub fn line(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
+        Self::new(label, x, y, Style::Line)
+    }
+
+    /// A dashed line.
+    pub fn dashed(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
+        Self::new(label, x, y, Style::Dashed)
+    }
+
+    /// Markers only.
+    pub fn markers(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
+        Self::new(label, x, y, Style::Markers)
+    }
+
+    /// Adds a shaded ± band (half-width per point).
+    pub fn with_band(mut self, half_width: Vec<f64>) -> Self {
+        self.band = Some(half_width);
+        self
+    }
+
+    /// Adds a text label per point.
+    pub fn with_point_labels(mut self, labels: Vec<String>) -> Self {
+        self.point_labels = Some(labels);
+        self
+    }
+}
+
+/// One set of axes.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Panel {
+    /// Title above the panel (may be empty).
+    pub title: String,
+    /// x-axis label (may be empty, e.g. on all but the bottom of stacked panels).
+    pub x_label: String,
+    /// y-axis label.
+    pub y_label: String,
+    /// The series, drawn in order (later on top); colours follow this order.
+    pub series: Vec<Series>,
+    /// One x unit spans as many pixels as one y unit (for trajectories).
+    pub equal_aspect: bool,
+}
+
+impl Panel {
+    /// An empty panel with the given title and axis labels.
+    pub fn new(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+    ) -> Self {
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            ..Self::default()
+        }
+    }
+
+    /// Appends a series.
+    pub fn with_series(mut self, s: Series) -> Self {
+        self.series.push(s);
+        self
+    }
+
+    /// Turns on equal aspect.
+    pub fn with_equal_aspect(mut self) -> Self {
+        self.equal_aspect = true;
+        self
+    }
+}
+
+/// A figure: a title and panels stacked vertically.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Figure {
+    /// Title on top (may be empty).
+    pub title: String,
+    /// Panels, top to bottom.
+    pub panels: Vec<Panel>,
+    /// Total width, pixels.
+    pub width_px: u32,
+    /// Height of each panel including its title and axis labels, pixels.
+    pub panel_height_px: u32,
+    /// All panels without equal aspect use one x range (the union of their data).
+    pub shared_x: bool,
+}
+
+impl Default for Figure {
+    fn default() -> Self {
+        Self {
+            title: String::new(),
+            panels: Vec::new(),
+            width_px: 900,
+            panel_height_px: 320,
+            shared_x: false,
+        }
+    }
+}
+
+/// One axis: data range mapped onto a pixel range, and its ticks.
+#[derive(Debug, Clone)]
+struct Axis {
+    lo: f64,
+    hi: f64,
+    ticks: Vec<f64>,
+    step: f64,
+}
+
+impl Axis {
+    /// Pixel position of `v` on a span from `p0` (at `lo`) to `p1` (at `hi`).
+    fn px(&self, v: f64, p0: f64, p1: f64) -> f64 {
+        p0 + (v - self.lo) / (self.hi - self.lo) * (p1 - p0)
+    }
+}
+
+/// A series after decimation, with its colour.
+struct Prepared<'a> {
+    s: &'a Series,
+    idx: Vec<usize>,
+    color: &'static str,
+}
+
+impl Prepared<'_> {
+    fn x(&self, k: usize) -> f64 {
+        self.s.x[self.idx[k]]
+    }
+    fn y(&self, k: usize) -> f64 {
+        self.s.y[self.idx[k]]
+    }
+    fn band(&self, k: usize) -> f64 {
+        self.s
+            .band
+            .as_ref()
+            .and_then(|b| b.get(self.idx[k]).copied())
+            .unwrap_or(f64::NAN)
+    }
+}
+
+impl Figure {
+    /// An empty figure with the default size (900 px wide, 320 px per panel).
+    pub fn new(title: impl Into<String>) -> Self {
+        Self {
+            title: title.into(),
+            ..Self::default()
+        }
+    }
+
+    /// Appends a panel.
+    pub fn with_panel(mut self, p: Panel) -> Self {
+        self.panels.push(p);
+        self
+    }
+
+    /// Sets the size in pixels.
+    pub fn with_size(mut self, width_px: u32, panel_height_px: u32) -> Self {
+        self.width_px = width_px;
+        self.panel_height_px = panel_height_px;
+        self
+    }
+
+    /// Shares one x range between the panels (see [`Figure::shared_x`]).
+    pub fn with_shared_x(mut self) -> Self {
+        self.shared_x = true;
+        self
+    }
+
+    /// Renders the figure as a standalone SVG document.
+    pub fn to_svg(&self) -> String {
+        let w = f64::from(self.width_px.max(200));
+        let ph = f64::from(self.panel_height_px.max(120));
+        let title_h = if self.title.is_empty() { 6.0 } else { 34.0 };
+        let h = title_h + ph * self.panels.len() as f64 + 4.0;
+
+        let prepared: Vec<Vec<Prepared>> = self
+            .panels
+            .iter()
+            .map(|p| {
+                p.series
+                    .iter()
+                    .enumerate()
+                    .map(|(i, s)| Prepared {
+                        s,
+                        idx: decimate(&s.x, &s.y, MAX_POINTS_PER_SERIES),
+                        color: PALETTE[i % PALETTE.len()],
+                    })
+                    .collect()
+            })
+            .collect();
+
+        // One legend width for all panels so stacked plot areas line up.
+        let max_label = self
+            .panels
+            .iter()
+            .flat_map(|p| &p.series)
+            .map(|s| s.label.chars().count())
+            .max()
+            .unwrap_or(0);
+        let legend_w = if max_label == 0 {
+            0.0
+        } else {
+            (44.0 + CHAR_W * max_label as f64).min(w * 0.35)
+        };
+        let (plot_l, plot_r) = (LEFT, w - RIGHT_PAD - legend_w);
+
+        let shared = if self.shared_x {
+            prepared
+                .iter()
+                .zip(&self.panels)
+                .filter(|(_, p)| !p.equal_aspect)
+                .map(|(s, _)| data_range(s).0)
+                .reduce(union)
+        } else {
+            None
+        };
+
+        let mut o = String::new();
+        let _ = write!(
+            o,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="{FONT}" font-size="12">"#
+        );
+        o.push('\n');
+        let _ = writeln!(o, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
+        if !self.title.is_empty() {
+            let _ = writeln!(
+                o,
+                r#"<text x="{:.1}" y="23" text-anchor="middle" font-size="16" font-weight="bold">{}</text>"#,
+                w / 2.0,
+                esc(&self.title)
+            );
+        }
+        for (i, (panel, series)) in self.panels.iter().zip(&prepared).enumerate() {
+            let top = title_h + ph * i as f64;
+            let plot_t = top + if panel.title.is_empty() { 12.0 } else { 30.0 };
+            let plot_b = top + ph - BOTTOM;
+            let rect = Rect {
+                l: plot_l,
+                r: plot_r,
+                t: plot_t,
+                b: plot_b,
+            };
+            render_panel(&mut o, i, panel, series, rect, shared, top);
+        }
+        o.push_str("</svg>\n");
+        o
+    }
+
+    /// Writes [`Figure::to_svg`] to `path`.
+    pub fn write_svg(&self, path: &Path) -> std::io::Result<()> {
+        std::fs::write(path, self.to_svg())
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Rect {
+    l: f64,
+    r: f64,
+    t: f64,
+    b: f64,
+}
+
+type Range = (f64, f64);
+
+fn union(a: Range, b: Range) -> Range {
+    (a.0.min(b.0), a.1.max(b.1))
+}
+
+/// x and y ranges of the finite points (y including the band); (inf, -inf) when empty.
+fn data_range(series: &[Prepared]) -> (Range, Range) {
+    let empty = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut xr, mut yr) = (empty, empty);
+    for s in series {
+        for k in 0..s.idx.len() {
+            let (x, y) = (s.x(k), s.y(k));
+            if !(x.is_finite() && y.is_finite()) {
+                continue;
+            }
+            xr = union(xr, (x, x));
+            yr = union(yr, (y, y));
+            let b = s.band(k);
+            if b.is_finite() {
+                yr = union(yr, (y - b.abs(), y + b.abs()));
+            }
+        }
+    }
+    (xr, yr)
+}
+
+/// A non-empty, non-degenerate range around `r`.
+fn widen(r: Range) -> Range {
+    if !(r.0.is_finite() && r.1.is_finite()) {
+        return (0.0, 1.0);
+    }
+    if r.1 > r.0 {
+        return r;
+    }
+    let pad = if r.0 == 0.0 { 1.0 } else { r.0.abs() * 0.1 };
+    (r.0 - pad, r.1 + pad)
+}
+
+/// A 1-2-5 step near `span / target`.
+fn nice_step(span: f64, target: usize) -> f64 {
+    let raw = span / target.max(1) as f64;
+    let p = 10f64.powi(raw.log10().floor() as i32);
+    let f = raw / p;
+    // Small tolerance so that e.g. 1.0000000000000002 still counts as 1.
+    let m = [1.0, 2.0, 5.0]
+        .into_iter()
+        .find(|&m| f <= m * (1.0 + 1e-9))
+        .unwrap_or(10.0);
+    m * p
+}
+
+/// Ticks at multiples of a 1-2-5 step, about `target` of them, the first at or below
+/// `lo` and the last at or above `hi`.
+fn nice_ticks(lo: f64, hi: f64, target: usize) -> (Vec<f64>, f64) {
+    let (lo, hi) = widen((lo, hi));
+    let step = nice_step(hi - lo, target);
+    let k0 = (lo / step).floor() as i64;
+    let k1 = (hi / step).ceil() as i64;
+    let ticks = (k0..=k1).map(|k| clean(k as f64 * step)).collect();
+    (ticks, step)
+}
+
+/// Rounds away the float noise of `k * step` and turns -0 into 0.
+fn clean(v: f64) -> f64 {
+    let r = format!("{v:.12e}").parse::<f64>().unwrap_or(v);
+    if r == 0.0 { 0.0 } else { r }
+}
+
+/// Axis over data range `r`, extended to the enclosing ticks.
+fn axis_for(r: Range, target: usize) -> Axis {
+    let (ticks, step) = nice_ticks(r.0, r.1, target);
+    Axis {
+        lo: ticks[0],
+        hi: ticks[ticks.len() - 1],
+        ticks,
+        step,
+    }
+}
+
+/// Axis over exactly `r`, with the multiples of `step` that fall inside it.
+fn axis_exact(r: Range, step: f64) -> Axis {
+    let eps = step * 1e-9;
+    let k0 = ((r.0 - eps) / step).ceil() as i64;
+    let k1 = ((r.1 + eps) / step).floor() as i64;
+    let ticks = (k0..=k1).map(|k| clean(k as f64 * step)).collect();
+    Axis {
+        lo: r.0,
+        hi: r.1,
+        ticks,
+        step,
+    }
+}
+
+/// `r` widened by `frac` of its span on each side (so data does not touch the frame).
+fn pad(r: Range, frac: f64) -> Range {
+    let (lo, hi) = widen(r);
+    let d = (hi - lo) * frac;
+    (lo - d, hi + d)
+}
+
+/// Equal-aspect axes: both ranges padded, the one with more pixels per unit widened
+/// about its centre to the other's scale, and one tick step for both (square grid).
+fn equal_axes(xr: Range, yr: Range, w: f64, h: f64, tx: usize, ty: usize) -> (Axis, Axis) {
+    let (xr, yr) = (pad(xr, 0.04), pad(yr, 0.04));
+    let s = (w / (xr.1 - xr.0)).min(h / (yr.1 - yr.0));
+    let grow = |r: Range, px: f64| {
+        let half = px / s / 2.0;
+        let c = 0.5 * (r.0 + r.1);
+        (c - half, c + half)
+    };
+    let (gx, gy) = (grow(xr, w), grow(yr, h));
+    let step = nice_step(gx.1 - gx.0, tx).max(nice_step(gy.1 - gy.0, ty));
+    (axis_exact(gx, step), axis_exact(gy, step))
+}
+
+/// Text for a tick value printed with the precision of `step`.
+fn tick_label(v: f64, step: f64) -> String {
+    let decimals = (-step.log10() - 1e-9).ceil().max(0.0) as usize;
+    let s = if v != 0.0 && (v.abs() >= 1e6 || step < 1e-4) {
+        format!("{v:.1e}")
+    } else {
+        format!("{v:.decimals$}")
+    };
+    if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
+        s[1..].to_owned()
+    } else {
+        s
+    }
+}
+
+/// Escapes text for XML content and attribute values.
+fn esc(s: &str) -> String {
+    let mut o = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => o.push_str("&amp;"),
+            '<' => o.push_str("&lt;"),
+            '>' => o.push_str("&gt;"),
+            '"' => o.push_str("&quot;"),
+            '\'' => o.push_str("&apos;"),
+            c if (c as u32) < 0x20 && c != '\t' && c != '\n' && c != '\r' => {}
+            c => o.push(c),
+        }
+    }
+    o
+}
+
+/// Indices of the points kept when a series has more than `max_points` points: the
+/// series is cut into buckets and each bucket keeps the points with its smallest and
+/// largest x and y (so spikes survive in both directions) and its first non-finite point
+/// (so gaps survive), in their original order.
+fn decimate(x: &[f64], y: &[f64], max_points: usize) -> Vec<usize> {
+    let n = x.len().min(y.len());
+    if n <= max_points {
+        return (0..n).collect();
+    }
+    let buckets = (max_points / 5).max(1);
+    let size = n.div_ceil(buckets);
+    let mut keep = Vec::with_capacity(max_points);
+    for a in (0..n).step_by(size) {
+        let b = (a + size).min(n);
+        let mut pick: [Option<usize>; 5] = [None; 5];
+        let better = |cur: Option<usize>, i: usize, v: &[f64], less: bool| match cur {
+            None => Some(i),
+            Some(c) if (less && v[i] < v[c]) || (!less && v[i] > v[c]) => Some(i),
+            keep => keep,
+        };
+        for i in a..b {
+            if !(x[i].is_finite() && y[i].is_finite()) {
+                pick[4] = pick[4].or(Some(i));
+                continue;
+            }
+            pick[0] = better(pick[0], i, x, true);
+            pick[1] = better(pick[1], i, x, false);
+            pick[2] = better(pick[2], i, y, true);
+            pick[3] = better(pick[3], i, y, false);
+        }
+        let mut p: Vec<usize> = pick.iter().flatten().copied().collect();
+        p.sort_unstable();
+        p.dedup();
+        keep.extend(p);
+    }
+    keep
+}
+
+fn render_panel(
+    o: &mut String,
+    index: usize,
+    panel: &Panel,
+    series: &[Prepared],
+    r: Rect,
+    shared_x: Option<Range>,
+    top: f64,
+) {
+    let (w, h) = (r.r - r.l, r.b - r.t);
+    let (xr, yr) = data_range(series);
+    let tx = ((w / 90.0) as usize).clamp(2, 12);
+    let ty = ((h / 45.0) as usize).clamp(2, 10);
+    let (ax, ay) = if panel.equal_aspect {
+        equal_axes(xr, yr, w, h, tx, ty)
+    } else {
+        let yr = pad(yr, 0.04);
+        let ay = axis_exact(yr, nice_step(yr.1 - yr.0, ty));
+        (axis_for(shared_x.unwrap_or(xr), tx), ay)
+    };
+    let px = |v: f64| ax.px(v, r.l, r.r);
+    let py = |v: f64| ay.px(v, r.b, r.t);
+
+    let _ = writeln!(o, r#"<g id="panel{index}">"#);
+    let _ = writeln!(
+        o,
+        r#"<defs><clipPath id="clip{index}"><rect x="{:.2}" y="{:.2}" width="{:.2}" height="{:.2}"/></clipPath></defs>"#,
+        r.l, r.t, w, h
+    );
+    if !panel.title.is_empty() {
+        let _ = writeln!(
+            o,
+            r#"<text x="{:.2}" y="{:.2}" font-size="13" font-weight="bold">{}</text>"#,
+            r.l,
+            top + 21.0,
+            esc(&panel.title)
+        );
+    }
+    // Grid, ticks and tick labels.
+    o.push_str(r##"<g stroke="#e3e3e3" stroke-width="1">"##);
+    for &t in &ax.ticks {
+        let x = px(t);
+        let _ = write!(
+            o,
+            r#"<line x1="{x:.2}" y1="{:.2}" x2="{x:.2}" y2="{:.2}"/>"#,
+            r.t, r.b
+        );
+    }
+    for &t in &ay.ticks {
+        let y = py(t);
+        let _ = write!(
+            o,
+            r#"<line x1="{:.2}" y1="{y:.2}" x2="{:.2}" y2="{y:.2}"/>"#,
+            r.l, r.r
+        );
+    }
+    o.push_str("</g>\n");
+    o.push_str(r##"<g font-size="11" fill="#333">"##);
+    for &t in &ax.ticks {
+        let _ = write!(
+            o,
+            r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
+            px(t),
+            r.b + 16.0,
+            esc(&tick_label(t, ax.step))
+        );
+    }
+    for &t in &ay.ticks {
+        let _ = write!(
+            o,
+            r#"<text x="{:.2}" y="{:.2}" text-anchor="end">{}</text>"#,
+            r.l - 6.0,
+            py(t) + 4.0,
+            esc(&tick_label(t, ay.step))
+        );
+    }
+    o.push_str("</g>\n");
+    if !panel.x_label.is_empty() {
+        let _ = writeln!(
+            o,
+            r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
+            (r.l + r.r) / 2.0,
+            r.b + 36.0,
+            esc(&panel.x_label)
+        );
+    }
+    if !panel.y_label.is_empty() {
+        let _ = writeln!(
+            o,
+            r#"<text transform="translate({:.2},{:.2}) rotate(-90)" text-anchor="middle">{}</text>"#,
+            r.l - 58.0,
+            (r.t + r.b) / 2.0,
+            esc(&panel.y_label)
+        );
+    }
+
+    // Data: bands first so every line is on top of every band.
+    let _ = writeln!(o, r#"<g clip-path="url(#clip{index})">"#);
+    for s in series.iter().filter(|s| s.s.band.is_some()) {
+        for run in runs(s.idx.len(), |k| {
+            s.x(k).is_finite() && s.y(k).is_finite() && s.band(k).is_finite()
+        }) {
+            let mut d = String::new();
+            for k in run.clone() {
+                let cmd = if k == run.start { 'M' } else { 'L' };
+                let _ = write!(
+                    d,
+                    "{cmd}{:.2},{:.2}",
+                    px(s.x(k)),
+                    py(s.y(k) + s.band(k).abs())
+                );
+            }
+            for k in run.clone().rev() {
+                let _ = write!(d, "L{:.2},{:.2}", px(s.x(k)), py(s.y(k) - s.band(k).abs()));
+            }
+            let _ = writeln!(
+                o,
+                r#"<path d="{d}Z" fill="{}" fill-opacity="0.2" stroke="none"/>"#,
+                s.color
+            );
+        }
+    }
+    for s in series.iter().filter(|s| s.s.style != Style::Markers) {
+        let mut d = String::new();
+        for run in runs(s.idx.len(), |k| s.x(k).is_finite() && s.y(k).is_finite()) {
+            for k in run.clone() {
+                let cmd = if k == run.start { 'M' } else { 'L' };
+                let _ = write!(d, "{cmd}{:.2},{:.2}", px(s.x(k)), py(s.y(k)));
+            }
+        }
+        if d.is_empty() {
+            continue;
+        }
+        let dash = if s.s.style == Style::Dashed {
+            r#" stroke-dasharray="7 4""#
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            o,
+            r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1.6" stroke-linejoin="round"{dash}/>"#,
+            s.color
+        );
+    }
+    o.push_str("</g>\n");
+    for s in series.iter().filter(|s| s.s.style == Style::Markers) {
+        let _ = write!(
+            o,
+            r#"<g fill="{}" stroke="white" stroke-width="0.8">"#,
+            s.color
+        );
+        for k in 0..s.idx.len() {
+            let (x, y) = (s.x(k), s.y(k));
+            if x.is_finite() && y.is_finite() {
+                let _ = write!(
+                    o,
+                    r#"<circle cx="{:.2}" cy="{:.2}" r="3.6"/>"#,
+                    px(x),
+                    py(y)
+                );
+            }
+        }
+        o.push_str("</g>\n");
+    }
+    for s in series {
+        let Some(labels) = &s.s.point_labels else {
+            continue;
+        };
+        let _ = write!(o, r#"<g font-size="10" fill="{}">"#, s.color);
+        for k in 0..s.idx.len() {
+            let (x, y) = (s.x(k), s.y(k));
+            match labels.get(s.idx[k]) {
+                Some(l) if !l.is_empty() && x.is_finite() && y.is_finite() => {
+                    let _ = write!(
+                        o,
+                        r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
+                        px(x) + 5.0,
+                        py(y) - 5.0,
+                        esc(l)
+                    );
+                }
+                _ => {}
+            }
+        }
+        o.push_str("</g>\n");
+    }
+    let _ = writeln!(
+        o,
+        r##"<rect x="{:.2}" y="{:.2}" width="{w:.2}" height="{h:.2}" fill="none" stroke="#444" stroke-width="1"/>"##,
+        r.l, r.t
+    );
+
+    // Legend, right of the plot area.
+    let lx = r.r + 12.0;
+    let mut ly = r.t + 8.0;
+    for s in series.iter().filter(|s| !s.s.label.is_empty()) {
+        if s.s.band.is_some() {
+            let _ = write!(
+                o,
+                r#"<rect x="{lx:.2}" y="{:.2}" width="26" height="10" fill="{}" fill-opacity="0.2"/>"#,
+                ly - 5.0,
+                s.color
+            );
+        }
+        match s.s.style {
+            Style::Markers => {
+                let _ = write!(
+                    o,
+                    r#"<circle cx="{:.2}" cy="{ly:.2}" r="3.6" fill="{}"/>"#,
+                    lx + 13.0,
+                    s.color
+                );
+            }
+            style => {
+                let dash = if style == Style::Dashed {
+                    r#" stroke-dasharray="7 4""#
+                } else {
+                    ""
+                };
+                let _ = write!(
+                    o,
+                    r#"<line x1="{lx:.2}" y1="{ly:.2}" x2="{:.2}" y2="{ly:.2}" stroke="{}" stroke-width="1.6"{dash}/>"#,
+                    lx + 26.0,
+                    s.color
+                );
+            }
+        }
+        let _ = writeln!(
+            o,
+            r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
+            lx + 32.0,
+            ly + 4.0,
+            esc(&s.s.label)
+        );
+        ly += 18.0;
+    }
+    o.push_str("</g>\n");
+}
+
+/// Maximal runs of consecutive indices in `0..n` for which `ok` holds.
+fn runs(n: usize, ok: impl Fn(usize) -> bool) -> Vec<std::ops::Range<usize>> {
+    let mut out = Vec::new();
+    let mut start = None;
+    for k in 0..=n {
+        match (k < n && ok(k), start) {
+            (true, None) => start = Some(k),
+            (false, Some(s)) => {
+                out.push(s..k);
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Checks that every tag is closed in order; returns the root element's name.
+    fn balanced(svg: &str) -> Result<String, String> {
+        let mut stack: Vec<String> = Vec::new();
+        let mut root = None;
+        let mut rest = svg;
+        while let Some(i) = rest.find('<') {
+            rest = &rest[i + 1..];
+            let end = rest.find('>').ok_or("unterminated tag")?;
+            let tag = &rest[..end];
+            rest = &rest[end + 1..];
+            if tag.starts_with('?') || tag.starts_with('!') {
+                continue;
+            }
+            if let Some(name) = tag.strip_prefix('/') {
+                let open = stack.pop().ok_or(format!("stray </{name}>"))?;
+                if open != name.trim() {
+                    return Err(format!("<{open}> closed by </{name}>"));
+                }
+                continue;
+            }
+            let name = tag
+                .split_whitespace()
+                .next()
+                .unwrap_or("")
+                .trim_end_matches('/');
+            if root.is_none() {
+                root = Some(name.to_owned());
+            } else if stack.is_empty() {
+                return Err(format!("second root <{name}>"));
+            }
+            if !tag.ends_with('/') {
+                stack.push(name.to_owned());
+            }
+        }
+        if !stack.is_empty() {
+            return Err(format!("unclosed {stack:?}"));
+        }
+        if svg.contains('&') {
+            for part in svg.split('&').skip(1) {
+                let ent = part.split(';').next().unwrap_or("");
+                if !["amp", "lt", "gt", "quot", "apos"].contains(&ent) {
+                    return Err(format!("bad entity &{ent}"));
+                }
+            }
+        }
+        root.ok_or_else(|| "empty".to_owned())
+    }
+
+    fn example() -> Figure {
+        let t: Vec<f64> = (0..2000).map(|i| i as f64 * 0.05).collect();
+        let traj_x: Vec<f64> = t.iter().map(|t| 10.0 * (t * 0.063).sin()).collect();
+        let traj_y: Vec<f64> = t.iter().map(|t| 5.0 - 5.0 * (t * 0.063).cos()).collect();
+        let bias: Vec<f64> = t
+            .iter()
+            .map(|&t| {
+                if (40.0..42.0).contains(&t) {
+                    f64::NAN
+                } else {
+                    3.0 * (t * 0.05).sin()
+                }
+            })
+            .collect();
+        Figure::new("Trajectory & bias <test>")
+            .with_panel(
+                Panel::new("Plan view", "x (m)", "y (m)")
+                    .with_equal_aspect()
+                    .with_series(Series::line("uncorrected", traj_x.clone(), traj_y.clone()))
+                    .with_series(Series::dashed(
+                        "corrected",
+                        traj_x.iter().map(|v| v * 0.9).collect(),
+                        traj_y.clone(),
+                    ))
+                    .with_series(
+                        Series::markers("GCPs", vec![0.0, 10.0, 0.0], vec![0.0, 5.0, 10.0])
+                            .with_point_labels(vec!["G0".into(), "G1".into(), "G2 \"end\"".into()]),
+                    ),
+            )
+            .with_panel(
+                Panel::new("Bias x", "", "bias (deg/h)").with_series(
+                    Series::line("estimate", t.clone(), bias).with_band(vec![0.5; 2000]),
+                ),
+            )
+            .with_panel(
+                Panel::new("Bias y", "time (s)", "bias (deg/h)").with_series(Series::line(
+                    "estimate",
+                    t.clone(),
+                    vec![1.0; 2000],
+                )),
+            )
+            .with_shared_x()
+    }
+
+    #[test]
+    fn svg_is_balanced_and_has_the_labels() {
+        let svg = example().to_svg();
+        assert_eq!(balanced(&svg).unwrap(), "svg");
+        for s in [
+            "Trajectory &amp; bias &lt;test&gt;",
+            "Plan view",
+            "x (m)",
+            "y (m)",
+            "uncorrected",
+            "corrected",
+            "GCPs",
+            "G2 &quot;end&quot;",
+            "bias (deg/h)",
+            "time (s)",
+            "stroke-dasharray",
+            "fill-opacity=\"0.2\"",
+        ] {
+            assert!(svg.contains(s), "missing {s}");
+        }
+        assert!(!svg.contains("<test>"));
+    }
+
+    #[test]
+    fn non_finite_points_break_lines_without_nan_in_output() {
+        let x = vec![0.0, 1.0, 2.0, f64::NAN, 4.0, 5.0, 6.0, 7.0];
+        let y = vec![0.0, 1.0, f64::INFINITY, 3.0, 4.0, 5.0, f64::NAN, 7.0];
+        let band = vec![0.1, 0.1, 0.1, 0.1, f64::NAN, 0.1, 0.1];
+        let fig = Figure::new("gaps").with_panel(
+            Panel::new("", "x", "y")
+                .with_series(Series::line("a", x.clone(), y.clone()).with_band(band))
+                .with_series(Series::markers("b", x, y)),
+        );
+        let svg = fig.to_svg();
+        balanced(&svg).unwrap();
+        let lower = svg.to_lowercase();
+        assert!(!lower.contains("nan") && !lower.contains("inf"), "{svg}");
+        // Runs {0,1}, {4,5}, {7}: two moves in the line's path (the lone point has no
+        // segment but still starts a subpath).
+        let line = svg
+            .lines()
+            .find(|l| l.contains("stroke-width=\"1.6\" stroke-linejoin"))
+            .unwrap();
+        assert_eq!(line.matches('M').count(), 3, "{line}");
+        // 5 finite markers.
+        assert_eq!(svg.matches("<circle cx").count(), 5 + 1); // + legend marker
+    }
+
+    #[test]
+    fn ticks_are_1_2_5_steps_covering_the_range() {
+        let cases = [
+            (0.13, 9.7),
+            (-3.2, 47.0),
+            (1e-5, 3.3e-4),
+            (-250.0, -249.2),
+            (0.0, 1.0),
+            (17.0, 17.0),
+            (-1e6, 2e6),
+        ];
+        for (lo, hi) in cases {
+            for target in [2, 5, 8] {
+                let (t, step) = nice_ticks(lo, hi, target);
+                assert!(t[0] <= lo && *t.last().unwrap() >= hi, "{lo} {hi} {t:?}");
+                let e = step.log10().floor();
+                let m = step / 10f64.powf(e);
+                assert!(
+                    [1.0, 2.0, 5.0, 10.0].iter().any(|c| (m - c).abs() < 1e-9),
+                    "step {step}"
+                );
+                for w in t.windows(2) {
+                    assert!(((w[1] - w[0]) - step).abs() < step * 1e-6, "{t:?}");
+                }
+                assert!(
+                    t.len() >= 2 && t.len() <= 3 * target + 3,
+                    "{lo} {hi} {target} {t:?}"
+                );
+                // Multiples of the step, so labels are round.
+                for v in &t {
+                    assert!(((v / step) - (v / step).round()).abs() < 1e-6);
+                }
+            }
+        }
+        assert_eq!(
+            nice_ticks(0.13, 9.7, 5).0,
+            vec![0.0, 2.0, 4.0, 6.0, 8.0, 10.0]
+        );
+        assert_eq!(tick_label(0.30000000000000004, 0.1), "0.3");
+        assert_eq!(tick_label(-0.0, 0.5), "0.0");
+        assert_eq!(tick_label(2000.0, 500.0), "2000");
+    }
+
+    #[test]
+    fn decimation_keeps_extremes_and_gaps() {
+        let n = 100_000;
+        let x: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let mut y: Vec<f64> = x.iter().map(|v| (v * 0.001).sin()).collect();
+        y[12_345] = 50.0;
+        y[77_777] = -40.0;
+        y[50_000] = f64::NAN;
+        let idx = decimate(&x, &y, MAX_POINTS_PER_SERIES);
+        assert!(idx.len() <= MAX_POINTS_PER_SERIES, "{}", idx.len());
+        assert!(idx.windows(2).all(|w| w[0] < w[1]));
+        for must in [0, n - 1, 12_345, 77_777, 50_000] {
+            assert!(idx.contains(&must), "{must}");
+        }
+        // Short series are untouched.
+        assert_eq!(
+            decimate(&x[..10], &y[..10], 4000),
+            (0..10).collect::<Vec<_>>()
+        );
+        // And the path written for the long series respects the limit.
+        let fig = Figure::new("").with_panel(Panel::new("", "", "").with_series(Series::line(
+            "s",
+            x.clone(),
+            y.clone(),
+        )));
+        let svg = fig.to_svg();
+        let path = svg.lines().find(|l| l.starts_with("<path d=\"M")).unwrap();
+        assert!(path.matches('L').count() + path.matches('M').count() <= MAX_POINTS_PER_SERIES);
+    }
+
+    #[test]
+    fn equal_aspect_gives_equal_scales() {
+        let (ax, ay) = equal_axes((0.0, 20.0), (0.0, 5.0), 600.0, 300.0, 6, 6);
+        let sx = 600.0 / (ax.hi - ax.lo);
+        let sy = 300.0 / (ay.hi - ay.lo);
+        assert!((sx - sy).abs() < 1e-9 * sx);
+        assert!(ax.lo <= 0.0 && ax.hi >= 20.0 && ay.lo <= 0.0 && ay.hi >= 5.0);
+        assert!(ax.ticks.len() >= 2 && ay.ticks.len() >= 2);
+        assert!((ax.step - ay.step).abs() < 1e-12);
+    }
+
+    #[test]
+    fn empty_figure_and_empty_series_are_valid() {
+        let svg = Figure::new("").to_svg();
+        assert_eq!(balanced(&svg).unwrap(), "svg");
+        let fig = Figure::new("e").with_panel(Panel::new("p", "x", "y").with_series(Series::line(
+            "none",
+            vec![],
+            vec![],
+        )));
+        assert_eq!(balanced(&fig.to_svg()).unwrap(), "svg");
+    }
+
+    /// Writes the example figure when CORRIDOR_PLOT_EXAMPLE is set to a file path.
+    #[test]
+    fn write_example_when_asked() {
+        if let Ok(p) = std::env::var("CORRIDOR_PLOT_EXAMPLE") {
+            example()
+                .with_size(900, 300)
+                .write_svg(Path::new(&p))
+                .unwrap();
+        }
+    }
+}

@@ -1,0 +1,455 @@
+//! The offline runner: a CSV log through the estimator core, to `estimates.csv`,
+//! `innovations.csv`, `summary.json` and optional plots. It is an adapter: every line of
+//! estimation is in [`crate::core`], shared with the daemon.
+
+use crate::core::heading::{CorridorMap, HeadingAid, MapError};
+use crate::core::{Counters, Estimate, Estimator, ImuInput};
+use crate::eval::{self, EvalOptions, EvalReport, TruthGcp};
+use corridor_shared::config::{Config, HeadingSource};
+use corridor_shared::imu_csv::{ImuCsvError, ImuLog, RejectedRow};
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::truth_csv::{TruthCsvError, TruthPoint};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Anything that stops a run.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The IMU log is unreadable or invalid.
+    #[error(transparent)]
+    Imu(#[from] ImuCsvError),
+    /// The ground truth is unreadable or invalid.
+    #[error(transparent)]
+    Truth(#[from] TruthCsvError),
+    /// The corridor map is unreadable or invalid.
+    #[error(transparent)]
+    Map(#[from] MapError),
+    /// The evaluation failed.
+    #[error("evaluation against {truth}: {source}")]
+    Eval {
+        /// Truth file.
+        truth: PathBuf,
+        /// Cause.
+        source: eval::EvalError,
+    },
+    /// Writing an output failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// File.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The log never left the alignment phase.
+    #[error("{path}: no initial rest of at least {min_rest_s} s followed by motion was found")]
+    NeverAligned {
+        /// The log.
+        path: PathBuf,
+        /// Required rest.
+        min_rest_s: f64,
+    },
+}
+
+/// Builds the heading source the configuration asks for.
+pub fn heading_aid(cfg: &Config, map: Option<&Path>) -> Result<HeadingAid, RunError> {
+    Ok(match (cfg.heading.source, map) {
+        (_, Some(path)) => HeadingAid::Map(CorridorMap::read(path)?),
+        (HeadingSource::Map, None) | (HeadingSource::None, None) => HeadingAid::None,
+        (HeadingSource::Grid, None) => HeadingAid::Grid {
+            grid_rad: cfg.heading.grid_rad,
+            step_rad: cfg.heading.grid_step_rad.get(),
+        },
+    })
+}
+
+/// Per-sample trace kept in memory for evaluation and plots.
+#[derive(Debug, Clone, Default)]
+pub struct Trace {
+    /// Sample times.
+    pub t_s: Vec<f64>,
+    /// Positions, map frame.
+    pub xy_m: Vec<[f64; 2]>,
+    /// Bias, sensor axes.
+    pub bias_rad_s: Vec<[f64; 3]>,
+    /// Bias σ.
+    pub bias_sd_rad_s: Vec<[f64; 3]>,
+    /// Converged flag.
+    pub converged: Vec<bool>,
+}
+
+/// Result of running a log through the estimator.
+#[derive(Debug, Clone)]
+pub struct RunOutcome {
+    /// The trace.
+    pub trace: Trace,
+    /// Counters of the estimator.
+    pub counters: Counters,
+    /// First convergence time.
+    pub converged_at_s: Option<f64>,
+    /// Sensor yaw on the foot, once calibrated.
+    pub mount_yaw_rad: Option<f64>,
+    /// Samples refused by the estimator, with their reasons.
+    pub refused: Vec<String>,
+}
+
+/// Runs `log` through a new estimator; `sink` sees every estimate with the input it came from.
+pub fn run_log(
+    log: &ImuLog,
+    cfg: &Config,
+    aid: &HeadingAid,
+    injection: &BiasInjection,
+    mut sink: impl FnMut(&ImuInput, &Estimate),
+) -> RunOutcome {
+    let mut est = Estimator::new(cfg.clone(), aid.clone());
+    let mut trace = Trace::default();
+    let mut refused = Vec::new();
+    for row in &log.rows {
+        let mut gyro = row.gyro_rad_s;
+        injection.apply(row.t_s, &mut gyro);
+        let input = ImuInput {
+            t_s: row.t_s,
+            gyro_rad_s: gyro,
+            accel_m_s2: row.accel_m_s2,
+        };
+        match est.step(&input) {
+            Ok(e) => {
+                trace.t_s.push(e.t_s);
+                trace.xy_m.push([e.p_m[0], e.p_m[1]]);
+                trace.bias_rad_s.push(e.gyro_bias_rad_s);
+                trace.bias_sd_rad_s.push(e.gyro_bias_sd_rad_s);
+                trace.converged.push(e.converged);
+                sink(&input, e);
+            }
+            Err(err) => refused.push(format!("{}:{}: {err}", log.path.display(), row.line)),
+        }
+    }
+    RunOutcome {
+        trace,
+        counters: *est.counters(),
+        converged_at_s: est.converged_at_s(),
+        mount_yaw_rad: est.mount_yaw_rad(),
+        refused,
+    }
+}
+
+impl Trace {
+    /// Mean bias over the samples at or after `from_s`.
+    pub fn mean_bias_from(&self, from_s: f64) -> Option<[f64; 3]> {
+        let mut sum = [0.0; 3];
+        let mut n = 0usize;
+        for (t, b) in self.t_s.iter().zip(&self.bias_rad_s) {
+            if *t >= from_s {
+                for k in 0..3 {
+                    sum[k] += b[k];
+                }
+                n += 1;
+            }
+        }
+        (n > 0).then(|| sum.map(|s| s / n as f64))
+    }
+
+    /// Evaluates the trajectory against footprint truth as `eval_traj.py` does by default.
+    pub fn evaluate(
+        &self,
+        truth: &[TruthPoint],
+        opts: &EvalOptions,
+    ) -> Result<EvalReport, eval::EvalError> {
+        let x: Vec<f64> = self.xy_m.iter().map(|p| p[0]).collect();
+        let y: Vec<f64> = self.xy_m.iter().map(|p| p[1]).collect();
+        let gcps: Vec<TruthGcp> = truth.iter().map(to_gcp).collect();
+        eval::evaluate(&self.t_s, &x, &y, &gcps, opts)
+    }
+}
+
+/// Converts a truth row for the evaluator.
+pub fn to_gcp(p: &TruthPoint) -> TruthGcp {
+    TruthGcp {
+        t_s: p.t_s,
+        x_m: p.x_m,
+        y_m: p.y_m,
+        stride: p.stride,
+    }
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// The IMU log.
+    pub imu: String,
+    /// Estimation mode.
+    pub mode: &'static str,
+    /// Final bias, rad/s, sensor axes.
+    pub bias_rad_s: [f64; 3],
+    /// Final bias σ.
+    pub bias_sd_rad_s: [f64; 3],
+    /// Mean bias over the converged phase (from `converged_at_s` on), or null.
+    pub bias_mean_converged_rad_s: Option<[f64; 3]>,
+    /// First time every bias σ was below `estimator.converged_sd_rad_s` (a real-time criterion).
+    pub converged_at_s: Option<f64>,
+    /// Sensor yaw on the foot found by the calibration, degrees.
+    pub mount_yaw_deg: Option<f64>,
+    /// Injected bias (constant part), rad/s.
+    pub injected_gyro_bias_rad_s: [f64; 3],
+    /// Injected ramp, rad/s².
+    pub injected_gyro_bias_ramp_rad_s2: [f64; 3],
+    /// Injection start, s.
+    pub injected_after_s: f64,
+    /// Input rows in the file (accepted by the reader).
+    pub samples_read: u64,
+    /// Samples the estimator processed.
+    pub samples: u64,
+    /// Stances.
+    pub stances: u64,
+    /// ZUPT updates.
+    pub zupts: u64,
+    /// Gaps (steps above `estimator.max_dt_s`).
+    pub gaps: u64,
+    /// Heading observations used.
+    pub heading_observations_used: u64,
+    /// Heading observations rejected, by reason.
+    pub heading_observations_rejected: BTreeMap<&'static str, u64>,
+    /// Input rows rejected by the CSV reader, by reason.
+    pub input_rows_rejected: BTreeMap<&'static str, u64>,
+    /// The first few rejected rows, with file, line, column and value.
+    pub input_rows_rejected_examples: Vec<String>,
+    /// Samples refused by the estimator (after the reader), with reasons.
+    pub samples_refused: Vec<String>,
+    /// Footprint evaluation (first-leg alignment), when truth was given.
+    pub eval: Option<EvalReport>,
+}
+
+/// Builds the summary of one run.
+pub fn summarize(
+    log: &ImuLog,
+    cfg: &Config,
+    injection: &BiasInjection,
+    outcome: &RunOutcome,
+    eval: Option<EvalReport>,
+) -> Summary {
+    let n = outcome.trace.t_s.len();
+    let last = |v: &Vec<[f64; 3]>| if n > 0 { v[n - 1] } else { [f64::NAN; 3] };
+    let c = &outcome.counters;
+    Summary {
+        imu: log.path.display().to_string(),
+        mode: cfg.mode.name(),
+        bias_rad_s: last(&outcome.trace.bias_rad_s),
+        bias_sd_rad_s: last(&outcome.trace.bias_sd_rad_s),
+        bias_mean_converged_rad_s: outcome
+            .converged_at_s
+            .and_then(|t| outcome.trace.mean_bias_from(t)),
+        converged_at_s: outcome.converged_at_s,
+        mount_yaw_deg: outcome.mount_yaw_rad.map(f64::to_degrees),
+        injected_gyro_bias_rad_s: injection.constant_rad_s,
+        injected_gyro_bias_ramp_rad_s2: injection.ramp_rad_s2,
+        injected_after_s: injection.after_s,
+        samples_read: log.rows.len() as u64,
+        samples: c.samples,
+        stances: c.stances,
+        zupts: c.zupts,
+        gaps: c.gaps,
+        heading_observations_used: c.heading_used,
+        heading_observations_rejected: BTreeMap::from([
+            ("not_straight", c.heading_not_straight),
+            ("outside_gate", c.heading_outside_gate),
+            ("outside_map", c.heading_outside_map),
+        ]),
+        input_rows_rejected: log.rejected_counts(),
+        input_rows_rejected_examples: log
+            .rejected
+            .iter()
+            .take(10)
+            .map(|r: &RejectedRow| r.located(&log.path).to_string())
+            .collect(),
+        samples_refused: outcome.refused.clone(),
+        eval,
+    }
+}
+
+/// CSV header of `estimates.csv`.
+pub const ESTIMATES_HEADER: &str = "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,roll_rad,pitch_rad,yaw_rad,qw,qx,qy,qz,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,stance,converged,phase";
+
+/// CSV header of `innovations.csv`.
+pub const INNOVATIONS_HEADER: &str = "t_s,kind,accepted,reason,r0,r1,r2,s0,s1,s2,nis,foot_heading_deg,direction_deg,baseline_s,gyro_norm_rad_s,accel_norm_m_s2,gz_rad_s";
+
+/// Writes one `estimates.csv` row.
+pub fn write_estimate_row(w: &mut impl Write, e: &Estimate) -> std::io::Result<()> {
+    let b = e.gyro_bias_rad_s;
+    let s = e.gyro_bias_sd_rad_s;
+    let q = e.nav_from_body;
+    writeln!(
+        w,
+        "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        e.t_s,
+        e.p_m[0],
+        e.p_m[1],
+        e.p_m[2],
+        e.v_m_s[0],
+        e.v_m_s[1],
+        e.v_m_s[2],
+        e.roll_rad,
+        e.pitch_rad,
+        e.yaw_rad,
+        q[0],
+        q[1],
+        q[2],
+        q[3],
+        b[0],
+        b[1],
+        b[2],
+        s[0],
+        s[1],
+        s[2],
+        u8::from(e.stance),
+        u8::from(e.converged),
+        match e.phase {
+            crate::core::Phase::Aligning => "aligning",
+            crate::core::Phase::Calibrating => "calibrating",
+            crate::core::Phase::Tracking => "tracking",
+        }
+    )
+}
+
+/// Writes the `innovations.csv` rows of one estimate (ZUPT and heading events).
+pub fn write_innovation_rows(
+    w: &mut impl Write,
+    input: &ImuInput,
+    e: &Estimate,
+) -> std::io::Result<()> {
+    let g = input.gyro_rad_s;
+    let a = input.accel_m_s2;
+    let gn = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+    let an = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    if let Some(z) = &e.zupt {
+        writeln!(
+            w,
+            "{},zupt,1,,{},{},{},{},{},{},{},,,,{gn},{an},{}",
+            e.t_s, z.r[0], z.r[1], z.r[2], z.s_diag[0], z.s_diag[1], z.s_diag[2], z.nis, g[2]
+        )?;
+    }
+    if let Some(h) = &e.heading {
+        let fh = h.foot_heading_rad.to_degrees();
+        let dir = h.direction_rad.to_degrees();
+        match &h.outcome {
+            Ok(i) => writeln!(
+                w,
+                "{},heading,1,,{},{},{},{},{},{},{},{fh},{dir},{},{gn},{an},{}",
+                e.t_s,
+                i.r[0],
+                i.r[1],
+                i.r[2],
+                i.s_diag[0],
+                i.s_diag[1],
+                i.s_diag[2],
+                i.nis,
+                h.baseline_s,
+                g[2]
+            )?,
+            Err(r) => writeln!(
+                w,
+                "{},heading,0,{},,,,,,,,{fh},,,{gn},{an},{}",
+                e.t_s,
+                r.name(),
+                g[2]
+            )?,
+        }
+    }
+    Ok(())
+}
+
+/// Creates a buffered file for writing, naming the path on error.
+pub fn create(path: &Path) -> Result<std::io::BufWriter<std::fs::File>, RunError> {
+    std::fs::File::create(path)
+        .map(|f| std::io::BufWriter::with_capacity(1 << 16, f))
+        .map_err(|source| RunError::Io {
+            path: path.to_owned(),
+            source,
+        })
+}
+
+/// Maps an IO error to one that names `path`.
+pub fn io_at(path: &Path) -> impl Fn(std::io::Error) -> RunError + '_ {
+    move |source| RunError::Io {
+        path: path.to_owned(),
+        source,
+    }
+}
+
+/// Everything `corridor run` needs.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// IMU log.
+    pub imu: PathBuf,
+    /// Validated configuration (with command-line overrides applied).
+    pub config: Config,
+    /// Corridor map file.
+    pub map: Option<PathBuf>,
+    /// Ground truth.
+    pub truth: Option<PathBuf>,
+    /// Synthetic bias injection.
+    pub injection: BiasInjection,
+    /// Write the figures.
+    pub plots: bool,
+    /// Output directory.
+    pub out_dir: PathBuf,
+    /// Reader options.
+    pub csv: corridor_shared::imu_csv::ImuCsvOptions,
+}
+
+/// Runs a log and writes `estimates.csv`, `innovations.csv`, `summary.json` (and the figures).
+pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
+    let log = corridor_shared::imu_csv::read_imu_csv(&opts.imu, &opts.csv)?;
+    let truth = opts
+        .truth
+        .as_deref()
+        .map(corridor_shared::truth_csv::read_truth_csv)
+        .transpose()?;
+    let aid = heading_aid(&opts.config, opts.map.as_deref())?;
+    std::fs::create_dir_all(&opts.out_dir).map_err(io_at(&opts.out_dir))?;
+    let est_path = opts.out_dir.join("estimates.csv");
+    let inn_path = opts.out_dir.join("innovations.csv");
+    let mut est_w = create(&est_path)?;
+    let mut inn_w = create(&inn_path)?;
+    writeln!(est_w, "{ESTIMATES_HEADER}").map_err(io_at(&est_path))?;
+    writeln!(inn_w, "{INNOVATIONS_HEADER}").map_err(io_at(&inn_path))?;
+    let mut io_err: Option<RunError> = None;
+    let outcome = run_log(&log, &opts.config, &aid, &opts.injection, |input, e| {
+        if io_err.is_some() {
+            return;
+        }
+        if let Err(err) = write_estimate_row(&mut est_w, e) {
+            io_err = Some(io_at(&est_path)(err));
+        } else if let Err(err) = write_innovation_rows(&mut inn_w, input, e) {
+            io_err = Some(io_at(&inn_path)(err));
+        }
+    });
+    if let Some(e) = io_err {
+        return Err(e);
+    }
+    est_w.flush().map_err(io_at(&est_path))?;
+    inn_w.flush().map_err(io_at(&inn_path))?;
+    if outcome.counters.samples > 0
+        && outcome.mount_yaw_rad.is_none()
+        && outcome.counters.stances == 0
+    {
+        return Err(RunError::NeverAligned {
+            path: opts.imu.clone(),
+            min_rest_s: opts.config.alignment.min_rest_s.get(),
+        });
+    }
+    let eval = match (&truth, &opts.truth) {
+        (Some(t), Some(path)) => Some(outcome.trace.evaluate(t, &EvalOptions::default()).map_err(
+            |source| RunError::Eval {
+                truth: path.clone(),
+                source,
+            },
+        )?),
+        _ => None,
+    };
+    let summary = summarize(&log, &opts.config, &opts.injection, &outcome, eval);
+    let sum_path = opts.out_dir.join("summary.json");
+    let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
+    std::fs::write(&sum_path, json + "\n").map_err(io_at(&sum_path))?;
+    Ok(summary)
+}

@@ -1,0 +1,357 @@
+//! The results table: every recording of a suite through the baselines and the bias modes, with
+//! footprint error and injected-bias recovery (`corridor eval --suite FILE`).
+//!
+//! Per recording:
+//! 1. `zupt`: the ZUPT filter alone, no prior (the standard foot INS).
+//! 1b. `zupt+rest`: the same with the gyro mean of the first rest subtracted.
+//! 2. `zupt+inj`: the injected bias, uncorrected (ZUPT filter, no prior).
+//! 3. `paper+inj`: the paper's mode with the injected bias, no prior.
+//! 4. `best+inj`: the best mode with the injected bias, no prior.
+//!
+//! Recovery = (bias with injection − bias without) / injected, averaged over the samples after
+//! both runs have converged (the real-time σ criterion), no prior; and separately with the
+//! rest-mean prior and the injection starting when the initial rest ends.
+
+use crate::eval::EvalOptions;
+use crate::runner::{self, RunError, RunOutcome, heading_aid};
+use corridor_shared::config::{BiasPrior, Config, ConfigFile, Mode};
+use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The suite file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SuiteFile {
+    /// Injected bias for the recovery rows, rad/s (default the paper's [0.001, 0.001, 0.005]).
+    #[serde(default)]
+    pub inject_gyro_bias_rad_s: Option<[f64; 3]>,
+    /// The mode reported as "best" (default `eskf`).
+    #[serde(default)]
+    pub best_mode: Option<Mode>,
+    /// Recordings.
+    #[serde(rename = "recording")]
+    pub recordings: Vec<SuiteRecording>,
+}
+
+/// One recording of the suite; paths are relative to the suite file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SuiteRecording {
+    /// Short name.
+    pub name: String,
+    /// IMU log.
+    pub imu: PathBuf,
+    /// Footprint truth.
+    pub truth: PathBuf,
+    /// Sensor configuration (one per sensor).
+    pub config: PathBuf,
+    /// Walking direction of the first leg in the map frame, degrees (map knowledge).
+    pub start_heading_deg: f64,
+    /// Grid orientation, degrees.
+    #[serde(default)]
+    pub grid_deg: f64,
+}
+
+/// Errors of the suite.
+#[derive(Debug, thiserror::Error)]
+pub enum SuiteError {
+    /// Suite file unreadable or invalid.
+    #[error("{path}: {message}")]
+    File {
+        /// File.
+        path: PathBuf,
+        /// Cause.
+        message: String,
+    },
+    /// A run failed.
+    #[error("recording {name}: {source}")]
+    Run {
+        /// Recording.
+        name: String,
+        /// Cause.
+        source: RunError,
+    },
+}
+
+/// Footprint figures of one run.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Footprint {
+    /// RMS over the GCPs after first-leg alignment, m.
+    pub rms_m: f64,
+    /// RMS as % of the truth path length.
+    pub rms_pct: f64,
+    /// Error at the last GCP, m.
+    pub final_m: f64,
+}
+
+/// One row of the results table.
+#[derive(Debug, Clone, Serialize)]
+pub struct SuiteRow {
+    /// Recording.
+    pub recording: String,
+    /// Truth path length, m.
+    pub path_m: f64,
+    /// 1. ZUPT filter alone.
+    pub zupt: Footprint,
+    /// 1b. ZUPT filter with the rest-mean prior.
+    pub zupt_rest: Footprint,
+    /// Best mode without injection, no prior.
+    pub best: Footprint,
+    /// Best mode without injection, with the rest-mean prior.
+    pub best_rest: Footprint,
+    /// 2. Injected, uncorrected.
+    pub zupt_inj: Footprint,
+    /// 3. Paper mode, injected.
+    pub paper_inj: Footprint,
+    /// 4. Best mode, injected.
+    pub best_inj: Footprint,
+    /// Recovery of the paper mode, per axis (fraction), no prior.
+    pub paper_recovery: [f64; 3],
+    /// Recovery of the best mode, per axis, no prior.
+    pub best_recovery: [f64; 3],
+    /// Recovery of the best mode with the prior and the injection after the first rest.
+    pub best_recovery_prior_late: [f64; 3],
+    /// Convergence time of the best mode with injection (s after the start of the log).
+    pub best_converged_at_s: Option<f64>,
+    /// Convergence time of the paper mode with injection.
+    pub paper_converged_at_s: Option<f64>,
+    /// Error reduction of the best mode over the uncorrected injected run, %.
+    pub best_reduction_pct: f64,
+}
+
+/// Runs the suite.
+pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
+    let text = std::fs::read_to_string(path).map_err(|e| SuiteError::File {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
+    let suite: SuiteFile = toml::from_str(&text).map_err(|e| SuiteError::File {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let inj = suite
+        .inject_gyro_bias_rad_s
+        .unwrap_or([0.001, 0.001, 0.005]);
+    let best_mode = suite.best_mode.unwrap_or(Mode::Eskf);
+    suite
+        .recordings
+        .iter()
+        .map(|r| {
+            run_recording(base, r, inj, best_mode).map_err(|source| SuiteError::Run {
+                name: r.name.clone(),
+                source,
+            })
+        })
+        .collect()
+}
+
+fn config_for(
+    base: &Path,
+    r: &SuiteRecording,
+    mode: Mode,
+    prior: BiasPrior,
+) -> Result<Config, RunError> {
+    let path = base.join(&r.config);
+    let mut file = ConfigFile::read(&path).map_err(|e| RunError::Io {
+        path: path.clone(),
+        source: std::io::Error::other(e.to_string()),
+    })?;
+    file.estimator.mode = Some(mode);
+    file.alignment.gyro_bias_prior = Some(prior);
+    file.heading.start_heading_deg = Some(r.start_heading_deg);
+    file.heading.grid_deg = Some(r.grid_deg);
+    file.validate().map_err(|e| RunError::Io {
+        path,
+        source: std::io::Error::other(e.to_string()),
+    })
+}
+
+struct Ctx<'a> {
+    base: &'a Path,
+    rec: &'a SuiteRecording,
+    log: ImuLog,
+    truth: Vec<TruthPoint>,
+}
+
+impl Ctx<'_> {
+    fn run(
+        &self,
+        mode: Mode,
+        prior: BiasPrior,
+        inj: BiasInjection,
+    ) -> Result<(RunOutcome, Footprint), RunError> {
+        let cfg = config_for(self.base, self.rec, mode, prior)?;
+        let aid = heading_aid(&cfg, None)?;
+        let out = runner::run_log(&self.log, &cfg, &aid, &inj, |_, _| {});
+        let rep = out
+            .trace
+            .evaluate(&self.truth, &EvalOptions::default())
+            .map_err(|source| RunError::Eval {
+                truth: self.base.join(&self.rec.truth),
+                source,
+            })?;
+        let fp = Footprint {
+            rms_m: rep.rms_error_m.unwrap_or(f64::NAN),
+            rms_pct: rep.rms_error_pct_of_path.unwrap_or(f64::NAN),
+            final_m: rep.final_gcp_error_m.unwrap_or(f64::NAN),
+        };
+        Ok((out, fp))
+    }
+}
+
+/// Recovery per axis: mean of (with − without)/injected after both converged (else the last
+/// quarter of the log).
+pub fn recovery(with: &RunOutcome, without: &RunOutcome, inj: [f64; 3]) -> [f64; 3] {
+    let t = &with.trace.t_s;
+    let from = match (with.converged_at_s, without.converged_at_s) {
+        (Some(a), Some(b)) => a.max(b),
+        _ => {
+            t.first().copied().unwrap_or(0.0)
+                + 0.75 * (t.last().copied().unwrap_or(0.0) - t.first().copied().unwrap_or(0.0))
+        }
+    };
+    let mut sum = [0.0; 3];
+    let mut n = 0usize;
+    for (i, &ti) in t.iter().enumerate() {
+        if ti >= from && i < without.trace.t_s.len() {
+            for (k, s) in sum.iter_mut().enumerate() {
+                *s += with.trace.bias_rad_s[i][k] - without.trace.bias_rad_s[i][k];
+            }
+            n += 1;
+        }
+    }
+    std::array::from_fn(|k| {
+        if n == 0 || inj[k] == 0.0 {
+            f64::NAN
+        } else {
+            sum[k] / n as f64 / inj[k]
+        }
+    })
+}
+
+fn run_recording(
+    base: &Path,
+    r: &SuiteRecording,
+    inj: [f64; 3],
+    best: Mode,
+) -> Result<SuiteRow, RunError> {
+    let log = read_imu_csv(&base.join(&r.imu), &ImuCsvOptions::default())?;
+    let truth = read_truth_csv(&base.join(&r.truth))?;
+    let path_m = truth
+        .windows(2)
+        .map(|w| (w[1].x_m - w[0].x_m).hypot(w[1].y_m - w[0].y_m))
+        .sum();
+    let ctx = Ctx {
+        base,
+        rec: r,
+        log,
+        truth,
+    };
+    let none = BiasInjection::default();
+    let injected = BiasInjection {
+        constant_rad_s: inj,
+        ..Default::default()
+    };
+    let (_, zupt) = ctx.run(Mode::Zupt, BiasPrior::None, none)?;
+    let (_, zupt_rest) = ctx.run(Mode::Zupt, BiasPrior::RestMean, none)?;
+    let (_, zupt_inj) = ctx.run(Mode::Zupt, BiasPrior::None, injected)?;
+    let (paper0, _) = ctx.run(Mode::Paper, BiasPrior::None, none)?;
+    let (paper1, paper_inj) = ctx.run(Mode::Paper, BiasPrior::None, injected)?;
+    let (best0, best_fp) = ctx.run(best, BiasPrior::None, none)?;
+    let (best1, best_inj) = ctx.run(best, BiasPrior::None, injected)?;
+    let (best_r0, best_rest) = ctx.run(best, BiasPrior::RestMean, none)?;
+    // The injection starts when the initial rest ends (the alignment instant of the clean run).
+    let rest_end = best_r0
+        .trace
+        .t_s
+        .first()
+        .copied()
+        .unwrap_or(0.0)
+        .max(first_motion_s(&best_r0));
+    let late = BiasInjection {
+        constant_rad_s: inj,
+        after_s: rest_end,
+        ..Default::default()
+    };
+    let (best_r1, _) = ctx.run(best, BiasPrior::RestMean, late)?;
+    Ok(SuiteRow {
+        recording: r.name.clone(),
+        path_m,
+        zupt,
+        zupt_rest,
+        best: best_fp,
+        best_rest,
+        zupt_inj,
+        paper_inj,
+        best_inj,
+        paper_recovery: recovery(&paper1, &paper0, inj),
+        best_recovery: recovery(&best1, &best0, inj),
+        best_recovery_prior_late: recovery(&best_r1, &best_r0, inj),
+        best_converged_at_s: best1.converged_at_s,
+        paper_converged_at_s: paper1.converged_at_s,
+        best_reduction_pct: 100.0 * (1.0 - best_inj.rms_m / zupt_inj.rms_m),
+    })
+}
+
+/// The end of the initial rest: the first sample whose bias σ is defined (the estimator has
+/// aligned and navigates).
+fn first_motion_s(o: &RunOutcome) -> f64 {
+    o.trace
+        .t_s
+        .iter()
+        .zip(&o.trace.bias_sd_rad_s)
+        .find(|(_, sd)| sd[0].is_finite())
+        .map_or(0.0, |(t, _)| *t)
+}
+
+/// The table as Markdown.
+pub fn markdown(rows: &[SuiteRow]) -> String {
+    let mut s = String::new();
+    s.push_str("Footprint RMS error after first-leg alignment, metres (% of path); final-GCP error in metres.\n\n");
+    s.push_str("| recording | path | (1) ZUPT | (1b) ZUPT + rest mean | (2) injected, uncorrected | (3) paper, injected | (4) best, injected | best, no injection | best + rest mean |\n");
+    s.push_str("|---|---|---|---|---|---|---|---|---|\n");
+    let f = |x: &Footprint| format!("{:.2} ({:.2} %), {:.2}", x.rms_m, x.rms_pct, x.final_m);
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {:.1} m | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.recording,
+            r.path_m,
+            f(&r.zupt),
+            f(&r.zupt_rest),
+            f(&r.zupt_inj),
+            f(&r.paper_inj),
+            f(&r.best_inj),
+            f(&r.best),
+            f(&r.best_rest)
+        ));
+    }
+    s.push_str("\nInjected-bias recovery ([0.001, 0.001, 0.005] rad/s), per axis x / y / z, % of the injected value; convergence time.\n\n");
+    s.push_str("| recording | paper, no prior | best, no prior | best, prior + injection after the rest | paper converged at | best converged at | best vs uncorrected |\n");
+    s.push_str("|---|---|---|---|---|---|---|\n");
+    let p = |v: &[f64; 3]| {
+        format!(
+            "{:.0} / {:.0} / {:.0}",
+            100.0 * v[0],
+            100.0 * v[1],
+            100.0 * v[2]
+        )
+    };
+    let t = |v: Option<f64>| v.map_or("never".to_string(), |v| format!("{v:.1} s"));
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {:+.0} % |\n",
+            r.recording,
+            p(&r.paper_recovery),
+            p(&r.best_recovery),
+            p(&r.best_recovery_prior_late),
+            t(r.paper_converged_at_s),
+            t(r.best_converged_at_s),
+            -r.best_reduction_pct
+        ));
+    }
+    s
+}

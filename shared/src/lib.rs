@@ -1,0 +1,15 @@
+//! Code shared by the corridor daemon (`corridor-service`) and its clients (`corridor-client`).
+//!
+//! Map of the modules:
+//! - [`config`]: the TOML configuration, parsed with `deny_unknown_fields` and validated into
+//!   types that cannot hold bad values.
+//! - [`imu_csv`]: the reader for IMU logs in the `t_s,gx_rad_s,...` CSV format, with row-level
+//!   rejection that names file, line, column and value.
+//! - [`truth_csv`]: the reader for surveyed footprint ground truth (`ground_truth.csv`).
+//! - [`injection`]: synthetic gyro-bias injection (constant, ramp, delayed) used by the
+//!   offline runner and the replay producer.
+
+pub mod config;
+pub mod imu_csv;
+pub mod injection;
+pub mod truth_csv;
