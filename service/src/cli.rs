@@ -23,9 +23,22 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run the estimator over a CSV log and write estimates, innovations and a summary.
-    Run(RunArgs),
+    Run(Box<RunArgs>),
     /// Run a suite of recordings through the baselines and the bias modes; print the table.
     Eval(EvalArgs),
+    /// The demo on the bundled measured recordings: the results table, then one recording with
+    /// the paper's injected bias, its summary and its figures.
+    Demo(DemoArgs),
+}
+
+#[derive(Args, Debug)]
+struct DemoArgs {
+    /// Repository root (where configs/ and tests/data/ are).
+    #[arg(long, default_value = ".")]
+    root: PathBuf,
+    /// Output directory.
+    #[arg(long, default_value = "out/demo")]
+    out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -164,6 +177,44 @@ fn dispatch(cli: Cli) -> Result<()> {
             };
             let s = runner::run(&opts)?;
             println!("{}", serde_json::to_string_pretty(&brief(&s))?);
+            Ok(())
+        }
+        Command::Demo(a) => {
+            let suite = a.root.join("configs/eval/gdins.toml");
+            let rows = corridor_service::suite::run_suite(&suite)?;
+            let md = corridor_service::suite::markdown(&rows);
+            println!(
+                "# Results on the bundled recordings ({})\n",
+                suite.display()
+            );
+            print!("{md}");
+            std::fs::create_dir_all(&a.out)
+                .with_context(|| format!("creating {}", a.out.display()))?;
+            std::fs::write(a.out.join("results.md"), &md)?;
+            let data = a.root.join("tests/data/gdins_exp25_multi_corridor");
+            let run_dir = a.out.join("exp25_injected");
+            let mut file = ConfigFile::read(&a.root.join("configs/gdins.toml"))?;
+            file.alignment.gyro_bias_prior = Some(BiasPrior::None);
+            let opts = RunOptions {
+                imu: data.join("imu.csv"),
+                config: file.validate()?,
+                map: None,
+                truth: Some(data.join("ground_truth.csv")),
+                injection: BiasInjection {
+                    constant_rad_s: [0.001, 0.001, 0.005],
+                    ..Default::default()
+                },
+                plots: true,
+                out_dir: run_dir.clone(),
+                csv: ImuCsvOptions::default(),
+            };
+            let s = runner::run(&opts)?;
+            println!(
+                "\n# exp25 with the injected bias [0.001, 0.001, 0.005] rad/s, no prior, mode {}\n",
+                s.mode
+            );
+            println!("{}", serde_json::to_string_pretty(&brief(&s))?);
+            println!("\nFigures and CSV files: {}", run_dir.display());
             Ok(())
         }
         Command::Eval(a) => {

@@ -400,6 +400,15 @@ pub struct RunOptions {
 /// Runs a log and writes `estimates.csv`, `innovations.csv`, `summary.json` (and the figures).
 pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     let log = corridor_shared::imu_csv::read_imu_csv(&opts.imu, &opts.csv)?;
+    for r in log.rejected.iter().take(20) {
+        tracing::warn!("rejected input row: {}", r.located(&log.path));
+    }
+    if log.rejected.len() > 20 {
+        tracing::warn!(
+            "{} more rejected rows (counts in summary.json)",
+            log.rejected.len() - 20
+        );
+    }
     let truth = opts
         .truth
         .as_deref()
@@ -447,9 +456,109 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         )?),
         _ => None,
     };
+    if opts.plots {
+        // "Before": the same log through the ZUPT filter alone, without any bias correction.
+        let mut base = opts.config.clone();
+        base.mode = corridor_shared::config::Mode::Zupt;
+        base.alignment.gyro_bias_prior = corridor_shared::config::BiasPrior::None;
+        let before = run_log(&log, &base, &HeadingAid::None, &opts.injection, |_, _| {});
+        let eval_before = truth
+            .as_deref()
+            .and_then(|t| before.trace.evaluate(t, &EvalOptions::default()).ok());
+        write_figures(
+            &opts.out_dir,
+            &before.trace,
+            &outcome.trace,
+            truth.as_deref(),
+            (eval_before.as_ref(), eval.as_ref()),
+        )?;
+    }
     let summary = summarize(&log, &opts.config, &opts.injection, &outcome, eval);
     let sum_path = opts.out_dir.join("summary.json");
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
     std::fs::write(&sum_path, json + "\n").map_err(io_at(&sum_path))?;
     Ok(summary)
+}
+
+/// The trajectory aligned to the truth as the evaluation aligns it (first leg), or as is.
+fn aligned_xy(
+    trace: &Trace,
+    truth: Option<&[TruthPoint]>,
+    rep: Option<&EvalReport>,
+) -> (Vec<f64>, Vec<f64>) {
+    let (mut xs, mut ys): (Vec<f64>, Vec<f64>) = trace.xy_m.iter().map(|p| (p[0], p[1])).unzip();
+    if let (Some(t), Some(r)) = (truth, rep)
+        && let (Some(g0), Some(theta)) = (t.first(), r.rotation_deg)
+    {
+        let i0 = trace
+            .t_s
+            .partition_point(|&x| x < g0.t_s)
+            .min(trace.t_s.len().saturating_sub(1));
+        let (px, py) = (xs[i0], ys[i0]);
+        let (s, c) = theta.to_radians().sin_cos();
+        for (x, y) in xs.iter_mut().zip(ys.iter_mut()) {
+            let (dx, dy) = (*x - px, *y - py);
+            *x = c * dx - s * dy + g0.x_m;
+            *y = s * dx + c * dy + g0.y_m;
+        }
+    }
+    (xs, ys)
+}
+
+/// Writes the paper's figures: trajectory before/after with the footprints, the bias per axis
+/// with its ±σ band, and the filter's bias σ against time.
+pub fn write_figures(
+    dir: &Path,
+    before: &Trace,
+    after: &Trace,
+    truth: Option<&[TruthPoint]>,
+    evals: (Option<&EvalReport>, Option<&EvalReport>),
+) -> Result<(), RunError> {
+    use crate::plot::{Figure, Panel, Series};
+    let (bx, by) = aligned_xy(before, truth, evals.0);
+    let (ax, ay) = aligned_xy(after, truth, evals.1);
+    let mut traj = Panel::new("Trajectory (aligned on the first leg)", "x (m)", "y (m)")
+        .with_equal_aspect()
+        .with_series(Series::dashed("ZUPT filter, no bias correction", bx, by))
+        .with_series(Series::line("corrected", ax, ay));
+    if let Some(t) = truth {
+        traj = traj.with_series(
+            Series::markers(
+                "surveyed footprints",
+                t.iter().map(|p| p.x_m).collect(),
+                t.iter().map(|p| p.y_m).collect(),
+            )
+            .with_point_labels((0..t.len()).map(|i| i.to_string()).collect()),
+        );
+    }
+    let f = dir.join("trajectory.svg");
+    Figure::new("corridor: trajectory before and after bias correction")
+        .with_panel(traj)
+        .with_size(900, 700)
+        .write_svg(&f)
+        .map_err(io_at(&f))?;
+
+    let mut bias = Figure::new("Gyro-bias estimate (sensor axes) with ±1σ").with_shared_x();
+    let mut cov = Figure::new("Bias-filter σ against time").with_shared_x();
+    for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+        let b: Vec<f64> = after.bias_rad_s.iter().map(|v| v[k]).collect();
+        let sd: Vec<f64> = after.bias_sd_rad_s.iter().map(|v| v[k]).collect();
+        bias = bias.with_panel(
+            Panel::new(format!("bias {axis}"), "t (s)", "rad/s").with_series(
+                Series::line(format!("b_{axis}"), after.t_s.clone(), b).with_band(sd.clone()),
+            ),
+        );
+        cov = cov.with_panel(
+            Panel::new(format!("σ {axis}"), "t (s)", "rad/s").with_series(Series::line(
+                format!("σ_{axis}"),
+                after.t_s.clone(),
+                sd,
+            )),
+        );
+    }
+    let f = dir.join("bias.svg");
+    bias.write_svg(&f).map_err(io_at(&f))?;
+    let f = dir.join("covariance.svg");
+    cov.write_svg(&f).map_err(io_at(&f))?;
+    Ok(())
 }

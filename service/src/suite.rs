@@ -2,11 +2,11 @@
 //! footprint error and injected-bias recovery (`corridor eval --suite FILE`).
 //!
 //! Per recording:
-//! 1. `zupt`: the ZUPT filter alone, no prior (the standard foot INS).
-//! 1b. `zupt+rest`: the same with the gyro mean of the first rest subtracted.
-//! 2. `zupt+inj`: the injected bias, uncorrected (ZUPT filter, no prior).
-//! 3. `paper+inj`: the paper's mode with the injected bias, no prior.
-//! 4. `best+inj`: the best mode with the injected bias, no prior.
+//! - (1) `zupt`: the ZUPT filter alone, no prior (the standard foot INS).
+//! - (1b) `zupt+rest`: the same with the gyro mean of the first rest subtracted.
+//! - (2) `zupt+inj`: the injected bias, uncorrected (ZUPT filter, no prior).
+//! - (3) `paper+inj`: the paper's mode with the injected bias, no prior.
+//! - (4) `best+inj`: the best mode with the injected bias, no prior.
 //!
 //! Recovery = (bias with injection − bias without) / injected, averaged over the samples after
 //! both runs have converged (the real-time σ criterion), no prior; and separately with the
@@ -72,7 +72,7 @@ pub enum SuiteError {
         /// Recording.
         name: String,
         /// Cause.
-        source: RunError,
+        source: Box<RunError>,
     },
 }
 
@@ -143,7 +143,7 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
         .map(|r| {
             run_recording(base, r, inj, best_mode).map_err(|source| SuiteError::Run {
                 name: r.name.clone(),
-                source,
+                source: Box::new(source),
             })
         })
         .collect()

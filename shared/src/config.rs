@@ -216,6 +216,9 @@ pub struct AlignmentFile {
     pub gyro_bias_prior: Option<BiasPrior>,
     /// Gravity: the mean specific force over the rest is used when absent.
     pub gravity_m_s2: Option<f64>,
+    /// The last part of the rest left out of the means: the foot starts to move before the
+    /// detector sees it (default 0.5 s).
+    pub rest_tail_s: Option<f64>,
 }
 
 /// `[detector]` section.
@@ -322,6 +325,8 @@ pub struct AlignmentConfig {
     pub gyro_bias_prior: BiasPrior,
     /// Fixed gravity, or `None` for the rest mean.
     pub gravity_m_s2: Option<Positive>,
+    /// Tail of the rest left out of the means.
+    pub rest_tail_s: f64,
 }
 
 /// Validated `[detector]`.
@@ -463,6 +468,7 @@ impl ConfigFile {
                     .gravity_m_s2
                     .map(|g| Positive::new("alignment.gravity_m_s2", g))
                     .transpose()?,
+                rest_tail_s: non_negative("alignment.rest_tail_s", a.rest_tail_s.unwrap_or(0.5))?,
             },
             detector: DetectorConfig {
                 kind: d.kind.unwrap_or(DetectorKind::Shoe),

@@ -165,12 +165,93 @@ impl Default for Estimate {
     }
 }
 
-#[derive(Debug, Clone, Default)]
-struct RestSums {
+/// Sums of specific force and rate over part of the rest.
+#[derive(Debug, Clone, Copy, Default)]
+struct Sums {
     n: u64,
-    t_first_s: f64,
     f: Vector3<f64>,
     w: Vector3<f64>,
+}
+
+impl Sums {
+    fn add(&mut self, o: &Sums) {
+        self.n += o.n;
+        self.f += o.f;
+        self.w += o.w;
+    }
+}
+
+/// The initial rest, in blocks, so that its last `tail_s` (the foot already starting to move
+/// while the detector still says "stance") can be left out of the means. Fixed capacity.
+#[derive(Debug, Clone)]
+struct RestSums {
+    t_first_s: f64,
+    settled: Sums,
+    recent: std::collections::VecDeque<Sums>,
+    current: Sums,
+    current_start_s: f64,
+    capacity: usize,
+}
+
+/// Block length of the rest accumulator.
+const REST_BLOCK_S: f64 = 0.05;
+
+impl RestSums {
+    fn new(tail_s: f64) -> Self {
+        let capacity = (tail_s / REST_BLOCK_S).ceil() as usize + 1;
+        Self {
+            t_first_s: f64::NAN,
+            settled: Sums::default(),
+            recent: std::collections::VecDeque::with_capacity(capacity + 1),
+            current: Sums::default(),
+            current_start_s: f64::NAN,
+            capacity,
+        }
+    }
+
+    fn clear(&mut self) {
+        self.t_first_s = f64::NAN;
+        self.settled = Sums::default();
+        self.recent.clear();
+        self.current = Sums::default();
+    }
+
+    fn is_empty(&self) -> bool {
+        self.t_first_s.is_nan()
+    }
+
+    fn push(&mut self, t_s: f64, f: &Vector3<f64>, w: &Vector3<f64>) {
+        if self.is_empty() {
+            self.t_first_s = t_s;
+            self.current_start_s = t_s;
+        }
+        if t_s - self.current_start_s >= REST_BLOCK_S {
+            if self.recent.len() == self.capacity
+                && let Some(old) = self.recent.pop_front()
+            {
+                self.settled.add(&old);
+            }
+            self.recent.push_back(self.current);
+            self.current = Sums::default();
+            self.current_start_s = t_s;
+        }
+        self.current.n += 1;
+        self.current.f += f;
+        self.current.w += w;
+    }
+
+    /// Means over the settled part, or over everything when the rest was too short for that.
+    fn means(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let mut s = self.settled;
+        if s.n == 0 {
+            for b in &self.recent {
+                s.add(b);
+            }
+            s.add(&self.current);
+        }
+        let n = s.n.max(1) as f64;
+        (s.f / n, s.w / n)
+    }
 }
 
 /// The bias filter of the `paper` and `rotation_aware` modes.
@@ -231,7 +312,7 @@ impl Estimator {
             phase: Phase::Aligning,
             counters: Counters::default(),
             last: None,
-            rest: RestSums::default(),
+            rest: RestSums::new(cfg.alignment.rest_tail_s),
             eskf: None,
             bias: BiasFilter::InEskf,
             tilt0: UnitQuaternion::identity(),
@@ -336,13 +417,8 @@ impl Estimator {
 
     fn align_step(&mut self, t_s: f64, w: &Vector3<f64>, f: &Vector3<f64>, stance: bool) {
         if stance {
-            if self.rest.n == 0 {
-                self.rest.t_first_s = t_s;
-            }
-            self.rest.n += 1;
-            self.rest.f += f;
-            self.rest.w += w;
-            let mean_f = self.rest.f / self.rest.n as f64;
+            self.rest.push(t_s, f, w);
+            let (mean_f, _) = self.rest.means();
             let (roll, pitch) = tilt_from_specific_force(&mean_f);
             let q = from_euler_zyx(roll, pitch, 0.0);
             self.out.nav_from_body = [q.w, q.i, q.j, q.k];
@@ -350,21 +426,19 @@ impl Estimator {
             self.out.pitch_rad = pitch;
             return;
         }
-        let rest_s = if self.rest.n > 0 {
-            t_s - self.rest.t_first_s
-        } else {
+        let rest_s = if self.rest.is_empty() {
             0.0
+        } else {
+            t_s - self.rest.t_first_s
         };
         if rest_s < self.cfg.alignment.min_rest_s.get() {
-            if self.rest.n > 0 {
+            if !self.rest.is_empty() {
                 self.counters.alignment_restarts += 1;
             }
-            self.rest = RestSums::default();
+            self.rest.clear();
             return;
         }
-        let n = self.rest.n as f64;
-        let mean_f = self.rest.f / n;
-        let mean_w = self.rest.w / n;
+        let (mean_f, mean_w) = self.rest.means();
         let g = self
             .cfg
             .alignment
@@ -630,5 +704,93 @@ fn check_finite(s: &ImuInput) -> Result<(), SampleError> {
             value,
         }),
         None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use corridor_shared::config::{Config, ConfigFile};
+
+    fn level_rest(t_s: f64) -> ImuInput {
+        ImuInput {
+            t_s,
+            gyro_rad_s: [0.0; 3],
+            accel_m_s2: [0.0, 0.0, 9.81],
+        }
+    }
+
+    #[test]
+    fn rotation_about_z_at_a_known_rate_gives_the_known_heading() {
+        let mut est = Estimator::new(Config::default(), HeadingAid::None);
+        let dt = 0.005;
+        let mut k = 0;
+        while k < 400 {
+            est.step(&level_rest(k as f64 * dt)).unwrap();
+            k += 1;
+        }
+        assert_eq!(est.phase(), Phase::Aligning);
+        // 0.25 s at 4 rad/s about z: the heading turns by exactly 1 rad. (The rate is high
+        // enough for the windowed detector to call the first rotating sample motion.)
+        for _ in 0..50 {
+            let s = ImuInput {
+                t_s: k as f64 * dt,
+                gyro_rad_s: [0.0, 0.0, 4.0],
+                accel_m_s2: [0.0, 0.0, 9.81],
+            };
+            est.step(&s).unwrap();
+            k += 1;
+        }
+        let e = est.step(&level_rest(k as f64 * dt)).unwrap();
+        assert_eq!(e.phase, Phase::Calibrating);
+        // 49 full steps plus half of the first and of the last step (trapezoid) = 50 steps.
+        assert!((e.yaw_rad - 1.0).abs() < 1e-9, "yaw {}", e.yaw_rad);
+        assert!(e.roll_rad.abs() < 1e-9 && e.pitch_rad.abs() < 1e-9);
+    }
+
+    #[test]
+    fn rest_mean_prior_recovers_a_static_bias() {
+        let cfg = ConfigFile::default().validate().unwrap();
+        let bias = [0.004, -0.002, 0.006];
+        let mut est = Estimator::new(cfg, HeadingAid::None);
+        let dt = 0.005;
+        for k in 0..600 {
+            let s = ImuInput {
+                t_s: k as f64 * dt,
+                gyro_rad_s: bias,
+                accel_m_s2: [0.0, 0.0, 9.81],
+            };
+            est.step(&s).unwrap();
+        }
+        let moving = ImuInput {
+            t_s: 600.0 * dt,
+            gyro_rad_s: [0.0, 3.0, 0.0],
+            accel_m_s2: [0.0, 0.0, 9.81],
+        };
+        let e = est.step(&moving).unwrap();
+        for (got, want) in e.gyro_bias_rad_s.iter().zip(bias) {
+            assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn bad_samples_are_refused_counted_and_change_nothing() {
+        let mut est = Estimator::new(Config::default(), HeadingAid::None);
+        est.step(&level_rest(0.0)).unwrap();
+        est.step(&level_rest(0.005)).unwrap();
+        let mut nan = level_rest(0.01);
+        nan.gyro_rad_s[1] = f64::NAN;
+        let err = est.step(&nan).unwrap_err();
+        assert!(err.to_string().contains("gy_rad_s"), "{err}");
+        let err = est.step(&level_rest(0.005)).unwrap_err();
+        assert!(
+            matches!(err, SampleError::TimeNotIncreasing { prev_t_s, .. } if prev_t_s == 0.005)
+        );
+        est.step(&level_rest(0.01)).unwrap();
+        let c = est.counters();
+        assert_eq!(
+            (c.samples, c.rejected_non_finite, c.rejected_time),
+            (3, 1, 1)
+        );
     }
 }

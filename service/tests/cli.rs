@@ -1,0 +1,216 @@
+//! The `corridor` binary: outputs of `run`, and clear errors for bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn corridor(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_corridor"))
+        .args(args)
+        .output()
+        .expect("corridor runs")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("corridor-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn run_writes_estimates_innovations_and_summary() {
+    let out = tmp("run");
+    let data = root().join("tests/data/gdins_exp36_corridor_out_and_back");
+    let o = corridor(&[
+        "run",
+        "--imu",
+        data.join("imu.csv").to_str().unwrap(),
+        "--truth",
+        data.join("ground_truth.csv").to_str().unwrap(),
+        "--config",
+        root().join("configs/gdins.toml").to_str().unwrap(),
+        "--inject-gyro-bias",
+        "0.001,0.001,0.005",
+        "--plots",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let est = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
+    let header = est.lines().next().unwrap();
+    for col in [
+        "t_s",
+        "x_m",
+        "y_m",
+        "z_m",
+        "roll_rad",
+        "pitch_rad",
+        "yaw_rad",
+        "bias_x_rad_s",
+        "bias_y_rad_s",
+        "bias_z_rad_s",
+        "bias_sd_x_rad_s",
+        "bias_sd_y_rad_s",
+        "bias_sd_z_rad_s",
+        "stance",
+    ] {
+        assert!(header.split(',').any(|c| c == col), "missing column {col}");
+    }
+    assert_eq!(
+        est.lines().count(),
+        14_001,
+        "one row per sample plus the header"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "bias_rad_s",
+        "bias_mean_converged_rad_s",
+        "converged_at_s",
+        "stances",
+        "heading_observations_used",
+        "heading_observations_rejected",
+        "input_rows_rejected",
+    ] {
+        assert!(summary.get(key).is_some(), "summary lacks {key}");
+    }
+    assert_eq!(summary["samples"], 14_000);
+    assert!(summary["stances"].as_u64().unwrap() > 50);
+    let rms = summary["eval"]["rms_error_m"].as_f64().unwrap();
+    assert!(rms > 0.0 && rms < 3.0, "rms {rms}");
+    let inn = std::fs::read_to_string(out.join("innovations.csv")).unwrap();
+    assert!(inn.lines().any(|l| l.contains(",heading,1,")));
+    for fig in ["trajectory.svg", "bias.svg", "covariance.svg"] {
+        let svg = std::fs::read_to_string(out.join(fig)).unwrap_or_else(|e| panic!("{fig}: {e}"));
+        assert!(svg.starts_with("<svg") || svg.starts_with("<?xml"), "{fig}");
+    }
+}
+
+#[test]
+fn malformed_rows_are_counted_and_reported_with_line_column_and_value() {
+    let dir = tmp("bad");
+    let src = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let mut lines: Vec<String> = std::fs::read_to_string(src)
+        .unwrap()
+        .lines()
+        .map(String::from)
+        .collect();
+    // line 52 of the file: a malformed gyro value; line 60: NaN; line 70: time going backwards
+    let mut f: Vec<String> = lines[51].split(',').map(String::from).collect();
+    f[2] = "abc".into();
+    lines[51] = f.join(",");
+    let mut f: Vec<String> = lines[59].split(',').map(String::from).collect();
+    f[5] = "NaN".into();
+    lines[59] = f.join(",");
+    let mut f: Vec<String> = lines[69].split(',').map(String::from).collect();
+    f[0] = "0.0001".into();
+    lines[69] = f.join(",");
+    let imu = dir.join("imu.csv");
+    std::fs::write(&imu, lines.join("\n") + "\n").unwrap();
+    let out = dir.join("o");
+    let o = corridor(&[
+        "run",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("imu.csv:52") && err.contains("gy_rad_s") && err.contains("abc"),
+        "{err}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["input_rows_rejected"]["malformed"], 1);
+    assert_eq!(summary["input_rows_rejected"]["non_finite"], 1);
+    assert_eq!(summary["input_rows_rejected"]["time_not_increasing"], 1);
+    assert_eq!(summary["samples"], 14_000 - 3);
+    let examples = summary["input_rows_rejected_examples"].to_string();
+    assert!(
+        examples.contains("imu.csv:60") && examples.contains("ay_m_s2"),
+        "{examples}"
+    );
+}
+
+#[test]
+fn too_many_bad_rows_stop_the_run_with_the_first_one_named() {
+    let dir = tmp("many");
+    let mut text = String::from("t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2\n");
+    for k in 0..200 {
+        let gy = if k % 10 == 3 {
+            "abc".to_string()
+        } else {
+            "0.0".to_string()
+        };
+        text += &format!("{},0.0,{gy},0.0,0.0,0.0,9.81\n", k as f64 * 0.005);
+    }
+    let imu = dir.join("imu.csv");
+    std::fs::write(&imu, text).unwrap();
+    let o = corridor(&[
+        "run",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--out",
+        dir.join("o").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("imu.csv:5") && err.contains("gy_rad_s") && err.contains("abc"),
+        "{err}"
+    );
+}
+
+#[test]
+fn degrees_per_second_are_refused() {
+    let dir = tmp("deg");
+    let imu = dir.join("imu.csv");
+    let mut text = String::from("t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2\n");
+    for k in 0..400 {
+        let gy = if k > 200 {
+            300.0 * ((k as f64) * 0.1).sin()
+        } else {
+            0.0
+        };
+        text += &format!("{},0.0,{gy},0.0,0.0,0.0,9.81\n", k as f64 * 0.005);
+    }
+    std::fs::write(&imu, text).unwrap();
+    let o = corridor(&[
+        "run",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--out",
+        dir.join("o").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("deg/s"), "{err}");
+}
+
+#[test]
+fn bad_config_names_the_key() {
+    let dir = tmp("cfg");
+    let cfg = dir.join("c.toml");
+    std::fs::write(&cfg, "[heading]\nsigma_deg = -3.0\n").unwrap();
+    let imu = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let o = corridor(&[
+        "run",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        dir.join("o").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("heading.sigma_deg") && err.contains("c.toml"),
+        "{err}"
+    );
+}
