@@ -423,7 +423,9 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     writeln!(est_w, "{ESTIMATES_HEADER}").map_err(io_at(&est_path))?;
     writeln!(inn_w, "{INNOVATIONS_HEADER}").map_err(io_at(&inn_path))?;
     let mut io_err: Option<RunError> = None;
+    let mut progress = Progress::new(log.rows.len());
     let outcome = run_log(&log, &opts.config, &aid, &opts.injection, |input, e| {
+        progress.tick();
         if io_err.is_some() {
             return;
         }
@@ -436,6 +438,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     if let Some(e) = io_err {
         return Err(e);
     }
+    progress.finish();
     est_w.flush().map_err(io_at(&est_path))?;
     inn_w.flush().map_err(io_at(&inn_path))?;
     if outcome.counters.samples > 0
@@ -561,4 +564,46 @@ pub fn write_figures(
     let f = dir.join("covariance.svg");
     cov.write_svg(&f).map_err(io_at(&f))?;
     Ok(())
+}
+
+/// A progress bar on stderr, shown only when stderr is a terminal and the log is long.
+struct Progress {
+    total: usize,
+    done: usize,
+    shown_pct: usize,
+    enabled: bool,
+}
+
+impl Progress {
+    fn new(total: usize) -> Self {
+        use std::io::IsTerminal;
+        Self {
+            total,
+            done: 0,
+            shown_pct: 0,
+            enabled: total >= 100_000 && std::io::stderr().is_terminal(),
+        }
+    }
+
+    fn tick(&mut self) {
+        self.done += 1;
+        if !self.enabled {
+            return;
+        }
+        let pct = self.done * 100 / self.total.max(1);
+        if pct > self.shown_pct {
+            self.shown_pct = pct;
+            let bar = "#".repeat(pct / 2);
+            eprint!(
+                "\r[{bar:<50}] {pct:3} % ({} / {} samples)",
+                self.done, self.total
+            );
+        }
+    }
+
+    fn finish(&self) {
+        if self.enabled {
+            eprintln!();
+        }
+    }
 }
