@@ -1,6 +1,6 @@
 //! Throughput of the IMU CSV parser ([`corridor_shared::imu_csv::parse_imu_csv`]) in rows/s.
 //!
-//! Reads `shared/data/gdins_exp29_corridor_circuit/imu.csv` (beside the repository) into memory
+//! Reads the bundled `tests/data/gdins_exp29_corridor_circuit/imu.csv` into memory
 //! once, or generates 100 000 synthetic rows of the same shape when that file is absent, and
 //! benchmarks parsing it from memory with the default options (units check included). Criterion
 //! reports the throughput in elements/s, which here are rows/s.
@@ -19,7 +19,7 @@ const SYNTHETIC_ROWS: usize = 100_000;
 /// The real recording, or a synthetic one, as (name, text).
 fn input() -> (PathBuf, String) {
     let real = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data/gdins_exp29_corridor_circuit/imu.csv");
+        .join("../tests/data/gdins_exp29_corridor_circuit/imu.csv");
     if let Ok(text) = std::fs::read_to_string(&real) {
         return (real, text);
     }

@@ -676,7 +676,7 @@ mod tests {
 
     #[test]
     fn real_files_parse_with_expected_counts_and_no_rejections() {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data");
         // (set, imu data rows, has magnetometer, ground-truth points)
         let sets = [
             ("gdins_exp29_corridor_circuit", 21001, true, 9),
