@@ -29,6 +29,24 @@ enum Command {
     /// The demo on the bundled measured recordings: the results table, then one recording with
     /// the paper's injected bias, its summary and its figures.
     Demo(DemoArgs),
+    /// Run the estimator as a daemon behind iceoryx2 services until SIGINT/SIGTERM.
+    Serve(ServeArgs),
+}
+
+#[derive(Args, Debug)]
+struct ServeArgs {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// iceoryx2 domain to serve; processes on other domains never see this daemon.
+    #[arg(long, default_value = corridor_shared::services::DEFAULT_DOMAIN)]
+    domain: String,
+    /// live (a lagging reader loses the oldest samples, counted) or lossless (the producer waits).
+    #[arg(long, default_value = "live")]
+    delivery: corridor_shared::services::Delivery,
+    /// Checkpoint file: loaded at start (a bad one is moved aside, cold start), saved at each
+    /// end of stream and at shutdown.
+    #[arg(long)]
+    checkpoint: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -236,6 +254,34 @@ fn dispatch(cli: Cli) -> Result<()> {
                 opts.config.max_dt_s.get(),
                 e.and_then(|e| e.loop_closure_error_m).unwrap_or(f64::NAN),
                 e.map_or(f64::NAN, |e| e.traj_path_length_m),
+            );
+            Ok(())
+        }
+        Command::Serve(a) => {
+            use corridor_service::daemon::{self, DaemonConfig};
+            let config = a.model.config()?;
+            let aid = runner::heading_aid(&config, a.model.map.as_deref())?;
+            let domain = corridor_shared::services::Domain::new(&a.domain)?;
+            let mut cfg = DaemonConfig::new(domain, config, aid);
+            cfg.delivery = a.delivery;
+            cfg.checkpoint = a.checkpoint.clone();
+            let report = daemon::serve(cfg)?;
+            let d = &report.diagnostics;
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&serde_json::json!({
+                    "streams_finished": report.streams_finished,
+                    "received": d.received,
+                    "accepted": d.accepted,
+                    "seq_gaps": d.seq_gaps,
+                    "rejected_non_finite": d.rejected_non_finite,
+                    "rejected_time": d.rejected_time,
+                    "rejected_duplicate_seq": d.rejected_duplicate_seq,
+                    "late": d.late,
+                    "dropped_overflow": d.dropped_overflow,
+                    "undelivered": d.undelivered,
+                    "warnings": report.warnings,
+                }))?
             );
             Ok(())
         }

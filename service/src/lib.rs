@@ -2,12 +2,18 @@
 //! runner and its daemon.
 //!
 //! Map of the modules:
+//! - [`checkpoint`]: atomic save/load of the bias, its covariance and the attitude (the only
+//!   user of bincode).
 //! - [`core`]: the pure estimator (no IO); everything else is an adapter around it.
+//! - [`daemon`]: the estimator behind iceoryx2 services (`corridor serve`): receive and estimator
+//!   threads, delivery policies, diagnostics.
 //! - [`eval`]: footprint-error evaluation, a port of the reference `eval_traj.py`.
 //! - [`plot`]: dependency-free SVG figures.
 //! - [`runner`]: the offline runner (CSV log in, estimates, innovations and summary out).
 //! - [`suite`]: the results table over several recordings (`corridor eval`).
+pub mod checkpoint;
 pub mod core;
+pub mod daemon;
 pub mod eval;
 pub mod plot;
 pub mod runner;

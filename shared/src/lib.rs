@@ -8,8 +8,13 @@
 //! - [`truth_csv`]: the reader for surveyed footprint ground truth (`ground_truth.csv`).
 //! - [`injection`]: synthetic gyro-bias injection (constant, ramp, delayed) used by the
 //!   offline runner and the replay producer.
+//! - [`wire`]: the zero-copy `#[repr(C)]` messages exchanged with the daemon over iceoryx2.
+//! - [`services`]: service names, QoS, the [`services::Domain`] namespace and the functions both
+//!   sides use to open the services.
 
 pub mod config;
 pub mod imu_csv;
 pub mod injection;
+pub mod services;
 pub mod truth_csv;
+pub mod wire;

@@ -1,0 +1,233 @@
+//! [`Producer`]: feeds the daemon.
+
+use crate::{ClientError, io_err};
+use corridor_shared::services::{
+    ANGLES_SERVICE, Access, Delivery, Domain, IMU_SERVICE, PubSub, ServiceError,
+};
+use corridor_shared::wire::{AngleObservation, FLAG_END_OF_STREAM, ImuSample};
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::update_connections::UpdateConnections;
+use iceoryx2::prelude::*;
+use std::time::{Duration, Instant};
+
+/// How long a lossless send keeps retrying a sample that reached no subscriber although one is
+/// connected (its receive side not attached yet, see the iceoryx2 notes).
+const LOSSLESS_RETRY: Duration = Duration::from_secs(2);
+
+/// What a [`Producer`] has sent so far.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ProducerStats {
+    /// IMU messages sent (end-of-stream markers included).
+    pub imu_sent: u64,
+    /// IMU messages that reached no subscriber.
+    pub imu_undelivered: u64,
+    /// Angle observations sent.
+    pub angles_sent: u64,
+    /// Angle observations that reached no subscriber.
+    pub angles_undelivered: u64,
+    /// Sends repeated because a connected subscriber was not attached yet (lossless only).
+    pub retries: u64,
+}
+
+/// Publishes IMU samples and angle observations to the daemon of a domain and notifies it.
+///
+/// Sequence numbers are assigned by [`Producer::send_imu`] (0, 1, 2, …);
+/// [`Producer::send_imu_raw`] sends a sample as given (for bridges and tests).
+pub struct Producer {
+    domain: Domain,
+    delivery: Delivery,
+    imu_service: PubSub<ImuSample>,
+    imu: Publisher<ipc::Service, ImuSample, ()>,
+    imu_notifier: Notifier<ipc::Service>,
+    angles: Publisher<ipc::Service, AngleObservation, ()>,
+    angles_notifier: Notifier<ipc::Service>,
+    next_imu_seq: u64,
+    next_angles_seq: u64,
+    stats: ProducerStats,
+    // Declared last: dropped after the ports.
+    node: Node<ipc::Service>,
+}
+
+impl std::fmt::Debug for Producer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Producer")
+            .field("domain", &self.domain.name())
+            .field("delivery", &self.delivery)
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Producer {
+    /// Opens (or creates) the input services of `domain` with `delivery` (which must match the
+    /// daemon's) and creates the publishers on a node called `node_name`. iceoryx2 handles
+    /// SIGINT/SIGTERM for this node: see [`Producer::termination_requested`].
+    pub fn new(domain: &Domain, node_name: &str, delivery: Delivery) -> Result<Self, ClientError> {
+        let node = domain.node(node_name, SignalHandlingMode::HandleTerminationRequests)?;
+        let port_err = |service, port, e: &dyn std::fmt::Debug| {
+            ClientError::Service(ServiceError::Port {
+                service,
+                port,
+                domain: domain.name().to_owned(),
+                detail: format!("{e:?}"),
+            })
+        };
+        let imu_service = domain.open::<ImuSample>(&node, Access::Owner(delivery))?;
+        let imu = imu_service
+            .publisher_builder()
+            .backpressure_strategy(delivery.backpressure())
+            .max_loaned_samples(2)
+            .create()
+            .map_err(|e| port_err(IMU_SERVICE, "publisher", &e))?;
+        let imu_notifier = domain
+            .open_event(&node, IMU_SERVICE, true)?
+            .notifier_builder()
+            .create()
+            .map_err(|e| port_err(IMU_SERVICE, "notifier", &e))?;
+        let angles_service = domain.open::<AngleObservation>(&node, Access::Owner(delivery))?;
+        let angles = angles_service
+            .publisher_builder()
+            .backpressure_strategy(delivery.backpressure())
+            .max_loaned_samples(2)
+            .create()
+            .map_err(|e| port_err(ANGLES_SERVICE, "publisher", &e))?;
+        let angles_notifier = domain
+            .open_event(&node, ANGLES_SERVICE, true)?
+            .notifier_builder()
+            .create()
+            .map_err(|e| port_err(ANGLES_SERVICE, "notifier", &e))?;
+        Ok(Self {
+            domain: domain.clone(),
+            delivery,
+            imu_service,
+            imu,
+            imu_notifier,
+            angles,
+            angles_notifier,
+            next_imu_seq: 0,
+            next_angles_seq: 0,
+            stats: ProducerStats::default(),
+            node,
+        })
+    }
+
+    /// Waits until at least one subscriber (the daemon) reads the IMU service, up to `timeout`.
+    pub fn wait_for_daemon(&self, timeout: Duration) -> Result<(), ClientError> {
+        let start = Instant::now();
+        while self.imu_service.dynamic_config().number_of_subscribers() == 0 {
+            if self.termination_requested() {
+                return Err(ClientError::Interrupted);
+            }
+            if start.elapsed() >= timeout {
+                return Err(ClientError::NoPeer {
+                    service: IMU_SERVICE,
+                    domain: self.domain.name().to_owned(),
+                    peer: "subscriber",
+                    waited: timeout,
+                });
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        self.imu
+            .update_connections()
+            .map_err(|e| io_err(IMU_SERVICE, &self.domain, "update connections", e))?;
+        Ok(())
+    }
+
+    /// Sends one IMU sample with the next sequence number (its `seq` is overwritten); returns the
+    /// number of subscribers that received it.
+    pub fn send_imu(&mut self, mut sample: ImuSample) -> Result<usize, ClientError> {
+        sample.seq = self.next_imu_seq;
+        self.send_imu_raw(sample)
+    }
+
+    /// Sends one IMU sample as given, `seq` included; the automatic sequence continues after it.
+    pub fn send_imu_raw(&mut self, sample: ImuSample) -> Result<usize, ClientError> {
+        self.next_imu_seq = sample.seq.wrapping_add(1);
+        let n = send(
+            &self.imu,
+            &self.imu_service,
+            self.delivery,
+            sample,
+            &mut self.stats.retries,
+        )
+        .map_err(|e| io_err(IMU_SERVICE, &self.domain, "send", e))?;
+        self.stats.imu_sent += 1;
+        if n == 0 {
+            self.stats.imu_undelivered += 1;
+        }
+        self.imu_notifier
+            .notify()
+            .map_err(|e| io_err(IMU_SERVICE, &self.domain, "notify", e))?;
+        Ok(n)
+    }
+
+    /// Sends the end-of-stream marker (a data-less [`ImuSample`] with [`FLAG_END_OF_STREAM`]):
+    /// the daemon answers with end-of-stream outputs and resets its estimator.
+    pub fn finish(&mut self) -> Result<usize, ClientError> {
+        self.send_imu(ImuSample {
+            t_s: f64::NAN,
+            temp_c: f64::NAN,
+            flags: FLAG_END_OF_STREAM,
+            ..ImuSample::default()
+        })
+    }
+
+    /// Sends one angle observation with the next sequence number.
+    pub fn send_angles(&mut self, mut obs: AngleObservation) -> Result<usize, ClientError> {
+        obs.seq = self.next_angles_seq;
+        self.next_angles_seq += 1;
+        let n = self
+            .angles
+            .send_copy(obs)
+            .map_err(|e| io_err(ANGLES_SERVICE, &self.domain, "send", e))?;
+        self.stats.angles_sent += 1;
+        if n == 0 {
+            self.stats.angles_undelivered += 1;
+        }
+        self.angles_notifier
+            .notify()
+            .map_err(|e| io_err(ANGLES_SERVICE, &self.domain, "notify", e))?;
+        Ok(n)
+    }
+
+    /// What was sent so far.
+    pub fn stats(&self) -> ProducerStats {
+        self.stats
+    }
+
+    /// The delivery policy.
+    pub fn delivery(&self) -> Delivery {
+        self.delivery
+    }
+
+    /// True once SIGINT or SIGTERM was received by this process.
+    pub fn termination_requested(&self) -> bool {
+        self.node.wait(Duration::ZERO).is_err()
+    }
+}
+
+/// Sends `sample`; in lossless mode retries while a connected subscriber was not reached.
+fn send(
+    publisher: &Publisher<ipc::Service, ImuSample, ()>,
+    service: &PubSub<ImuSample>,
+    delivery: Delivery,
+    sample: ImuSample,
+    retries: &mut u64,
+) -> Result<usize, iceoryx2::port::SendError> {
+    let mut n = publisher.send_copy(sample)?;
+    if n > 0 || delivery == Delivery::Live {
+        return Ok(n);
+    }
+    let start = Instant::now();
+    while n == 0
+        && service.dynamic_config().number_of_subscribers() > 0
+        && start.elapsed() < LOSSLESS_RETRY
+    {
+        std::thread::sleep(Duration::from_micros(200));
+        *retries += 1;
+        n = publisher.send_copy(sample)?;
+    }
+    Ok(n)
+}

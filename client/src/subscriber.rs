@@ -1,0 +1,143 @@
+//! [`Subscriber<T>`]: one output stream of the daemon.
+
+use crate::{ClientError, io_err};
+use corridor_shared::services::{Access, Domain, PubSub, ServiceError, Topic};
+use iceoryx2::port::listener::Listener;
+use iceoryx2::prelude::*;
+use std::time::{Duration, Instant};
+
+/// Receives the messages of type `T` (e.g. [`AttitudeSample`]) that the daemon publishes, with
+/// a blocking [`Subscriber::recv_timeout`] (the daemon notifies the paired event service after
+/// each send, so waiting costs no CPU).
+///
+/// [`AttitudeSample`]: corridor_shared::wire::AttitudeSample
+pub struct Subscriber<T: Topic> {
+    domain: Domain,
+    service: PubSub<T>,
+    sub: iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>,
+    listener: Listener<ipc::Service>,
+    // Declared last: dropped after the ports.
+    node: Node<ipc::Service>,
+}
+
+impl<T: Topic> std::fmt::Debug for Subscriber<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Subscriber")
+            .field("service", &T::SERVICE)
+            .field("domain", &self.domain.name())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<T: Topic> Subscriber<T> {
+    /// Opens the service of `T` in `domain` as a reader on a node called `node_name`, waiting up
+    /// to `timeout` for it to exist and to have a publisher (the daemon); then attaches to it so
+    /// nothing the daemon sends afterwards is missed. iceoryx2 handles SIGINT/SIGTERM for this
+    /// node: waits end with [`ClientError::Interrupted`].
+    pub fn open(domain: &Domain, node_name: &str, timeout: Duration) -> Result<Self, ClientError> {
+        let node = domain.node(node_name, SignalHandlingMode::HandleTerminationRequests)?;
+        let start = Instant::now();
+        let no_peer = || ClientError::NoPeer {
+            service: T::SERVICE,
+            domain: domain.name().to_owned(),
+            peer: "publisher",
+            waited: timeout,
+        };
+        // The daemon creates the pub-sub service, then its event service: wait for both.
+        let (service, event) = loop {
+            let attempt = domain
+                .open::<T>(&node, Access::Reader)
+                .and_then(|s| Ok((s, domain.open_event(&node, T::SERVICE, false)?)));
+            match attempt {
+                Ok(x) => break x,
+                Err(ServiceError::NotFound { .. }) if start.elapsed() < timeout => {
+                    if node.wait(Duration::from_millis(10)).is_err() {
+                        return Err(ClientError::Interrupted);
+                    }
+                }
+                Err(ServiceError::NotFound { .. }) => return Err(no_peer()),
+                Err(e) => return Err(e.into()),
+            }
+        };
+        let port_err = |port, e: &dyn std::fmt::Debug| {
+            ClientError::Service(ServiceError::Port {
+                service: T::SERVICE,
+                port,
+                domain: domain.name().to_owned(),
+                detail: format!("{e:?}"),
+            })
+        };
+        let sub = service
+            .subscriber_builder()
+            .buffer_size(T::QOS.buffer_size)
+            .history_request(T::QOS.history_size)
+            .create()
+            .map_err(|e| port_err("subscriber", &e))?;
+        let listener = event
+            .listener_builder()
+            .create()
+            .map_err(|e| port_err("listener", &e))?;
+        while service.dynamic_config().number_of_publishers() == 0 {
+            if start.elapsed() >= timeout {
+                return Err(no_peer());
+            }
+            if node.wait(Duration::from_millis(5)).is_err() {
+                return Err(ClientError::Interrupted);
+            }
+        }
+        // Attach the receive side of the publisher's connection now (iceoryx2 attaches it
+        // lazily on receive/has_samples), without consuming a sample.
+        sub.has_samples()
+            .map_err(|e| io_err(T::SERVICE, domain, "connect", e))?;
+        Ok(Self {
+            domain: domain.clone(),
+            service,
+            sub,
+            listener,
+            node,
+        })
+    }
+
+    /// The next message if one is waiting.
+    pub fn try_recv(&self) -> Result<Option<T>, ClientError> {
+        match self.sub.receive() {
+            Ok(Some(s)) => Ok(Some(*s.payload())),
+            Ok(None) => Ok(None),
+            Err(e) => Err(io_err(T::SERVICE, &self.domain, "receive", e)),
+        }
+    }
+
+    /// The next message, waiting up to `timeout` for one; `Ok(None)` on timeout.
+    pub fn recv_timeout(&self, timeout: Duration) -> Result<Option<T>, ClientError> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            if let Some(x) = self.try_recv()? {
+                return Ok(Some(x));
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                return Ok(None);
+            }
+            if let Err(e) = self.listener.timed_wait(|_| {}, deadline - now) {
+                return Err(if self.termination_requested() {
+                    ClientError::Interrupted
+                } else {
+                    io_err(T::SERVICE, &self.domain, "wait", e)
+                });
+            }
+            if self.termination_requested() {
+                return Err(ClientError::Interrupted);
+            }
+        }
+    }
+
+    /// Number of publishers currently connected (0 once the daemon has gone).
+    pub fn publishers(&self) -> usize {
+        self.service.dynamic_config().number_of_publishers()
+    }
+
+    /// True once SIGINT or SIGTERM was received by this process.
+    pub fn termination_requested(&self) -> bool {
+        self.node.wait(Duration::ZERO).is_err()
+    }
+}

@@ -1,0 +1,398 @@
+//! Estimator checkpoints: the gyro bias, its covariance and the attitude, saved so that a
+//! restarted daemon can warm-start. The only module that uses bincode.
+//!
+//! File layout: the 8-byte magic [`MAGIC`], the format version as a little-endian `u32`
+//! ([`FORMAT_VERSION`]), then the bincode-2 (`standard` config, serde) encoding of
+//! [`Checkpoint`]. Trailing bytes, non-finite values or a bad quaternion count as corruption.
+//!
+//! [`save`] is atomic: it writes `<file>.tmp-<pid>`, fsyncs it, renames it over the target and
+//! fsyncs the directory, so a crash leaves either the old or the new checkpoint. [`load`] moves a
+//! corrupt or incompatible file aside (`<file>.corrupt-<n>`, first free `n`) so the next start
+//! does not trip over it again, and reports it as [`CheckpointError::Corrupt`] or
+//! [`CheckpointError::Incompatible`] (see [`CheckpointError::is_cold_start`]).
+
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// First bytes of every checkpoint file.
+pub const MAGIC: [u8; 8] = *b"CORRCKPT";
+/// Format version written by [`save`]; [`load`] accepts only this one.
+pub const FORMAT_VERSION: u32 = 1;
+/// Largest payload accepted by the decoder, bytes.
+const MAX_PAYLOAD: usize = 1 << 16;
+
+/// What a checkpoint holds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// Estimation mode name the state belongs to (`Mode::name`), e.g. `rotation_aware`.
+    pub mode: String,
+    /// Sensor time of the state, s.
+    pub t_s: f64,
+    /// Gyro bias, rad/s, sensor axes.
+    pub gyro_bias_rad_s: [f64; 3],
+    /// Its covariance, (rad/s)², row-major.
+    pub gyro_bias_cov: [[f64; 3]; 3],
+    /// Attitude `nav_from_body` as (w, x, y, z), unit norm.
+    pub nav_from_body_wxyz: [f64; 4],
+}
+
+/// A checkpoint that could not be saved or loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckpointError {
+    /// There is no checkpoint file (a normal cold start).
+    #[error("{path}: no checkpoint")]
+    NotFound {
+        /// The file.
+        path: PathBuf,
+    },
+    /// Reading or writing failed.
+    #[error("{path}: cannot {operation} checkpoint: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What was attempted.
+        operation: &'static str,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The file is not a valid checkpoint; it was moved to `moved_to`.
+    #[error(
+        "{path}: corrupt checkpoint ({reason}); moved to {}",
+        display_opt(moved_to)
+    )]
+    Corrupt {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+        /// Where it was moved (`None` if the rename failed too).
+        moved_to: Option<PathBuf>,
+    },
+    /// The file has another format version; it was moved to `moved_to`.
+    #[error(
+        "{path}: checkpoint format version {found}, this build reads {expected}; moved to {}",
+        display_opt(moved_to)
+    )]
+    Incompatible {
+        /// The file.
+        path: PathBuf,
+        /// Version in the file.
+        found: u32,
+        /// Version this build reads.
+        expected: u32,
+        /// Where it was moved (`None` if the rename failed too).
+        moved_to: Option<PathBuf>,
+    },
+    /// The state to save is not valid (non-finite value, quaternion not unit).
+    #[error("refusing to save checkpoint to {path}: {reason}")]
+    Invalid {
+        /// The target file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+impl CheckpointError {
+    /// True when the daemon should warn and start cold: the file was missing, corrupt or of
+    /// another version (IO errors other than "not found" are true too: a checkpoint is never
+    /// required).
+    pub fn is_cold_start(&self) -> bool {
+        !matches!(self, CheckpointError::Invalid { .. })
+    }
+}
+
+fn display_opt(p: &Option<PathBuf>) -> String {
+    p.as_ref()
+        .map_or_else(|| "<rename failed>".to_owned(), |p| p.display().to_string())
+}
+
+impl Checkpoint {
+    /// Checks that every value is finite, the covariance diagonal non-negative and the
+    /// quaternion of unit norm (within 1e-6).
+    pub fn validate(&self) -> Result<(), String> {
+        let finite = self.t_s.is_finite()
+            && self.gyro_bias_rad_s.iter().all(|v| v.is_finite())
+            && self.gyro_bias_cov.iter().flatten().all(|v| v.is_finite())
+            && self.nav_from_body_wxyz.iter().all(|v| v.is_finite());
+        if !finite {
+            return Err("a value is not finite".into());
+        }
+        if (0..3).any(|i| self.gyro_bias_cov[i][i] < 0.0) {
+            return Err("a bias variance is negative".into());
+        }
+        let n2: f64 = self.nav_from_body_wxyz.iter().map(|v| v * v).sum();
+        if (n2.sqrt() - 1.0).abs() > 1e-6 {
+            return Err(format!("attitude quaternion has norm {}", n2.sqrt()));
+        }
+        Ok(())
+    }
+}
+
+fn config() -> impl bincode::config::Config {
+    bincode::config::standard().with_limit::<MAX_PAYLOAD>()
+}
+
+/// Encodes a checkpoint into the file layout (magic, version, payload).
+pub fn encode(cp: &Checkpoint) -> Vec<u8> {
+    let mut out = Vec::with_capacity(128);
+    out.extend_from_slice(&MAGIC);
+    out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+    let payload = bincode::serde::encode_to_vec(cp, config()).expect("a checkpoint always encodes");
+    out.extend_from_slice(&payload);
+    out
+}
+
+/// Why bytes are not a checkpoint.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DecodeError {
+    /// Not a checkpoint or damaged.
+    Corrupt(String),
+    /// Another format version.
+    Version(u32),
+}
+
+/// Decodes the file layout.
+pub fn decode(bytes: &[u8]) -> Result<Checkpoint, DecodeError> {
+    let header = MAGIC.len() + 4;
+    if bytes.len() < header {
+        return Err(DecodeError::Corrupt(format!(
+            "{} bytes, shorter than the {header}-byte header",
+            bytes.len()
+        )));
+    }
+    if bytes[..MAGIC.len()] != MAGIC {
+        return Err(DecodeError::Corrupt("bad magic".into()));
+    }
+    let version = u32::from_le_bytes(bytes[MAGIC.len()..header].try_into().expect("4 bytes"));
+    if version != FORMAT_VERSION {
+        return Err(DecodeError::Version(version));
+    }
+    let payload = &bytes[header..];
+    let (cp, used): (Checkpoint, usize) = bincode::serde::decode_from_slice(payload, config())
+        .map_err(|e| DecodeError::Corrupt(format!("payload: {e}")))?;
+    if used != payload.len() {
+        return Err(DecodeError::Corrupt(format!(
+            "{} trailing bytes after the payload",
+            payload.len() - used
+        )));
+    }
+    cp.validate().map_err(DecodeError::Corrupt)?;
+    Ok(cp)
+}
+
+/// Saves atomically (temp file, fsync, rename, fsync of the directory).
+pub fn save(path: &Path, cp: &Checkpoint) -> Result<(), CheckpointError> {
+    cp.validate().map_err(|reason| CheckpointError::Invalid {
+        path: path.to_owned(),
+        reason,
+    })?;
+    let io = |operation, source| CheckpointError::Io {
+        path: path.to_owned(),
+        operation,
+        source,
+    };
+    let mut tmp_name = path.as_os_str().to_owned();
+    tmp_name.push(format!(".tmp-{}", std::process::id()));
+    let tmp = PathBuf::from(tmp_name);
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp).map_err(|e| io("create", e))?;
+        f.write_all(&encode(cp)).map_err(|e| io("write", e))?;
+        f.sync_all().map_err(|e| io("fsync", e))?;
+        drop(f);
+        std::fs::rename(&tmp, path).map_err(|e| io("rename", e))
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+        return result;
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    // Makes the rename durable; not every filesystem allows opening a directory.
+    if let Ok(d) = std::fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
+    Ok(())
+}
+
+/// Loads a checkpoint. A corrupt or incompatible file is moved aside to `<path>.corrupt-<n>`.
+pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(CheckpointError::NotFound {
+                path: path.to_owned(),
+            });
+        }
+        Err(source) => {
+            return Err(CheckpointError::Io {
+                path: path.to_owned(),
+                operation: "read",
+                source,
+            });
+        }
+    };
+    match decode(&bytes) {
+        Ok(cp) => Ok(cp),
+        Err(DecodeError::Corrupt(reason)) => Err(CheckpointError::Corrupt {
+            path: path.to_owned(),
+            reason,
+            moved_to: move_aside(path),
+        }),
+        Err(DecodeError::Version(found)) => Err(CheckpointError::Incompatible {
+            path: path.to_owned(),
+            found,
+            expected: FORMAT_VERSION,
+            moved_to: move_aside(path),
+        }),
+    }
+}
+
+/// Renames `path` to the first free `<path>.corrupt-<n>` (n = 1, 2, …).
+fn move_aside(path: &Path) -> Option<PathBuf> {
+    (1..10_000).find_map(|n| {
+        let mut name = path.as_os_str().to_owned();
+        name.push(format!(".corrupt-{n}"));
+        let target = PathBuf::from(name);
+        if target.exists() {
+            return None;
+        }
+        std::fs::rename(path, &target).ok().map(|()| target)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Checkpoint {
+        let s = 0.5f64.sqrt();
+        Checkpoint {
+            mode: "rotation_aware".into(),
+            t_s: 123.456,
+            gyro_bias_rad_s: [1e-3, -2e-3, 5e-3],
+            gyro_bias_cov: [[1e-8, 1e-10, 0.0], [1e-10, 2e-8, 0.0], [0.0, 0.0, 3e-8]],
+            nav_from_body_wxyz: [s, 0.0, 0.0, s],
+        }
+    }
+
+    fn tmp_dir(tag: &str) -> PathBuf {
+        let d =
+            std::env::temp_dir().join(format!("corridor-checkpoint-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn round_trip_is_exact_and_leaves_no_temp_file() {
+        let d = tmp_dir("roundtrip");
+        let p = d.join("bias.ckpt");
+        save(&p, &sample()).unwrap();
+        assert_eq!(load(&p).unwrap(), sample());
+        let mut cp2 = sample();
+        cp2.t_s = 200.0;
+        save(&p, &cp2).unwrap(); // overwrite
+        assert_eq!(load(&p).unwrap(), cp2);
+        let names: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("bias.ckpt")]);
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn missing_file_is_not_found() {
+        let d = tmp_dir("missing");
+        let e = load(&d.join("nope.ckpt")).unwrap_err();
+        assert!(matches!(e, CheckpointError::NotFound { .. }), "{e}");
+        assert!(e.is_cold_start());
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn truncated_file_is_corrupt_and_moved_aside() {
+        let d = tmp_dir("truncated");
+        let p = d.join("bias.ckpt");
+        let bytes = encode(&sample());
+        for cut in [3, 12, bytes.len() - 1] {
+            std::fs::write(&p, &bytes[..cut]).unwrap();
+            let e = load(&p).unwrap_err();
+            let CheckpointError::Corrupt { moved_to, .. } = &e else {
+                panic!("cut at {cut}: {e}");
+            };
+            assert!(e.is_cold_start());
+            assert!(!p.exists(), "the corrupt file must be moved away");
+            assert!(moved_to.as_ref().unwrap().exists());
+        }
+        assert!(d.join("bias.ckpt.corrupt-1").exists());
+        assert!(d.join("bias.ckpt.corrupt-3").exists());
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn wrong_version_is_incompatible() {
+        let d = tmp_dir("version");
+        let p = d.join("bias.ckpt");
+        let mut bytes = encode(&sample());
+        bytes[8..12].copy_from_slice(&7u32.to_le_bytes());
+        std::fs::write(&p, &bytes).unwrap();
+        let e = load(&p).unwrap_err();
+        match &e {
+            CheckpointError::Incompatible {
+                found,
+                expected,
+                moved_to,
+                ..
+            } => {
+                assert_eq!((*found, *expected), (7, FORMAT_VERSION));
+                assert_eq!(
+                    moved_to.as_deref(),
+                    Some(d.join("bias.ckpt.corrupt-1").as_path())
+                );
+            }
+            _ => panic!("{e}"),
+        }
+        assert!(e.to_string().contains("version 7"), "{e}");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn garbage_is_corrupt() {
+        assert!(matches!(
+            decode(b"this is not a checkpoint at all"),
+            Err(DecodeError::Corrupt(_))
+        ));
+        // Right header, garbage payload.
+        let mut bytes = MAGIC.to_vec();
+        bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        bytes.extend_from_slice(&[0xff; 40]);
+        assert!(matches!(decode(&bytes), Err(DecodeError::Corrupt(_))));
+        // Trailing bytes.
+        let mut bytes = encode(&sample());
+        bytes.push(0);
+        assert!(matches!(decode(&bytes), Err(DecodeError::Corrupt(r)) if r.contains("trailing")));
+        // Valid encoding of an invalid state.
+        let mut bad = sample();
+        bad.nav_from_body_wxyz = [2.0, 0.0, 0.0, 0.0];
+        assert!(matches!(
+            decode(&encode(&bad)),
+            Err(DecodeError::Corrupt(_))
+        ));
+    }
+
+    #[test]
+    fn invalid_state_is_not_saved() {
+        let d = tmp_dir("invalid");
+        let mut bad = sample();
+        bad.gyro_bias_rad_s[0] = f64::NAN;
+        let e = save(&d.join("x.ckpt"), &bad).unwrap_err();
+        assert!(matches!(e, CheckpointError::Invalid { .. }));
+        assert!(!d.join("x.ckpt").exists());
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+}

@@ -1,0 +1,582 @@
+//! The iceoryx2 services of corridor: names, quality of service, and the one place both sides
+//! open them.
+//!
+//! Every service is opened through a function of this module by the daemon and by the clients
+//! alike, so the QoS (buffer sizes, history, port counts, overflow behaviour) is identical on both
+//! sides: iceoryx2 refuses an opener whose requirements exceed the creator's, so a mismatch would
+//! otherwise depend on which process started first.
+//!
+//! | service | payload | publisher | paired event |
+//! | --- | --- | --- | --- |
+//! | [`IMU_SERVICE`] | [`ImuSample`] | producers | yes (daemon waits on it) |
+//! | [`ANGLES_SERVICE`] | [`AngleObservation`] | producers | yes |
+//! | [`ATTITUDE_SERVICE`] | [`AttitudeSample`] | daemon | yes |
+//! | [`BIAS_SERVICE`] | [`BiasSample`] | daemon | yes |
+//! | [`NAV_SERVICE`] | [`NavSample`] | daemon | yes |
+//! | [`DIAGNOSTICS_SERVICE`] | [`Diagnostics`] | daemon | yes |
+//! | [`DAEMON_SERVICE`] | (event only) | daemon, created exclusively | lock only |
+//!
+//! A blocking wait on a publish-subscribe port is not possible in iceoryx2; each pub-sub service
+//! has an event service of the same name: the publisher notifies after sending, the reader waits
+//! on a listener.
+//!
+//! [`Domain`] gives every independent set of processes (a sensor, a test) its own iceoryx2
+//! namespace (`global.prefix`), so they never see each other's services.
+
+use crate::wire::{
+    AngleObservation, AttitudeSample, BiasSample, Diagnostics, ImuSample, NavSample,
+};
+use iceoryx2::prelude::*;
+use iceoryx2::service::builder::event::{EventCreateError, EventOpenError, EventOpenOrCreateError};
+use iceoryx2::service::builder::publish_subscribe::{
+    PublishSubscribeOpenError, PublishSubscribeOpenOrCreateError,
+};
+use std::fmt::Debug;
+use std::str::FromStr;
+
+/// Version of the wire layout; part of every service name. Bump it with any change to
+/// [`crate::wire`].
+pub const SERVICE_VERSION: &str = "v1";
+/// IMU samples, producers → daemon.
+pub const IMU_SERVICE: &str = "corridor/v1/imu";
+/// External angle observations, producers → daemon.
+pub const ANGLES_SERVICE: &str = "corridor/v1/angles";
+/// Attitude after every IMU sample, daemon → clients.
+pub const ATTITUDE_SERVICE: &str = "corridor/v1/attitude";
+/// Gyro-bias estimates, daemon → clients.
+pub const BIAS_SERVICE: &str = "corridor/v1/bias";
+/// Position and velocity at each stance, daemon → clients.
+pub const NAV_SERVICE: &str = "corridor/v1/nav";
+/// Daemon counters, daemon → clients.
+pub const DIAGNOSTICS_SERVICE: &str = "corridor/v1/diagnostics";
+/// Event service created exclusively by the running daemon: a second daemon on the same domain
+/// fails to create it. Clients must not open it (an open handle would keep it alive after the
+/// daemon exits).
+pub const DAEMON_SERVICE: &str = "corridor/v1/daemon";
+
+/// The default domain name.
+pub const DEFAULT_DOMAIN: &str = "default";
+
+/// Longest domain name, characters.
+pub const MAX_DOMAIN_LEN: usize = 48;
+
+/// A service that could not be opened or used. Every variant names the service and the domain.
+#[derive(Debug, thiserror::Error)]
+pub enum ServiceError {
+    /// The domain name is not usable.
+    #[error("domain {name:?}: {rule}")]
+    InvalidDomain {
+        /// The name given.
+        name: String,
+        /// What a domain name must satisfy.
+        rule: &'static str,
+    },
+    /// The iceoryx2 node could not be created.
+    #[error("domain {domain:?}: cannot create iceoryx2 node {node:?}: {detail}")]
+    Node {
+        /// Domain.
+        domain: String,
+        /// Node name.
+        node: String,
+        /// The iceoryx2 error.
+        detail: String,
+    },
+    /// The service exists with the other delivery policy.
+    #[error(
+        "service {service:?} in domain {domain:?} exists with the other delivery policy; \
+         this process asked for {requested:?} (use the same --delivery on every process)"
+    )]
+    DeliveryMismatch {
+        /// Service name.
+        service: &'static str,
+        /// Domain.
+        domain: String,
+        /// Policy asked for.
+        requested: Delivery,
+    },
+    /// The service does not exist (yet): the daemon is not running on this domain.
+    #[error(
+        "service {service:?} does not exist in domain {domain:?} (is `corridor serve --domain {domain}` running?)"
+    )]
+    NotFound {
+        /// Service name.
+        service: &'static str,
+        /// Domain.
+        domain: String,
+    },
+    /// Another daemon already serves this domain.
+    #[error(
+        "another corridor daemon already serves domain {domain:?} (service {DAEMON_SERVICE:?} exists)"
+    )]
+    DaemonAlreadyRunning {
+        /// Domain.
+        domain: String,
+    },
+    /// Opening or creating the service failed.
+    #[error("service {service:?} ({pattern}) in domain {domain:?}: cannot open: {detail}")]
+    Open {
+        /// Service name.
+        service: &'static str,
+        /// `publish-subscribe` or `event`.
+        pattern: &'static str,
+        /// Domain.
+        domain: String,
+        /// The iceoryx2 error.
+        detail: String,
+    },
+    /// Creating a port (publisher, subscriber, notifier, listener) failed.
+    #[error("service {service:?} in domain {domain:?}: cannot create {port}: {detail}")]
+    Port {
+        /// Service name.
+        service: &'static str,
+        /// Port kind.
+        port: &'static str,
+        /// Domain.
+        domain: String,
+        /// The iceoryx2 error.
+        detail: String,
+    },
+    /// Sending, receiving, notifying or waiting failed.
+    #[error("service {service:?} in domain {domain:?}: {operation} failed: {detail}")]
+    Io {
+        /// Service name.
+        service: &'static str,
+        /// What was attempted.
+        operation: &'static str,
+        /// Domain.
+        domain: String,
+        /// The iceoryx2 error.
+        detail: String,
+    },
+}
+
+/// What happens when a reader falls behind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Delivery {
+    /// A full receive buffer drops its oldest sample (iceoryx2 safe overflow); the publisher never
+    /// waits. For live sensors: the freshest data wins, losses show up as `seq` gaps.
+    #[default]
+    Live,
+    /// A full receive buffer makes the publisher wait until the reader has taken a sample
+    /// (`RetryUntilDelivered`). For replays and recordings: nothing is lost, a slow reader slows
+    /// the producer down.
+    Lossless,
+}
+
+impl Delivery {
+    /// `live` or `lossless`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Delivery::Live => "live",
+            Delivery::Lossless => "lossless",
+        }
+    }
+
+    /// The iceoryx2 `enable_safe_overflow` setting of the services.
+    pub fn safe_overflow(self) -> bool {
+        self == Delivery::Live
+    }
+
+    /// The backpressure strategy of the publishers.
+    pub fn backpressure(self) -> BackpressureStrategy {
+        match self {
+            Delivery::Live => BackpressureStrategy::DiscardData,
+            Delivery::Lossless => BackpressureStrategy::RetryUntilDelivered,
+        }
+    }
+}
+
+impl FromStr for Delivery {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "live" => Ok(Delivery::Live),
+            "lossless" => Ok(Delivery::Lossless),
+            _ => Err(format!("delivery {s:?}: expected live or lossless")),
+        }
+    }
+}
+
+/// Quality of service of one publish-subscribe service.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Qos {
+    /// Maximum publishers.
+    pub max_publishers: usize,
+    /// Maximum subscribers.
+    pub max_subscribers: usize,
+    /// Receive buffer of each subscriber, samples.
+    pub buffer_size: usize,
+    /// Samples a late subscriber receives on connecting.
+    pub history_size: usize,
+    /// Samples a subscriber may hold at once.
+    pub max_borrowed: usize,
+}
+
+/// A wire type bound to its service.
+pub trait Topic: Debug + Copy + ZeroCopySend + 'static {
+    /// Service name.
+    const SERVICE: &'static str;
+    /// Quality of service.
+    const QOS: Qos;
+}
+
+impl Topic for ImuSample {
+    const SERVICE: &'static str = IMU_SERVICE;
+    /// 4096 samples: about 4 s of a 1 kHz IMU.
+    const QOS: Qos = Qos {
+        max_publishers: 2,
+        max_subscribers: 4,
+        buffer_size: 4096,
+        history_size: 0,
+        max_borrowed: 2,
+    };
+}
+
+impl Topic for AngleObservation {
+    const SERVICE: &'static str = ANGLES_SERVICE;
+    const QOS: Qos = Qos {
+        max_publishers: 4,
+        max_subscribers: 4,
+        buffer_size: 64,
+        history_size: 0,
+        max_borrowed: 2,
+    };
+}
+
+impl Topic for AttitudeSample {
+    const SERVICE: &'static str = ATTITUDE_SERVICE;
+    const QOS: Qos = Qos {
+        max_publishers: 1,
+        max_subscribers: 8,
+        buffer_size: 4096,
+        history_size: 0,
+        max_borrowed: 2,
+    };
+}
+
+impl Topic for BiasSample {
+    const SERVICE: &'static str = BIAS_SERVICE;
+    /// History 1: a late subscriber gets the latest bias at once.
+    const QOS: Qos = Qos {
+        max_publishers: 1,
+        max_subscribers: 8,
+        buffer_size: 256,
+        history_size: 1,
+        max_borrowed: 2,
+    };
+}
+
+impl Topic for NavSample {
+    const SERVICE: &'static str = NAV_SERVICE;
+    const QOS: Qos = Qos {
+        max_publishers: 1,
+        max_subscribers: 8,
+        buffer_size: 256,
+        history_size: 1,
+        max_borrowed: 2,
+    };
+}
+
+impl Topic for Diagnostics {
+    const SERVICE: &'static str = DIAGNOSTICS_SERVICE;
+    const QOS: Qos = Qos {
+        max_publishers: 1,
+        max_subscribers: 8,
+        buffer_size: 64,
+        history_size: 1,
+        max_borrowed: 2,
+    };
+}
+
+/// Maximum notifiers on a paired event service.
+pub const EVENT_MAX_NOTIFIERS: usize = 4;
+/// Maximum listeners on a paired event service.
+pub const EVENT_MAX_LISTENERS: usize = 8;
+
+/// How a process opens a service.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Access {
+    /// Opens or creates the service with the given delivery policy, and refuses a service that
+    /// exists with the other one. For the daemon (all services) and the producers (inputs).
+    Owner(Delivery),
+    /// Opens an existing service whatever its delivery policy; fails with
+    /// [`ServiceError::NotFound`] when it does not exist. For readers of the daemon's outputs.
+    Reader,
+}
+
+/// A publish-subscribe service handle.
+pub type PubSub<T> =
+    iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>;
+/// An event service handle.
+pub type Event = iceoryx2::service::port_factory::event::PortFactory<ipc::Service>;
+
+/// An isolated iceoryx2 namespace: processes on different domains never see each other.
+#[derive(Debug, Clone)]
+pub struct Domain {
+    name: String,
+    config: Config,
+}
+
+impl Domain {
+    /// Validates `name` (1–48 characters out of `a-z A-Z 0-9 _ -`) and builds the iceoryx2
+    /// config whose `global.prefix` is `corridor_<name>_`.
+    pub fn new(name: &str) -> Result<Self, ServiceError> {
+        let invalid = |rule| ServiceError::InvalidDomain {
+            name: name.to_owned(),
+            rule,
+        };
+        if name.is_empty() || name.len() > MAX_DOMAIN_LEN {
+            return Err(invalid("must have 1 to 48 characters"));
+        }
+        if !name
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-')
+        {
+            return Err(invalid("may only contain a-z, A-Z, 0-9, '_' and '-'"));
+        }
+        let mut config = Config::default();
+        config.global.prefix = FileName::new(format!("corridor_{name}_").as_bytes())
+            .map_err(|_| invalid("is not usable in a file name"))?;
+        Ok(Self {
+            name: name.to_owned(),
+            config,
+        })
+    }
+
+    /// The domain name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The iceoryx2 configuration of the domain.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// A node in this domain. `signals`: `Disabled` when the caller handles SIGINT/SIGTERM itself
+    /// (the daemon), `HandleTerminationRequests` for tools that rely on iceoryx2's handler.
+    pub fn node(
+        &self,
+        node_name: &str,
+        signals: SignalHandlingMode,
+    ) -> Result<Node<ipc::Service>, ServiceError> {
+        let err = |detail: String| ServiceError::Node {
+            domain: self.name.clone(),
+            node: node_name.to_owned(),
+            detail,
+        };
+        let name: NodeName = node_name.try_into().map_err(|e| err(format!("{e:?}")))?;
+        NodeBuilder::new()
+            .name(&name)
+            .config(&self.config)
+            .signal_handling_mode(signals)
+            .create::<ipc::Service>()
+            .map_err(|e| err(format!("{e:?}")))
+    }
+
+    /// Opens the publish-subscribe service of `T` with its [`Topic::QOS`].
+    pub fn open<T: Topic>(
+        &self,
+        node: &Node<ipc::Service>,
+        access: Access,
+    ) -> Result<PubSub<T>, ServiceError> {
+        let service = T::SERVICE;
+        let q = T::QOS;
+        let open_err = |detail: String| ServiceError::Open {
+            service,
+            pattern: "publish-subscribe",
+            domain: self.name.clone(),
+            detail,
+        };
+        let name: ServiceName = service.try_into().map_err(|e| open_err(format!("{e:?}")))?;
+        let builder = node
+            .service_builder(&name)
+            .publish_subscribe::<T>()
+            .max_publishers(q.max_publishers)
+            .max_subscribers(q.max_subscribers)
+            .subscriber_max_buffer_size(q.buffer_size)
+            .history_size(q.history_size)
+            .subscriber_max_borrowed_samples(q.max_borrowed);
+        match access {
+            Access::Owner(delivery) => builder
+                .enable_safe_overflow(delivery.safe_overflow())
+                .open_or_create()
+                .map_err(|e| match e {
+                    PublishSubscribeOpenOrCreateError::PublishSubscribeOpenError(
+                        PublishSubscribeOpenError::IncompatibleOverflowBehavior,
+                    ) => ServiceError::DeliveryMismatch {
+                        service,
+                        domain: self.name.clone(),
+                        requested: delivery,
+                    },
+                    e => open_err(format!("{e:?}")),
+                }),
+            Access::Reader => builder.open().map_err(|e| match e {
+                PublishSubscribeOpenError::DoesNotExist => ServiceError::NotFound {
+                    service,
+                    domain: self.name.clone(),
+                },
+                e => open_err(format!("{e:?}")),
+            }),
+        }
+    }
+
+    /// Opens the event service paired with `service` (same name). `create`: open or create
+    /// (owners); otherwise open only.
+    pub fn open_event(
+        &self,
+        node: &Node<ipc::Service>,
+        service: &'static str,
+        create: bool,
+    ) -> Result<Event, ServiceError> {
+        let open_err = |detail: String| ServiceError::Open {
+            service,
+            pattern: "event",
+            domain: self.name.clone(),
+            detail,
+        };
+        let name: ServiceName = service.try_into().map_err(|e| open_err(format!("{e:?}")))?;
+        let builder = node
+            .service_builder(&name)
+            .event()
+            .max_notifiers(EVENT_MAX_NOTIFIERS)
+            .max_listeners(EVENT_MAX_LISTENERS);
+        if create {
+            builder
+                .open_or_create()
+                .map_err(|e: EventOpenOrCreateError| open_err(format!("{e:?}")))
+        } else {
+            builder.open().map_err(|e| match e {
+                EventOpenError::DoesNotExist => ServiceError::NotFound {
+                    service,
+                    domain: self.name.clone(),
+                },
+                e => open_err(format!("{e:?}")),
+            })
+        }
+    }
+
+    /// Claims the domain for one daemon by creating [`DAEMON_SERVICE`] exclusively. Keep the
+    /// returned handle alive for the daemon's life; dropping it releases the claim. A daemon
+    /// that crashed is cleaned up by the next node creation (iceoryx2 removes dead nodes'
+    /// services), so its claim does not block a restart.
+    pub fn claim_daemon(&self, node: &Node<ipc::Service>) -> Result<Event, ServiceError> {
+        let name: ServiceName = DAEMON_SERVICE.try_into().map_err(|e| ServiceError::Open {
+            service: DAEMON_SERVICE,
+            pattern: "event",
+            domain: self.name.clone(),
+            detail: format!("{e:?}"),
+        })?;
+        node.service_builder(&name)
+            .event()
+            .max_notifiers(1)
+            .max_listeners(EVENT_MAX_LISTENERS)
+            .create()
+            .map_err(|e| match e {
+                EventCreateError::AlreadyExists
+                | EventCreateError::IsBeingCreatedByAnotherInstance => {
+                    ServiceError::DaemonAlreadyRunning {
+                        domain: self.name.clone(),
+                    }
+                }
+                e => ServiceError::Open {
+                    service: DAEMON_SERVICE,
+                    pattern: "event",
+                    domain: self.name.clone(),
+                    detail: format!("{e:?}"),
+                },
+            })
+    }
+}
+
+/// Opens [`IMU_SERVICE`]; see [`Domain::open`].
+pub fn open_imu(
+    domain: &Domain,
+    node: &Node<ipc::Service>,
+    access: Access,
+) -> Result<PubSub<ImuSample>, ServiceError> {
+    domain.open::<ImuSample>(node, access)
+}
+
+/// Opens [`ANGLES_SERVICE`]; see [`Domain::open`].
+pub fn open_angles(
+    domain: &Domain,
+    node: &Node<ipc::Service>,
+    access: Access,
+) -> Result<PubSub<AngleObservation>, ServiceError> {
+    domain.open::<AngleObservation>(node, access)
+}
+
+/// Opens [`ATTITUDE_SERVICE`]; see [`Domain::open`].
+pub fn open_attitude(
+    domain: &Domain,
+    node: &Node<ipc::Service>,
+    access: Access,
+) -> Result<PubSub<AttitudeSample>, ServiceError> {
+    domain.open::<AttitudeSample>(node, access)
+}
+
+/// Opens [`BIAS_SERVICE`]; see [`Domain::open`].
+pub fn open_bias(
+    domain: &Domain,
+    node: &Node<ipc::Service>,
+    access: Access,
+) -> Result<PubSub<BiasSample>, ServiceError> {
+    domain.open::<BiasSample>(node, access)
+}
+
+/// Opens [`NAV_SERVICE`]; see [`Domain::open`].
+pub fn open_nav(
+    domain: &Domain,
+    node: &Node<ipc::Service>,
+    access: Access,
+) -> Result<PubSub<NavSample>, ServiceError> {
+    domain.open::<NavSample>(node, access)
+}
+
+/// Opens [`DIAGNOSTICS_SERVICE`]; see [`Domain::open`].
+pub fn open_diagnostics(
+    domain: &Domain,
+    node: &Node<ipc::Service>,
+    access: Access,
+) -> Result<PubSub<Diagnostics>, ServiceError> {
+    domain.open::<Diagnostics>(node, access)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn domain_names_are_validated() {
+        assert!(Domain::new("lab-1_a").is_ok());
+        for bad in ["", "a/b", "a b", &"x".repeat(49)] {
+            let e = Domain::new(bad).unwrap_err();
+            assert!(matches!(e, ServiceError::InvalidDomain { .. }), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn delivery_parses() {
+        assert_eq!("live".parse::<Delivery>(), Ok(Delivery::Live));
+        assert_eq!("lossless".parse::<Delivery>(), Ok(Delivery::Lossless));
+        assert!("fast".parse::<Delivery>().is_err());
+        assert!(Delivery::Live.safe_overflow());
+        assert!(!Delivery::Lossless.safe_overflow());
+    }
+
+    #[test]
+    fn lossless_history_fits_the_buffer() {
+        // iceoryx2 refuses history > buffer without safe overflow.
+        for q in [
+            ImuSample::QOS,
+            AngleObservation::QOS,
+            AttitudeSample::QOS,
+            BiasSample::QOS,
+            NavSample::QOS,
+            Diagnostics::QOS,
+        ] {
+            assert!(q.history_size <= q.buffer_size);
+        }
+    }
+}

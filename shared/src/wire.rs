@@ -1,0 +1,254 @@
+//! Zero-copy wire types exchanged over iceoryx2 between the daemon and its clients.
+//!
+//! Every type is `#[repr(C)]`, `Copy`, of fixed size and self-contained (no pointers, no heap),
+//! so it can live in shared memory. The layout is the contract: changing a type means bumping
+//! [`crate::services::SERVICE_VERSION`] (old processes then never see the new layout, see the
+//! service names). Each type carries an explicit `type_name` so the iceoryx2 type check does not
+//! depend on the Rust module path.
+//!
+//! Conventions for every type:
+//! - `seq`: a per-stream sequence number, starting at 0 and increasing by 1 per message of that
+//!   type, set by the publisher of the type. Gaps mean lost messages.
+//! - `t_s`: sensor time in **seconds** (`f64`, the clock of the IMU log, not wall-clock time).
+//!   Seconds as `f64` are used rather than integer nanoseconds so that a log replayed through the
+//!   daemon reaches the estimator with bit-identical times (and so bit-identical estimates) to
+//!   the offline runner.
+//! - angles in radians, rates in rad/s, specific force in m/s², positions in m, velocities in m/s;
+//!   vectors in sensor axes (`_body`/gyro bias) or in the map frame (position, velocity), as named.
+
+use iceoryx2::prelude::*;
+
+/// [`ImuSample::flags`] (and the output `flags`): the producer has finished; this message
+/// carries no data. The daemon answers with one output of each kind carrying the same flag (and
+/// the last state), then resets its estimator for the next stream.
+pub const FLAG_END_OF_STREAM: u32 = 1 << 0;
+
+/// Output `flags`: the bias is subtracted from the gyro rates the attitude was integrated from
+/// (set once the estimator has aligned).
+pub const FLAG_BIAS_CORRECTED: u32 = 1 << 1;
+
+/// Output `flags`: the foot is at rest (stance) on this sample.
+pub const FLAG_STANCE: u32 = 1 << 2;
+
+/// Output `flags`: every bias σ is below the configured convergence bound (and tracking).
+pub const FLAG_CONVERGED: u32 = 1 << 3;
+
+/// [`Diagnostics::flags`]: published because the daemon is shutting down.
+pub const FLAG_SHUTDOWN: u32 = 1 << 4;
+
+/// [`AngleObservation::valid`] bit: `roll_rad` is valid.
+pub const ANGLE_ROLL: u32 = 1 << 0;
+/// [`AngleObservation::valid`] bit: `pitch_rad` is valid.
+pub const ANGLE_PITCH: u32 = 1 << 1;
+/// [`AngleObservation::valid`] bit: `heading_rad` is valid.
+pub const ANGLE_HEADING: u32 = 1 << 2;
+
+/// Estimator phase as carried on the wire ([`AttitudeSample::phase`], [`Diagnostics::phase`]).
+pub mod phase {
+    /// Waiting for the end of the initial rest.
+    pub const ALIGNING: u32 = 0;
+    /// Fixing the map frame and the sensor's yaw on the foot.
+    pub const CALIBRATING: u32 = 1;
+    /// Heading observations in use.
+    pub const TRACKING: u32 = 2;
+}
+
+/// One IMU sample, producer → daemon (`corridor/v1/imu`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("corridor_v1_ImuSample")]
+#[repr(C)]
+pub struct ImuSample {
+    /// Sequence number of the producer, +1 per sample (end-of-stream markers included).
+    pub seq: u64,
+    /// Sensor time, s.
+    pub t_s: f64,
+    /// Angular rate, rad/s, sensor axes.
+    pub gyro_rad_s: [f64; 3],
+    /// Specific force, m/s², sensor axes (points up at rest).
+    pub accel_m_s2: [f64; 3],
+    /// Sensor temperature, °C; NaN when the sensor has none.
+    pub temp_c: f64,
+    /// Bit set of `FLAG_*` ([`FLAG_END_OF_STREAM`]).
+    pub flags: u32,
+    /// Reserved, 0.
+    pub reserved: u32,
+}
+
+impl ImuSample {
+    /// True when this is an end-of-stream marker (no data).
+    pub fn is_end_of_stream(&self) -> bool {
+        self.flags & FLAG_END_OF_STREAM != 0
+    }
+}
+
+/// An external attitude observation, producer → daemon (`corridor/v1/angles`), e.g. a heading
+/// from a map matcher or a camera. Only the components whose bit is set in `valid` are used.
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("corridor_v1_AngleObservation")]
+#[repr(C)]
+pub struct AngleObservation {
+    /// Sequence number of the producer.
+    pub seq: u64,
+    /// Sensor time the observation refers to, s.
+    pub t_s: f64,
+    /// Roll, rad.
+    pub roll_rad: f64,
+    /// Pitch, rad.
+    pub pitch_rad: f64,
+    /// Walking (foot) heading in the map frame, rad.
+    pub heading_rad: f64,
+    /// σ of roll, rad.
+    pub roll_sd_rad: f64,
+    /// σ of pitch, rad.
+    pub pitch_sd_rad: f64,
+    /// σ of heading, rad.
+    pub heading_sd_rad: f64,
+    /// Bit set of [`ANGLE_ROLL`], [`ANGLE_PITCH`], [`ANGLE_HEADING`].
+    pub valid: u32,
+    /// Reserved, 0.
+    pub reserved: u32,
+}
+
+/// The gyro-bias estimate, daemon → clients (`corridor/v1/bias`): at each heading observation,
+/// at the configured rate and at end of stream.
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("corridor_v1_BiasSample")]
+#[repr(C)]
+pub struct BiasSample {
+    /// Sequence number of the daemon's bias stream.
+    pub seq: u64,
+    /// Sensor time of the last IMU sample used, s.
+    pub t_s: f64,
+    /// `seq` of the last IMU sample used.
+    pub imu_seq: u64,
+    /// Gyro bias, rad/s, sensor axes.
+    pub gyro_bias_rad_s: [f64; 3],
+    /// Its σ, rad/s (NaN before alignment).
+    pub gyro_bias_sd_rad_s: [f64; 3],
+    /// 1 when every σ is below the convergence bound (and tracking), else 0.
+    pub converged: u32,
+    /// Bit set of `FLAG_*` ([`FLAG_END_OF_STREAM`], [`FLAG_CONVERGED`]).
+    pub flags: u32,
+}
+
+/// The attitude after one IMU sample, daemon → clients (`corridor/v1/attitude`): one per
+/// accepted IMU sample, plus one end-of-stream marker.
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("corridor_v1_AttitudeSample")]
+#[repr(C)]
+pub struct AttitudeSample {
+    /// Sequence number of the daemon's attitude stream.
+    pub seq: u64,
+    /// Sensor time, s.
+    pub t_s: f64,
+    /// `seq` of the IMU sample this attitude follows.
+    pub imu_seq: u64,
+    /// Attitude `nav_from_body` as (w, x, y, z).
+    pub nav_from_body_wxyz: [f64; 4],
+    /// ZYX roll, rad.
+    pub roll_rad: f64,
+    /// ZYX pitch, rad.
+    pub pitch_rad: f64,
+    /// ZYX yaw, rad, map frame.
+    pub yaw_rad: f64,
+    /// Gyro bias used, rad/s, sensor axes.
+    pub gyro_bias_rad_s: [f64; 3],
+    /// Its σ, rad/s.
+    pub gyro_bias_sd_rad_s: [f64; 3],
+    /// Estimator phase ([`phase`]).
+    pub phase: u32,
+    /// Bit set of `FLAG_*` ([`FLAG_BIAS_CORRECTED`], [`FLAG_STANCE`], [`FLAG_CONVERGED`],
+    /// [`FLAG_END_OF_STREAM`]).
+    pub flags: u32,
+}
+
+/// Position and velocity at a footfall, daemon → clients (`corridor/v1/nav`): one per stance
+/// (first sample of the stance), after alignment.
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("corridor_v1_NavSample")]
+#[repr(C)]
+pub struct NavSample {
+    /// Sequence number of the daemon's nav stream.
+    pub seq: u64,
+    /// Sensor time, s.
+    pub t_s: f64,
+    /// `seq` of the IMU sample.
+    pub imu_seq: u64,
+    /// Stance count since alignment (1 for the first footfall).
+    pub stance: u64,
+    /// Position, m, map frame.
+    pub p_m: [f64; 3],
+    /// Velocity, m/s, map frame.
+    pub v_m_s: [f64; 3],
+    /// Yaw, rad, map frame.
+    pub yaw_rad: f64,
+    /// Bit set of `FLAG_*`.
+    pub flags: u32,
+    /// Reserved, 0.
+    pub reserved: u32,
+}
+
+/// Counters of the daemon, daemon → clients (`corridor/v1/diagnostics`): periodically (wall
+/// clock), at end of stream and at shutdown. Every counter is cumulative over the daemon's life.
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("corridor_v1_Diagnostics")]
+#[repr(C)]
+pub struct Diagnostics {
+    /// Sequence number of the daemon's diagnostics stream.
+    pub seq: u64,
+    /// Sensor time of the last accepted IMU sample, s (NaN before the first).
+    pub t_s: f64,
+    /// IMU messages received over IPC (end-of-stream markers included).
+    pub received: u64,
+    /// IMU samples missing according to `seq` (sum of the gap lengths).
+    pub seq_gaps: u64,
+    /// Samples refused because `seq` repeated the previous one.
+    pub rejected_duplicate_seq: u64,
+    /// Samples refused because `seq` was older than the previous one (arrived late).
+    pub late: u64,
+    /// Samples refused by the estimator: a value was NaN or infinite.
+    pub rejected_non_finite: u64,
+    /// Samples refused by the estimator: time did not increase.
+    pub rejected_time: u64,
+    /// Samples dropped because the receive → estimator channel was full (live policy only).
+    pub dropped_overflow: u64,
+    /// Samples the estimator accepted.
+    pub accepted: u64,
+    /// Output messages that reached no subscriber.
+    pub undelivered: u64,
+    /// Stances since the start (over all streams).
+    pub stances: u64,
+    /// Heading observations used.
+    pub heading_used: u64,
+    /// Normalised innovation squared of the last heading update (NaN before the first).
+    pub last_nis: f64,
+    /// Estimator phase ([`phase`]).
+    pub phase: u32,
+    /// Bit set of `FLAG_*` ([`FLAG_END_OF_STREAM`], [`FLAG_SHUTDOWN`]).
+    pub flags: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_are_fixed_and_padding_free() {
+        assert_eq!(size_of::<ImuSample>(), 8 + 8 + 24 + 24 + 8 + 8);
+        assert_eq!(size_of::<AngleObservation>(), 8 * 8 + 8);
+        assert_eq!(size_of::<BiasSample>(), 8 * 3 + 48 + 8);
+        assert_eq!(size_of::<AttitudeSample>(), 8 * 3 + 32 + 24 + 48 + 8);
+        assert_eq!(size_of::<NavSample>(), 8 * 4 + 48 + 8 + 8);
+        assert_eq!(size_of::<Diagnostics>(), 8 * 14 + 8);
+    }
+
+    #[test]
+    fn end_of_stream_flag() {
+        let s = ImuSample {
+            flags: FLAG_END_OF_STREAM,
+            ..ImuSample::default()
+        };
+        assert!(s.is_end_of_stream());
+        assert!(!ImuSample::default().is_end_of_stream());
+    }
+}

@@ -1,0 +1,257 @@
+//! End-to-end: the daemon in-process on its own iceoryx2 domain, fed over IPC by the client
+//! [`Producer`], read back with [`Subscriber`]s.
+//!
+//! - `replay_matches_offline_run_sample_by_sample`: the exp36 log at full speed with the lossless
+//!   policy gives exactly the estimates of the offline `run_log`, with no sample lost.
+//! - `bad_samples_over_ipc_are_rejected_and_counted`: NaN, time going backwards, a duplicate and a
+//!   late `seq` are refused and counted in `Diagnostics`; a second daemon on the domain is
+//!   refused.
+//!
+//! Each test has its own domain (stable name, so no per-run shared-memory files pile up).
+
+use corridor_client::{Delivery, Domain, Producer, Subscriber};
+use corridor_service::core::Estimate;
+use corridor_service::daemon::{self, DaemonConfig, DaemonReport};
+use corridor_service::runner::{heading_aid, run_log};
+use corridor_shared::config::{Config, ConfigFile};
+use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::services::ServiceError;
+use corridor_shared::wire::{AttitudeSample, Diagnostics, FLAG_END_OF_STREAM, ImuSample};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+const WAIT: Duration = Duration::from_secs(20);
+
+fn manifest() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn config() -> Config {
+    let path = manifest().join("../configs/gdins.toml");
+    ConfigFile::read(&path)
+        .expect("config reads")
+        .validate()
+        .expect("config is valid")
+}
+
+struct Running {
+    shutdown: Arc<AtomicBool>,
+    handle: JoinHandle<Result<DaemonReport, daemon::DaemonError>>,
+}
+
+impl Running {
+    fn start(cfg: DaemonConfig) -> Self {
+        let shutdown = Arc::new(AtomicBool::new(false));
+        let flag = Arc::clone(&shutdown);
+        let handle = std::thread::Builder::new()
+            .name("test-daemon".into())
+            .spawn(move || daemon::run(cfg, flag))
+            .unwrap();
+        Self { shutdown, handle }
+    }
+
+    fn stop(self) -> DaemonReport {
+        self.shutdown.store(true, Ordering::Relaxed);
+        self.handle.join().unwrap().expect("daemon ran cleanly")
+    }
+}
+
+/// Reads diagnostics until the end-of-stream one.
+fn diagnostics_at_end(sub: &Subscriber<Diagnostics>) -> Diagnostics {
+    loop {
+        let d = sub
+            .recv_timeout(WAIT)
+            .unwrap()
+            .expect("diagnostics before timeout");
+        if d.flags & FLAG_END_OF_STREAM != 0 {
+            return d;
+        }
+    }
+}
+
+#[test]
+fn replay_matches_offline_run_sample_by_sample() {
+    let imu_path: PathBuf = manifest().join("data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let cfg = config();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let log = read_imu_csv(&imu_path, &ImuCsvOptions::default()).unwrap();
+    let mut offline: Vec<Estimate> = Vec::with_capacity(log.rows.len());
+    let outcome = run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+        offline.push(*e)
+    });
+    assert!(outcome.refused.is_empty());
+    assert_eq!(offline.len(), log.rows.len());
+
+    let domain = Domain::new("test_daemon_replay").unwrap();
+    let mut dcfg = DaemonConfig::new(domain.clone(), cfg, aid);
+    dcfg.delivery = Delivery::Lossless;
+    let daemon = Running::start(dcfg);
+
+    let attitude = Subscriber::<AttitudeSample>::open(&domain, "test-attitude", WAIT).unwrap();
+    let diagnostics = Subscriber::<Diagnostics>::open(&domain, "test-diagnostics", WAIT).unwrap();
+
+    // The producer on its own thread: with the lossless policy it blocks while this thread is
+    // not reading (iceoryx2 ports are !Send, so it is created there).
+    let rows = log.rows.clone();
+    let producer = std::thread::spawn(move || {
+        let mut p = Producer::new(&domain, "test-replay", Delivery::Lossless).unwrap();
+        p.wait_for_daemon(WAIT).unwrap();
+        for r in &rows {
+            p.send_imu(ImuSample {
+                t_s: r.t_s,
+                gyro_rad_s: r.gyro_rad_s,
+                accel_m_s2: r.accel_m_s2,
+                temp_c: r.temp_c.unwrap_or(f64::NAN),
+                ..ImuSample::default()
+            })
+            .unwrap();
+        }
+        p.finish().unwrap();
+        p.stats()
+    });
+
+    let mut got: Vec<AttitudeSample> = Vec::with_capacity(offline.len());
+    loop {
+        let a = attitude
+            .recv_timeout(WAIT)
+            .unwrap()
+            .unwrap_or_else(|| panic!("attitude timed out after {} samples", got.len()));
+        if a.flags & FLAG_END_OF_STREAM != 0 {
+            assert_eq!(
+                a.imu_seq,
+                offline.len() as u64,
+                "marker carries the last seq"
+            );
+            break;
+        }
+        got.push(a);
+    }
+    let stats = producer.join().unwrap();
+    assert_eq!(stats.imu_sent, offline.len() as u64 + 1);
+    assert_eq!(stats.imu_undelivered, 0);
+
+    assert_eq!(
+        got.len(),
+        offline.len(),
+        "every sample reached the subscriber"
+    );
+    for (i, (a, e)) in got.iter().zip(&offline).enumerate() {
+        assert_eq!(a.seq, i as u64, "attitude seq contiguous");
+        assert_eq!(a.imu_seq, i as u64, "input seq contiguous");
+        assert_eq!(a.t_s.to_bits(), e.t_s.to_bits(), "t_s at {i}");
+        let close = |x: f64, y: f64| x == y || (x - y).abs() <= 1e-12;
+        for k in 0..3 {
+            assert!(
+                close(a.gyro_bias_rad_s[k], e.gyro_bias_rad_s[k]),
+                "bias[{k}] at sample {i}: {} vs {}",
+                a.gyro_bias_rad_s[k],
+                e.gyro_bias_rad_s[k]
+            );
+            assert!(
+                close(a.gyro_bias_sd_rad_s[k], e.gyro_bias_sd_rad_s[k])
+                    || (a.gyro_bias_sd_rad_s[k].is_nan() && e.gyro_bias_sd_rad_s[k].is_nan()),
+                "bias sd[{k}] at sample {i}"
+            );
+        }
+        for k in 0..4 {
+            assert!(
+                close(a.nav_from_body_wxyz[k], e.nav_from_body[k]),
+                "q[{k}] at sample {i}"
+            );
+        }
+        assert!(close(a.roll_rad, e.roll_rad), "roll at {i}");
+        assert!(close(a.pitch_rad, e.pitch_rad), "pitch at {i}");
+        assert!(close(a.yaw_rad, e.yaw_rad), "yaw at {i}");
+    }
+
+    let d = diagnostics_at_end(&diagnostics);
+    assert_eq!(d.received, offline.len() as u64 + 1);
+    assert_eq!(d.accepted, offline.len() as u64);
+    assert_eq!(
+        (
+            d.seq_gaps,
+            d.dropped_overflow,
+            d.rejected_duplicate_seq,
+            d.late
+        ),
+        (0, 0, 0, 0)
+    );
+    assert_eq!((d.rejected_non_finite, d.rejected_time), (0, 0));
+    assert_eq!(d.stances, outcome.counters.stances);
+
+    let report = daemon.stop();
+    assert_eq!(report.streams_finished, 1);
+    assert_eq!(report.diagnostics.accepted, offline.len() as u64);
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+}
+
+#[test]
+fn bad_samples_over_ipc_are_rejected_and_counted() {
+    let cfg = config();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let domain = Domain::new("test_daemon_reject").unwrap();
+    let mut dcfg = DaemonConfig::new(domain.clone(), cfg, aid);
+    dcfg.delivery = Delivery::Lossless;
+    let daemon = Running::start(dcfg.clone());
+    let diagnostics = Subscriber::<Diagnostics>::open(&domain, "test-diagnostics", WAIT).unwrap();
+
+    // A second daemon on the same domain is refused with a clear error.
+    let err = daemon::run(dcfg, Arc::new(AtomicBool::new(true))).unwrap_err();
+    assert!(
+        matches!(
+            &err,
+            daemon::DaemonError::Service(ServiceError::DaemonAlreadyRunning { domain })
+                if domain == "test_daemon_reject"
+        ),
+        "{err}"
+    );
+
+    let mut p = Producer::new(&domain, "test-bad-producer", Delivery::Lossless).unwrap();
+    p.wait_for_daemon(WAIT).unwrap();
+    let at = |seq: u64, t_s: f64| ImuSample {
+        seq,
+        t_s,
+        gyro_rad_s: [0.001, -0.002, 0.003],
+        accel_m_s2: [0.0, 0.0, 9.81],
+        temp_c: f64::NAN,
+        ..ImuSample::default()
+    };
+    let dt = 0.005;
+    let mut sent = 0u64;
+    let mut send = |s: ImuSample| {
+        p.send_imu_raw(s).unwrap();
+        sent += 1;
+    };
+    for i in 0..5 {
+        send(at(i, i as f64 * dt)); // 0..4 good
+    }
+    let mut nan = at(5, 5.0 * dt);
+    nan.gyro_rad_s[1] = f64::NAN;
+    send(nan); // refused by the estimator: non-finite
+    send(at(6, 2.0 * dt)); // refused by the estimator: time backwards
+    send(at(7, 7.0 * dt)); // good
+    send(at(7, 8.0 * dt)); // duplicate seq
+    send(at(6, 9.0 * dt)); // late seq
+    send(at(10, 10.0 * dt)); // good, after a gap of 2 (seq 8 and 9)
+    p.finish().unwrap();
+    sent += 1;
+    assert_eq!(p.stats().imu_undelivered, 0);
+
+    let d = diagnostics_at_end(&diagnostics);
+    assert_eq!(d.received, sent);
+    assert_eq!(d.rejected_non_finite, 1);
+    assert_eq!(d.rejected_time, 1);
+    assert_eq!(d.rejected_duplicate_seq, 1);
+    assert_eq!(d.late, 1);
+    assert_eq!(d.seq_gaps, 2);
+    assert_eq!(d.accepted, 7);
+    assert_eq!(d.dropped_overflow, 0);
+
+    let report = daemon.stop();
+    assert_eq!(report.diagnostics.rejected_non_finite, 1);
+    assert_eq!(report.streams_finished, 1);
+}
