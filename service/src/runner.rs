@@ -42,6 +42,9 @@ pub enum RunError {
         /// Cause.
         source: std::io::Error,
     },
+    /// The configuration is unreadable or invalid.
+    #[error(transparent)]
+    Config(#[from] corridor_shared::config::ConfigError),
     /// The log never left the alignment phase.
     #[error("{path}: no initial rest of at least {min_rest_s} s followed by motion was found")]
     NeverAligned {
@@ -303,11 +306,7 @@ pub fn write_estimate_row(w: &mut impl Write, e: &Estimate) -> std::io::Result<(
         s[2],
         u8::from(e.stance),
         u8::from(e.converged),
-        match e.phase {
-            crate::core::Phase::Aligning => "aligning",
-            crate::core::Phase::Calibrating => "calibrating",
-            crate::core::Phase::Tracking => "tracking",
-        }
+        e.phase.name()
     )
 }
 

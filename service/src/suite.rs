@@ -149,30 +149,28 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
         .collect()
 }
 
+/// The recording's configuration with the mode, prior and map knowledge of one suite row.
 fn config_for(
-    base: &Path,
+    file: &ConfigFile,
+    path: &Path,
     r: &SuiteRecording,
     mode: Mode,
     prior: BiasPrior,
 ) -> Result<Config, RunError> {
-    let path = base.join(&r.config);
-    let mut file = ConfigFile::read(&path).map_err(|e| RunError::Io {
-        path: path.clone(),
-        source: std::io::Error::other(e.to_string()),
-    })?;
+    let mut file = file.clone();
     file.estimator.mode = Some(mode);
     file.alignment.gyro_bias_prior = Some(prior);
     file.heading.start_heading_deg = Some(r.start_heading_deg);
     file.heading.grid_deg = Some(r.grid_deg);
-    file.validate().map_err(|e| RunError::Io {
-        path,
-        source: std::io::Error::other(e.to_string()),
-    })
+    Ok(file
+        .validate()
+        .map_err(|e| corridor_shared::config::with_path(e, path))?)
 }
 
 struct Ctx<'a> {
     base: &'a Path,
     rec: &'a SuiteRecording,
+    config: ConfigFile,
     log: ImuLog,
     truth: Vec<TruthPoint>,
 }
@@ -184,7 +182,13 @@ impl Ctx<'_> {
         prior: BiasPrior,
         inj: BiasInjection,
     ) -> Result<(RunOutcome, Footprint), RunError> {
-        let cfg = config_for(self.base, self.rec, mode, prior)?;
+        let cfg = config_for(
+            &self.config,
+            &self.base.join(&self.rec.config),
+            self.rec,
+            mode,
+            prior,
+        )?;
         let aid = heading_aid(&cfg, None)?;
         let out = runner::run_log(&self.log, &cfg, &aid, &inj, |_, _| {});
         let rep = out
@@ -248,6 +252,7 @@ fn run_recording(
     let ctx = Ctx {
         base,
         rec: r,
+        config: ConfigFile::read(&base.join(&r.config))?,
         log,
         truth,
     };

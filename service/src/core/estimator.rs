@@ -68,6 +68,17 @@ pub enum Phase {
     Tracking,
 }
 
+impl Phase {
+    /// Stable name for CSV and logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Aligning => "aligning",
+            Phase::Calibrating => "calibrating",
+            Phase::Tracking => "tracking",
+        }
+    }
+}
+
 /// What happened to one heading observation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HeadingEvent {
