@@ -255,6 +255,27 @@ impl Eskf {
         self.p[(TH + 2, TH + 2)] = var_rad2;
     }
 
+    /// Sets the gyro bias and its covariance block (clearing its correlations), when the filter
+    /// owns the bias.
+    pub fn set_gyro_bias(&mut self, bias_rad_s: Vector3<f64>, cov: &Matrix3<f64>) {
+        if !self.estimate_bias {
+            return;
+        }
+        self.gyro_bias_rad_s = bias_rad_s;
+        for j in 0..N {
+            for i in 0..3 {
+                self.p[(BG + i, j)] = 0.0;
+                self.p[(j, BG + i)] = 0.0;
+            }
+        }
+        self.p.fixed_view_mut::<3, 3>(BG, BG).copy_from(cov);
+    }
+
+    /// Covariance block of the gyro bias.
+    pub fn gyro_bias_cov(&self) -> Matrix3<f64> {
+        self.p.fixed_view::<3, 3>(BG, BG).into_owned()
+    }
+
     /// σ of the gyro-bias states.
     pub fn gyro_bias_sd(&self) -> Vector3<f64> {
         Vector3::new(

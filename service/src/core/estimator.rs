@@ -56,6 +56,23 @@ pub enum SampleError {
     },
 }
 
+/// A saved bias state: gyro bias and its covariance, sensor axes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WarmStart {
+    /// Gyro bias, rad/s.
+    pub gyro_bias_rad_s: [f64; 3],
+    /// Its covariance, (rad/s)², symmetric positive definite.
+    pub gyro_bias_cov: [[f64; 3]; 3],
+}
+
+/// A warm-start state that is not finite, symmetric and positive definite.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("warm-start state rejected (bias {:?}, covariance {:?}): must be finite, symmetric and positive definite", .state.gyro_bias_rad_s, .state.gyro_bias_cov)]
+pub struct WarmStartError {
+    /// The rejected state.
+    pub state: WarmStart,
+}
+
 /// Estimator phase.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Phase {
@@ -304,6 +321,7 @@ pub struct Estimator {
     stance_obs_done: bool,
     stance_f_sum: (Vector3<f64>, u64),
     pending_heading: Option<(f64, f64)>,
+    warm_start: Option<WarmStart>,
     converged_at_s: Option<f64>,
     out: Estimate,
 }
@@ -333,6 +351,7 @@ impl Estimator {
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
             pending_heading: None,
+            warm_start: None,
             converged_at_s: None,
             out: Estimate::default(),
             cfg,
@@ -497,7 +516,70 @@ impl Estimator {
                 obs: None,
             },
         };
+        if let Some(ws) = self.warm_start {
+            self.apply_warm_start(&ws);
+        }
         self.phase = Phase::Calibrating;
+    }
+
+    /// Replaces the bias prior by a saved state (bias and covariance in sensor axes).
+    fn apply_warm_start(&mut self, ws: &WarmStart) {
+        let b = Vector3::from(ws.gyro_bias_rad_s);
+        let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
+        let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
+        match &mut self.bias {
+            BiasFilter::InEskf => {
+                if let Some(e) = self.eskf.as_mut() {
+                    e.set_gyro_bias(b, &p);
+                }
+            }
+            BiasFilter::Paper { kf, .. } => {
+                kf.b_rad_s = c * b;
+                kf.p = c * p * c.transpose();
+            }
+            BiasFilter::RotationAware { kf, .. } => {
+                kf.b_rad_s = b;
+                kf.p = p;
+            }
+        }
+    }
+
+    /// Starts from a saved bias state (e.g. a daemon checkpoint) instead of the configured prior:
+    /// used at the end of the next alignment. Attitude is always re-aligned from the
+    /// accelerometer, and the map frame from the first stride, because the foot may have moved
+    /// while the estimator was down.
+    pub fn set_warm_start(&mut self, ws: WarmStart) -> Result<(), WarmStartError> {
+        let finite = ws.gyro_bias_rad_s.iter().all(|v| v.is_finite())
+            && ws.gyro_bias_cov.iter().flatten().all(|v| v.is_finite());
+        let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
+        let symmetric = (p - p.transpose()).abs().max() <= 1e-12 * p.abs().max().max(1e-300);
+        let positive = p.cholesky().is_some();
+        if !(finite && symmetric && positive) {
+            return Err(WarmStartError { state: ws });
+        }
+        self.warm_start = Some(ws);
+        if self.phase != Phase::Aligning {
+            self.apply_warm_start(&ws);
+        }
+        Ok(())
+    }
+
+    /// Gyro bias (sensor axes) and its full covariance: what a checkpoint saves.
+    pub fn bias_state(&self) -> Option<WarmStart> {
+        self.eskf.as_ref()?;
+        let (b, _) = self.bias_sensor();
+        let p = match &self.bias {
+            BiasFilter::InEskf => self.eskf.as_ref().expect("aligned").gyro_bias_cov(),
+            BiasFilter::Paper { kf, .. } => {
+                let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
+                c.transpose() * kf.p * c
+            }
+            BiasFilter::RotationAware { kf, .. } => kf.p,
+        };
+        Some(WarmStart {
+            gyro_bias_rad_s: b.into(),
+            gyro_bias_cov: std::array::from_fn(|i| std::array::from_fn(|j| p[(i, j)])),
+        })
     }
 
     /// Foot-from-sensor rotation: `R_z(mount_yaw)·tilt0`.
@@ -782,6 +864,44 @@ mod tests {
         for (got, want) in e.gyro_bias_rad_s.iter().zip(bias) {
             assert!((got - want).abs() < 1e-12, "{got} vs {want}");
         }
+    }
+
+    #[test]
+    fn warm_start_replaces_the_prior_and_bad_states_are_refused() {
+        let bias = [0.004, -0.002, 0.006];
+        let saved = WarmStart {
+            gyro_bias_rad_s: [0.001, 0.002, 0.003],
+            gyro_bias_cov: [[1e-8, 0.0, 0.0], [0.0, 2e-8, 1e-9], [0.0, 1e-9, 3e-8]],
+        };
+        let mut est = Estimator::new(Config::default(), HeadingAid::None);
+        let mut bad = saved;
+        bad.gyro_bias_cov[0][0] = -1.0;
+        assert!(est.set_warm_start(bad).is_err());
+        bad = saved;
+        bad.gyro_bias_rad_s[2] = f64::NAN;
+        assert!(est.set_warm_start(bad).is_err());
+        assert!(est.bias_state().is_none(), "no state before alignment");
+        est.set_warm_start(saved).unwrap();
+        let dt = 0.005;
+        for k in 0..600 {
+            let s = ImuInput {
+                t_s: k as f64 * dt,
+                gyro_rad_s: bias,
+                accel_m_s2: [0.0, 0.0, 9.81],
+            };
+            est.step(&s).unwrap();
+        }
+        let moving = ImuInput {
+            t_s: 600.0 * dt,
+            gyro_rad_s: [0.0, 3.0, 0.0],
+            accel_m_s2: [0.0, 0.0, 9.81],
+        };
+        est.step(&moving).unwrap();
+        let state = est.bias_state().unwrap();
+        // One propagation step later: the saved bias, and its covariance plus one step of noise.
+        assert_eq!(state.gyro_bias_rad_s, saved.gyro_bias_rad_s);
+        assert!((state.gyro_bias_cov[1][2] - 1e-9).abs() < 1e-15);
+        assert!(state.gyro_bias_cov[0][0] >= 1e-8 && state.gyro_bias_cov[0][0] < 1.01e-8);
     }
 
     #[test]

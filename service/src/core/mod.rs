@@ -14,4 +14,6 @@ pub mod heading;
 pub mod rotation;
 pub mod stance;
 
-pub use estimator::{Counters, Estimate, Estimator, ImuInput, Phase, SampleError};
+pub use estimator::{
+    Counters, Estimate, Estimator, ImuInput, Phase, SampleError, WarmStart, WarmStartError,
+};
