@@ -192,6 +192,32 @@ pub struct ConfigFile {
     /// `[heading]`
     #[serde(default)]
     pub heading: HeadingFile,
+    /// `[daemon]` (only `corridor serve` reads it)
+    #[serde(default)]
+    pub daemon: DaemonFile,
+}
+
+/// `[daemon]` section: the estimator service.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DaemonFile {
+    /// iceoryx2 domain (a name prefix isolating independent process sets; default `default`).
+    pub domain: Option<String>,
+    /// `live` (a slow reader loses the oldest samples, counted) or `lossless` (backpressure end
+    /// to end); default `live`.
+    pub delivery: Option<String>,
+    /// Capacity of the receive → estimator channel, samples (default 4096).
+    pub channel_capacity: Option<usize>,
+    /// Period of bias samples between heading updates, s of sensor time (default 1.0).
+    pub bias_period_s: Option<f64>,
+    /// Period of diagnostics, s of wall-clock time (default 1.0).
+    pub diagnostics_period_s: Option<f64>,
+    /// Period of the one-line health log, s of wall-clock time (default 10.0).
+    pub health_period_s: Option<f64>,
+    /// Checkpoint file; absent: no checkpoint.
+    pub checkpoint_path: Option<PathBuf>,
+    /// Period of checkpoints while running, s of wall-clock time (default 30.0).
+    pub checkpoint_period_s: Option<f64>,
 }
 
 /// `[estimator]` section.
@@ -314,6 +340,29 @@ pub struct Config {
     pub bias_kf: BiasKfConfig,
     /// Heading aiding.
     pub heading: HeadingConfig,
+    /// The daemon.
+    pub daemon: DaemonSettings,
+}
+
+/// Validated `[daemon]`.
+#[derive(Debug, Clone, Serialize)]
+pub struct DaemonSettings {
+    /// Domain name (validated again, against iceoryx2's rules, when the daemon opens it).
+    pub domain: String,
+    /// `true` for lossless delivery.
+    pub lossless: bool,
+    /// Channel capacity (≥ 1).
+    pub channel_capacity: usize,
+    /// Bias sample period.
+    pub bias_period_s: Positive,
+    /// Diagnostics period.
+    pub diagnostics_period_s: Positive,
+    /// Health log period.
+    pub health_period_s: Positive,
+    /// Checkpoint file.
+    pub checkpoint_path: Option<PathBuf>,
+    /// Checkpoint period.
+    pub checkpoint_period_s: Positive,
 }
 
 /// Validated `[alignment]`.
@@ -454,7 +503,60 @@ impl ConfigFile {
                 "must be in 1..=100",
             ));
         }
+        let dm = &self.daemon;
+        let lossless = match dm.delivery.as_deref().unwrap_or("live") {
+            "live" => false,
+            "lossless" => true,
+            other => {
+                return Err(invalid(
+                    "daemon.delivery",
+                    other,
+                    "must be live or lossless",
+                ));
+            }
+        };
+        let channel_capacity = dm.channel_capacity.unwrap_or(4096);
+        if !(1..=1 << 24).contains(&channel_capacity) {
+            return Err(invalid(
+                "daemon.channel_capacity",
+                channel_capacity,
+                "must be in 1..=16777216",
+            ));
+        }
+        let domain = dm.domain.clone().unwrap_or_else(|| "default".to_owned());
+        if domain.is_empty()
+            || domain.len() > 64
+            || !domain
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+        {
+            return Err(invalid(
+                "daemon.domain",
+                format!("{domain:?}"),
+                "must be 1 to 64 ASCII letters, digits, '_' or '-'",
+            ));
+        }
+        let daemon = DaemonSettings {
+            domain,
+            lossless,
+            channel_capacity,
+            bias_period_s: Positive::new("daemon.bias_period_s", dm.bias_period_s.unwrap_or(1.0))?,
+            diagnostics_period_s: Positive::new(
+                "daemon.diagnostics_period_s",
+                dm.diagnostics_period_s.unwrap_or(1.0),
+            )?,
+            health_period_s: Positive::new(
+                "daemon.health_period_s",
+                dm.health_period_s.unwrap_or(10.0),
+            )?,
+            checkpoint_path: dm.checkpoint_path.clone(),
+            checkpoint_period_s: Positive::new(
+                "daemon.checkpoint_period_s",
+                dm.checkpoint_period_s.unwrap_or(30.0),
+            )?,
+        };
         Ok(Config {
+            daemon,
             mode: e.mode.unwrap_or(Mode::Eskf),
             converged_sd_rad_s: Positive::new(
                 "estimator.converged_sd_rad_s",
@@ -625,6 +727,33 @@ mod tests {
                 .to_string()
                 .contains("detector.window")
         );
+    }
+
+    #[test]
+    fn daemon_section_is_validated() {
+        let f =
+            ConfigFile::parse("[daemon]\ndelivery = \"sometimes\"\n", Path::new("s.toml")).unwrap();
+        assert!(
+            f.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("daemon.delivery")
+        );
+        let f = ConfigFile::parse("[daemon]\ndomain = \"a b\"\n", Path::new("s.toml")).unwrap();
+        assert!(
+            f.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("daemon.domain")
+        );
+        let f = ConfigFile::parse(
+            "[daemon]\ndelivery = \"lossless\"\nchannel_capacity = 8\n",
+            Path::new("s.toml"),
+        )
+        .unwrap();
+        let c = f.validate().unwrap();
+        assert!(c.daemon.lossless);
+        assert_eq!(c.daemon.channel_capacity, 8);
     }
 
     #[test]
