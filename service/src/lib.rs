@@ -9,6 +9,7 @@
 //!   threads, delivery policies, diagnostics.
 //! - [`eval`]: footprint-error evaluation, a port of the reference `eval_traj.py`.
 //! - [`plot`]: dependency-free SVG figures.
+//! - [`residuals`]: residual statistics for the diagnosis (NIS, whiteness, CUSUM, regression).
 //! - [`runner`]: the offline runner (CSV log in, estimates, innovations and summary out).
 //! - [`suite`]: the results table over several recordings (`corridor eval`).
 pub mod checkpoint;
@@ -16,5 +17,6 @@ pub mod core;
 pub mod daemon;
 pub mod eval;
 pub mod plot;
+pub mod residuals;
 pub mod runner;
 pub mod suite;
