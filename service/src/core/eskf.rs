@@ -6,7 +6,7 @@
 //! frame, applied as `exp(δθ)·q`), δb_g. The covariance is propagated block by block because the
 //! transition matrix is sparse; nothing here allocates.
 
-use super::rotation::{exp_rotvec, skew, wrap_pi, yaw, yaw_jacobian};
+use super::rotation::{exp_rotvec, heading_jacobian, heading_of_axis, skew, wrap_pi};
 use nalgebra::{Matrix3, SMatrix, SVector, UnitQuaternion, Vector3};
 
 /// Error-state dimension.
@@ -112,51 +112,61 @@ impl Eskf {
     /// Strapdown step over `dt_s` with the bias-corrected body rate `omega_rad_s` (already
     /// averaged over the step) and the specific force `f_m_s2`, then covariance propagation.
     pub fn propagate(&mut self, omega_rad_s: &Vector3<f64>, f_m_s2: &Vector3<f64>, dt_s: f64) {
-        let half = self.nav_from_body * exp_rotvec(&(omega_rad_s * (0.5 * dt_s)));
+        let step_half = exp_rotvec(&(omega_rad_s * (0.5 * dt_s)));
+        let half = self.nav_from_body * step_half;
         let f_nav = half * f_m_s2;
         let a = f_nav - Vector3::new(0.0, 0.0, self.gravity_m_s2);
         self.p_m += self.v_m_s * dt_s + a * (0.5 * dt_s * dt_s);
         self.v_m_s += a * dt_s;
-        self.nav_from_body = half * exp_rotvec(&(omega_rad_s * (0.5 * dt_s)));
+        self.nav_from_body = half * step_half;
         let c = half.to_rotation_matrix().into_inner();
         self.propagate_covariance(&(-skew(&f_nav) * dt_s), &(-c * dt_s), dt_s);
     }
 
-    /// P ← F P Fᵀ + Q for F = [[I, dt, 0, 0], [0, I, Fvθ, 0], [0, 0, I, Fθb], [0, 0, 0, I]],
-    /// computed by blocks.
+    /// P ← F P Fᵀ + Q for F = [[I, dt, 0, 0], [0, I, Fvθ, 0], [0, 0, I, Fθb], [0, 0, 0, I]].
+    /// Written out by blocks on the column-major storage: F is sparse, so this is about 500
+    /// multiply-adds instead of the 3,500 of a dense product (the hot path of the core).
     fn propagate_covariance(&mut self, f_vth: &Matrix3<f64>, f_thb: &Matrix3<f64>, dt: f64) {
-        let p = &mut self.p;
-        // M = F P (block rows)
-        let row_v = p.fixed_view::<3, N>(V0, 0).into_owned();
-        let row_th = p.fixed_view::<3, N>(TH, 0).into_owned();
-        let row_b = p.fixed_view::<3, N>(BG, 0).into_owned();
-        {
-            let mut r = p.fixed_view_mut::<3, N>(P0, 0);
-            r += row_v * dt;
+        let fvt: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|k| f_vth[(i, k)]));
+        let ftb: [[f64; 3]; 3] = if self.estimate_bias {
+            std::array::from_fn(|i| std::array::from_fn(|k| f_thb[(i, k)]))
+        } else {
+            [[0.0; 3]; 3]
+        };
+        let a = self.p.as_mut_slice(); // column-major: a[col * N + row]
+        // M = F P: for each column, rows p, v, θ read the old rows v, θ, b.
+        for col in a.chunks_exact_mut(N) {
+            let v = [col[V0], col[V0 + 1], col[V0 + 2]];
+            let th = [col[TH], col[TH + 1], col[TH + 2]];
+            let b = [col[BG], col[BG + 1], col[BG + 2]];
+            for i in 0..3 {
+                col[P0 + i] += dt * v[i];
+                col[V0 + i] += fvt[i][0] * th[0] + fvt[i][1] * th[1] + fvt[i][2] * th[2];
+                col[TH + i] += ftb[i][0] * b[0] + ftb[i][1] * b[1] + ftb[i][2] * b[2];
+            }
         }
-        {
-            let mut r = p.fixed_view_mut::<3, N>(V0, 0);
-            r += f_vth * row_th;
-        }
-        if self.estimate_bias {
-            let mut r = p.fixed_view_mut::<3, N>(TH, 0);
-            r += f_thb * row_b;
-        }
-        // P' = M Fᵀ (block columns)
-        let col_v = p.fixed_view::<N, 3>(0, V0).into_owned();
-        let col_th = p.fixed_view::<N, 3>(0, TH).into_owned();
-        let col_b = p.fixed_view::<N, 3>(0, BG).into_owned();
-        {
-            let mut c = p.fixed_view_mut::<N, 3>(0, P0);
-            c += col_v * dt;
-        }
-        {
-            let mut c = p.fixed_view_mut::<N, 3>(0, V0);
-            c += col_th * f_vth.transpose();
-        }
-        if self.estimate_bias {
-            let mut c = p.fixed_view_mut::<N, 3>(0, TH);
-            c += col_b * f_thb.transpose();
+        // P' = M Fᵀ: columns p, v, θ read the old columns v, θ, b.
+        for row in 0..N {
+            let v = [
+                a[V0 * N + row],
+                a[(V0 + 1) * N + row],
+                a[(V0 + 2) * N + row],
+            ];
+            let th = [
+                a[TH * N + row],
+                a[(TH + 1) * N + row],
+                a[(TH + 2) * N + row],
+            ];
+            let b = [
+                a[BG * N + row],
+                a[(BG + 1) * N + row],
+                a[(BG + 2) * N + row],
+            ];
+            for k in 0..3 {
+                a[(P0 + k) * N + row] += dt * v[k];
+                a[(V0 + k) * N + row] += th[0] * fvt[k][0] + th[1] * fvt[k][1] + th[2] * fvt[k][2];
+                a[(TH + k) * N + row] += b[0] * ftb[k][0] + b[1] * ftb[k][1] + b[2] * ftb[k][2];
+            }
         }
         let qa = self.noise.accel_m_s2.powi(2) * dt;
         let qg = self.noise.gyro_rad_s.powi(2) * dt;
@@ -166,9 +176,9 @@ impl Eskf {
             0.0
         };
         for i in 0..3 {
-            p[(V0 + i, V0 + i)] += qa;
-            p[(TH + i, TH + i)] += qg;
-            p[(BG + i, BG + i)] += qb;
+            a[(V0 + i) * N + V0 + i] += qa;
+            a[(TH + i) * N + TH + i] += qg;
+            a[(BG + i) * N + BG + i] += qb;
         }
     }
 
@@ -186,9 +196,15 @@ impl Eskf {
         let pht = self.p.fixed_view::<N, 3>(0, V0).into_owned();
         let k = pht * s_inv;
         let dx = k * r;
-        let hp = self.p.fixed_view::<3, N>(V0, 0).into_owned();
-        self.p -= k * hp;
-        self.symmetrize();
+        // P ← P − K·P_v: (the product is symmetric) computed on one triangle and mirrored.
+        for j in 0..N {
+            for i in 0..=j {
+                let d = k[(i, 0)] * pht[(j, 0)] + k[(i, 1)] * pht[(j, 1)] + k[(i, 2)] * pht[(j, 2)];
+                let v = self.p[(i, j)] - d;
+                self.p[(i, j)] = v;
+                self.p[(j, i)] = v;
+            }
+        }
         self.inject(&dx);
         Innovation {
             r: [r.x, r.y, r.z],
@@ -198,10 +214,16 @@ impl Eskf {
         }
     }
 
-    /// Yaw (ZYX) of the body: observed value `yaw_obs_rad` with σ `sd_rad`.
-    pub fn heading_update(&mut self, yaw_obs_rad: f64, sd_rad: f64) -> Innovation {
-        let r = wrap_pi(yaw_obs_rad - yaw(&self.nav_from_body));
-        let h = yaw_jacobian(&self.nav_from_body);
+    /// Heading of the body-frame direction `axis_body` (e.g. the foot's forward axis):
+    /// observed value `heading_obs_rad` with σ `sd_rad`.
+    pub fn heading_update(
+        &mut self,
+        heading_obs_rad: f64,
+        sd_rad: f64,
+        axis_body: &Vector3<f64>,
+    ) -> Innovation {
+        let r = wrap_pi(heading_obs_rad - heading_of_axis(&self.nav_from_body, axis_body));
+        let h = heading_jacobian(&self.nav_from_body, axis_body);
         let pht: SVector<f64, N> = self.p.fixed_view::<N, 3>(0, TH) * h;
         let s = h.dot(&pht.fixed_rows::<3>(TH)) + sd_rad * sd_rad;
         let k = pht / s;
@@ -378,7 +400,7 @@ mod tests {
             f.propagate(&omega, &g, dt);
             f.zupt();
             if k % 200 == 199 {
-                f.heading_update(0.0, 0.02);
+                f.heading_update(0.0, 0.02, &Vector3::x());
             }
         }
         assert!(

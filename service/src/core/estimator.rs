@@ -17,7 +17,9 @@
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::eskf::{Eskf, EskfNoise, Innovation};
 use super::heading::{HeadingAid, Rejection, StraightWalk};
-use super::rotation::{euler_zyx, from_euler_zyx, rot_z, tilt_from_specific_force, wrap_pi, yaw};
+use super::rotation::{
+    euler_zyx, from_euler_zyx, heading_of_axis, rot_z, tilt_from_specific_force, wrap_pi, yaw,
+};
 use super::stance::StanceDetector;
 use corridor_shared::config::{BiasPrior, Config, Mode};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
@@ -587,6 +589,13 @@ impl Estimator {
         rot_z(self.mount_yaw_rad) * self.tilt0
     }
 
+    /// The foot's forward axis in sensor axes. Its horizontal heading is the foot heading at
+    /// any foot pitch or roll, unlike the sensor's ZYX yaw minus the mounting yaw, which is only
+    /// right while the foot is flat.
+    fn foot_forward_body(&self) -> Vector3<f64> {
+        self.foot_from_sensor().inverse() * Vector3::x()
+    }
+
     /// Gyro bias in sensor axes and its σ.
     fn bias_sensor(&self) -> (Vector3<f64>, Vector3<f64>) {
         match &self.bias {
@@ -656,6 +665,7 @@ impl Estimator {
     /// Once per stance: calibration or a heading observation.
     fn stance_observation(&mut self, t_s: f64) {
         let h = self.cfg.heading.clone();
+        let forward = self.foot_forward_body();
         let eskf = self.eskf.as_mut().expect("aligned");
         if self.phase == Phase::Calibrating {
             let n = self.mount_sum.2;
@@ -667,7 +677,9 @@ impl Estimator {
                 eskf.rotate_frame(h.start_heading_rad - d.y.atan2(d.x));
                 eskf.set_heading_variance(1e-8);
             }
-            let m = wrap_pi(yaw(&eskf.nav_from_body) - h.start_heading_rad);
+            // Heading of the sensor's levelled x axis: ≈ foot heading + mounting yaw.
+            let levelled = eskf.nav_from_body * self.tilt0.inverse();
+            let m = wrap_pi(yaw(&levelled) - h.start_heading_rad);
             self.mount_sum.0 += m.cos();
             self.mount_sum.1 += m.sin();
             self.mount_sum.2 += 1;
@@ -690,7 +702,7 @@ impl Estimator {
             }
             return;
         }
-        let foot_heading = wrap_pi(yaw(&eskf.nav_from_body) - self.mount_yaw_rad);
+        let foot_heading = heading_of_axis(&eskf.nav_from_body, &forward);
         let straight = self.straight.push(foot_heading);
         let xy = [eskf.p_m.x, eskf.p_m.y];
         let (direction, sd) = match self.pending_heading.take() {
@@ -720,10 +732,10 @@ impl Estimator {
             }
             Ok(dir) => {
                 event.direction_rad = dir;
-                let sensor_yaw = dir + self.mount_yaw_rad;
+                let sensor_yaw = dir + self.mount_yaw_rad; // flat foot at heading `dir`
                 let tilt_sd = self.cfg.bias_kf.tilt_sd_rad.get();
                 let innovation = match &mut self.bias {
-                    BiasFilter::InEskf => Some(eskf.heading_update(sensor_yaw, sd)),
+                    BiasFilter::InEskf => Some(eskf.heading_update(dir, sd, &forward)),
                     BiasFilter::Paper { kf, obs } => {
                         let q_true = rot_z(sensor_yaw) * self.tilt0;
                         obs.as_ref()
@@ -739,7 +751,9 @@ impl Estimator {
                     BiasFilter::RotationAware { kf, obs } => {
                         let (sum, n) = self.stance_f_sum;
                         let (roll, pitch) = tilt_from_specific_force(&(sum / n.max(1) as f64));
-                        let q_true = rot_z(sensor_yaw) * from_euler_zyx(roll, pitch, 0.0);
+                        // The accelerometer's tilt, turned about z until the foot axis points at `dir`.
+                        let tilt = from_euler_zyx(roll, pitch, 0.0);
+                        let q_true = rot_z(dir - heading_of_axis(&tilt, &forward)) * tilt;
                         obs.as_ref().map(|o| {
                             let (y, hm) = o.observe(&q_true);
                             kf.predict(t_s);

@@ -107,16 +107,26 @@ pub fn rot_z(angle_rad: f64) -> UnitQuaternion<f64> {
 
 /// ZYX yaw of `nav_from_body`: the heading of the body x axis projected on the horizontal.
 pub fn yaw(q: &UnitQuaternion<f64>) -> f64 {
-    let x = q * Vector3::x();
-    x.y.atan2(x.x)
+    heading_of_axis(q, &Vector3::x())
 }
 
-/// Jacobian of [`yaw`] with respect to a small navigation-frame rotation `δθ` applied as
-/// `exp(δθ)·q`.
-pub fn yaw_jacobian(q: &UnitQuaternion<f64>) -> Vector3<f64> {
-    let c = q * Vector3::x();
+/// Heading (angle from the navigation x axis, counter-clockwise about z) of the body-frame
+/// direction `axis_body` projected on the horizontal.
+pub fn heading_of_axis(q: &UnitQuaternion<f64>, axis_body: &Vector3<f64>) -> f64 {
+    let c = q * axis_body;
+    c.y.atan2(c.x)
+}
+
+/// Jacobian of [`heading_of_axis`] with respect to a small navigation-frame rotation `δθ`
+/// applied as `exp(δθ)·q`.
+pub fn heading_jacobian(q: &UnitQuaternion<f64>, axis_body: &Vector3<f64>) -> Vector3<f64> {
+    let c = q * axis_body;
     let n2 = (c.x * c.x + c.y * c.y).max(1e-12);
-    Vector3::new(-c.x * c.z / n2, -c.y * c.z / n2, 1.0)
+    Vector3::new(
+        -c.x * c.z / n2,
+        -c.y * c.z / n2,
+        (c.x * c.x + c.y * c.y) / n2,
+    )
 }
 
 /// Roll and pitch (ZYX) of a body frame whose measured specific force (pointing up at rest)
@@ -161,14 +171,18 @@ mod tests {
     }
 
     #[test]
-    fn yaw_jacobian_matches_finite_difference() {
+    fn heading_jacobian_matches_finite_difference() {
         let q = from_euler_zyx(0.4, -0.6, 1.0);
-        let j = yaw_jacobian(&q);
-        for k in 0..3 {
-            let mut d = Vector3::zeros();
-            d[k] = 1e-7;
-            let num = wrap_pi(yaw(&(exp_rotvec(&d) * q)) - yaw(&q)) / 1e-7;
-            assert!((num - j[k]).abs() < 1e-5, "axis {k}: {num} vs {}", j[k]);
+        for axis in [Vector3::x(), Vector3::new(0.3, -0.8, 0.5).normalize()] {
+            let j = heading_jacobian(&q, &axis);
+            for k in 0..3 {
+                let mut d = Vector3::zeros();
+                d[k] = 1e-7;
+                let num = wrap_pi(
+                    heading_of_axis(&(exp_rotvec(&d) * q), &axis) - heading_of_axis(&q, &axis),
+                ) / 1e-7;
+                assert!((num - j[k]).abs() < 1e-5, "axis {k}: {num} vs {}", j[k]);
+            }
         }
         let (_, _, y) = euler_zyx(&q);
         assert!((y - yaw(&q)).abs() < 1e-12);

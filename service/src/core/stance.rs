@@ -9,6 +9,9 @@
 use corridor_shared::config::{DetectorConfig, DetectorKind};
 use nalgebra::Vector3;
 
+/// Samples between exact recomputations of the window sums.
+const RESUM_EVERY: usize = 4096;
+
 /// Stance detector state. Allocates its window once, at construction.
 #[derive(Debug, Clone)]
 pub struct StanceDetector {
@@ -22,6 +25,12 @@ pub struct StanceDetector {
     accel: Vec<Vector3<f64>>,
     next: usize,
     filled: usize,
+    /// Running sums over the window: Σa, Σ|a|², Σ|ω|² (recomputed exactly every
+    /// `RESUM_EVERY` samples so rounding cannot accumulate).
+    sum_a: Vector3<f64>,
+    sum_a2: f64,
+    sum_w2: f64,
+    since_resum: usize,
     raw_since_s: Option<f64>,
     last_statistic: f64,
 }
@@ -55,9 +64,22 @@ impl StanceDetector {
             accel: vec![Vector3::zeros(); w],
             next: 0,
             filled: 0,
+            sum_a: Vector3::zeros(),
+            sum_a2: 0.0,
+            sum_w2: 0.0,
+            since_resum: 0,
             raw_since_s: None,
             last_statistic: f64::INFINITY,
         }
+    }
+
+    /// Recomputes the running sums from the window.
+    fn resum(&mut self) {
+        let (g, a) = (&self.gyro[..self.filled], &self.accel[..self.filled]);
+        self.sum_a = a.iter().sum();
+        self.sum_a2 = a.iter().map(|v| v.norm_squared()).sum();
+        self.sum_w2 = g.iter().map(|v| v.norm_squared()).sum();
+        self.since_resum = 0;
     }
 
     /// Sets the gravity magnitude used by SHOE.
@@ -83,30 +105,35 @@ impl StanceDetector {
         accel_m_s2: &Vector3<f64>,
     ) -> StanceDecision {
         let w = self.gyro.len();
+        if self.filled == w {
+            let (og, oa) = (self.gyro[self.next], self.accel[self.next]);
+            self.sum_a -= oa;
+            self.sum_a2 -= oa.norm_squared();
+            self.sum_w2 -= og.norm_squared();
+        }
         self.gyro[self.next] = *gyro_rad_s;
         self.accel[self.next] = *accel_m_s2;
+        self.sum_a += accel_m_s2;
+        self.sum_a2 += accel_m_s2.norm_squared();
+        self.sum_w2 += gyro_rad_s.norm_squared();
         self.next = (self.next + 1) % w;
         self.filled = (self.filled + 1).min(w);
+        self.since_resum += 1;
+        if self.since_resum >= RESUM_EVERY {
+            self.resum();
+        }
         let n = self.filled as f64;
-        let statistic = {
-            let gyro = &self.gyro[..self.filled];
-            let accel = &self.accel[..self.filled];
-            match self.kind {
-                DetectorKind::Are => {
-                    gyro.iter().map(|g| g.norm_squared()).sum::<f64>() * self.inv_var_g / n
-                }
-                DetectorKind::Mv => {
-                    let mean = accel.iter().sum::<Vector3<f64>>() / n;
-                    accel.iter().map(|a| (a - mean).norm_squared()).sum::<f64>() * self.inv_var_a
-                        / n
-                }
-                DetectorKind::Shoe => {
-                    let mean = accel.iter().sum::<Vector3<f64>>() / n;
-                    let up = mean.normalize() * self.gravity_m_s2;
-                    let sa: f64 = accel.iter().map(|a| (a - up).norm_squared()).sum();
-                    let sg: f64 = gyro.iter().map(|g| g.norm_squared()).sum();
-                    (sa * self.inv_var_a + sg * self.inv_var_g) / n
-                }
+        let statistic = match self.kind {
+            DetectorKind::Are => self.sum_w2.max(0.0) * self.inv_var_g / n,
+            DetectorKind::Mv => {
+                // Σ|a − ā|² = Σ|a|² − |Σa|²/n
+                (self.sum_a2 - self.sum_a.norm_squared() / n).max(0.0) * self.inv_var_a / n
+            }
+            DetectorKind::Shoe => {
+                // Σ|a − g·ā/|ā||² = Σ|a|² − 2g·|Σa| + n·g²
+                let g = self.gravity_m_s2;
+                let sa = (self.sum_a2 - 2.0 * g * self.sum_a.norm() + n * g * g).max(0.0);
+                (sa * self.inv_var_a + self.sum_w2.max(0.0) * self.inv_var_g) / n
             }
         };
         self.last_statistic = statistic;
@@ -145,6 +172,47 @@ mod tests {
         assert!(last.stance && last.stance_age_s > 0.3);
         let moving = d.push(0.5, &Vector3::new(0.0, 3.0, 0.0), &g);
         assert!(!moving.raw && !moving.stance && moving.stance_age_s == 0.0);
+    }
+
+    #[test]
+    fn running_sums_equal_the_window_formulas() {
+        for kind in [DetectorKind::Shoe, DetectorKind::Are, DetectorKind::Mv] {
+            let mut cfg = Config::default().detector;
+            cfg.kind = kind;
+            let mut d = StanceDetector::new(&cfg, 9.81);
+            let mut hist = Vec::new();
+            for i in 0..10_000 {
+                let t = i as f64 * 0.005;
+                let w = Vector3::new((t * 3.0).sin(), 0.2 * (t * 7.0).cos(), 0.01 * t.sin());
+                let a = Vector3::new(0.3 * (t * 5.0).sin(), 0.1, 9.81 + 0.5 * (t * 2.0).cos());
+                hist.push((w, a));
+                let got = d.push(t, &w, &a).statistic;
+                let win = &hist[hist.len().saturating_sub(cfg.window)..];
+                let n = win.len() as f64;
+                let mean: Vector3<f64> = win.iter().map(|x| x.1).sum::<Vector3<f64>>() / n;
+                let sa: f64 = match kind {
+                    DetectorKind::Mv => win.iter().map(|x| (x.1 - mean).norm_squared()).sum(),
+                    _ => win
+                        .iter()
+                        .map(|x| (x.1 - mean.normalize() * 9.81).norm_squared())
+                        .sum(),
+                };
+                let sg: f64 = win.iter().map(|x| x.0.norm_squared()).sum();
+                let want = match kind {
+                    DetectorKind::Shoe => {
+                        (sa / cfg.sigma_accel_m_s2.get().powi(2)
+                            + sg / cfg.sigma_gyro_rad_s.get().powi(2))
+                            / n
+                    }
+                    DetectorKind::Are => sg / cfg.sigma_gyro_rad_s.get().powi(2) / n,
+                    DetectorKind::Mv => sa / cfg.sigma_accel_m_s2.get().powi(2) / n,
+                };
+                assert!(
+                    (got - want).abs() <= 1e-6 * want.abs().max(1.0),
+                    "{kind:?} at {i}: {got} vs {want}"
+                );
+            }
+        }
     }
 
     #[test]
