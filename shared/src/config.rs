@@ -255,7 +255,7 @@ pub struct DetectorFile {
     pub kind: Option<DetectorKind>,
     /// Window length in samples (default 5).
     pub window: Option<usize>,
-    /// Threshold on the statistic (default 3e5 for SHOE with the default σ).
+    /// Threshold on the statistic (default 1e5 for SHOE with the default σ: about 0.6 rad/s of rotation).
     pub threshold: Option<f64>,
     /// Accelerometer noise σ used by the statistic (default 0.01 m/s²).
     pub sigma_accel_m_s2: Option<f64>,
@@ -575,7 +575,7 @@ impl ConfigFile {
             detector: DetectorConfig {
                 kind: d.kind.unwrap_or(DetectorKind::Shoe),
                 window,
-                threshold: Positive::new("detector.threshold", d.threshold.unwrap_or(3e5))?,
+                threshold: Positive::new("detector.threshold", d.threshold.unwrap_or(1e5))?,
                 sigma_accel_m_s2: Positive::new(
                     "detector.sigma_accel_m_s2",
                     d.sigma_accel_m_s2.unwrap_or(0.01),
