@@ -192,9 +192,29 @@ pub struct ConfigFile {
     /// `[heading]`
     #[serde(default)]
     pub heading: HeadingFile,
+    /// `[model]`: switchable model extensions of the `eskf` mode
+    #[serde(default)]
+    pub model: ModelFile,
     /// `[daemon]` (only `corridor serve` reads it)
     #[serde(default)]
     pub daemon: DaemonFile,
+}
+
+/// `[model]` section: extension states of the error-state filter (`eskf` and `zupt` modes).
+/// Each key switches its extension on; absent means off.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    /// Gyro-bias rate states (a linear bias drift): random walk of the rate, rad/s²/√s.
+    pub bias_rate_rw_rad_s2_sqrt_s: Option<f64>,
+    /// Initial σ of the bias rate, rad/s² (default 1e-4).
+    pub bias_rate_initial_sd_rad_s2: Option<f64>,
+    /// Gyro scale-factor states per sensor axis: initial σ (dimensionless).
+    pub scale_factor_sd: Option<f64>,
+    /// Foot-heading offset state: initial σ, degrees.
+    pub heading_offset_sd_deg: Option<f64>,
+    /// Diagonal g-sensitivity states: initial σ, rad/s per m/s².
+    pub g_sensitivity_sd: Option<f64>,
 }
 
 /// `[daemon]` section: the estimator service.
@@ -340,8 +360,25 @@ pub struct Config {
     pub bias_kf: BiasKfConfig,
     /// Heading aiding.
     pub heading: HeadingConfig,
+    /// Model extensions.
+    pub model: ModelSettings,
     /// The daemon.
     pub daemon: DaemonSettings,
+}
+
+/// Validated `[model]`: `None` = extension off.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ModelSettings {
+    /// Bias-rate random walk.
+    pub bias_rate_rw_rad_s2_sqrt_s: Option<Positive>,
+    /// Initial σ of the bias rate.
+    pub bias_rate_initial_sd_rad_s2: Positive,
+    /// Scale-factor initial σ.
+    pub scale_factor_sd: Option<Positive>,
+    /// Heading-offset initial σ, rad.
+    pub heading_offset_sd_rad: Option<Positive>,
+    /// g-sensitivity initial σ.
+    pub g_sensitivity_sd: Option<Positive>,
 }
 
 /// Validated `[daemon]`.
@@ -555,8 +592,27 @@ impl ConfigFile {
                 dm.checkpoint_period_s.unwrap_or(30.0),
             )?,
         };
+        let md = &self.model;
+        let opt = |key: &str, v: Option<f64>| v.map(|v| Positive::new(key, v)).transpose();
+        let model = ModelSettings {
+            bias_rate_rw_rad_s2_sqrt_s: opt(
+                "model.bias_rate_rw_rad_s2_sqrt_s",
+                md.bias_rate_rw_rad_s2_sqrt_s,
+            )?,
+            bias_rate_initial_sd_rad_s2: Positive::new(
+                "model.bias_rate_initial_sd_rad_s2",
+                md.bias_rate_initial_sd_rad_s2.unwrap_or(1e-4),
+            )?,
+            scale_factor_sd: opt("model.scale_factor_sd", md.scale_factor_sd)?,
+            heading_offset_sd_rad: opt(
+                "model.heading_offset_sd_deg",
+                md.heading_offset_sd_deg.map(f64::to_radians),
+            )?,
+            g_sensitivity_sd: opt("model.g_sensitivity_sd", md.g_sensitivity_sd)?,
+        };
         Ok(Config {
             daemon,
+            model,
             mode: e.mode.unwrap_or(Mode::Eskf),
             converged_sd_rad_s: Positive::new(
                 "estimator.converged_sd_rad_s",

@@ -1,23 +1,27 @@
 //! The ZUPT-aided error-state Kalman filter of a foot-mounted INS: the standard filter every
-//! corridor result is compared with.
+//! corridor result is compared with, with switchable model extensions.
 //!
 //! Nominal state: position and velocity in the navigation frame (local level, z up),
-//! attitude `nav_from_body`, gyro bias in body axes. Error state (12): δp, δv, δθ (navigation
-//! frame, applied as `exp(δθ)·q`), δb_g. The covariance is propagated block by block because the
-//! transition matrix is sparse; nothing here allocates.
+//! attitude `nav_from_body`, gyro bias in body axes, and the enabled extensions:
+//! - gyro-bias rate (3 states: the bias drifts linearly, with a random walk on the rate);
+//! - gyro scale factor per body axis (3 states: `ω_meas = (1 + s)·ω + b`);
+//! - foot-heading offset (1 state: the foot points `offset` away from the walking direction
+//!   the map gives, e.g. a toe-out that differs from the one calibrated at the start);
+//! - g-sensitivity, diagonal (3 states: `ω_meas = ω + b + k∘f`).
+//!
+//! Error state: δp, δv, δθ (navigation frame, applied as `exp(δθ)·q`), δb, then the extensions
+//! in that order. The covariance lives in a fixed array sized for every extension, is propagated
+//! block by block (the transition matrix is sparse), and nothing here allocates.
 
 use super::rotation::{exp_rotvec, heading_jacobian, heading_of_axis, skew, wrap_pi};
-use nalgebra::{Matrix3, SMatrix, SVector, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
-/// Error-state dimension.
-pub const N: usize = 12;
+/// Largest error-state dimension (12 base states and 10 extension states).
+pub const MAX_N: usize = 22;
 const P0: usize = 0;
 const V0: usize = 3;
 const TH: usize = 6;
 const BG: usize = 9;
-
-type Mat = SMatrix<f64, N, N>;
-type Vecn = SVector<f64, N>;
 
 /// Noise figures of the filter.
 #[derive(Debug, Clone, Copy)]
@@ -30,6 +34,54 @@ pub struct EskfNoise {
     pub gyro_bias_rw: f64,
     /// ZUPT σ, m/s.
     pub zupt_m_s: f64,
+}
+
+/// Which extension states the filter carries, with their initial σ and noise.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Extensions {
+    /// Bias-rate states: random walk of the rate, rad/s²/√s (`None`: off).
+    pub bias_rate_rw: Option<f64>,
+    /// Initial σ of the bias rate, rad/s² (used when the bias-rate states are on).
+    pub bias_rate_sd: f64,
+    /// Scale-factor states: initial σ, dimensionless (`None`: off).
+    pub scale_factor_sd: Option<f64>,
+    /// Heading-offset state: initial σ, rad (`None`: off).
+    pub heading_offset_sd: Option<f64>,
+    /// g-sensitivity states: initial σ, rad/s per m/s² (`None`: off).
+    pub g_sensitivity_sd: Option<f64>,
+}
+
+/// Indices of the extension states in the error state.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct Layout {
+    n: usize,
+    rate: Option<usize>,
+    scale: Option<usize>,
+    offset: Option<usize>,
+    gsens: Option<usize>,
+}
+
+impl Layout {
+    fn new(ext: &Extensions) -> Self {
+        let mut n = 12;
+        let mut take = |on: bool, k: usize| {
+            on.then(|| {
+                n += k;
+                n - k
+            })
+        };
+        let rate = take(ext.bias_rate_rw.is_some(), 3);
+        let scale = take(ext.scale_factor_sd.is_some(), 3);
+        let offset = take(ext.heading_offset_sd.is_some(), 1);
+        let gsens = take(ext.g_sensitivity_sd.is_some(), 3);
+        Self {
+            n,
+            rate,
+            scale,
+            offset,
+            gsens,
+        }
+    }
 }
 
 /// Result of one scalar or vector measurement update.
@@ -45,6 +97,19 @@ pub struct Innovation {
     pub dim: u8,
 }
 
+/// The extension estimates.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ExtensionEstimates {
+    /// Gyro-bias rate, rad/s², body axes.
+    pub bias_rate_rad_s2: Vector3<f64>,
+    /// Gyro scale factor per body axis (0 = nominal).
+    pub scale_factor: Vector3<f64>,
+    /// Foot-heading offset, rad.
+    pub heading_offset_rad: f64,
+    /// g-sensitivity, rad/s per m/s², body axes.
+    pub g_sensitivity: Vector3<f64>,
+}
+
 /// The filter.
 #[derive(Debug, Clone)]
 pub struct Eskf {
@@ -56,17 +121,57 @@ pub struct Eskf {
     pub nav_from_body: UnitQuaternion<f64>,
     /// Gyro bias, rad/s, body frame.
     pub gyro_bias_rad_s: Vector3<f64>,
-    /// Error covariance.
-    pub p: Mat,
+    /// Extension estimates (zero when an extension is off).
+    pub ext: ExtensionEstimates,
+    /// Error covariance, column-major with stride `MAX_N`; only the leading `n × n` is used.
+    p: [f64; MAX_N * MAX_N],
+    layout: Layout,
     gravity_m_s2: f64,
     noise: EskfNoise,
+    ext_cfg: Extensions,
     estimate_bias: bool,
+}
+
+#[inline]
+fn ix(r: usize, c: usize) -> usize {
+    c * MAX_N + r
+}
+
+/// Dimension without extensions.
+const BASE_N: usize = 12;
+
+/// `P ← F P Fᵀ` (without Q) for the base 12-state filter: the common case, with constant
+/// bounds so the compiler unrolls it.
+fn propagate_base(a: &mut [f64; MAX_N * MAX_N], fvt: &[[f64; 3]; 3], ftb: &[[f64; 3]; 3], dt: f64) {
+    let dot3 = |m: &[f64; 3], v: &[f64; 3]| m[0] * v[0] + m[1] * v[1] + m[2] * v[2];
+    for col in 0..BASE_N {
+        let c = &mut a[col * MAX_N..col * MAX_N + BASE_N];
+        let v = [c[V0], c[V0 + 1], c[V0 + 2]];
+        let th = [c[TH], c[TH + 1], c[TH + 2]];
+        let b = [c[BG], c[BG + 1], c[BG + 2]];
+        for i in 0..3 {
+            c[P0 + i] += dt * v[i];
+            c[V0 + i] += dot3(&fvt[i], &th);
+            c[TH + i] += dot3(&ftb[i], &b);
+        }
+    }
+    for row in 0..BASE_N {
+        let v = [a[ix(row, V0)], a[ix(row, V0 + 1)], a[ix(row, V0 + 2)]];
+        let th = [a[ix(row, TH)], a[ix(row, TH + 1)], a[ix(row, TH + 2)]];
+        let b = [a[ix(row, BG)], a[ix(row, BG + 1)], a[ix(row, BG + 2)]];
+        for i in 0..3 {
+            a[ix(row, P0 + i)] += dt * v[i];
+            a[ix(row, V0 + i)] += dot3(&fvt[i], &th);
+            a[ix(row, TH + i)] += dot3(&ftb[i], &b);
+        }
+    }
 }
 
 impl Eskf {
     /// A filter at rest at the origin with the given attitude, bias and initial σ.
     /// With `estimate_bias == false` the bias states are frozen (zero covariance, no noise):
     /// another estimator then owns the bias.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         nav_from_body: UnitQuaternion<f64>,
         gyro_bias_rad_s: Vector3<f64>,
@@ -75,28 +180,57 @@ impl Eskf {
         gravity_m_s2: f64,
         noise: EskfNoise,
         estimate_bias: bool,
+        ext: Extensions,
     ) -> Self {
-        let mut p = Mat::zeros();
-        for i in 0..3 {
-            p[(P0 + i, P0 + i)] = 1e-6;
-            p[(V0 + i, V0 + i)] = 1e-6;
-            if estimate_bias {
-                p[(BG + i, BG + i)] = bias_sd_rad_s * bias_sd_rad_s;
-            }
-        }
-        p[(TH, TH)] = tilt_sd_rad * tilt_sd_rad;
-        p[(TH + 1, TH + 1)] = tilt_sd_rad * tilt_sd_rad;
-        p[(TH + 2, TH + 2)] = 1e-6; // heading is defined by the alignment
-        Self {
+        let layout = Layout::new(&ext);
+        let mut f = Self {
             p_m: Vector3::zeros(),
             v_m_s: Vector3::zeros(),
             nav_from_body,
             gyro_bias_rad_s,
-            p,
+            ext: ExtensionEstimates::default(),
+            p: [0.0; MAX_N * MAX_N],
+            layout,
             gravity_m_s2,
             noise,
+            ext_cfg: ext,
             estimate_bias,
+        };
+        let mut set = |i: usize, var: f64| f.p[ix(i, i)] = var;
+        for i in 0..3 {
+            set(P0 + i, 1e-6);
+            set(V0 + i, 1e-6);
+            if estimate_bias {
+                set(BG + i, bias_sd_rad_s * bias_sd_rad_s);
+            }
         }
+        set(TH, tilt_sd_rad * tilt_sd_rad);
+        set(TH + 1, tilt_sd_rad * tilt_sd_rad);
+        set(TH + 2, 1e-6); // heading is defined by the alignment
+        if let Some(i) = layout.rate.filter(|_| estimate_bias) {
+            for k in 0..3 {
+                set(i + k, ext.bias_rate_sd * ext.bias_rate_sd);
+            }
+        }
+        if let (Some(i), Some(sd)) = (layout.scale, ext.scale_factor_sd) {
+            for k in 0..3 {
+                set(i + k, sd * sd);
+            }
+        }
+        if let (Some(i), Some(sd)) = (layout.offset, ext.heading_offset_sd) {
+            set(i, sd * sd);
+        }
+        if let (Some(i), Some(sd)) = (layout.gsens, ext.g_sensitivity_sd) {
+            for k in 0..3 {
+                set(i + k, sd * sd);
+            }
+        }
+        f
+    }
+
+    /// Error-state dimension in use.
+    pub fn dim(&self) -> usize {
+        self.layout.n
     }
 
     /// Whether the filter owns the gyro bias.
@@ -109,8 +243,32 @@ impl Eskf {
         self.gravity_m_s2
     }
 
-    /// Strapdown step over `dt_s` with the bias-corrected body rate `omega_rad_s` (already
-    /// averaged over the step) and the specific force `f_m_s2`, then covariance propagation.
+    /// Covariance element.
+    pub fn cov(&self, r: usize, c: usize) -> f64 {
+        self.p[ix(r, c)]
+    }
+
+    /// The body rate corrected for the filter's own error model (scale factor and
+    /// g-sensitivity) and for `bias_rad_s` (the filter's own bias, or an external one).
+    pub fn corrected_rate(
+        &self,
+        omega_meas_rad_s: &Vector3<f64>,
+        f_m_s2: &Vector3<f64>,
+        bias_rad_s: &Vector3<f64>,
+    ) -> Vector3<f64> {
+        let mut w = omega_meas_rad_s - bias_rad_s;
+        if self.layout.gsens.is_some() {
+            w -= self.ext.g_sensitivity.component_mul(f_m_s2);
+        }
+        if self.layout.scale.is_some() {
+            w = w.component_div(&(Vector3::repeat(1.0) + self.ext.scale_factor));
+        }
+        w
+    }
+
+    /// Strapdown step over `dt_s` with the corrected body rate `omega_rad_s` (see
+    /// [`Eskf::corrected_rate`], already averaged over the step) and the specific force
+    /// `f_m_s2`, then covariance propagation.
     pub fn propagate(&mut self, omega_rad_s: &Vector3<f64>, f_m_s2: &Vector3<f64>, dt_s: f64) {
         let step_half = exp_rotvec(&(omega_rad_s * (0.5 * dt_s)));
         let half = self.nav_from_body * step_half;
@@ -119,53 +277,102 @@ impl Eskf {
         self.p_m += self.v_m_s * dt_s + a * (0.5 * dt_s * dt_s);
         self.v_m_s += a * dt_s;
         self.nav_from_body = half * step_half;
+        if self.layout.rate.is_some() {
+            self.gyro_bias_rad_s += self.ext.bias_rate_rad_s2 * dt_s;
+        }
         let c = half.to_rotation_matrix().into_inner();
-        self.propagate_covariance(&(-skew(&f_nav) * dt_s), &(-c * dt_s), dt_s);
+        self.propagate_covariance(
+            &(-skew(&f_nav) * dt_s),
+            &(-c * dt_s),
+            omega_rad_s,
+            f_m_s2,
+            dt_s,
+        );
     }
 
-    /// P ← F P Fᵀ + Q for F = [[I, dt, 0, 0], [0, I, Fvθ, 0], [0, 0, I, Fθb], [0, 0, 0, I]].
-    /// Written out by blocks on the column-major storage: F is sparse, so this is about 500
-    /// multiply-adds instead of the 3,500 of a dense product (the hot path of the core).
-    fn propagate_covariance(&mut self, f_vth: &Matrix3<f64>, f_thb: &Matrix3<f64>, dt: f64) {
-        let fvt: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|k| f_vth[(i, k)]));
-        let ftb: [[f64; 3]; 3] = if self.estimate_bias {
-            std::array::from_fn(|i| std::array::from_fn(|k| f_thb[(i, k)]))
+    /// P ← F P Fᵀ + Q for the sparse F = I + G with the blocks
+    /// p←v: dt·I, v←θ: −[f]×dt, θ←b: −C·dt, θ←s: −C·diag(ω)·dt, θ←k: −C·diag(f)·dt, b←d: dt·I.
+    /// Written out on the column-major storage: about 500 multiply-adds for the base filter
+    /// instead of the 3,500 of a dense product (the hot path of the core).
+    fn propagate_covariance(
+        &mut self,
+        f_vth: &Matrix3<f64>,
+        minus_c_dt: &Matrix3<f64>,
+        omega: &Vector3<f64>,
+        f_body: &Vector3<f64>,
+        dt: f64,
+    ) {
+        let lay = self.layout;
+        let n = lay.n;
+        let m3 = |m: &Matrix3<f64>| -> [[f64; 3]; 3] {
+            std::array::from_fn(|i| std::array::from_fn(|k| m[(i, k)]))
+        };
+        let fvt = m3(f_vth);
+        let ftb = if self.estimate_bias {
+            m3(minus_c_dt)
         } else {
             [[0.0; 3]; 3]
         };
-        let a = self.p.as_mut_slice(); // column-major: a[col * N + row]
-        // M = F P: for each column, rows p, v, θ read the old rows v, θ, b.
-        for col in a.chunks_exact_mut(N) {
-            let v = [col[V0], col[V0 + 1], col[V0 + 2]];
-            let th = [col[TH], col[TH + 1], col[TH + 2]];
-            let b = [col[BG], col[BG + 1], col[BG + 2]];
-            for i in 0..3 {
-                col[P0 + i] += dt * v[i];
-                col[V0 + i] += fvt[i][0] * th[0] + fvt[i][1] * th[1] + fvt[i][2] * th[2];
-                col[TH + i] += ftb[i][0] * b[0] + ftb[i][1] * b[1] + ftb[i][2] * b[2];
+        // θ←s and θ←k blocks: −C·diag(ω)·dt and −C·diag(f)·dt.
+        let fts = m3(&(minus_c_dt * Matrix3::from_diagonal(omega)));
+        let ftk = m3(&(minus_c_dt * Matrix3::from_diagonal(f_body)));
+        let b_rate = lay.rate.filter(|_| self.estimate_bias);
+        let a = &mut self.p;
+        let dot3 = |m: &[f64; 3], v: [f64; 3]| m[0] * v[0] + m[1] * v[1] + m[2] * v[2];
+        if n == BASE_N {
+            propagate_base(a, &fvt, &ftb, dt);
+        } else {
+            // M = F P: rows p, v, θ, b read the old rows v, θ, b/s/k, d.
+            for col in 0..n {
+                let c = &mut a[col * MAX_N..col * MAX_N + n];
+                let v = [c[V0], c[V0 + 1], c[V0 + 2]];
+                let th = [c[TH], c[TH + 1], c[TH + 2]];
+                let b = [c[BG], c[BG + 1], c[BG + 2]];
+                let s = lay.scale.map(|i| [c[i], c[i + 1], c[i + 2]]);
+                let k = lay.gsens.map(|i| [c[i], c[i + 1], c[i + 2]]);
+                let d = b_rate.map(|i| [c[i], c[i + 1], c[i + 2]]);
+                for i in 0..3 {
+                    c[P0 + i] += dt * v[i];
+                    c[V0 + i] += dot3(&fvt[i], th);
+                    let mut dth = dot3(&ftb[i], b);
+                    if let Some(s) = s {
+                        dth += dot3(&fts[i], s);
+                    }
+                    if let Some(k) = k {
+                        dth += dot3(&ftk[i], k);
+                    }
+                    c[TH + i] += dth;
+                    if let Some(d) = d {
+                        c[BG + i] += dt * d[i];
+                    }
+                }
             }
-        }
-        // P' = M Fᵀ: columns p, v, θ read the old columns v, θ, b.
-        for row in 0..N {
-            let v = [
-                a[V0 * N + row],
-                a[(V0 + 1) * N + row],
-                a[(V0 + 2) * N + row],
-            ];
-            let th = [
-                a[TH * N + row],
-                a[(TH + 1) * N + row],
-                a[(TH + 2) * N + row],
-            ];
-            let b = [
-                a[BG * N + row],
-                a[(BG + 1) * N + row],
-                a[(BG + 2) * N + row],
-            ];
-            for k in 0..3 {
-                a[(P0 + k) * N + row] += dt * v[k];
-                a[(V0 + k) * N + row] += th[0] * fvt[k][0] + th[1] * fvt[k][1] + th[2] * fvt[k][2];
-                a[(TH + k) * N + row] += b[0] * ftb[k][0] + b[1] * ftb[k][1] + b[2] * ftb[k][2];
+            // P' = M Fᵀ: columns p, v, θ, b read the old columns.
+            let col = |a: &[f64; MAX_N * MAX_N], row: usize, c0: usize| {
+                [a[ix(row, c0)], a[ix(row, c0 + 1)], a[ix(row, c0 + 2)]]
+            };
+            for row in 0..n {
+                let v = col(a, row, V0);
+                let th = col(a, row, TH);
+                let b = col(a, row, BG);
+                let s = lay.scale.map(|i| col(a, row, i));
+                let k = lay.gsens.map(|i| col(a, row, i));
+                let d = b_rate.map(|i| col(a, row, i));
+                for i in 0..3 {
+                    a[ix(row, P0 + i)] += dt * v[i];
+                    a[ix(row, V0 + i)] += dot3(&fvt[i], th);
+                    let mut dth = dot3(&ftb[i], b);
+                    if let Some(s) = s {
+                        dth += dot3(&fts[i], s);
+                    }
+                    if let Some(k) = k {
+                        dth += dot3(&ftk[i], k);
+                    }
+                    a[ix(row, TH + i)] += dth;
+                    if let Some(d) = d {
+                        a[ix(row, BG + i)] += dt * d[i];
+                    }
+                }
             }
         }
         let qa = self.noise.accel_m_s2.powi(2) * dt;
@@ -176,82 +383,168 @@ impl Eskf {
             0.0
         };
         for i in 0..3 {
-            a[(V0 + i) * N + V0 + i] += qa;
-            a[(TH + i) * N + TH + i] += qg;
-            a[(BG + i) * N + BG + i] += qb;
+            a[ix(V0 + i, V0 + i)] += qa;
+            a[ix(TH + i, TH + i)] += qg;
+            a[ix(BG + i, BG + i)] += qb;
+        }
+        if let (Some(i), Some(rw)) = (b_rate, self.ext_cfg.bias_rate_rw) {
+            for k in 0..3 {
+                a[ix(i + k, i + k)] += rw * rw * dt;
+            }
         }
     }
 
-    /// Zero-velocity update.
-    pub fn zupt(&mut self) -> Innovation {
-        let r = -self.v_m_s;
-        let mut s = self.p.fixed_view::<3, 3>(V0, V0).into_owned();
-        let rv = self.noise.zupt_m_s.powi(2);
-        for i in 0..3 {
-            s[(i, i)] += rv;
+    /// A measurement update with an `m × n` Jacobian given by rows of (index, value) pairs over
+    /// at most 4 columns each, innovation `r` and noise variances `r_var`. Joseph-free
+    /// symmetric form: `P ← P − K·H·P` on one triangle, mirrored.
+    fn update<const M: usize>(
+        &mut self,
+        h: &[[(usize, f64); 4]; M],
+        r: [f64; M],
+        r_var: [f64; M],
+    ) -> Innovation {
+        let n = self.layout.n;
+        // PHᵀ (n × M)
+        let mut pht = [[0.0; M]; MAX_N];
+        for (i, row) in pht.iter_mut().enumerate().take(n) {
+            for (j, hj) in h.iter().enumerate() {
+                row[j] = hj.iter().map(|&(c, v)| v * self.p[ix(i, c)]).sum();
+            }
+        }
+        // S = H P Hᵀ + R
+        let mut s = nalgebra::SMatrix::<f64, M, M>::zeros();
+        for a in 0..M {
+            for b in 0..M {
+                s[(a, b)] = h[a].iter().map(|&(c, v)| v * pht[c][b]).sum::<f64>();
+            }
+            s[(a, a)] += r_var[a];
         }
         let Some(s_inv) = s.try_inverse() else {
             return Innovation::default();
         };
-        let pht = self.p.fixed_view::<N, 3>(0, V0).into_owned();
-        let k = pht * s_inv;
-        let dx = k * r;
-        // P ← P − K·P_v: (the product is symmetric) computed on one triangle and mirrored.
-        for j in 0..N {
-            for i in 0..=j {
-                let d = k[(i, 0)] * pht[(j, 0)] + k[(i, 1)] * pht[(j, 1)] + k[(i, 2)] * pht[(j, 2)];
-                let v = self.p[(i, j)] - d;
-                self.p[(i, j)] = v;
-                self.p[(j, i)] = v;
+        let rv = nalgebra::SVector::<f64, M>::from(r);
+        let s_inv_r = s_inv * rv;
+        let mut k = [[0.0; M]; MAX_N];
+        for (ki, pi) in k.iter_mut().zip(&pht).take(n) {
+            for (b, kb) in ki.iter_mut().enumerate() {
+                *kb = (0..M).map(|a| pi[a] * s_inv[(a, b)]).sum();
             }
+        }
+        for (j, pj) in pht.iter().enumerate().take(n) {
+            for (i, ki) in k.iter().enumerate().take(j + 1) {
+                let d: f64 = (0..M).map(|a| ki[a] * pj[a]).sum();
+                let v = self.p[ix(i, j)] - d;
+                self.p[ix(i, j)] = v;
+                self.p[ix(j, i)] = v;
+            }
+        }
+        let mut dx = [0.0; MAX_N];
+        for (i, d) in dx.iter_mut().enumerate().take(n) {
+            *d = (0..M).map(|a| pht[i][a] * s_inv_r[a]).sum();
+        }
+        self.inject(&dx);
+        let mut out = Innovation {
+            nis: rv.dot(&s_inv_r),
+            dim: M as u8,
+            ..Default::default()
+        };
+        for a in 0..M.min(3) {
+            out.r[a] = r[a];
+            out.s_diag[a] = s[(a, a)];
+        }
+        out
+    }
+
+    /// Zero-velocity update (H selects the velocity: written out, it runs on every stance
+    /// sample).
+    pub fn zupt(&mut self) -> Innovation {
+        let n = self.layout.n;
+        let rv = self.noise.zupt_m_s.powi(2);
+        let r = -self.v_m_s;
+        let mut pht = [[0.0; 3]; MAX_N];
+        for (i, row) in pht.iter_mut().enumerate().take(n) {
+            *row = [
+                self.p[ix(i, V0)],
+                self.p[ix(i, V0 + 1)],
+                self.p[ix(i, V0 + 2)],
+            ];
+        }
+        let mut s = Matrix3::from_fn(|a, b| pht[V0 + a][b]);
+        for a in 0..3 {
+            s[(a, a)] += rv;
+        }
+        let Some(s_inv) = s.try_inverse() else {
+            return Innovation::default();
+        };
+        let mut k = [[0.0; 3]; MAX_N];
+        for (ki, pi) in k.iter_mut().zip(&pht).take(n) {
+            let v = s_inv.transpose() * Vector3::from(*pi);
+            *ki = [v.x, v.y, v.z];
+        }
+        for (j, pj) in pht.iter().enumerate().take(n) {
+            for (i, ki) in k.iter().enumerate().take(j + 1) {
+                let v = self.p[ix(i, j)] - (ki[0] * pj[0] + ki[1] * pj[1] + ki[2] * pj[2]);
+                self.p[ix(i, j)] = v;
+                self.p[ix(j, i)] = v;
+            }
+        }
+        let s_inv_r = s_inv * r;
+        let mut dx = [0.0; MAX_N];
+        for (d, pi) in dx.iter_mut().zip(&pht).take(n) {
+            *d = pi[0] * s_inv_r.x + pi[1] * s_inv_r.y + pi[2] * s_inv_r.z;
         }
         self.inject(&dx);
         Innovation {
             r: [r.x, r.y, r.z],
             s_diag: [s[(0, 0)], s[(1, 1)], s[(2, 2)]],
-            nis: r.dot(&(s_inv * r)),
+            nis: r.dot(&s_inv_r),
             dim: 3,
         }
     }
 
-    /// Heading of the body-frame direction `axis_body` (e.g. the foot's forward axis):
-    /// observed value `heading_obs_rad` with σ `sd_rad`.
+    /// The heading of the body-frame direction `axis_body` (the foot's forward axis) as the
+    /// model predicts it: its attitude heading plus the heading-offset state.
+    pub fn predicted_heading(&self, axis_body: &Vector3<f64>) -> f64 {
+        heading_of_axis(&self.nav_from_body, axis_body) + self.ext.heading_offset_rad
+    }
+
+    /// Heading observation of `axis_body`: observed value `heading_obs_rad` with σ `sd_rad`.
     pub fn heading_update(
         &mut self,
         heading_obs_rad: f64,
         sd_rad: f64,
         axis_body: &Vector3<f64>,
     ) -> Innovation {
-        let r = wrap_pi(heading_obs_rad - heading_of_axis(&self.nav_from_body, axis_body));
-        let h = heading_jacobian(&self.nav_from_body, axis_body);
-        let pht: SVector<f64, N> = self.p.fixed_view::<N, 3>(0, TH) * h;
-        let s = h.dot(&pht.fixed_rows::<3>(TH)) + sd_rad * sd_rad;
-        let k = pht / s;
-        let dx = k * r;
-        let hp = pht.transpose();
-        self.p -= k * hp;
-        self.symmetrize();
-        self.inject(&dx);
-        Innovation {
-            r: [r, 0.0, 0.0],
-            s_diag: [s, 0.0, 0.0],
-            nis: r * r / s,
-            dim: 1,
-        }
+        let r = wrap_pi(heading_obs_rad - self.predicted_heading(axis_body));
+        let j = heading_jacobian(&self.nav_from_body, axis_body);
+        let off = self.layout.offset.map_or((0, 0.0), |i| (i, 1.0));
+        self.update(
+            &[[(TH, j.x), (TH + 1, j.y), (TH + 2, j.z), off]],
+            [r],
+            [sd_rad * sd_rad],
+        )
     }
 
-    fn inject(&mut self, dx: &Vecn) {
-        self.p_m += dx.fixed_rows::<3>(P0);
-        self.v_m_s += dx.fixed_rows::<3>(V0);
-        self.nav_from_body = exp_rotvec(&dx.fixed_rows::<3>(TH).into_owned()) * self.nav_from_body;
+    fn inject(&mut self, dx: &[f64; MAX_N]) {
+        let v3 = |i: usize| Vector3::new(dx[i], dx[i + 1], dx[i + 2]);
+        self.p_m += v3(P0);
+        self.v_m_s += v3(V0);
+        self.nav_from_body = exp_rotvec(&v3(TH)) * self.nav_from_body;
         if self.estimate_bias {
-            self.gyro_bias_rad_s += dx.fixed_rows::<3>(BG);
+            self.gyro_bias_rad_s += v3(BG);
+            if let Some(i) = self.layout.rate {
+                self.ext.bias_rate_rad_s2 += v3(i);
+            }
         }
-    }
-
-    fn symmetrize(&mut self) {
-        let t = self.p.transpose();
-        self.p = (self.p + t) * 0.5;
+        if let Some(i) = self.layout.scale {
+            self.ext.scale_factor += v3(i);
+        }
+        if let Some(i) = self.layout.offset {
+            self.ext.heading_offset_rad += dx[i];
+        }
+        if let Some(i) = self.layout.gsens {
+            self.ext.g_sensitivity += v3(i);
+        }
     }
 
     /// Rotates the navigation frame about z by `angle_rad` (used once the map frame is known).
@@ -261,20 +554,39 @@ impl Eskf {
         self.p_m = m * self.p_m;
         self.v_m_s = m * self.v_m_s;
         self.nav_from_body = UnitQuaternion::from_rotation_matrix(&r) * self.nav_from_body;
-        let mut t = Mat::identity();
+        // P ← T P Tᵀ with T = blockdiag(R, R, R, I, …): rows then columns of the p, v, θ blocks.
+        let n = self.layout.n;
         for b in [P0, V0, TH] {
-            t.fixed_view_mut::<3, 3>(b, b).copy_from(&m);
+            for c in 0..n {
+                let x = [self.p[ix(b, c)], self.p[ix(b + 1, c)], self.p[ix(b + 2, c)]];
+                for i in 0..3 {
+                    self.p[ix(b + i, c)] = m[(i, 0)] * x[0] + m[(i, 1)] * x[1] + m[(i, 2)] * x[2];
+                }
+            }
+            for rr in 0..n {
+                let x = [
+                    self.p[ix(rr, b)],
+                    self.p[ix(rr, b + 1)],
+                    self.p[ix(rr, b + 2)],
+                ];
+                for i in 0..3 {
+                    self.p[ix(rr, b + i)] = m[(i, 0)] * x[0] + m[(i, 1)] * x[1] + m[(i, 2)] * x[2];
+                }
+            }
         }
-        self.p = t * self.p * t.transpose();
     }
 
     /// Sets the heading variance (after the map frame is fixed, the heading is known).
     pub fn set_heading_variance(&mut self, var_rad2: f64) {
-        for j in 0..N {
-            self.p[(TH + 2, j)] = 0.0;
-            self.p[(j, TH + 2)] = 0.0;
+        self.clear_state(TH + 2, var_rad2);
+    }
+
+    fn clear_state(&mut self, i: usize, var: f64) {
+        for j in 0..self.layout.n {
+            self.p[ix(i, j)] = 0.0;
+            self.p[ix(j, i)] = 0.0;
         }
-        self.p[(TH + 2, TH + 2)] = var_rad2;
+        self.p[ix(i, i)] = var;
     }
 
     /// Sets the gyro bias and its covariance block (clearing its correlations), when the filter
@@ -284,42 +596,48 @@ impl Eskf {
             return;
         }
         self.gyro_bias_rad_s = bias_rad_s;
-        for j in 0..N {
-            for i in 0..3 {
-                self.p[(BG + i, j)] = 0.0;
-                self.p[(j, BG + i)] = 0.0;
+        for i in 0..3 {
+            self.clear_state(BG + i, 0.0);
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                self.p[ix(BG + i, BG + j)] = cov[(i, j)];
             }
         }
-        self.p.fixed_view_mut::<3, 3>(BG, BG).copy_from(cov);
     }
 
     /// Covariance block of the gyro bias.
     pub fn gyro_bias_cov(&self) -> Matrix3<f64> {
-        self.p.fixed_view::<3, 3>(BG, BG).into_owned()
+        Matrix3::from_fn(|i, j| self.p[ix(BG + i, BG + j)])
     }
 
     /// σ of the gyro-bias states.
     pub fn gyro_bias_sd(&self) -> Vector3<f64> {
-        Vector3::new(
-            self.p[(BG, BG)].max(0.0).sqrt(),
-            self.p[(BG + 1, BG + 1)].max(0.0).sqrt(),
-            self.p[(BG + 2, BG + 2)].max(0.0).sqrt(),
-        )
+        Vector3::from_fn(|i, _| self.p[ix(BG + i, BG + i)].max(0.0).sqrt())
     }
 
     /// σ of the attitude error (navigation frame).
     pub fn attitude_sd(&self) -> Vector3<f64> {
-        Vector3::new(
-            self.p[(TH, TH)].max(0.0).sqrt(),
-            self.p[(TH + 1, TH + 1)].max(0.0).sqrt(),
-            self.p[(TH + 2, TH + 2)].max(0.0).sqrt(),
-        )
+        Vector3::from_fn(|i, _| self.p[ix(TH + i, TH + i)].max(0.0).sqrt())
+    }
+
+    /// σ of the heading-offset state, when enabled.
+    pub fn heading_offset_sd(&self) -> Option<f64> {
+        self.layout.offset.map(|i| self.p[ix(i, i)].max(0.0).sqrt())
+    }
+
+    /// σ of the scale-factor states, when enabled.
+    pub fn scale_factor_sd(&self) -> Option<Vector3<f64>> {
+        self.layout
+            .scale
+            .map(|i| Vector3::from_fn(|k, _| self.p[ix(i + k, i + k)].max(0.0).sqrt()))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::core::rotation::from_euler_zyx;
 
     fn noise() -> EskfNoise {
         EskfNoise {
@@ -330,53 +648,135 @@ mod tests {
         }
     }
 
+    fn all_ext() -> Extensions {
+        Extensions {
+            bias_rate_rw: Some(1e-5),
+            bias_rate_sd: 1e-4,
+            scale_factor_sd: Some(0.01),
+            heading_offset_sd: Some(0.05),
+            g_sensitivity_sd: Some(1e-3),
+        }
+    }
+
+    fn dense(f: &Eskf) -> nalgebra::DMatrix<f64> {
+        let n = f.dim();
+        nalgebra::DMatrix::from_fn(n, n, |r, c| f.cov(r, c))
+    }
+
     #[test]
-    fn block_propagation_equals_dense_formula() {
+    fn block_propagation_equals_dense_formula_with_every_extension() {
+        for ext in [Extensions::default(), all_ext()] {
+            let mut f = Eskf::new(
+                from_euler_zyx(0.2, -0.3, 1.0),
+                Vector3::zeros(),
+                0.01,
+                0.01,
+                9.81,
+                noise(),
+                true,
+                ext,
+            );
+            for _ in 0..3 {
+                f.propagate(
+                    &Vector3::new(1.0, -2.0, 0.5),
+                    &Vector3::new(1.0, 2.0, 9.0),
+                    0.005,
+                );
+                f.zupt();
+                f.heading_update(0.3, 0.05, &Vector3::x());
+            }
+            let n = f.dim();
+            let lay = Layout::new(&ext);
+            let p_before = dense(&f);
+            let q_before = f.nav_from_body;
+            let omega = Vector3::new(0.5, 3.0, -1.0);
+            let acc = Vector3::new(2.0, -1.0, 10.0);
+            let dt = 0.005;
+            f.propagate(&omega, &acc, dt);
+            let half = q_before * exp_rotvec(&(omega * (0.5 * dt)));
+            let c = half.to_rotation_matrix().into_inner();
+            let mut big_f = nalgebra::DMatrix::<f64>::identity(n, n);
+            let mut put = |r: usize, cc: usize, m: &Matrix3<f64>| {
+                big_f.view_mut((r, cc), (3, 3)).copy_from(m)
+            };
+            put(P0, V0, &(Matrix3::identity() * dt));
+            put(V0, TH, &(-skew(&(half * acc)) * dt));
+            put(TH, BG, &(-c * dt));
+            if let Some(i) = lay.scale {
+                put(TH, i, &(-c * Matrix3::from_diagonal(&omega) * dt));
+            }
+            if let Some(i) = lay.gsens {
+                put(TH, i, &(-c * Matrix3::from_diagonal(&acc) * dt));
+            }
+            if let Some(i) = lay.rate {
+                put(BG, i, &(Matrix3::identity() * dt));
+            }
+            let mut q = nalgebra::DMatrix::<f64>::zeros(n, n);
+            for i in 0..3 {
+                q[(V0 + i, V0 + i)] = 0.25 * dt;
+                q[(TH + i, TH + i)] = 1e-4 * dt;
+                q[(BG + i, BG + i)] = 1e-8 * dt;
+                if let Some(r) = lay.rate {
+                    q[(r + i, r + i)] = 1e-10 * dt;
+                }
+            }
+            let want = &big_f * p_before * big_f.transpose() + q;
+            let err = (want - dense(&f)).abs().max();
+            assert!(err < 1e-15, "n = {n}: {err}");
+        }
+    }
+
+    #[test]
+    fn update_matches_the_textbook_kalman_formulas() {
         let mut f = Eskf::new(
-            crate::core::rotation::from_euler_zyx(0.2, -0.3, 1.0),
+            from_euler_zyx(0.2, -0.3, 1.0),
             Vector3::zeros(),
             0.01,
             0.01,
             9.81,
             noise(),
             true,
+            all_ext(),
         );
-        // give P some structure
-        for _ in 0..3 {
+        for _ in 0..5 {
             f.propagate(
                 &Vector3::new(1.0, -2.0, 0.5),
                 &Vector3::new(1.0, 2.0, 9.0),
                 0.005,
             );
-            f.zupt();
         }
-        let p_before = f.p;
-        let q_before = f.nav_from_body;
-        let omega = Vector3::new(0.5, 3.0, -1.0);
-        let acc = Vector3::new(2.0, -1.0, 10.0);
-        let dt = 0.005;
-        f.propagate(&omega, &acc, dt);
-        let half = q_before * exp_rotvec(&(omega * (0.5 * dt)));
-        let c = half.to_rotation_matrix().into_inner();
-        let mut big_f = Mat::identity();
-        big_f
-            .fixed_view_mut::<3, 3>(P0, V0)
-            .copy_from(&(Matrix3::identity() * dt));
-        big_f
-            .fixed_view_mut::<3, 3>(V0, TH)
-            .copy_from(&(-skew(&(half * acc)) * dt));
-        big_f.fixed_view_mut::<3, 3>(TH, BG).copy_from(&(-c * dt));
-        let mut q = Mat::zeros();
+        let n = f.dim();
+        let p = dense(&f);
+        let axis = Vector3::new(0.2, 0.9, -0.3).normalize();
+        let j = heading_jacobian(&f.nav_from_body, &axis);
+        let mut h = nalgebra::DMatrix::<f64>::zeros(1, n);
+        h[(0, TH)] = j.x;
+        h[(0, TH + 1)] = j.y;
+        h[(0, TH + 2)] = j.z;
+        h[(0, Layout::new(&all_ext()).offset.unwrap())] = 1.0;
+        let s = (&h * &p * h.transpose())[(0, 0)] + 0.05f64.powi(2);
+        let k = &p * h.transpose() / s;
+        let want = &p - &k * &h * &p;
+        let inn = f.heading_update(0.7, 0.05, &axis);
+        assert!((inn.s_diag[0] - s).abs() < 1e-15);
+        assert!((want - dense(&f)).abs().max() < 1e-15);
+
+        // ZUPT: H selects the velocity.
+        let p = dense(&f);
+        let mut h = nalgebra::DMatrix::<f64>::zeros(3, n);
         for i in 0..3 {
-            q[(V0 + i, V0 + i)] = 0.25 * dt;
-            q[(TH + i, TH + i)] = 1e-4 * dt;
-            q[(BG + i, BG + i)] = 1e-8 * dt;
+            h[(i, V0 + i)] = 1.0;
         }
-        let dense = big_f * p_before * big_f.transpose() + q;
+        let s = &h * &p * h.transpose() + nalgebra::DMatrix::<f64>::identity(3, 3) * 1e-4;
+        let k = &p * h.transpose() * s.clone().try_inverse().unwrap();
+        let want = &p - &k * &h * &p;
+        let v_before = f.v_m_s;
+        let dx =
+            &k * nalgebra::DVector::from_column_slice(&[-v_before.x, -v_before.y, -v_before.z]);
+        f.zupt();
+        assert!((want - dense(&f)).abs().max() < 1e-15);
         assert!(
-            (dense - f.p).abs().max() < 1e-15,
-            "{}",
-            (dense - f.p).abs().max()
+            (f.v_m_s - (v_before + Vector3::new(dx[V0], dx[V0 + 1], dx[V0 + 2]))).norm() < 1e-14
         );
     }
 
@@ -391,12 +791,13 @@ mod tests {
             9.81,
             noise(),
             true,
+            Extensions::default(),
         );
         let true_bias = Vector3::new(0.0, 0.0, 0.01);
         let g = Vector3::new(0.0, 0.0, 9.81);
         let dt = 0.005;
         for k in 0..4000 {
-            let omega = true_bias - f.gyro_bias_rad_s;
+            let omega = f.corrected_rate(&true_bias, &g, &f.gyro_bias_rad_s.clone());
             f.propagate(&omega, &g, dt);
             f.zupt();
             if k % 200 == 199 {
@@ -412,6 +813,119 @@ mod tests {
             f.gyro_bias_sd().z < 0.25 * 0.02,
             "σ did not shrink: {}",
             f.gyro_bias_sd().z
+        );
+    }
+
+    #[test]
+    fn scale_factor_state_converges_on_a_turning_body() {
+        // Turns about z at ±2 rad/s with a 2 % z scale error; heading observed every second.
+        let ext = Extensions {
+            scale_factor_sd: Some(0.05),
+            ..Default::default()
+        };
+        let mut f = Eskf::new(
+            UnitQuaternion::identity(),
+            Vector3::zeros(),
+            0.01,
+            1e-4,
+            9.81,
+            noise(),
+            true,
+            ext,
+        );
+        let g = Vector3::new(0.0, 0.0, 9.81);
+        let dt = 0.005;
+        let mut true_yaw: f64 = 0.0;
+        for k in 0..20_000 {
+            let rate = if (k / 400) % 2 == 0 { 2.0 } else { -1.0 };
+            true_yaw += rate * dt;
+            let meas = Vector3::new(0.0, 0.0, rate * 1.02);
+            let omega = f.corrected_rate(&meas, &g, &f.gyro_bias_rad_s.clone());
+            f.propagate(&omega, &g, dt);
+            f.zupt();
+            if k % 200 == 199 {
+                f.heading_update(wrap_pi(true_yaw), 0.01, &Vector3::x());
+            }
+        }
+        assert!(
+            (f.ext.scale_factor.z - 0.02).abs() < 1e-3,
+            "{}",
+            f.ext.scale_factor.z
+        );
+    }
+
+    #[test]
+    fn bias_rate_state_follows_a_ramp() {
+        let ext = Extensions {
+            bias_rate_rw: Some(1e-7),
+            bias_rate_sd: 3e-4,
+            ..Default::default()
+        };
+        let mut f = Eskf::new(
+            UnitQuaternion::identity(),
+            Vector3::zeros(),
+            0.01,
+            1e-3,
+            9.81,
+            EskfNoise {
+                gyro_bias_rw: 1e-6,
+                ..noise()
+            },
+            true,
+            ext,
+        );
+        let g = Vector3::new(0.0, 0.0, 9.81);
+        let dt = 0.005;
+        let ramp = 1e-4; // rad/s²
+        for k in 0..40_000 {
+            let t = k as f64 * dt;
+            let meas = Vector3::new(0.0, 0.0, ramp * t);
+            let omega = f.corrected_rate(&meas, &g, &f.gyro_bias_rad_s.clone());
+            f.propagate(&omega, &g, dt);
+            f.zupt();
+            if k % 200 == 199 {
+                f.heading_update(0.0, 0.01, &Vector3::x());
+            }
+        }
+        assert!(
+            (f.ext.bias_rate_rad_s2.z - ramp).abs() < 0.2 * ramp,
+            "{}",
+            f.ext.bias_rate_rad_s2.z
+        );
+        assert!(
+            (f.gyro_bias_rad_s.z - ramp * 200.0).abs() < 2e-3,
+            "{}",
+            f.gyro_bias_rad_s.z
+        );
+    }
+
+    #[test]
+    fn heading_offset_state_absorbs_a_constant_offset() {
+        // A foot that walks along the map direction but points 3° off it: with the attitude's
+        // heading known (tight initial σ), the offset state takes the difference.
+        let ext = Extensions {
+            heading_offset_sd: Some(0.1),
+            ..Default::default()
+        };
+        let mut f = Eskf::new(
+            UnitQuaternion::identity(),
+            Vector3::zeros(),
+            0.01,
+            1e-5,
+            9.81,
+            noise(),
+            true,
+            ext,
+        );
+        let g = Vector3::new(0.0, 0.0, 9.81);
+        for _ in 0..20 {
+            f.propagate(&Vector3::zeros(), &g, 0.005);
+            f.heading_update(3f64.to_radians(), 0.02, &Vector3::x());
+        }
+        assert!(
+            (f.ext.heading_offset_rad.to_degrees() - 3.0).abs() < 0.5,
+            "{}",
+            f.ext.heading_offset_rad.to_degrees()
         );
     }
 }

@@ -15,7 +15,7 @@
 //!    configured mode.
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
-use super::eskf::{Eskf, EskfNoise, Innovation};
+use super::eskf::{Eskf, EskfNoise, Extensions, Innovation};
 use super::heading::{HeadingAid, Rejection, StraightWalk};
 use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rot_z, tilt_from_specific_force, wrap_pi, yaw,
@@ -494,6 +494,20 @@ impl Estimator {
             gyro_bias_rw: e.gyro_bias_rw_rad_s_sqrt_s,
             zupt_m_s: e.zupt_sd_m_s.get(),
         };
+        let m = &self.cfg.model;
+        let ext = if own_bias {
+            Extensions {
+                bias_rate_rw: m.bias_rate_rw_rad_s2_sqrt_s.map(|v| v.get()),
+                bias_rate_sd: m.bias_rate_initial_sd_rad_s2.get(),
+                scale_factor_sd: m.scale_factor_sd.map(|v| v.get()),
+                heading_offset_sd: m.heading_offset_sd_rad.map(|v| v.get()),
+                g_sensitivity_sd: m.g_sensitivity_sd.map(|v| v.get()),
+            }
+        } else {
+            // The extensions are observed through the filter's own heading updates, which the
+            // bias-filter modes do not make.
+            Extensions::default()
+        };
         self.eskf = Some(Eskf::new(
             self.tilt0,
             if own_bias { b0 } else { Vector3::zeros() },
@@ -502,6 +516,7 @@ impl Estimator {
             g,
             noise,
             own_bias,
+            ext,
         ));
         let rw = self.cfg.bias_kf.bias_rw_rad_s_sqrt_s;
         self.bias = match self.cfg.mode {
@@ -641,7 +656,8 @@ impl Estimator {
             }
         }
         let eskf = self.eskf.as_mut().expect("aligned");
-        eskf.propagate(&(w_avg - bias), f_avg, dt);
+        let omega = eskf.corrected_rate(w_avg, f_avg, &bias);
+        eskf.propagate(&omega, f_avg, dt);
         if stance {
             self.out.zupt = Some(eskf.zupt());
             self.counters.zupts += 1;
@@ -702,7 +718,7 @@ impl Estimator {
             }
             return;
         }
-        let foot_heading = heading_of_axis(&eskf.nav_from_body, &forward);
+        let foot_heading = wrap_pi(eskf.predicted_heading(&forward));
         let straight = self.straight.push(foot_heading);
         let xy = [eskf.p_m.x, eskf.p_m.y];
         let (direction, sd) = match self.pending_heading.take() {
