@@ -31,6 +31,24 @@ enum Command {
     Demo(DemoArgs),
     /// Run the estimator as a daemon behind iceoryx2 services until SIGINT/SIGTERM.
     Serve(ServeArgs),
+    /// Diagnose the model on a log: rank the effects its residuals show, add the top one, and
+    /// report the error before and after (report.json, report.md, residuals.svg).
+    Diagnose(DiagnoseArgs),
+}
+
+#[derive(Args, Debug)]
+struct DiagnoseArgs {
+    /// IMU log.
+    #[arg(long)]
+    imu: PathBuf,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Footprint ground truth, to report the footprint error before and after.
+    #[arg(long)]
+    truth: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long)]
+    out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -95,6 +113,18 @@ pub struct ModelArgs {
 impl ModelArgs {
     /// Reads the config file and applies the overrides; errors name the key and the value.
     pub fn config(&self) -> Result<Config> {
+        let file = self.config_file()?;
+        let path = self
+            .config
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("<built-in defaults>"));
+        Ok(file
+            .validate()
+            .map_err(|e| corridor_shared::config::with_path(e, &path))?)
+    }
+
+    /// The config file with the overrides applied, not yet validated.
+    pub fn config_file(&self) -> Result<ConfigFile> {
         let mut file = match &self.config {
             Some(p) => ConfigFile::read(p)?,
             None => ConfigFile::default(),
@@ -121,13 +151,7 @@ impl ModelArgs {
                     .with_context(|| format!("--prior {p:?}: expected none or rest_mean"))?,
             );
         }
-        let path = self
-            .config
-            .clone()
-            .unwrap_or_else(|| PathBuf::from("<built-in defaults>"));
-        Ok(file
-            .validate()
-            .map_err(|e| corridor_shared::config::with_path(e, &path))?)
+        Ok(file)
     }
 }
 
@@ -283,6 +307,26 @@ fn dispatch(cli: Cli) -> Result<()> {
                     "warnings": report.warnings,
                 }))?
             );
+            Ok(())
+        }
+        Command::Diagnose(a) => {
+            let file = a.model.config_file()?;
+            let log = corridor_shared::imu_csv::read_imu_csv(&a.imu, &ImuCsvOptions::default())?;
+            let truth = a
+                .truth
+                .as_deref()
+                .map(corridor_shared::truth_csv::read_truth_csv)
+                .transpose()?;
+            let (report, before, after, _) = corridor_service::diagnose::diagnose(
+                &log,
+                &file,
+                truth.as_deref(),
+                a.model.map.as_deref(),
+            )?;
+            std::fs::create_dir_all(&a.out)
+                .with_context(|| format!("creating {}", a.out.display()))?;
+            corridor_service::diagnose::write_report(&a.out, &report, &before, &after)?;
+            print!("{}", std::fs::read_to_string(a.out.join("report.md"))?);
             Ok(())
         }
         Command::Eval(a) => {

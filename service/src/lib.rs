@@ -7,6 +7,7 @@
 //! - [`core`]: the pure estimator (no IO); everything else is an adapter around it.
 //! - [`daemon`]: the estimator behind iceoryx2 services (`corridor serve`): receive and estimator
 //!   threads, delivery policies, diagnostics.
+//! - [`diagnose`]: residual diagnosis: rank the effects the model lacks, add the top one, compare.
 //! - [`eval`]: footprint-error evaluation, a port of the reference `eval_traj.py`.
 //! - [`plot`]: dependency-free SVG figures.
 //! - [`residuals`]: residual statistics for the diagnosis (NIS, whiteness, CUSUM, regression).
@@ -15,6 +16,7 @@
 pub mod checkpoint;
 pub mod core;
 pub mod daemon;
+pub mod diagnose;
 pub mod eval;
 pub mod plot;
 pub mod residuals;
