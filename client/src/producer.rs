@@ -4,7 +4,7 @@ use crate::{ClientError, io_err};
 use corridor_shared::services::{
     ANGLES_SERVICE, Access, Delivery, Domain, IMU_SERVICE, PubSub, ServiceError,
 };
-use corridor_shared::wire::{AngleObservation, FLAG_END_OF_STREAM, ImuSample};
+use corridor_shared::wire::{AngleObservation, FLAG_END_OF_STREAM, ImuSample, monotonic_ns};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::update_connections::UpdateConnections;
@@ -143,8 +143,12 @@ impl Producer {
     }
 
     /// Sends one IMU sample as given, `seq` included; the automatic sequence continues after it.
-    pub fn send_imu_raw(&mut self, sample: ImuSample) -> Result<usize, ClientError> {
+    /// A `sent_ns` of 0 is stamped with [`monotonic_ns`] now (the daemon's latency figures).
+    pub fn send_imu_raw(&mut self, mut sample: ImuSample) -> Result<usize, ClientError> {
         self.next_imu_seq = sample.seq.wrapping_add(1);
+        if sample.sent_ns == 0 {
+            sample.sent_ns = monotonic_ns();
+        }
         let n = send(
             &self.imu,
             &self.imu_service,

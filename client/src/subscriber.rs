@@ -4,11 +4,16 @@ use crate::{ClientError, io_err};
 use corridor_shared::services::{Access, Domain, PubSub, ServiceError, Topic};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::*;
+use std::cell::Cell;
 use std::time::{Duration, Instant};
 
 /// Receives the messages of type `T` (e.g. [`AttitudeSample`]) that the daemon publishes, with
 /// a blocking [`Subscriber::recv_timeout`] (the daemon notifies the paired event service after
 /// each send, so waiting costs no CPU).
+///
+/// It counts what it lost from the `seq` numbers ([`Subscriber::missed`]): with the `live`
+/// policy a reader that falls behind by more than the buffer ([`Topic::QOS`]) loses the oldest
+/// messages, and iceoryx2 does not tell the publisher, so only the reader can count them.
 ///
 /// [`AttitudeSample`]: corridor_shared::wire::AttitudeSample
 pub struct Subscriber<T: Topic> {
@@ -16,6 +21,9 @@ pub struct Subscriber<T: Topic> {
     service: PubSub<T>,
     sub: iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>,
     listener: Listener<ipc::Service>,
+    last_seq: Cell<Option<u64>>,
+    missed: Cell<u64>,
+    restarts: Cell<u64>,
     // Declared last: dropped after the ports.
     node: Node<ipc::Service>,
 }
@@ -94,6 +102,9 @@ impl<T: Topic> Subscriber<T> {
             service,
             sub,
             listener,
+            last_seq: Cell::new(None),
+            missed: Cell::new(0),
+            restarts: Cell::new(0),
             node,
         })
     }
@@ -101,7 +112,12 @@ impl<T: Topic> Subscriber<T> {
     /// The next message if one is waiting.
     pub fn try_recv(&self) -> Result<Option<T>, ClientError> {
         match self.sub.receive() {
-            Ok(Some(s)) => Ok(Some(*s.payload())),
+            Ok(Some(s)) => {
+                let v = *s.payload();
+                drop(s);
+                self.track(v.seq());
+                Ok(Some(v))
+            }
             Ok(None) => Ok(None),
             Err(e) => Err(io_err(T::SERVICE, &self.domain, "receive", e)),
         }
@@ -129,6 +145,26 @@ impl<T: Topic> Subscriber<T> {
                 return Err(ClientError::Interrupted);
             }
         }
+    }
+
+    fn track(&self, seq: u64) {
+        match self.last_seq.get() {
+            Some(l) if seq > l => self.missed.set(self.missed.get() + (seq - l - 1)),
+            Some(_) => self.restarts.set(self.restarts.get() + 1),
+            None => {}
+        }
+        self.last_seq.set(Some(seq));
+    }
+
+    /// Messages lost so far according to their `seq` (overwritten in this reader's buffer
+    /// because it fell behind, with the `live` policy).
+    pub fn missed(&self) -> u64 {
+        self.missed.get()
+    }
+
+    /// Times the `seq` numbering went back (a restarted daemon).
+    pub fn publisher_restarts(&self) -> u64 {
+        self.restarts.get()
     }
 
     /// Number of publishers currently connected (0 once the daemon has gone).

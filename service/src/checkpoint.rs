@@ -1,5 +1,9 @@
-//! Estimator checkpoints: the gyro bias, its covariance and the attitude, saved so that a
-//! restarted daemon can warm-start. The only module that uses bincode.
+//! Estimator checkpoints: the gyro bias, its full covariance and the attitude, saved so that a
+//! restarted daemon can warm-start ([`Checkpoint::warm_start`]). The only module that uses
+//! bincode.
+//!
+//! Format versions: 1 (first slice: diagonal covariance, no save time), 2 (full covariance
+//! from `Estimator::bias_state`, validated as symmetric positive definite; wall-clock save time).
 //!
 //! File layout: the 8-byte magic [`MAGIC`], the format version as a little-endian `u32`
 //! ([`FORMAT_VERSION`]), then the bincode-2 (`standard` config, serde) encoding of
@@ -11,6 +15,7 @@
 //! does not trip over it again, and reports it as [`CheckpointError::Corrupt`] or
 //! [`CheckpointError::Incompatible`] (see [`CheckpointError::is_cold_start`]).
 
+use crate::core::WarmStart;
 use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -18,7 +23,7 @@ use std::path::{Path, PathBuf};
 /// First bytes of every checkpoint file.
 pub const MAGIC: [u8; 8] = *b"CORRCKPT";
 /// Format version written by [`save`]; [`load`] accepts only this one.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// Largest payload accepted by the decoder, bytes.
 const MAX_PAYLOAD: usize = 1 << 16;
 
@@ -29,6 +34,8 @@ pub struct Checkpoint {
     pub mode: String,
     /// Sensor time of the state, s.
     pub t_s: f64,
+    /// Wall-clock time of the save, ms since the Unix epoch (to report a checkpoint's age).
+    pub saved_unix_ms: u64,
     /// Gyro bias, rad/s, sensor axes.
     pub gyro_bias_rad_s: [f64; 3],
     /// Its covariance, (rad/s)², row-major.
@@ -109,8 +116,8 @@ fn display_opt(p: &Option<PathBuf>) -> String {
 }
 
 impl Checkpoint {
-    /// Checks that every value is finite, the covariance diagonal non-negative and the
-    /// quaternion of unit norm (within 1e-6).
+    /// Checks that every value is finite, the covariance symmetric positive definite (what
+    /// `Estimator::set_warm_start` accepts) and the quaternion of unit norm (within 1e-6).
     pub fn validate(&self) -> Result<(), String> {
         let finite = self.t_s.is_finite()
             && self.gyro_bias_rad_s.iter().all(|v| v.is_finite())
@@ -119,8 +126,13 @@ impl Checkpoint {
         if !finite {
             return Err("a value is not finite".into());
         }
-        if (0..3).any(|i| self.gyro_bias_cov[i][i] < 0.0) {
-            return Err("a bias variance is negative".into());
+        let p = nalgebra::Matrix3::from_fn(|i, j| self.gyro_bias_cov[i][j]);
+        let scale = p.abs().max().max(1e-300);
+        if (p - p.transpose()).abs().max() > 1e-12 * scale {
+            return Err("bias covariance is not symmetric".into());
+        }
+        if p.cholesky().is_none() {
+            return Err("bias covariance is not positive definite".into());
         }
         let n2: f64 = self.nav_from_body_wxyz.iter().map(|v| v * v).sum();
         if (n2.sqrt() - 1.0).abs() > 1e-6 {
@@ -128,6 +140,34 @@ impl Checkpoint {
         }
         Ok(())
     }
+}
+
+impl Checkpoint {
+    /// The estimator's warm-start state (bias and covariance, sensor axes).
+    pub fn warm_start(&self) -> WarmStart {
+        WarmStart {
+            gyro_bias_rad_s: self.gyro_bias_rad_s,
+            gyro_bias_cov: self.gyro_bias_cov,
+        }
+    }
+
+    /// Age of the checkpoint against the wall clock (`None` if the clock is behind it).
+    pub fn age(&self) -> Option<std::time::Duration> {
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .ok()?
+            .as_millis();
+        let now = u64::try_from(now).ok()?;
+        now.checked_sub(self.saved_unix_ms)
+            .map(std::time::Duration::from_millis)
+    }
+}
+
+/// Now, ms since the Unix epoch (0 if the clock is before 1970).
+pub fn unix_now_ms() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| u64::try_from(d.as_millis()).unwrap_or(u64::MAX))
 }
 
 fn config() -> impl bincode::config::Config {
@@ -273,6 +313,7 @@ mod tests {
         Checkpoint {
             mode: "rotation_aware".into(),
             t_s: 123.456,
+            saved_unix_ms: 1_700_000_000_000,
             gyro_bias_rad_s: [1e-3, -2e-3, 5e-3],
             gyro_bias_cov: [[1e-8, 1e-10, 0.0], [1e-10, 2e-8, 0.0], [0.0, 0.0, 3e-8]],
             nav_from_body_wxyz: [s, 0.0, 0.0, s],
@@ -376,7 +417,18 @@ mod tests {
         let mut bytes = encode(&sample());
         bytes.push(0);
         assert!(matches!(decode(&bytes), Err(DecodeError::Corrupt(r)) if r.contains("trailing")));
-        // Valid encoding of an invalid state.
+        // Valid encoding of an invalid state: a covariance that is not positive definite, or
+        // not symmetric.
+        let mut bad = sample();
+        bad.gyro_bias_cov[2][2] = 0.0;
+        assert!(
+            matches!(decode(&encode(&bad)), Err(DecodeError::Corrupt(r)) if r.contains("positive"))
+        );
+        let mut bad = sample();
+        bad.gyro_bias_cov[0][1] = 5e-9;
+        assert!(
+            matches!(decode(&encode(&bad)), Err(DecodeError::Corrupt(r)) if r.contains("symmetric"))
+        );
         let mut bad = sample();
         bad.nav_from_body_wxyz = [2.0, 0.0, 0.0, 0.0];
         assert!(matches!(

@@ -55,14 +55,16 @@ struct DiagnoseArgs {
 struct ServeArgs {
     #[command(flatten)]
     model: ModelArgs,
-    /// iceoryx2 domain to serve; processes on other domains never see this daemon.
-    #[arg(long, default_value = corridor_shared::services::DEFAULT_DOMAIN)]
-    domain: String,
-    /// live (a lagging reader loses the oldest samples, counted) or lossless (the producer waits).
-    #[arg(long, default_value = "live")]
-    delivery: corridor_shared::services::Delivery,
-    /// Checkpoint file: loaded at start (a bad one is moved aside, cold start), saved at each
-    /// end of stream and at shutdown.
+    /// iceoryx2 domain to serve (overrides `daemon.domain`); processes on other domains never
+    /// see this daemon.
+    #[arg(long)]
+    domain: Option<String>,
+    /// live (a lagging reader loses the oldest samples, counted) or lossless (the producer
+    /// waits); overrides `daemon.delivery`.
+    #[arg(long)]
+    delivery: Option<corridor_shared::services::Delivery>,
+    /// Checkpoint file (overrides `daemon.checkpoint_path`): loaded at start (a bad one is
+    /// moved aside, cold start), saved periodically, at each end of stream and at shutdown.
     #[arg(long)]
     checkpoint: Option<PathBuf>,
 }
@@ -285,10 +287,19 @@ fn dispatch(cli: Cli) -> Result<()> {
             use corridor_service::daemon::{self, DaemonConfig};
             let config = a.model.config()?;
             let aid = runner::heading_aid(&config, a.model.map.as_deref())?;
-            let domain = corridor_shared::services::Domain::new(&a.domain)?;
-            let mut cfg = DaemonConfig::new(domain, config, aid);
-            cfg.delivery = a.delivery;
-            cfg.checkpoint = a.checkpoint.clone();
+            // The flags override the `[daemon]` section of the file.
+            let mut cfg = match &a.domain {
+                Some(d) => {
+                    DaemonConfig::new(corridor_shared::services::Domain::new(d)?, config, aid)
+                }
+                None => DaemonConfig::from_config(config, aid)?,
+            };
+            if let Some(d) = a.delivery {
+                cfg.delivery = d;
+            }
+            if let Some(p) = &a.checkpoint {
+                cfg.checkpoint = Some(p.clone());
+            }
             let report = daemon::serve(cfg)?;
             let d = &report.diagnostics;
             println!(
@@ -304,6 +315,9 @@ fn dispatch(cli: Cli) -> Result<()> {
                     "late": d.late,
                     "dropped_overflow": d.dropped_overflow,
                     "undelivered": d.undelivered,
+                    "producer_changes": d.producer_changes,
+                    "checkpoints_saved": report.checkpoints_saved,
+                    "warm_started": report.warm_started_from.is_some(),
                     "warnings": report.warnings,
                 }))?
             );

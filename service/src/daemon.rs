@@ -4,18 +4,25 @@
 //! Threads (all named, all joined by [`run`]):
 //! - `corridor-rx` owns the input subscriber ports ([`ImuSample`], [`AngleObservation`]). It
 //!   blocks on the IMU event listener (no busy poll) with [`DaemonConfig::poll_timeout`] so it
-//!   sees `shutdown`, checks `seq` (gaps, duplicates, late samples) and forwards the samples over
-//!   a bounded crossbeam channel. Angle observations are drained on every wake-up (an IMU stream
-//!   wakes it at the sensor rate; an idle daemon within `poll_timeout`).
+//!   sees `shutdown`, checks `seq` (gaps, duplicates, late samples) and the producer's identity
+//!   (a restarted producer), and forwards the samples over a bounded crossbeam channel. Angle
+//!   observations are drained on every wake-up (an IMU stream wakes it at the sensor rate; an
+//!   idle daemon within `poll_timeout`).
 //! - `corridor-estimator` owns the [`Estimator`] and the output publisher ports, publishes an
-//!   [`AttitudeSample`] per accepted IMU sample, a [`BiasSample`] at each heading observation and
-//!   every [`DaemonConfig::bias_period_s`] of sensor time, a [`NavSample`] at each new stance,
-//!   and [`Diagnostics`] every [`DaemonConfig::diagnostics_period`] (wall clock), at end of
-//!   stream and at shutdown.
+//!   [`AttitudeSample`] per accepted IMU sample, a [`BiasSample`] at each heading observation,
+//!   at the end of alignment and every [`DaemonConfig::bias_period_s`] of sensor time, a
+//!   [`NavSample`] at each new stance, and [`Diagnostics`] every
+//!   [`DaemonConfig::diagnostics_period`] (wall clock), at end of stream and at shutdown. It also
+//!   logs a one-line health summary every [`DaemonConfig::health_period`] and saves the
+//!   checkpoint every [`DaemonConfig::checkpoint_period`].
 //!
-//! iceoryx2 ports are `!Send`, so each thread creates its own node and ports. Neither thread
-//! allocates per sample: the channel is a preallocated array, samples are copied into loaned
-//! shared-memory slots.
+//! iceoryx2 ports are `!Send`, so each thread creates its own node and ports. The daemon's code
+//! and the estimator core allocate nothing per sample (tested by `tests/tests/daemon_alloc.rs`):
+//! the channel is a preallocated array, samples are copied into loaned shared-memory slots, the
+//! latency histograms are fixed arrays. The one allocation left per published message is inside
+//! iceoryx2 0.10: `Publisher::loan_uninit` boxes a small `Rc` (`ChunkMutSharedState::new`,
+//! iceoryx2 `port/details/chunk_mut_shared_state.rs`) that is freed again by `send`. Periodic
+//! work (checkpoint, health line) may allocate.
 //!
 //! Delivery policy ([`Delivery`]): `live` drops the oldest sample of a full IPC buffer (seen as
 //! `seq` gaps) and the newest one when the channel is full (`dropped_overflow`); `lossless`
@@ -23,8 +30,20 @@
 //! stalls the daemon.
 //!
 //! End of stream: an [`ImuSample`] with [`FLAG_END_OF_STREAM`] makes the daemon publish one
-//! attitude, nav, bias and diagnostics message carrying the flag (last state, no new data), save the checkpoint and start a
-//! new estimator (the next producer starts at `seq` 0 with its own clock).
+//! attitude, nav, bias and diagnostics message carrying the flag (last state, no new data), save
+//! the checkpoint and start a new estimator (the next producer starts at `seq` 0 with its own
+//! clock). A producer replaced mid-stream (another publisher port, e.g. a restarted driver) is
+//! counted in [`Diagnostics::producer_changes`]; its `seq` numbering starts afresh (a `seq`
+//! continuing the old one still counts the gap), and when its clock restarted too, the daemon
+//! ends the old stream as if it had received the marker.
+//!
+//! Checkpoint and warm start: with [`DaemonConfig::checkpoint`] set, the daemon loads it at
+//! start (a corrupt or incompatible one is moved aside with a warning: cold start) and hands the
+//! saved bias and covariance to [`Estimator::set_warm_start`] before the first sample; it saves
+//! the estimator's [`Estimator::bias_state`] periodically, at each end of stream and at
+//! shutdown. Every new stream warm-starts from the last saved state, as a restarted daemon
+//! would. Without a checkpoint every stream starts from the configured prior (bit-identical to
+//! `corridor run`).
 //!
 //! One daemon per domain: [`run`] claims the domain ([`Domain::claim_daemon`]) and fails with
 //! [`ServiceError::DaemonAlreadyRunning`] when another daemon holds it.
@@ -34,14 +53,15 @@
 
 use crate::checkpoint::{self, Checkpoint, CheckpointError};
 use crate::core::heading::HeadingAid;
-use crate::core::{Counters, Estimate, Estimator, ImuInput, Phase};
+use crate::core::{Counters, Estimate, Estimator, ImuInput, Phase, WarmStart};
 use corridor_shared::config::Config;
 use corridor_shared::services::{Access, Delivery, Domain, ServiceError, Topic};
 use corridor_shared::wire::{
     ANGLE_HEADING, AngleObservation, AttitudeSample, BiasSample, Diagnostics, FLAG_BIAS_CORRECTED,
-    FLAG_CONVERGED, FLAG_END_OF_STREAM, FLAG_SHUTDOWN, FLAG_STANCE, ImuSample, NavSample, phase,
+    FLAG_CONVERGED, FLAG_END_OF_STREAM, FLAG_SHUTDOWN, FLAG_STANCE, ImuSample, NavSample,
+    monotonic_ns, phase,
 };
-use crossbeam_channel::{RecvTimeoutError, SendTimeoutError, TrySendError};
+use crossbeam_channel::{RecvTimeoutError, TryRecvError, TrySendError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::prelude::*;
@@ -75,25 +95,46 @@ pub struct DaemonConfig {
     pub bias_period_s: f64,
     /// Period of [`Diagnostics`], wall clock.
     pub diagnostics_period: Duration,
-    /// Checkpoint file: loaded at start (a bad one is moved aside, with a warning), saved at
-    /// each end of stream and at shutdown. `None`: no checkpoint.
+    /// Period of the one-line health summary in the log (`info`), wall clock.
+    pub health_period: Duration,
+    /// Checkpoint file: loaded at start (a bad one is moved aside, with a warning), saved every
+    /// [`DaemonConfig::checkpoint_period`], at each end of stream and at shutdown. `None`: no
+    /// checkpoint, no warm start.
     pub checkpoint: Option<PathBuf>,
+    /// Period of the checkpoint saves, wall clock (only when the state changed).
+    pub checkpoint_period: Duration,
 }
 
 impl DaemonConfig {
-    /// Defaults: live delivery, channel of 4096 samples, 100 ms poll, bias every 1 s, diagnostics
-    /// every 1 s, no checkpoint.
+    /// Everything from the configuration: the domain and the rest of its `[daemon]` section
+    /// ([`corridor_shared::config::DaemonSettings`]). Fails when the domain name is not usable
+    /// by iceoryx2.
+    pub fn from_config(estimator: Config, aid: HeadingAid) -> Result<Self, DaemonError> {
+        let domain = Domain::new(&estimator.daemon.domain)?;
+        Ok(Self::new(domain, estimator, aid))
+    }
+
+    /// `domain`, and the rest from the `[daemon]` section of `estimator` (its defaults: live
+    /// delivery, channel of 4096 samples, bias every 1 s, diagnostics every 1 s, health every
+    /// 10 s, no checkpoint, checkpoint every 30 s); 100 ms poll.
     pub fn new(domain: Domain, estimator: Config, aid: HeadingAid) -> Self {
+        let d = estimator.daemon.clone();
         Self {
             domain,
             estimator,
             aid,
-            delivery: Delivery::Live,
-            channel_capacity: 4096,
+            delivery: if d.lossless {
+                Delivery::Lossless
+            } else {
+                Delivery::Live
+            },
+            channel_capacity: d.channel_capacity,
             poll_timeout: Duration::from_millis(100),
-            bias_period_s: 1.0,
-            diagnostics_period: Duration::from_secs(1),
-            checkpoint: None,
+            bias_period_s: d.bias_period_s.get(),
+            diagnostics_period: Duration::from_secs_f64(d.diagnostics_period_s.get()),
+            health_period: Duration::from_secs_f64(d.health_period_s.get()),
+            checkpoint: d.checkpoint_path,
+            checkpoint_period: Duration::from_secs_f64(d.checkpoint_period_s.get()),
         }
     }
 }
@@ -103,8 +144,12 @@ impl DaemonConfig {
 pub struct DaemonReport {
     /// The last diagnostics published (cumulative counters).
     pub diagnostics: Diagnostics,
-    /// End-of-stream markers handled.
+    /// End-of-stream markers handled (and streams ended by a producer restart).
     pub streams_finished: u64,
+    /// The checkpoint the daemon warm-started from, if any.
+    pub warm_started_from: Option<Checkpoint>,
+    /// Checkpoints saved.
+    pub checkpoints_saved: u64,
     /// Non-fatal problems (a bad checkpoint, a failed save), in order.
     pub warnings: Vec<String>,
 }
@@ -151,13 +196,19 @@ struct RxCounters {
     duplicate: AtomicU64,
     late: AtomicU64,
     dropped: AtomicU64,
+    producer_changes: AtomicU64,
 }
 
 /// Receive → estimator messages.
 #[derive(Debug, Clone, Copy)]
 enum Msg {
     Imu(ImuSample),
-    Heading { heading_rad: f64, sd_rad: f64 },
+    Heading {
+        heading_rad: f64,
+        sd_rad: f64,
+    },
+    /// The next IMU sample comes from another producer than the previous one, mid-stream.
+    NewProducer,
 }
 
 /// Runs the daemon until `shutdown` is set (or a thread fails), then returns its report.
@@ -176,6 +227,20 @@ pub fn run(cfg: DaemonConfig, shutdown: Arc<AtomicBool>) -> Result<DaemonReport,
             rule: "must be a finite number > 0",
         });
     }
+    for (field, d) in [
+        ("diagnostics_period", cfg.diagnostics_period),
+        ("health_period", cfg.health_period),
+        ("checkpoint_period", cfg.checkpoint_period),
+        ("poll_timeout", cfg.poll_timeout),
+    ] {
+        if d.is_zero() {
+            return Err(DaemonError::Config {
+                field,
+                value: format!("{d:?}"),
+                rule: "must be > 0",
+            });
+        }
+    }
     let node = cfg
         .domain
         .node("corridor-daemon", SignalHandlingMode::Disabled)?;
@@ -184,6 +249,7 @@ pub fn run(cfg: DaemonConfig, shutdown: Arc<AtomicBool>) -> Result<DaemonReport,
         domain = cfg.domain.name(),
         delivery = cfg.delivery.name(),
         mode = cfg.estimator.mode.name(),
+        checkpoint = ?cfg.checkpoint,
         "corridor daemon starting"
     );
 
@@ -206,8 +272,12 @@ pub fn run(cfg: DaemonConfig, shutdown: Arc<AtomicBool>) -> Result<DaemonReport,
         let stop = Arc::clone(&stop);
         let shutdown = Arc::clone(&shutdown);
         let ready = ready_tx;
+        let to_est = ToEstimator {
+            tx,
+            wake: est_handle.thread().clone(),
+        };
         spawn(RX_THREAD, move || {
-            rx_thread(&cfg, tx, &counters, ready, &shutdown, &stop)
+            rx_thread(&cfg, to_est, &counters, ready, &shutdown, &stop)
         })
     };
     let rx_handle = match rx_handle {
@@ -236,6 +306,8 @@ pub fn run(cfg: DaemonConfig, shutdown: Arc<AtomicBool>) -> Result<DaemonReport,
         tracing::info!(domain = cfg.domain.name(), "corridor daemon ready");
     }
     let rx_result = join(RX_THREAD, rx_handle);
+    // The channel is disconnected now; wake the estimator so it sees it at once.
+    est_handle.thread().unpark();
     let est_result = join(ESTIMATOR_THREAD, est_handle);
     if let Some(e) = setup_err {
         return Err(e);
@@ -246,6 +318,7 @@ pub fn run(cfg: DaemonConfig, shutdown: Arc<AtomicBool>) -> Result<DaemonReport,
         domain = cfg.domain.name(),
         received = report.diagnostics.received,
         accepted = report.diagnostics.accepted,
+        checkpoints_saved = report.checkpoints_saved,
         "corridor daemon stopped"
     );
     Ok(report)
@@ -344,7 +417,7 @@ fn io_err(
 
 fn rx_thread(
     cfg: &DaemonConfig,
-    tx: crossbeam_channel::Sender<Msg>,
+    tx: ToEstimator,
     counters: &RxCounters,
     ready: crossbeam_channel::Sender<Result<(), DaemonError>>,
     shutdown: &AtomicBool,
@@ -389,6 +462,9 @@ fn rx_thread(
     let d = &cfg.domain;
     let stopping = || shutdown.load(Ordering::Relaxed) || stop.load(Ordering::Relaxed);
     let mut last_seq: Option<u64> = None;
+    let mut last_producer = None;
+    // True between the first data sample of a stream and its end-of-stream marker.
+    let mut mid_stream = false;
     while !stopping() {
         listener
             .timed_wait(|_| {}, cfg.poll_timeout)
@@ -414,16 +490,43 @@ fn rx_thread(
             .map_err(|e| io_err(d, ImuSample::SERVICE, "receive", e))?
         {
             let s: ImuSample = *smp.payload();
+            let producer = smp.header().publisher_id();
             drop(smp); // return the shared-memory slot at once
             counters.received.fetch_add(1, Ordering::Relaxed);
+            if last_producer.is_some_and(|p| p != producer) && mid_stream {
+                // A restarted or replaced producer: its numbering starts afresh unless it
+                // continues the old one (then the gap is real and counted below).
+                counters.producer_changes.fetch_add(1, Ordering::Relaxed);
+                tracing::warn!(
+                    seq = s.seq,
+                    last_seq = ?last_seq,
+                    "IMU producer changed mid-stream"
+                );
+                if last_seq.is_some_and(|l| s.seq <= l) {
+                    last_seq = None;
+                }
+                // Never dropped: the estimator must see it before the new producer's samples.
+                if !forward(
+                    Delivery::Lossless,
+                    &tx,
+                    Msg::NewProducer,
+                    counters,
+                    &stopping,
+                ) {
+                    return Ok(());
+                }
+            }
+            last_producer = Some(producer);
             if s.is_end_of_stream() {
                 last_seq = None;
+                mid_stream = false;
                 // The marker is never dropped, whatever the policy.
                 if !forward(Delivery::Lossless, &tx, Msg::Imu(s), counters, &stopping) {
                     return Ok(());
                 }
                 continue;
             }
+            mid_stream = true;
             if let Some(l) = last_seq {
                 if s.seq == l {
                     counters.duplicate.fetch_add(1, Ordering::Relaxed);
@@ -446,39 +549,140 @@ fn rx_thread(
     Ok(())
 }
 
+/// The receive thread's end of the channel, and the estimator thread to wake after a send.
+///
+/// The estimator thread parks (`std::thread::park_timeout`) when the channel is empty instead
+/// of a blocking `recv`: crossbeam's blocking receive spins and calls `sched_yield` several
+/// times per sample before it sleeps, which costs more CPU than the estimation at 1 kHz.
+struct ToEstimator {
+    tx: crossbeam_channel::Sender<Msg>,
+    wake: std::thread::Thread,
+}
+
 /// Hands `msg` to the estimator thread; false when the estimator thread is gone or the daemon
 /// stops while waiting.
 fn forward(
     delivery: Delivery,
-    tx: &crossbeam_channel::Sender<Msg>,
+    to: &ToEstimator,
     msg: Msg,
     counters: &RxCounters,
     stopping: &impl Fn() -> bool,
 ) -> bool {
+    let tx = &to.tx;
     match delivery {
         Delivery::Live => match tx.try_send(msg) {
-            Ok(()) => true,
+            Ok(()) => {
+                to.wake.unpark();
+                true
+            }
             Err(TrySendError::Full(_)) => {
                 counters.dropped.fetch_add(1, Ordering::Relaxed);
+                to.wake.unpark();
                 true
             }
             Err(TrySendError::Disconnected(_)) => false,
         },
         Delivery::Lossless => {
+            // Polls instead of a blocking `send`: crossbeam's blocking path allocates (a wait
+            // context per thread, its waker list) the first time the channel is full, and a
+            // full channel means the estimator has `channel_capacity` samples of work queued,
+            // so a 50 µs poll costs no throughput.
             let mut msg = msg;
+            let mut waited = Duration::ZERO;
             loop {
-                match tx.send_timeout(msg, Duration::from_millis(100)) {
-                    Ok(()) => return true,
-                    Err(SendTimeoutError::Timeout(m)) => {
-                        if stopping() {
-                            return false;
-                        }
-                        msg = m;
+                match tx.try_send(msg) {
+                    Ok(()) => {
+                        to.wake.unpark();
+                        return true;
                     }
-                    Err(SendTimeoutError::Disconnected(_)) => return false,
+                    Err(TrySendError::Full(m)) => {
+                        msg = m;
+                        to.wake.unpark();
+                        std::thread::sleep(FULL_POLL);
+                        waited += FULL_POLL;
+                        if waited >= Duration::from_millis(100) {
+                            waited = Duration::ZERO;
+                            if stopping() {
+                                return false;
+                            }
+                        }
+                    }
+                    Err(TrySendError::Disconnected(_)) => return false,
                 }
             }
         }
+    }
+}
+
+/// Poll period of the receive thread while the channel is full (lossless policy).
+const FULL_POLL: Duration = Duration::from_micros(50);
+
+// ---------------------------------------------------------------------------------------------
+// Latency histogram
+
+/// Sub-buckets per octave of the latency histogram (resolution about 9 %).
+const SUB_BUCKETS: usize = 8;
+
+/// A fixed-size log-scale histogram of latencies in ns: no allocation when recording.
+#[derive(Debug, Clone)]
+struct LatencyHistogram {
+    counts: [u32; 64 * SUB_BUCKETS],
+    n: u64,
+}
+
+impl LatencyHistogram {
+    fn new() -> Self {
+        Self {
+            counts: [0; 64 * SUB_BUCKETS],
+            n: 0,
+        }
+    }
+
+    fn bucket(ns: u64) -> usize {
+        if ns < SUB_BUCKETS as u64 {
+            return ns as usize;
+        }
+        let octave = 63 - ns.leading_zeros() as usize; // ≥ 3
+        let sub = ((ns >> (octave - 3)) & (SUB_BUCKETS as u64 - 1)) as usize;
+        (octave - 2) * SUB_BUCKETS + sub
+    }
+
+    /// Middle of a bucket, ns.
+    fn value(bucket: usize) -> f64 {
+        if bucket < SUB_BUCKETS {
+            return bucket as f64;
+        }
+        let octave = bucket / SUB_BUCKETS + 2;
+        let sub = bucket % SUB_BUCKETS;
+        let low = ((SUB_BUCKETS + sub) as f64) * (1u64 << (octave - 3)) as f64;
+        low + 0.5 * (1u64 << (octave - 3)) as f64
+    }
+
+    fn record(&mut self, ns: u64) {
+        let b = Self::bucket(ns).min(self.counts.len() - 1);
+        self.counts[b] = self.counts[b].saturating_add(1);
+        self.n += 1;
+    }
+
+    /// The `q` quantile (0..=1), s; NaN when empty.
+    fn quantile_s(&self, q: f64) -> f64 {
+        if self.n == 0 {
+            return f64::NAN;
+        }
+        let rank = ((q * self.n as f64).ceil() as u64).clamp(1, self.n);
+        let mut acc = 0u64;
+        for (b, &c) in self.counts.iter().enumerate() {
+            acc += u64::from(c);
+            if acc >= rank {
+                return Self::value(b) * 1e-9;
+            }
+        }
+        f64::NAN
+    }
+
+    fn clear(&mut self) {
+        self.counts.fill(0);
+        self.n = 0;
     }
 }
 
@@ -548,6 +752,16 @@ struct Outputs {
     diagnostics: Out<Diagnostics>,
 }
 
+/// Cumulative counters at the previous health line.
+#[derive(Debug, Clone, Copy)]
+struct HealthMark {
+    at: Instant,
+    received: u64,
+    seq_gaps: u64,
+    rejected: u64,
+    dropped: u64,
+}
+
 /// State of the estimator thread.
 struct EstState {
     est: Estimator,
@@ -556,10 +770,22 @@ struct EstState {
     last: Estimate,
     last_imu_seq: u64,
     last_bias_t_s: f64,
+    last_phase: Phase,
     last_stances: u64,
     last_nis: f64,
     undelivered: u64,
     streams_finished: u64,
+    /// The next sample comes from a new producer (see [`Msg::NewProducer`]).
+    producer_changed: bool,
+    /// The state each new stream starts from (checkpoint configured only).
+    warm: Option<WarmStart>,
+    warm_started_from: Option<Checkpoint>,
+    /// Accepted samples at the last checkpoint save (no save when nothing changed).
+    saved_at_samples: u64,
+    checkpoints_saved: u64,
+    latency_diag: LatencyHistogram,
+    latency_health: LatencyHistogram,
+    health: HealthMark,
     warnings: Vec<String>,
 }
 
@@ -568,6 +794,14 @@ fn phase_code(p: Phase) -> u32 {
         Phase::Aligning => phase::ALIGNING,
         Phase::Calibrating => phase::CALIBRATING,
         Phase::Tracking => phase::TRACKING,
+    }
+}
+
+fn phase_name(p: Phase) -> &'static str {
+    match p {
+        Phase::Aligning => "aligning",
+        Phase::Calibrating => "calibrating",
+        Phase::Tracking => "tracking",
     }
 }
 
@@ -585,7 +819,7 @@ fn flags_of(e: &Estimate) -> u32 {
     f
 }
 
-fn attitude_of(e: &Estimate, imu_seq: u64) -> AttitudeSample {
+fn attitude_of(e: &Estimate, imu_seq: u64, imu_sent_ns: u64) -> AttitudeSample {
     AttitudeSample {
         seq: 0,
         t_s: e.t_s,
@@ -598,6 +832,7 @@ fn attitude_of(e: &Estimate, imu_seq: u64) -> AttitudeSample {
         gyro_bias_sd_rad_s: e.gyro_bias_sd_rad_s,
         phase: phase_code(e.phase),
         flags: flags_of(e),
+        imu_sent_ns,
     }
 }
 
@@ -613,6 +848,29 @@ fn bias_of(e: &Estimate, imu_seq: u64) -> BiasSample {
     }
 }
 
+/// `[x, y, z]` with 3 significant digits, for the health line.
+struct Vec3Fmt([f64; 3]);
+
+impl std::fmt::Display for Vec3Fmt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [x, y, z] = self.0;
+        write!(f, "[{x:.3e}, {y:.3e}, {z:.3e}]")
+    }
+}
+
+/// A latency in s as µs, or `-` when unknown.
+struct MicrosFmt(f64);
+
+impl std::fmt::Display for MicrosFmt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.0.is_finite() {
+            write!(f, "{:.0} µs", self.0 * 1e6)
+        } else {
+            f.write_str("-")
+        }
+    }
+}
+
 impl EstState {
     fn new(cfg: &DaemonConfig) -> Self {
         Self {
@@ -621,12 +879,37 @@ impl EstState {
             last: Estimate::default(),
             last_imu_seq: 0,
             last_bias_t_s: f64::NEG_INFINITY,
+            last_phase: Phase::Aligning,
             last_stances: 0,
             last_nis: f64::NAN,
             undelivered: 0,
             streams_finished: 0,
+            producer_changed: false,
+            warm: None,
+            warm_started_from: None,
+            saved_at_samples: 0,
+            checkpoints_saved: 0,
+            latency_diag: LatencyHistogram::new(),
+            latency_health: LatencyHistogram::new(),
+            health: HealthMark {
+                at: Instant::now(),
+                received: 0,
+                seq_gaps: 0,
+                rejected: 0,
+                dropped: 0,
+            },
             warnings: Vec::new(),
         }
+    }
+
+    fn warn(&mut self, w: String) {
+        tracing::warn!("{w}");
+        self.warnings.push(w);
+    }
+
+    /// Accepted samples over all streams.
+    fn accepted(&self) -> u64 {
+        self.previous.samples + self.est.counters().samples
     }
 
     fn diagnostics(&self, rx: &RxCounters, flags: u32) -> Diagnostics {
@@ -647,9 +930,19 @@ impl EstState {
             stances: p.stances + c.stances,
             heading_used: p.heading_used + c.heading_used,
             last_nis: self.last_nis,
+            producer_changes: rx.producer_changes.load(Ordering::Relaxed),
+            latency_p50_s: self.latency_diag.quantile_s(0.5),
+            latency_p99_s: self.latency_diag.quantile_s(0.99),
             phase: phase_code(self.est.phase()),
             flags,
         }
+    }
+
+    fn publish_diagnostics(&mut self, out: &mut Outputs, rx: &RxCounters, flags: u32) {
+        let d = self.diagnostics(rx, flags);
+        let ok = out.diagnostics.publish(|v, q| v.seq = q, d);
+        self.count(ok);
+        self.latency_diag.clear();
     }
 
     fn count(&mut self, delivered: bool) {
@@ -658,7 +951,38 @@ impl EstState {
         }
     }
 
-    fn on_sample(&mut self, cfg: &DaemonConfig, out: &mut Outputs, s: &ImuSample) {
+    /// A fresh estimator for a new stream, warm-started from the last saved state if any.
+    fn new_estimator(&mut self, cfg: &DaemonConfig) -> Estimator {
+        let mut est = Estimator::new(cfg.estimator.clone(), cfg.aid.clone());
+        if let Some(ws) = self.warm
+            && let Err(e) = est.set_warm_start(ws)
+        {
+            self.warm = None;
+            self.warn(format!("{e}; cold start"));
+        }
+        est
+    }
+
+    fn on_sample(&mut self, cfg: &DaemonConfig, out: &mut Outputs, rx: &RxCounters, s: &ImuSample) {
+        let clock_went_back =
+            s.t_s.partial_cmp(&self.last.t_s) != Some(std::cmp::Ordering::Greater);
+        if std::mem::take(&mut self.producer_changed)
+            && self.est.counters().samples > 0
+            && clock_went_back
+        {
+            // The new producer's clock restarted: end the old stream as a marker would.
+            tracing::warn!(
+                t_s = s.t_s,
+                last_t_s = self.last.t_s,
+                "new IMU producer restarted its clock; starting a new stream"
+            );
+            let marker = ImuSample {
+                seq: self.last_imu_seq,
+                flags: FLAG_END_OF_STREAM,
+                ..ImuSample::default()
+            };
+            self.on_end_of_stream(cfg, out, rx, &marker);
+        }
         let input = ImuInput {
             t_s: s.t_s,
             gyro_rad_s: s.gyro_rad_s,
@@ -676,14 +1000,23 @@ impl EstState {
         self.last_imu_seq = s.seq;
         let ok = out
             .attitude
-            .publish(|v, q| v.seq = q, attitude_of(&e, s.seq));
+            .publish(|v, q| v.seq = q, attitude_of(&e, s.seq, s.sent_ns));
         self.count(ok);
+        if s.sent_ns != 0 {
+            let now = monotonic_ns();
+            if now >= s.sent_ns {
+                self.latency_diag.record(now - s.sent_ns);
+                self.latency_health.record(now - s.sent_ns);
+            }
+        }
         if let Some(h) = &e.heading
             && let Ok(i) = &h.outcome
         {
             self.last_nis = i.nis;
         }
-        if e.heading.is_some() || e.t_s - self.last_bias_t_s >= cfg.bias_period_s {
+        let aligned_now = e.phase != self.last_phase && self.last_phase == Phase::Aligning;
+        self.last_phase = e.phase;
+        if aligned_now || e.heading.is_some() || e.t_s - self.last_bias_t_s >= cfg.bias_period_s {
             self.last_bias_t_s = e.t_s;
             let ok = out.bias.publish(|v, q| v.seq = q, bias_of(&e, s.seq));
             self.count(ok);
@@ -714,7 +1047,7 @@ impl EstState {
         rx: &RxCounters,
         s: &ImuSample,
     ) {
-        let mut a = attitude_of(&self.last, s.seq);
+        let mut a = attitude_of(&self.last, s.seq, s.sent_ns);
         a.flags |= FLAG_END_OF_STREAM;
         let ok = out.attitude.publish(|v, q| v.seq = q, a);
         self.count(ok);
@@ -734,11 +1067,10 @@ impl EstState {
         b.flags |= FLAG_END_OF_STREAM;
         let ok = out.bias.publish(|v, q| v.seq = q, b);
         self.count(ok);
-        let d = self.diagnostics(rx, FLAG_END_OF_STREAM);
-        let ok = out.diagnostics.publish(|v, q| v.seq = q, d);
-        self.count(ok);
+        self.publish_diagnostics(out, rx, FLAG_END_OF_STREAM);
         self.save_checkpoint(cfg);
-        // A new stream: fresh estimator, counters carried over.
+        // A new stream: fresh estimator (warm-started from the state just saved), counters
+        // carried over.
         let c = *self.est.counters();
         let p = &mut self.previous;
         p.samples += c.samples;
@@ -746,37 +1078,83 @@ impl EstState {
         p.rejected_time += c.rejected_time;
         p.stances += c.stances;
         p.heading_used += c.heading_used;
-        self.est = Estimator::new(cfg.estimator.clone(), cfg.aid.clone());
+        self.est = self.new_estimator(cfg);
         self.last = Estimate::default();
         self.last_bias_t_s = f64::NEG_INFINITY;
+        self.last_phase = Phase::Aligning;
         self.last_stances = 0;
         self.streams_finished += 1;
     }
 
-    /// Saves bias, covariance and attitude once the estimator has aligned.
+    /// Saves the estimator's bias state (once aligned, and only if it changed since the last
+    /// save); it also becomes the warm start of the next stream.
     fn save_checkpoint(&mut self, cfg: &DaemonConfig) {
         let Some(path) = &cfg.checkpoint else { return };
-        if self.last.phase == Phase::Aligning {
+        let Some(state) = self.est.bias_state() else {
             return;
-        }
-        let sd = self.last.gyro_bias_sd_rad_s;
-        // TODO(core): the estimator exposes only the σ of the bias; store its full covariance
-        // once `Estimator::gyro_bias_covariance()` exists. Until then the diagonal.
-        let mut cov = [[0.0; 3]; 3];
-        for i in 0..3 {
-            cov[i][i] = sd[i] * sd[i];
+        };
+        let accepted = self.accepted();
+        if accepted == self.saved_at_samples {
+            return;
         }
         let cp = Checkpoint {
             mode: cfg.estimator.mode.name().to_owned(),
             t_s: self.last.t_s,
-            gyro_bias_rad_s: self.last.gyro_bias_rad_s,
-            gyro_bias_cov: cov,
+            saved_unix_ms: checkpoint::unix_now_ms(),
+            gyro_bias_rad_s: state.gyro_bias_rad_s,
+            gyro_bias_cov: state.gyro_bias_cov,
             nav_from_body_wxyz: self.last.nav_from_body,
         };
-        if let Err(e) = checkpoint::save(path, &cp) {
-            tracing::warn!("{e}");
-            self.warnings.push(e.to_string());
+        match checkpoint::save(path, &cp) {
+            Ok(()) => {
+                self.saved_at_samples = accepted;
+                self.checkpoints_saved += 1;
+                self.warm = Some(state);
+                tracing::debug!(path = %path.display(), t_s = cp.t_s, "checkpoint saved");
+            }
+            Err(e) => {
+                // Still the best state for the next stream of this process.
+                self.warm = Some(state);
+                self.warn(e.to_string());
+            }
         }
+    }
+
+    /// Logs the one-line health summary and starts a new window.
+    fn log_health(&mut self, rx: &RxCounters) {
+        let now = Instant::now();
+        let d = self.diagnostics(rx, 0);
+        let rejected = d.rejected_non_finite + d.rejected_time + d.rejected_duplicate_seq + d.late;
+        let h = self.health;
+        let secs = now.duration_since(h.at).as_secs_f64().max(1e-9);
+        let rate = (d.received - h.received) as f64 / secs;
+        tracing::info!(
+            "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
+             dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
+             σ {} rad/s, converged {}, phase {}",
+            d.received,
+            d.seq_gaps - h.seq_gaps,
+            d.seq_gaps,
+            rejected - h.rejected,
+            rejected,
+            d.dropped_overflow - h.dropped,
+            d.dropped_overflow,
+            d.producer_changes,
+            MicrosFmt(self.latency_health.quantile_s(0.5)),
+            MicrosFmt(self.latency_health.quantile_s(0.99)),
+            Vec3Fmt(self.last.gyro_bias_rad_s),
+            Vec3Fmt(self.last.gyro_bias_sd_rad_s),
+            if self.last.converged { "yes" } else { "no" },
+            phase_name(self.est.phase()),
+        );
+        self.latency_health.clear();
+        self.health = HealthMark {
+            at: now,
+            received: d.received,
+            seq_gaps: d.seq_gaps,
+            rejected,
+            dropped: d.dropped_overflow,
+        };
     }
 }
 
@@ -810,16 +1188,33 @@ fn estimator_thread(
     };
     drop(ready);
     let mut st = EstState::new(cfg);
-    warm_start(cfg, &mut st);
-    let mut next_diag = Instant::now() + cfg.diagnostics_period;
+    load_warm_start(cfg, &mut st);
+    st.est = st.new_estimator(cfg);
+    let start = Instant::now();
+    let mut next_diag = start + cfg.diagnostics_period;
+    let mut next_health = start + cfg.health_period;
+    let mut next_checkpoint = start + cfg.checkpoint_period;
     loop {
-        let wait = next_diag.saturating_duration_since(Instant::now());
-        match rx.recv_timeout(wait) {
+        let deadline = next_diag.min(next_health).min(next_checkpoint);
+        let msg = match rx.try_recv() {
+            Ok(m) => Ok(m),
+            Err(TryRecvError::Empty) => {
+                // Woken by the receive thread's unpark after each send (no lost wake-up:
+                // an unpark before the park makes it return at once).
+                let now = Instant::now();
+                if deadline > now {
+                    std::thread::park_timeout(deadline - now);
+                }
+                Err(RecvTimeoutError::Timeout)
+            }
+            Err(TryRecvError::Disconnected) => Err(RecvTimeoutError::Disconnected),
+        };
+        match msg {
             Ok(Msg::Imu(s)) if s.is_end_of_stream() => {
                 st.on_end_of_stream(cfg, &mut out, counters, &s);
                 next_diag = Instant::now() + cfg.diagnostics_period;
             }
-            Ok(Msg::Imu(s)) => st.on_sample(cfg, &mut out, &s),
+            Ok(Msg::Imu(s)) => st.on_sample(cfg, &mut out, counters, &s),
             Ok(Msg::Heading {
                 heading_rad,
                 sd_rad,
@@ -830,60 +1225,90 @@ fn estimator_thread(
                     tracing::debug!(heading_rad, sd_rad, "angle observation refused");
                 }
             }
+            Ok(Msg::NewProducer) => st.producer_changed = true,
             Err(RecvTimeoutError::Timeout) => {}
             Err(RecvTimeoutError::Disconnected) => break,
         }
-        if Instant::now() >= next_diag {
-            let d = st.diagnostics(counters, 0);
-            let ok = out.diagnostics.publish(|v, q| v.seq = q, d);
-            st.count(ok);
-            next_diag = Instant::now() + cfg.diagnostics_period;
+        let now = Instant::now();
+        if now >= next_diag {
+            st.publish_diagnostics(&mut out, counters, 0);
+            next_diag = now + cfg.diagnostics_period;
+        }
+        if now >= next_health {
+            st.log_health(counters);
+            next_health = now + cfg.health_period;
+        }
+        if now >= next_checkpoint {
+            st.save_checkpoint(cfg);
+            next_checkpoint = Instant::now() + cfg.checkpoint_period;
         }
     }
-    let d = st.diagnostics(counters, FLAG_SHUTDOWN);
-    let ok = out.diagnostics.publish(|v, q| v.seq = q, d);
-    st.count(ok);
+    st.publish_diagnostics(&mut out, counters, FLAG_SHUTDOWN);
     st.save_checkpoint(cfg);
     let mut diagnostics = st.diagnostics(counters, FLAG_SHUTDOWN);
     diagnostics.seq = out.diagnostics.seq.saturating_sub(1);
     Ok(DaemonReport {
         diagnostics,
         streams_finished: st.streams_finished,
+        warm_started_from: st.warm_started_from,
+        checkpoints_saved: st.checkpoints_saved,
         warnings: st.warnings,
     })
 }
 
-/// Loads the checkpoint; a bad one becomes a warning and a cold start.
-fn warm_start(cfg: &DaemonConfig, st: &mut EstState) {
+/// Loads the checkpoint into `st.warm`; a bad one becomes a warning and a cold start.
+fn load_warm_start(cfg: &DaemonConfig, st: &mut EstState) {
     let Some(path) = &cfg.checkpoint else { return };
     match checkpoint::load(path) {
         Ok(cp) if cp.mode != cfg.estimator.mode.name() => {
-            let w = format!(
+            st.warn(format!(
                 "{}: checkpoint is for mode {}, the daemon runs {}; cold start",
                 path.display(),
                 cp.mode,
                 cfg.estimator.mode.name()
-            );
-            tracing::warn!("{w}");
-            st.warnings.push(w);
+            ));
         }
         Ok(cp) => {
-            // TODO(core): warm start needs `Estimator::warm_start(bias, bias_cov, nav_from_body)`
-            // (a prior used at the end of alignment instead of the configured one). Until it
-            // exists the checkpoint is only loaded and validated.
             tracing::info!(
                 path = %path.display(),
                 t_s = cp.t_s,
-                "checkpoint loaded; warm start is not wired into the estimator yet, cold start"
+                age_s = cp.age().map(|a| a.as_secs_f64()),
+                bias_rad_s = %Vec3Fmt(cp.gyro_bias_rad_s),
+                "warm start from the checkpoint"
             );
+            st.warm = Some(cp.warm_start());
+            st.warm_started_from = Some(cp);
         }
         Err(CheckpointError::NotFound { .. }) => {
             tracing::info!(path = %path.display(), "no checkpoint; cold start");
         }
-        Err(e) => {
-            let w = format!("{e}; cold start");
-            tracing::warn!("{w}");
-            st.warnings.push(w);
+        Err(e) => st.warn(format!("{e}; cold start")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn latency_histogram_quantiles_are_within_a_bucket() {
+        let mut h = LatencyHistogram::new();
+        assert!(h.quantile_s(0.5).is_nan());
+        for ns in 1..=1000u64 {
+            h.record(ns * 1000); // 1 µs .. 1 ms, uniform
+        }
+        let p50 = h.quantile_s(0.5);
+        let p99 = h.quantile_s(0.99);
+        assert!((p50 - 500e-6).abs() < 0.07 * 500e-6, "{p50}");
+        assert!((p99 - 990e-6).abs() < 0.07 * 990e-6, "{p99}");
+        h.record(u64::MAX); // clamped into the last bucket, no panic
+        h.clear();
+        assert!(h.quantile_s(0.99).is_nan());
+        for ns in 0..8 {
+            assert_eq!(
+                LatencyHistogram::value(LatencyHistogram::bucket(ns)),
+                ns as f64
+            );
         }
     }
 }

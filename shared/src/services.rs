@@ -36,23 +36,23 @@ use std::str::FromStr;
 
 /// Version of the wire layout; part of every service name. Bump it with any change to
 /// [`crate::wire`].
-pub const SERVICE_VERSION: &str = "v1";
+pub const SERVICE_VERSION: &str = "v2";
 /// IMU samples, producers → daemon.
-pub const IMU_SERVICE: &str = "corridor/v1/imu";
+pub const IMU_SERVICE: &str = "corridor/v2/imu";
 /// External angle observations, producers → daemon.
-pub const ANGLES_SERVICE: &str = "corridor/v1/angles";
+pub const ANGLES_SERVICE: &str = "corridor/v2/angles";
 /// Attitude after every IMU sample, daemon → clients.
-pub const ATTITUDE_SERVICE: &str = "corridor/v1/attitude";
+pub const ATTITUDE_SERVICE: &str = "corridor/v2/attitude";
 /// Gyro-bias estimates, daemon → clients.
-pub const BIAS_SERVICE: &str = "corridor/v1/bias";
+pub const BIAS_SERVICE: &str = "corridor/v2/bias";
 /// Position and velocity at each stance, daemon → clients.
-pub const NAV_SERVICE: &str = "corridor/v1/nav";
+pub const NAV_SERVICE: &str = "corridor/v2/nav";
 /// Daemon counters, daemon → clients.
-pub const DIAGNOSTICS_SERVICE: &str = "corridor/v1/diagnostics";
+pub const DIAGNOSTICS_SERVICE: &str = "corridor/v2/diagnostics";
 /// Event service created exclusively by the running daemon: a second daemon on the same domain
 /// fails to create it. Clients must not open it (an open handle would keep it alive after the
 /// daemon exits).
-pub const DAEMON_SERVICE: &str = "corridor/v1/daemon";
+pub const DAEMON_SERVICE: &str = "corridor/v2/daemon";
 
 /// The default domain name.
 pub const DEFAULT_DOMAIN: &str = "default";
@@ -218,6 +218,8 @@ pub trait Topic: Debug + Copy + ZeroCopySend + 'static {
     const SERVICE: &'static str;
     /// Quality of service.
     const QOS: Qos;
+    /// The message's sequence number (every wire type has one; gaps mean lost messages).
+    fn seq(&self) -> u64;
 }
 
 impl Topic for ImuSample {
@@ -230,6 +232,9 @@ impl Topic for ImuSample {
         history_size: 0,
         max_borrowed: 2,
     };
+    fn seq(&self) -> u64 {
+        self.seq
+    }
 }
 
 impl Topic for AngleObservation {
@@ -241,6 +246,9 @@ impl Topic for AngleObservation {
         history_size: 0,
         max_borrowed: 2,
     };
+    fn seq(&self) -> u64 {
+        self.seq
+    }
 }
 
 impl Topic for AttitudeSample {
@@ -252,6 +260,9 @@ impl Topic for AttitudeSample {
         history_size: 0,
         max_borrowed: 2,
     };
+    fn seq(&self) -> u64 {
+        self.seq
+    }
 }
 
 impl Topic for BiasSample {
@@ -264,6 +275,9 @@ impl Topic for BiasSample {
         history_size: 1,
         max_borrowed: 2,
     };
+    fn seq(&self) -> u64 {
+        self.seq
+    }
 }
 
 impl Topic for NavSample {
@@ -275,6 +289,9 @@ impl Topic for NavSample {
         history_size: 1,
         max_borrowed: 2,
     };
+    fn seq(&self) -> u64 {
+        self.seq
+    }
 }
 
 impl Topic for Diagnostics {
@@ -286,6 +303,9 @@ impl Topic for Diagnostics {
         history_size: 1,
         max_borrowed: 2,
     };
+    fn seq(&self) -> u64 {
+        self.seq
+    }
 }
 
 /// Maximum notifiers on a paired event service.

@@ -53,9 +53,9 @@ pub mod phase {
     pub const TRACKING: u32 = 2;
 }
 
-/// One IMU sample, producer → daemon (`corridor/v1/imu`).
+/// One IMU sample, producer → daemon (`corridor/v2/imu`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v1_ImuSample")]
+#[type_name("corridor_v2_ImuSample")]
 #[repr(C)]
 pub struct ImuSample {
     /// Sequence number of the producer, +1 per sample (end-of-stream markers included).
@@ -72,6 +72,10 @@ pub struct ImuSample {
     pub flags: u32,
     /// Reserved, 0.
     pub reserved: u32,
+    /// When the producer sent it: [`monotonic_ns`] of the producer's host, 0 when unknown.
+    /// The client `Producer` stamps it; the daemon uses it for its latency figures and copies
+    /// it into [`AttitudeSample::imu_sent_ns`].
+    pub sent_ns: u64,
 }
 
 impl ImuSample {
@@ -81,10 +85,10 @@ impl ImuSample {
     }
 }
 
-/// An external attitude observation, producer → daemon (`corridor/v1/angles`), e.g. a heading
+/// An external attitude observation, producer → daemon (`corridor/v2/angles`), e.g. a heading
 /// from a map matcher or a camera. Only the components whose bit is set in `valid` are used.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v1_AngleObservation")]
+#[type_name("corridor_v2_AngleObservation")]
 #[repr(C)]
 pub struct AngleObservation {
     /// Sequence number of the producer.
@@ -109,10 +113,10 @@ pub struct AngleObservation {
     pub reserved: u32,
 }
 
-/// The gyro-bias estimate, daemon → clients (`corridor/v1/bias`): at each heading observation,
+/// The gyro-bias estimate, daemon → clients (`corridor/v2/bias`): at each heading observation,
 /// at the configured rate and at end of stream.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v1_BiasSample")]
+#[type_name("corridor_v2_BiasSample")]
 #[repr(C)]
 pub struct BiasSample {
     /// Sequence number of the daemon's bias stream.
@@ -131,10 +135,10 @@ pub struct BiasSample {
     pub flags: u32,
 }
 
-/// The attitude after one IMU sample, daemon → clients (`corridor/v1/attitude`): one per
+/// The attitude after one IMU sample, daemon → clients (`corridor/v2/attitude`): one per
 /// accepted IMU sample, plus one end-of-stream marker.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v1_AttitudeSample")]
+#[type_name("corridor_v2_AttitudeSample")]
 #[repr(C)]
 pub struct AttitudeSample {
     /// Sequence number of the daemon's attitude stream.
@@ -160,12 +164,15 @@ pub struct AttitudeSample {
     /// Bit set of `FLAG_*` ([`FLAG_BIAS_CORRECTED`], [`FLAG_STANCE`], [`FLAG_CONVERGED`],
     /// [`FLAG_END_OF_STREAM`]).
     pub flags: u32,
+    /// [`ImuSample::sent_ns`] of the IMU sample this attitude follows (0 when unknown): a
+    /// consumer on the same host gets the end-to-end latency as `monotonic_ns() - imu_sent_ns`.
+    pub imu_sent_ns: u64,
 }
 
-/// Position and velocity at a footfall, daemon → clients (`corridor/v1/nav`): one per stance
+/// Position and velocity at a footfall, daemon → clients (`corridor/v2/nav`): one per stance
 /// (first sample of the stance), after alignment.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v1_NavSample")]
+#[type_name("corridor_v2_NavSample")]
 #[repr(C)]
 pub struct NavSample {
     /// Sequence number of the daemon's nav stream.
@@ -188,10 +195,10 @@ pub struct NavSample {
     pub reserved: u32,
 }
 
-/// Counters of the daemon, daemon → clients (`corridor/v1/diagnostics`): periodically (wall
+/// Counters of the daemon, daemon → clients (`corridor/v2/diagnostics`): periodically (wall
 /// clock), at end of stream and at shutdown. Every counter is cumulative over the daemon's life.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v1_Diagnostics")]
+#[type_name("corridor_v2_Diagnostics")]
 #[repr(C)]
 pub struct Diagnostics {
     /// Sequence number of the daemon's diagnostics stream.
@@ -222,10 +229,52 @@ pub struct Diagnostics {
     pub heading_used: u64,
     /// Normalised innovation squared of the last heading update (NaN before the first).
     pub last_nis: f64,
+    /// Times the IMU producer changed (another publisher port than the previous sample's: a
+    /// restarted or replaced producer). Its `seq` numbering starts afresh; when its clock also
+    /// restarted, the daemon starts a new stream as if it had received an end of stream.
+    pub producer_changes: u64,
+    /// Median latency from the producer's send ([`ImuSample::sent_ns`]) to the publication of
+    /// the matching [`AttitudeSample`], s, over the last diagnostics period (NaN when unknown).
+    pub latency_p50_s: f64,
+    /// 99th percentile of the same latency, s (NaN when unknown).
+    pub latency_p99_s: f64,
     /// Estimator phase ([`phase`]).
     pub phase: u32,
     /// Bit set of `FLAG_*` ([`FLAG_END_OF_STREAM`], [`FLAG_SHUTDOWN`]).
     pub flags: u32,
+}
+
+/// The host's monotonic clock (`CLOCK_MONOTONIC` on Linux), ns: comparable between processes of
+/// one machine, never jumps. Used for [`ImuSample::sent_ns`] and latency measurements.
+#[cfg(all(target_os = "linux", target_pointer_width = "64"))]
+pub fn monotonic_ns() -> u64 {
+    #[repr(C)]
+    struct Timespec {
+        tv_sec: i64,
+        tv_nsec: i64,
+    }
+    unsafe extern "C" {
+        fn clock_gettime(clock_id: i32, tp: *mut Timespec) -> i32;
+    }
+    const CLOCK_MONOTONIC: i32 = 1;
+    let mut ts = Timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable `struct timespec` (two 64-bit fields on 64-bit Linux)
+    // and CLOCK_MONOTONIC always exists there.
+    let rc = unsafe { clock_gettime(CLOCK_MONOTONIC, &mut ts) };
+    debug_assert_eq!(rc, 0);
+    (ts.tv_sec as u64) * 1_000_000_000 + ts.tv_nsec as u64
+}
+
+/// Fallback of the host's monotonic clock: wall-clock time since the Unix epoch, ns (may jump;
+/// only used where `CLOCK_MONOTONIC` is not wired up).
+#[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
+pub fn monotonic_ns() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as u64)
 }
 
 #[cfg(test)]
@@ -234,12 +283,12 @@ mod tests {
 
     #[test]
     fn sizes_are_fixed_and_padding_free() {
-        assert_eq!(size_of::<ImuSample>(), 8 + 8 + 24 + 24 + 8 + 8);
+        assert_eq!(size_of::<ImuSample>(), 8 + 8 + 24 + 24 + 8 + 8 + 8);
         assert_eq!(size_of::<AngleObservation>(), 8 * 8 + 8);
         assert_eq!(size_of::<BiasSample>(), 8 * 3 + 48 + 8);
-        assert_eq!(size_of::<AttitudeSample>(), 8 * 3 + 32 + 24 + 48 + 8);
+        assert_eq!(size_of::<AttitudeSample>(), 8 * 3 + 32 + 24 + 48 + 8 + 8);
         assert_eq!(size_of::<NavSample>(), 8 * 4 + 48 + 8 + 8);
-        assert_eq!(size_of::<Diagnostics>(), 8 * 14 + 8);
+        assert_eq!(size_of::<Diagnostics>(), 8 * 17 + 8);
     }
 
     #[test]
@@ -250,5 +299,13 @@ mod tests {
         };
         assert!(s.is_end_of_stream());
         assert!(!ImuSample::default().is_end_of_stream());
+    }
+
+    #[test]
+    fn monotonic_clock_advances() {
+        let a = monotonic_ns();
+        std::thread::sleep(std::time::Duration::from_millis(2));
+        let b = monotonic_ns();
+        assert!(a > 0 && b >= a + 1_000_000, "{a} {b}");
     }
 }

@@ -1,0 +1,317 @@
+//! The daemon as a real process (`corridor serve`), each test on its own domain:
+//!
+//! - `sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint`: a daemon fed at
+//!   10× real time is killed with SIGKILL mid-stream (after a periodic checkpoint), leaving its
+//!   shared memory behind; a new daemon on the same domain starts (iceoryx2 removes the dead
+//!   node's resources), warm-starts from that checkpoint, and a consumer that stayed connected
+//!   across the crash receives the new daemon's stream. SIGTERM then stops it cleanly.
+//! - `second_daemon_on_the_same_domain_is_refused`: the second `corridor serve` exits with an
+//!   error naming the domain.
+
+use corridor_client::{Delivery, Domain, Producer, Subscriber};
+use corridor_service::checkpoint;
+use corridor_service::core::{Estimate, Phase};
+use corridor_service::runner::{heading_aid, run_log};
+use corridor_shared::config::ConfigFile;
+use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::wire::{AttitudeSample, BiasSample, Diagnostics, ImuSample, phase};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+const WAIT: Duration = Duration::from_secs(15);
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn exp36() -> ImuLog {
+    let path = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
+    read_imu_csv(&path, &ImuCsvOptions::default()).unwrap()
+}
+
+/// gdins.toml plus a `[daemon]` section with a fast periodic checkpoint.
+fn write_config(dir: &Path) -> PathBuf {
+    let mut text = std::fs::read_to_string(root().join("configs/gdins.toml")).unwrap();
+    assert!(!text.contains("[daemon]"));
+    text.push_str("\n[daemon]\ncheckpoint_period_s = 0.2\nhealth_period_s = 0.5\n");
+    let path = dir.join("service.toml");
+    std::fs::write(&path, text).unwrap();
+    ConfigFile::read(&path).unwrap().validate().unwrap();
+    path
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("corridor-{tag}"));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn cleanup_domain(domain: &str) {
+    for f in shm_files(domain) {
+        let _ = std::fs::remove_file(Path::new("/dev/shm").join(f));
+    }
+    // Event sockets and service files a failed run may leave under /tmp/iceoryx2.
+    let prefix = format!("corridor_{domain}_");
+    for root in ["/tmp/iceoryx2", "/tmp/iceoryx2/services"] {
+        if let Ok(dir) = std::fs::read_dir(root) {
+            for e in dir.flatten() {
+                if e.file_name().to_string_lossy().starts_with(&prefix) {
+                    let _ = std::fs::remove_file(e.path());
+                }
+            }
+        }
+    }
+}
+
+fn shm_files(domain: &str) -> Vec<String> {
+    let prefix = format!("corridor_{domain}_");
+    std::fs::read_dir("/dev/shm")
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.starts_with(&prefix))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// `corridor serve` with its stderr (the log) in `log`.
+fn serve(config: &Path, domain: &str, ckpt: &Path, log: &Path) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_corridor"))
+        .args(["serve", "--delivery", "live", "--domain", domain])
+        .arg("--config")
+        .arg(config)
+        .arg("--checkpoint")
+        .arg(ckpt)
+        .env("RUST_LOG", "info")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(std::fs::File::create(log).unwrap())
+        .spawn()
+        .expect("corridor serve starts")
+}
+
+/// SIGTERM, then the exit status and stdout (the JSON report).
+fn terminate(mut child: Child) -> (std::process::ExitStatus, String) {
+    let pid = i32::try_from(child.id()).unwrap();
+    // SAFETY: plain kill(2) on our own child.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGTERM) }, 0);
+    let start = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            let mut out = String::new();
+            use std::io::Read;
+            child
+                .stdout
+                .take()
+                .unwrap()
+                .read_to_string(&mut out)
+                .unwrap();
+            return (status, out);
+        }
+        if start.elapsed() > WAIT {
+            let _ = child.kill();
+            panic!("daemon did not stop on SIGTERM");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn offline(log: &ImuLog) -> (Vec<Estimate>, usize) {
+    let cfg = ConfigFile::read(&root().join("configs/gdins.toml"))
+        .unwrap()
+        .validate()
+        .unwrap();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let mut est = Vec::with_capacity(log.rows.len());
+    run_log(log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+        est.push(*e)
+    });
+    let first = est.iter().position(|e| e.phase != Phase::Aligning).unwrap();
+    (est, first)
+}
+
+fn sample(r: &corridor_shared::imu_csv::ImuRow) -> ImuSample {
+    ImuSample {
+        t_s: r.t_s,
+        gyro_rad_s: r.gyro_rad_s,
+        accel_m_s2: r.accel_m_s2,
+        temp_c: f64::NAN,
+        ..ImuSample::default()
+    }
+}
+
+#[test]
+fn sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint() {
+    let name = "test_daemon_sigkill";
+    cleanup_domain(name);
+    let dir = temp_dir("test-daemon-sigkill");
+    let config = write_config(&dir);
+    let ckpt = dir.join("checkpoint.bin");
+    let log = exp36();
+    let (offline, first_aligned) = offline(&log);
+    let domain = Domain::new(name).unwrap();
+
+    // First life: fed at 10× real time until it tracks and has saved a periodic checkpoint.
+    let first = serve(&config, name, &ckpt, &dir.join("first.log"));
+    let attitude = Subscriber::<AttitudeSample>::open(&domain, "test-attitude", WAIT).unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let producer = {
+        let (domain, stop, rows) = (domain.clone(), Arc::clone(&stop), log.rows.clone());
+        std::thread::spawn(move || {
+            let mut p = Producer::new(&domain, "test-sensor", Delivery::Live).unwrap();
+            p.wait_for_daemon(WAIT).unwrap();
+            let start = Instant::now();
+            let t0 = rows[0].t_s;
+            for r in &rows {
+                if stop.load(Ordering::Relaxed) {
+                    break;
+                }
+                let due = start + Duration::from_secs_f64((r.t_s - t0) / 10.0);
+                std::thread::sleep(due.saturating_duration_since(Instant::now()));
+                p.send_imu(sample(r)).unwrap();
+            }
+            p.stats()
+        })
+    };
+    let deadline = Instant::now() + WAIT;
+    let mut last = AttitudeSample::default();
+    while !(last.phase == phase::TRACKING && ckpt.exists()) || last.imu_seq < 4000 {
+        assert!(
+            Instant::now() < deadline,
+            "no tracking and checkpoint in time"
+        );
+        if let Some(a) = attitude.recv_timeout(Duration::from_millis(100)).unwrap() {
+            last = a;
+        }
+    }
+    let mut first = first;
+    first.kill().unwrap(); // SIGKILL
+    first.wait().unwrap();
+    stop.store(true, Ordering::Relaxed);
+    let sent = producer.join().unwrap();
+    assert!(
+        (sent.imu_sent as usize) < log.rows.len(),
+        "killed mid-stream"
+    );
+    let stale = shm_files(name);
+    assert!(
+        stale.len() > 1,
+        "the killed daemon leaves its shared memory behind: {stale:?}"
+    );
+    let saved = checkpoint::load(&ckpt).expect("a periodic checkpoint");
+    let last_t = offline.last().unwrap().t_s;
+    assert!(
+        saved.t_s > offline[first_aligned].t_s && saved.t_s < last_t,
+        "mid-stream state: t = {} s",
+        saved.t_s
+    );
+
+    // Second life, same domain: the dead node's resources are cleaned, the checkpoint used.
+    let second = serve(&config, name, &ckpt, &dir.join("second.log"));
+    let bias = Subscriber::<BiasSample>::open(&domain, "test-bias", WAIT).unwrap();
+    let diagnostics = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    let n = first_aligned + 100;
+    {
+        // The sensor driver restarted too: a new producer, seq and clock from the start.
+        let mut p = Producer::new(&domain, "test-sensor-2", Delivery::Live).unwrap();
+        p.wait_for_daemon(WAIT).unwrap();
+        for (i, r) in log.rows[..n].iter().enumerate() {
+            if i % 500 == 0 {
+                std::thread::sleep(Duration::from_millis(5)); // stay within the buffers
+            }
+            p.send_imu(sample(r)).unwrap();
+        }
+        p.finish().unwrap();
+        assert_eq!(p.stats().imu_undelivered, 0);
+    }
+    let first_bias = loop {
+        let b = bias
+            .recv_timeout(WAIT)
+            .unwrap()
+            .expect("bias from the new daemon");
+        if b.gyro_bias_sd_rad_s[0].is_finite() {
+            break b;
+        }
+    };
+    assert_eq!(first_bias.imu_seq, first_aligned as u64);
+    assert_eq!(
+        first_bias.gyro_bias_rad_s, saved.gyro_bias_rad_s,
+        "warm start from the checkpoint of the killed daemon"
+    );
+    // The consumer that stayed connected through the crash gets the new daemon's attitude.
+    let mut after = 0u64;
+    while let Some(a) = attitude.recv_timeout(Duration::from_millis(500)).unwrap() {
+        if a.imu_seq as usize == n - 1 && a.t_s == log.rows[n - 1].t_s {
+            after += 1;
+        }
+    }
+    assert_eq!(after, 1, "the kept consumer receives the restarted stream");
+    assert!(attitude.publisher_restarts() >= 1);
+    let d = loop {
+        let d = diagnostics
+            .recv_timeout(WAIT)
+            .unwrap()
+            .expect("diagnostics");
+        if d.accepted == n as u64 {
+            break d;
+        }
+    };
+    assert_eq!((d.seq_gaps, d.dropped_overflow, d.late), (0, 0, 0));
+    drop((attitude, bias, diagnostics));
+
+    let (status, out) = terminate(second);
+    assert!(status.success(), "{status}");
+    let report: serde_json::Value = serde_json::from_str(&out).expect("JSON report");
+    assert_eq!(report["warm_started"], true, "{out}");
+    assert_eq!(report["accepted"], n as u64, "{out}");
+    let log2 = std::fs::read_to_string(dir.join("second.log")).unwrap();
+    assert!(log2.contains("warm start from the checkpoint"), "{log2}");
+    assert!(log2.contains("health: input"), "{log2}");
+    let left = shm_files(name);
+    assert!(
+        left.iter().all(|f| f.ends_with("global_mgmt")),
+        "a clean exit removes the domain's shared memory: {left:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+    cleanup_domain(name);
+}
+
+#[test]
+fn second_daemon_on_the_same_domain_is_refused() {
+    let name = "test_daemon_twice";
+    cleanup_domain(name);
+    let dir = temp_dir("test-daemon-twice");
+    let config = write_config(&dir);
+    let domain = Domain::new(name).unwrap();
+    let first = serve(&config, name, &dir.join("a.bin"), &dir.join("first.log"));
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+
+    let out = Command::new(env!("CARGO_BIN_EXE_corridor"))
+        .args(["serve", "--domain", name])
+        .arg("--config")
+        .arg(&config)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!(
+            "another corridor daemon already serves domain \"{name}\""
+        )),
+        "{err}"
+    );
+    // The first one is undisturbed.
+    assert!(diag.recv_timeout(WAIT).unwrap().is_some());
+    assert_eq!(diag.publishers(), 1);
+    drop(diag);
+    let (status, _) = terminate(first);
+    assert!(status.success());
+    std::fs::remove_dir_all(&dir).unwrap();
+    cleanup_domain(name);
+}

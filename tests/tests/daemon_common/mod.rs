@@ -1,0 +1,169 @@
+//! Helpers shared by the `daemon_*` tests: the bundled log, the config, an in-process daemon
+//! and the per-test domain cleanup. Each test binary uses part of it.
+#![allow(dead_code)]
+
+use corridor_client::{Delivery, Domain, Producer, Subscriber};
+use corridor_service::daemon::{self, DaemonConfig, DaemonError, DaemonReport};
+use corridor_service::runner::heading_aid;
+use corridor_shared::config::{Config, ConfigFile};
+use corridor_shared::imu_csv::{ImuCsvOptions, ImuRow, read_imu_csv};
+use corridor_shared::services::Topic;
+use corridor_shared::wire::{FLAG_END_OF_STREAM, ImuSample};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+/// Longest wait for anything in these tests.
+pub const WAIT: Duration = Duration::from_secs(20);
+
+/// The tests crate's directory.
+pub fn manifest() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `configs/gdins.toml`, validated.
+pub fn config() -> Config {
+    let path = manifest().join("../configs/gdins.toml");
+    ConfigFile::read(&path)
+        .expect("config reads")
+        .validate()
+        .expect("config is valid")
+}
+
+/// The rows of the bundled exp36 recording (200 Hz, 14 000 samples).
+pub fn exp36_rows() -> Vec<ImuRow> {
+    let path = manifest().join("data/gdins_exp36_corridor_out_and_back/imu.csv");
+    read_imu_csv(&path, &ImuCsvOptions::default())
+        .expect("exp36 reads")
+        .rows
+}
+
+/// A row as an IMU sample (`seq` and `sent_ns` left to the producer).
+pub fn imu(r: &ImuRow) -> ImuSample {
+    ImuSample {
+        t_s: r.t_s,
+        gyro_rad_s: r.gyro_rad_s,
+        accel_m_s2: r.accel_m_s2,
+        temp_c: r.temp_c.unwrap_or(f64::NAN),
+        ..ImuSample::default()
+    }
+}
+
+/// A daemon config for `domain` with the gdins config and its grid heading aid.
+pub fn daemon_config(domain: &Domain, delivery: Delivery) -> DaemonConfig {
+    let cfg = config();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let mut d = DaemonConfig::new(domain.clone(), cfg, aid);
+    d.delivery = delivery;
+    d
+}
+
+/// A daemon running in-process on its own thread.
+pub struct Running {
+    shutdown: Arc<AtomicBool>,
+    handle: JoinHandle<Result<DaemonReport, DaemonError>>,
+}
+
+impl Running {
+    /// Starts [`daemon::run`] on a thread named `test-daemon`.
+    pub fn start(cfg: DaemonConfig) -> Self {
+        let shutdown = Arc::new(AtomicBool::new(false));
+        let flag = Arc::clone(&shutdown);
+        let handle = std::thread::Builder::new()
+            .name("test-daemon".into())
+            .spawn(move || daemon::run(cfg, flag))
+            .unwrap();
+        Self { shutdown, handle }
+    }
+
+    /// Sets the shutdown flag and returns the report.
+    pub fn stop(self) -> DaemonReport {
+        self.shutdown.store(true, Ordering::Relaxed);
+        self.handle.join().unwrap().expect("daemon ran cleanly")
+    }
+}
+
+/// Removes the domain's shared-memory files (a clean exit leaves only the 16-byte
+/// `global_mgmt` file of the prefix; a killed process leaves more). Call at the start and at
+/// the end of a test.
+pub fn cleanup_domain(domain: &str) {
+    let prefix = format!("corridor_{domain}_");
+    // Shared memory, and the event sockets / service files iceoryx2 keeps under /tmp/iceoryx2
+    // (left behind when a failed test exits with its daemon still running).
+    for root in ["/dev/shm", "/tmp/iceoryx2", "/tmp/iceoryx2/services"] {
+        if let Ok(dir) = std::fs::read_dir(root) {
+            for e in dir.flatten() {
+                if e.file_name().to_string_lossy().starts_with(&prefix) {
+                    let _ = std::fs::remove_file(e.path());
+                }
+            }
+        }
+    }
+}
+
+/// Lists the domain's files in /dev/shm.
+pub fn shm_files(domain: &str) -> Vec<String> {
+    let prefix = format!("corridor_{domain}_");
+    let mut v: Vec<String> = std::fs::read_dir("/dev/shm")
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.starts_with(&prefix))
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// A fresh, empty temporary directory for `tag`.
+pub fn temp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("corridor-{tag}"));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Sends `rows` (then, if `finish`, the end-of-stream marker) from a producer created on a new
+/// thread (iceoryx2 ports are `!Send`); returns the producer's stats.
+pub fn produce(
+    domain: &Domain,
+    node: &'static str,
+    delivery: Delivery,
+    rows: Vec<ImuRow>,
+    finish: bool,
+) -> JoinHandle<corridor_client::ProducerStats> {
+    let domain = domain.clone();
+    std::thread::Builder::new()
+        .name(node.into())
+        .spawn(move || {
+            let mut p = Producer::new(&domain, node, delivery).unwrap();
+            p.wait_for_daemon(WAIT).unwrap();
+            for r in &rows {
+                p.send_imu(imu(r)).unwrap();
+            }
+            if finish {
+                p.finish().unwrap();
+            }
+            p.stats()
+        })
+        .unwrap()
+}
+
+/// Receives until a message carrying [`FLAG_END_OF_STREAM`] (included in the result).
+pub fn until_end<T: Topic>(sub: &Subscriber<T>, flags: impl Fn(&T) -> u32) -> Vec<T> {
+    let mut v = Vec::new();
+    loop {
+        let m = sub
+            .recv_timeout(WAIT)
+            .unwrap()
+            .unwrap_or_else(|| panic!("{} timed out after {} messages", T::SERVICE, v.len()));
+        let end = flags(&m) & FLAG_END_OF_STREAM != 0;
+        v.push(m);
+        if end {
+            return v;
+        }
+    }
+}

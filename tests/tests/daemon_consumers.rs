@@ -1,0 +1,281 @@
+//! Consumers and producers coming and going around a running daemon (in-process, each test on
+//! its own domain).
+//!
+//! - `consumers_come_and_go_and_a_stalled_one_does_not_stall_the_estimator` (`live`): three
+//!   attitude readers and a bias reader at once; one is dropped mid-stream, one never reads.
+//!   The reading ones get every message, the producer and the daemon lose nothing, and the
+//!   stalled reader finds the newest messages with its losses counted from `seq`.
+//! - `producer_restarted_mid_stream_is_counted_and_handled` (`lossless`): a producer vanishes
+//!   mid-stream; its successor restarts `seq` and clock (the daemon ends the old stream and the
+//!   new one matches the offline run exactly), a third one continues the numbering after a gap
+//!   (counted as a gap, same stream).
+
+mod daemon_common;
+
+use corridor_client::{Delivery, Domain, Producer, Subscriber};
+use corridor_service::core::Estimate;
+use corridor_service::runner::{heading_aid, run_log};
+use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::services::Topic;
+use corridor_shared::wire::{AttitudeSample, BiasSample, Diagnostics, FLAG_END_OF_STREAM};
+use daemon_common::*;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+/// Reads attitude on its own thread (ports are `!Send`): until the end-of-stream marker, or
+/// until `limit` messages then drops the reader. Returns the messages and `missed()`.
+fn reader(
+    domain: &Domain,
+    name: &'static str,
+    limit: Option<usize>,
+    progress: Arc<AtomicU64>,
+) -> std::thread::JoinHandle<(Vec<AttitudeSample>, u64)> {
+    let domain = domain.clone();
+    let (tx, rx) = std::sync::mpsc::sync_channel(1);
+    let h = std::thread::Builder::new()
+        .name(name.into())
+        .spawn(move || {
+            let sub = Subscriber::<AttitudeSample>::open(&domain, name, WAIT).unwrap();
+            tx.send(()).unwrap();
+            let mut v = Vec::new();
+            loop {
+                let a = sub
+                    .recv_timeout(WAIT)
+                    .unwrap()
+                    .unwrap_or_else(|| panic!("{name}: timeout after {}", v.len()));
+                v.push(a);
+                progress.store(a.imu_seq, Ordering::Relaxed);
+                if a.flags & FLAG_END_OF_STREAM != 0 || limit.is_some_and(|l| v.len() >= l) {
+                    return (v, sub.missed());
+                }
+            }
+        })
+        .unwrap();
+    rx.recv_timeout(WAIT).expect("reader connected");
+    h
+}
+
+fn assert_contiguous(name: &str, v: &[AttitudeSample]) {
+    for (i, a) in v.iter().enumerate() {
+        assert_eq!(a.seq, i as u64, "{name}: attitude seq at {i}");
+    }
+}
+
+#[test]
+fn consumers_come_and_go_and_a_stalled_one_does_not_stall_the_estimator() {
+    let name = "test_daemon_consumers";
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let daemon = Running::start(daemon_config(&domain, Delivery::Live));
+
+    let rows = exp36_rows();
+    let n = rows.len();
+    let progress = Arc::new(AtomicU64::new(0));
+    let a = reader(&domain, "test-reader-a", None, Arc::clone(&progress));
+    let b = reader(
+        &domain,
+        "test-reader-b",
+        Some(3000),
+        Arc::new(AtomicU64::new(0)),
+    );
+    let stalled = Subscriber::<AttitudeSample>::open(&domain, "test-stalled", WAIT).unwrap();
+    let bias = Subscriber::<BiasSample>::open(&domain, "test-bias", WAIT).unwrap();
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+
+    // 20× real time (4 kHz): well within what the daemon does, beyond a reader's 4096-sample
+    // buffer within a second.
+    let start = Instant::now();
+    let producer = {
+        let domain = domain.clone();
+        std::thread::spawn(move || {
+            let mut p = Producer::new(&domain, "test-sensor", Delivery::Live).unwrap();
+            p.wait_for_daemon(WAIT).unwrap();
+            let t0 = rows[0].t_s;
+            let start = Instant::now();
+            for r in &rows {
+                let due = start + Duration::from_secs_f64((r.t_s - t0) / 20.0);
+                std::thread::sleep(due.saturating_duration_since(Instant::now()));
+                p.send_imu(imu(r)).unwrap();
+            }
+            p.finish().unwrap();
+            p.stats()
+        })
+    };
+    // The stalled reader takes the first message, then nothing until the end.
+    let first = stalled.recv_timeout(WAIT).unwrap().expect("first attitude");
+    assert_eq!(first.seq, 0);
+    let stats = producer.join().unwrap();
+    let (got_a, missed_a) = a.join().unwrap();
+    let elapsed = start.elapsed();
+    let (got_b, missed_b) = b.join().unwrap();
+    assert_eq!(stats.imu_undelivered, 0);
+
+    // The reading consumer got everything, in order, whatever the others did.
+    assert_eq!(got_a.len(), n + 1, "every attitude and the marker");
+    assert_contiguous("a", &got_a);
+    assert_eq!(missed_a, 0);
+    assert_eq!(got_b.len(), 3000, "b read 3000 then went away");
+    assert_contiguous("b", &got_b);
+    assert_eq!(missed_b, 0);
+    // Not stalled: the stream took about its paced duration (70 s of data / 20 = 3.5 s).
+    assert!(
+        elapsed < Duration::from_secs(10),
+        "took {elapsed:?}: the stalled reader slowed the daemon"
+    );
+
+    // The stalled reader finds the newest messages (its buffer), the rest counted lost.
+    let mut kept = Vec::new();
+    while let Some(x) = stalled.try_recv().unwrap() {
+        kept.push(x);
+    }
+    assert_eq!(kept.len(), AttitudeSample::QOS.buffer_size);
+    assert!(kept.last().unwrap().flags & FLAG_END_OF_STREAM != 0);
+    assert_eq!(kept[0].seq, (n + 1 - kept.len()) as u64, "oldest dropped");
+    assert_eq!(
+        stalled.missed(),
+        (n + 1 - kept.len() - 1) as u64,
+        "losses counted"
+    );
+
+    // The bias reader and diagnostics: nothing lost on the input side.
+    let biases = until_end(&bias, |b| b.flags);
+    assert!(biases.len() > 60, "{}", biases.len());
+    assert_eq!(bias.missed(), 0);
+    let d = until_end(&diag, |d| d.flags);
+    let d = d.last().unwrap();
+    assert_eq!(d.accepted, n as u64);
+    assert_eq!((d.seq_gaps, d.dropped_overflow, d.late), (0, 0, 0));
+    assert_eq!(d.producer_changes, 0);
+    assert!(d.latency_p50_s > 0.0 && d.latency_p99_s < 0.5, "{d:?}");
+    drop((stalled, bias, diag));
+    let report = daemon.stop();
+    assert_eq!(report.streams_finished, 1);
+    cleanup_domain(name);
+}
+
+fn exp36_log() -> ImuLog {
+    let path = manifest().join("data/gdins_exp36_corridor_out_and_back/imu.csv");
+    read_imu_csv(&path, &ImuCsvOptions::default()).unwrap()
+}
+
+#[test]
+fn producer_restarted_mid_stream_is_counted_and_handled() {
+    let name = "test_daemon_producer_restart";
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
+    let log = exp36_log();
+    let cfg = config();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let mut offline: Vec<Estimate> = Vec::new();
+    run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+        offline.push(*e)
+    });
+    let rows = log.rows;
+    let (k1, k2, gap, k3) = (6000usize, 5000usize, 10usize, 3000usize);
+
+    let progress = Arc::new(AtomicU64::new(0));
+    let a = {
+        let domain = domain.clone();
+        let progress = Arc::clone(&progress);
+        std::thread::spawn(move || {
+            let sub = Subscriber::<AttitudeSample>::open(&domain, "test-att", WAIT).unwrap();
+            let mut v = Vec::new();
+            let mut ends = 0;
+            loop {
+                let a = sub.recv_timeout(WAIT).unwrap().expect("attitude");
+                v.push(a);
+                progress.fetch_add(1, Ordering::Relaxed);
+                if a.flags & FLAG_END_OF_STREAM != 0 {
+                    ends += 1;
+                    if ends == 2 {
+                        return v;
+                    }
+                }
+            }
+        })
+    };
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    let wait_progress = |count: u64| {
+        let deadline = Instant::now() + WAIT;
+        while progress.load(Ordering::Relaxed) < count {
+            assert!(Instant::now() < deadline, "daemon stuck");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    };
+
+    // P1 sends part of the log and vanishes (no end-of-stream marker).
+    {
+        let mut p = Producer::new(&domain, "test-p1", Delivery::Lossless).unwrap();
+        p.wait_for_daemon(WAIT).unwrap();
+        for r in &rows[..k1] {
+            p.send_imu(imu(r)).unwrap();
+        }
+        wait_progress(k1 as u64);
+    }
+    // P2: a restarted driver, seq and clock from the start.
+    {
+        let mut p = Producer::new(&domain, "test-p2", Delivery::Lossless).unwrap();
+        p.wait_for_daemon(WAIT).unwrap();
+        for r in &rows[..k2] {
+            p.send_imu(imu(r)).unwrap();
+        }
+        wait_progress((k1 + 1 + k2) as u64);
+    }
+    // P3: continues P2's numbering and clock after `gap` lost samples.
+    {
+        let mut p = Producer::new(&domain, "test-p3", Delivery::Lossless).unwrap();
+        p.wait_for_daemon(WAIT).unwrap();
+        for (i, r) in rows[k2 + gap..k2 + gap + k3].iter().enumerate() {
+            let mut s = imu(r);
+            s.seq = (k2 + gap + i) as u64;
+            p.send_imu_raw(s).unwrap();
+        }
+        p.finish().unwrap();
+    }
+    let got = a.join().unwrap();
+    assert_eq!(got.len(), k1 + 1 + k2 + k3 + 1);
+    // P1's stream, ended by the daemon when P2's clock went back.
+    let end1 = &got[k1];
+    assert!(
+        end1.flags & FLAG_END_OF_STREAM != 0,
+        "implicit end of stream"
+    );
+    assert_eq!(end1.imu_seq, (k1 - 1) as u64);
+    // P2's stream starts afresh: exactly the offline run (cold start, no checkpoint), and P3's
+    // samples continue it.
+    let second = &got[k1 + 1..got.len() - 1];
+    let expect_idx = (0..k2).chain(k2 + gap..k2 + gap + k3);
+    let mut checked = 0;
+    for (a, i) in second.iter().zip(expect_idx) {
+        assert_eq!(a.imu_seq, i as u64);
+        assert_eq!(a.t_s, rows[i].t_s);
+        if i < k2 {
+            assert_eq!(a.nav_from_body_wxyz, offline[i].nav_from_body, "sample {i}");
+            assert_eq!(a.gyro_bias_rad_s, offline[i].gyro_bias_rad_s, "sample {i}");
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, k2);
+
+    let d = until_end(&diag, |d| d.flags);
+    // The first end-of-stream diagnostics is the implicit one; read to the second.
+    let d = if d.last().unwrap().accepted == (k1 + k2 + k3) as u64 {
+        *d.last().unwrap()
+    } else {
+        *until_end(&diag, |d| d.flags).last().unwrap()
+    };
+    assert_eq!(d.producer_changes, 2);
+    assert_eq!(d.seq_gaps, gap as u64, "P3's gap counted");
+    assert_eq!(
+        (d.late, d.rejected_duplicate_seq, d.rejected_time),
+        (0, 0, 0)
+    );
+    assert_eq!(d.accepted, (k1 + k2 + k3) as u64);
+    drop(diag);
+    let report = daemon.stop();
+    assert_eq!(report.streams_finished, 2);
+    cleanup_domain(name);
+}
