@@ -12,9 +12,14 @@
 //! the total rotation (∫|ω|), the specific-force excess (∫| |f| − g |), and the deviation of
 //! the time steps from their median.
 //!
+//! Each fixable effect is also scored by a nested-model F test: the model with the effect added
+//! against the current one, on the heading innovations (see [`score_by_likelihood`]); its score
+//! is the larger of the two.
+//!
 //! Catalogue and test of each effect (scores are −log₁₀ p, significant from 3):
-//! - `heading_offset`: mean of `r` ≠ 0 with the same sign on every direction (t test, and the
-//!   one-way ANOVA across directions must not reject equal means);
+//! - `heading_offset`: the walking direction (stride displacement) differs from the map
+//!   direction by a constant with the same sign on every direction (t test, and the one-way
+//!   ANOVA across directions must not reject equal means);
 //! - `bias_drift`: a trend of `r` in time (regression) or a drift/step in its cumulative sum
 //!   (CUSUM); the fix is bias-rate states for a ramp, a faster bias random walk for a step;
 //! - `gyro_scale_factor`: `r` proportional to the signed turn since the last used observation;
@@ -41,6 +46,8 @@ use std::path::Path;
 
 /// Score from which an effect counts as significant (p < 0.001).
 pub const SIGNIFICANT: f64 = 3.0;
+/// Residual-test score an effect needs before the F test can raise it (p < 0.05).
+pub const CORROBORATED: f64 = 1.3;
 /// Largest number of model extensions added in one diagnosis.
 pub const MAX_ITERATIONS: usize = 3;
 
@@ -55,6 +62,10 @@ pub struct HeadingResidual {
     pub s_rad2: f64,
     /// Used by the filter (else rejected by the gate or the straight-walk test).
     pub accepted: bool,
+    /// Foot heading the model predicted, rad.
+    pub foot_heading_rad: f64,
+    /// Position at the observation, m, map frame.
+    pub p_xy: [f64; 2],
     /// Direction index (`round((ψ_map − grid)/step)`, modulo the number of directions).
     pub direction: i64,
     /// Time since the previous used observation, s.
@@ -104,6 +115,12 @@ pub struct Consistency {
     pub whiteness_fraction_outside: f64,
     /// Heading observations used.
     pub observations: usize,
+    /// Sum of the squared heading innovations of the used observations, rad².
+    pub rss_rad2: f64,
+    /// The NIS is above its band.
+    pub nis_too_large: bool,
+    /// p-value of the NIS test.
+    pub nis_p: f64,
     /// Final bias, rad/s, and its σ.
     pub bias_rad_s: [f64; 3],
     /// Final bias σ.
@@ -222,7 +239,8 @@ pub fn analyse(
         // The turn the map says the walker made since the last used observation: free of the
         // stride-to-stride scatter of the foot angle, which the gyro-integrated turn carries
         // (and which correlates with the residual by construction).
-        let map_turn = last_dir.map_or(0.0, |d| crate::core::rotation::wrap_pi(h.direction_rad - d));
+        let map_turn =
+            last_dir.map_or(0.0, |d| crate::core::rotation::wrap_pi(h.direction_rad - d));
         let tilt = if stance_sum.1 > 0 {
             up.cross(&stance_sum.0.normalize())
         } else {
@@ -233,6 +251,8 @@ pub fn analyse(
             r_rad: r,
             s_rad2: s,
             accepted,
+            foot_heading_rad: h.foot_heading_rad,
+            p_xy: [e.p_m[0], e.p_m[1]],
             direction: k.rem_euclid(n_dirs.max(1)),
             dt_s: acc.dt_s,
             turn_rad: map_turn,
@@ -270,10 +290,15 @@ pub fn analyse(
         whiteness_p: white.as_ref().map_or(f64::NAN, |w| w.ljung_box_p),
         whiteness_fraction_outside: white.as_ref().map_or(f64::NAN, |w| w.fraction_outside),
         observations: used.len(),
+        rss_rad2: used.iter().map(|r| r.r_rad * r.r_rad).sum(),
+        nis_too_large: nis_t
+            .as_ref()
+            .is_some_and(|t| t.verdict == residuals::NisVerdict::TooLarge),
+        nis_p: nis_t.as_ref().map_or(f64::NAN, |t| t.p_value),
         bias_rad_s: bias,
         bias_sd_rad_s: bias_sd,
     };
-    let effects = rank_effects(&used, &consistency, nis_t.as_ref(), cfg.mode);
+    let effects = rank_effects(&used, cfg.mode);
     Ok(Analysis {
         model: model_keys(file),
         consistency,
@@ -308,12 +333,9 @@ fn score(p: f64) -> f64 {
     }
 }
 
-fn rank_effects(
-    used: &[&HeadingResidual],
-    c: &Consistency,
-    nis: Option<&residuals::NisTest>,
-    mode: Mode,
-) -> Vec<Effect> {
+/// The catalogue's effects with their residual evidence, scored by the residual tests alone
+/// (regression, CUSUM, group means); [`score_by_likelihood`] re-scores the fixable ones.
+fn rank_effects(used: &[&HeadingResidual], mode: Mode) -> Vec<Effect> {
     let mut out = Vec::new();
     if used.len() < 8 {
         out.push(Effect {
@@ -327,11 +349,25 @@ fn rank_effects(
     let r: Vec<f64> = used.iter().map(|x| x.r_rad).collect();
     let deg = f64::to_degrees;
 
-    // heading_offset: a constant, same sign on every direction
-    let groups: Vec<i64> = used.iter().map(|x| x.direction).collect();
-    let all = group_means(&r, &vec![0; r.len()]).ok();
-    let by_dir = group_means(&r, &groups).ok();
-    let anova = anova_oneway(&r, &groups).ok();
+    // heading_offset: the walking direction (stride displacement between two used
+    // observations on the same corridor direction) against the map, same sign on every
+    // direction. The filter pulls the foot heading onto the map, so an offset between foot and
+    // walking direction shows in the strides, not in the heading innovations; a lagging bias
+    // estimate tilts the strides by about half the mean innovation, which is removed.
+    let mut w = Vec::new();
+    let mut wg = Vec::new();
+    for pair in used.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let (dx, dy) = (b.p_xy[0] - a.p_xy[0], b.p_xy[1] - a.p_xy[1]);
+        if b.turn_rad == 0.0 && a.direction == b.direction && dx.hypot(dy) > 0.3 {
+            let dir = crate::core::rotation::wrap_pi(b.r_rad + b.foot_heading_rad);
+            w.push(crate::core::rotation::wrap_pi(dir - dy.atan2(dx)) - 0.5 * b.r_rad);
+            wg.push(b.direction);
+        }
+    }
+    let all = group_means(&w, &vec![0; w.len()]).ok();
+    let by_dir = group_means(&w, &wg).ok();
+    let anova = anova_oneway(&w, &wg).ok();
     if let Some(a) = all.as_ref().and_then(|g| g.first()) {
         let same_sign = by_dir.as_ref().is_some_and(|g| {
             g.iter()
@@ -347,7 +383,7 @@ fn rank_effects(
             name: "heading_offset",
             score: s,
             evidence: format!(
-                "mean residual {:+.2}° ± {:.2}° over {} observations (p = {:.1e}); per direction {}; equal-means ANOVA p = {:.2}",
+                "walking direction minus map direction {:+.2}° ± {:.2}° over {} straight strides (p = {:.1e}); per direction {}; equal-means ANOVA p = {:.2}",
                 deg(a.mean),
                 deg(a.std_err),
                 a.n,
@@ -492,15 +528,19 @@ fn rank_effects(
     });
 
     out.sort_by(|a, b| b.score.total_cmp(&a.score));
-    let best = out.first().map_or(0.0, |e| e.score);
-    let nis_bad = nis.is_some_and(|n| n.verdict == residuals::NisVerdict::TooLarge);
+    out
+}
+
+/// Adds `unexplained` in front when the residuals are inconsistent and nothing is significant.
+fn add_unexplained(effects: &mut Vec<Effect>, c: &Consistency) {
+    let best = effects.first().map_or(0.0, |e| e.score);
     let not_white = c.whiteness_p < 0.01;
-    if (nis_bad || not_white) && best < SIGNIFICANT {
-        out.insert(
+    if (c.nis_too_large || not_white) && best < SIGNIFICANT {
+        effects.insert(
             0,
             Effect {
                 name: "unexplained",
-                score: score(c.whiteness_p).max(nis.map_or(0.0, |n| score(n.p_value))),
+                score: score(c.whiteness_p).max(if c.nis_too_large { score(c.nis_p) } else { 0.0 }),
                 evidence: format!(
                     "residuals inconsistent (NIS mean {:.2}, band {:.2}–{:.2}; whiteness p = {:.1e}) and no catalogue effect is significant",
                     c.nis_mean, c.nis_band[0], c.nis_band[1], c.whiteness_p
@@ -509,7 +549,115 @@ fn rank_effects(
             },
         );
     }
-    out
+}
+
+/// The fixes tried for an effect, with the number of parameters each adds.
+fn fixes_for(name: &str) -> &'static [(&'static str, usize)] {
+    match name {
+        "heading_offset" => &[("model.heading_offset_sd_deg = 5", 1)],
+        "bias_drift" => &[
+            ("model.bias_rate_rw_rad_s2_sqrt_s = 1e-6", 3),
+            ("eskf.gyro_bias_rw_rad_s_sqrt_s × 10", 1),
+        ],
+        "gyro_scale_factor" => &[("model.scale_factor_sd = 0.02", 3)],
+        "g_sensitivity" => &[("model.g_sensitivity_sd = 1e-3", 3)],
+        "mounting_tilt" => &[("estimator.mode = rotation_aware", 3)],
+        _ => &[],
+    }
+}
+
+/// A candidate model: an effect's fix applied, and its analysis.
+#[derive(Debug, Clone)]
+pub struct Candidate {
+    /// Effect.
+    pub effect: &'static str,
+    /// Fix.
+    pub fix: &'static str,
+    /// The model with the fix.
+    pub file: ConfigFile,
+    /// Its analysis.
+    pub analysis: Analysis,
+}
+
+/// Re-scores every fixable effect by a nested-model F test on the heading innovations: the
+/// model with the effect's fix against the current one, `F = ((RSS₀ − RSS₁)/k) / (RSS₁/(n − k))`
+/// with `k` added parameters. Sums of squares rather than the Gaussian likelihood, because the
+/// configured heading σ is deliberately conservative (NIS 0.3–1) and a likelihood would reward
+/// models for their S, not for their residuals. The residual tests stay in the evidence; the F
+/// test decides, because a lagging bias estimate, an offset and a scale error can all leave a
+/// residual of constant sign.
+pub fn score_by_likelihood(
+    log: &ImuLog,
+    file: &ConfigFile,
+    base: &mut Analysis,
+    truth: Option<&[TruthPoint]>,
+    map: Option<&Path>,
+) -> Result<Vec<Candidate>, RunError> {
+    let mut candidates = Vec::new();
+    for e in &mut base.effects {
+        let mut best: Option<(f64, usize, Candidate)> = None;
+        for &(fix, k) in fixes_for(e.name) {
+            let mut f = file.clone();
+            if !apply_fix(fix, &mut f) {
+                continue;
+            }
+            let a = analyse(log, &f, truth, map)?;
+            let n = a.consistency.observations as f64;
+            let (rss0, rss1) = (base.consistency.rss_rad2, a.consistency.rss_rad2);
+            let lr = if n > k as f64 + 2.0 && rss1 > 0.0 {
+                ((rss0 - rss1) / k as f64) / (rss1 / (n - k as f64))
+            } else {
+                0.0
+            };
+            if best.as_ref().is_none_or(|(b, _, _)| lr > *b) {
+                best = Some((
+                    lr,
+                    k,
+                    Candidate {
+                        effect: e.name,
+                        fix,
+                        file: f,
+                        analysis: a,
+                    },
+                ));
+            }
+        }
+        match best {
+            Some((lr, k, cand)) => {
+                let n = cand.analysis.consistency.observations as f64;
+                let p = residuals::f_sf(lr.max(0.0), k as f64, (n - k as f64).max(1.0));
+                // The F test only counts for an effect whose own signature is there (residual
+                // test p < 0.05): extension states are flexible (three g-sensitivity states
+                // also absorb a bias drift at stance, where f ≈ g), so a lower RSS alone does
+                // not name the effect. Then the larger of the two: an offset does not show in
+                // the innovations (see `rank_effects`), a drift the filter lags behind shows
+                // more in the F test than in the residual tests.
+                if e.score >= CORROBORATED {
+                    e.score = e.score.max(if lr > 0.0 { score(p) } else { 0.0 });
+                }
+                e.fix = Some(cand.fix);
+                e.evidence = format!(
+                    "{}; adding `{}`: F = {:.1} for {} parameter{} (p = {:.1e})",
+                    e.evidence,
+                    cand.fix,
+                    lr,
+                    k,
+                    if k == 1 { "" } else { "s" },
+                    p
+                );
+                candidates.push(cand);
+            }
+            None if !fixes_for(e.name).is_empty() => {
+                e.score = 0.0;
+                e.evidence = format!("{}; already in the model", e.evidence);
+                e.fix = None;
+            }
+            None => {}
+        }
+    }
+    base.effects.sort_by(|a, b| b.score.total_cmp(&a.score));
+    add_unexplained(&mut base.effects, &base.consistency);
+    Ok(candidates)
 }
 
 /// The extension keys switched on in `file`.
@@ -538,11 +686,11 @@ fn model_keys(file: &ConfigFile) -> Vec<String> {
     v
 }
 
-/// Applies the fix of `effect` to `file`; `false` when corridor has no fix for it or it is
+/// Applies a fix (one of the catalogue's labels) to `file`; `false` when it is unknown or
 /// already in the model.
-pub fn apply_fix(effect: &Effect, file: &mut ConfigFile) -> bool {
+pub fn apply_fix(fix: &str, file: &mut ConfigFile) -> bool {
     let m = &mut file.model;
-    match effect.fix {
+    match Some(fix) {
         Some("model.heading_offset_sd_deg = 5") if m.heading_offset_sd_deg.is_none() => {
             m.heading_offset_sd_deg = Some(5.0)
         }
@@ -591,43 +739,43 @@ pub fn diagnose(
     truth: Option<&[TruthPoint]>,
     map: Option<&Path>,
 ) -> Result<(Report, Analysis, Analysis, ConfigFile), RunError> {
-    let first = analyse(log, start, truth, map)?;
+    let mut first = analyse(log, start, truth, map)?;
+    let mut candidates = score_by_likelihood(log, start, &mut first, truth, map)?;
     let mut current = first.clone();
     let mut file = start.clone();
     let mut iterations = Vec::new();
     for _ in 0..MAX_ITERATIONS {
         let Some(top) = current
             .effects
-            .iter()
-            .find(|e| e.score >= SIGNIFICANT)
+            .first()
+            .filter(|e| e.score >= SIGNIFICANT)
             .cloned()
         else {
             break;
         };
-        let mut next_file = file.clone();
-        if !apply_fix(&top, &mut next_file) {
-            break;
-        }
-        let next = analyse(log, &next_file, truth, map)?;
-        let kept = improved(&current.consistency, &next.consistency);
+        let Some(cand) = candidates.iter().find(|c| c.effect == top.name).cloned() else {
+            break; // significant but corridor has no fix for it
+        };
+        let kept = improved(&current.consistency, &cand.analysis.consistency);
         iterations.push(Iteration {
             effect: top.name,
-            fix: top.fix.unwrap_or(""),
+            fix: cand.fix,
             before: current.consistency.clone(),
-            after: next.consistency.clone(),
+            after: cand.analysis.consistency.clone(),
             kept,
         });
         if !kept {
             break;
         }
-        file = next_file;
-        current = next;
+        file = cand.file;
+        current = cand.analysis;
+        candidates = score_by_likelihood(log, &file, &mut current, truth, map)?;
     }
     let report = Report {
         top_effect: first
             .effects
-            .iter()
-            .find(|e| e.score >= SIGNIFICANT)
+            .first()
+            .filter(|e| e.score >= SIGNIFICANT)
             .map_or("none".to_string(), |e| e.name.to_string()),
         effects: first.effects.clone(),
         before: first.consistency.clone(),
