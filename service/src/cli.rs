@@ -234,7 +234,12 @@ fn dispatch(cli: Cli) -> Result<()> {
             print!("{md}");
             std::fs::create_dir_all(&a.out)
                 .with_context(|| format!("creating {}", a.out.display()))?;
-            std::fs::write(a.out.join("results.md"), &md)?;
+            let loops = corridor_service::suite::run_loops(&suite, &a.out.join("diagnose"))?;
+            println!(
+                "\n# The loop: residual diagnosis from the paper's model (reports in {})\n\n{loops}",
+                a.out.join("diagnose").display()
+            );
+            std::fs::write(a.out.join("results.md"), format!("{md}\n{loops}"))?;
             let data = a.root.join("tests/data/gdins_exp25_multi_corridor");
             let run_dir = a.out.join("exp25_injected");
             let mut file = ConfigFile::read(&a.root.join("configs/gdins.toml"))?;

@@ -146,6 +146,8 @@ pub struct Analysis {
 pub struct Iteration {
     /// Effect added.
     pub effect: &'static str,
+    /// Its score when it was chosen.
+    pub score: f64,
     /// Config change.
     pub fix: &'static str,
     /// Before.
@@ -689,6 +691,19 @@ fn model_keys(file: &ConfigFile) -> Vec<String> {
 /// Applies a fix (one of the catalogue's labels) to `file`; `false` when it is unknown or
 /// already in the model.
 pub fn apply_fix(fix: &str, file: &mut ConfigFile) -> bool {
+    // The extension states live in the error-state filter: from the paper's bias filter (or
+    // its rotation-aware variant) a model extension also moves the heading observations there.
+    if fix.starts_with("model.")
+        && matches!(file.estimator.mode, Some(Mode::Paper | Mode::RotationAware))
+    {
+        let mut f = file.clone();
+        f.estimator.mode = Some(Mode::Eskf);
+        if apply_fix(fix, &mut f) {
+            *file = f;
+            return true;
+        }
+        return false;
+    }
     let m = &mut file.model;
     match Some(fix) {
         Some("model.heading_offset_sd_deg = 5") if m.heading_offset_sd_deg.is_none() => {
@@ -759,6 +774,7 @@ pub fn diagnose(
         let kept = improved(&current.consistency, &cand.analysis.consistency);
         iterations.push(Iteration {
             effect: top.name,
+            score: top.score,
             fix: cand.fix,
             before: current.consistency.clone(),
             after: cand.analysis.consistency.clone(),
