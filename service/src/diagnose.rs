@@ -136,6 +136,8 @@ pub struct Analysis {
     pub consistency: Consistency,
     /// Effects, best first.
     pub effects: Vec<Effect>,
+    /// Final gyro scale factors per sensor axis with their σ, when the model estimates them.
+    pub scale_factor: Option<[[f64; 2]; 3]>,
     /// The residuals (for plots and the report).
     #[serde(skip)]
     pub residuals: Vec<HeadingResidual>,
@@ -301,10 +303,14 @@ pub fn analyse(
         bias_sd_rad_s: bias_sd,
     };
     let effects = rank_effects(&used, cfg.mode);
+    let scale_factor = outcome
+        .extensions
+        .and_then(|(x, sd)| sd.map(|sd| std::array::from_fn(|k| [x.scale_factor[k], sd[k]])));
     Ok(Analysis {
         model: model_keys(file),
         consistency,
         effects,
+        scale_factor,
         residuals: res,
     })
 }
@@ -553,6 +559,54 @@ fn add_unexplained(effects: &mut Vec<Effect>, c: &Consistency) {
     }
 }
 
+/// A clock running at the wrong rate scales every integrated angle alike: when the scale-factor
+/// model that explains the residuals finds the same factor on all three axes (within 2σ, and
+/// different from zero by 3σ), the effect is `timing` (a clock-rate error), not the gyro's
+/// scale factor. The fix is the same states, which absorb it; the report says which.
+fn split_timing_from_scale(effects: &mut [Effect], candidates: &[Candidate]) {
+    let Some(sf) = candidates
+        .iter()
+        .find(|c| c.effect == "gyro_scale_factor")
+        .and_then(|c| c.analysis.scale_factor)
+    else {
+        return;
+    };
+    let w: Vec<f64> = sf
+        .iter()
+        .map(|[_, sd]| 1.0 / (sd * sd).max(1e-300))
+        .collect();
+    let wsum: f64 = w.iter().sum();
+    let mean = sf.iter().zip(&w).map(|([s, _], w)| s * w).sum::<f64>() / wsum;
+    let mean_sd = (1.0 / wsum).sqrt();
+    let agree = sf.iter().all(|[s, sd]| (s - mean).abs() <= 2.0 * sd);
+    let Some(i) = effects.iter().position(|e| e.name == "gyro_scale_factor") else {
+        return;
+    };
+    let detail = format!(
+        "scale factors of the fitted model ({:+.4} ± {:.4}, {:+.4} ± {:.4}, {:+.4} ± {:.4})",
+        sf[0][0], sf[0][1], sf[1][0], sf[1][1], sf[2][0], sf[2][1]
+    );
+    if agree && mean.abs() > 3.0 * mean_sd {
+        let sc = effects[i].score;
+        effects[i].evidence = format!("{}; {detail}: the same on every axis", effects[i].evidence);
+        effects[i].score = 0.5 * sc;
+        if let Some(t) = effects.iter_mut().find(|e| e.name == "timing") {
+            t.score = sc;
+            t.fix = Some("model.scale_factor_sd = 0.02");
+            t.evidence = format!(
+                "{}; every gyro axis shows the same scale factor {:+.4} ± {:.4}: time stamps running {:.2} % {} (a clock-rate error)",
+                t.evidence,
+                mean,
+                mean_sd,
+                100.0 * mean.abs(),
+                if mean > 0.0 { "fast" } else { "slow" }
+            );
+        }
+    } else {
+        effects[i].evidence = format!("{}; {detail}", effects[i].evidence);
+    }
+}
+
 /// The fixes tried for an effect, with the number of parameters each adds.
 fn fixes_for(name: &str) -> &'static [(&'static str, usize)] {
     match name {
@@ -561,7 +615,7 @@ fn fixes_for(name: &str) -> &'static [(&'static str, usize)] {
             ("model.bias_rate_rw_rad_s2_sqrt_s = 1e-6", 3),
             ("eskf.gyro_bias_rw_rad_s_sqrt_s × 10", 1),
         ],
-        "gyro_scale_factor" => &[("model.scale_factor_sd = 0.02", 3)],
+        "gyro_scale_factor" | "timing" => &[("model.scale_factor_sd = 0.02", 3)],
         "g_sensitivity" => &[("model.g_sensitivity_sd = 1e-3", 3)],
         "mounting_tilt" => &[("estimator.mode = rotation_aware", 3)],
         _ => &[],
@@ -657,6 +711,7 @@ pub fn score_by_likelihood(
             None => {}
         }
     }
+    split_timing_from_scale(&mut base.effects, &candidates);
     base.effects.sort_by(|a, b| b.score.total_cmp(&a.score));
     add_unexplained(&mut base.effects, &base.consistency);
     Ok(candidates)

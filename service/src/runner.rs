@@ -95,6 +95,11 @@ pub struct RunOutcome {
     pub mount_yaw_rad: Option<f64>,
     /// Samples refused by the estimator, with their reasons.
     pub refused: Vec<String>,
+    /// Final extension estimates and the scale factors' σ (see `Estimator::extensions`).
+    pub extensions: Option<(
+        crate::core::eskf::ExtensionEstimates,
+        Option<nalgebra::Vector3<f64>>,
+    )>,
 }
 
 /// Runs `log` through a new estimator; `sink` sees every estimate with the input it came from.
@@ -133,6 +138,7 @@ pub fn run_log(
         counters: *est.counters(),
         converged_at_s: est.converged_at_s(),
         mount_yaw_rad: est.mount_yaw_rad(),
+        extensions: est.extensions(),
         refused,
     }
 }

@@ -217,3 +217,22 @@ fn a_slowly_oscillating_bias_is_not_a_confident_wrong_answer() {
         r.effects
     );
 }
+
+#[test]
+fn injected_timing_drift_is_named_timing_and_fixed() {
+    // The logger's clock runs 3 % fast: every time stamp, and so every integrated angle and
+    // distance, is stretched. It looks like a scale factor, the same on every axis.
+    let (log, truth) = load("gdins_exp25_multi_corridor");
+    let mut log = log;
+    for r in &mut log.rows {
+        r.t_s *= 1.03;
+    }
+    let truth: Vec<TruthPoint> = truth
+        .iter()
+        .map(|p| TruthPoint {
+            t_s: p.t_s * 1.03,
+            ..*p
+        })
+        .collect();
+    assert_found_and_fixed(&run(&log, &truth, &config(0.0, true)), "timing");
+}

@@ -900,6 +900,46 @@ mod tests {
     }
 
     #[test]
+    fn g_sensitivity_state_converges_on_a_tumbling_body() {
+        // A body rolling in place about its x axis: gravity sweeps through y and z, and the z
+        // gyro reads k_z·f_z on top of the rate. ZUPTs and heading observations of the x axis.
+        let k_true = Vector3::new(0.0, 0.0, 2e-3);
+        let ext = Extensions {
+            g_sensitivity_sd: Some(5e-3),
+            ..Default::default()
+        };
+        let mut f = Eskf::new(
+            UnitQuaternion::identity(),
+            Vector3::zeros(),
+            0.01,
+            1e-4,
+            9.81,
+            noise(),
+            true,
+            ext,
+        );
+        let dt = 0.005;
+        let w_true = Vector3::new(0.5, 0.0, 0.0);
+        let mut q_true = UnitQuaternion::identity();
+        for k in 0..40_000 {
+            q_true *= exp_rotvec(&(w_true * dt));
+            let f_body = q_true.inverse() * Vector3::new(0.0, 0.0, 9.81);
+            let meas = w_true + k_true.component_mul(&f_body);
+            let omega = f.corrected_rate(&meas, &f_body, &f.gyro_bias_rad_s.clone());
+            f.propagate(&omega, &f_body, dt);
+            f.zupt();
+            if k % 200 == 199 {
+                f.heading_update(0.0, 0.01, &Vector3::x());
+            }
+        }
+        assert!(
+            (f.ext.g_sensitivity.z - k_true.z).abs() < 0.2 * k_true.z,
+            "{}",
+            f.ext.g_sensitivity
+        );
+    }
+
+    #[test]
     fn heading_offset_state_absorbs_a_constant_offset() {
         // A foot that walks along the map direction but points 3° off it: with the attitude's
         // heading known (tight initial σ), the offset state takes the difference.

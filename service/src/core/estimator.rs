@@ -15,7 +15,7 @@
 //!    configured mode.
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
-use super::eskf::{Eskf, EskfNoise, Extensions, Innovation};
+use super::eskf::{Eskf, EskfNoise, ExtensionEstimates, Extensions, Innovation};
 use super::heading::{HeadingAid, Rejection, StraightWalk};
 use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rot_z, tilt_from_specific_force, wrap_pi, yaw,
@@ -378,6 +378,12 @@ impl Estimator {
     /// First time the bias counted as converged.
     pub fn converged_at_s(&self) -> Option<f64> {
         self.converged_at_s
+    }
+
+    /// The error-state filter's extension estimates (zero for the extensions that are off),
+    /// with the σ of the scale factors when they are on.
+    pub fn extensions(&self) -> Option<(ExtensionEstimates, Option<Vector3<f64>>)> {
+        self.eskf.as_ref().map(|e| (e.ext, e.scale_factor_sd()))
     }
 
     /// The sensor's yaw on the foot (mounting yaw and toe-out), rad, once calibrated.
