@@ -313,15 +313,15 @@ impl Eskf {
         } else {
             [[0.0; 3]; 3]
         };
-        // θ←s and θ←k blocks: −C·diag(ω)·dt and −C·diag(f)·dt.
-        let fts = m3(&(minus_c_dt * Matrix3::from_diagonal(omega)));
-        let ftk = m3(&(minus_c_dt * Matrix3::from_diagonal(f_body)));
         let b_rate = lay.rate.filter(|_| self.estimate_bias);
         let a = &mut self.p;
         let dot3 = |m: &[f64; 3], v: [f64; 3]| m[0] * v[0] + m[1] * v[1] + m[2] * v[2];
         if n == BASE_N {
             propagate_base(a, &fvt, &ftb, dt);
         } else {
+            // θ←s and θ←k blocks: −C·diag(ω)·dt and −C·diag(f)·dt.
+            let fts = m3(&(minus_c_dt * Matrix3::from_diagonal(omega)));
+            let ftk = m3(&(minus_c_dt * Matrix3::from_diagonal(f_body)));
             // M = F P: rows p, v, θ, b read the old rows v, θ, b/s/k, d.
             for col in 0..n {
                 let c = &mut a[col * MAX_N..col * MAX_N + n];
