@@ -218,6 +218,7 @@ fn bias_nav_reader(domain: &Domain, count: Arc<AtomicU64>) -> std::thread::JoinH
 
 #[test]
 fn daemon_threads_do_not_allocate_per_sample() {
+    let _one = one_daemon_at_a_time();
     trace_if_asked();
     let name = "test_daemon_alloc";
     cleanup_domain(name);

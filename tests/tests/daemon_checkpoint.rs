@@ -63,6 +63,7 @@ fn max_abs_diff(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 #[test]
 fn restart_warm_starts_from_the_saved_bias() {
+    let _one = one_daemon_at_a_time();
     let name = "test_daemon_warm";
     cleanup_domain(name);
     let dir = temp_dir("test-daemon-warm");
@@ -161,6 +162,7 @@ fn restart_warm_starts_from_the_saved_bias() {
 
 #[test]
 fn corrupt_checkpoint_is_moved_aside_and_the_daemon_cold_starts() {
+    let _one = one_daemon_at_a_time();
     let name = "test_daemon_corrupt";
     cleanup_domain(name);
     let dir = temp_dir("test-daemon-corrupt");

@@ -65,6 +65,7 @@ fn assert_contiguous(name: &str, v: &[AttitudeSample]) {
 
 #[test]
 fn consumers_come_and_go_and_a_stalled_one_does_not_stall_the_estimator() {
+    let _one = one_daemon_at_a_time();
     let name = "test_daemon_consumers";
     cleanup_domain(name);
     let domain = Domain::new(name).unwrap();
@@ -169,6 +170,7 @@ fn exp36_log() -> ImuLog {
 
 #[test]
 fn producer_restarted_mid_stream_is_counted_and_handled() {
+    let _one = one_daemon_at_a_time();
     let name = "test_daemon_producer_restart";
     cleanup_domain(name);
     let domain = Domain::new(name).unwrap();

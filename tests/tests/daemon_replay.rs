@@ -75,6 +75,7 @@ fn diagnostics_at_end(sub: &Subscriber<Diagnostics>) -> Diagnostics {
 
 #[test]
 fn replay_matches_offline_run_sample_by_sample() {
+    let _one = one_daemon_at_a_time();
     let imu_path: PathBuf = manifest().join("data/gdins_exp36_corridor_out_and_back/imu.csv");
     let cfg = config();
     let aid = heading_aid(&cfg, None).unwrap();
@@ -191,6 +192,7 @@ fn replay_matches_offline_run_sample_by_sample() {
 
 #[test]
 fn bad_samples_over_ipc_are_rejected_and_counted() {
+    let _one = one_daemon_at_a_time();
     let cfg = config();
     let aid = heading_aid(&cfg, None).unwrap();
     let domain = Domain::new("test_daemon_reject").unwrap();
@@ -254,4 +256,12 @@ fn bad_samples_over_ipc_are_rejected_and_counted() {
     let report = daemon.stop();
     assert_eq!(report.diagnostics.rejected_non_finite, 1);
     assert_eq!(report.streams_finished, 1);
+}
+
+/// One daemon per process at a time (see `daemon_common::one_daemon_at_a_time` in the other
+/// daemon tests: two concurrent daemons in one process sometimes lose the IMU connection).
+fn one_daemon_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    static ONE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    ONE.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }

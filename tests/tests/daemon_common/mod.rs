@@ -167,3 +167,14 @@ pub fn until_end<T: Topic>(sub: &Subscriber<T>, flags: impl Fn(&T) -> u32) -> Ve
         }
     }
 }
+
+/// Serialises the daemon tests of one test binary. Two daemons (on different domains) started
+/// concurrently in one process sometimes never take up the producer's IMU connection: the
+/// producer's sends report a receiver, the daemon's subscriber receives nothing (seen about once
+/// in six runs of `daemon_checkpoint`, never in 14 runs one test at a time; iceoryx2 0.10, cause
+/// not found). The product runs one daemon per process; the tests do the same.
+pub fn one_daemon_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    static ONE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    ONE.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
