@@ -1,6 +1,7 @@
 //! corridor-client: talk to the corridor daemon over iceoryx2 shared memory.
 //!
 //! Map of the modules:
+//! - [`csv_rows`]: the CSV rows of the attitude and bias streams (logger tool and demo).
 //! - [`producer`]: [`Producer`], publishes [`ImuSample`]s and [`AngleObservation`]s (and the
 //!   end-of-stream marker) and wakes the daemon.
 //! - [`subscriber`]: [`Subscriber<T>`], receives one of the daemon's outputs
@@ -23,6 +24,7 @@
 //! [`NavSample`]: corridor_shared::wire::NavSample
 //! [`Diagnostics`]: corridor_shared::wire::Diagnostics
 
+pub mod csv_rows;
 pub mod producer;
 pub mod subscriber;
 

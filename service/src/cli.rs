@@ -2,14 +2,12 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
+use corridor_client::csv_rows::{ATTITUDE_HEADER, BIAS_HEADER, write_attitude_row, write_bias_row};
 use corridor_service::runner::{self, RunOptions};
 use corridor_shared::config::{BiasPrior, Config, ConfigFile, Mode};
 use corridor_shared::imu_csv::ImuCsvOptions;
 use corridor_shared::injection::{BiasInjection, parse_vec3};
-use corridor_shared::wire::{
-    AttitudeSample, BiasSample, FLAG_CONVERGED, FLAG_END_OF_STREAM, FLAG_STANCE, ImuSample,
-    NavSample, phase,
-};
+use corridor_shared::wire::{AttitudeSample, BiasSample, FLAG_END_OF_STREAM, ImuSample, NavSample};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -406,11 +404,6 @@ const DEMO_WAIT: Duration = Duration::from_secs(10);
 const DEMO_POLL: Duration = Duration::from_millis(50);
 /// Largest accepted difference between the daemon's final bias and the offline run's, rad/s.
 const DEMO_BIAS_TOLERANCE_RAD_S: f64 = 1e-12;
-/// Header of the demo logger's `attitude.csv`: the columns of `corridor-log` (the
-/// `estimates.csv` names that apply, preceded by `seq,imu_seq`).
-const DEMO_ATTITUDE_HEADER: &str = "seq,imu_seq,t_s,roll_rad,pitch_rad,yaw_rad,qw,qx,qy,qz,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,stance,converged,phase";
-/// Header of the demo logger's `bias.csv` (as `corridor-log`).
-const DEMO_BIAS_HEADER: &str = "seq,imu_seq,t_s,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,converged";
 
 /// The configuration of the demo's exp25 runs (offline and through the daemon):
 /// `configs/gdins.toml` without a gyro-bias prior, walking off at heading 0°.
@@ -704,8 +697,8 @@ fn demo_logger(
     let bias_path = dir.join("bias.csv");
     let mut att_w = runner::create(&att_path)?;
     let mut bias_w = runner::create(&bias_path)?;
-    writeln!(att_w, "{DEMO_ATTITUDE_HEADER}").map_err(runner::io_at(&att_path))?;
-    writeln!(bias_w, "{DEMO_BIAS_HEADER}").map_err(runner::io_at(&bias_path))?;
+    writeln!(att_w, "{ATTITUDE_HEADER}").map_err(runner::io_at(&att_path))?;
+    writeln!(bias_w, "{BIAS_HEADER}").map_err(runner::io_at(&bias_path))?;
     let _ = ready.send(());
 
     let mut got = DemoLogged::default();
@@ -727,13 +720,7 @@ fn demo_logger(
                 got.final_bias_rad_s = b.gyro_bias_rad_s;
                 bias_done = true;
             } else {
-                let (v, s) = (b.gyro_bias_rad_s, b.gyro_bias_sd_rad_s);
-                writeln!(
-                    bias_w,
-                    "{},{},{},{},{},{},{},{},{},{}",
-                    b.seq, b.imu_seq, b.t_s, v[0], v[1], v[2], s[0], s[1], s[2], b.converged
-                )
-                .map_err(runner::io_at(&bias_path))?;
+                write_bias_row(&mut bias_w, &b).map_err(runner::io_at(&bias_path))?;
                 got.bias_rows += 1;
             }
             continue;
@@ -744,43 +731,9 @@ fn demo_logger(
                 attitude_done = true;
                 continue;
             }
-            let (q, b, s) = (
-                x.nav_from_body_wxyz,
-                x.gyro_bias_rad_s,
-                x.gyro_bias_sd_rad_s,
-            );
-            let phase_name = match x.phase {
-                phase::ALIGNING => "aligning",
-                phase::CALIBRATING => "calibrating",
-                phase::TRACKING => "tracking",
-                _ => "unknown",
-            };
-            writeln!(
-                att_w,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                x.seq,
-                x.imu_seq,
-                x.t_s,
-                x.roll_rad,
-                x.pitch_rad,
-                x.yaw_rad,
-                q[0],
-                q[1],
-                q[2],
-                q[3],
-                b[0],
-                b[1],
-                b[2],
-                s[0],
-                s[1],
-                s[2],
-                u8::from(x.flags & FLAG_STANCE != 0),
-                u8::from(x.flags & FLAG_CONVERGED != 0),
-                phase_name
-            )
-            .map_err(runner::io_at(&att_path))?;
+            write_attitude_row(&mut att_w, &x).map_err(runner::io_at(&att_path))?;
             got.attitude_rows += 1;
-            got.last_attitude_bias_rad_s = b;
+            got.last_attitude_bias_rad_s = x.gyro_bias_rad_s;
             continue;
         }
         if last_rx.elapsed() >= DEMO_WAIT {

@@ -7,19 +7,13 @@
 
 use anyhow::{Context, Result};
 use clap::Parser;
+use corridor_client::csv_rows::{ATTITUDE_HEADER, BIAS_HEADER, write_attitude_row, write_bias_row};
 use corridor_client::{Domain, Subscriber};
 use corridor_shared::services::DEFAULT_DOMAIN;
-use corridor_shared::wire::{
-    AttitudeSample, BiasSample, FLAG_CONVERGED, FLAG_END_OF_STREAM, FLAG_STANCE, phase,
-};
+use corridor_shared::wire::{AttitudeSample, BiasSample, FLAG_END_OF_STREAM};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
-
-/// Header of `attitude.csv`.
-const ATTITUDE_HEADER: &str = "seq,imu_seq,t_s,roll_rad,pitch_rad,yaw_rad,qw,qx,qy,qz,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,stance,converged,phase";
-/// Header of `bias.csv`.
-const BIAS_HEADER: &str = "seq,imu_seq,t_s,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,converged";
 
 #[derive(Parser, Debug)]
 #[command(
@@ -40,15 +34,6 @@ struct Args {
     /// How long to wait for the daemon, s.
     #[arg(long, default_value_t = 30.0)]
     wait_s: f64,
-}
-
-fn phase_name(p: u32) -> &'static str {
-    match p {
-        phase::ALIGNING => "aligning",
-        phase::CALIBRATING => "calibrating",
-        phase::TRACKING => "tracking",
-        _ => "unknown",
-    }
 }
 
 fn main() -> Result<()> {
@@ -94,13 +79,8 @@ fn main() -> Result<()> {
             Err(e) => return Err(e.into()),
         };
         while let Some(b) = bias.try_recv()? {
-            let (v, s) = (b.gyro_bias_rad_s, b.gyro_bias_sd_rad_s);
-            writeln!(
-                bias_w,
-                "{},{},{},{},{},{},{},{},{},{}",
-                b.seq, b.imu_seq, b.t_s, v[0], v[1], v[2], s[0], s[1], s[2], b.converged
-            )
-            .with_context(|| format!("writing {}", bias_path.display()))?;
+            write_bias_row(&mut bias_w, &b)
+                .with_context(|| format!("writing {}", bias_path.display()))?;
             bias_rows += 1;
         }
         let Some(x) = got else {
@@ -117,35 +97,8 @@ fn main() -> Result<()> {
         if x.flags & FLAG_END_OF_STREAM != 0 {
             break "end of stream";
         }
-        let (q, b, s) = (
-            x.nav_from_body_wxyz,
-            x.gyro_bias_rad_s,
-            x.gyro_bias_sd_rad_s,
-        );
-        writeln!(
-            att_w,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            x.seq,
-            x.imu_seq,
-            x.t_s,
-            x.roll_rad,
-            x.pitch_rad,
-            x.yaw_rad,
-            q[0],
-            q[1],
-            q[2],
-            q[3],
-            b[0],
-            b[1],
-            b[2],
-            s[0],
-            s[1],
-            s[2],
-            u8::from(x.flags & FLAG_STANCE != 0),
-            u8::from(x.flags & FLAG_CONVERGED != 0),
-            phase_name(x.phase)
-        )
-        .with_context(|| format!("writing {}", att_path.display()))?;
+        write_attitude_row(&mut att_w, &x)
+            .with_context(|| format!("writing {}", att_path.display()))?;
         rows += 1;
     };
     att_w

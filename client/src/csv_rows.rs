@@ -1,0 +1,92 @@
+//! The CSV rows of the daemon's attitude and bias streams, shared by `corridor-log` and the
+//! `corridor demo` logger. The attitude columns are those of `corridor run`'s `estimates.csv`
+//! that apply (no position or velocity: those are in the nav stream), preceded by
+//! `seq,imu_seq`.
+
+use corridor_shared::wire::{AttitudeSample, BiasSample, FLAG_CONVERGED, FLAG_STANCE, phase};
+use std::io::Write;
+
+/// Header of `attitude.csv`.
+pub const ATTITUDE_HEADER: &str = "seq,imu_seq,t_s,roll_rad,pitch_rad,yaw_rad,qw,qx,qy,qz,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,stance,converged,phase";
+
+/// Header of `bias.csv`.
+pub const BIAS_HEADER: &str = "seq,imu_seq,t_s,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,converged";
+
+/// The `estimates.csv` name of a wire phase code.
+pub fn phase_name(p: u32) -> &'static str {
+    match p {
+        phase::ALIGNING => "aligning",
+        phase::CALIBRATING => "calibrating",
+        phase::TRACKING => "tracking",
+        _ => "unknown",
+    }
+}
+
+/// Writes one `attitude.csv` row.
+pub fn write_attitude_row(w: &mut impl Write, x: &AttitudeSample) -> std::io::Result<()> {
+    let (q, b, s) = (
+        x.nav_from_body_wxyz,
+        x.gyro_bias_rad_s,
+        x.gyro_bias_sd_rad_s,
+    );
+    writeln!(
+        w,
+        "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        x.seq,
+        x.imu_seq,
+        x.t_s,
+        x.roll_rad,
+        x.pitch_rad,
+        x.yaw_rad,
+        q[0],
+        q[1],
+        q[2],
+        q[3],
+        b[0],
+        b[1],
+        b[2],
+        s[0],
+        s[1],
+        s[2],
+        u8::from(x.flags & FLAG_STANCE != 0),
+        u8::from(x.flags & FLAG_CONVERGED != 0),
+        phase_name(x.phase)
+    )
+}
+
+/// Writes one `bias.csv` row.
+pub fn write_bias_row(w: &mut impl Write, b: &BiasSample) -> std::io::Result<()> {
+    let (v, s) = (b.gyro_bias_rad_s, b.gyro_bias_sd_rad_s);
+    writeln!(
+        w,
+        "{},{},{},{},{},{},{},{},{},{}",
+        b.seq, b.imu_seq, b.t_s, v[0], v[1], v[2], s[0], s[1], s[2], b.converged
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_have_as_many_fields_as_their_headers() {
+        let mut a = Vec::new();
+        write_attitude_row(&mut a, &AttitudeSample::default()).unwrap();
+        let a = String::from_utf8(a).unwrap();
+        assert_eq!(
+            a.trim_end().split(',').count(),
+            ATTITUDE_HEADER.split(',').count()
+        );
+        assert!(
+            a.trim_end().ends_with(",0,0,aligning") || a.contains("unknown"),
+            "{a}"
+        );
+        let mut b = Vec::new();
+        write_bias_row(&mut b, &BiasSample::default()).unwrap();
+        let b = String::from_utf8(b).unwrap();
+        assert_eq!(
+            b.trim_end().split(',').count(),
+            BIAS_HEADER.split(',').count()
+        );
+    }
+}
