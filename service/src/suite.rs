@@ -53,6 +53,21 @@ pub struct SuiteRecording {
     /// Grid orientation, degrees.
     #[serde(default)]
     pub grid_deg: f64,
+    /// Gait of the walk: fast or varying gait is reported but kept out of the normal-gait
+    /// summary.
+    #[serde(default)]
+    pub gait: Gait,
+}
+
+/// The gait of a suite recording, as its data set documents it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Gait {
+    /// Normal walking.
+    #[default]
+    Normal,
+    /// Fast or varying gait.
+    Fast,
 }
 
 /// Errors of the suite.
@@ -92,6 +107,8 @@ pub struct Footprint {
 pub struct SuiteRow {
     /// Recording.
     pub recording: String,
+    /// Its gait.
+    pub gait: Gait,
     /// Truth path length, m.
     pub path_m: f64,
     /// 1. ZUPT filter alone.
@@ -124,6 +141,10 @@ pub struct SuiteRow {
     pub best_settled_prior_late_at_s: Option<f64>,
     /// Error reduction of the best mode over the uncorrected injected run, %.
     pub best_reduction_pct: f64,
+    /// Stances of the default run (best mode, rest-mean prior).
+    pub stances: u64,
+    /// Heading observations used in the default run.
+    pub heading_used: u64,
 }
 
 /// Reads a suite file.
@@ -373,6 +394,7 @@ fn run_recording(
     let (best0, best_fp) = ctx.run(best, BiasPrior::None, none)?;
     let (best1, best_inj) = ctx.run(best, BiasPrior::None, injected)?;
     let (best_r0, best_rest) = ctx.run(best, BiasPrior::RestMean, none)?;
+    let (stances, heading_used) = (best_r0.counters.stances, best_r0.counters.heading_used);
     // The injection starts when the initial rest ends (the alignment instant of the clean run).
     let rest_end = best_r0
         .trace
@@ -389,6 +411,7 @@ fn run_recording(
     let (best_r1, _) = ctx.run(best, BiasPrior::RestMean, late)?;
     Ok(SuiteRow {
         recording: r.name.clone(),
+        gait: r.gait,
         path_m,
         zupt,
         zupt_rest,
@@ -405,6 +428,8 @@ fn run_recording(
         best_settled_at_s: settled_at(&best1, &best0, inj),
         best_settled_prior_late_at_s: settled_at(&best_r1, &best_r0, inj),
         best_reduction_pct: 100.0 * (1.0 - best_inj.rms_m / zupt_inj.rms_m),
+        stances,
+        heading_used,
     })
 }
 
@@ -419,9 +444,106 @@ fn first_motion_s(o: &RunOutcome) -> f64 {
         .map_or(0.0, |(t, _)| *t)
 }
 
+/// How far the default may be worse than the baseline and still count as "not worse", % of path.
+pub const NOT_WORSE_TOLERANCE_PCT: f64 = 0.05;
+
+/// The headline over the normal-gait recordings: the default configuration (best mode with the
+/// rest-mean prior) against the ZUPT + rest-mean baseline.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Summary {
+    /// Normal-gait recordings.
+    pub n: usize,
+    /// Median footprint RMS of the baseline, % of path.
+    pub baseline_median_pct: f64,
+    /// Worst footprint RMS of the baseline, % of path.
+    pub baseline_worst_pct: f64,
+    /// Median footprint RMS of the default, % of path.
+    pub default_median_pct: f64,
+    /// Worst footprint RMS of the default, % of path.
+    pub default_worst_pct: f64,
+    /// Recordings on which the default is better than the baseline.
+    pub default_better: usize,
+    /// Recordings on which the default is worse than the baseline by more than
+    /// [`NOT_WORSE_TOLERANCE_PCT`].
+    pub default_worse: usize,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// The summary over the normal-gait rows.
+pub fn summary(rows: &[SuiteRow]) -> Summary {
+    let normal: Vec<&SuiteRow> = rows.iter().filter(|r| r.gait == Gait::Normal).collect();
+    let mut base: Vec<f64> = normal.iter().map(|r| r.zupt_rest.rms_pct).collect();
+    let mut def: Vec<f64> = normal.iter().map(|r| r.best_rest.rms_pct).collect();
+    let worst = |v: &[f64]| v.iter().copied().fold(f64::NAN, f64::max);
+    Summary {
+        n: normal.len(),
+        baseline_worst_pct: worst(&base),
+        default_worst_pct: worst(&def),
+        baseline_median_pct: median(&mut base),
+        default_median_pct: median(&mut def),
+        default_better: normal
+            .iter()
+            .filter(|r| r.best_rest.rms_pct < r.zupt_rest.rms_pct)
+            .count(),
+        default_worse: normal
+            .iter()
+            .filter(|r| r.best_rest.rms_pct > r.zupt_rest.rms_pct + NOT_WORSE_TOLERANCE_PCT)
+            .count(),
+    }
+}
+
+/// The headline table (default against the baseline, per recording) and its summary line.
+pub fn headline_markdown(rows: &[SuiteRow]) -> String {
+    let mut s = String::from(
+        "Default configuration (best mode, rest-mean prior) against the ZUPT + rest-mean baseline: footprint RMS, % of path.\n\n\
+         | recording | gait | path | baseline | default | default − baseline | heading used / stances |\n\
+         |---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {} | {:.1} m | {:.2} % | {:.2} % | {:+.2} | {} / {} |\n",
+            r.recording,
+            match r.gait {
+                Gait::Normal => "normal",
+                Gait::Fast => "fast",
+            },
+            r.path_m,
+            r.zupt_rest.rms_pct,
+            r.best_rest.rms_pct,
+            r.best_rest.rms_pct - r.zupt_rest.rms_pct,
+            r.heading_used,
+            r.stances,
+        ));
+    }
+    let m = summary(rows);
+    s.push_str(&format!(
+        "\nNormal gait ({} recordings): median {:.2} % (baseline {:.2} %), worst {:.2} % (baseline {:.2} %); \
+         default better on {} of {}, worse by more than {:.2} % of path on {}.\n",
+        m.n,
+        m.default_median_pct,
+        m.baseline_median_pct,
+        m.default_worst_pct,
+        m.baseline_worst_pct,
+        m.default_better,
+        m.n,
+        NOT_WORSE_TOLERANCE_PCT,
+        m.default_worse
+    ));
+    s
+}
+
 /// The table as Markdown.
 pub fn markdown(rows: &[SuiteRow]) -> String {
-    let mut s = String::new();
+    let mut s = headline_markdown(rows);
+    s.push('\n');
     s.push_str("Footprint RMS error after first-leg alignment, metres (% of path); final-GCP error in metres.\n\n");
     s.push_str("| recording | path | (1) ZUPT | (1b) ZUPT + rest mean | (2) injected, uncorrected | (3) paper, injected | (4) best, injected | best, no injection | best + rest mean |\n");
     s.push_str("|---|---|---|---|---|---|---|---|---|\n");
