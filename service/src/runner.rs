@@ -219,6 +219,12 @@ pub struct Summary {
     pub heading_observations_used: u64,
     /// Heading observations rejected, by reason.
     pub heading_observations_rejected: BTreeMap<&'static str, u64>,
+    /// Stride-direction observations used.
+    pub stride_observations_used: u64,
+    /// Stride-direction observations rejected (too short, outside the gate or unlikely).
+    pub stride_observations_rejected: u64,
+    /// Gyro-bias changes detected (`eskf.bias_change_threshold`).
+    pub bias_changes_detected: u64,
     /// Input rows rejected by the CSV reader, by reason.
     pub input_rows_rejected: BTreeMap<&'static str, u64>,
     /// The first few rejected rows, with file, line, column and value.
@@ -263,7 +269,11 @@ pub fn summarize(
             ("not_straight", c.heading_not_straight),
             ("outside_gate", c.heading_outside_gate),
             ("outside_map", c.heading_outside_map),
+            ("unlikely", c.heading_unlikely),
         ]),
+        stride_observations_used: c.stride_used,
+        stride_observations_rejected: c.stride_rejected,
+        bias_changes_detected: c.bias_changes,
         input_rows_rejected: log.rejected_counts(),
         input_rows_rejected_examples: log
             .rejected
@@ -316,7 +326,8 @@ pub fn write_estimate_row(w: &mut impl Write, e: &Estimate) -> std::io::Result<(
     )
 }
 
-/// Writes the `innovations.csv` rows of one estimate (ZUPT and heading events).
+/// Writes the `innovations.csv` rows of one estimate (ZUPT, stride-direction and heading
+/// events; for a stride row `foot_heading_deg` is the stride's direction).
 pub fn write_innovation_rows(
     w: &mut impl Write,
     input: &ImuInput,
@@ -333,13 +344,14 @@ pub fn write_innovation_rows(
             e.t_s, z.r[0], z.r[1], z.r[2], z.s_diag[0], z.s_diag[1], z.s_diag[2], z.nis, g[2]
         )?;
     }
-    if let Some(h) = &e.heading {
+    for (kind, h) in [("stride", &e.stride), ("heading", &e.heading)] {
+        let Some(h) = h else { continue };
         let fh = h.foot_heading_rad.to_degrees();
         let dir = h.direction_rad.to_degrees();
         match &h.outcome {
             Ok(i) => writeln!(
                 w,
-                "{},heading,1,,{},{},{},{},{},{},{},{fh},{dir},{},{gn},{an},{}",
+                "{},{kind},1,,{},{},{},{},{},{},{},{fh},{dir},{},{gn},{an},{}",
                 e.t_s,
                 i.r[0],
                 i.r[1],
@@ -353,7 +365,7 @@ pub fn write_innovation_rows(
             )?,
             Err(r) => writeln!(
                 w,
-                "{},heading,0,{},,,,,,,,{fh},,,{gn},{an},{}",
+                "{},{kind},0,{},,,,,,,,{fh},,,{gn},{an},{}",
                 e.t_s,
                 r.name(),
                 g[2]

@@ -48,6 +48,10 @@ pub struct SuiteRecording {
     pub truth: PathBuf,
     /// Sensor configuration (one per sensor).
     pub config: PathBuf,
+    /// Configuration of the ZUPT baselines (rows 1, 1b, 2), when their noise set differs from
+    /// the default's (one per sensor; default: `config`).
+    #[serde(default)]
+    pub baseline_config: Option<PathBuf>,
     /// Walking direction of the first leg in the map frame, degrees (map knowledge).
     pub start_heading_deg: f64,
     /// Grid orientation, degrees.
@@ -143,8 +147,10 @@ pub struct SuiteRow {
     pub best_reduction_pct: f64,
     /// Stances of the default run (best mode, rest-mean prior).
     pub stances: u64,
-    /// Heading observations used in the default run.
+    /// Foot-axis heading observations used in the default run.
     pub heading_used: u64,
+    /// Stride-direction observations used in the default run.
+    pub stride_used: u64,
 }
 
 /// Reads a suite file.
@@ -272,6 +278,7 @@ struct Ctx<'a> {
     base: &'a Path,
     rec: &'a SuiteRecording,
     config: ConfigFile,
+    baseline: ConfigFile,
     log: ImuLog,
     truth: Vec<TruthPoint>,
 }
@@ -283,8 +290,27 @@ impl Ctx<'_> {
         prior: BiasPrior,
         inj: BiasInjection,
     ) -> Result<(RunOutcome, Footprint), RunError> {
+        self.run_with(&self.config, mode, prior, inj)
+    }
+
+    /// A ZUPT baseline run, with the baseline's configuration.
+    fn run_baseline(
+        &self,
+        prior: BiasPrior,
+        inj: BiasInjection,
+    ) -> Result<(RunOutcome, Footprint), RunError> {
+        self.run_with(&self.baseline, Mode::Zupt, prior, inj)
+    }
+
+    fn run_with(
+        &self,
+        file: &ConfigFile,
+        mode: Mode,
+        prior: BiasPrior,
+        inj: BiasInjection,
+    ) -> Result<(RunOutcome, Footprint), RunError> {
         let cfg = config_for(
-            &self.config,
+            file,
             &self.base.join(&self.rec.config),
             self.rec,
             mode,
@@ -378,6 +404,7 @@ fn run_recording(
         base,
         rec: r,
         config: ConfigFile::read(&base.join(&r.config))?,
+        baseline: ConfigFile::read(&base.join(r.baseline_config.as_ref().unwrap_or(&r.config)))?,
         log,
         truth,
     };
@@ -386,15 +413,16 @@ fn run_recording(
         constant_rad_s: inj,
         ..Default::default()
     };
-    let (_, zupt) = ctx.run(Mode::Zupt, BiasPrior::None, none)?;
-    let (_, zupt_rest) = ctx.run(Mode::Zupt, BiasPrior::RestMean, none)?;
-    let (_, zupt_inj) = ctx.run(Mode::Zupt, BiasPrior::None, injected)?;
+    let (_, zupt) = ctx.run_baseline(BiasPrior::None, none)?;
+    let (_, zupt_rest) = ctx.run_baseline(BiasPrior::RestMean, none)?;
+    let (_, zupt_inj) = ctx.run_baseline(BiasPrior::None, injected)?;
     let (paper0, _) = ctx.run(Mode::Paper, BiasPrior::None, none)?;
     let (paper1, paper_inj) = ctx.run(Mode::Paper, BiasPrior::None, injected)?;
     let (best0, best_fp) = ctx.run(best, BiasPrior::None, none)?;
     let (best1, best_inj) = ctx.run(best, BiasPrior::None, injected)?;
     let (best_r0, best_rest) = ctx.run(best, BiasPrior::RestMean, none)?;
-    let (stances, heading_used) = (best_r0.counters.stances, best_r0.counters.heading_used);
+    let c = best_r0.counters;
+    let (stances, heading_used, stride_used) = (c.stances, c.heading_used, c.stride_used);
     // The injection starts when the initial rest ends (the alignment instant of the clean run).
     let rest_end = best_r0
         .trace
@@ -430,6 +458,7 @@ fn run_recording(
         best_reduction_pct: 100.0 * (1.0 - best_inj.rms_m / zupt_inj.rms_m),
         stances,
         heading_used,
+        stride_used,
     })
 }
 
@@ -504,12 +533,12 @@ pub fn summary(rows: &[SuiteRow]) -> Summary {
 pub fn headline_markdown(rows: &[SuiteRow]) -> String {
     let mut s = String::from(
         "Default configuration (best mode, rest-mean prior) against the ZUPT + rest-mean baseline: footprint RMS, % of path.\n\n\
-         | recording | gait | path | baseline | default | default − baseline | heading used / stances |\n\
+         | recording | gait | path | baseline | default | default − baseline | stride directions / foot axes used / stances |\n\
          |---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s.push_str(&format!(
-            "| {} | {} | {:.1} m | {:.2} % | {:.2} % | {:+.2} | {} / {} |\n",
+            "| {} | {} | {:.1} m | {:.2} % | {:.2} % | {:+.2} | {} / {} / {} |\n",
             r.recording,
             match r.gait {
                 Gait::Normal => "normal",
@@ -519,6 +548,7 @@ pub fn headline_markdown(rows: &[SuiteRow]) -> String {
             r.zupt_rest.rms_pct,
             r.best_rest.rms_pct,
             r.best_rest.rms_pct - r.zupt_rest.rms_pct,
+            r.stride_used,
             r.heading_used,
             r.stances,
         ));

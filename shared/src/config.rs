@@ -159,6 +159,29 @@ pub enum HeadingSource {
     Map,
 }
 
+/// Which heading observations the `eskf` mode takes at a stance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HeadingObservations {
+    /// The heading of the foot's forward axis (needs the sensor's yaw on the foot).
+    FootAxis,
+    /// The direction of the stride since the previous footprint (needs no mounting yaw).
+    Stride,
+    /// Both, the stride first.
+    Both,
+}
+
+impl HeadingObservations {
+    /// Whether the stride direction is observed.
+    pub fn stride(self) -> bool {
+        matches!(self, Self::Stride | Self::Both)
+    }
+    /// Whether the foot axis is observed.
+    pub fn foot_axis(self) -> bool {
+        matches!(self, Self::FootAxis | Self::Both)
+    }
+}
+
 /// Whether the initial rest's gyro mean is used as a bias prior.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -303,6 +326,9 @@ pub struct EskfFile {
     pub zupt_sd_m_s: Option<f64>,
     /// Initial roll/pitch σ (default 0.5°, in rad).
     pub initial_tilt_sd_rad: Option<f64>,
+    /// CUSUM threshold, in σ, of the bias-change detector on the heading innovations; on an
+    /// alarm the bias variance grows by `gyro_bias_initial_sd_rad_s²` (absent: off).
+    pub bias_change_threshold: Option<f64>,
 }
 
 /// `[bias_kf]` section: the paper's 3-state bias filter.
@@ -339,6 +365,20 @@ pub struct HeadingFile {
     pub calibration_strides: Option<usize>,
     /// Seconds into a stance at which the heading observation is taken (default 0.05 s).
     pub obs_delay_s: Option<f64>,
+    /// σ of the start heading: how well the first stride is known to follow
+    /// `start_heading_deg` (default 1°, in degrees).
+    pub start_heading_sd_deg: Option<f64>,
+    /// Which observations the `eskf` mode takes (default `both`).
+    pub observations: Option<HeadingObservations>,
+    /// σ of one stride-direction observation (default 2°, in degrees).
+    pub stride_sigma_deg: Option<f64>,
+    /// Shortest stride whose direction is observed (default 0.5 m).
+    pub min_stride_m: Option<f64>,
+    /// Prior probability that a stance's walking direction is a dominant direction, for the
+    /// association weight (default 0.7).
+    pub aligned_prior: Option<f64>,
+    /// Smallest association weight that is still fused (default 0.5).
+    pub min_weight: Option<f64>,
 }
 
 /// A validated configuration.
@@ -449,6 +489,8 @@ pub struct EskfConfig {
     pub zupt_sd_m_s: Positive,
     /// Initial tilt σ.
     pub initial_tilt_sd_rad: Positive,
+    /// Bias-change CUSUM threshold (off when `None`).
+    pub bias_change_threshold: Option<Positive>,
 }
 
 /// Validated `[bias_kf]`.
@@ -483,6 +525,18 @@ pub struct HeadingConfig {
     pub calibration_strides: usize,
     /// Observation delay into a stance.
     pub obs_delay_s: f64,
+    /// σ of the start heading.
+    pub start_heading_sd_rad: Positive,
+    /// Observations of the `eskf` mode.
+    pub observations: HeadingObservations,
+    /// Stride-direction σ.
+    pub stride_sigma_rad: Positive,
+    /// Shortest observed stride.
+    pub min_stride_m: Positive,
+    /// Prior probability of an aligned stance.
+    pub aligned_prior: Fraction,
+    /// Smallest fused association weight.
+    pub min_weight: Fraction,
 }
 
 impl Default for Config {
@@ -671,6 +725,10 @@ impl ConfigFile {
                     "eskf.initial_tilt_sd_rad",
                     k.initial_tilt_sd_rad.unwrap_or(deg(0.5)),
                 )?,
+                bias_change_threshold: k
+                    .bias_change_threshold
+                    .map(|v| Positive::new("eskf.bias_change_threshold", v))
+                    .transpose()?,
             },
             bias_kf: BiasKfConfig {
                 tilt_sd_rad: Positive::new(
@@ -709,6 +767,21 @@ impl ConfigFile {
                 straight_strides,
                 calibration_strides,
                 obs_delay_s: non_negative("heading.obs_delay_s", h.obs_delay_s.unwrap_or(0.05))?,
+                start_heading_sd_rad: Positive::new(
+                    "heading.start_heading_sd_deg",
+                    deg(h.start_heading_sd_deg.unwrap_or(1.0)),
+                )?,
+                observations: h.observations.unwrap_or(HeadingObservations::Both),
+                stride_sigma_rad: Positive::new(
+                    "heading.stride_sigma_deg",
+                    deg(h.stride_sigma_deg.unwrap_or(2.0)),
+                )?,
+                min_stride_m: Positive::new("heading.min_stride_m", h.min_stride_m.unwrap_or(0.5))?,
+                aligned_prior: Fraction::new(
+                    "heading.aligned_prior",
+                    h.aligned_prior.unwrap_or(0.7),
+                )?,
+                min_weight: Fraction::new("heading.min_weight", h.min_weight.unwrap_or(0.5))?,
             },
         })
     }

@@ -7,7 +7,9 @@
 //! - gyro scale factor per body axis (3 states: `ω_meas = (1 + s)·ω + b`);
 //! - foot-heading offset (1 state: the foot points `offset` away from the walking direction
 //!   the map gives, e.g. a toe-out that differs from the one calibrated at the start);
-//! - g-sensitivity, diagonal (3 states: `ω_meas = ω + b + k∘f`).
+//! - g-sensitivity, diagonal (3 states: `ω_meas = ω + b + k∘f`);
+//! - the previous footprint (2 states: a stochastic clone of the horizontal position at the
+//!   last stance, so that the direction of the stride since then can be observed).
 //!
 //! Error state: δp, δv, δθ (navigation frame, applied as `exp(δθ)·q`), δb, then the extensions
 //! in that order. The covariance lives in a fixed array sized for every extension, is propagated
@@ -16,8 +18,8 @@
 use super::rotation::{exp_rotvec, heading_jacobian, heading_of_axis, skew, wrap_pi};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
-/// Largest error-state dimension (12 base states and 10 extension states).
-pub const MAX_N: usize = 22;
+/// Largest error-state dimension (12 base states and 12 extension states).
+pub const MAX_N: usize = 24;
 const P0: usize = 0;
 const V0: usize = 3;
 const TH: usize = 6;
@@ -49,6 +51,8 @@ pub struct Extensions {
     pub heading_offset_sd: Option<f64>,
     /// g-sensitivity states: initial σ, rad/s per m/s² (`None`: off).
     pub g_sensitivity_sd: Option<f64>,
+    /// Footprint-clone states for stride-direction observations.
+    pub footprint_clone: bool,
 }
 
 /// Indices of the extension states in the error state.
@@ -59,6 +63,7 @@ struct Layout {
     scale: Option<usize>,
     offset: Option<usize>,
     gsens: Option<usize>,
+    clone: Option<usize>,
 }
 
 impl Layout {
@@ -74,13 +79,21 @@ impl Layout {
         let scale = take(ext.scale_factor_sd.is_some(), 3);
         let offset = take(ext.heading_offset_sd.is_some(), 1);
         let gsens = take(ext.g_sensitivity_sd.is_some(), 3);
+        let clone = take(ext.footprint_clone, 2);
         Self {
             n,
             rate,
             scale,
             offset,
             gsens,
+            clone,
         }
+    }
+
+    /// Whether every extension state is constant between updates (F = I, no noise): the
+    /// heading offset and the footprint clone. Then the base block propagation serves.
+    fn static_extensions_only(&self) -> bool {
+        self.rate.is_none() && self.scale.is_none() && self.gsens.is_none()
     }
 }
 
@@ -123,6 +136,8 @@ pub struct Eskf {
     pub gyro_bias_rad_s: Vector3<f64>,
     /// Extension estimates (zero when an extension is off).
     pub ext: ExtensionEstimates,
+    /// The cloned footprint (horizontal position at the last clone), m; NaN before the first.
+    pub footprint_xy_m: [f64; 2],
     /// Error covariance, column-major with stride `MAX_N`; only the leading `n × n` is used.
     p: [f64; MAX_N * MAX_N],
     layout: Layout,
@@ -132,6 +147,9 @@ pub struct Eskf {
     estimate_bias: bool,
 }
 
+/// One row of a sparse measurement Jacobian: (state index, value) pairs.
+type SparseRow = [(usize, f64); 4];
+
 #[inline]
 fn ix(r: usize, c: usize) -> usize {
     c * MAX_N + r
@@ -140,11 +158,17 @@ fn ix(r: usize, c: usize) -> usize {
 /// Dimension without extensions.
 const BASE_N: usize = 12;
 
-/// `P ← F P Fᵀ` (without Q) for the base 12-state filter: the common case, with constant
-/// bounds so the compiler unrolls it.
-fn propagate_base(a: &mut [f64; MAX_N * MAX_N], fvt: &[[f64; 3]; 3], ftb: &[[f64; 3]; 3], dt: f64) {
+/// `P ← F P Fᵀ` (without Q) for the base 12-state filter plus extension states that are
+/// constant between updates (their rows of F are the identity): the common case.
+fn propagate_base(
+    a: &mut [f64; MAX_N * MAX_N],
+    n: usize,
+    fvt: &[[f64; 3]; 3],
+    ftb: &[[f64; 3]; 3],
+    dt: f64,
+) {
     let dot3 = |m: &[f64; 3], v: &[f64; 3]| m[0] * v[0] + m[1] * v[1] + m[2] * v[2];
-    for col in 0..BASE_N {
+    for col in 0..n {
         let c = &mut a[col * MAX_N..col * MAX_N + BASE_N];
         let v = [c[V0], c[V0 + 1], c[V0 + 2]];
         let th = [c[TH], c[TH + 1], c[TH + 2]];
@@ -155,7 +179,7 @@ fn propagate_base(a: &mut [f64; MAX_N * MAX_N], fvt: &[[f64; 3]; 3], ftb: &[[f64
             c[TH + i] += dot3(&ftb[i], &b);
         }
     }
-    for row in 0..BASE_N {
+    for row in 0..n {
         let v = [a[ix(row, V0)], a[ix(row, V0 + 1)], a[ix(row, V0 + 2)]];
         let th = [a[ix(row, TH)], a[ix(row, TH + 1)], a[ix(row, TH + 2)]];
         let b = [a[ix(row, BG)], a[ix(row, BG + 1)], a[ix(row, BG + 2)]];
@@ -189,6 +213,7 @@ impl Eskf {
             nav_from_body,
             gyro_bias_rad_s,
             ext: ExtensionEstimates::default(),
+            footprint_xy_m: [f64::NAN; 2],
             p: [0.0; MAX_N * MAX_N],
             layout,
             gravity_m_s2,
@@ -316,8 +341,8 @@ impl Eskf {
         let b_rate = lay.rate.filter(|_| self.estimate_bias);
         let a = &mut self.p;
         let dot3 = |m: &[f64; 3], v: [f64; 3]| m[0] * v[0] + m[1] * v[1] + m[2] * v[2];
-        if n == BASE_N {
-            propagate_base(a, &fvt, &ftb, dt);
+        if lay.static_extensions_only() {
+            propagate_base(a, n, &fvt, &ftb, dt);
         } else {
             // θ←s and θ←k blocks: −C·diag(ω)·dt and −C·diag(f)·dt.
             let fts = m3(&(minus_c_dt * Matrix3::from_diagonal(omega)));
@@ -516,13 +541,98 @@ impl Eskf {
         axis_body: &Vector3<f64>,
     ) -> Innovation {
         let r = wrap_pi(heading_obs_rad - self.predicted_heading(axis_body));
+        let h = self.heading_row(axis_body);
+        self.update(&[h], [r], [sd_rad * sd_rad])
+    }
+
+    /// The sparse Jacobian row of the foot-axis heading (attitude and heading offset).
+    fn heading_row(&self, axis_body: &Vector3<f64>) -> SparseRow {
         let j = heading_jacobian(&self.nav_from_body, axis_body);
         let off = self.layout.offset.map_or((0, 0.0), |i| (i, 1.0));
-        self.update(
-            &[[(TH, j.x), (TH + 1, j.y), (TH + 2, j.z), off]],
-            [r],
-            [sd_rad * sd_rad],
+        [(TH, j.x), (TH + 1, j.y), (TH + 2, j.z), off]
+    }
+
+    /// `H P Hᵀ` of one sparse row: the predicted variance of a scalar observation.
+    fn predicted_variance(&self, h: &SparseRow) -> f64 {
+        h.iter()
+            .map(|&(a, va)| {
+                h.iter()
+                    .map(|&(b, vb)| va * vb * self.p[ix(a, b)])
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
+    /// The foot-axis heading as the model predicts it and its variance, rad and rad².
+    pub fn heading_prediction(&self, axis_body: &Vector3<f64>) -> (f64, f64) {
+        (
+            wrap_pi(self.predicted_heading(axis_body)),
+            self.predicted_variance(&self.heading_row(axis_body)),
         )
+    }
+
+    /// Starts a new stride: the current horizontal position becomes the cloned footprint,
+    /// with its covariance (rows and columns of the clone copied from those of x and y).
+    /// Without the clone states this does nothing.
+    pub fn clone_footprint(&mut self) {
+        let Some(c) = self.layout.clone else {
+            return;
+        };
+        let n = self.layout.n;
+        self.footprint_xy_m = [self.p_m.x, self.p_m.y];
+        for k in 0..2 {
+            for j in 0..n {
+                let v = if j == c || j == c + 1 {
+                    0.0
+                } else {
+                    self.p[ix(P0 + k, j)]
+                };
+                self.p[ix(c + k, j)] = v;
+                self.p[ix(j, c + k)] = v;
+            }
+        }
+        for a in 0..2 {
+            for b in 0..2 {
+                self.p[ix(c + a, c + b)] = self.p[ix(P0 + a, P0 + b)];
+            }
+        }
+    }
+
+    /// The stride since the cloned footprint: its horizontal length (m), direction (rad) and
+    /// the direction's sparse Jacobian row, or `None` without a clone.
+    fn stride(&self) -> Option<(f64, f64, SparseRow)> {
+        let c = self.layout.clone?;
+        let [x0, y0] = self.footprint_xy_m;
+        let (dx, dy) = (self.p_m.x - x0, self.p_m.y - y0);
+        let d2 = dx * dx + dy * dy;
+        if !d2.is_finite() || d2 <= 0.0 {
+            return None;
+        }
+        let (hx, hy) = (-dy / d2, dx / d2);
+        Some((
+            d2.sqrt(),
+            dy.atan2(dx),
+            [(P0, hx), (P0 + 1, hy), (c, -hx), (c + 1, -hy)],
+        ))
+    }
+
+    /// The stride since the cloned footprint: length (m), direction (rad) and the direction's
+    /// variance (rad²), or `None` without a clone.
+    pub fn stride_prediction(&self) -> Option<(f64, f64, f64)> {
+        self.stride()
+            .map(|(len, dir, h)| (len, dir, self.predicted_variance(&h)))
+    }
+
+    /// Stride-direction observation: the walking direction since the cloned footprint is
+    /// `direction_obs_rad` with σ `sd_rad`. `None` without a clone.
+    pub fn stride_direction_update(
+        &mut self,
+        direction_obs_rad: f64,
+        sd_rad: f64,
+    ) -> Option<Innovation> {
+        let (_, dir, h) = self.stride()?;
+        let r = wrap_pi(direction_obs_rad - dir);
+        Some(self.update(&[h], [r], [sd_rad * sd_rad]))
     }
 
     fn inject(&mut self, dx: &[f64; MAX_N]) {
@@ -545,6 +655,10 @@ impl Eskf {
         if let Some(i) = self.layout.gsens {
             self.ext.g_sensitivity += v3(i);
         }
+        if let Some(i) = self.layout.clone {
+            self.footprint_xy_m[0] += dx[i];
+            self.footprint_xy_m[1] += dx[i + 1];
+        }
     }
 
     /// Rotates the navigation frame about z by `angle_rad` (used once the map frame is known).
@@ -556,6 +670,23 @@ impl Eskf {
         self.nav_from_body = UnitQuaternion::from_rotation_matrix(&r) * self.nav_from_body;
         // P ← T P Tᵀ with T = blockdiag(R, R, R, I, …): rows then columns of the p, v, θ blocks.
         let n = self.layout.n;
+        if let Some(c) = self.layout.clone {
+            let [x, y] = self.footprint_xy_m;
+            self.footprint_xy_m = [m[(0, 0)] * x + m[(0, 1)] * y, m[(1, 0)] * x + m[(1, 1)] * y];
+            // The clone is horizontal: T acts on it with the upper-left 2 × 2 of R.
+            for c2 in 0..n {
+                let x = [self.p[ix(c, c2)], self.p[ix(c + 1, c2)]];
+                for i in 0..2 {
+                    self.p[ix(c + i, c2)] = m[(i, 0)] * x[0] + m[(i, 1)] * x[1];
+                }
+            }
+            for rr in 0..n {
+                let x = [self.p[ix(rr, c)], self.p[ix(rr, c + 1)]];
+                for i in 0..2 {
+                    self.p[ix(rr, c + i)] = m[(i, 0)] * x[0] + m[(i, 1)] * x[1];
+                }
+            }
+        }
         for b in [P0, V0, TH] {
             for c in 0..n {
                 let x = [self.p[ix(b, c)], self.p[ix(b + 1, c)], self.p[ix(b + 2, c)]];
@@ -587,6 +718,20 @@ impl Eskf {
             self.p[ix(j, i)] = 0.0;
         }
         self.p[ix(i, i)] = var;
+    }
+
+    /// Widens the gyro-bias covariance by `var` along the body axis that points up now (the
+    /// component a heading observation sees: a detected bias change), when the filter owns the
+    /// bias.
+    pub fn widen_gyro_bias(&mut self, var: f64) {
+        if self.estimate_bias {
+            let up = self.nav_from_body.inverse() * Vector3::z();
+            for i in 0..3 {
+                for j in 0..3 {
+                    self.p[ix(BG + i, BG + j)] += var * up[i] * up[j];
+                }
+            }
+        }
     }
 
     /// Sets the gyro bias and its covariance block (clearing its correlations), when the filter
@@ -655,6 +800,7 @@ mod tests {
             scale_factor_sd: Some(0.01),
             heading_offset_sd: Some(0.05),
             g_sensitivity_sd: Some(1e-3),
+            footprint_clone: true,
         }
     }
 
@@ -665,7 +811,12 @@ mod tests {
 
     #[test]
     fn block_propagation_equals_dense_formula_with_every_extension() {
-        for ext in [Extensions::default(), all_ext()] {
+        let static_only = Extensions {
+            heading_offset_sd: Some(0.05),
+            footprint_clone: true,
+            ..Default::default()
+        };
+        for ext in [Extensions::default(), static_only, all_ext()] {
             let mut f = Eskf::new(
                 from_euler_zyx(0.2, -0.3, 1.0),
                 Vector3::zeros(),
@@ -684,6 +835,8 @@ mod tests {
                 );
                 f.zupt();
                 f.heading_update(0.3, 0.05, &Vector3::x());
+                f.stride_direction_update(0.2, 0.05);
+                f.clone_footprint();
             }
             let n = f.dim();
             let lay = Layout::new(&ext);

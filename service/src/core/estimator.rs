@@ -14,6 +14,7 @@
 //!    associated with a map direction; an accepted direction becomes a heading observation for the
 //!    configured mode.
 
+use super::bias_change::BiasChangeDetector;
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::eskf::{Eskf, EskfNoise, ExtensionEstimates, Extensions, Innovation};
 use super::heading::{HeadingAid, Rejection, StraightWalk};
@@ -21,7 +22,7 @@ use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rot_z, tilt_from_specific_force, wrap_pi, yaw,
 };
 use super::stance::StanceDetector;
-use corridor_shared::config::{BiasPrior, Config, Mode};
+use corridor_shared::config::{BiasPrior, Config, HeadingConfig, Mode};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// One IMU sample.
@@ -134,6 +135,15 @@ pub struct Counters {
     pub heading_outside_gate: u64,
     /// Rejected: outside every corridor.
     pub heading_outside_map: u64,
+    /// Rejected: the association weight was below `heading.min_weight` (the residual says the
+    /// walker is not walking along the associated direction: a weave, a side-step).
+    pub heading_unlikely: u64,
+    /// Stride-direction observations used.
+    pub stride_used: u64,
+    /// Stride-direction observations rejected (too short, outside the gate, unlikely).
+    pub stride_rejected: u64,
+    /// Gyro-bias changes detected (the bias covariance was widened).
+    pub bias_changes: u64,
     /// Times the initial rest was too short and alignment started over.
     pub alignment_restarts: u64,
 }
@@ -171,6 +181,9 @@ pub struct Estimate {
     pub zupt: Option<Innovation>,
     /// Heading observation event, when one was taken on this sample.
     pub heading: Option<HeadingEvent>,
+    /// Stride-direction observation event, when one was taken on this sample
+    /// (`foot_heading_rad` then holds the stride direction).
+    pub stride: Option<HeadingEvent>,
 }
 
 impl Default for Estimate {
@@ -191,6 +204,7 @@ impl Default for Estimate {
             converged: false,
             zupt: None,
             heading: None,
+            stride: None,
         }
     }
 }
@@ -318,6 +332,10 @@ pub struct Estimator {
     /// Sensor yaw minus foot heading.
     mount_yaw_rad: f64,
     mount_sum: (f64, f64, usize),
+    /// The previous footprint (nominal, map frame) and the direction of the stride that ended
+    /// there, for the mounting-yaw calibration.
+    last_footprint: Option<([f64; 2], Option<f64>)>,
+    bias_change: Option<BiasChangeDetector>,
     straight: StraightWalk,
     in_stance: bool,
     stance_obs_done: bool,
@@ -349,6 +367,11 @@ impl Estimator {
             tilt0: UnitQuaternion::identity(),
             mount_yaw_rad: 0.0,
             mount_sum: (0.0, 0.0, 0),
+            last_footprint: None,
+            bias_change: cfg
+                .eskf
+                .bias_change_threshold
+                .map(|h| BiasChangeDetector::new(h.get())),
             in_stance: false,
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
@@ -424,6 +447,7 @@ impl Estimator {
         out.detector_statistic = decision.statistic;
         out.zupt = None;
         out.heading = None;
+        out.stride = None;
 
         if self.phase == Phase::Aligning {
             self.align_step(s.t_s, &w, &f, decision.stance);
@@ -508,6 +532,8 @@ impl Estimator {
                 scale_factor_sd: m.scale_factor_sd.map(|v| v.get()),
                 heading_offset_sd: m.heading_offset_sd_rad.map(|v| v.get()),
                 g_sensitivity_sd: m.g_sensitivity_sd.map(|v| v.get()),
+                footprint_clone: self.cfg.mode == Mode::Eskf
+                    && self.cfg.heading.observations.stride(),
             }
         } else {
             // The extensions are observed through the filter's own heading updates, which the
@@ -690,22 +716,45 @@ impl Estimator {
         let forward = self.foot_forward_body();
         let eskf = self.eskf.as_mut().expect("aligned");
         if self.phase == Phase::Calibrating {
-            let n = self.mount_sum.2;
-            if n == 0 {
-                let d = eskf.p_m;
-                if d.x.hypot(d.y) < 0.2 {
-                    return; // not a stride yet (a shuffle in place)
+            let stride_dir = match self.last_footprint {
+                None => {
+                    let d = eskf.p_m;
+                    if d.x.hypot(d.y) < 0.2 {
+                        return; // not a stride yet (a shuffle in place)
+                    }
+                    eskf.rotate_frame(h.start_heading_rad - d.y.atan2(d.x));
+                    eskf.set_heading_variance(h.start_heading_sd_rad.get().powi(2));
+                    h.start_heading_rad
                 }
-                eskf.rotate_frame(h.start_heading_rad - d.y.atan2(d.x));
-                eskf.set_heading_variance(1e-8);
+                Some((xy, _)) => {
+                    let (dx, dy) = (eskf.p_m.x - xy[0], eskf.p_m.y - xy[1]);
+                    if dx.hypot(dy) < h.min_stride_m.get() {
+                        return; // a shuffle: wait for a real stride
+                    }
+                    dy.atan2(dx)
+                }
+            };
+            // The sensor's yaw on the foot is learnt on straight strides only (this stride in
+            // the direction of the previous one): in a turn the foot at touchdown does not
+            // point along the stride that brought it there.
+            let straight = self
+                .last_footprint
+                .and_then(|(_, prev)| prev)
+                .is_none_or(|prev| {
+                    wrap_pi(stride_dir - prev).abs() <= h.straight_max_change_rad.get()
+                });
+            self.last_footprint = Some(([eskf.p_m.x, eskf.p_m.y], Some(stride_dir)));
+            eskf.clone_footprint();
+            if !straight {
+                return;
             }
-            // Heading of the sensor's levelled x axis: ≈ foot heading + mounting yaw.
+            // Heading of the sensor's levelled x axis: ≈ walking direction + mounting yaw.
             let levelled = eskf.nav_from_body * self.tilt0.inverse();
-            let m = wrap_pi(yaw(&levelled) - h.start_heading_rad);
+            let m = wrap_pi(yaw(&levelled) - stride_dir);
             self.mount_sum.0 += m.cos();
             self.mount_sum.1 += m.sin();
             self.mount_sum.2 += 1;
-            self.straight.push(h.start_heading_rad);
+            self.straight.push(stride_dir);
             if self.mount_sum.2 >= h.calibration_strides {
                 self.mount_yaw_rad = self.mount_sum.1.atan2(self.mount_sum.0);
                 self.phase = Phase::Tracking;
@@ -722,6 +771,10 @@ impl Estimator {
                     }
                 }
             }
+            return;
+        }
+        if self.cfg.mode == Mode::Eskf && self.pending_heading.is_none() {
+            self.eskf_observations(&forward);
             return;
         }
         let foot_heading = wrap_pi(eskf.predicted_heading(&forward));
@@ -744,12 +797,7 @@ impl Estimator {
         };
         match direction {
             Err(r) => {
-                match r {
-                    Rejection::NotStraight => self.counters.heading_not_straight += 1,
-                    Rejection::OutsideGate => self.counters.heading_outside_gate += 1,
-                    Rejection::OutsideMap => self.counters.heading_outside_map += 1,
-                    Rejection::NoSource => {}
-                }
+                self.count_rejection(r);
                 event.outcome = Err(r);
             }
             Ok(dir) => {
@@ -793,6 +841,109 @@ impl Estimator {
         self.out.heading = Some(event);
     }
 
+    /// The `eskf` mode's observations at a stance: the stride direction since the previous
+    /// footprint and the foot axis, each associated with the nearest dominant direction and
+    /// fused with the weight of that association (see [`association_weight`]).
+    fn eskf_observations(&mut self, forward: &Vector3<f64>) {
+        let h = &self.cfg.heading;
+        let eskf = self.eskf.as_mut().expect("aligned");
+        let xy = [eskf.p_m.x, eskf.p_m.y];
+        let mut used: [Option<Innovation>; 2] = [None; 2];
+        if h.observations.stride() {
+            let event = match eskf.stride_prediction() {
+                Some((len, dir, var)) if len >= h.min_stride_m.get() => {
+                    let sd = h.stride_sigma_rad.get();
+                    let mut event = HeadingEvent {
+                        foot_heading_rad: dir,
+                        direction_rad: f64::NAN,
+                        outcome: Err(Rejection::NoSource),
+                        baseline_s: 0.0,
+                    };
+                    match weighted_association(&self.aid, h, xy, dir, var + sd * sd) {
+                        Ok((d, w)) => {
+                            event.direction_rad = d;
+                            if let Some(i) = eskf.stride_direction_update(d, sd / w.sqrt()) {
+                                self.counters.stride_used += 1;
+                                event.outcome = Ok(i);
+                                used[0] = Some(i);
+                            }
+                        }
+                        Err(r) => {
+                            self.counters.stride_rejected += 1;
+                            event.outcome = Err(r);
+                        }
+                    }
+                    Some(event)
+                }
+                Some(_) => {
+                    self.counters.stride_rejected += 1;
+                    None
+                }
+                None => None,
+            };
+            eskf.clone_footprint();
+            self.out.stride = event;
+        }
+        let (foot_heading, var) = eskf.heading_prediction(forward);
+        let straight = self.straight.push(foot_heading);
+        let mut event = HeadingEvent {
+            foot_heading_rad: foot_heading,
+            direction_rad: f64::NAN,
+            outcome: Err(Rejection::NoSource),
+            baseline_s: 0.0,
+        };
+        if h.observations.foot_axis() {
+            let sd = h.sigma_rad.get();
+            let assoc = if straight {
+                weighted_association(&self.aid, h, xy, foot_heading, var + sd * sd)
+            } else {
+                Err(Rejection::NotStraight)
+            };
+            match assoc {
+                Ok((d, w)) => {
+                    event.direction_rad = d;
+                    let i = eskf.heading_update(d, sd / w.sqrt(), forward);
+                    self.counters.heading_used += 1;
+                    event.outcome = Ok(i);
+                    used[1] = Some(i);
+                }
+                Err(r) => {
+                    self.count_rejection(r);
+                    event.outcome = Err(r);
+                }
+            }
+        }
+        self.out.heading = Some(event);
+        for i in used.iter().flatten() {
+            self.watch_bias(i);
+        }
+    }
+
+    /// Feeds a used heading innovation to the bias-change detector; on an alarm the bias is as
+    /// uncertain again as without a prior.
+    fn watch_bias(&mut self, i: &Innovation) {
+        let Some(d) = self.bias_change.as_mut() else {
+            return;
+        };
+        if d.push(i.r[0] / i.s_diag[0].sqrt()) {
+            self.counters.bias_changes += 1;
+            let sd = self.cfg.eskf.gyro_bias_initial_sd_rad_s.get();
+            if let Some(e) = self.eskf.as_mut() {
+                e.widen_gyro_bias(sd * sd);
+            }
+        }
+    }
+
+    fn count_rejection(&mut self, r: Rejection) {
+        match r {
+            Rejection::NotStraight => self.counters.heading_not_straight += 1,
+            Rejection::OutsideGate => self.counters.heading_outside_gate += 1,
+            Rejection::OutsideMap => self.counters.heading_outside_map += 1,
+            Rejection::Unlikely => self.counters.heading_unlikely += 1,
+            Rejection::NoSource => {}
+        }
+    }
+
     fn fill_output(&mut self) {
         let (b, sd) = self.bias_sensor();
         let e = self.eskf.as_ref().expect("aligned");
@@ -814,6 +965,40 @@ impl Estimator {
             self.converged_at_s = Some(out.t_s);
         }
     }
+}
+
+/// Associates `value_rad` (a walking or foot heading, with innovation variance `s_rad2`)
+/// with the nearest dominant direction, and weighs the association: the posterior probability
+/// that the walker walks along that direction rather than in some other direction (uniform over
+/// the spacing of the candidate directions), with prior `heading.aligned_prior`. Below
+/// `heading.min_weight` the observation is rejected as unlikely.
+fn weighted_association(
+    aid: &HeadingAid,
+    h: &HeadingConfig,
+    xy: [f64; 2],
+    value_rad: f64,
+    s_rad2: f64,
+) -> Result<(f64, f64), Rejection> {
+    let dir = aid.associate(xy, value_rad, h.gate_rad.get())?;
+    let w = association_weight(
+        wrap_pi(dir - value_rad),
+        s_rad2,
+        h.aligned_prior.get(),
+        aid.spacing_rad(),
+    );
+    if w < h.min_weight.get() || w <= 0.0 {
+        return Err(Rejection::Unlikely);
+    }
+    Ok((dir, w))
+}
+
+/// Posterior probability of "aligned" for residual `r_rad` with variance `s_rad2`, against
+/// "walking in any direction" spread uniformly over `spacing_rad`, with prior `prior`.
+pub fn association_weight(r_rad: f64, s_rad2: f64, prior: f64, spacing_rad: f64) -> f64 {
+    let aligned = prior * (-0.5 * r_rad * r_rad / s_rad2).exp()
+        / (2.0 * std::f64::consts::PI * s_rad2).sqrt();
+    let other = (1.0 - prior) / spacing_rad;
+    aligned / (aligned + other)
 }
 
 fn check_finite(s: &ImuInput) -> Result<(), SampleError> {

@@ -143,6 +143,9 @@ pub enum Rejection {
     OutsideGate,
     /// Not inside any corridor of the map.
     OutsideMap,
+    /// The association weight was too low: the walker is most likely not walking along the
+    /// nearest direction (a weave, a side-step, a turn).
+    Unlikely,
     /// No heading source.
     NoSource,
 }
@@ -154,12 +157,22 @@ impl Rejection {
             Rejection::NotStraight => "not_straight",
             Rejection::OutsideGate => "outside_gate",
             Rejection::OutsideMap => "outside_map",
+            Rejection::Unlikely => "unlikely",
             Rejection::NoSource => "no_source",
         }
     }
 }
 
 impl HeadingAid {
+    /// The angle between neighbouring candidate directions: the grid step, or π for a
+    /// corridor's ψ / ψ + π.
+    pub fn spacing_rad(&self) -> f64 {
+        match self {
+            HeadingAid::Grid { step_rad, .. } => *step_rad,
+            HeadingAid::None | HeadingAid::Map(_) => PI,
+        }
+    }
+
     /// The associated direction (rad, map frame) for a foot at `xy` walking at `heading_rad`,
     /// the nearest of the candidate directions within `gate_rad`.
     pub fn associate(
