@@ -32,10 +32,8 @@
 //!   effect of the catalogue reaches significance.
 
 use crate::eval::EvalOptions;
-use crate::residuals::{
-    self, anova_oneway, cusum, group_means, nis_consistency, regress, whiteness,
-};
 use crate::runner::{RunError, heading_aid, run_log};
+use crate::stats::{self, anova_oneway, cusum, group_means, nis_consistency, regress, whiteness};
 use corridor_shared::config::{ConfigFile, Mode};
 use corridor_shared::imu_csv::ImuLog;
 use corridor_shared::injection::BiasInjection;
@@ -297,7 +295,7 @@ pub fn analyse(
         rss_rad2: used.iter().map(|r| r.r_rad * r.r_rad).sum(),
         nis_too_large: nis_t
             .as_ref()
-            .is_some_and(|t| t.verdict == residuals::NisVerdict::TooLarge),
+            .is_some_and(|t| t.verdict == stats::NisVerdict::TooLarge),
         nis_p: nis_t.as_ref().map_or(f64::NAN, |t| t.p_value),
         bias_rad_s: bias,
         bias_sd_rad_s: bias_sd,
@@ -681,7 +679,7 @@ pub fn score_by_likelihood(
         match best {
             Some((lr, k, cand)) => {
                 let n = cand.analysis.consistency.observations as f64;
-                let p = residuals::f_sf(lr.max(0.0), k as f64, (n - k as f64).max(1.0));
+                let p = stats::f_sf(lr.max(0.0), k as f64, (n - k as f64).max(1.0));
                 // The F test only counts for an effect whose own signature is there (residual
                 // test p < 0.05): extension states are flexible (three g-sensitivity states
                 // also absorb a bias drift at stance, where f ≈ g), so a lower RSS alone does
