@@ -12,16 +12,6 @@ pub const ATTITUDE_HEADER: &str = "seq,imu_seq,t_s,roll_rad,pitch_rad,yaw_rad,qw
 /// Header of `bias.csv`.
 pub const BIAS_HEADER: &str = "seq,imu_seq,t_s,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,converged";
 
-/// The `estimates.csv` name of a wire phase code.
-pub fn phase_name(p: u32) -> &'static str {
-    match p {
-        phase::ALIGNING => "aligning",
-        phase::CALIBRATING => "calibrating",
-        phase::TRACKING => "tracking",
-        _ => "unknown",
-    }
-}
-
 /// Writes one `attitude.csv` row.
 pub fn write_attitude_row(w: &mut impl Write, x: &AttitudeSample) -> std::io::Result<()> {
     let (q, b, s) = (
@@ -50,7 +40,7 @@ pub fn write_attitude_row(w: &mut impl Write, x: &AttitudeSample) -> std::io::Re
         s[2],
         u8::from(x.flags & FLAG_STANCE != 0),
         u8::from(x.flags & FLAG_CONVERGED != 0),
-        phase_name(x.phase)
+        phase::name(x.phase)
     )
 }
 

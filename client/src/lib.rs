@@ -56,18 +56,3 @@ pub enum ClientError {
     #[error("interrupted by a termination request (SIGINT/SIGTERM)")]
     Interrupted,
 }
-
-/// Shorthand for building a [`ServiceError::Io`].
-pub(crate) fn io_err(
-    service: &'static str,
-    domain: &Domain,
-    operation: &'static str,
-    detail: impl std::fmt::Debug,
-) -> ClientError {
-    ClientError::Service(ServiceError::Io {
-        service,
-        operation,
-        domain: domain.name().to_owned(),
-        detail: format!("{detail:?}"),
-    })
-}

@@ -136,16 +136,6 @@ fn offline(log: &ImuLog) -> (Vec<Estimate>, usize) {
     (est, first)
 }
 
-fn sample(r: &corridor_shared::imu_csv::ImuRow) -> ImuSample {
-    ImuSample {
-        t_s: r.t_s,
-        gyro_rad_s: r.gyro_rad_s,
-        accel_m_s2: r.accel_m_s2,
-        temp_c: f64::NAN,
-        ..ImuSample::default()
-    }
-}
-
 #[test]
 fn sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint() {
     let name = "test_daemon_sigkill";
@@ -174,7 +164,7 @@ fn sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint() {
                 }
                 let due = start + Duration::from_secs_f64((r.t_s - t0) / 10.0);
                 std::thread::sleep(due.saturating_duration_since(Instant::now()));
-                p.send_imu(sample(r)).unwrap();
+                p.send_imu(ImuSample::from(r)).unwrap();
             }
             p.stats()
         })
@@ -225,7 +215,7 @@ fn sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint() {
             if i % 500 == 0 {
                 std::thread::sleep(Duration::from_millis(5)); // stay within the buffers
             }
-            p.send_imu(sample(r)).unwrap();
+            p.send_imu(ImuSample::from(r)).unwrap();
         }
         p.finish().unwrap();
         assert_eq!(p.stats().imu_undelivered, 0);

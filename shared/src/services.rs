@@ -150,6 +150,38 @@ pub enum ServiceError {
     },
 }
 
+impl ServiceError {
+    /// A failed send, receive, notify or wait ([`ServiceError::Io`]) on `service` in `domain`.
+    pub fn io(
+        domain: &Domain,
+        service: &'static str,
+        operation: &'static str,
+        detail: impl Debug,
+    ) -> Self {
+        ServiceError::Io {
+            service,
+            operation,
+            domain: domain.name().to_owned(),
+            detail: format!("{detail:?}"),
+        }
+    }
+
+    /// A port of `service` in `domain` that could not be created ([`ServiceError::Port`]).
+    pub fn port(
+        domain: &Domain,
+        service: &'static str,
+        port: &'static str,
+        detail: impl Debug,
+    ) -> Self {
+        ServiceError::Port {
+            service,
+            port,
+            domain: domain.name().to_owned(),
+            detail: format!("{detail:?}"),
+        }
+    }
+}
+
 /// What happens when a reader falls behind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Delivery {

@@ -18,7 +18,9 @@ use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::services::Topic;
-use corridor_shared::wire::{AttitudeSample, BiasSample, Diagnostics, FLAG_END_OF_STREAM};
+use corridor_shared::wire::{
+    AttitudeSample, BiasSample, Diagnostics, FLAG_END_OF_STREAM, ImuSample,
+};
 use daemon_common::*;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -98,7 +100,7 @@ fn consumers_come_and_go_and_a_stalled_one_does_not_stall_the_estimator() {
             for r in &rows {
                 let due = start + Duration::from_secs_f64((r.t_s - t0) / 20.0);
                 std::thread::sleep(due.saturating_duration_since(Instant::now()));
-                p.send_imu(imu(r)).unwrap();
+                p.send_imu(ImuSample::from(r)).unwrap();
             }
             p.finish().unwrap();
             p.stats()
@@ -220,7 +222,7 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
         let mut p = Producer::new(&domain, "test-p1", Delivery::Lossless).unwrap();
         p.wait_for_daemon(WAIT).unwrap();
         for r in &rows[..k1] {
-            p.send_imu(imu(r)).unwrap();
+            p.send_imu(ImuSample::from(r)).unwrap();
         }
         wait_progress(k1 as u64);
     }
@@ -229,7 +231,7 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
         let mut p = Producer::new(&domain, "test-p2", Delivery::Lossless).unwrap();
         p.wait_for_daemon(WAIT).unwrap();
         for r in &rows[..k2] {
-            p.send_imu(imu(r)).unwrap();
+            p.send_imu(ImuSample::from(r)).unwrap();
         }
         wait_progress((k1 + 1 + k2) as u64);
     }
@@ -238,7 +240,7 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
         let mut p = Producer::new(&domain, "test-p3", Delivery::Lossless).unwrap();
         p.wait_for_daemon(WAIT).unwrap();
         for (i, r) in rows[k2 + gap..k2 + gap + k3].iter().enumerate() {
-            let mut s = imu(r);
+            let mut s = ImuSample::from(r);
             s.seq = (k2 + gap + i) as u64;
             p.send_imu_raw(s).unwrap();
         }

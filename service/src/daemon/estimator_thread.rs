@@ -3,7 +3,7 @@
 //! line.
 
 use super::latency::LatencyHistogram;
-use super::outputs::{Out, Outputs, attitude_of, bias_of, flags_of, phase_code, phase_name};
+use super::outputs::{Out, Outputs, attitude_of, bias_of, flags_of, phase_code};
 use super::receive::{Msg, RxCounters};
 use super::{DaemonConfig, DaemonError, DaemonReport};
 use crate::checkpoint::{self, Checkpoint, CheckpointError};
@@ -350,7 +350,7 @@ impl EstState {
             Vec3Fmt(self.last.gyro_bias_rad_s),
             Vec3Fmt(self.last.gyro_bias_sd_rad_s),
             if self.last.converged { "yes" } else { "no" },
-            phase_name(self.est.phase()),
+            self.est.phase().name(),
         );
         self.latency_health.clear();
         self.health = HealthMark {

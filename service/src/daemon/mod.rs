@@ -379,31 +379,3 @@ fn join<T>(thread: &'static str, h: JoinHandle<Result<T, DaemonError>>) -> Resul
         Err(DaemonError::Panicked { thread, message })
     })
 }
-
-fn port_err(
-    domain: &Domain,
-    service: &'static str,
-    port: &'static str,
-    e: impl std::fmt::Debug,
-) -> DaemonError {
-    DaemonError::Service(ServiceError::Port {
-        service,
-        port,
-        domain: domain.name().to_owned(),
-        detail: format!("{e:?}"),
-    })
-}
-
-fn io_err(
-    domain: &Domain,
-    service: &'static str,
-    operation: &'static str,
-    e: impl std::fmt::Debug,
-) -> DaemonError {
-    DaemonError::Service(ServiceError::Io {
-        service,
-        operation,
-        domain: domain.name().to_owned(),
-        detail: format!("{e:?}"),
-    })
-}

@@ -1,9 +1,9 @@
 //! The output publishers (attitude, bias, nav, diagnostics) and the conversion of an
 //! [`Estimate`] into the wire messages.
 
-use super::{DaemonConfig, DaemonError, port_err};
+use super::{DaemonConfig, DaemonError};
 use crate::core::{Estimate, Phase};
-use corridor_shared::services::{Access, Topic};
+use corridor_shared::services::{Access, ServiceError, Topic};
 use corridor_shared::wire::{
     AttitudeSample, BiasSample, Diagnostics, FLAG_BIAS_CORRECTED, FLAG_CONVERGED, FLAG_STANCE,
     NavSample, phase,
@@ -29,12 +29,12 @@ impl<T: Topic> Out<T> {
             .backpressure_strategy(cfg.delivery.backpressure())
             .max_loaned_samples(2)
             .create()
-            .map_err(|e| port_err(d, T::SERVICE, "publisher", e))?;
+            .map_err(|e| ServiceError::port(d, T::SERVICE, "publisher", e))?;
         let notifier = d
             .open_event(node, T::SERVICE, true)?
             .notifier_builder()
             .create()
-            .map_err(|e| port_err(d, T::SERVICE, "notifier", e))?;
+            .map_err(|e| ServiceError::port(d, T::SERVICE, "notifier", e))?;
         Ok(Self {
             publisher,
             notifier,
@@ -80,14 +80,6 @@ pub(super) fn phase_code(p: Phase) -> u32 {
         Phase::Aligning => phase::ALIGNING,
         Phase::Calibrating => phase::CALIBRATING,
         Phase::Tracking => phase::TRACKING,
-    }
-}
-
-pub(super) fn phase_name(p: Phase) -> &'static str {
-    match p {
-        Phase::Aligning => "aligning",
-        Phase::Calibrating => "calibrating",
-        Phase::Tracking => "tracking",
     }
 }
 

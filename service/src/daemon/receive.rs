@@ -1,8 +1,8 @@
 //! The receive thread (`corridor-rx`): input subscribers, `seq` and producer checks, and the
 //! bounded channel to the estimator thread.
 
-use super::{DaemonConfig, DaemonError, io_err, port_err};
-use corridor_shared::services::{Access, Delivery, Topic};
+use super::{DaemonConfig, DaemonError};
+use corridor_shared::services::{Access, Delivery, ServiceError, Topic};
 use corridor_shared::wire::{ANGLE_HEADING, AngleObservation, ImuSample};
 use crossbeam_channel::TrySendError;
 use iceoryx2::prelude::*;
@@ -49,18 +49,18 @@ pub(super) fn rx_thread(
             .subscriber_builder()
             .buffer_size(ImuSample::QOS.buffer_size)
             .create()
-            .map_err(|e| port_err(d, ImuSample::SERVICE, "subscriber", e))?;
+            .map_err(|e| ServiceError::port(d, ImuSample::SERVICE, "subscriber", e))?;
         let listener = d
             .open_event(&node, ImuSample::SERVICE, true)?
             .listener_builder()
             .create()
-            .map_err(|e| port_err(d, ImuSample::SERVICE, "listener", e))?;
+            .map_err(|e| ServiceError::port(d, ImuSample::SERVICE, "listener", e))?;
         let angles = d
             .open::<AngleObservation>(&node, access)?
             .subscriber_builder()
             .buffer_size(AngleObservation::QOS.buffer_size)
             .create()
-            .map_err(|e| port_err(d, AngleObservation::SERVICE, "subscriber", e))?;
+            .map_err(|e| ServiceError::port(d, AngleObservation::SERVICE, "subscriber", e))?;
         // The producers notify this one too; creating it lets them open it before we wait.
         let _angles_event = d.open_event(&node, AngleObservation::SERVICE, true)?;
         Ok((imu, listener, angles, _angles_event, node))
@@ -85,10 +85,10 @@ pub(super) fn rx_thread(
     while !stopping() {
         listener
             .timed_wait(|_| {}, cfg.poll_timeout)
-            .map_err(|e| io_err(d, ImuSample::SERVICE, "wait", e))?;
+            .map_err(|e| ServiceError::io(d, ImuSample::SERVICE, "wait", e))?;
         while let Some(obs) = angles
             .receive()
-            .map_err(|e| io_err(d, AngleObservation::SERVICE, "receive", e))?
+            .map_err(|e| ServiceError::io(d, AngleObservation::SERVICE, "receive", e))?
         {
             let o: AngleObservation = *obs.payload();
             drop(obs);
@@ -104,7 +104,7 @@ pub(super) fn rx_thread(
         }
         while let Some(smp) = imu
             .receive()
-            .map_err(|e| io_err(d, ImuSample::SERVICE, "receive", e))?
+            .map_err(|e| ServiceError::io(d, ImuSample::SERVICE, "receive", e))?
         {
             let s: ImuSample = *smp.payload();
             let producer = smp.header().publisher_id();

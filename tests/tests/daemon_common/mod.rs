@@ -40,17 +40,6 @@ pub fn exp36_rows() -> Vec<ImuRow> {
         .rows
 }
 
-/// A row as an IMU sample (`seq` and `sent_ns` left to the producer).
-pub fn imu(r: &ImuRow) -> ImuSample {
-    ImuSample {
-        t_s: r.t_s,
-        gyro_rad_s: r.gyro_rad_s,
-        accel_m_s2: r.accel_m_s2,
-        temp_c: r.temp_c.unwrap_or(f64::NAN),
-        ..ImuSample::default()
-    }
-}
-
 /// A daemon config for `domain` with the gdins config and its grid heading aid.
 pub fn daemon_config(domain: &Domain, delivery: Delivery) -> DaemonConfig {
     let cfg = config();
@@ -142,7 +131,7 @@ pub fn produce(
             let mut p = Producer::new(&domain, node, delivery).unwrap();
             p.wait_for_daemon(WAIT).unwrap();
             for r in &rows {
-                p.send_imu(imu(r)).unwrap();
+                p.send_imu(ImuSample::from(r)).unwrap();
             }
             if finish {
                 p.finish().unwrap();
