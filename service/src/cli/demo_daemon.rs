@@ -2,11 +2,13 @@
 //! in-process daemon to a logger and a PDR consumer, checked against the offline run.
 
 use anyhow::{Context, Result, bail};
-use corridor_client::csv_rows::{ATTITUDE_HEADER, BIAS_HEADER, write_attitude_row, write_bias_row};
+use corridor_client::record::{RecordOptions, RecordStop, Recorded, Recorder};
+use corridor_client::replay::{ReplayOptions, Speed, replay};
+use corridor_client::track::{Track, TrackStop, Tracker};
+use corridor_client::{ClientError, Delivery, Domain, ProducerStats};
 use corridor_service::runner::{self, RunOptions};
+use corridor_shared::imu_csv::ImuLog;
 use corridor_shared::injection::BiasInjection;
-use corridor_shared::wire::{AttitudeSample, BiasSample, FLAG_END_OF_STREAM, ImuSample, NavSample};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -19,30 +21,6 @@ const DEMO_POLL: Duration = Duration::from_millis(50);
 /// Largest accepted difference between the daemon's final bias and the offline run's, rad/s.
 const DEMO_BIAS_TOLERANCE_RAD_S: f64 = 1e-12;
 
-/// What the demo's logger consumer received.
-#[derive(Debug, Default)]
-struct DemoLogged {
-    attitude_rows: u64,
-    bias_rows: u64,
-    /// Attitude and bias messages missing from the `seq` numbering.
-    missed: u64,
-    /// The bias of the last attitude row.
-    last_attitude_bias_rad_s: [f64; 3],
-    /// The bias of the end-of-stream bias message (the daemon's final bias).
-    final_bias_rad_s: [f64; 3],
-}
-
-/// What the demo's PDR consumer received.
-#[derive(Debug, Default)]
-struct DemoTracked {
-    /// One nav sample per stance.
-    strides: Vec<NavSample>,
-    /// The stance count carried by the end-of-stream nav sample.
-    end_stances: u64,
-    /// Nav messages missing from the `seq` numbering.
-    missed: u64,
-}
-
 /// Runs the daemon in-process on a domain of this process, opens a logger and a PDR consumer,
 /// replays `exp25` (its log, configuration and injection) through the client [`Producer`] at
 /// full speed with lossless delivery, and checks the daemon's final bias against `offline`
@@ -50,7 +28,6 @@ struct DemoTracked {
 ///
 /// [`Producer`]: corridor_client::Producer
 pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summary) -> Result<()> {
-    use corridor_client::{Delivery, Domain};
     use corridor_service::daemon::{self, DaemonConfig};
 
     let started = Instant::now();
@@ -95,7 +72,7 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
             .context("starting the PDR thread")?
     };
     let replay_started = Instant::now();
-    let replay = (|| -> Result<corridor_client::ProducerStats> {
+    let replay = (|| -> Result<ProducerStats> {
         let mut ready = 0;
         let waiting = Instant::now();
         while ready < 2 {
@@ -145,20 +122,18 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
         + stats.imu_sent.saturating_sub(d.received)
         + d.seq_gaps
         + d.dropped_overflow;
-    let lost_logger = d.accepted.saturating_sub(logged.attitude_rows) + logged.missed;
+    let logged_missed = logged.attitude_missed + logged.bias_missed;
+    let lost_logger = d.accepted.saturating_sub(logged.attitude_rows) + logged_missed;
     let lost_pdr = tracked
         .end_stances
-        .saturating_sub(tracked.strides.len() as u64)
+        .unwrap_or(0)
+        .saturating_sub(tracked.strides)
         + tracked.missed;
     let lost = lost_daemon + lost_logger + lost_pdr;
     let rejected = d.rejected_non_finite + d.rejected_time + d.rejected_duplicate_seq + d.late;
-    let last = tracked.strides.last().copied().unwrap_or_default();
-    let path_m: f64 = tracked
-        .strides
-        .windows(2)
-        .map(|w| (w[1].p_m[0] - w[0].p_m[0]).hypot(w[1].p_m[1] - w[0].p_m[1]))
-        .sum();
-    let daemon_bias = logged.final_bias_rad_s;
+    let last = tracked.last.unwrap_or_default();
+    let path_m = tracked.path_m;
+    let daemon_bias = logged.final_bias_rad_s.unwrap_or([f64::NAN; 3]);
     let diff: [f64; 3] = std::array::from_fn(|k| (daemon_bias[k] - offline.bias_rad_s[k]).abs());
     let max_diff = diff
         .iter()
@@ -182,13 +157,13 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
         "logger: {} attitude rows, {} bias rows, {} missed ({}, {})",
         logged.attitude_rows,
         logged.bias_rows,
-        logged.missed,
+        logged_missed,
         dir.join("attitude.csv").display(),
         dir.join("bias.csv").display()
     );
     println!(
         "pdr: {} strides ({} stances offline), {} missed; last at t = {:.2} s: x = {:.3} m, y = {:.3} m, z = {:.3} m, yaw = {:.1}°; path {:.2} m",
-        tracked.strides.len(),
+        tracked.strides,
         offline.stances,
         tracked.missed,
         last.t_s,
@@ -243,10 +218,10 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
             "the daemon's final bias differs from the offline run's by {max_diff:e} rad/s on its worst axis (tolerance {DEMO_BIAS_TOLERANCE_RAD_S:e})"
         );
     }
-    if tracked.strides.len() as u64 != offline.stances {
+    if tracked.strides != offline.stances {
         bail!(
             "the PDR consumer saw {} strides, the offline run {} stances",
-            tracked.strides.len(),
+            tracked.strides,
             offline.stances
         );
     }
@@ -256,133 +231,68 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
     Ok(())
 }
 
-/// Sends `log` with `injection` added to the gyro through a lossless [`Producer`], as fast as
-/// the daemon takes it, then the end-of-stream marker.
-///
-/// [`Producer`]: corridor_client::Producer
-fn demo_replay(
-    domain: &corridor_client::Domain,
-    log: &corridor_shared::imu_csv::ImuLog,
-    injection: &BiasInjection,
-) -> Result<corridor_client::ProducerStats> {
-    use corridor_client::{Delivery, Producer};
-    let mut p = Producer::new(domain, "corridor-demo-replay", Delivery::Lossless)?;
-    p.wait_for_daemon(DEMO_WAIT)?;
-    for r in &log.rows {
-        let mut gyro = r.gyro_rad_s;
-        injection.apply(r.t_s, &mut gyro);
-        p.send_imu(ImuSample {
-            t_s: r.t_s,
-            gyro_rad_s: gyro,
-            accel_m_s2: r.accel_m_s2,
-            temp_c: r.temp_c.unwrap_or(f64::NAN),
-            ..ImuSample::default()
-        })?;
-    }
-    p.finish()?;
-    Ok(p.stats())
+/// Sends `log` with `injection` added to the gyro through a lossless producer
+/// ([`corridor_client::replay`]), as fast as the daemon takes it, then the end-of-stream marker.
+fn demo_replay(domain: &Domain, log: &ImuLog, injection: &BiasInjection) -> Result<ProducerStats> {
+    let opts = ReplayOptions {
+        node_name: "corridor-demo-replay".into(),
+        delivery: Delivery::Lossless,
+        speed: Speed::Max,
+        loops: 1,
+        injection: *injection,
+        wait: DEMO_WAIT,
+    };
+    Ok(replay(domain, &log.rows, &opts)?.stats)
 }
 
-/// The demo's logger: writes the attitude and bias streams to `dir/attitude.csv` and
-/// `dir/bias.csv` (the columns of `corridor-log`) until the end-of-stream attitude and bias.
+/// The demo's logger ([`Recorder`], the `corridor-log` tool's loop): writes the attitude and
+/// bias streams to `dir/attitude.csv` and `dir/bias.csv` until the end-of-stream attitude and
+/// bias; says `ready` once attached.
 fn demo_logger(
-    domain: &corridor_client::Domain,
+    domain: &Domain,
     dir: &Path,
     ready: &std::sync::mpsc::Sender<()>,
     abort: &AtomicBool,
-) -> Result<DemoLogged> {
-    use corridor_client::Subscriber;
-    let attitude =
-        Subscriber::<AttitudeSample>::open(domain, "corridor-demo-log-attitude", DEMO_WAIT)?;
-    let bias = Subscriber::<BiasSample>::open(domain, "corridor-demo-log-bias", DEMO_WAIT)?;
-    let att_path = dir.join("attitude.csv");
-    let bias_path = dir.join("bias.csv");
-    let mut att_w = runner::create(&att_path)?;
-    let mut bias_w = runner::create(&bias_path)?;
-    writeln!(att_w, "{ATTITUDE_HEADER}").map_err(runner::io_at(&att_path))?;
-    writeln!(bias_w, "{BIAS_HEADER}").map_err(runner::io_at(&bias_path))?;
+) -> Result<Recorded> {
+    let opts = RecordOptions {
+        node_name: "corridor-demo-log".into(),
+        wait: DEMO_WAIT,
+        idle_timeout: DEMO_WAIT,
+        idle_before_first: true,
+        poll: DEMO_POLL,
+    };
+    let recorder = Recorder::open(domain, dir, &opts)?;
     let _ = ready.send(());
-
-    let mut got = DemoLogged::default();
-    let (mut attitude_done, mut bias_done) = (false, false);
-    let mut last_rx = Instant::now();
-    while !(attitude_done && bias_done) {
-        if abort.load(Ordering::Relaxed) {
-            bail!("stopped: the replay failed");
-        }
-        // The bias stream first, without waiting while attitudes still come.
-        let b = if attitude_done {
-            bias.recv_timeout(DEMO_POLL)?
-        } else {
-            bias.try_recv()?
-        };
-        if let Some(b) = b {
-            last_rx = Instant::now();
-            if b.flags & FLAG_END_OF_STREAM != 0 {
-                got.final_bias_rad_s = b.gyro_bias_rad_s;
-                bias_done = true;
-            } else {
-                write_bias_row(&mut bias_w, &b).map_err(runner::io_at(&bias_path))?;
-                got.bias_rows += 1;
-            }
-            continue;
-        }
-        if !attitude_done && let Some(x) = attitude.recv_timeout(DEMO_POLL)? {
-            last_rx = Instant::now();
-            if x.flags & FLAG_END_OF_STREAM != 0 {
-                attitude_done = true;
-                continue;
-            }
-            write_attitude_row(&mut att_w, &x).map_err(runner::io_at(&att_path))?;
-            got.attitude_rows += 1;
-            got.last_attitude_bias_rad_s = x.gyro_bias_rad_s;
-            continue;
-        }
-        if last_rx.elapsed() >= DEMO_WAIT {
-            bail!("nothing from the daemon for {DEMO_WAIT:?}");
-        }
+    let got = recorder.run(abort)?;
+    match got.stopped {
+        RecordStop::EndOfStream => Ok(got),
+        RecordStop::Aborted => bail!("stopped: the replay failed"),
+        RecordStop::IdleTimeout => bail!("nothing from the daemon for {DEMO_WAIT:?}"),
+        RecordStop::Interrupted => Err(ClientError::Interrupted.into()),
     }
-    att_w.flush().map_err(runner::io_at(&att_path))?;
-    bias_w.flush().map_err(runner::io_at(&bias_path))?;
-    got.missed = attitude.missed() + bias.missed();
-    Ok(got)
 }
 
-/// The demo's PDR consumer: collects the nav sample of every stance until the end of stream.
+/// The demo's PDR consumer ([`Tracker`], the `corridor-pdr` tool's loop): follows the nav
+/// stream until its end; says `ready` once attached.
 fn demo_pdr(
-    domain: &corridor_client::Domain,
+    domain: &Domain,
     ready: &std::sync::mpsc::Sender<()>,
     abort: &AtomicBool,
-) -> Result<DemoTracked> {
-    let nav =
-        corridor_client::Subscriber::<NavSample>::open(domain, "corridor-demo-pdr", DEMO_WAIT)?;
+) -> Result<Track> {
+    let tracker = Tracker::open(domain, "corridor-demo-pdr", DEMO_WAIT)?;
     let _ = ready.send(());
-    let mut got = DemoTracked::default();
-    let mut last_rx = Instant::now();
-    loop {
-        if abort.load(Ordering::Relaxed) {
-            bail!("stopped: the replay failed");
-        }
-        let Some(n) = nav.recv_timeout(DEMO_POLL)? else {
-            if last_rx.elapsed() >= DEMO_WAIT {
-                bail!("nothing from the daemon for {DEMO_WAIT:?}");
-            }
-            continue;
-        };
-        last_rx = Instant::now();
-        if n.flags & FLAG_END_OF_STREAM != 0 {
-            got.end_stances = n.stance;
-            break;
-        }
-        got.strides.push(n);
+    let got = tracker.run(DEMO_POLL, Some(DEMO_WAIT), abort, |_| {})?;
+    match got.stopped {
+        TrackStop::EndOfStream => Ok(got),
+        TrackStop::Aborted => bail!("stopped: the replay failed"),
+        TrackStop::IdleTimeout => bail!("nothing from the daemon for {DEMO_WAIT:?}"),
+        TrackStop::Interrupted => Err(ClientError::Interrupted.into()),
     }
-    got.missed = nav.missed();
-    Ok(got)
 }
 
 /// Files of `domain` still in the iceoryx2 locations: shared memory (`/dev/shm`) and the
 /// iceoryx2 root directory (services, nodes), two levels deep.
-fn demo_leftovers(domain: &corridor_client::Domain) -> Vec<String> {
+fn demo_leftovers(domain: &Domain) -> Vec<String> {
     fn scan(dir: &Path, tag: &str, depth: u32, left: &mut Vec<String>) {
         let Ok(entries) = std::fs::read_dir(dir) else {
             return;
