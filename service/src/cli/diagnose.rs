@@ -30,14 +30,14 @@ pub(super) fn diagnose(a: &DiagnoseArgs) -> Result<()> {
         .as_deref()
         .map(corridor_shared::truth_csv::read_truth_csv)
         .transpose()?;
-    let (report, before, after, _) = corridor_service::diagnose::diagnose(
+    let d = corridor_service::diagnose::run_diagnosis(
         &log,
         &file,
         truth.as_deref(),
         a.model.map.as_deref(),
     )?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    corridor_service::diagnose::write_report(&a.out, &report, &before, &after)?;
+    corridor_service::diagnose::write_report(&a.out, &d.report, &d.before, &d.after)?;
     print!("{}", std::fs::read_to_string(a.out.join("report.md"))?);
     Ok(())
 }
