@@ -541,60 +541,6 @@ impl Domain {
     }
 }
 
-/// Opens [`IMU_SERVICE`]; see [`Domain::open`].
-pub fn open_imu(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<ImuSample>, ServiceError> {
-    domain.open::<ImuSample>(node, access)
-}
-
-/// Opens [`ANGLES_SERVICE`]; see [`Domain::open`].
-pub fn open_angles(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<AngleObservation>, ServiceError> {
-    domain.open::<AngleObservation>(node, access)
-}
-
-/// Opens [`ATTITUDE_SERVICE`]; see [`Domain::open`].
-pub fn open_attitude(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<AttitudeSample>, ServiceError> {
-    domain.open::<AttitudeSample>(node, access)
-}
-
-/// Opens [`BIAS_SERVICE`]; see [`Domain::open`].
-pub fn open_bias(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<BiasSample>, ServiceError> {
-    domain.open::<BiasSample>(node, access)
-}
-
-/// Opens [`NAV_SERVICE`]; see [`Domain::open`].
-pub fn open_nav(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<NavSample>, ServiceError> {
-    domain.open::<NavSample>(node, access)
-}
-
-/// Opens [`DIAGNOSTICS_SERVICE`]; see [`Domain::open`].
-pub fn open_diagnostics(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<Diagnostics>, ServiceError> {
-    domain.open::<Diagnostics>(node, access)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
