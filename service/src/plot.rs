@@ -1025,14 +1025,25 @@ mod tests {
         assert_eq!(balanced(&fig.to_svg()).unwrap(), "svg");
     }
 
-    /// Writes the example figure when CORRIDOR_PLOT_EXAMPLE is set to a file path.
+    /// `write_svg` writes exactly `to_svg`, at the size asked for. With CORRIDOR_PLOT_EXAMPLE
+    /// set to a file path, the example figure is also written there, to look at.
     #[test]
-    fn write_example_when_asked() {
+    fn write_svg_writes_the_figure_at_its_size() {
+        let fig = example().with_size(640, 200);
+        let dir = std::env::temp_dir().join(format!("corridor-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("example.svg");
+        let written = fig
+            .write_svg(&path)
+            .and_then(|()| std::fs::read_to_string(&path));
+        std::fs::remove_dir_all(&dir).unwrap();
+        let written = written.unwrap();
+        assert_eq!(written, fig.to_svg());
+        assert_eq!(balanced(&written).unwrap(), "svg");
+        assert!(written.contains("width=\"640\""), "{}", &written[..200]);
+        assert!(!example().to_svg().contains("width=\"640\""));
         if let Ok(p) = std::env::var("CORRIDOR_PLOT_EXAMPLE") {
-            example()
-                .with_size(900, 300)
-                .write_svg(Path::new(&p))
-                .unwrap();
+            fig.write_svg(Path::new(&p)).unwrap();
         }
     }
 }
