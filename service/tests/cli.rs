@@ -1,5 +1,8 @@
 //! The `corridor` binary: outputs of `run`, and clear errors for bad input.
 
+mod common;
+
+use common::TempDir;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -14,27 +17,8 @@ fn corridor(args: &[&str]) -> std::process::Output {
         .expect("corridor runs")
 }
 
-/// A fresh temporary directory, removed when dropped (also when the test fails).
-struct TempDir(PathBuf);
-
-impl std::ops::Deref for TempDir {
-    type Target = Path;
-    fn deref(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 fn tmp(name: &str) -> TempDir {
-    let d = std::env::temp_dir().join(format!("corridor-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    TempDir(d)
+    TempDir::new(&format!("cli-{}-{name}", std::process::id()))
 }
 
 #[test]

@@ -107,12 +107,28 @@ pub fn shm_files(domain: &str) -> Vec<String> {
     v
 }
 
-/// A fresh, empty temporary directory for `tag`.
-pub fn temp_dir(tag: &str) -> PathBuf {
+/// A fresh, empty temporary directory, removed when dropped (also when the test fails).
+pub struct TempDir(PathBuf);
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A fresh, empty temporary directory for `tag` (`corridor-{tag}`), removed when dropped.
+pub fn temp_dir(tag: &str) -> TempDir {
     let d = std::env::temp_dir().join(format!("corridor-{tag}"));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    TempDir(d)
 }
 
 /// Sends `rows` (then, if `finish`, the end-of-stream marker) from a producer created on a new
