@@ -29,7 +29,6 @@
 //! - `cusum`: the [`cusum`] range test and [`sliding_mean`];
 //! - `regression`: [`regress`] and [`simple_regression`];
 //! - `groups`: [`group_means`] and [`anova_oneway`].
-#![warn(missing_docs)]
 
 mod cusum;
 mod distributions;
