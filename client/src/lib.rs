@@ -2,14 +2,19 @@
 //!
 //! Map of the modules:
 //! - [`csv_rows`]: the CSV rows of the attitude and bias streams (logger tool and demo).
+//! - [`record`]: [`Recorder`], the attitude and bias streams to `attitude.csv` and `bias.csv`.
+//! - [`replay`]: [`replay()`], a recorded IMU log sent as a live sensor (paced, looped, with an
+//!   injected gyro bias).
+//! - [`track`]: [`Tracker`], the stride-by-stride positions of the nav stream.
 //! - [`producer`]: [`Producer`], publishes [`ImuSample`]s and [`AngleObservation`]s (and the
 //!   end-of-stream marker) and wakes the daemon.
 //! - [`subscriber`]: [`Subscriber<T>`], receives one of the daemon's outputs
 //!   ([`AttitudeSample`], [`BiasSample`], [`NavSample`], [`Diagnostics`]) with a blocking
 //!   [`Subscriber::recv_timeout`].
 //!
-//! Binaries (`src/bin/`): `corridor-replay` (a CSV log as a live IMU), `corridor-log` (the
-//! attitude stream to `estimates.csv`), `corridor-pdr` (stride-by-stride positions).
+//! Binaries (`src/bin/`), thin wrappers around the three tool modules (which `corridor demo`
+//! uses too): `corridor-replay` ([`replay`]), `corridor-log` ([`record`]), `corridor-pdr`
+//! ([`track`]). [`init_tracing`] is the log setup of every corridor binary.
 //!
 //! Service names, QoS and domains are defined once in [`corridor_shared::services`]; the wire
 //! types in [`corridor_shared::wire`].
@@ -26,11 +31,17 @@
 
 pub mod csv_rows;
 pub mod producer;
+pub mod record;
+pub mod replay;
 pub mod subscriber;
+pub mod track;
 
 pub use corridor_shared::services::{Delivery, Domain, ServiceError};
 pub use producer::{Producer, ProducerStats};
+pub use record::Recorder;
+pub use replay::replay;
 pub use subscriber::Subscriber;
+pub use track::Tracker;
 
 use std::time::Duration;
 
@@ -55,19 +66,24 @@ pub enum ClientError {
     /// SIGINT or SIGTERM was received (iceoryx2's signal handler).
     #[error("interrupted by a termination request (SIGINT/SIGTERM)")]
     Interrupted,
+    /// An output file could not be created or written.
+    #[error("{}: {source}", path.display())]
+    File {
+        /// The file (or directory).
+        path: std::path::PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
 }
 
-/// Shorthand for building a [`ServiceError::Io`].
-pub(crate) fn io_err(
-    service: &'static str,
-    domain: &Domain,
-    operation: &'static str,
-    detail: impl std::fmt::Debug,
-) -> ClientError {
-    ClientError::Service(ServiceError::Io {
-        service,
-        operation,
-        domain: domain.name().to_owned(),
-        detail: format!("{detail:?}"),
-    })
+/// Logs to stderr, filtered by `RUST_LOG`, or by `default_filter` (e.g. `warn`) when it is
+/// unset or invalid. Call once, at the start of a binary.
+pub fn init_tracing(default_filter: &str) {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default_filter)),
+        )
+        .with_writer(std::io::stderr)
+        .init();
 }

@@ -1,6 +1,6 @@
 //! [`Producer`]: feeds the daemon.
 
-use crate::{ClientError, io_err};
+use crate::ClientError;
 use corridor_shared::services::{
     ANGLES_SERVICE, Access, Delivery, Domain, IMU_SERVICE, PubSub, ServiceError,
 };
@@ -65,38 +65,30 @@ impl Producer {
     /// SIGINT/SIGTERM for this node: see [`Producer::termination_requested`].
     pub fn new(domain: &Domain, node_name: &str, delivery: Delivery) -> Result<Self, ClientError> {
         let node = domain.node(node_name, SignalHandlingMode::HandleTerminationRequests)?;
-        let port_err = |service, port, e: &dyn std::fmt::Debug| {
-            ClientError::Service(ServiceError::Port {
-                service,
-                port,
-                domain: domain.name().to_owned(),
-                detail: format!("{e:?}"),
-            })
-        };
         let imu_service = domain.open::<ImuSample>(&node, Access::Owner(delivery))?;
         let imu = imu_service
             .publisher_builder()
             .backpressure_strategy(delivery.backpressure())
             .max_loaned_samples(2)
             .create()
-            .map_err(|e| port_err(IMU_SERVICE, "publisher", &e))?;
+            .map_err(|e| ServiceError::port(domain, IMU_SERVICE, "publisher", e))?;
         let imu_notifier = domain
             .open_event(&node, IMU_SERVICE, true)?
             .notifier_builder()
             .create()
-            .map_err(|e| port_err(IMU_SERVICE, "notifier", &e))?;
+            .map_err(|e| ServiceError::port(domain, IMU_SERVICE, "notifier", e))?;
         let angles_service = domain.open::<AngleObservation>(&node, Access::Owner(delivery))?;
         let angles = angles_service
             .publisher_builder()
             .backpressure_strategy(delivery.backpressure())
             .max_loaned_samples(2)
             .create()
-            .map_err(|e| port_err(ANGLES_SERVICE, "publisher", &e))?;
+            .map_err(|e| ServiceError::port(domain, ANGLES_SERVICE, "publisher", e))?;
         let angles_notifier = domain
             .open_event(&node, ANGLES_SERVICE, true)?
             .notifier_builder()
             .create()
-            .map_err(|e| port_err(ANGLES_SERVICE, "notifier", &e))?;
+            .map_err(|e| ServiceError::port(domain, ANGLES_SERVICE, "notifier", e))?;
         Ok(Self {
             domain: domain.clone(),
             delivery,
@@ -131,7 +123,7 @@ impl Producer {
         }
         self.imu
             .update_connections()
-            .map_err(|e| io_err(IMU_SERVICE, &self.domain, "update connections", e))?;
+            .map_err(|e| ServiceError::io(&self.domain, IMU_SERVICE, "update connections", e))?;
         Ok(())
     }
 
@@ -156,14 +148,14 @@ impl Producer {
             sample,
             &mut self.stats.retries,
         )
-        .map_err(|e| io_err(IMU_SERVICE, &self.domain, "send", e))?;
+        .map_err(|e| ServiceError::io(&self.domain, IMU_SERVICE, "send", e))?;
         self.stats.imu_sent += 1;
         if n == 0 {
             self.stats.imu_undelivered += 1;
         }
         self.imu_notifier
             .notify()
-            .map_err(|e| io_err(IMU_SERVICE, &self.domain, "notify", e))?;
+            .map_err(|e| ServiceError::io(&self.domain, IMU_SERVICE, "notify", e))?;
         Ok(n)
     }
 
@@ -185,14 +177,14 @@ impl Producer {
         let n = self
             .angles
             .send_copy(obs)
-            .map_err(|e| io_err(ANGLES_SERVICE, &self.domain, "send", e))?;
+            .map_err(|e| ServiceError::io(&self.domain, ANGLES_SERVICE, "send", e))?;
         self.stats.angles_sent += 1;
         if n == 0 {
             self.stats.angles_undelivered += 1;
         }
         self.angles_notifier
             .notify()
-            .map_err(|e| io_err(ANGLES_SERVICE, &self.domain, "notify", e))?;
+            .map_err(|e| ServiceError::io(&self.domain, ANGLES_SERVICE, "notify", e))?;
         Ok(n)
     }
 

@@ -1,6 +1,6 @@
 //! [`Subscriber<T>`]: one output stream of the daemon.
 
-use crate::{ClientError, io_err};
+use crate::ClientError;
 use corridor_shared::services::{Access, Domain, PubSub, ServiceError, Topic};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::*;
@@ -67,24 +67,16 @@ impl<T: Topic> Subscriber<T> {
                 Err(e) => return Err(e.into()),
             }
         };
-        let port_err = |port, e: &dyn std::fmt::Debug| {
-            ClientError::Service(ServiceError::Port {
-                service: T::SERVICE,
-                port,
-                domain: domain.name().to_owned(),
-                detail: format!("{e:?}"),
-            })
-        };
         let sub = service
             .subscriber_builder()
             .buffer_size(T::QOS.buffer_size)
             .history_request(T::QOS.history_size)
             .create()
-            .map_err(|e| port_err("subscriber", &e))?;
+            .map_err(|e| ServiceError::port(domain, T::SERVICE, "subscriber", e))?;
         let listener = event
             .listener_builder()
             .create()
-            .map_err(|e| port_err("listener", &e))?;
+            .map_err(|e| ServiceError::port(domain, T::SERVICE, "listener", e))?;
         while service.dynamic_config().number_of_publishers() == 0 {
             if start.elapsed() >= timeout {
                 return Err(no_peer());
@@ -96,7 +88,7 @@ impl<T: Topic> Subscriber<T> {
         // Attach the receive side of the publisher's connection now (iceoryx2 attaches it
         // lazily on receive/has_samples), without consuming a sample.
         sub.has_samples()
-            .map_err(|e| io_err(T::SERVICE, domain, "connect", e))?;
+            .map_err(|e| ServiceError::io(domain, T::SERVICE, "connect", e))?;
         Ok(Self {
             domain: domain.clone(),
             service,
@@ -119,7 +111,7 @@ impl<T: Topic> Subscriber<T> {
                 Ok(Some(v))
             }
             Ok(None) => Ok(None),
-            Err(e) => Err(io_err(T::SERVICE, &self.domain, "receive", e)),
+            Err(e) => Err(ServiceError::io(&self.domain, T::SERVICE, "receive", e).into()),
         }
     }
 
@@ -138,7 +130,7 @@ impl<T: Topic> Subscriber<T> {
                 return Err(if self.termination_requested() {
                     ClientError::Interrupted
                 } else {
-                    io_err(T::SERVICE, &self.domain, "wait", e)
+                    ServiceError::io(&self.domain, T::SERVICE, "wait", e).into()
                 });
             }
             if self.termination_requested() {

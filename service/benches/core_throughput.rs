@@ -1,6 +1,8 @@
 //! Core throughput: samples per second through the estimator on one core, CSV parsing
 //! excluded (the log is parsed once, before timing). Prints criterion's throughput figure for
 //! each mode.
+// `criterion_group!` defines an undocumented `pub fn`.
+#![allow(missing_docs)]
 
 use corridor_service::core::{Estimator, ImuInput};
 use corridor_service::runner::heading_aid;

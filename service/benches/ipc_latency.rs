@@ -45,13 +45,9 @@ fn looped(rows: &[ImuRow], i: usize) -> ImuSample {
     let n = rows.len();
     let span = rows[n - 1].t_s - rows[0].t_s + 0.005;
     let r = &rows[i % n];
-    ImuSample {
-        t_s: r.t_s + (i / n) as f64 * span,
-        gyro_rad_s: r.gyro_rad_s,
-        accel_m_s2: r.accel_m_s2,
-        temp_c: f64::NAN,
-        ..ImuSample::default()
-    }
+    let mut s = ImuSample::from(r);
+    s.t_s += (i / n) as f64 * span;
+    s
 }
 
 fn cleanup_domain(domain: &str) {

@@ -10,8 +10,9 @@
 //! - [`diagnose`]: residual diagnosis: rank the effects the model lacks, add the top one, compare.
 //! - [`eval`]: footprint-error evaluation, a port of the reference `eval_traj.py`.
 //! - [`plot`]: dependency-free SVG figures.
-//! - [`residuals`]: residual statistics for the diagnosis (NIS, whiteness, CUSUM, regression).
 //! - [`runner`]: the offline runner (CSV log in, estimates, innovations and summary out).
+//! - [`stats`]: the statistics of the residual diagnosis (distributions, NIS, whiteness, CUSUM,
+//!   regression, group means), each group with its unit tests.
 //! - [`suite`]: the results table over several recordings (`corridor eval`).
 pub mod checkpoint;
 pub mod core;
@@ -19,6 +20,6 @@ pub mod daemon;
 pub mod diagnose;
 pub mod eval;
 pub mod plot;
-pub mod residuals;
 pub mod runner;
+pub mod stats;
 pub mod suite;

@@ -1,5 +1,8 @@
 //! The `corridor` binary: outputs of `run`, and clear errors for bad input.
 
+mod common;
+
+use common::TempDir;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -14,10 +17,8 @@ fn corridor(args: &[&str]) -> std::process::Output {
         .expect("corridor runs")
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("corridor-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmp(name: &str) -> TempDir {
+    TempDir::new(&format!("cli-{}-{name}", std::process::id()))
 }
 
 #[test]

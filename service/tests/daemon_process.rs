@@ -8,6 +8,9 @@
 //! - `second_daemon_on_the_same_domain_is_refused`: the second `corridor serve` exits with an
 //!   error naming the domain.
 
+mod common;
+
+use common::TempDir;
 use corridor_client::{Delivery, Domain, Producer, Subscriber};
 use corridor_service::checkpoint;
 use corridor_service::core::{Estimate, Phase};
@@ -42,13 +45,6 @@ fn write_config(dir: &Path) -> PathBuf {
     std::fs::write(&path, text).unwrap();
     ConfigFile::read(&path).unwrap().validate().unwrap();
     path
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("corridor-{tag}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn cleanup_domain(domain: &str) {
@@ -136,21 +132,11 @@ fn offline(log: &ImuLog) -> (Vec<Estimate>, usize) {
     (est, first)
 }
 
-fn sample(r: &corridor_shared::imu_csv::ImuRow) -> ImuSample {
-    ImuSample {
-        t_s: r.t_s,
-        gyro_rad_s: r.gyro_rad_s,
-        accel_m_s2: r.accel_m_s2,
-        temp_c: f64::NAN,
-        ..ImuSample::default()
-    }
-}
-
 #[test]
 fn sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint() {
     let name = "test_daemon_sigkill";
     cleanup_domain(name);
-    let dir = temp_dir("test-daemon-sigkill");
+    let dir = TempDir::new("test-daemon-sigkill");
     let config = write_config(&dir);
     let ckpt = dir.join("checkpoint.bin");
     let log = exp36();
@@ -174,7 +160,7 @@ fn sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint() {
                 }
                 let due = start + Duration::from_secs_f64((r.t_s - t0) / 10.0);
                 std::thread::sleep(due.saturating_duration_since(Instant::now()));
-                p.send_imu(sample(r)).unwrap();
+                p.send_imu(ImuSample::from(r)).unwrap();
             }
             p.stats()
         })
@@ -225,7 +211,7 @@ fn sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint() {
             if i % 500 == 0 {
                 std::thread::sleep(Duration::from_millis(5)); // stay within the buffers
             }
-            p.send_imu(sample(r)).unwrap();
+            p.send_imu(ImuSample::from(r)).unwrap();
         }
         p.finish().unwrap();
         assert_eq!(p.stats().imu_undelivered, 0);
@@ -278,7 +264,6 @@ fn sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint() {
         left.iter().all(|f| f.ends_with("global_mgmt")),
         "a clean exit removes the domain's shared memory: {left:?}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
     cleanup_domain(name);
 }
 
@@ -286,7 +271,7 @@ fn sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint() {
 fn second_daemon_on_the_same_domain_is_refused() {
     let name = "test_daemon_twice";
     cleanup_domain(name);
-    let dir = temp_dir("test-daemon-twice");
+    let dir = TempDir::new("test-daemon-twice");
     let config = write_config(&dir);
     let domain = Domain::new(name).unwrap();
     let first = serve(&config, name, &dir.join("a.bin"), &dir.join("first.log"));
@@ -312,6 +297,5 @@ fn second_daemon_on_the_same_domain_is_refused() {
     drop(diag);
     let (status, _) = terminate(first);
     assert!(status.success());
-    std::fs::remove_dir_all(&dir).unwrap();
     cleanup_domain(name);
 }

@@ -6,6 +6,8 @@
 //! reports the throughput in elements/s, which here are rows/s.
 //!
 //! Run: `cargo bench -p corridor-shared --bench csv_parse -- --warm-up-time 1 --measurement-time 3`
+// `criterion_group!` defines an undocumented `pub fn`.
+#![allow(missing_docs)]
 
 use corridor_shared::imu_csv::{ImuCsvOptions, parse_imu_csv};
 use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_main};

@@ -150,6 +150,38 @@ pub enum ServiceError {
     },
 }
 
+impl ServiceError {
+    /// A failed send, receive, notify or wait ([`ServiceError::Io`]) on `service` in `domain`.
+    pub fn io(
+        domain: &Domain,
+        service: &'static str,
+        operation: &'static str,
+        detail: impl Debug,
+    ) -> Self {
+        ServiceError::Io {
+            service,
+            operation,
+            domain: domain.name().to_owned(),
+            detail: format!("{detail:?}"),
+        }
+    }
+
+    /// A port of `service` in `domain` that could not be created ([`ServiceError::Port`]).
+    pub fn port(
+        domain: &Domain,
+        service: &'static str,
+        port: &'static str,
+        detail: impl Debug,
+    ) -> Self {
+        ServiceError::Port {
+            service,
+            port,
+            domain: domain.name().to_owned(),
+            detail: format!("{detail:?}"),
+        }
+    }
+}
+
 /// What happens when a reader falls behind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Delivery {
@@ -509,60 +541,6 @@ impl Domain {
     }
 }
 
-/// Opens [`IMU_SERVICE`]; see [`Domain::open`].
-pub fn open_imu(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<ImuSample>, ServiceError> {
-    domain.open::<ImuSample>(node, access)
-}
-
-/// Opens [`ANGLES_SERVICE`]; see [`Domain::open`].
-pub fn open_angles(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<AngleObservation>, ServiceError> {
-    domain.open::<AngleObservation>(node, access)
-}
-
-/// Opens [`ATTITUDE_SERVICE`]; see [`Domain::open`].
-pub fn open_attitude(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<AttitudeSample>, ServiceError> {
-    domain.open::<AttitudeSample>(node, access)
-}
-
-/// Opens [`BIAS_SERVICE`]; see [`Domain::open`].
-pub fn open_bias(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<BiasSample>, ServiceError> {
-    domain.open::<BiasSample>(node, access)
-}
-
-/// Opens [`NAV_SERVICE`]; see [`Domain::open`].
-pub fn open_nav(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<NavSample>, ServiceError> {
-    domain.open::<NavSample>(node, access)
-}
-
-/// Opens [`DIAGNOSTICS_SERVICE`]; see [`Domain::open`].
-pub fn open_diagnostics(
-    domain: &Domain,
-    node: &Node<ipc::Service>,
-    access: Access,
-) -> Result<PubSub<Diagnostics>, ServiceError> {
-    domain.open::<Diagnostics>(node, access)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -570,7 +548,8 @@ mod tests {
     #[test]
     fn domain_names_are_validated() {
         assert!(Domain::new("lab-1_a").is_ok());
-        for bad in ["", "a/b", "a b", &"x".repeat(49)] {
+        assert!(Domain::new(&"x".repeat(MAX_DOMAIN_LEN)).is_ok());
+        for bad in ["", "a/b", "a b", &"x".repeat(MAX_DOMAIN_LEN + 1)] {
             let e = Domain::new(bad).unwrap_err();
             assert!(matches!(e, ServiceError::InvalidDomain { .. }), "{bad:?}");
         }

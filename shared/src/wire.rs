@@ -16,6 +16,7 @@
 //! - angles in radians, rates in rad/s, specific force in m/s², positions in m, velocities in m/s;
 //!   vectors in sensor axes (`_body`/gyro bias) or in the map frame (position, velocity), as named.
 
+use crate::imu_csv::ImuRow;
 use iceoryx2::prelude::*;
 
 /// [`ImuSample::flags`] (and the output `flags`): the producer has finished; this message
@@ -51,6 +52,17 @@ pub mod phase {
     pub const CALIBRATING: u32 = 1;
     /// Heading observations in use.
     pub const TRACKING: u32 = 2;
+
+    /// The name of a phase code (`aligning`, `calibrating`, `tracking`, as in
+    /// `estimates.csv`), `unknown` for any other value.
+    pub fn name(code: u32) -> &'static str {
+        match code {
+            ALIGNING => "aligning",
+            CALIBRATING => "calibrating",
+            TRACKING => "tracking",
+            _ => "unknown",
+        }
+    }
 }
 
 /// One IMU sample, producer → daemon (`corridor/v2/imu`).
@@ -82,6 +94,20 @@ impl ImuSample {
     /// True when this is an end-of-stream marker (no data).
     pub fn is_end_of_stream(&self) -> bool {
         self.flags & FLAG_END_OF_STREAM != 0
+    }
+}
+
+impl From<&ImuRow> for ImuSample {
+    /// A row of an IMU log as a sample: time, gyro, accelerometer, and the temperature (NaN when
+    /// the log has none); `seq` and `sent_ns` are left to the producer.
+    fn from(r: &ImuRow) -> Self {
+        Self {
+            t_s: r.t_s,
+            gyro_rad_s: r.gyro_rad_s,
+            accel_m_s2: r.accel_m_s2,
+            temp_c: r.temp_c.unwrap_or(f64::NAN),
+            ..Self::default()
+        }
     }
 }
 

@@ -22,7 +22,7 @@ use corridor_service::core::{Estimator, ImuInput};
 use corridor_service::daemon::{ESTIMATOR_THREAD, RX_THREAD};
 use corridor_service::runner::heading_aid;
 use corridor_shared::imu_csv::ImuRow;
-use corridor_shared::wire::{AttitudeSample, BiasSample, FLAG_END_OF_STREAM, NavSample};
+use corridor_shared::wire::{AttitudeSample, BiasSample, FLAG_END_OF_STREAM, ImuSample, NavSample};
 use daemon_common::*;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -256,7 +256,7 @@ fn daemon_threads_do_not_allocate_per_sample() {
     let mut p = Producer::new(&domain, "test-sensor", Delivery::Lossless).unwrap();
     p.wait_for_daemon(WAIT).unwrap();
     for r in &rows[..WARM_UP] {
-        p.send_imu(imu(r)).unwrap();
+        p.send_imu(ImuSample::from(r)).unwrap();
     }
     let others_before = wait_for(WARM_UP);
     let before = (
@@ -266,7 +266,7 @@ fn daemon_threads_do_not_allocate_per_sample() {
     WINDOW.store(true, Ordering::Relaxed);
     let t = Instant::now();
     for r in &rows[WARM_UP..window_end] {
-        p.send_imu(imu(r)).unwrap();
+        p.send_imu(ImuSample::from(r)).unwrap();
     }
     let others_after = wait_for(window_end);
     WINDOW.store(false, Ordering::Relaxed);
@@ -276,7 +276,7 @@ fn daemon_threads_do_not_allocate_per_sample() {
         EST_ALLOCS.load(Ordering::Relaxed),
     );
     for r in &rows[window_end..] {
-        p.send_imu(imu(r)).unwrap();
+        p.send_imu(ImuSample::from(r)).unwrap();
     }
     p.finish().unwrap();
     assert_eq!(reader.join().unwrap(), 0, "no attitude lost");

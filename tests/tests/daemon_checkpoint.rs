@@ -156,7 +156,6 @@ fn restart_warm_starts_from_the_saved_bias() {
     let resaved = checkpoint::load(&ckpt).unwrap();
     assert_eq!(resaved.t_s, offline[first_aligned + 399].t_s);
 
-    std::fs::remove_dir_all(&dir).unwrap();
     cleanup_domain(name);
 }
 
@@ -193,6 +192,5 @@ fn corrupt_checkpoint_is_moved_aside_and_the_daemon_cold_starts() {
     let cp = checkpoint::load(&ckpt).expect("new checkpoint");
     assert_eq!(cp.t_s, offline[first_aligned + 49].t_s);
 
-    std::fs::remove_dir_all(&dir).unwrap();
     cleanup_domain(name);
 }

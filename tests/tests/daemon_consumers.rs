@@ -9,6 +9,9 @@
 //!   mid-stream; its successor restarts `seq` and clock (the daemon ends the old stream and the
 //!   new one matches the offline run exactly), a third one continues the numbering after a gap
 //!   (counted as a gap, same stream).
+//! - `client_tools_replay_record_and_track_a_whole_stream` (`lossless`): the client's replay,
+//!   record and track loops (the tools' and the demo's) lose nothing and stop at the end of
+//!   stream.
 
 mod daemon_common;
 
@@ -18,7 +21,9 @@ use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::services::Topic;
-use corridor_shared::wire::{AttitudeSample, BiasSample, Diagnostics, FLAG_END_OF_STREAM};
+use corridor_shared::wire::{
+    AttitudeSample, BiasSample, Diagnostics, FLAG_END_OF_STREAM, ImuSample,
+};
 use daemon_common::*;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -98,7 +103,7 @@ fn consumers_come_and_go_and_a_stalled_one_does_not_stall_the_estimator() {
             for r in &rows {
                 let due = start + Duration::from_secs_f64((r.t_s - t0) / 20.0);
                 std::thread::sleep(due.saturating_duration_since(Instant::now()));
-                p.send_imu(imu(r)).unwrap();
+                p.send_imu(ImuSample::from(r)).unwrap();
             }
             p.finish().unwrap();
             p.stats()
@@ -220,7 +225,7 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
         let mut p = Producer::new(&domain, "test-p1", Delivery::Lossless).unwrap();
         p.wait_for_daemon(WAIT).unwrap();
         for r in &rows[..k1] {
-            p.send_imu(imu(r)).unwrap();
+            p.send_imu(ImuSample::from(r)).unwrap();
         }
         wait_progress(k1 as u64);
     }
@@ -229,7 +234,7 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
         let mut p = Producer::new(&domain, "test-p2", Delivery::Lossless).unwrap();
         p.wait_for_daemon(WAIT).unwrap();
         for r in &rows[..k2] {
-            p.send_imu(imu(r)).unwrap();
+            p.send_imu(ImuSample::from(r)).unwrap();
         }
         wait_progress((k1 + 1 + k2) as u64);
     }
@@ -238,7 +243,7 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
         let mut p = Producer::new(&domain, "test-p3", Delivery::Lossless).unwrap();
         p.wait_for_daemon(WAIT).unwrap();
         for (i, r) in rows[k2 + gap..k2 + gap + k3].iter().enumerate() {
-            let mut s = imu(r);
+            let mut s = ImuSample::from(r);
             s.seq = (k2 + gap + i) as u64;
             p.send_imu_raw(s).unwrap();
         }
@@ -286,5 +291,106 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
     drop(diag);
     let report = daemon.stop();
     assert_eq!(report.streams_finished, 2);
+    cleanup_domain(name);
+}
+
+/// The client tools' loops ([`replay`], [`Recorder`], [`Tracker`]: what `corridor-replay`,
+/// `corridor-log`, `corridor-pdr` and `corridor demo` run) around a daemon, lossless at full
+/// speed: nothing is lost, the logger's files hold every accepted sample and stop at the end of
+/// stream, the tracker reports one stride per stance with its path.
+#[test]
+fn client_tools_replay_record_and_track_a_whole_stream() {
+    use corridor_client::csv_rows::{ATTITUDE_HEADER, BIAS_HEADER};
+    use corridor_client::record::{RecordOptions, RecordStop, Recorder};
+    use corridor_client::replay::{ReplayOptions, Speed, replay};
+    use corridor_client::track::{TrackStop, Tracker};
+    use std::sync::atomic::AtomicBool;
+
+    let _one = one_daemon_at_a_time();
+    let name = "test_daemon_tools";
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
+    let dir = temp_dir("test-daemon-tools");
+    let rows = exp36_rows();
+    let poll = Duration::from_millis(50);
+    let never = Arc::new(AtomicBool::new(false));
+    let (ready_tx, ready_rx) = std::sync::mpsc::channel();
+
+    let recorder = {
+        let (domain, dir, ready, never) = (
+            domain.clone(),
+            dir.to_path_buf(),
+            ready_tx.clone(),
+            Arc::clone(&never),
+        );
+        std::thread::spawn(move || {
+            let opts = RecordOptions {
+                node_name: "test-log".into(),
+                wait: WAIT,
+                idle_timeout: WAIT,
+                idle_before_first: true,
+                poll,
+            };
+            let r = Recorder::open(&domain, &dir, &opts).unwrap();
+            ready.send(()).unwrap();
+            r.run(&never).unwrap()
+        })
+    };
+    let tracker = {
+        let (domain, ready, never) = (domain.clone(), ready_tx, Arc::clone(&never));
+        std::thread::spawn(move || {
+            let t = Tracker::open(&domain, "test-pdr", WAIT).unwrap();
+            ready.send(()).unwrap();
+            let mut strides = Vec::new();
+            let track = t
+                .run(poll, Some(WAIT), &never, |s| strides.push(*s))
+                .unwrap();
+            (track, strides)
+        })
+    };
+    for _ in 0..2 {
+        ready_rx.recv_timeout(WAIT).expect("consumer attached");
+    }
+    let opts = ReplayOptions {
+        node_name: "test-replay".into(),
+        delivery: Delivery::Lossless,
+        speed: Speed::Max,
+        loops: 1,
+        injection: BiasInjection::default(),
+        wait: WAIT,
+    };
+    let sent = replay(&domain, &rows, &opts).unwrap();
+    let rec = recorder.join().unwrap();
+    let (track, strides) = tracker.join().unwrap();
+    let d = daemon.stop().diagnostics;
+
+    assert_eq!(sent.samples, rows.len() as u64);
+    assert_eq!(sent.stats.imu_sent, rows.len() as u64 + 1, "and the marker");
+    assert_eq!(sent.stats.imu_undelivered, 0);
+    assert!(!sent.interrupted);
+    assert_eq!(d.accepted, rows.len() as u64);
+
+    assert_eq!(rec.stopped, RecordStop::EndOfStream);
+    assert_eq!(rec.attitude_rows, d.accepted);
+    assert_eq!((rec.attitude_missed, rec.bias_missed), (0, 0));
+    assert!(rec.bias_rows > 0);
+    assert_eq!(rec.final_bias_rad_s, Some(rec.last_attitude_bias_rad_s));
+    let att = std::fs::read_to_string(&rec.attitude_path).unwrap();
+    assert_eq!(att.lines().next(), Some(ATTITUDE_HEADER));
+    assert_eq!(att.lines().count() as u64, rec.attitude_rows + 1);
+    let bias = std::fs::read_to_string(&rec.bias_path).unwrap();
+    assert_eq!(bias.lines().next(), Some(BIAS_HEADER));
+    assert_eq!(bias.lines().count() as u64, rec.bias_rows + 1);
+
+    assert_eq!(track.stopped, TrackStop::EndOfStream);
+    assert!(d.stances > 0);
+    assert_eq!(track.end_stances, Some(d.stances));
+    assert_eq!(track.strides, d.stances);
+    assert_eq!(strides.len() as u64, track.strides);
+    assert_eq!(track.missed, 0);
+    assert_eq!(strides.first().map(|s| s.step_m), Some(0.0));
+    assert_eq!(track.path_m, strides.iter().map(|s| s.step_m).sum::<f64>());
+    assert_eq!(track.last.map(|n| n.stance), Some(d.stances));
     cleanup_domain(name);
 }

@@ -102,14 +102,7 @@ fn replay_matches_offline_run_sample_by_sample() {
         let mut p = Producer::new(&domain, "test-replay", Delivery::Lossless).unwrap();
         p.wait_for_daemon(WAIT).unwrap();
         for r in &rows {
-            p.send_imu(ImuSample {
-                t_s: r.t_s,
-                gyro_rad_s: r.gyro_rad_s,
-                accel_m_s2: r.accel_m_s2,
-                temp_c: r.temp_c.unwrap_or(f64::NAN),
-                ..ImuSample::default()
-            })
-            .unwrap();
+            p.send_imu(ImuSample::from(r)).unwrap();
         }
         p.finish().unwrap();
         p.stats()

@@ -3,7 +3,7 @@
 //! must have a lower footprint error than the one it started from. On the clean recordings it
 //! must not invent an effect beyond the real one it documents (a heading offset on exp25).
 
-use corridor_service::diagnose::{Report, SIGNIFICANT, apply_fix, diagnose};
+use corridor_service::diagnose::{Effect, Report, SIGNIFICANT, apply_fix, run_diagnosis};
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::ConfigFile;
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
@@ -41,7 +41,7 @@ fn constant_bias_config() -> ConfigFile {
 }
 
 fn run(log: &ImuLog, truth: &[TruthPoint], cfg: &ConfigFile) -> Report {
-    let (report, ..) = diagnose(log, cfg, Some(truth), None).unwrap();
+    let report = run_diagnosis(log, cfg, Some(truth), None).unwrap().report;
     for e in &report.effects {
         eprintln!("    {} {:.1}: {}", e.name, e.score, e.evidence);
     }
@@ -67,7 +67,7 @@ fn run(log: &ImuLog, truth: &[TruthPoint], cfg: &ConfigFile) -> Report {
 fn assert_found_and_fixed(report: &Report, effect: &str) {
     assert_eq!(report.top_effect, effect, "{:#?}", report.effects);
     let first = report.iterations.first().expect("an effect was added");
-    assert_eq!(first.effect, effect);
+    assert_eq!(first.effect.name(), effect);
     let (before, after) = (
         report.before.gcp_rms_m.unwrap(),
         report.after.gcp_rms_m.unwrap(),
@@ -212,7 +212,7 @@ fn a_slowly_oscillating_bias_is_not_a_confident_wrong_answer() {
     let r = run(&log, &truth, &config(0.0, true));
     let top = &r.effects[0];
     assert!(
-        matches!(top.name, "unexplained" | "bias_drift") || top.score < SIGNIFICANT,
+        matches!(top.name, Effect::Unexplained | Effect::BiasDrift) || top.score < SIGNIFICANT,
         "{:#?}",
         r.effects
     );

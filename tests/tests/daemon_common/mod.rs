@@ -40,17 +40,6 @@ pub fn exp36_rows() -> Vec<ImuRow> {
         .rows
 }
 
-/// A row as an IMU sample (`seq` and `sent_ns` left to the producer).
-pub fn imu(r: &ImuRow) -> ImuSample {
-    ImuSample {
-        t_s: r.t_s,
-        gyro_rad_s: r.gyro_rad_s,
-        accel_m_s2: r.accel_m_s2,
-        temp_c: r.temp_c.unwrap_or(f64::NAN),
-        ..ImuSample::default()
-    }
-}
-
 /// A daemon config for `domain` with the gdins config and its grid heading aid.
 pub fn daemon_config(domain: &Domain, delivery: Delivery) -> DaemonConfig {
     let cfg = config();
@@ -118,12 +107,28 @@ pub fn shm_files(domain: &str) -> Vec<String> {
     v
 }
 
-/// A fresh, empty temporary directory for `tag`.
-pub fn temp_dir(tag: &str) -> PathBuf {
+/// A fresh, empty temporary directory, removed when dropped (also when the test fails).
+pub struct TempDir(PathBuf);
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A fresh, empty temporary directory for `tag` (`corridor-{tag}`), removed when dropped.
+pub fn temp_dir(tag: &str) -> TempDir {
     let d = std::env::temp_dir().join(format!("corridor-{tag}"));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    TempDir(d)
 }
 
 /// Sends `rows` (then, if `finish`, the end-of-stream marker) from a producer created on a new
@@ -142,7 +147,7 @@ pub fn produce(
             let mut p = Producer::new(&domain, node, delivery).unwrap();
             p.wait_for_daemon(WAIT).unwrap();
             for r in &rows {
-                p.send_imu(imu(r)).unwrap();
+                p.send_imu(ImuSample::from(r)).unwrap();
             }
             if finish {
                 p.finish().unwrap();

@@ -23,7 +23,17 @@
 //! );
 //! fig.write_svg(std::path::Path::new("/tmp/bias.svg")).unwrap();
 //! ```
+//!
+//! Map of the submodules: this file holds the figure model ([`Figure`], [`Panel`],
+//! [`Series`], [`Style`]) and the page layout (`Figure::to_svg`); `axes` the ranges, axes
+//! and 1-2-5 ticks; `render` one panel's SVG (grid, bands, lines, markers, legend), the
+//! decimation and XML escaping.
 
+mod axes;
+mod render;
+
+use axes::*;
+use render::*;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -182,22 +192,6 @@ impl Default for Figure {
     }
 }
 
-/// One axis: data range mapped onto a pixel range, and its ticks.
-#[derive(Debug, Clone)]
-struct Axis {
-    lo: f64,
-    hi: f64,
-    ticks: Vec<f64>,
-    step: f64,
-}
-
-impl Axis {
-    /// Pixel position of `v` on a span from `p0` (at `lo`) to `p1` (at `hi`).
-    fn px(&self, v: f64, p0: f64, p1: f64) -> f64 {
-        p0 + (v - self.lo) / (self.hi - self.lo) * (p1 - p0)
-    }
-}
-
 /// A series after decimation, with its colour.
 struct Prepared<'a> {
     s: &'a Series,
@@ -333,456 +327,6 @@ impl Figure {
     pub fn write_svg(&self, path: &Path) -> std::io::Result<()> {
         std::fs::write(path, self.to_svg())
     }
-}
-
-#[derive(Debug, Clone, Copy)]
-struct Rect {
-    l: f64,
-    r: f64,
-    t: f64,
-    b: f64,
-}
-
-type Range = (f64, f64);
-
-fn union(a: Range, b: Range) -> Range {
-    (a.0.min(b.0), a.1.max(b.1))
-}
-
-/// x and y ranges of the finite points (y including the band); (inf, -inf) when empty.
-fn data_range(series: &[Prepared]) -> (Range, Range) {
-    let empty = (f64::INFINITY, f64::NEG_INFINITY);
-    let (mut xr, mut yr) = (empty, empty);
-    for s in series {
-        for k in 0..s.idx.len() {
-            let (x, y) = (s.x(k), s.y(k));
-            if !(x.is_finite() && y.is_finite()) {
-                continue;
-            }
-            xr = union(xr, (x, x));
-            yr = union(yr, (y, y));
-            let b = s.band(k);
-            if b.is_finite() {
-                yr = union(yr, (y - b.abs(), y + b.abs()));
-            }
-        }
-    }
-    (xr, yr)
-}
-
-/// A non-empty, non-degenerate range around `r`.
-fn widen(r: Range) -> Range {
-    if !(r.0.is_finite() && r.1.is_finite()) {
-        return (0.0, 1.0);
-    }
-    if r.1 > r.0 {
-        return r;
-    }
-    let pad = if r.0 == 0.0 { 1.0 } else { r.0.abs() * 0.1 };
-    (r.0 - pad, r.1 + pad)
-}
-
-/// A 1-2-5 step near `span / target`.
-fn nice_step(span: f64, target: usize) -> f64 {
-    let raw = span / target.max(1) as f64;
-    let p = 10f64.powi(raw.log10().floor() as i32);
-    let f = raw / p;
-    // Small tolerance so that e.g. 1.0000000000000002 still counts as 1.
-    let m = [1.0, 2.0, 5.0]
-        .into_iter()
-        .find(|&m| f <= m * (1.0 + 1e-9))
-        .unwrap_or(10.0);
-    m * p
-}
-
-/// Ticks at multiples of a 1-2-5 step, about `target` of them, the first at or below
-/// `lo` and the last at or above `hi`.
-fn nice_ticks(lo: f64, hi: f64, target: usize) -> (Vec<f64>, f64) {
-    let (lo, hi) = widen((lo, hi));
-    let step = nice_step(hi - lo, target);
-    let k0 = (lo / step).floor() as i64;
-    let k1 = (hi / step).ceil() as i64;
-    let ticks = (k0..=k1).map(|k| clean(k as f64 * step)).collect();
-    (ticks, step)
-}
-
-/// Rounds away the float noise of `k * step` and turns -0 into 0.
-fn clean(v: f64) -> f64 {
-    let r = format!("{v:.12e}").parse::<f64>().unwrap_or(v);
-    if r == 0.0 { 0.0 } else { r }
-}
-
-/// Axis over data range `r`, extended to the enclosing ticks.
-fn axis_for(r: Range, target: usize) -> Axis {
-    let (ticks, step) = nice_ticks(r.0, r.1, target);
-    Axis {
-        lo: ticks[0],
-        hi: ticks[ticks.len() - 1],
-        ticks,
-        step,
-    }
-}
-
-/// Axis over exactly `r`, with the multiples of `step` that fall inside it.
-fn axis_exact(r: Range, step: f64) -> Axis {
-    let eps = step * 1e-9;
-    let k0 = ((r.0 - eps) / step).ceil() as i64;
-    let k1 = ((r.1 + eps) / step).floor() as i64;
-    let ticks = (k0..=k1).map(|k| clean(k as f64 * step)).collect();
-    Axis {
-        lo: r.0,
-        hi: r.1,
-        ticks,
-        step,
-    }
-}
-
-/// `r` widened by `frac` of its span on each side (so data does not touch the frame).
-fn pad(r: Range, frac: f64) -> Range {
-    let (lo, hi) = widen(r);
-    let d = (hi - lo) * frac;
-    (lo - d, hi + d)
-}
-
-/// Equal-aspect axes: both ranges padded, the one with more pixels per unit widened
-/// about its centre to the other's scale, and one tick step for both (square grid).
-fn equal_axes(xr: Range, yr: Range, w: f64, h: f64, tx: usize, ty: usize) -> (Axis, Axis) {
-    let (xr, yr) = (pad(xr, 0.04), pad(yr, 0.04));
-    let s = (w / (xr.1 - xr.0)).min(h / (yr.1 - yr.0));
-    let grow = |r: Range, px: f64| {
-        let half = px / s / 2.0;
-        let c = 0.5 * (r.0 + r.1);
-        (c - half, c + half)
-    };
-    let (gx, gy) = (grow(xr, w), grow(yr, h));
-    let step = nice_step(gx.1 - gx.0, tx).max(nice_step(gy.1 - gy.0, ty));
-    (axis_exact(gx, step), axis_exact(gy, step))
-}
-
-/// Text for a tick value printed with the precision of `step`.
-fn tick_label(v: f64, step: f64) -> String {
-    let decimals = (-step.log10() - 1e-9).ceil().max(0.0) as usize;
-    let s = if v != 0.0 && (v.abs() >= 1e6 || step < 1e-4) {
-        format!("{v:.1e}")
-    } else {
-        format!("{v:.decimals$}")
-    };
-    if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
-        s[1..].to_owned()
-    } else {
-        s
-    }
-}
-
-/// Escapes text for XML content and attribute values.
-fn esc(s: &str) -> String {
-    let mut o = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => o.push_str("&amp;"),
-            '<' => o.push_str("&lt;"),
-            '>' => o.push_str("&gt;"),
-            '"' => o.push_str("&quot;"),
-            '\'' => o.push_str("&apos;"),
-            c if (c as u32) < 0x20 && c != '\t' && c != '\n' && c != '\r' => {}
-            c => o.push(c),
-        }
-    }
-    o
-}
-
-/// Indices of the points kept when a series has more than `max_points` points: the
-/// series is cut into buckets and each bucket keeps the points with its smallest and
-/// largest x and y (so spikes survive in both directions) and its first non-finite point
-/// (so gaps survive), in their original order.
-fn decimate(x: &[f64], y: &[f64], max_points: usize) -> Vec<usize> {
-    let n = x.len().min(y.len());
-    if n <= max_points {
-        return (0..n).collect();
-    }
-    let buckets = (max_points / 5).max(1);
-    let size = n.div_ceil(buckets);
-    let mut keep = Vec::with_capacity(max_points);
-    for a in (0..n).step_by(size) {
-        let b = (a + size).min(n);
-        let mut pick: [Option<usize>; 5] = [None; 5];
-        let better = |cur: Option<usize>, i: usize, v: &[f64], less: bool| match cur {
-            None => Some(i),
-            Some(c) if (less && v[i] < v[c]) || (!less && v[i] > v[c]) => Some(i),
-            keep => keep,
-        };
-        for i in a..b {
-            if !(x[i].is_finite() && y[i].is_finite()) {
-                pick[4] = pick[4].or(Some(i));
-                continue;
-            }
-            pick[0] = better(pick[0], i, x, true);
-            pick[1] = better(pick[1], i, x, false);
-            pick[2] = better(pick[2], i, y, true);
-            pick[3] = better(pick[3], i, y, false);
-        }
-        let mut p: Vec<usize> = pick.iter().flatten().copied().collect();
-        p.sort_unstable();
-        p.dedup();
-        keep.extend(p);
-    }
-    keep
-}
-
-fn render_panel(
-    o: &mut String,
-    index: usize,
-    panel: &Panel,
-    series: &[Prepared],
-    r: Rect,
-    shared_x: Option<Range>,
-    top: f64,
-) {
-    let (w, h) = (r.r - r.l, r.b - r.t);
-    let (xr, yr) = data_range(series);
-    let tx = ((w / 90.0) as usize).clamp(2, 12);
-    let ty = ((h / 45.0) as usize).clamp(2, 10);
-    let (ax, ay) = if panel.equal_aspect {
-        equal_axes(xr, yr, w, h, tx, ty)
-    } else {
-        let yr = pad(yr, 0.04);
-        let ay = axis_exact(yr, nice_step(yr.1 - yr.0, ty));
-        (axis_for(shared_x.unwrap_or(xr), tx), ay)
-    };
-    let px = |v: f64| ax.px(v, r.l, r.r);
-    let py = |v: f64| ay.px(v, r.b, r.t);
-
-    let _ = writeln!(o, r#"<g id="panel{index}">"#);
-    let _ = writeln!(
-        o,
-        r#"<defs><clipPath id="clip{index}"><rect x="{:.2}" y="{:.2}" width="{:.2}" height="{:.2}"/></clipPath></defs>"#,
-        r.l, r.t, w, h
-    );
-    if !panel.title.is_empty() {
-        let _ = writeln!(
-            o,
-            r#"<text x="{:.2}" y="{:.2}" font-size="13" font-weight="bold">{}</text>"#,
-            r.l,
-            top + 21.0,
-            esc(&panel.title)
-        );
-    }
-    // Grid, ticks and tick labels.
-    o.push_str(r##"<g stroke="#e3e3e3" stroke-width="1">"##);
-    for &t in &ax.ticks {
-        let x = px(t);
-        let _ = write!(
-            o,
-            r#"<line x1="{x:.2}" y1="{:.2}" x2="{x:.2}" y2="{:.2}"/>"#,
-            r.t, r.b
-        );
-    }
-    for &t in &ay.ticks {
-        let y = py(t);
-        let _ = write!(
-            o,
-            r#"<line x1="{:.2}" y1="{y:.2}" x2="{:.2}" y2="{y:.2}"/>"#,
-            r.l, r.r
-        );
-    }
-    o.push_str("</g>\n");
-    o.push_str(r##"<g font-size="11" fill="#333">"##);
-    for &t in &ax.ticks {
-        let _ = write!(
-            o,
-            r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
-            px(t),
-            r.b + 16.0,
-            esc(&tick_label(t, ax.step))
-        );
-    }
-    for &t in &ay.ticks {
-        let _ = write!(
-            o,
-            r#"<text x="{:.2}" y="{:.2}" text-anchor="end">{}</text>"#,
-            r.l - 6.0,
-            py(t) + 4.0,
-            esc(&tick_label(t, ay.step))
-        );
-    }
-    o.push_str("</g>\n");
-    if !panel.x_label.is_empty() {
-        let _ = writeln!(
-            o,
-            r#"<text x="{:.2}" y="{:.2}" text-anchor="middle">{}</text>"#,
-            (r.l + r.r) / 2.0,
-            r.b + 36.0,
-            esc(&panel.x_label)
-        );
-    }
-    if !panel.y_label.is_empty() {
-        let _ = writeln!(
-            o,
-            r#"<text transform="translate({:.2},{:.2}) rotate(-90)" text-anchor="middle">{}</text>"#,
-            r.l - 58.0,
-            (r.t + r.b) / 2.0,
-            esc(&panel.y_label)
-        );
-    }
-
-    // Data: bands first so every line is on top of every band.
-    let _ = writeln!(o, r#"<g clip-path="url(#clip{index})">"#);
-    for s in series.iter().filter(|s| s.s.band.is_some()) {
-        for run in runs(s.idx.len(), |k| {
-            s.x(k).is_finite() && s.y(k).is_finite() && s.band(k).is_finite()
-        }) {
-            let mut d = String::new();
-            for k in run.clone() {
-                let cmd = if k == run.start { 'M' } else { 'L' };
-                let _ = write!(
-                    d,
-                    "{cmd}{:.2},{:.2}",
-                    px(s.x(k)),
-                    py(s.y(k) + s.band(k).abs())
-                );
-            }
-            for k in run.clone().rev() {
-                let _ = write!(d, "L{:.2},{:.2}", px(s.x(k)), py(s.y(k) - s.band(k).abs()));
-            }
-            let _ = writeln!(
-                o,
-                r#"<path d="{d}Z" fill="{}" fill-opacity="0.2" stroke="none"/>"#,
-                s.color
-            );
-        }
-    }
-    for s in series.iter().filter(|s| s.s.style != Style::Markers) {
-        let mut d = String::new();
-        for run in runs(s.idx.len(), |k| s.x(k).is_finite() && s.y(k).is_finite()) {
-            for k in run.clone() {
-                let cmd = if k == run.start { 'M' } else { 'L' };
-                let _ = write!(d, "{cmd}{:.2},{:.2}", px(s.x(k)), py(s.y(k)));
-            }
-        }
-        if d.is_empty() {
-            continue;
-        }
-        let dash = if s.s.style == Style::Dashed {
-            r#" stroke-dasharray="7 4""#
-        } else {
-            ""
-        };
-        let _ = writeln!(
-            o,
-            r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1.6" stroke-linejoin="round"{dash}/>"#,
-            s.color
-        );
-    }
-    o.push_str("</g>\n");
-    for s in series.iter().filter(|s| s.s.style == Style::Markers) {
-        let _ = write!(
-            o,
-            r#"<g fill="{}" stroke="white" stroke-width="0.8">"#,
-            s.color
-        );
-        for k in 0..s.idx.len() {
-            let (x, y) = (s.x(k), s.y(k));
-            if x.is_finite() && y.is_finite() {
-                let _ = write!(
-                    o,
-                    r#"<circle cx="{:.2}" cy="{:.2}" r="3.6"/>"#,
-                    px(x),
-                    py(y)
-                );
-            }
-        }
-        o.push_str("</g>\n");
-    }
-    for s in series {
-        let Some(labels) = &s.s.point_labels else {
-            continue;
-        };
-        let _ = write!(o, r#"<g font-size="10" fill="{}">"#, s.color);
-        for k in 0..s.idx.len() {
-            let (x, y) = (s.x(k), s.y(k));
-            match labels.get(s.idx[k]) {
-                Some(l) if !l.is_empty() && x.is_finite() && y.is_finite() => {
-                    let _ = write!(
-                        o,
-                        r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
-                        px(x) + 5.0,
-                        py(y) - 5.0,
-                        esc(l)
-                    );
-                }
-                _ => {}
-            }
-        }
-        o.push_str("</g>\n");
-    }
-    let _ = writeln!(
-        o,
-        r##"<rect x="{:.2}" y="{:.2}" width="{w:.2}" height="{h:.2}" fill="none" stroke="#444" stroke-width="1"/>"##,
-        r.l, r.t
-    );
-
-    // Legend, right of the plot area.
-    let lx = r.r + 12.0;
-    let mut ly = r.t + 8.0;
-    for s in series.iter().filter(|s| !s.s.label.is_empty()) {
-        if s.s.band.is_some() {
-            let _ = write!(
-                o,
-                r#"<rect x="{lx:.2}" y="{:.2}" width="26" height="10" fill="{}" fill-opacity="0.2"/>"#,
-                ly - 5.0,
-                s.color
-            );
-        }
-        match s.s.style {
-            Style::Markers => {
-                let _ = write!(
-                    o,
-                    r#"<circle cx="{:.2}" cy="{ly:.2}" r="3.6" fill="{}"/>"#,
-                    lx + 13.0,
-                    s.color
-                );
-            }
-            style => {
-                let dash = if style == Style::Dashed {
-                    r#" stroke-dasharray="7 4""#
-                } else {
-                    ""
-                };
-                let _ = write!(
-                    o,
-                    r#"<line x1="{lx:.2}" y1="{ly:.2}" x2="{:.2}" y2="{ly:.2}" stroke="{}" stroke-width="1.6"{dash}/>"#,
-                    lx + 26.0,
-                    s.color
-                );
-            }
-        }
-        let _ = writeln!(
-            o,
-            r#"<text x="{:.2}" y="{:.2}">{}</text>"#,
-            lx + 32.0,
-            ly + 4.0,
-            esc(&s.s.label)
-        );
-        ly += 18.0;
-    }
-    o.push_str("</g>\n");
-}
-
-/// Maximal runs of consecutive indices in `0..n` for which `ok` holds.
-fn runs(n: usize, ok: impl Fn(usize) -> bool) -> Vec<std::ops::Range<usize>> {
-    let mut out = Vec::new();
-    let mut start = None;
-    for k in 0..=n {
-        match (k < n && ok(k), start) {
-            (true, None) => start = Some(k),
-            (false, Some(s)) => {
-                out.push(s..k);
-                start = None;
-            }
-            _ => {}
-        }
-    }
-    out
 }
 
 #[cfg(test)]
@@ -1025,14 +569,25 @@ mod tests {
         assert_eq!(balanced(&fig.to_svg()).unwrap(), "svg");
     }
 
-    /// Writes the example figure when CORRIDOR_PLOT_EXAMPLE is set to a file path.
+    /// `write_svg` writes exactly `to_svg`, at the size asked for. With CORRIDOR_PLOT_EXAMPLE
+    /// set to a file path, the example figure is also written there, to look at.
     #[test]
-    fn write_example_when_asked() {
+    fn write_svg_writes_the_figure_at_its_size() {
+        let fig = example().with_size(640, 200);
+        let dir = std::env::temp_dir().join(format!("corridor-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("example.svg");
+        let written = fig
+            .write_svg(&path)
+            .and_then(|()| std::fs::read_to_string(&path));
+        std::fs::remove_dir_all(&dir).unwrap();
+        let written = written.unwrap();
+        assert_eq!(written, fig.to_svg());
+        assert_eq!(balanced(&written).unwrap(), "svg");
+        assert!(written.contains("width=\"640\""), "{}", &written[..200]);
+        assert!(!example().to_svg().contains("width=\"640\""));
         if let Ok(p) = std::env::var("CORRIDOR_PLOT_EXAMPLE") {
-            example()
-                .with_size(900, 300)
-                .write_svg(Path::new(&p))
-                .unwrap();
+            fig.write_svg(Path::new(&p)).unwrap();
         }
     }
 }

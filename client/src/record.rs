@@ -1,0 +1,209 @@
+//! Record: the daemon's attitude and bias streams written to `attitude.csv` and `bias.csv`
+//! (the rows of [`crate::csv_rows`]) until the end of stream. Used by `corridor-log` and by
+//! `corridor demo`.
+//!
+//! [`Recorder::open`] attaches the readers and creates the files; [`Recorder::run`] then
+//! records. The split lets a caller say "attached" before the producer starts.
+
+use crate::csv_rows::{ATTITUDE_HEADER, BIAS_HEADER, write_attitude_row, write_bias_row};
+use crate::{ClientError, Domain, Subscriber};
+use corridor_shared::wire::{AttitudeSample, BiasSample, FLAG_END_OF_STREAM};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// How to record.
+#[derive(Debug, Clone)]
+pub struct RecordOptions {
+    /// Prefix of the readers' iceoryx2 node names (`-attitude`, `-bias` appended).
+    pub node_name: String,
+    /// How long to wait for the daemon's services.
+    pub wait: Duration,
+    /// Stop when nothing arrived for this long.
+    pub idle_timeout: Duration,
+    /// Whether the idle timeout also runs before the first message (else it waits for the first
+    /// message for ever, until SIGINT/SIGTERM).
+    pub idle_before_first: bool,
+    /// Longest single wait, so [`Recorder::run`] sees its `abort` flag.
+    pub poll: Duration,
+}
+
+/// Why a recording stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RecordStop {
+    /// The end-of-stream attitude and bias messages arrived.
+    EndOfStream,
+    /// Nothing arrived for [`RecordOptions::idle_timeout`].
+    IdleTimeout,
+    /// SIGINT/SIGTERM.
+    Interrupted,
+    /// The caller's `abort` flag was set.
+    Aborted,
+}
+
+impl RecordStop {
+    /// In words, for the tools' output.
+    pub fn describe(self) -> &'static str {
+        match self {
+            RecordStop::EndOfStream => "end of stream",
+            RecordStop::IdleTimeout => "idle timeout",
+            RecordStop::Interrupted => "interrupted",
+            RecordStop::Aborted => "aborted",
+        }
+    }
+}
+
+/// What a recording received.
+#[derive(Debug, Clone)]
+pub struct Recorded {
+    /// Why it stopped.
+    pub stopped: RecordStop,
+    /// Rows written to `attitude.csv`.
+    pub attitude_rows: u64,
+    /// Rows written to `bias.csv`.
+    pub bias_rows: u64,
+    /// Attitude messages missing from the `seq` numbering.
+    pub attitude_missed: u64,
+    /// Bias messages missing from the `seq` numbering.
+    pub bias_missed: u64,
+    /// The bias of the last attitude row.
+    pub last_attitude_bias_rad_s: [f64; 3],
+    /// The bias of the end-of-stream bias message (the daemon's final bias), if it came.
+    pub final_bias_rad_s: Option<[f64; 3]>,
+    /// The attitude file.
+    pub attitude_path: PathBuf,
+    /// The bias file.
+    pub bias_path: PathBuf,
+}
+
+/// The readers and the open files of a recording.
+#[derive(Debug)]
+pub struct Recorder {
+    attitude: Subscriber<AttitudeSample>,
+    bias: Subscriber<BiasSample>,
+    att_w: BufWriter<File>,
+    bias_w: BufWriter<File>,
+    opts: RecordOptions,
+    got: Recorded,
+}
+
+fn create(path: &Path) -> Result<BufWriter<File>, ClientError> {
+    File::create(path)
+        .map(BufWriter::new)
+        .map_err(|source| ClientError::File {
+            path: path.to_owned(),
+            source,
+        })
+}
+
+fn file_err(path: &Path) -> impl FnOnce(std::io::Error) -> ClientError + '_ {
+    move |source| ClientError::File {
+        path: path.to_owned(),
+        source,
+    }
+}
+
+impl Recorder {
+    /// Creates `dir` (if needed) with `attitude.csv` and `bias.csv` and their headers, and
+    /// attaches to the daemon's attitude and bias streams in `domain`.
+    pub fn open(domain: &Domain, dir: &Path, opts: &RecordOptions) -> Result<Self, ClientError> {
+        std::fs::create_dir_all(dir).map_err(file_err(dir))?;
+        let attitude_path = dir.join("attitude.csv");
+        let bias_path = dir.join("bias.csv");
+        let mut att_w = create(&attitude_path)?;
+        let mut bias_w = create(&bias_path)?;
+        writeln!(att_w, "{ATTITUDE_HEADER}").map_err(file_err(&attitude_path))?;
+        writeln!(bias_w, "{BIAS_HEADER}").map_err(file_err(&bias_path))?;
+        let name = &opts.node_name;
+        let attitude = Subscriber::open(domain, &format!("{name}-attitude"), opts.wait)?;
+        let bias = Subscriber::open(domain, &format!("{name}-bias"), opts.wait)?;
+        Ok(Self {
+            attitude,
+            bias,
+            att_w,
+            bias_w,
+            opts: opts.clone(),
+            got: Recorded {
+                stopped: RecordStop::EndOfStream,
+                attitude_rows: 0,
+                bias_rows: 0,
+                attitude_missed: 0,
+                bias_missed: 0,
+                last_attitude_bias_rad_s: [0.0; 3],
+                final_bias_rad_s: None,
+                attitude_path,
+                bias_path,
+            },
+        })
+    }
+
+    /// Records until the end-of-stream attitude and bias messages, the idle timeout,
+    /// SIGINT/SIGTERM or `abort`; flushes the files and says what it got. The end-of-stream
+    /// messages are not written as rows.
+    pub fn run(mut self, abort: &AtomicBool) -> Result<Recorded, ClientError> {
+        let poll = self.opts.poll;
+        let (mut attitude_done, mut bias_done) = (false, false);
+        let mut any = false;
+        let mut last_rx = Instant::now();
+        let stopped = loop {
+            if attitude_done && bias_done {
+                break RecordStop::EndOfStream;
+            }
+            if abort.load(Ordering::Relaxed) {
+                break RecordStop::Aborted;
+            }
+            // The bias stream first, without waiting while attitudes still come.
+            let b = if attitude_done {
+                self.bias.recv_timeout(poll)
+            } else {
+                self.bias.try_recv()
+            };
+            let b = match b {
+                Err(ClientError::Interrupted) => break RecordStop::Interrupted,
+                b => b?,
+            };
+            if let Some(b) = b {
+                (last_rx, any) = (Instant::now(), true);
+                if b.flags & FLAG_END_OF_STREAM != 0 {
+                    self.got.final_bias_rad_s = Some(b.gyro_bias_rad_s);
+                    bias_done = true;
+                } else {
+                    write_bias_row(&mut self.bias_w, &b).map_err(file_err(&self.got.bias_path))?;
+                    self.got.bias_rows += 1;
+                }
+                continue;
+            }
+            if !attitude_done {
+                let x = match self.attitude.recv_timeout(poll) {
+                    Err(ClientError::Interrupted) => break RecordStop::Interrupted,
+                    x => x?,
+                };
+                if let Some(x) = x {
+                    (last_rx, any) = (Instant::now(), true);
+                    if x.flags & FLAG_END_OF_STREAM != 0 {
+                        attitude_done = true;
+                    } else {
+                        write_attitude_row(&mut self.att_w, &x)
+                            .map_err(file_err(&self.got.attitude_path))?;
+                        self.got.attitude_rows += 1;
+                        self.got.last_attitude_bias_rad_s = x.gyro_bias_rad_s;
+                    }
+                    continue;
+                }
+            }
+            if (any || self.opts.idle_before_first) && last_rx.elapsed() >= self.opts.idle_timeout {
+                break RecordStop::IdleTimeout;
+            }
+        };
+        self.att_w
+            .flush()
+            .map_err(file_err(&self.got.attitude_path))?;
+        self.bias_w.flush().map_err(file_err(&self.got.bias_path))?;
+        self.got.stopped = stopped;
+        self.got.attitude_missed = self.attitude.missed();
+        self.got.bias_missed = self.bias.missed();
+        Ok(self.got)
+    }
+}

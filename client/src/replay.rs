@@ -1,0 +1,137 @@
+//! Replay: a recorded IMU log sent to the daemon as if it were a live sensor, paced at a chosen
+//! speed, optionally looped and with a synthetic gyro bias added. Used by `corridor-replay` and
+//! by `corridor demo`.
+
+use crate::{ClientError, Delivery, Domain, Producer, ProducerStats};
+use corridor_shared::imu_csv::ImuRow;
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::wire::ImuSample;
+use std::str::FromStr;
+use std::time::{Duration, Instant};
+
+/// Replay speed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Speed {
+    /// As fast as the daemon takes it.
+    Max,
+    /// Sensor time × factor (1 = real time).
+    Factor(f64),
+}
+
+impl FromStr for Speed {
+    type Err = String;
+
+    /// `max`, `realtime` or a speed-up factor > 0 (`2` = twice real time).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "max" => Ok(Speed::Max),
+            "realtime" => Ok(Speed::Factor(1.0)),
+            _ => s
+                .parse::<f64>()
+                .ok()
+                .filter(|f| f.is_finite() && *f > 0.0)
+                .map(Speed::Factor)
+                .ok_or_else(|| format!("speed {s:?}: expected realtime, max or a factor > 0")),
+        }
+    }
+}
+
+/// How to replay a log.
+#[derive(Debug, Clone)]
+pub struct ReplayOptions {
+    /// Name of the producer's iceoryx2 node.
+    pub node_name: String,
+    /// Delivery policy; must be the daemon's.
+    pub delivery: Delivery,
+    /// Pacing.
+    pub speed: Speed,
+    /// Times the log is sent; the clock continues across loops (shifted by the log's span plus
+    /// one mean period).
+    pub loops: u32,
+    /// Synthetic gyro bias added to every sample, at the (shifted) sample time.
+    pub injection: BiasInjection,
+    /// How long to wait for the daemon's subscriber.
+    pub wait: Duration,
+}
+
+/// What a replay sent.
+#[derive(Debug, Clone, Copy)]
+pub struct Replayed {
+    /// Data samples sent (the end-of-stream marker not included).
+    pub samples: u64,
+    /// The producer's counters (the marker included).
+    pub stats: ProducerStats,
+    /// Stopped early by SIGINT/SIGTERM (the marker is still sent).
+    pub interrupted: bool,
+    /// Wall time from the first sample to the marker, s.
+    pub elapsed_s: f64,
+}
+
+/// Sends `rows` to the daemon of `domain` as `opts` says, then the end-of-stream marker.
+/// SIGINT/SIGTERM end the replay early (checked every 64 samples), still with the marker.
+pub fn replay(
+    domain: &Domain,
+    rows: &[ImuRow],
+    opts: &ReplayOptions,
+) -> Result<Replayed, ClientError> {
+    let mut p = Producer::new(domain, &opts.node_name, opts.delivery)?;
+    p.wait_for_daemon(opts.wait)?;
+    let (first_t_s, loop_shift_s) = match (rows.first(), rows.last()) {
+        (Some(first), Some(last)) => {
+            let n = rows.len();
+            let period = if n > 1 {
+                (last.t_s - first.t_s) / (n - 1) as f64
+            } else {
+                0.01
+            };
+            (first.t_s, last.t_s - first.t_s + period)
+        }
+        _ => (0.0, 0.0),
+    };
+    let start = Instant::now();
+    let mut interrupted = false;
+    'outer: for k in 0..opts.loops {
+        let shift = f64::from(k) * loop_shift_s;
+        for (i, r) in rows.iter().enumerate() {
+            let t_s = r.t_s + shift;
+            if let Speed::Factor(f) = opts.speed {
+                let due = start + Duration::from_secs_f64(((t_s - first_t_s) / f).max(0.0));
+                let now = Instant::now();
+                if due > now {
+                    std::thread::sleep(due - now);
+                }
+            }
+            if i % 64 == 0 && p.termination_requested() {
+                interrupted = true;
+                break 'outer;
+            }
+            let mut s = ImuSample::from(r);
+            s.t_s = t_s;
+            opts.injection.apply(t_s, &mut s.gyro_rad_s);
+            p.send_imu(s)?;
+        }
+    }
+    p.finish()?;
+    let stats = p.stats();
+    Ok(Replayed {
+        samples: stats.imu_sent.saturating_sub(1),
+        stats,
+        interrupted,
+        elapsed_s: start.elapsed().as_secs_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn speeds_parse() {
+        assert_eq!("max".parse::<Speed>(), Ok(Speed::Max));
+        assert_eq!("realtime".parse::<Speed>(), Ok(Speed::Factor(1.0)));
+        assert_eq!("2.5".parse::<Speed>(), Ok(Speed::Factor(2.5)));
+        for bad in ["0", "-1", "inf", "NaN", "fast"] {
+            assert!(bad.parse::<Speed>().is_err(), "{bad}");
+        }
+    }
+}

@@ -1,0 +1,74 @@
+//! [`ModelArgs`]: the configuration flags shared by every command that runs the estimator.
+
+use anyhow::{Context, Result};
+use clap::Args;
+use corridor_shared::config::{BiasPrior, Config, ConfigFile, Mode};
+use std::path::PathBuf;
+
+/// Configuration flags shared by every command that runs the estimator.
+#[derive(Args, Debug, Clone)]
+pub struct ModelArgs {
+    /// Configuration file (TOML); built-in defaults when absent.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Corridor map (TOML with [[corridor]] tables); switches the heading source to the map.
+    #[arg(long)]
+    pub map: Option<PathBuf>,
+    /// Walking direction at the start, degrees in the map frame (overrides the config).
+    #[arg(long)]
+    pub start_heading_deg: Option<f64>,
+    /// Orientation of the building's dominant directions, degrees (overrides the config).
+    #[arg(long)]
+    pub grid_deg: Option<f64>,
+    /// Estimation mode: zupt, paper, rotation_aware or eskf (overrides the config).
+    #[arg(long)]
+    pub mode: Option<String>,
+    /// Gyro-bias prior: none or rest_mean (overrides the config).
+    #[arg(long)]
+    pub prior: Option<String>,
+}
+
+impl ModelArgs {
+    /// Reads the config file and applies the overrides; errors name the key and the value.
+    pub fn config(&self) -> Result<Config> {
+        let file = self.config_file()?;
+        let path = self
+            .config
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("<built-in defaults>"));
+        Ok(file
+            .validate()
+            .map_err(|e| corridor_shared::config::with_path(e, &path))?)
+    }
+
+    /// The config file with the overrides applied, not yet validated.
+    pub fn config_file(&self) -> Result<ConfigFile> {
+        let mut file = match &self.config {
+            Some(p) => ConfigFile::read(p)?,
+            None => ConfigFile::default(),
+        };
+        if let Some(v) = self.start_heading_deg {
+            file.heading.start_heading_deg = Some(v);
+        }
+        if let Some(v) = self.grid_deg {
+            file.heading.grid_deg = Some(v);
+        }
+        if let Some(m) = &self.mode {
+            file.estimator.mode = Some(
+                toml::Value::String(m.clone())
+                    .try_into::<Mode>()
+                    .with_context(|| {
+                        format!("--mode {m:?}: expected zupt, paper, rotation_aware or eskf")
+                    })?,
+            );
+        }
+        if let Some(p) = &self.prior {
+            file.alignment.gyro_bias_prior = Some(
+                toml::Value::String(p.clone())
+                    .try_into::<BiasPrior>()
+                    .with_context(|| format!("--prior {p:?}: expected none or rest_mean"))?,
+            );
+        }
+        Ok(file)
+    }
+}

@@ -1,0 +1,65 @@
+//! `corridor serve`: the daemon until SIGINT/SIGTERM, with its report printed as JSON.
+
+use super::model::ModelArgs;
+use anyhow::Result;
+use clap::Args;
+use corridor_service::runner;
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub(super) struct ServeArgs {
+    #[command(flatten)]
+    pub(super) model: ModelArgs,
+    /// iceoryx2 domain to serve (overrides `daemon.domain`); processes on other domains never
+    /// see this daemon.
+    #[arg(long)]
+    pub(super) domain: Option<String>,
+    /// live (a lagging reader loses the oldest samples, counted) or lossless (the producer
+    /// waits); overrides `daemon.delivery`.
+    #[arg(long)]
+    pub(super) delivery: Option<corridor_shared::services::Delivery>,
+    /// Checkpoint file (overrides `daemon.checkpoint_path`): loaded at start (a bad one is
+    /// moved aside, cold start), saved periodically, at each end of stream and at shutdown.
+    #[arg(long)]
+    pub(super) checkpoint: Option<PathBuf>,
+}
+
+/// Serves until a termination request, then prints the daemon's report.
+pub(super) fn serve(a: &ServeArgs) -> Result<()> {
+    use corridor_service::daemon::{self, DaemonConfig};
+    let config = a.model.config()?;
+    let aid = runner::heading_aid(&config, a.model.map.as_deref())?;
+    // The flags override the `[daemon]` section of the file.
+    let mut cfg = match &a.domain {
+        Some(d) => DaemonConfig::new(corridor_shared::services::Domain::new(d)?, config, aid),
+        None => DaemonConfig::from_config(config, aid)?,
+    };
+    if let Some(d) = a.delivery {
+        cfg.delivery = d;
+    }
+    if let Some(p) = &a.checkpoint {
+        cfg.checkpoint = Some(p.clone());
+    }
+    let report = daemon::serve(cfg)?;
+    let d = &report.diagnostics;
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&serde_json::json!({
+            "streams_finished": report.streams_finished,
+            "received": d.received,
+            "accepted": d.accepted,
+            "seq_gaps": d.seq_gaps,
+            "rejected_non_finite": d.rejected_non_finite,
+            "rejected_time": d.rejected_time,
+            "rejected_duplicate_seq": d.rejected_duplicate_seq,
+            "late": d.late,
+            "dropped_overflow": d.dropped_overflow,
+            "undelivered": d.undelivered,
+            "producer_changes": d.producer_changes,
+            "checkpoints_saved": report.checkpoints_saved,
+            "warm_started": report.warm_started_from.is_some(),
+            "warnings": report.warnings,
+        }))?
+    );
+    Ok(())
+}

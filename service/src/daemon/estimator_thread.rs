@@ -1,0 +1,492 @@
+//! The estimator thread (`corridor-estimator`): owns the [`Estimator`] and the output ports,
+//! publishes per sample, handles the end of stream, saves the checkpoint and logs the health
+//! line.
+
+use super::latency::LatencyHistogram;
+use super::outputs::{Out, Outputs, attitude_of, bias_of, flags_of, phase_code};
+use super::receive::{Msg, RxCounters};
+use super::{DaemonConfig, DaemonError, DaemonReport};
+use crate::checkpoint::{self, Checkpoint, CheckpointError};
+use crate::core::{Counters, Estimate, Estimator, ImuInput, Phase, WarmStart};
+use corridor_shared::wire::{
+    Diagnostics, FLAG_END_OF_STREAM, FLAG_SHUTDOWN, ImuSample, NavSample, monotonic_ns,
+};
+use crossbeam_channel::{RecvTimeoutError, TryRecvError};
+use iceoryx2::prelude::*;
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+/// Cumulative counters at the previous health line.
+#[derive(Debug, Clone, Copy)]
+struct HealthMark {
+    at: Instant,
+    received: u64,
+    seq_gaps: u64,
+    rejected: u64,
+    dropped: u64,
+}
+
+/// State of the estimator thread.
+struct EstState {
+    est: Estimator,
+    /// Counters of the estimators of finished streams.
+    previous: Counters,
+    last: Estimate,
+    last_imu_seq: u64,
+    last_bias_t_s: f64,
+    last_phase: Phase,
+    last_stances: u64,
+    last_nis: f64,
+    undelivered: u64,
+    streams_finished: u64,
+    /// The next sample comes from a new producer (see [`Msg::NewProducer`]).
+    producer_changed: bool,
+    /// The state each new stream starts from (checkpoint configured only).
+    warm: Option<WarmStart>,
+    warm_started_from: Option<Checkpoint>,
+    /// Accepted samples at the last checkpoint save (no save when nothing changed).
+    saved_at_samples: u64,
+    checkpoints_saved: u64,
+    latency_diag: LatencyHistogram,
+    latency_health: LatencyHistogram,
+    health: HealthMark,
+    warnings: Vec<String>,
+}
+
+/// `[x, y, z]` with 3 significant digits, for the health line.
+struct Vec3Fmt([f64; 3]);
+
+impl std::fmt::Display for Vec3Fmt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [x, y, z] = self.0;
+        write!(f, "[{x:.3e}, {y:.3e}, {z:.3e}]")
+    }
+}
+
+/// A latency in s as µs, or `-` when unknown.
+struct MicrosFmt(f64);
+
+impl std::fmt::Display for MicrosFmt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.0.is_finite() {
+            write!(f, "{:.0} µs", self.0 * 1e6)
+        } else {
+            f.write_str("-")
+        }
+    }
+}
+
+impl EstState {
+    fn new(cfg: &DaemonConfig) -> Self {
+        Self {
+            est: Estimator::new(cfg.estimator.clone(), cfg.aid.clone()),
+            previous: Counters::default(),
+            last: Estimate::default(),
+            last_imu_seq: 0,
+            last_bias_t_s: f64::NEG_INFINITY,
+            last_phase: Phase::Aligning,
+            last_stances: 0,
+            last_nis: f64::NAN,
+            undelivered: 0,
+            streams_finished: 0,
+            producer_changed: false,
+            warm: None,
+            warm_started_from: None,
+            saved_at_samples: 0,
+            checkpoints_saved: 0,
+            latency_diag: LatencyHistogram::new(),
+            latency_health: LatencyHistogram::new(),
+            health: HealthMark {
+                at: Instant::now(),
+                received: 0,
+                seq_gaps: 0,
+                rejected: 0,
+                dropped: 0,
+            },
+            warnings: Vec::new(),
+        }
+    }
+
+    fn warn(&mut self, w: String) {
+        tracing::warn!("{w}");
+        self.warnings.push(w);
+    }
+
+    /// Accepted samples over all streams.
+    fn accepted(&self) -> u64 {
+        self.previous.samples + self.est.counters().samples
+    }
+
+    fn diagnostics(&self, rx: &RxCounters, flags: u32) -> Diagnostics {
+        let c = self.est.counters();
+        let p = &self.previous;
+        Diagnostics {
+            seq: 0,
+            t_s: self.last.t_s,
+            received: rx.received.load(Ordering::Relaxed),
+            seq_gaps: rx.seq_gaps.load(Ordering::Relaxed),
+            rejected_duplicate_seq: rx.duplicate.load(Ordering::Relaxed),
+            late: rx.late.load(Ordering::Relaxed),
+            rejected_non_finite: p.rejected_non_finite + c.rejected_non_finite,
+            rejected_time: p.rejected_time + c.rejected_time,
+            dropped_overflow: rx.dropped.load(Ordering::Relaxed),
+            accepted: p.samples + c.samples,
+            undelivered: self.undelivered,
+            stances: p.stances + c.stances,
+            heading_used: p.heading_used + c.heading_used,
+            last_nis: self.last_nis,
+            producer_changes: rx.producer_changes.load(Ordering::Relaxed),
+            latency_p50_s: self.latency_diag.quantile_s(0.5),
+            latency_p99_s: self.latency_diag.quantile_s(0.99),
+            phase: phase_code(self.est.phase()),
+            flags,
+        }
+    }
+
+    fn publish_diagnostics(&mut self, out: &mut Outputs, rx: &RxCounters, flags: u32) {
+        let d = self.diagnostics(rx, flags);
+        let ok = out.diagnostics.publish(|v, q| v.seq = q, d);
+        self.count(ok);
+        self.latency_diag.clear();
+    }
+
+    fn count(&mut self, delivered: bool) {
+        if !delivered {
+            self.undelivered += 1;
+        }
+    }
+
+    /// A fresh estimator for a new stream, warm-started from the last saved state if any.
+    fn new_estimator(&mut self, cfg: &DaemonConfig) -> Estimator {
+        let mut est = Estimator::new(cfg.estimator.clone(), cfg.aid.clone());
+        if let Some(ws) = self.warm
+            && let Err(e) = est.set_warm_start(ws)
+        {
+            self.warm = None;
+            self.warn(format!("{e}; cold start"));
+        }
+        est
+    }
+
+    fn on_sample(&mut self, cfg: &DaemonConfig, out: &mut Outputs, rx: &RxCounters, s: &ImuSample) {
+        let clock_went_back =
+            s.t_s.partial_cmp(&self.last.t_s) != Some(std::cmp::Ordering::Greater);
+        if std::mem::take(&mut self.producer_changed)
+            && self.est.counters().samples > 0
+            && clock_went_back
+        {
+            // The new producer's clock restarted: end the old stream as a marker would.
+            tracing::warn!(
+                t_s = s.t_s,
+                last_t_s = self.last.t_s,
+                "new IMU producer restarted its clock; starting a new stream"
+            );
+            let marker = ImuSample {
+                seq: self.last_imu_seq,
+                flags: FLAG_END_OF_STREAM,
+                ..ImuSample::default()
+            };
+            self.on_end_of_stream(cfg, out, rx, &marker);
+        }
+        let input = ImuInput {
+            t_s: s.t_s,
+            gyro_rad_s: s.gyro_rad_s,
+            accel_m_s2: s.accel_m_s2,
+        };
+        let e = match self.est.step(&input) {
+            Ok(e) => *e,
+            Err(err) => {
+                // Counted by the estimator, published in Diagnostics.
+                tracing::debug!(seq = s.seq, "sample refused: {err}");
+                return;
+            }
+        };
+        self.last = e;
+        self.last_imu_seq = s.seq;
+        let ok = out
+            .attitude
+            .publish(|v, q| v.seq = q, attitude_of(&e, s.seq, s.sent_ns));
+        self.count(ok);
+        if s.sent_ns != 0 {
+            let now = monotonic_ns();
+            if now >= s.sent_ns {
+                self.latency_diag.record(now - s.sent_ns);
+                self.latency_health.record(now - s.sent_ns);
+            }
+        }
+        if let Some(h) = &e.heading
+            && let Ok(i) = &h.outcome
+        {
+            self.last_nis = i.nis;
+        }
+        let aligned_now = e.phase != self.last_phase && self.last_phase == Phase::Aligning;
+        self.last_phase = e.phase;
+        if aligned_now || e.heading.is_some() || e.t_s - self.last_bias_t_s >= cfg.bias_period_s {
+            self.last_bias_t_s = e.t_s;
+            let ok = out.bias.publish(|v, q| v.seq = q, bias_of(&e, s.seq));
+            self.count(ok);
+        }
+        let stances = self.est.counters().stances;
+        if stances > self.last_stances {
+            self.last_stances = stances;
+            let nav = NavSample {
+                seq: 0,
+                t_s: e.t_s,
+                imu_seq: s.seq,
+                stance: stances,
+                p_m: e.p_m,
+                v_m_s: e.v_m_s,
+                yaw_rad: e.yaw_rad,
+                flags: flags_of(&e),
+                reserved: 0,
+            };
+            let ok = out.nav.publish(|v, q| v.seq = q, nav);
+            self.count(ok);
+        }
+    }
+
+    fn on_end_of_stream(
+        &mut self,
+        cfg: &DaemonConfig,
+        out: &mut Outputs,
+        rx: &RxCounters,
+        s: &ImuSample,
+    ) {
+        let mut a = attitude_of(&self.last, s.seq, s.sent_ns);
+        a.flags |= FLAG_END_OF_STREAM;
+        let ok = out.attitude.publish(|v, q| v.seq = q, a);
+        self.count(ok);
+        let nav = NavSample {
+            t_s: self.last.t_s,
+            imu_seq: s.seq,
+            stance: self.last_stances,
+            p_m: self.last.p_m,
+            v_m_s: self.last.v_m_s,
+            yaw_rad: self.last.yaw_rad,
+            flags: FLAG_END_OF_STREAM,
+            ..NavSample::default()
+        };
+        let ok = out.nav.publish(|v, q| v.seq = q, nav);
+        self.count(ok);
+        let mut b = bias_of(&self.last, self.last_imu_seq);
+        b.flags |= FLAG_END_OF_STREAM;
+        let ok = out.bias.publish(|v, q| v.seq = q, b);
+        self.count(ok);
+        self.publish_diagnostics(out, rx, FLAG_END_OF_STREAM);
+        self.save_checkpoint(cfg);
+        // A new stream: fresh estimator (warm-started from the state just saved), counters
+        // carried over.
+        let c = *self.est.counters();
+        let p = &mut self.previous;
+        p.samples += c.samples;
+        p.rejected_non_finite += c.rejected_non_finite;
+        p.rejected_time += c.rejected_time;
+        p.stances += c.stances;
+        p.heading_used += c.heading_used;
+        self.est = self.new_estimator(cfg);
+        self.last = Estimate::default();
+        self.last_bias_t_s = f64::NEG_INFINITY;
+        self.last_phase = Phase::Aligning;
+        self.last_stances = 0;
+        self.streams_finished += 1;
+    }
+
+    /// Saves the estimator's bias state (once aligned, and only if it changed since the last
+    /// save); it also becomes the warm start of the next stream.
+    fn save_checkpoint(&mut self, cfg: &DaemonConfig) {
+        let Some(path) = &cfg.checkpoint else { return };
+        let Some(state) = self.est.bias_state() else {
+            return;
+        };
+        let accepted = self.accepted();
+        if accepted == self.saved_at_samples {
+            return;
+        }
+        let cp = Checkpoint {
+            mode: cfg.estimator.mode.name().to_owned(),
+            t_s: self.last.t_s,
+            saved_unix_ms: checkpoint::unix_now_ms(),
+            gyro_bias_rad_s: state.gyro_bias_rad_s,
+            gyro_bias_cov: state.gyro_bias_cov,
+            nav_from_body_wxyz: self.last.nav_from_body,
+        };
+        match checkpoint::save(path, &cp) {
+            Ok(()) => {
+                self.saved_at_samples = accepted;
+                self.checkpoints_saved += 1;
+                self.warm = Some(state);
+                tracing::debug!(path = %path.display(), t_s = cp.t_s, "checkpoint saved");
+            }
+            Err(e) => {
+                // Still the best state for the next stream of this process.
+                self.warm = Some(state);
+                self.warn(e.to_string());
+            }
+        }
+    }
+
+    /// Logs the one-line health summary and starts a new window.
+    fn log_health(&mut self, rx: &RxCounters) {
+        let now = Instant::now();
+        let d = self.diagnostics(rx, 0);
+        let rejected = d.rejected_non_finite + d.rejected_time + d.rejected_duplicate_seq + d.late;
+        let h = self.health;
+        let secs = now.duration_since(h.at).as_secs_f64().max(1e-9);
+        let rate = (d.received - h.received) as f64 / secs;
+        tracing::info!(
+            "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
+             dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
+             σ {} rad/s, converged {}, phase {}",
+            d.received,
+            d.seq_gaps - h.seq_gaps,
+            d.seq_gaps,
+            rejected - h.rejected,
+            rejected,
+            d.dropped_overflow - h.dropped,
+            d.dropped_overflow,
+            d.producer_changes,
+            MicrosFmt(self.latency_health.quantile_s(0.5)),
+            MicrosFmt(self.latency_health.quantile_s(0.99)),
+            Vec3Fmt(self.last.gyro_bias_rad_s),
+            Vec3Fmt(self.last.gyro_bias_sd_rad_s),
+            if self.last.converged { "yes" } else { "no" },
+            self.est.phase().name(),
+        );
+        self.latency_health.clear();
+        self.health = HealthMark {
+            at: now,
+            received: d.received,
+            seq_gaps: d.seq_gaps,
+            rejected,
+            dropped: d.dropped_overflow,
+        };
+    }
+}
+
+pub(super) fn estimator_thread(
+    cfg: &DaemonConfig,
+    rx: crossbeam_channel::Receiver<Msg>,
+    counters: &RxCounters,
+    ready: crossbeam_channel::Sender<Result<(), DaemonError>>,
+) -> Result<DaemonReport, DaemonError> {
+    let setup = || -> Result<_, DaemonError> {
+        let node = cfg
+            .domain
+            .node("corridor-daemon-estimator", SignalHandlingMode::Disabled)?;
+        let out = Outputs {
+            attitude: Out::new(cfg, &node)?,
+            bias: Out::new(cfg, &node)?,
+            nav: Out::new(cfg, &node)?,
+            diagnostics: Out::new(cfg, &node)?,
+        };
+        Ok((out, node))
+    };
+    let (mut out, _node) = match setup() {
+        Ok(x) => {
+            let _ = ready.send(Ok(()));
+            x
+        }
+        Err(e) => {
+            let _ = ready.send(Err(e));
+            return Ok(DaemonReport::default());
+        }
+    };
+    drop(ready);
+    let mut st = EstState::new(cfg);
+    load_warm_start(cfg, &mut st);
+    st.est = st.new_estimator(cfg);
+    let start = Instant::now();
+    let mut next_diag = start + cfg.diagnostics_period;
+    let mut next_health = start + cfg.health_period;
+    let mut next_checkpoint = start + cfg.checkpoint_period;
+    loop {
+        let deadline = next_diag.min(next_health).min(next_checkpoint);
+        let msg = match rx.try_recv() {
+            Ok(m) => Ok(m),
+            Err(TryRecvError::Empty) => {
+                // Woken by the receive thread's unpark after each send (no lost wake-up:
+                // an unpark before the park makes it return at once).
+                let now = Instant::now();
+                if deadline > now {
+                    std::thread::park_timeout(deadline - now);
+                }
+                Err(RecvTimeoutError::Timeout)
+            }
+            Err(TryRecvError::Disconnected) => Err(RecvTimeoutError::Disconnected),
+        };
+        match msg {
+            Ok(Msg::Imu(s)) if s.is_end_of_stream() => {
+                st.on_end_of_stream(cfg, &mut out, counters, &s);
+                next_diag = Instant::now() + cfg.diagnostics_period;
+            }
+            Ok(Msg::Imu(s)) => st.on_sample(cfg, &mut out, counters, &s),
+            Ok(Msg::Heading {
+                heading_rad,
+                sd_rad,
+            }) => {
+                if heading_rad.is_finite() && sd_rad.is_finite() && sd_rad > 0.0 {
+                    st.est.queue_heading(heading_rad, sd_rad);
+                } else {
+                    tracing::debug!(heading_rad, sd_rad, "angle observation refused");
+                }
+            }
+            Ok(Msg::NewProducer) => st.producer_changed = true,
+            Err(RecvTimeoutError::Timeout) => {}
+            Err(RecvTimeoutError::Disconnected) => break,
+        }
+        let now = Instant::now();
+        if now >= next_diag {
+            st.publish_diagnostics(&mut out, counters, 0);
+            next_diag = now + cfg.diagnostics_period;
+        }
+        if now >= next_health {
+            st.log_health(counters);
+            next_health = now + cfg.health_period;
+        }
+        if now >= next_checkpoint {
+            st.save_checkpoint(cfg);
+            next_checkpoint = Instant::now() + cfg.checkpoint_period;
+        }
+    }
+    st.publish_diagnostics(&mut out, counters, FLAG_SHUTDOWN);
+    st.save_checkpoint(cfg);
+    let mut diagnostics = st.diagnostics(counters, FLAG_SHUTDOWN);
+    diagnostics.seq = out.diagnostics.seq.saturating_sub(1);
+    Ok(DaemonReport {
+        diagnostics,
+        streams_finished: st.streams_finished,
+        warm_started_from: st.warm_started_from,
+        checkpoints_saved: st.checkpoints_saved,
+        warnings: st.warnings,
+    })
+}
+
+/// Loads the checkpoint into `st.warm`; a bad one becomes a warning and a cold start.
+fn load_warm_start(cfg: &DaemonConfig, st: &mut EstState) {
+    let Some(path) = &cfg.checkpoint else { return };
+    match checkpoint::load(path) {
+        Ok(cp) if cp.mode != cfg.estimator.mode.name() => {
+            st.warn(format!(
+                "{}: checkpoint is for mode {}, the daemon runs {}; cold start",
+                path.display(),
+                cp.mode,
+                cfg.estimator.mode.name()
+            ));
+        }
+        Ok(cp) => {
+            tracing::info!(
+                path = %path.display(),
+                t_s = cp.t_s,
+                age_s = cp.age().map(|a| a.as_secs_f64()),
+                bias_rad_s = %Vec3Fmt(cp.gyro_bias_rad_s),
+                "warm start from the checkpoint"
+            );
+            st.warm = Some(cp.warm_start());
+            st.warm_started_from = Some(cp);
+        }
+        Err(CheckpointError::NotFound { .. }) => {
+            tracing::info!(path = %path.display(), "no checkpoint; cold start");
+        }
+        Err(e) => st.warn(format!("{e}; cold start")),
+    }
+}

@@ -1,0 +1,127 @@
+//! The output publishers (attitude, bias, nav, diagnostics) and the conversion of an
+//! [`Estimate`] into the wire messages.
+
+use super::{DaemonConfig, DaemonError};
+use crate::core::{Estimate, Phase};
+use corridor_shared::services::{Access, ServiceError, Topic};
+use corridor_shared::wire::{
+    AttitudeSample, BiasSample, Diagnostics, FLAG_BIAS_CORRECTED, FLAG_CONVERGED, FLAG_STANCE,
+    NavSample, phase,
+};
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::prelude::*;
+
+/// A publisher with its paired notifier.
+pub(super) struct Out<T: Topic> {
+    pub(super) publisher: Publisher<ipc::Service, T, ()>,
+    pub(super) notifier: Notifier<ipc::Service>,
+    pub(super) seq: u64,
+    pub(super) failed_once: bool,
+}
+
+impl<T: Topic> Out<T> {
+    pub(super) fn new(cfg: &DaemonConfig, node: &Node<ipc::Service>) -> Result<Self, DaemonError> {
+        let d = &cfg.domain;
+        let publisher = d
+            .open::<T>(node, Access::Owner(cfg.delivery))?
+            .publisher_builder()
+            .backpressure_strategy(cfg.delivery.backpressure())
+            .max_loaned_samples(2)
+            .create()
+            .map_err(|e| ServiceError::port(d, T::SERVICE, "publisher", e))?;
+        let notifier = d
+            .open_event(node, T::SERVICE, true)?
+            .notifier_builder()
+            .create()
+            .map_err(|e| ServiceError::port(d, T::SERVICE, "notifier", e))?;
+        Ok(Self {
+            publisher,
+            notifier,
+            seq: 0,
+            failed_once: false,
+        })
+    }
+
+    /// Publishes `value` with the next `seq`; returns false when nobody received it.
+    pub(super) fn publish(&mut self, set_seq: impl FnOnce(&mut T, u64), mut value: T) -> bool {
+        set_seq(&mut value, self.seq);
+        self.seq += 1;
+        let delivered = match self.publisher.loan_uninit() {
+            Ok(slot) => slot.write_payload(value).send(),
+            Err(e) => Err(e.into()),
+        };
+        let _ = self.notifier.notify();
+        match delivered {
+            Ok(n) => n > 0,
+            Err(e) => {
+                if !self.failed_once {
+                    self.failed_once = true;
+                    tracing::warn!(
+                        service = T::SERVICE,
+                        "publishing failed: {e:?} (reported once)"
+                    );
+                }
+                false
+            }
+        }
+    }
+}
+
+pub(super) struct Outputs {
+    pub(super) attitude: Out<AttitudeSample>,
+    pub(super) bias: Out<BiasSample>,
+    pub(super) nav: Out<NavSample>,
+    pub(super) diagnostics: Out<Diagnostics>,
+}
+
+pub(super) fn phase_code(p: Phase) -> u32 {
+    match p {
+        Phase::Aligning => phase::ALIGNING,
+        Phase::Calibrating => phase::CALIBRATING,
+        Phase::Tracking => phase::TRACKING,
+    }
+}
+
+pub(super) fn flags_of(e: &Estimate) -> u32 {
+    let mut f = 0;
+    if e.phase != Phase::Aligning {
+        f |= FLAG_BIAS_CORRECTED;
+    }
+    if e.stance {
+        f |= FLAG_STANCE;
+    }
+    if e.converged {
+        f |= FLAG_CONVERGED;
+    }
+    f
+}
+
+pub(super) fn attitude_of(e: &Estimate, imu_seq: u64, imu_sent_ns: u64) -> AttitudeSample {
+    AttitudeSample {
+        seq: 0,
+        t_s: e.t_s,
+        imu_seq,
+        nav_from_body_wxyz: e.nav_from_body,
+        roll_rad: e.roll_rad,
+        pitch_rad: e.pitch_rad,
+        yaw_rad: e.yaw_rad,
+        gyro_bias_rad_s: e.gyro_bias_rad_s,
+        gyro_bias_sd_rad_s: e.gyro_bias_sd_rad_s,
+        phase: phase_code(e.phase),
+        flags: flags_of(e),
+        imu_sent_ns,
+    }
+}
+
+pub(super) fn bias_of(e: &Estimate, imu_seq: u64) -> BiasSample {
+    BiasSample {
+        seq: 0,
+        t_s: e.t_s,
+        imu_seq,
+        gyro_bias_rad_s: e.gyro_bias_rad_s,
+        gyro_bias_sd_rad_s: e.gyro_bias_sd_rad_s,
+        converged: u32::from(e.converged),
+        flags: flags_of(e) & FLAG_CONVERGED,
+    }
+}

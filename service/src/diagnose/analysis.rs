@@ -1,0 +1,273 @@
+//! One run of a model and its residuals: the heading residuals with their regressors, the
+//! consistency figures (NIS, whiteness, footprint error) and the ranked effects.
+
+use super::ranking::{Finding, rank_effects};
+use crate::eval::EvalOptions;
+use crate::runner::{RunError, heading_aid, run_log};
+use crate::stats::{self, nis_consistency, whiteness};
+use corridor_shared::config::{ConfigFile, Mode};
+use corridor_shared::imu_csv::ImuLog;
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::truth_csv::TruthPoint;
+use nalgebra::{UnitQuaternion, Vector3};
+use serde::Serialize;
+use std::path::Path;
+
+/// One heading residual with its regressors.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct HeadingResidual {
+    /// Time, s.
+    pub t_s: f64,
+    /// Residual `ψ_map − ψ̂_foot`, rad.
+    pub r_rad: f64,
+    /// Innovation variance, rad².
+    pub s_rad2: f64,
+    /// Used by the filter (else rejected by the gate or the straight-walk test).
+    pub accepted: bool,
+    /// Foot heading the model predicted, rad.
+    pub foot_heading_rad: f64,
+    /// Position at the observation, m, map frame.
+    pub p_xy: [f64; 2],
+    /// Direction index (`round((ψ_map − grid)/step)`, modulo the number of directions).
+    pub direction: i64,
+    /// Time since the previous used observation, s.
+    pub dt_s: f64,
+    /// Signed turn since the previous used observation, from the map directions, rad.
+    pub turn_rad: f64,
+    /// The same turn from the gyro (∫ω about the vertical), rad.
+    pub gyro_turn_rad: f64,
+    /// Total rotation ∫|ω| since the previous observation, rad.
+    pub rotation_rad: f64,
+    /// ∫| |f| − g | since the previous observation, m/s.
+    pub force_excess_m_s: f64,
+    /// Σ |dt − median dt| since the previous observation, s.
+    pub dt_deviation_s: f64,
+    /// Angle between the gravity direction at this stance and at the initial rest, rad, as a
+    /// rotation vector in sensor axes.
+    pub tilt_change: [f64; 3],
+}
+
+/// Consistency figures of one run.
+#[derive(Debug, Clone, Serialize)]
+pub struct Consistency {
+    /// Footprint RMS, m (when truth is given).
+    pub gcp_rms_m: Option<f64>,
+    /// Footprint RMS, % of path.
+    pub gcp_rms_pct: Option<f64>,
+    /// Mean NIS of the accepted heading observations.
+    pub nis_mean: f64,
+    /// Its 95 % χ² band (lower, upper).
+    pub nis_band: [f64; 2],
+    /// Ljung–Box p-value of the normalised residuals (whiteness).
+    pub whiteness_p: f64,
+    /// Fraction of autocorrelations outside ±1.96/√N (lags 1..10).
+    pub whiteness_fraction_outside: f64,
+    /// Heading observations used.
+    pub observations: usize,
+    /// Sum of the squared heading innovations of the used observations, rad².
+    pub rss_rad2: f64,
+    /// The NIS is above its band.
+    pub nis_too_large: bool,
+    /// p-value of the NIS test.
+    pub nis_p: f64,
+    /// Final bias, rad/s, and its σ.
+    pub bias_rad_s: [f64; 3],
+    /// Final bias σ.
+    pub bias_sd_rad_s: [f64; 3],
+}
+
+/// The analysis of one model.
+#[derive(Debug, Clone, Serialize)]
+pub struct Analysis {
+    /// Model extensions in force (config keys).
+    pub model: Vec<String>,
+    /// Consistency figures.
+    pub consistency: Consistency,
+    /// Effects, best first.
+    pub effects: Vec<Finding>,
+    /// Final gyro scale factors per sensor axis with their σ, when the model estimates them.
+    pub scale_factor: Option<[[f64; 2]; 3]>,
+    /// The residuals (for plots and the report).
+    #[serde(skip)]
+    pub residuals: Vec<HeadingResidual>,
+}
+
+/// Runs the model of `file` on `log` and analyses its residuals.
+pub fn analyse(
+    log: &ImuLog,
+    file: &ConfigFile,
+    truth: Option<&[TruthPoint]>,
+    map: Option<&Path>,
+) -> Result<Analysis, RunError> {
+    let cfg = file.validate()?;
+    let aid = heading_aid(&cfg, map)?;
+    let grid = cfg.heading.grid_rad;
+    let step = cfg.heading.grid_step_rad.get();
+    let sigma2 = cfg.heading.sigma_rad.get().powi(2);
+    let n_dirs = (std::f64::consts::TAU / step).round() as i64;
+    let median_dt = median_dt(log);
+    let mut acc = Accumulator::default();
+    let mut res = Vec::new();
+    let mut rest_up: Option<Vector3<f64>> = None;
+    let mut rest_sum = Vector3::zeros();
+    let mut stance_sum = (Vector3::zeros(), 0u32);
+    let mut last_t: Option<f64> = None;
+    let mut last_dir: Option<f64> = None;
+    let outcome = run_log(log, &cfg, &aid, &BiasInjection::default(), |input, e| {
+        let w = Vector3::from(input.gyro_rad_s);
+        let f = Vector3::from(input.accel_m_s2);
+        let dt = last_t.map_or(0.0, |t| input.t_s - t);
+        last_t = Some(input.t_s);
+        if e.phase == crate::core::Phase::Aligning {
+            if e.stance {
+                rest_sum += f;
+            }
+            return;
+        }
+        let up = *rest_up.get_or_insert_with(|| rest_sum.normalize());
+        let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+            e.nav_from_body[0],
+            e.nav_from_body[1],
+            e.nav_from_body[2],
+            e.nav_from_body[3],
+        ));
+        acc.dt_s += dt;
+        acc.turn_rad += (q * w).z * dt;
+        acc.rotation_rad += w.norm() * dt;
+        acc.force_excess_m_s += (f.norm() - 9.80665).abs() * dt;
+        acc.dt_deviation_s += (dt - median_dt).abs();
+        if e.stance {
+            stance_sum.0 += f;
+            stance_sum.1 += 1;
+        } else {
+            stance_sum = (Vector3::zeros(), 0);
+        }
+        let Some(h) = &e.heading else { return };
+        if h.direction_rad.is_nan() {
+            return; // rejected before association: keep accumulating to the next observation
+        }
+        let r = crate::core::rotation::wrap_pi(h.direction_rad - h.foot_heading_rad);
+        let (accepted, s) = match &h.outcome {
+            Ok(i) if i.dim == 1 => (true, i.s_diag[0]),
+            Ok(_) => (true, sigma2),
+            Err(_) => (false, sigma2),
+        };
+        let k = ((h.direction_rad - grid) / step).round() as i64;
+        // The turn the map says the walker made since the last used observation: free of the
+        // stride-to-stride scatter of the foot angle, which the gyro-integrated turn carries
+        // (and which correlates with the residual by construction).
+        let map_turn =
+            last_dir.map_or(0.0, |d| crate::core::rotation::wrap_pi(h.direction_rad - d));
+        let tilt = if stance_sum.1 > 0 {
+            up.cross(&stance_sum.0.normalize())
+        } else {
+            Vector3::zeros()
+        };
+        res.push(HeadingResidual {
+            t_s: e.t_s,
+            r_rad: r,
+            s_rad2: s,
+            accepted,
+            foot_heading_rad: h.foot_heading_rad,
+            p_xy: [e.p_m[0], e.p_m[1]],
+            direction: k.rem_euclid(n_dirs.max(1)),
+            dt_s: acc.dt_s,
+            turn_rad: map_turn,
+            gyro_turn_rad: acc.turn_rad,
+            rotation_rad: acc.rotation_rad,
+            force_excess_m_s: acc.force_excess_m_s,
+            dt_deviation_s: acc.dt_deviation_s,
+            tilt_change: tilt.into(),
+        });
+        if accepted {
+            acc = Accumulator::default();
+            last_dir = Some(h.direction_rad);
+        }
+    });
+    let n = outcome.trace.t_s.len();
+    let (bias, bias_sd) = if n > 0 {
+        (
+            outcome.trace.bias_rad_s[n - 1],
+            outcome.trace.bias_sd_rad_s[n - 1],
+        )
+    } else {
+        ([f64::NAN; 3], [f64::NAN; 3])
+    };
+    let eval = truth.and_then(|t| outcome.trace.evaluate(t, &EvalOptions::default()).ok());
+    let used: Vec<&HeadingResidual> = res.iter().filter(|r| r.accepted).collect();
+    let nis: Vec<f64> = used.iter().map(|r| r.r_rad * r.r_rad / r.s_rad2).collect();
+    let z: Vec<f64> = used.iter().map(|r| r.r_rad / r.s_rad2.sqrt()).collect();
+    let nis_t = nis_consistency(&nis, 1, 0.95).ok();
+    let white = whiteness(&z, 10.min(used.len().saturating_sub(2)).max(1)).ok();
+    let consistency = Consistency {
+        gcp_rms_m: eval.as_ref().and_then(|e| e.rms_error_m),
+        gcp_rms_pct: eval.as_ref().and_then(|e| e.rms_error_pct_of_path),
+        nis_mean: nis_t.as_ref().map_or(f64::NAN, |t| t.mean),
+        nis_band: nis_t.as_ref().map_or([f64::NAN; 2], |t| [t.lower, t.upper]),
+        whiteness_p: white.as_ref().map_or(f64::NAN, |w| w.ljung_box_p),
+        whiteness_fraction_outside: white.as_ref().map_or(f64::NAN, |w| w.fraction_outside),
+        observations: used.len(),
+        rss_rad2: used.iter().map(|r| r.r_rad * r.r_rad).sum(),
+        nis_too_large: nis_t
+            .as_ref()
+            .is_some_and(|t| t.verdict == stats::NisVerdict::TooLarge),
+        nis_p: nis_t.as_ref().map_or(f64::NAN, |t| t.p_value),
+        bias_rad_s: bias,
+        bias_sd_rad_s: bias_sd,
+    };
+    let effects = rank_effects(&used, cfg.mode);
+    let scale_factor = outcome
+        .extensions
+        .and_then(|(x, sd)| sd.map(|sd| std::array::from_fn(|k| [x.scale_factor[k], sd[k]])));
+    Ok(Analysis {
+        model: model_keys(file),
+        consistency,
+        effects,
+        scale_factor,
+        residuals: res,
+    })
+}
+
+#[derive(Debug, Clone, Copy, Default)]
+struct Accumulator {
+    dt_s: f64,
+    turn_rad: f64,
+    rotation_rad: f64,
+    force_excess_m_s: f64,
+    dt_deviation_s: f64,
+}
+
+fn median_dt(log: &ImuLog) -> f64 {
+    let mut d: Vec<f64> = log.rows.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
+    if d.is_empty() {
+        return 0.0;
+    }
+    let mid = d.len() / 2;
+    *d.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// The extension keys switched on in `file`.
+fn model_keys(file: &ConfigFile) -> Vec<String> {
+    let m = &file.model;
+    let mut v = Vec::new();
+    if m.bias_rate_rw_rad_s2_sqrt_s.is_some() {
+        v.push("bias_rate".into());
+    }
+    if m.scale_factor_sd.is_some() {
+        v.push("scale_factor".into());
+    }
+    if m.heading_offset_sd_deg.is_some() {
+        v.push("heading_offset".into());
+    }
+    if m.g_sensitivity_sd.is_some() {
+        v.push("g_sensitivity".into());
+    }
+    if let Some(rw) = file.eskf.gyro_bias_rw_rad_s_sqrt_s {
+        v.push(format!("gyro_bias_rw = {rw:e}"));
+    }
+    v.push(format!(
+        "mode = {}",
+        file.estimator.mode.map_or("eskf", Mode::name)
+    ));
+    v
+}

@@ -1,0 +1,290 @@
+//! The catalogue: the effects the diagnosis tests for ([`Effect`]), the model changes that add
+//! them ([`Fix`]), which fixes each effect tries ([`Effect::fixes`]) and how a fix changes a
+//! configuration ([`apply_fix`]). The names and labels are those of `report.json` and
+//! `report.md`.
+
+use corridor_shared::config::{ConfigFile, Mode};
+use serde::{Serialize, Serializer};
+use std::fmt;
+
+/// An effect the model may lack.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Effect {
+    /// The walking direction differs from the map direction by a constant.
+    HeadingOffset,
+    /// The gyro bias drifts (ramp) or steps.
+    BiasDrift,
+    /// The residual grows with the turn: a gyro scale-factor error.
+    GyroScaleFactor,
+    /// The residual grows with the specific-force excess: a g-sensitive gyro.
+    GSensitivity,
+    /// The residual grows with the total rotation, not the turn.
+    AxisMisalignment,
+    /// The residual grows with the time-step deviations, or every axis shows the same scale
+    /// factor (a clock-rate error).
+    Timing,
+    /// The foot is not flat at stance (the paper's model only).
+    MountingTilt,
+    /// The residuals are inconsistent and nothing in the catalogue explains them.
+    Unexplained,
+}
+
+impl Effect {
+    /// Every effect, in the catalogue's order.
+    pub const ALL: [Effect; 8] = [
+        Effect::HeadingOffset,
+        Effect::BiasDrift,
+        Effect::GyroScaleFactor,
+        Effect::GSensitivity,
+        Effect::AxisMisalignment,
+        Effect::Timing,
+        Effect::MountingTilt,
+        Effect::Unexplained,
+    ];
+
+    /// The catalogue name (in the reports).
+    pub fn name(self) -> &'static str {
+        match self {
+            Effect::HeadingOffset => "heading_offset",
+            Effect::BiasDrift => "bias_drift",
+            Effect::GyroScaleFactor => "gyro_scale_factor",
+            Effect::GSensitivity => "g_sensitivity",
+            Effect::AxisMisalignment => "axis_misalignment",
+            Effect::Timing => "timing",
+            Effect::MountingTilt => "mounting_tilt",
+            Effect::Unexplained => "unexplained",
+        }
+    }
+
+    /// The fixes tried for this effect, with the number of parameters each adds; empty when
+    /// corridor has no model change for it.
+    pub fn fixes(self) -> &'static [(Fix, usize)] {
+        match self {
+            Effect::HeadingOffset => &[(Fix::HeadingOffset, 1)],
+            Effect::BiasDrift => &[(Fix::BiasRate, 3), (Fix::BiasRandomWalkTimes10, 1)],
+            Effect::GyroScaleFactor | Effect::Timing => &[(Fix::ScaleFactor, 3)],
+            Effect::GSensitivity => &[(Fix::GSensitivity, 3)],
+            Effect::MountingTilt => &[(Fix::RotationAware, 3)],
+            Effect::AxisMisalignment | Effect::Unexplained => &[],
+        }
+    }
+}
+
+impl fmt::Display for Effect {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl Serialize for Effect {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+/// A model change that adds an effect.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Fix {
+    /// A heading-offset state (`model.heading_offset_sd_deg = 5`).
+    HeadingOffset,
+    /// Bias-rate states (`model.bias_rate_rw_rad_s2_sqrt_s = 1e-6`).
+    BiasRate,
+    /// A ten times faster bias random walk (`eskf.gyro_bias_rw_rad_s_sqrt_s × 10`).
+    BiasRandomWalkTimes10,
+    /// Gyro scale-factor states (`model.scale_factor_sd = 0.02`).
+    ScaleFactor,
+    /// Gyro g-sensitivity states (`model.g_sensitivity_sd = 1e-3`).
+    GSensitivity,
+    /// The rotation-aware variant of the paper's filter (`estimator.mode = rotation_aware`).
+    RotationAware,
+}
+
+impl Fix {
+    /// Every fix.
+    pub const ALL: [Fix; 6] = [
+        Fix::HeadingOffset,
+        Fix::BiasRate,
+        Fix::BiasRandomWalkTimes10,
+        Fix::ScaleFactor,
+        Fix::GSensitivity,
+        Fix::RotationAware,
+    ];
+
+    /// The configuration change in words (in the reports).
+    pub fn label(self) -> &'static str {
+        match self {
+            Fix::HeadingOffset => "model.heading_offset_sd_deg = 5",
+            Fix::BiasRate => "model.bias_rate_rw_rad_s2_sqrt_s = 1e-6",
+            Fix::BiasRandomWalkTimes10 => "eskf.gyro_bias_rw_rad_s_sqrt_s × 10",
+            Fix::ScaleFactor => "model.scale_factor_sd = 0.02",
+            Fix::GSensitivity => "model.g_sensitivity_sd = 1e-3",
+            Fix::RotationAware => "estimator.mode = rotation_aware",
+        }
+    }
+
+    /// An extension state of the error-state filter (a `model.` key).
+    pub fn is_model_extension(self) -> bool {
+        matches!(
+            self,
+            Fix::HeadingOffset | Fix::BiasRate | Fix::ScaleFactor | Fix::GSensitivity
+        )
+    }
+}
+
+impl fmt::Display for Fix {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.label())
+    }
+}
+
+impl Serialize for Fix {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.label())
+    }
+}
+
+/// Applies `fix` to `file`; `false` when it is already in the model.
+pub fn apply_fix(fix: Fix, file: &mut ConfigFile) -> bool {
+    // The extension states live in the error-state filter: from the paper's bias filter (or
+    // its rotation-aware variant) a model extension also moves the heading observations there.
+    if fix.is_model_extension()
+        && matches!(file.estimator.mode, Some(Mode::Paper | Mode::RotationAware))
+    {
+        let mut f = file.clone();
+        f.estimator.mode = Some(Mode::Eskf);
+        if apply_fix(fix, &mut f) {
+            *file = f;
+            return true;
+        }
+        return false;
+    }
+    let m = &mut file.model;
+    match fix {
+        Fix::HeadingOffset if m.heading_offset_sd_deg.is_none() => {
+            m.heading_offset_sd_deg = Some(5.0)
+        }
+        Fix::BiasRate if m.bias_rate_rw_rad_s2_sqrt_s.is_none() => {
+            m.bias_rate_rw_rad_s2_sqrt_s = Some(1e-6)
+        }
+        Fix::ScaleFactor if m.scale_factor_sd.is_none() => m.scale_factor_sd = Some(0.02),
+        Fix::GSensitivity if m.g_sensitivity_sd.is_none() => m.g_sensitivity_sd = Some(1e-3),
+        Fix::BiasRandomWalkTimes10 => {
+            let rw = file.eskf.gyro_bias_rw_rad_s_sqrt_s.unwrap_or(1e-4);
+            if rw >= 1e-3 {
+                return false;
+            }
+            file.eskf.gyro_bias_rw_rad_s_sqrt_s = Some(rw * 10.0);
+        }
+        Fix::RotationAware if file.estimator.mode == Some(Mode::Paper) => {
+            file.estimator.mode = Some(Mode::RotationAware)
+        }
+        _ => return false,
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_and_labels_are_the_report_strings() {
+        let names: Vec<&str> = Effect::ALL.iter().map(|e| e.name()).collect();
+        assert_eq!(
+            names,
+            [
+                "heading_offset",
+                "bias_drift",
+                "gyro_scale_factor",
+                "g_sensitivity",
+                "axis_misalignment",
+                "timing",
+                "mounting_tilt",
+                "unexplained"
+            ]
+        );
+        for e in Effect::ALL {
+            assert_eq!(e.to_string(), e.name());
+            assert_eq!(serde_json::to_value(e).unwrap(), e.name());
+        }
+        for f in Fix::ALL {
+            assert_eq!(f.to_string(), f.label());
+            assert_eq!(serde_json::to_value(f).unwrap(), f.label());
+            // The extension states are exactly the `model.` keys.
+            assert_eq!(f.is_model_extension(), f.label().starts_with("model."));
+        }
+    }
+
+    #[test]
+    fn each_effect_maps_to_its_fixes() {
+        let fixes = |e: Effect| e.fixes().iter().map(|&(f, _)| f).collect::<Vec<_>>();
+        assert_eq!(fixes(Effect::HeadingOffset), [Fix::HeadingOffset]);
+        assert_eq!(
+            fixes(Effect::BiasDrift),
+            [Fix::BiasRate, Fix::BiasRandomWalkTimes10]
+        );
+        assert_eq!(fixes(Effect::GyroScaleFactor), [Fix::ScaleFactor]);
+        assert_eq!(fixes(Effect::Timing), [Fix::ScaleFactor]);
+        assert_eq!(fixes(Effect::GSensitivity), [Fix::GSensitivity]);
+        assert_eq!(fixes(Effect::MountingTilt), [Fix::RotationAware]);
+        assert!(Effect::AxisMisalignment.fixes().is_empty());
+        assert!(Effect::Unexplained.fixes().is_empty());
+        // Parameters added: one offset, one random-walk scale, three states otherwise.
+        for e in Effect::ALL {
+            for &(f, k) in e.fixes() {
+                let one = matches!(f, Fix::HeadingOffset | Fix::BiasRandomWalkTimes10);
+                assert_eq!(k, if one { 1 } else { 3 }, "{e} {f}");
+            }
+        }
+        // Every fix is reachable from some effect.
+        for f in Fix::ALL {
+            assert!(
+                Effect::ALL
+                    .iter()
+                    .any(|e| e.fixes().iter().any(|&(g, _)| g == f)),
+                "{f}"
+            );
+        }
+    }
+
+    #[test]
+    fn every_fix_applies_once_then_reports_already_in_the_model() {
+        for f in Fix::ALL {
+            let mut file = ConfigFile::default();
+            file.estimator.mode = Some(if f == Fix::RotationAware {
+                Mode::Paper
+            } else {
+                Mode::Eskf
+            });
+            let before = format!("{file:?}");
+            assert!(apply_fix(f, &mut file), "{f} applies to the default model");
+            assert_ne!(format!("{file:?}"), before, "{f} changed nothing");
+            if f != Fix::BiasRandomWalkTimes10 {
+                assert!(!apply_fix(f, &mut file), "{f} applied twice");
+            }
+        }
+        // The random walk grows ×10 per application up to 1e-3.
+        let mut file = ConfigFile::default();
+        assert!(apply_fix(Fix::BiasRandomWalkTimes10, &mut file));
+        assert_eq!(file.eskf.gyro_bias_rw_rad_s_sqrt_s, Some(1e-3));
+        assert!(!apply_fix(Fix::BiasRandomWalkTimes10, &mut file));
+    }
+
+    #[test]
+    fn model_extensions_move_the_paper_model_to_the_error_state_filter() {
+        let mut file = ConfigFile::default();
+        file.estimator.mode = Some(Mode::Paper);
+        assert!(apply_fix(Fix::ScaleFactor, &mut file));
+        assert_eq!(file.estimator.mode, Some(Mode::Eskf));
+        assert_eq!(file.model.scale_factor_sd, Some(0.02));
+        // Not a model extension: the mode stays.
+        let mut file = ConfigFile::default();
+        file.estimator.mode = Some(Mode::Paper);
+        assert!(apply_fix(Fix::BiasRandomWalkTimes10, &mut file));
+        assert_eq!(file.estimator.mode, Some(Mode::Paper));
+        // The rotation-aware mode only replaces the paper's.
+        let mut file = ConfigFile::default();
+        file.estimator.mode = Some(Mode::Eskf);
+        assert!(!apply_fix(Fix::RotationAware, &mut file));
+    }
+}

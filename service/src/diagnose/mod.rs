@@ -1,0 +1,202 @@
+//! Residual diagnosis (`corridor diagnose`): run the configured model, test its heading
+//! residuals for consistency, rank the effects of a catalogue by the evidence in the residuals,
+//! add the top effect to the model, run again and report the error before and after; repeat
+//! while a significant, fixable effect remains.
+//!
+//! The residual is the heading innovation of each stance observation: the map direction minus
+//! the foot heading the model predicts, `r = ψ_map − ψ̂_foot`, with its innovation variance
+//! `S` (from the filter, or σ² in the bias-filter modes). Between two used observations the
+//! runner accumulates the candidate regressors: elapsed time, the signed turn (from the map
+//! directions: the gyro-integrated turn carries the stride-to-stride scatter of the foot angle,
+//! which correlates with the residual by construction and looked like a 30–60 % scale factor),
+//! the total rotation (∫|ω|), the specific-force excess (∫| |f| − g |), and the deviation of
+//! the time steps from their median.
+//!
+//! Each fixable effect is also scored by a nested-model F test: the model with the effect added
+//! against the current one, on the heading innovations (see [`score_by_likelihood`]); its score
+//! is the larger of the two.
+//!
+//! Catalogue and test of each effect (scores are −log₁₀ p, significant from 3):
+//! - `heading_offset`: the walking direction (stride displacement) differs from the map
+//!   direction by a constant with the same sign on every direction (t test, and the one-way
+//!   ANOVA across directions must not reject equal means);
+//! - `bias_drift`: a trend of `r` in time (regression) or a drift/step in its cumulative sum
+//!   (CUSUM); the fix is bias-rate states for a ramp, a faster bias random walk for a step;
+//! - `gyro_scale_factor`: `r` proportional to the signed turn since the last used observation;
+//! - `g_sensitivity`: `r` proportional to ∫| |f| − g |;
+//! - `axis_misalignment`: `r` proportional to the total rotation ∫|ω| (cadence), not to the turn;
+//! - `timing`: `r` proportional to the time-step deviations (jitter, gaps);
+//! - `mounting_tilt`: the accelerometer's tilt at stance differs from the tilt at the initial
+//!   rest (only an effect for the paper's model, which takes the foot as flat);
+//! - `unexplained`: the residuals are inconsistent (NIS above its χ² band or not white) and no
+//!   effect of the catalogue reaches significance.
+//!
+//! Map of the submodules (their public items are re-exported here):
+//! - `catalogue`: the effects ([`Effect`]) and fixes ([`Fix`]), which fixes each effect
+//!   tries, and [`apply_fix`];
+//! - `analysis`: one run of a model and its residuals ([`analyse`] → [`Analysis`],
+//!   [`Consistency`], [`HeadingResidual`]);
+//! - `ranking`: the evidence for each effect ([`Finding`]), the residual tests and the
+//!   nested-model F test ([`score_by_likelihood`]);
+//! - `report`: `report.md`, `report.json` and `residuals.svg` ([`write_report`]);
+//! - this file: the loop ([`run_diagnosis`] → [`Diagnosis`]).
+
+mod analysis;
+mod catalogue;
+mod ranking;
+mod report;
+
+pub use analysis::{Analysis, Consistency, HeadingResidual, analyse};
+pub use catalogue::{Effect, Fix, apply_fix};
+pub use ranking::{Candidate, Finding, score_by_likelihood};
+pub use report::write_report;
+
+use crate::runner::RunError;
+use corridor_shared::config::ConfigFile;
+use corridor_shared::imu_csv::ImuLog;
+use corridor_shared::truth_csv::TruthPoint;
+use serde::Serialize;
+use std::path::Path;
+
+/// Score from which an effect counts as significant (p < 0.001).
+pub const SIGNIFICANT: f64 = 3.0;
+/// Residual-test score an effect needs before the F test can raise it (p < 0.05).
+pub const CORROBORATED: f64 = 1.3;
+/// Largest number of model extensions added in one diagnosis.
+pub const MAX_ITERATIONS: usize = 3;
+
+/// One step of the loop: the effect added and the model before and after.
+#[derive(Debug, Clone, Serialize)]
+pub struct Iteration {
+    /// Effect added.
+    pub effect: Effect,
+    /// Its score when it was chosen.
+    pub score: f64,
+    /// Config change.
+    pub fix: Fix,
+    /// Before.
+    pub before: Consistency,
+    /// After.
+    pub after: Consistency,
+    /// Kept (the error or, without truth, the NIS/whiteness improved).
+    pub kept: bool,
+}
+
+/// `report.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    /// The effects ranked on the starting model.
+    pub effects: Vec<Finding>,
+    /// The first effect, or `none` when nothing is significant.
+    pub top_effect: String,
+    /// The starting model.
+    pub before: Consistency,
+    /// The final model.
+    pub after: Consistency,
+    /// The loop.
+    pub iterations: Vec<Iteration>,
+    /// Effects of the final model.
+    pub final_effects: Vec<Finding>,
+    /// The final model's extensions.
+    pub final_model: Vec<String>,
+}
+
+/// What a diagnosis found: the report, the analyses of the starting and the final model, and
+/// the final model's configuration.
+#[derive(Debug, Clone)]
+pub struct Diagnosis {
+    /// `report.json`.
+    pub report: Report,
+    /// The analysis of the starting model.
+    pub before: Analysis,
+    /// The analysis of the final model.
+    pub after: Analysis,
+    /// The final model.
+    pub final_model: ConfigFile,
+}
+
+/// Did the model improve? With truth: the footprint error fell. Without: the NIS moved toward
+/// 1 or the whiteness p-value rose, and neither got clearly worse.
+fn improved(before: &Consistency, after: &Consistency) -> bool {
+    match (before.gcp_rms_m, after.gcp_rms_m) {
+        (Some(b), Some(a)) => a < b,
+        _ => {
+            let d = |c: &Consistency| (c.nis_mean.ln()).abs();
+            d(after) < d(before) || after.whiteness_p > before.whiteness_p
+        }
+    }
+}
+
+/// The whole loop: analyse `start`, add the top significant effect while one has a fix and
+/// the model improves (at most [`MAX_ITERATIONS`] times).
+pub fn run_diagnosis(
+    log: &ImuLog,
+    start: &ConfigFile,
+    truth: Option<&[TruthPoint]>,
+    map: Option<&Path>,
+) -> Result<Diagnosis, RunError> {
+    let mut first = analyse(log, start, truth, map)?;
+    let mut candidates = score_by_likelihood(log, start, &mut first, truth, map)?;
+    let mut current = first.clone();
+    let mut file = start.clone();
+    let mut iterations = Vec::new();
+    for _ in 0..MAX_ITERATIONS {
+        let Some(top) = current
+            .effects
+            .first()
+            .filter(|e| e.score >= SIGNIFICANT)
+            .cloned()
+        else {
+            break;
+        };
+        let Some(cand) = candidates.iter().find(|c| c.effect == top.name).cloned() else {
+            break; // significant but corridor has no fix for it
+        };
+        let kept = improved(&current.consistency, &cand.analysis.consistency);
+        iterations.push(Iteration {
+            effect: top.name,
+            score: top.score,
+            fix: cand.fix,
+            before: current.consistency.clone(),
+            after: cand.analysis.consistency.clone(),
+            kept,
+        });
+        if !kept {
+            break;
+        }
+        file = cand.file;
+        current = cand.analysis;
+        candidates = score_by_likelihood(log, &file, &mut current, truth, map)?;
+    }
+    let report = Report {
+        top_effect: first
+            .effects
+            .first()
+            .filter(|e| e.score >= SIGNIFICANT)
+            .map_or("none".to_string(), |e| e.name.to_string()),
+        effects: first.effects.clone(),
+        before: first.consistency.clone(),
+        after: current.consistency.clone(),
+        iterations,
+        final_effects: current.effects.clone(),
+        final_model: current.model.clone(),
+    };
+    Ok(Diagnosis {
+        report,
+        before: first,
+        after: current,
+        final_model: file,
+    })
+}
+
+/// [`run_diagnosis`] as a tuple `(report, before, after, final model)`, for the callers not
+/// yet moved to [`Diagnosis`] (`suite::run_loops`).
+pub fn diagnose(
+    log: &ImuLog,
+    start: &ConfigFile,
+    truth: Option<&[TruthPoint]>,
+    map: Option<&Path>,
+) -> Result<(Report, Analysis, Analysis, ConfigFile), RunError> {
+    let d = run_diagnosis(log, start, truth, map)?;
+    Ok((d.report, d.before, d.after, d.final_model))
+}

@@ -1,0 +1,116 @@
+//! The diagnosis report: `report.md`, `report.json` and the `residuals.svg` figure.
+
+use super::Report;
+use super::analysis::{Analysis, Consistency, HeadingResidual};
+use super::catalogue::Fix;
+use crate::runner::RunError;
+use std::path::Path;
+
+/// `report.md`, with the figures written next to it.
+pub fn write_report(
+    dir: &Path,
+    report: &Report,
+    before: &Analysis,
+    after: &Analysis,
+) -> Result<(), RunError> {
+    use crate::plot::{Figure, Panel, Series};
+    use crate::runner::io_at;
+    let series = |a: &Analysis, label: &str| {
+        let used: Vec<&HeadingResidual> = a.residuals.iter().filter(|r| r.accepted).collect();
+        Series::markers(
+            label.to_string(),
+            used.iter().map(|r| r.t_s).collect(),
+            used.iter().map(|r| r.r_rad.to_degrees()).collect(),
+        )
+    };
+    let turn = |a: &Analysis, label: &str| {
+        let used: Vec<&HeadingResidual> = a.residuals.iter().filter(|r| r.accepted).collect();
+        Series::markers(
+            label.to_string(),
+            used.iter().map(|r| r.turn_rad.to_degrees()).collect(),
+            used.iter().map(|r| r.r_rad.to_degrees()).collect(),
+        )
+    };
+    let fig = Figure::new("Heading residuals before and after the diagnosis")
+        .with_panel(
+            Panel::new("residual against time", "t (s)", "ψ_map − ψ̂ (°)")
+                .with_series(series(before, "before"))
+                .with_series(series(after, "after")),
+        )
+        .with_panel(
+            Panel::new(
+                "residual against the turn since the last observation",
+                "turn (°)",
+                "ψ_map − ψ̂ (°)",
+            )
+            .with_series(turn(before, "before"))
+            .with_series(turn(after, "after")),
+        );
+    let f = dir.join("residuals.svg");
+    fig.write_svg(&f).map_err(io_at(&f))?;
+
+    let mut md = String::from("# corridor diagnose\n\n");
+    md.push_str(&format!(
+        "Top effect on the starting model: **{}**.\n\n",
+        report.top_effect
+    ));
+    md.push_str("## Effects on the starting model (score = −log₁₀ p; significant from 3)\n\n| effect | score | evidence | fix |\n|---|---|---|---|\n");
+    for e in &report.effects {
+        md.push_str(&format!(
+            "| {} | {:.1} | {} | {} |\n",
+            e.name,
+            e.score,
+            e.evidence.replace('|', "/"),
+            e.fix.map_or("—", Fix::label)
+        ));
+    }
+    md.push_str("\n## Loop\n\n| step | effect added | fix | RMS before | RMS after | NIS before | NIS after | whiteness p before | after | kept |\n|---|---|---|---|---|---|---|---|---|---|\n");
+    let rms = |c: &Consistency| c.gcp_rms_m.map_or("—".into(), |v| format!("{v:.2} m"));
+    for (i, it) in report.iterations.iter().enumerate() {
+        md.push_str(&format!(
+            "| {} | {} | `{}` | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {} |\n",
+            i + 1,
+            it.effect,
+            it.fix,
+            rms(&it.before),
+            rms(&it.after),
+            it.before.nis_mean,
+            it.after.nis_mean,
+            it.before.whiteness_p,
+            it.after.whiteness_p,
+            if it.kept { "yes" } else { "no" }
+        ));
+    }
+    md.push_str(&format!(
+        "\nBefore: {} ; after: {} ; final model: {}.\n\n![residuals](residuals.svg)\n",
+        describe(&report.before),
+        describe(&report.after),
+        report.final_model.join(", ")
+    ));
+    let f = dir.join("report.md");
+    std::fs::write(&f, md).map_err(io_at(&f))?;
+    let f = dir.join("report.json");
+    std::fs::write(
+        &f,
+        serde_json::to_string_pretty(report).expect("serialises") + "\n",
+    )
+    .map_err(io_at(&f))?;
+    Ok(())
+}
+
+fn describe(c: &Consistency) -> String {
+    format!(
+        "footprint RMS {}, NIS {:.2} (band {:.2}–{:.2}), whiteness p {:.2}, bias ({:.5}, {:.5}, {:.5}) ± ({:.1e}, {:.1e}, {:.1e}) rad/s",
+        c.gcp_rms_m.map_or("n/a".into(), |v| format!("{v:.2} m")),
+        c.nis_mean,
+        c.nis_band[0],
+        c.nis_band[1],
+        c.whiteness_p,
+        c.bias_rad_s[0],
+        c.bias_rad_s[1],
+        c.bias_rad_s[2],
+        c.bias_sd_rad_s[0],
+        c.bias_sd_rad_s[1],
+        c.bias_sd_rad_s[2]
+    )
+}
