@@ -151,6 +151,165 @@ pub struct SuiteRow {
     pub heading_used: u64,
     /// Stride-direction observations used in the default run.
     pub stride_used: u64,
+    /// NIS of the default run: the first ZUPT of each stance, the stride directions and the
+    /// foot axes used.
+    pub nis: [Option<NisFigure>; 3],
+    /// Use of heading information on straight and weave strides (walks with every footprint).
+    pub stride_use: Option<StrideUse>,
+}
+
+/// The mean NIS of one update type against its two-sided 95 % χ² band.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct NisFigure {
+    /// Mean NIS per degree of freedom.
+    pub mean: f64,
+    /// Lower bound of the band, per degree of freedom.
+    pub lower: f64,
+    /// Upper bound of the band, per degree of freedom.
+    pub upper: f64,
+    /// Updates.
+    pub n: usize,
+}
+
+impl NisFigure {
+    fn of(nis: &[f64], dof: usize) -> Option<Self> {
+        let t = crate::stats::nis_consistency(nis, dof, 0.95).ok()?;
+        let d = dof as f64;
+        Some(Self {
+            mean: t.mean / d,
+            lower: t.lower / d,
+            upper: t.upper / d,
+            n: t.n,
+        })
+    }
+
+    /// Whether the mean lies inside the band.
+    pub fn in_band(&self) -> bool {
+        (self.lower..=self.upper).contains(&self.mean)
+    }
+}
+
+/// How the default run used heading information on the strides of a walk whose every
+/// footprint is surveyed. A truth stride lies on a *straight stretch* when it and both
+/// neighbours point within [`STRAIGHT_DEG`] of one dominant direction; it is a *weave* when it
+/// points more than [`WEAVE_DEG`] off the dominant direction that both neighbours follow (within
+/// [`WEAVE_DEG`]). Turns are neither.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct StrideUse {
+    /// Straight-stretch strides.
+    pub straight: usize,
+    /// Of them, strides whose stance used a stride-direction or foot-axis observation.
+    pub straight_used: usize,
+    /// Weave strides.
+    pub weave: usize,
+    /// Of them, strides whose stance used an observation.
+    pub weave_used: usize,
+}
+
+/// Largest deviation from the dominant direction of a straight-stretch stride, degrees.
+pub const STRAIGHT_DEG: f64 = 5.0;
+/// Smallest deviation of a weave stride, degrees.
+pub const WEAVE_DEG: f64 = 10.0;
+
+impl StrideUse {
+    /// Classifies the truth strides (grid spacing `step_rad` from `grid_rad`) and counts the
+    /// stances (time, heading information used) of the run that fall in each stride's window
+    /// (after the previous footprint, up to its own). `None` unless every stride is surveyed.
+    fn of(
+        truth: &[TruthPoint],
+        grid_rad: f64,
+        step_rad: f64,
+        stances: &[(f64, bool)],
+    ) -> Option<Self> {
+        let every = truth.windows(2).all(|w| match (w[0].stride, w[1].stride) {
+            (Some(a), Some(b)) => b == a + 1,
+            _ => false,
+        });
+        if !every || truth.len() < 4 {
+            return None;
+        }
+        let wrap = crate::core::rotation::wrap_pi;
+        // (time of the footprint ending the stride, nearest dominant direction index, deviation)
+        let strides: Vec<(f64, f64, i64, f64)> = truth
+            .windows(2)
+            .map(|w| {
+                let d = (w[1].y_m - w[0].y_m).atan2(w[1].x_m - w[0].x_m);
+                let k = ((d - grid_rad) / step_rad).round();
+                let dev = wrap(d - grid_rad - k * step_rad).abs().to_degrees();
+                let n = (std::f64::consts::TAU / step_rad).round() as i64;
+                (w[0].t_s, w[1].t_s, (k as i64).rem_euclid(n.max(1)), dev)
+            })
+            .collect();
+        let mut u = StrideUse::default();
+        for i in 1..strides.len().saturating_sub(1) {
+            let (prev, cur, next) = (strides[i - 1], strides[i], strides[i + 1]);
+            let straight = [prev, cur, next]
+                .iter()
+                .all(|s| s.2 == cur.2 && s.3 <= STRAIGHT_DEG);
+            let weave = prev.2 == next.2
+                && prev.3 <= WEAVE_DEG
+                && next.3 <= WEAVE_DEG
+                && (cur.2 != prev.2 || cur.3 > WEAVE_DEG);
+            if !(straight || weave) {
+                continue;
+            }
+            let used = stances
+                .iter()
+                .any(|&(t, used)| used && t > cur.0 && t <= cur.1);
+            if straight {
+                u.straight += 1;
+                u.straight_used += usize::from(used);
+            } else {
+                u.weave += 1;
+                u.weave_used += usize::from(used);
+            }
+        }
+        Some(u)
+    }
+}
+
+/// The NIS of one run, by update type, and its stances with the use of heading information.
+#[derive(Debug, Default)]
+struct NisSeries {
+    zupt_first: Vec<f64>,
+    stride: Vec<f64>,
+    heading: Vec<f64>,
+    in_stance: bool,
+    stances: Vec<(f64, bool)>,
+}
+
+impl NisSeries {
+    fn push(&mut self, e: &crate::core::Estimate) {
+        match &e.zupt {
+            Some(z) if !self.in_stance => {
+                self.zupt_first.push(z.nis);
+                self.in_stance = true;
+            }
+            Some(_) => {}
+            None => self.in_stance = false,
+        }
+        let mut used = false;
+        for (h, v) in [
+            (&e.stride, &mut self.stride),
+            (&e.heading, &mut self.heading),
+        ] {
+            if let Some(Ok(i)) = h.as_ref().map(|h| h.outcome) {
+                v.push(i.nis);
+                used = true;
+            }
+        }
+        if e.stride.is_some() || e.heading.is_some() {
+            self.stances.push((e.t_s, used));
+        }
+    }
+
+    fn figures(&self) -> [Option<NisFigure>; 3] {
+        [
+            NisFigure::of(&self.zupt_first, 3),
+            NisFigure::of(&self.stride, 1),
+            NisFigure::of(&self.heading, 1),
+        ]
+    }
 }
 
 /// Reads a suite file.
@@ -302,6 +461,34 @@ impl Ctx<'_> {
         self.run_with(&self.baseline, Mode::Zupt, prior, inj)
     }
 
+    /// The NIS of the default run (the best mode with the rest-mean prior) and its use of
+    /// heading information on the truth strides.
+    fn default_nis(
+        &self,
+        mode: Mode,
+    ) -> Result<([Option<NisFigure>; 3], Option<StrideUse>), RunError> {
+        let cfg = config_for(
+            &self.config,
+            &self.base.join(&self.rec.config),
+            self.rec,
+            mode,
+            BiasPrior::RestMean,
+        )?;
+        let aid = heading_aid(&cfg, None)?;
+        let mut nis = NisSeries::default();
+        runner::run_log(&self.log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+            nis.push(e)
+        });
+        let grid = &cfg.heading;
+        let stride_use = StrideUse::of(
+            &self.truth,
+            grid.grid_rad,
+            grid.grid_step_rad.get(),
+            &nis.stances,
+        );
+        Ok((nis.figures(), stride_use))
+    }
+
     fn run_with(
         &self,
         file: &ConfigFile,
@@ -421,6 +608,7 @@ fn run_recording(
     let (best0, best_fp) = ctx.run(best, BiasPrior::None, none)?;
     let (best1, best_inj) = ctx.run(best, BiasPrior::None, injected)?;
     let (best_r0, best_rest) = ctx.run(best, BiasPrior::RestMean, none)?;
+    let (nis, stride_use) = ctx.default_nis(best)?;
     let c = best_r0.counters;
     let (stances, heading_used, stride_used) = (c.stances, c.heading_used, c.stride_used);
     // The injection starts when the initial rest ends (the alignment instant of the clean run).
@@ -459,6 +647,8 @@ fn run_recording(
         stances,
         heading_used,
         stride_used,
+        nis,
+        stride_use,
     })
 }
 
@@ -570,9 +760,85 @@ pub fn headline_markdown(rows: &[SuiteRow]) -> String {
     s
 }
 
+/// The NIS table: mean per degree of freedom of each update type of the default run, and its
+/// 95 % band.
+pub fn nis_markdown(rows: &[SuiteRow]) -> String {
+    let mut s = String::from(
+        "Consistency of the default run: mean NIS per degree of freedom [95 % χ² band] (n); ✗ outside the band.\n\n\
+         | recording | first ZUPT of each stance | stride direction | foot axis |\n|---|---|---|---|\n",
+    );
+    let mut inside = [0usize; 3];
+    let f = |x: &Option<NisFigure>| {
+        x.map_or("—".to_string(), |x| {
+            format!(
+                "{:.2} [{:.2}, {:.2}] ({}){}",
+                x.mean,
+                x.lower,
+                x.upper,
+                x.n,
+                if x.in_band() { "" } else { " ✗" }
+            )
+        })
+    };
+    for r in rows {
+        for (k, x) in r.nis.iter().enumerate() {
+            inside[k] += usize::from(x.is_some_and(|x| x.in_band()));
+        }
+        s.push_str(&format!(
+            "| {} | {} | {} | {} |\n",
+            r.recording,
+            f(&r.nis[0]),
+            f(&r.nis[1]),
+            f(&r.nis[2])
+        ));
+    }
+    let mut u = StrideUse::default();
+    let mut use_rows = String::new();
+    for r in rows {
+        if let Some(x) = r.stride_use {
+            use_rows.push_str(&format!(
+                "| {} | {} of {} | {} of {} |\n",
+                r.recording, x.straight_used, x.straight, x.weave_used, x.weave
+            ));
+            if r.gait == Gait::Normal {
+                u.straight += x.straight;
+                u.straight_used += x.straight_used;
+                u.weave += x.weave;
+                u.weave_used += x.weave_used;
+            }
+        }
+    }
+    if !use_rows.is_empty() {
+        s.push_str(&format!(
+            "\nHeading information used on the strides of the walks surveyed at every stride \
+             (straight: the stride and both neighbours within {STRAIGHT_DEG}° of one dominant \
+             direction; weave: more than {WEAVE_DEG}° off the direction both neighbours follow).\n\n\
+             | recording | straight strides used | weave strides used |\n|---|---|---|\n{use_rows}\
+             | all normal-gait walks | {} of {} ({:.0} %) | {} of {} |\n",
+            u.straight_used,
+            u.straight,
+            100.0 * u.straight_used as f64 / u.straight.max(1) as f64,
+            u.weave_used,
+            u.weave
+        ));
+    }
+    s.push_str(&format!(
+        "\nInside the band: first ZUPT {} of {}, stride direction {} of {}, foot axis {} of {}.\n",
+        inside[0],
+        rows.len(),
+        inside[1],
+        rows.len(),
+        inside[2],
+        rows.len()
+    ));
+    s
+}
+
 /// The table as Markdown.
 pub fn markdown(rows: &[SuiteRow]) -> String {
     let mut s = headline_markdown(rows);
+    s.push('\n');
+    s.push_str(&nis_markdown(rows));
     s.push('\n');
     s.push_str("Footprint RMS error after first-leg alignment, metres (% of path); final-GCP error in metres.\n\n");
     s.push_str("| recording | path | (1) ZUPT | (1b) ZUPT + rest mean | (2) injected, uncorrected | (3) paper, injected | (4) best, injected | best, no injection | best + rest mean |\n");
