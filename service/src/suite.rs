@@ -202,8 +202,11 @@ pub struct StrideUse {
     pub straight_used: usize,
     /// Weave strides.
     pub weave: usize,
-    /// Of them, strides whose stance used an observation.
+    /// Of them, strides whose direction was used as a stride-direction observation.
     pub weave_used: usize,
+    /// Of them, strides whose stance used the foot axis (in a side-step the foot may still
+    /// point along the corridor: not an error in itself).
+    pub weave_foot_used: usize,
 }
 
 /// Largest deviation from the dominant direction of a straight-stretch stride, degrees.
@@ -219,7 +222,7 @@ impl StrideUse {
         truth: &[TruthPoint],
         grid_rad: f64,
         step_rad: f64,
-        stances: &[(f64, bool)],
+        stances: &[StanceUse],
     ) -> Option<Self> {
         let every = truth.windows(2).all(|w| match (w[0].stride, w[1].stride) {
             (Some(a), Some(b)) => b == a + 1,
@@ -253,19 +256,28 @@ impl StrideUse {
             if !(straight || weave) {
                 continue;
             }
-            let used = stances
-                .iter()
-                .any(|&(t, used)| used && t > cur.0 && t <= cur.1);
+            let inside = |s: &&StanceUse| s.t_s > cur.0 && s.t_s <= cur.1;
+            let stride = stances.iter().filter(inside).any(|s| s.stride);
+            let foot = stances.iter().filter(inside).any(|s| s.foot_axis);
             if straight {
                 u.straight += 1;
-                u.straight_used += usize::from(used);
+                u.straight_used += usize::from(stride || foot);
             } else {
                 u.weave += 1;
-                u.weave_used += usize::from(used);
+                u.weave_used += usize::from(stride);
+                u.weave_foot_used += usize::from(foot);
             }
         }
         Some(u)
     }
+}
+
+/// One stance's use of heading information.
+#[derive(Debug, Clone, Copy)]
+struct StanceUse {
+    t_s: f64,
+    stride: bool,
+    foot_axis: bool,
 }
 
 /// The NIS of one run, by update type, and its stances with the use of heading information.
@@ -275,7 +287,7 @@ struct NisSeries {
     stride: Vec<f64>,
     heading: Vec<f64>,
     in_stance: bool,
-    stances: Vec<(f64, bool)>,
+    stances: Vec<StanceUse>,
 }
 
 impl NisSeries {
@@ -288,18 +300,25 @@ impl NisSeries {
             Some(_) => {}
             None => self.in_stance = false,
         }
-        let mut used = false;
-        for (h, v) in [
+        let mut used = [false; 2];
+        for (k, (h, v)) in [
             (&e.stride, &mut self.stride),
             (&e.heading, &mut self.heading),
-        ] {
+        ]
+        .into_iter()
+        .enumerate()
+        {
             if let Some(Ok(i)) = h.as_ref().map(|h| h.outcome) {
                 v.push(i.nis);
-                used = true;
+                used[k] = true;
             }
         }
         if e.stride.is_some() || e.heading.is_some() {
-            self.stances.push((e.t_s, used));
+            self.stances.push(StanceUse {
+                t_s: e.t_s,
+                stride: used[0],
+                foot_axis: used[1],
+            });
         }
     }
 
@@ -797,14 +816,21 @@ pub fn nis_markdown(rows: &[SuiteRow]) -> String {
     for r in rows {
         if let Some(x) = r.stride_use {
             use_rows.push_str(&format!(
-                "| {} | {} of {} | {} of {} |\n",
-                r.recording, x.straight_used, x.straight, x.weave_used, x.weave
+                "| {} | {} of {} | {} of {} | {} of {} |\n",
+                r.recording,
+                x.straight_used,
+                x.straight,
+                x.weave_used,
+                x.weave,
+                x.weave_foot_used,
+                x.weave
             ));
             if r.gait == Gait::Normal {
                 u.straight += x.straight;
                 u.straight_used += x.straight_used;
                 u.weave += x.weave;
                 u.weave_used += x.weave_used;
+                u.weave_foot_used += x.weave_foot_used;
             }
         }
     }
@@ -813,12 +839,14 @@ pub fn nis_markdown(rows: &[SuiteRow]) -> String {
             "\nHeading information used on the strides of the walks surveyed at every stride \
              (straight: the stride and both neighbours within {STRAIGHT_DEG}° of one dominant \
              direction; weave: more than {WEAVE_DEG}° off the direction both neighbours follow).\n\n\
-             | recording | straight strides used | weave strides used |\n|---|---|---|\n{use_rows}\
-             | all normal-gait walks | {} of {} ({:.0} %) | {} of {} |\n",
+             | recording | straight strides with heading information | weave strides whose direction was used | weave strides whose foot axis was used |\n|---|---|---|---|\n{use_rows}\
+             | all normal-gait walks | {} of {} ({:.0} %) | {} of {} | {} of {} |\n",
             u.straight_used,
             u.straight,
             100.0 * u.straight_used as f64 / u.straight.max(1) as f64,
             u.weave_used,
+            u.weave,
+            u.weave_foot_used,
             u.weave
         ));
     }
