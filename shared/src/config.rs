@@ -326,6 +326,9 @@ pub struct EskfFile {
     pub zupt_sd_m_s: Option<f64>,
     /// Initial roll/pitch σ (default 0.5°, in rad).
     pub initial_tilt_sd_rad: Option<f64>,
+    /// Lever arm between the sensor and the point the foot rolls about at the edges of a
+    /// stance (default 0: off): the ZUPT σ of a sample is √(zupt_sd² + (arm·|ω|)²).
+    pub zupt_lever_arm_m: Option<f64>,
     /// CUSUM threshold, in σ, of the bias-change detector on the heading innovations; on an
     /// alarm the bias variance grows by `gyro_bias_initial_sd_rad_s²` (absent: off).
     pub bias_change_threshold: Option<f64>,
@@ -489,6 +492,8 @@ pub struct EskfConfig {
     pub zupt_sd_m_s: Positive,
     /// Initial tilt σ.
     pub initial_tilt_sd_rad: Positive,
+    /// ZUPT lever arm (0 = a constant ZUPT σ).
+    pub zupt_lever_arm_m: f64,
     /// Bias-change CUSUM threshold (off when `None`).
     pub bias_change_threshold: Option<Positive>,
 }
@@ -724,6 +729,10 @@ impl ConfigFile {
                 initial_tilt_sd_rad: Positive::new(
                     "eskf.initial_tilt_sd_rad",
                     k.initial_tilt_sd_rad.unwrap_or(deg(0.5)),
+                )?,
+                zupt_lever_arm_m: non_negative(
+                    "eskf.zupt_lever_arm_m",
+                    k.zupt_lever_arm_m.unwrap_or(0.0),
                 )?,
                 bias_change_threshold: k
                     .bias_change_threshold

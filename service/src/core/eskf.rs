@@ -483,8 +483,13 @@ impl Eskf {
     /// Zero-velocity update (H selects the velocity: written out, it runs on every stance
     /// sample).
     pub fn zupt(&mut self) -> Innovation {
+        self.zupt_with_sd(self.noise.zupt_m_s)
+    }
+
+    /// Zero-velocity update with σ `sd_m_s` instead of the configured one.
+    pub fn zupt_with_sd(&mut self, sd_m_s: f64) -> Innovation {
         let n = self.layout.n;
-        let rv = self.noise.zupt_m_s.powi(2);
+        let rv = sd_m_s * sd_m_s;
         let r = -self.v_m_s;
         let mut pht = [[0.0; 3]; MAX_N];
         for (i, row) in pht.iter_mut().enumerate().take(n) {

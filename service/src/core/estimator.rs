@@ -691,7 +691,11 @@ impl Estimator {
         let omega = eskf.corrected_rate(w_avg, f_avg, &bias);
         eskf.propagate(&omega, f_avg, dt);
         if stance {
-            self.out.zupt = Some(eskf.zupt());
+            // A foot that rolls about its heel or toe moves the sensor at the lever arm times the
+            // rotation rate: at the edges of a stance the zero velocity is that much less sure.
+            let arm = self.cfg.eskf.zupt_lever_arm_m * omega.norm();
+            let sd = self.cfg.eskf.zupt_sd_m_s.get().hypot(arm);
+            self.out.zupt = Some(eskf.zupt_with_sd(sd));
             self.counters.zupts += 1;
             if !self.in_stance {
                 self.in_stance = true;
