@@ -223,8 +223,6 @@ pub struct Summary {
     pub stride_observations_used: u64,
     /// Stride-direction observations rejected (too short, outside the gate or unlikely).
     pub stride_observations_rejected: u64,
-    /// Gyro-bias changes detected (`eskf.bias_change_threshold`).
-    pub bias_changes_detected: u64,
     /// Input rows rejected by the CSV reader, by reason.
     pub input_rows_rejected: BTreeMap<&'static str, u64>,
     /// The first few rejected rows, with file, line, column and value.
@@ -273,7 +271,6 @@ pub fn summarize(
         ]),
         stride_observations_used: c.stride_used,
         stride_observations_rejected: c.stride_rejected,
-        bias_changes_detected: c.bias_changes,
         input_rows_rejected: log.rejected_counts(),
         input_rows_rejected_examples: log
             .rejected

@@ -329,9 +329,6 @@ pub struct EskfFile {
     /// Lever arm between the sensor and the point the foot rolls about at the edges of a
     /// stance (default 0: off): the ZUPT σ of a sample is √(zupt_sd² + (arm·|ω|)²).
     pub zupt_lever_arm_m: Option<f64>,
-    /// CUSUM threshold, in σ, of the bias-change detector on the heading innovations; on an
-    /// alarm the bias variance grows by `gyro_bias_initial_sd_rad_s²` (absent: off).
-    pub bias_change_threshold: Option<f64>,
 }
 
 /// `[bias_kf]` section: the paper's 3-state bias filter.
@@ -494,8 +491,6 @@ pub struct EskfConfig {
     pub initial_tilt_sd_rad: Positive,
     /// ZUPT lever arm (0 = a constant ZUPT σ).
     pub zupt_lever_arm_m: f64,
-    /// Bias-change CUSUM threshold (off when `None`).
-    pub bias_change_threshold: Option<Positive>,
 }
 
 /// Validated `[bias_kf]`.
@@ -734,10 +729,6 @@ impl ConfigFile {
                     "eskf.zupt_lever_arm_m",
                     k.zupt_lever_arm_m.unwrap_or(0.0),
                 )?,
-                bias_change_threshold: k
-                    .bias_change_threshold
-                    .map(|v| Positive::new("eskf.bias_change_threshold", v))
-                    .transpose()?,
             },
             bias_kf: BiasKfConfig {
                 tilt_sd_rad: Positive::new(

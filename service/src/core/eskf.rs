@@ -725,20 +725,6 @@ impl Eskf {
         self.p[ix(i, i)] = var;
     }
 
-    /// Widens the gyro-bias covariance by `var` along the body axis that points up now (the
-    /// component a heading observation sees: a detected bias change), when the filter owns the
-    /// bias.
-    pub fn widen_gyro_bias(&mut self, var: f64) {
-        if self.estimate_bias {
-            let up = self.nav_from_body.inverse() * Vector3::z();
-            for i in 0..3 {
-                for j in 0..3 {
-                    self.p[ix(BG + i, BG + j)] += var * up[i] * up[j];
-                }
-            }
-        }
-    }
-
     /// Sets the gyro bias and its covariance block (clearing its correlations), when the filter
     /// owns the bias.
     pub fn set_gyro_bias(&mut self, bias_rad_s: Vector3<f64>, cov: &Matrix3<f64>) {

@@ -14,7 +14,6 @@
 //!    associated with a map direction; an accepted direction becomes a heading observation for the
 //!    configured mode.
 
-use super::bias_change::BiasChangeDetector;
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::eskf::{Eskf, EskfNoise, ExtensionEstimates, Extensions, Innovation};
 use super::heading::{HeadingAid, Rejection, StraightWalk};
@@ -142,8 +141,6 @@ pub struct Counters {
     pub stride_used: u64,
     /// Stride-direction observations rejected (too short, outside the gate, unlikely).
     pub stride_rejected: u64,
-    /// Gyro-bias changes detected (the bias covariance was widened).
-    pub bias_changes: u64,
     /// Times the initial rest was too short and alignment started over.
     pub alignment_restarts: u64,
 }
@@ -335,7 +332,6 @@ pub struct Estimator {
     /// The previous footprint (nominal, map frame) and the direction of the stride that ended
     /// there, for the mounting-yaw calibration.
     last_footprint: Option<([f64; 2], Option<f64>)>,
-    bias_change: Option<BiasChangeDetector>,
     straight: StraightWalk,
     in_stance: bool,
     stance_obs_done: bool,
@@ -368,10 +364,6 @@ impl Estimator {
             mount_yaw_rad: 0.0,
             mount_sum: (0.0, 0.0, 0),
             last_footprint: None,
-            bias_change: cfg
-                .eskf
-                .bias_change_threshold
-                .map(|h| BiasChangeDetector::new(h.get())),
             in_stance: false,
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
@@ -852,7 +844,6 @@ impl Estimator {
         let h = &self.cfg.heading;
         let eskf = self.eskf.as_mut().expect("aligned");
         let xy = [eskf.p_m.x, eskf.p_m.y];
-        let mut used: [Option<Innovation>; 2] = [None; 2];
         if h.observations.stride() {
             let event = match eskf.stride_prediction() {
                 Some((len, dir, var)) if len >= h.min_stride_m.get() => {
@@ -869,7 +860,6 @@ impl Estimator {
                             if let Some(i) = eskf.stride_direction_update(d, sd / w.sqrt()) {
                                 self.counters.stride_used += 1;
                                 event.outcome = Ok(i);
-                                used[0] = Some(i);
                             }
                         }
                         Err(r) => {
@@ -909,7 +899,6 @@ impl Estimator {
                     let i = eskf.heading_update(d, sd / w.sqrt(), forward);
                     self.counters.heading_used += 1;
                     event.outcome = Ok(i);
-                    used[1] = Some(i);
                 }
                 Err(r) => {
                     self.count_rejection(r);
@@ -918,24 +907,6 @@ impl Estimator {
             }
         }
         self.out.heading = Some(event);
-        for i in used.iter().flatten() {
-            self.watch_bias(i);
-        }
-    }
-
-    /// Feeds a used heading innovation to the bias-change detector; on an alarm the bias is as
-    /// uncertain again as without a prior.
-    fn watch_bias(&mut self, i: &Innovation) {
-        let Some(d) = self.bias_change.as_mut() else {
-            return;
-        };
-        if d.push(i.r[0] / i.s_diag[0].sqrt()) {
-            self.counters.bias_changes += 1;
-            let sd = self.cfg.eskf.gyro_bias_initial_sd_rad_s.get();
-            if let Some(e) = self.eskf.as_mut() {
-                e.widen_gyro_bias(sd * sd);
-            }
-        }
     }
 
     fn count_rejection(&mut self, r: Rejection) {

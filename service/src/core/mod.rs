@@ -4,11 +4,9 @@
 //! - [`stance`]: SHOE / ARE / MV zero-velocity detection.
 //! - [`eskf`]: the ZUPT-aided error-state Kalman filter (position, velocity, attitude, gyro bias).
 //! - [`bias_kf`]: the paper's 3-state bias filter and its observers.
-//! - [`bias_change`]: CUSUM detection of a gyro-bias change after start-up.
 //! - [`heading`]: heading sources (grid, corridor map), association, straight-walk test.
 //! - [`estimator`]: the per-sample pipeline that ties them together.
 
-pub mod bias_change;
 pub mod bias_kf;
 pub mod eskf;
 pub mod estimator;
