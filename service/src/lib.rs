@@ -9,6 +9,7 @@
 //!   threads, delivery policies, diagnostics.
 //! - [`diagnose`]: residual diagnosis: rank the effects the model lacks, add the top one, compare.
 //! - [`eval`]: footprint-error evaluation, a port of the reference `eval_traj.py`.
+//! - [`map_file`]: corridor map files (TOML) read and checked for the core.
 //! - [`plot`]: dependency-free SVG figures.
 //! - [`runner`]: the offline runner (CSV log in, estimates, innovations and summary out).
 //! - [`stats`]: the statistics of the residual diagnosis (distributions, NIS, whiteness, CUSUM,
@@ -19,6 +20,7 @@ pub mod core;
 pub mod daemon;
 pub mod diagnose;
 pub mod eval;
+pub mod map_file;
 pub mod plot;
 pub mod runner;
 pub mod stats;

@@ -2,9 +2,10 @@
 //! `innovations.csv`, `summary.json` and optional plots. It is an adapter: every line of
 //! estimation is in [`crate::core`], shared with the daemon.
 
-use crate::core::heading::{CorridorMap, HeadingAid, MapError};
+use crate::core::heading::HeadingAid;
 use crate::core::{Counters, Estimate, Estimator, ImuInput};
 use crate::eval::{self, EvalOptions, EvalReport, TruthGcp};
+use crate::map_file::{MapError, read_corridor_map};
 use corridor_shared::config::{Config, HeadingSource};
 use corridor_shared::imu_csv::{ImuCsvError, ImuLog, RejectedRow};
 use corridor_shared::injection::BiasInjection;
@@ -58,7 +59,7 @@ pub enum RunError {
 /// Builds the heading source the configuration asks for.
 pub fn heading_aid(cfg: &Config, map: Option<&Path>) -> Result<HeadingAid, RunError> {
     Ok(match (cfg.heading.source, map) {
-        (_, Some(path)) => HeadingAid::Map(CorridorMap::read(path)?),
+        (_, Some(path)) => HeadingAid::Map(read_corridor_map(path)?),
         (HeadingSource::Map, None) | (HeadingSource::None, None) => HeadingAid::None,
         (HeadingSource::Grid, None) => HeadingAid::Grid {
             grid_rad: cfg.heading.grid_rad,

@@ -38,6 +38,32 @@ pub struct EskfNoise {
     pub zupt_m_s: f64,
 }
 
+/// Whether the filter estimates the gyro bias.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BiasStates {
+    /// The bias states are estimated (`zupt`, `eskf`).
+    Estimated,
+    /// The bias states are frozen (zero covariance, no noise): another estimator owns the bias.
+    Frozen,
+}
+
+/// The filter's starting point.
+#[derive(Debug, Clone, Copy)]
+pub struct EskfInit {
+    /// Attitude `nav_from_body`.
+    pub nav_from_body: UnitQuaternion<f64>,
+    /// Gyro bias, rad/s, body axes.
+    pub gyro_bias_rad_s: Vector3<f64>,
+    /// Initial roll and pitch σ, rad.
+    pub tilt_sd_rad: f64,
+    /// Initial gyro-bias σ, rad/s (unused when the bias states are frozen).
+    pub bias_sd_rad_s: f64,
+    /// Gravity magnitude, m/s².
+    pub gravity_m_s2: f64,
+    /// Whether the bias states are estimated.
+    pub bias: BiasStates,
+}
+
 /// Which extension states the filter carries, with their initial σ and noise.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Extensions {
@@ -193,19 +219,16 @@ fn propagate_base(
 
 impl Eskf {
     /// A filter at rest at the origin with the given attitude, bias and initial σ.
-    /// With `estimate_bias == false` the bias states are frozen (zero covariance, no noise):
-    /// another estimator then owns the bias.
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        nav_from_body: UnitQuaternion<f64>,
-        gyro_bias_rad_s: Vector3<f64>,
-        tilt_sd_rad: f64,
-        bias_sd_rad_s: f64,
-        gravity_m_s2: f64,
-        noise: EskfNoise,
-        estimate_bias: bool,
-        ext: Extensions,
-    ) -> Self {
+    pub fn new(init: EskfInit, noise: EskfNoise, ext: Extensions) -> Self {
+        let EskfInit {
+            nav_from_body,
+            gyro_bias_rad_s,
+            tilt_sd_rad,
+            bias_sd_rad_s,
+            gravity_m_s2,
+            bias,
+        } = init;
+        let estimate_bias = bias == BiasStates::Estimated;
         let layout = Layout::new(&ext);
         let mut f = Self {
             p_m: Vector3::zeros(),
@@ -256,11 +279,6 @@ impl Eskf {
     /// Error-state dimension in use.
     pub fn dim(&self) -> usize {
         self.layout.n
-    }
-
-    /// Whether the filter owns the gyro bias.
-    pub fn estimates_bias(&self) -> bool {
-        self.estimate_bias
     }
 
     /// Gravity magnitude in use.
@@ -752,11 +770,6 @@ impl Eskf {
         Vector3::from_fn(|i, _| self.p[ix(BG + i, BG + i)].max(0.0).sqrt())
     }
 
-    /// σ of the attitude error (navigation frame).
-    pub fn attitude_sd(&self) -> Vector3<f64> {
-        Vector3::from_fn(|i, _| self.p[ix(TH + i, TH + i)].max(0.0).sqrt())
-    }
-
     /// σ of the heading-offset state, when enabled.
     pub fn heading_offset_sd(&self) -> Option<f64> {
         self.layout.offset.map(|i| self.p[ix(i, i)].max(0.0).sqrt())
@@ -809,13 +822,15 @@ mod tests {
         };
         for ext in [Extensions::default(), static_only, all_ext()] {
             let mut f = Eskf::new(
-                from_euler_zyx(0.2, -0.3, 1.0),
-                Vector3::zeros(),
-                0.01,
-                0.01,
-                9.81,
+                EskfInit {
+                    nav_from_body: from_euler_zyx(0.2, -0.3, 1.0),
+                    gyro_bias_rad_s: Vector3::zeros(),
+                    tilt_sd_rad: 0.01,
+                    bias_sd_rad_s: 0.01,
+                    gravity_m_s2: 9.81,
+                    bias: BiasStates::Estimated,
+                },
                 noise(),
-                true,
                 ext,
             );
             for _ in 0..3 {
@@ -873,13 +888,15 @@ mod tests {
     #[test]
     fn update_matches_the_textbook_kalman_formulas() {
         let mut f = Eskf::new(
-            from_euler_zyx(0.2, -0.3, 1.0),
-            Vector3::zeros(),
-            0.01,
-            0.01,
-            9.81,
+            EskfInit {
+                nav_from_body: from_euler_zyx(0.2, -0.3, 1.0),
+                gyro_bias_rad_s: Vector3::zeros(),
+                tilt_sd_rad: 0.01,
+                bias_sd_rad_s: 0.01,
+                gravity_m_s2: 9.81,
+                bias: BiasStates::Estimated,
+            },
             noise(),
-            true,
             all_ext(),
         );
         for _ in 0..5 {
@@ -928,13 +945,15 @@ mod tests {
     fn heading_updates_make_z_bias_observable() {
         // Static sensor, level, with a z bias of 0.01 rad/s the filter does not know.
         let mut f = Eskf::new(
-            UnitQuaternion::identity(),
-            Vector3::zeros(),
-            0.01,
-            0.02,
-            9.81,
+            EskfInit {
+                nav_from_body: UnitQuaternion::identity(),
+                gyro_bias_rad_s: Vector3::zeros(),
+                tilt_sd_rad: 0.01,
+                bias_sd_rad_s: 0.02,
+                gravity_m_s2: 9.81,
+                bias: BiasStates::Estimated,
+            },
             noise(),
-            true,
             Extensions::default(),
         );
         let true_bias = Vector3::new(0.0, 0.0, 0.01);
@@ -968,13 +987,15 @@ mod tests {
             ..Default::default()
         };
         let mut f = Eskf::new(
-            UnitQuaternion::identity(),
-            Vector3::zeros(),
-            0.01,
-            1e-4,
-            9.81,
+            EskfInit {
+                nav_from_body: UnitQuaternion::identity(),
+                gyro_bias_rad_s: Vector3::zeros(),
+                tilt_sd_rad: 0.01,
+                bias_sd_rad_s: 1e-4,
+                gravity_m_s2: 9.81,
+                bias: BiasStates::Estimated,
+            },
             noise(),
-            true,
             ext,
         );
         let g = Vector3::new(0.0, 0.0, 9.81);
@@ -1006,16 +1027,18 @@ mod tests {
             ..Default::default()
         };
         let mut f = Eskf::new(
-            UnitQuaternion::identity(),
-            Vector3::zeros(),
-            0.01,
-            1e-3,
-            9.81,
+            EskfInit {
+                nav_from_body: UnitQuaternion::identity(),
+                gyro_bias_rad_s: Vector3::zeros(),
+                tilt_sd_rad: 0.01,
+                bias_sd_rad_s: 1e-3,
+                gravity_m_s2: 9.81,
+                bias: BiasStates::Estimated,
+            },
             EskfNoise {
                 gyro_bias_rw: 1e-6,
                 ..noise()
             },
-            true,
             ext,
         );
         let g = Vector3::new(0.0, 0.0, 9.81);
@@ -1053,13 +1076,15 @@ mod tests {
             ..Default::default()
         };
         let mut f = Eskf::new(
-            UnitQuaternion::identity(),
-            Vector3::zeros(),
-            0.01,
-            1e-4,
-            9.81,
+            EskfInit {
+                nav_from_body: UnitQuaternion::identity(),
+                gyro_bias_rad_s: Vector3::zeros(),
+                tilt_sd_rad: 0.01,
+                bias_sd_rad_s: 1e-4,
+                gravity_m_s2: 9.81,
+                bias: BiasStates::Estimated,
+            },
             noise(),
-            true,
             ext,
         );
         let dt = 0.005;
@@ -1092,13 +1117,15 @@ mod tests {
             ..Default::default()
         };
         let mut f = Eskf::new(
-            UnitQuaternion::identity(),
-            Vector3::zeros(),
-            0.01,
-            1e-5,
-            9.81,
+            EskfInit {
+                nav_from_body: UnitQuaternion::identity(),
+                gyro_bias_rad_s: Vector3::zeros(),
+                tilt_sd_rad: 0.01,
+                bias_sd_rad_s: 1e-5,
+                gravity_m_s2: 9.81,
+                bias: BiasStates::Estimated,
+            },
             noise(),
-            true,
             ext,
         );
         let g = Vector3::new(0.0, 0.0, 9.81);

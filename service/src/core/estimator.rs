@@ -15,7 +15,9 @@
 //!    configured mode.
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
-use super::eskf::{Eskf, EskfNoise, ExtensionEstimates, Extensions, Innovation};
+use super::eskf::{
+    BiasStates, Eskf, EskfInit, EskfNoise, ExtensionEstimates, Extensions, Innovation,
+};
 use super::heading::{HeadingAid, Rejection, StraightWalk};
 use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rot_z, tilt_from_specific_force, wrap_pi, yaw,
@@ -533,13 +535,19 @@ impl Estimator {
             Extensions::default()
         };
         self.eskf = Some(Eskf::new(
-            self.tilt0,
-            if own_bias { b0 } else { Vector3::zeros() },
-            e.initial_tilt_sd_rad.get(),
-            sd0,
-            g,
+            EskfInit {
+                nav_from_body: self.tilt0,
+                gyro_bias_rad_s: if own_bias { b0 } else { Vector3::zeros() },
+                tilt_sd_rad: e.initial_tilt_sd_rad.get(),
+                bias_sd_rad_s: sd0,
+                gravity_m_s2: g,
+                bias: if own_bias {
+                    BiasStates::Estimated
+                } else {
+                    BiasStates::Frozen
+                },
+            },
             noise,
-            own_bias,
             ext,
         ));
         let rw = self.cfg.bias_kf.bias_rw_rad_s_sqrt_s;

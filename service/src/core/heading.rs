@@ -56,53 +56,23 @@ pub struct CorridorMap {
     pub corridors: Vec<Corridor>,
 }
 
-/// A map that could not be read.
-#[derive(Debug, thiserror::Error)]
-pub enum MapError {
-    /// IO error.
-    #[error("{path}: cannot read map: {source}")]
-    Io {
-        /// File.
-        path: std::path::PathBuf,
-        /// Cause.
-        source: std::io::Error,
-    },
-    /// TOML error (names the key).
-    #[error("{path}: {message}")]
-    Toml {
-        /// File.
-        path: std::path::PathBuf,
-        /// Parser message.
-        message: String,
-    },
-    /// A corridor with a bad geometry.
-    #[error("{path}: corridor {index} ({name:?}): {problem}")]
-    Geometry {
-        /// File.
-        path: std::path::PathBuf,
-        /// 0-based index in the file.
-        index: usize,
-        /// Its name.
-        name: String,
-        /// What is wrong.
-        problem: String,
-    },
+/// A corridor whose geometry cannot be used.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("corridor {index} ({name:?}): {problem}")]
+pub struct GeometryError {
+    /// 0-based index in the map.
+    pub index: usize,
+    /// Its name.
+    pub name: String,
+    /// What is wrong.
+    pub problem: String,
 }
 
 impl CorridorMap {
-    /// Reads and checks a map file.
-    pub fn read(path: &std::path::Path) -> Result<Self, MapError> {
-        let text = std::fs::read_to_string(path).map_err(|source| MapError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        let map: CorridorMap = toml::from_str(&text).map_err(|e| MapError::Toml {
-            path: path.to_owned(),
-            message: e.to_string(),
-        })?;
-        for (index, c) in map.corridors.iter().enumerate() {
-            let bad = |problem: String| MapError::Geometry {
-                path: path.to_owned(),
+    /// Checks every corridor: a positive finite width, finite and distinct ends.
+    pub fn check(&self) -> Result<(), GeometryError> {
+        for (index, c) in self.corridors.iter().enumerate() {
+            let bad = |problem: String| GeometryError {
                 index,
                 name: c.name.clone(),
                 problem,
@@ -114,7 +84,7 @@ impl CorridorMap {
                 return Err(bad("from_m and to_m must be finite and distinct".into()));
             }
         }
-        Ok(map)
+        Ok(())
     }
 }
 

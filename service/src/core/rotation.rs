@@ -5,7 +5,7 @@
 //! (ENU-like local level, z up). The "half-angle vector" `x` of the paper is the vector with
 //! `q = exp(x) = [cos|x|, sin|x|·x/|x|]`; the rotation vector is `2x`.
 
-use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use std::f64::consts::{PI, TAU};
 
 /// Wraps an angle to [-π, π).
@@ -135,11 +135,6 @@ pub fn tilt_from_specific_force(f_body: &Vector3<f64>) -> (f64, f64) {
     let roll = f_body.y.atan2(f_body.z);
     let pitch = (-f_body.x).atan2((f_body.y * f_body.y + f_body.z * f_body.z).sqrt());
     (roll, pitch)
-}
-
-/// The quaternion from its four components (w, x, y, z), normalised.
-pub fn quat(w: f64, x: f64, y: f64, z: f64) -> UnitQuaternion<f64> {
-    UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z))
 }
 
 #[cfg(test)]
