@@ -595,13 +595,13 @@ impl ConfigFile {
             ));
         }
         let dm = &self.daemon;
-        let lossless = match dm.delivery.as_deref().unwrap_or("live") {
-            "live" => false,
-            "lossless" => true,
-            other => {
+        let delivery = dm.delivery.as_deref().unwrap_or("live");
+        let lossless = match delivery.parse::<crate::services::Delivery>() {
+            Ok(d) => d == crate::services::Delivery::Lossless,
+            Err(_) => {
                 return Err(invalid(
                     "daemon.delivery",
-                    other,
+                    delivery,
                     "must be live or lossless",
                 ));
             }
@@ -615,17 +615,11 @@ impl ConfigFile {
             ));
         }
         let domain = dm.domain.clone().unwrap_or_else(|| "default".to_owned());
-        if domain.is_empty()
-            || domain.len() > 64
-            || !domain
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+        // The same rule `corridor serve` applies when it opens the domain.
+        if let Err(crate::services::ServiceError::InvalidDomain { rule, .. }) =
+            crate::services::Domain::new(&domain)
         {
-            return Err(invalid(
-                "daemon.domain",
-                format!("{domain:?}"),
-                "must be 1 to 64 ASCII letters, digits, '_' or '-'",
-            ));
+            return Err(invalid("daemon.domain", format!("{domain:?}"), rule));
         }
         let daemon = DaemonSettings {
             domain,
@@ -875,6 +869,18 @@ mod tests {
                 .to_string()
                 .contains("daemon.domain")
         );
+        // The longest domain the services accept passes, one more character does not (config
+        // and `corridor serve` once disagreed: 64 against 48).
+        let long = |n: usize| format!("[daemon]\ndomain = \"{}\"\n", "d".repeat(n));
+        let max = crate::services::MAX_DOMAIN_LEN;
+        let ok = ConfigFile::parse(&long(max), Path::new("s.toml")).unwrap();
+        crate::services::Domain::new(&ok.validate().unwrap().daemon.domain).unwrap();
+        let err = ConfigFile::parse(&long(max + 1), Path::new("s.toml"))
+            .unwrap()
+            .validate()
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("daemon.domain") && err.contains("48"), "{err}");
         let f = ConfigFile::parse(
             "[daemon]\ndelivery = \"lossless\"\nchannel_capacity = 8\n",
             Path::new("s.toml"),
