@@ -365,8 +365,12 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<String, SuiteError> {
         file.estimator.mode = Some(Mode::Paper);
         file.heading.start_heading_deg = Some(r.start_heading_deg);
         file.heading.grid_deg = Some(r.grid_deg);
-        let (report, before, after, _) =
-            crate::diagnose::diagnose(&log, &file, Some(&truth), None).map_err(wrap)?;
+        let crate::diagnose::Diagnosis {
+            report,
+            before,
+            after,
+            ..
+        } = crate::diagnose::run_diagnosis(&log, &file, Some(&truth), None).map_err(wrap)?;
         let dir = out.join(r.name.replace(' ', "_"));
         std::fs::create_dir_all(&dir).map_err(|e| wrap(crate::runner::io_at(&dir)(e)))?;
         crate::diagnose::write_report(&dir, &report, &before, &after).map_err(wrap)?;

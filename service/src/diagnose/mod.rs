@@ -188,15 +188,3 @@ pub fn run_diagnosis(
         final_model: file,
     })
 }
-
-/// [`run_diagnosis`] as a tuple `(report, before, after, final model)`, for the callers not
-/// yet moved to [`Diagnosis`] (`suite::run_loops`).
-pub fn diagnose(
-    log: &ImuLog,
-    start: &ConfigFile,
-    truth: Option<&[TruthPoint]>,
-    map: Option<&Path>,
-) -> Result<(Report, Analysis, Analysis, ConfigFile), RunError> {
-    let d = run_diagnosis(log, start, truth, map)?;
-    Ok((d.report, d.before, d.after, d.final_model))
-}
