@@ -156,6 +156,92 @@ pub struct SuiteRow {
     pub nis: [Option<NisFigure>; 3],
     /// Use of heading information on straight and weave strides (walks with every footprint).
     pub stride_use: Option<StrideUse>,
+    /// Stride-length ratio of the default run: the summed distances between its positions at
+    /// the surveyed footprints over the surveyed distances.
+    pub stride_ratio: f64,
+    /// Detected stances against the surveyed footprints (walks with every footprint).
+    pub stances_found: Option<StanceMatch>,
+}
+
+/// Detected stances against the footprint list: a listed footprint (the end of its stance)
+/// is found when a detected stance ends within [`STANCE_MATCH_S`] of it.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct StanceMatch {
+    /// Listed footprints.
+    pub listed: usize,
+    /// Of them, found.
+    pub found: usize,
+    /// Detected stances within the listed span.
+    pub detected: usize,
+    /// Of them, matching a listed footprint.
+    pub matching: usize,
+}
+
+/// Largest distance between a detected and a listed stance end, s.
+pub const STANCE_MATCH_S: f64 = 0.05;
+
+impl StanceMatch {
+    fn of(truth: &[TruthPoint], stances: &[(f64, f64)]) -> Self {
+        let (t0, t1) = match (truth.first(), truth.last()) {
+            (Some(a), Some(b)) => (a.t_s - STANCE_MATCH_S, b.t_s + STANCE_MATCH_S),
+            _ => return Self::default(),
+        };
+        let near = |a: f64, b: f64| (a - b).abs() <= STANCE_MATCH_S;
+        let detected: Vec<f64> = stances
+            .iter()
+            .map(|s| s.1)
+            .filter(|&e| e >= t0 && e <= t1)
+            .collect();
+        Self {
+            listed: truth.len(),
+            found: truth
+                .iter()
+                .filter(|p| detected.iter().any(|&e| near(e, p.t_s)))
+                .count(),
+            detected: detected.len(),
+            matching: detected
+                .iter()
+                .filter(|&&e| truth.iter().any(|p| near(e, p.t_s)))
+                .count(),
+        }
+    }
+
+    /// Found / listed.
+    pub fn recall(&self) -> f64 {
+        self.found as f64 / self.listed.max(1) as f64
+    }
+
+    /// Matching / detected.
+    pub fn precision(&self) -> f64 {
+        self.matching as f64 / self.detected.max(1) as f64
+    }
+}
+
+/// Summed distances between the run's positions at the truth footprints over the surveyed
+/// distances.
+fn stride_ratio(trace: &runner::Trace, truth: &[TruthPoint]) -> f64 {
+    let at = |t: f64| {
+        let i = trace
+            .t_s
+            .partition_point(|&x| x < t)
+            .min(trace.t_s.len().saturating_sub(1));
+        trace.xy_m.get(i).copied().unwrap_or([f64::NAN; 2])
+    };
+    let (mut est, mut sur) = (0.0, 0.0);
+    for w in truth.windows(2) {
+        let (a, b) = (at(w[0].t_s), at(w[1].t_s));
+        est += (b[0] - a[0]).hypot(b[1] - a[1]);
+        sur += (w[1].x_m - w[0].x_m).hypot(w[1].y_m - w[0].y_m);
+    }
+    est / sur
+}
+
+/// What the suite measures on the default run besides the footprint error.
+struct DefaultFigures {
+    nis: [Option<NisFigure>; 3],
+    stride_use: Option<StrideUse>,
+    stride_ratio: f64,
+    stances_found: Option<StanceMatch>,
 }
 
 /// The mean NIS of one update type against its two-sided 95 % χ² band.
@@ -288,10 +374,23 @@ struct NisSeries {
     heading: Vec<f64>,
     in_stance: bool,
     stances: Vec<StanceUse>,
+    /// Detected stance intervals (start, end), s.
+    intervals: Vec<(f64, f64)>,
+    detector_stance: Option<f64>,
+    last_t_s: f64,
 }
 
 impl NisSeries {
     fn push(&mut self, e: &crate::core::Estimate) {
+        match (e.stance, self.detector_stance) {
+            (true, None) => self.detector_stance = Some(e.t_s),
+            (false, Some(start)) => {
+                self.intervals.push((start, self.last_t_s));
+                self.detector_stance = None;
+            }
+            _ => {}
+        }
+        self.last_t_s = e.t_s;
         match &e.zupt {
             Some(z) if !self.in_stance => {
                 self.zupt_first.push(z.nis);
@@ -486,10 +585,7 @@ impl Ctx<'_> {
 
     /// The NIS of the default run (the best mode with the rest-mean prior) and its use of
     /// heading information on the truth strides.
-    fn default_nis(
-        &self,
-        mode: Mode,
-    ) -> Result<([Option<NisFigure>; 3], Option<StrideUse>), RunError> {
+    fn default_figures(&self, mode: Mode) -> Result<DefaultFigures, RunError> {
         let cfg = config_for(
             &self.config,
             &self.base.join(&self.rec.config),
@@ -499,7 +595,7 @@ impl Ctx<'_> {
         )?;
         let aid = heading_aid(&cfg, None)?;
         let mut nis = NisSeries::default();
-        runner::run_log(&self.log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+        let out = runner::run_log(&self.log, &cfg, &aid, &BiasInjection::default(), |_, e| {
             nis.push(e)
         });
         let grid = &cfg.heading;
@@ -509,7 +605,12 @@ impl Ctx<'_> {
             grid.grid_step_rad.get(),
             &nis.stances,
         );
-        Ok((nis.figures(), stride_use))
+        Ok(DefaultFigures {
+            nis: nis.figures(),
+            stances_found: stride_use.map(|_| StanceMatch::of(&self.truth, &nis.intervals)),
+            stride_use,
+            stride_ratio: stride_ratio(&out.trace, &self.truth),
+        })
     }
 
     fn run_with(
@@ -631,7 +732,7 @@ fn run_recording(
     let (best0, best_fp) = ctx.run(best, BiasPrior::None, none)?;
     let (best1, best_inj) = ctx.run(best, BiasPrior::None, injected)?;
     let (best_r0, best_rest) = ctx.run(best, BiasPrior::RestMean, none)?;
-    let (nis, stride_use) = ctx.default_nis(best)?;
+    let fig = ctx.default_figures(best)?;
     let c = best_r0.counters;
     let (stances, heading_used, stride_used) = (c.stances, c.heading_used, c.stride_used);
     // The injection starts when the initial rest ends (the alignment instant of the clean run).
@@ -670,8 +771,10 @@ fn run_recording(
         stances,
         heading_used,
         stride_used,
-        nis,
-        stride_use,
+        nis: fig.nis,
+        stride_use: fig.stride_use,
+        stride_ratio: fig.stride_ratio,
+        stances_found: fig.stances_found,
     })
 }
 
@@ -746,12 +849,12 @@ pub fn summary(rows: &[SuiteRow]) -> Summary {
 pub fn headline_markdown(rows: &[SuiteRow]) -> String {
     let mut s = String::from(
         "Default configuration (best mode, rest-mean prior) against the ZUPT + rest-mean baseline: footprint RMS, % of path.\n\n\
-         | recording | gait | path | baseline | default | default − baseline | stride directions / foot axes used / stances |\n\
-         |---|---|---|---|---|---|---|\n",
+         | recording | gait | path | baseline | default | default − baseline | stride directions / foot axes used / stances | stride-length ratio | stances found (recall / precision, ±50 ms) |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         s.push_str(&format!(
-            "| {} | {} | {:.1} m | {:.2} % | {:.2} % | {:+.2} | {} / {} / {} |\n",
+            "| {} | {} | {:.1} m | {:.2} % | {:.2} % | {:+.2} | {} / {} / {} | {:.3} | {} |\n",
             r.recording,
             match r.gait {
                 Gait::Normal => "normal",
@@ -764,6 +867,16 @@ pub fn headline_markdown(rows: &[SuiteRow]) -> String {
             r.stride_used,
             r.heading_used,
             r.stances,
+            r.stride_ratio,
+            r.stances_found.map_or("—".to_string(), |m| format!(
+                "{} of {} ({:.0} %) / {} of {} ({:.0} %)",
+                m.found,
+                m.listed,
+                100.0 * m.recall(),
+                m.matching,
+                m.detected,
+                100.0 * m.precision()
+            )),
         ));
     }
     let m = summary(rows);

@@ -306,6 +306,13 @@ pub struct DetectorFile {
     pub sigma_gyro_rad_s: Option<f64>,
     /// Shortest stance kept (default 0.04 s).
     pub min_stance_s: Option<f64>,
+    /// Adaptive threshold: a sample is stance when its statistic is below `threshold` or below
+    /// this factor times the quietest statistic of the last `adaptive_window_s` (absent: off).
+    pub adaptive_factor: Option<f64>,
+    /// Look-back of the adaptive threshold, about one stride cycle (default 1.5 s).
+    pub adaptive_window_s: Option<f64>,
+    /// Largest adaptive threshold (default 10 × `threshold`).
+    pub adaptive_max_threshold: Option<f64>,
 }
 
 /// `[eskf]` section: the ZUPT-aided error-state filter.
@@ -470,6 +477,12 @@ pub struct DetectorConfig {
     pub sigma_gyro_rad_s: Positive,
     /// Shortest stance.
     pub min_stance_s: f64,
+    /// Adaptive factor (off when `None`).
+    pub adaptive_factor: Option<Positive>,
+    /// Adaptive look-back.
+    pub adaptive_window_s: Positive,
+    /// Largest adaptive threshold.
+    pub adaptive_max_threshold: Positive,
 }
 
 /// Validated `[eskf]`.
@@ -691,6 +704,19 @@ impl ConfigFile {
                 min_stance_s: non_negative(
                     "detector.min_stance_s",
                     d.min_stance_s.unwrap_or(0.04),
+                )?,
+                adaptive_factor: d
+                    .adaptive_factor
+                    .map(|v| Positive::new("detector.adaptive_factor", v))
+                    .transpose()?,
+                adaptive_window_s: Positive::new(
+                    "detector.adaptive_window_s",
+                    d.adaptive_window_s.unwrap_or(1.5),
+                )?,
+                adaptive_max_threshold: Positive::new(
+                    "detector.adaptive_max_threshold",
+                    d.adaptive_max_threshold
+                        .unwrap_or(10.0 * d.threshold.unwrap_or(1e5)),
                 )?,
             },
             eskf: EskfConfig {

@@ -12,6 +12,48 @@ use nalgebra::Vector3;
 /// Samples between exact recomputations of the window sums.
 const RESUM_EVERY: usize = 4096;
 
+/// Blocks of the adaptive threshold's look-back (each `adaptive_window_s / MIN_BLOCKS` long).
+const MIN_BLOCKS: usize = 6;
+
+/// The quietest statistic over the last few seconds, in blocks: fixed size, no allocation.
+#[derive(Debug, Clone, Copy)]
+struct RecentMinimum {
+    block_s: f64,
+    minima: [f64; MIN_BLOCKS],
+    current: usize,
+    current_start_s: f64,
+}
+
+impl RecentMinimum {
+    fn new(window_s: f64) -> Self {
+        Self {
+            block_s: window_s / MIN_BLOCKS as f64,
+            minima: [f64::INFINITY; MIN_BLOCKS],
+            current: 0,
+            current_start_s: f64::NAN,
+        }
+    }
+
+    fn push(&mut self, t_s: f64, statistic: f64) -> f64 {
+        if self.current_start_s.is_nan() {
+            self.current_start_s = t_s;
+        }
+        // A gap longer than the look-back clears it.
+        if t_s - self.current_start_s >= self.block_s * MIN_BLOCKS as f64 {
+            self.minima = [f64::INFINITY; MIN_BLOCKS];
+            self.current_start_s = t_s;
+        }
+        while t_s - self.current_start_s >= self.block_s {
+            self.current = (self.current + 1) % MIN_BLOCKS;
+            self.minima[self.current] = f64::INFINITY;
+            self.current_start_s += self.block_s;
+        }
+        let m = &mut self.minima[self.current];
+        *m = m.min(statistic);
+        self.minima.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+}
+
 /// Stance detector state. Allocates its window once, at construction.
 #[derive(Debug, Clone)]
 pub struct StanceDetector {
@@ -33,6 +75,7 @@ pub struct StanceDetector {
     since_resum: usize,
     raw_since_s: Option<f64>,
     last_statistic: f64,
+    adaptive: Option<(f64, f64, RecentMinimum)>,
 }
 
 /// What the detector says about one sample.
@@ -70,6 +113,13 @@ impl StanceDetector {
             since_resum: 0,
             raw_since_s: None,
             last_statistic: f64::INFINITY,
+            adaptive: cfg.adaptive_factor.map(|k| {
+                (
+                    k.get(),
+                    cfg.adaptive_max_threshold.get(),
+                    RecentMinimum::new(cfg.adaptive_window_s.get()),
+                )
+            }),
         }
     }
 
@@ -137,7 +187,17 @@ impl StanceDetector {
             }
         };
         self.last_statistic = statistic;
-        let raw = self.filled == w && statistic < self.threshold;
+        // Fast or varying gait: the foot never stops rotating, and the quietest moment of a
+        // stride lies above a fixed threshold. A sample within `factor` of the quietest statistic
+        // of the last stride cycle counts too (capped), so the threshold follows the gait.
+        let threshold = match &mut self.adaptive {
+            Some((factor, max, recent)) => {
+                let quietest = recent.push(t_s, statistic);
+                self.threshold.max((*factor * quietest).min(*max))
+            }
+            None => self.threshold,
+        };
+        let raw = self.filled == w && statistic < threshold;
         if raw {
             self.raw_since_s.get_or_insert(t_s);
         } else {
@@ -213,6 +273,36 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A fast gait: 0.3 s "stances" that still rotate at 0.8 rad/s between 0.5 s swings at
+    /// 6 rad/s. The fixed threshold (about 0.6 rad/s) finds none; the adaptive one finds each.
+    #[test]
+    fn the_adaptive_threshold_follows_a_gait_that_never_stops_rotating() {
+        let g = Vector3::new(0.0, 0.0, 9.81);
+        let count = |adaptive: bool| {
+            let mut cfg = Config::default().detector;
+            if adaptive {
+                cfg.adaptive_factor =
+                    Some(corridor_shared::config::Positive::new("f", 3.0).unwrap());
+                cfg.adaptive_max_threshold =
+                    corridor_shared::config::Positive::new("m", 3e5).unwrap();
+            }
+            let mut d = StanceDetector::new(&cfg, 9.81);
+            let (mut stances, mut was) = (0, false);
+            for i in 0..1600 {
+                let t = i as f64 * 0.005;
+                let phase = t % 0.8;
+                let w = if phase < 0.3 { 0.8 } else { 6.0 };
+                let now = d.push(t, &Vector3::new(0.0, w, 0.0), &g).stance;
+                stances += usize::from(now && !was);
+                was = now;
+            }
+            stances
+        };
+        assert_eq!(count(false), 0);
+        // 10 cycles; the first needs one stride of history.
+        assert!((9..=10).contains(&count(true)), "{}", count(true));
     }
 
     #[test]
