@@ -381,6 +381,11 @@ pub struct HeadingFile {
     pub stride_sigma_deg: Option<f64>,
     /// Shortest stride whose direction is observed (default 0.5 m).
     pub min_stride_m: Option<f64>,
+    /// Footprints (this one included) that must lie on a line for a stride direction to be
+    /// observed (default 0: off; at most 8).
+    pub line_footprints: Option<usize>,
+    /// Largest distance of those footprints from their line (default 0.05 m).
+    pub line_lateral_m: Option<f64>,
     /// Prior probability that a stance's walking direction is a dominant direction, for the
     /// association weight (default 0.7).
     pub aligned_prior: Option<f64>,
@@ -546,6 +551,10 @@ pub struct HeadingConfig {
     pub stride_sigma_rad: Positive,
     /// Shortest observed stride.
     pub min_stride_m: Positive,
+    /// Footprints of the straight-line test (0 = off).
+    pub line_footprints: usize,
+    /// Largest lateral distance of the straight-line test.
+    pub line_lateral_m: Positive,
     /// Prior probability of an aligned stance.
     pub aligned_prior: Fraction,
     /// Smallest fused association weight.
@@ -797,6 +806,20 @@ impl ConfigFile {
                     deg(h.stride_sigma_deg.unwrap_or(2.0)),
                 )?,
                 min_stride_m: Positive::new("heading.min_stride_m", h.min_stride_m.unwrap_or(0.5))?,
+                line_footprints: match h.line_footprints.unwrap_or(0) {
+                    n @ (0 | 3..=8) => n,
+                    n => {
+                        return Err(invalid(
+                            "heading.line_footprints",
+                            n,
+                            "must be 0 (off) or 3..=8",
+                        ));
+                    }
+                },
+                line_lateral_m: Positive::new(
+                    "heading.line_lateral_m",
+                    h.line_lateral_m.unwrap_or(0.05),
+                )?,
                 aligned_prior: Fraction::new(
                     "heading.aligned_prior",
                     h.aligned_prior.unwrap_or(0.7),

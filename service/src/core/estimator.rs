@@ -18,7 +18,7 @@ use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::eskf::{
     BiasStates, Eskf, EskfInit, EskfNoise, ExtensionEstimates, Extensions, Innovation,
 };
-use super::heading::{HeadingAid, Rejection, StraightWalk};
+use super::heading::{FootprintLine, HeadingAid, Rejection, StraightWalk};
 use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rot_z, tilt_from_specific_force, wrap_pi, yaw,
 };
@@ -335,6 +335,7 @@ pub struct Estimator {
     /// there, for the mounting-yaw calibration.
     last_footprint: Option<([f64; 2], Option<f64>)>,
     straight: StraightWalk,
+    line: Option<FootprintLine>,
     in_stance: bool,
     stance_obs_done: bool,
     stance_f_sum: (Vector3<f64>, u64),
@@ -355,6 +356,12 @@ impl Estimator {
         Self {
             detector,
             straight,
+            line: (cfg.heading.line_footprints > 0).then(|| {
+                FootprintLine::new(
+                    cfg.heading.line_footprints,
+                    cfg.heading.line_lateral_m.get(),
+                )
+            }),
             aid,
             phase: Phase::Aligning,
             counters: Counters::default(),
@@ -862,7 +869,13 @@ impl Estimator {
                         outcome: Err(Rejection::NoSource),
                         baseline_s: 0.0,
                     };
-                    match weighted_association(&self.aid, h, xy, dir, var + sd * sd) {
+                    let on_line = self.line.as_mut().and_then(|l| l.push(xy));
+                    let assoc = if on_line == Some(false) {
+                        Err(Rejection::NotStraight)
+                    } else {
+                        weighted_association(&self.aid, h, xy, dir, var + sd * sd)
+                    };
+                    match assoc {
                         Ok((d, w)) => {
                             event.direction_rad = d;
                             if let Some(i) = eskf.stride_direction_update(d, sd / w.sqrt()) {

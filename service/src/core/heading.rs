@@ -221,9 +221,105 @@ impl StraightWalk {
     }
 }
 
+/// Capacity of [`FootprintLine`].
+pub const MAX_LINE_FOOTPRINTS: usize = 8;
+
+/// The straight-stretch test on footprints: the last `n` footprints (this one included) lie on
+/// a line to within `max_lateral_m`. A curve, a weave or a side-step moves a footprint off the
+/// line through its neighbours, while stride-to-stride direction changes alone hardly tell a
+/// curve of a few degrees a stride from direction noise. Fixed capacity, no allocation.
+#[derive(Debug, Clone, Copy)]
+pub struct FootprintLine {
+    xy: [[f64; 2]; MAX_LINE_FOOTPRINTS],
+    n: usize,
+    len: usize,
+    next: usize,
+    max_lateral_m: f64,
+}
+
+impl FootprintLine {
+    /// Over `n` footprints (clamped to 2..=[`MAX_LINE_FOOTPRINTS`]).
+    pub fn new(n: usize, max_lateral_m: f64) -> Self {
+        Self {
+            xy: [[0.0; 2]; MAX_LINE_FOOTPRINTS],
+            n: n.clamp(2, MAX_LINE_FOOTPRINTS),
+            len: 0,
+            next: 0,
+            max_lateral_m,
+        }
+    }
+
+    /// Records a footprint; `Some(true)` when the last `n` lie on a line, `Some(false)` when
+    /// they do not, `None` until `n` footprints are known.
+    pub fn push(&mut self, xy: [f64; 2]) -> Option<bool> {
+        self.xy[self.next] = xy;
+        self.next = (self.next + 1) % self.n;
+        self.len = (self.len + 1).min(self.n);
+        (self.len == self.n).then(|| self.lateral_m() <= self.max_lateral_m)
+    }
+
+    /// Largest distance of a footprint from the total-least-squares line through them, m.
+    pub fn lateral_m(&self) -> f64 {
+        let pts = &self.xy[..self.len];
+        let k = pts.len().max(1) as f64;
+        let (mx, my) = (
+            pts.iter().map(|p| p[0]).sum::<f64>() / k,
+            pts.iter().map(|p| p[1]).sum::<f64>() / k,
+        );
+        let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+        for p in pts {
+            let (dx, dy) = (p[0] - mx, p[1] - my);
+            sxx += dx * dx;
+            syy += dy * dy;
+            sxy += dx * dy;
+        }
+        // Direction of the principal axis; the normal is perpendicular to it.
+        let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+        let (nx, ny) = (-theta.sin(), theta.cos());
+        pts.iter()
+            .map(|p| ((p[0] - mx) * nx + (p[1] - my) * ny).abs())
+            .fold(0.0, f64::max)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn footprints_on_a_line_pass_and_a_curve_or_a_weave_does_not() {
+        let mut line = FootprintLine::new(4, 0.05);
+        // A straight walk at 30° with 2 cm of lateral scatter.
+        let dir = 30f64.to_radians();
+        let mut got = Vec::new();
+        for (k, lat) in [0.0, 0.02, -0.02, 0.01, -0.01].iter().enumerate() {
+            let s = 1.4 * k as f64;
+            got.push(line.push([
+                s * dir.cos() - lat * dir.sin(),
+                s * dir.sin() + lat * dir.cos(),
+            ]));
+        }
+        assert_eq!(got, [None, None, None, Some(true), Some(true)]);
+        // A weave: 0.5 m to the side on the next stride.
+        let s = 1.4 * 5.0;
+        assert_eq!(
+            line.push([
+                s * dir.cos() - 0.5 * dir.sin(),
+                s * dir.sin() + 0.5 * dir.cos()
+            ]),
+            Some(false)
+        );
+        // A curve: 5° more on every stride (a 16 m radius).
+        let mut curve = FootprintLine::new(4, 0.05);
+        let (mut p, mut h) = ([0.0, 0.0], 0.0f64);
+        let mut last = None;
+        for _ in 0..6 {
+            last = curve.push(p);
+            h += 5f64.to_radians();
+            p = [p[0] + 1.4 * h.cos(), p[1] + 1.4 * h.sin()];
+        }
+        assert_eq!(last, Some(false), "lateral {}", curve.lateral_m());
+    }
 
     #[test]
     fn grid_associates_psi_or_psi_plus_pi() {
