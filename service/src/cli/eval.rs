@@ -12,12 +12,30 @@ pub(super) struct EvalArgs {
     /// Also write the table (Markdown) and the rows (JSON) into this directory.
     #[arg(long)]
     pub(super) out: Option<PathBuf>,
+    /// Also run the residual-diagnosis loop from the paper's model on every recording (its
+    /// table is appended; with --out its reports go under OUT/diagnose).
+    #[arg(long)]
+    pub(super) loops: bool,
 }
 
 /// Runs the suite, prints the table and writes it when asked.
 pub(super) fn eval(a: EvalArgs) -> Result<()> {
     let rows = corridor_service::suite::run_suite(&a.suite)?;
-    let md = corridor_service::suite::markdown(&rows);
+    let mut md = corridor_service::suite::markdown(&rows);
+    if a.loops {
+        let reports = a.out.as_ref().map_or_else(
+            || std::env::temp_dir().join(format!("corridor-loops-{}", std::process::id())),
+            |d| d.join("diagnose"),
+        );
+        let loops = corridor_service::suite::run_loops(&a.suite, &reports)?;
+        if a.out.is_none() {
+            // Reports were only a by-product; keep nothing behind.
+            let _ = std::fs::remove_dir_all(&reports);
+        }
+        md.push_str(&format!(
+            "\nThe residual-diagnosis loop from the paper's model (`corridor diagnose`):\n\n{loops}"
+        ));
+    }
     print!("{md}");
     if let Some(dir) = a.out {
         std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
