@@ -988,13 +988,49 @@ fn weighted_association(
     Ok((dir, w))
 }
 
-/// Posterior probability of "aligned" for residual `r_rad` with variance `s_rad2`, against
-/// "walking in any direction" spread uniformly over `spacing_rad`, with prior `prior`.
+/// Posterior probability that the walker walks along the associated (nearest) direction, for
+/// residual `r_rad` with innovation variance `s_rad2`: against walking along one of the other
+/// candidate directions (`r_rad + m·spacing_rad`, m ≠ 0) and against walking in any direction
+/// (uniform over `spacing_rad`), with prior `prior` of being aligned with some candidate. When
+/// the heading is too uncertain to tell the candidates apart (a long unaided stretch without a
+/// bias prior), the weight falls and the observation is not fused with a wrong direction.
 pub fn association_weight(r_rad: f64, s_rad2: f64, prior: f64, spacing_rad: f64) -> f64 {
-    let aligned = prior * (-0.5 * r_rad * r_rad / s_rad2).exp()
-        / (2.0 * std::f64::consts::PI * s_rad2).sqrt();
-    let other = (1.0 - prior) / spacing_rad;
-    aligned / (aligned + other)
+    let density =
+        |r: f64| (-0.5 * r * r / s_rad2).exp() / (2.0 * std::f64::consts::PI * s_rad2).sqrt();
+    let nearest = prior * density(r_rad);
+    // Candidates cover the circle once: at most 360 of them, their density vanishes fast.
+    let n = (std::f64::consts::TAU / spacing_rad).round().max(1.0) as i64;
+    let others: f64 = (1..n)
+        .map(|m| {
+            let r = crate::core::rotation::wrap_pi(r_rad + m as f64 * spacing_rad);
+            prior * density(r)
+        })
+        .sum();
+    let anywhere = (1.0 - prior) / spacing_rad;
+    nearest / (nearest + others + anywhere)
+}
+
+#[cfg(test)]
+mod association_tests {
+    use super::association_weight;
+
+    #[test]
+    fn the_weight_falls_with_the_residual_and_with_ambiguity() {
+        let deg = f64::to_radians;
+        let quarter = deg(90.0);
+        let s = deg(2.0).powi(2);
+        let on = association_weight(0.0, s, 0.7, quarter);
+        let off = association_weight(deg(8.0), s, 0.7, quarter);
+        assert!(on > 0.95 && off < 0.1, "{on} {off}");
+        // A heading σ of 30°: the grid directions 90° apart can no longer be told apart.
+        let vague = association_weight(0.0, deg(30.0).powi(2), 0.7, quarter);
+        assert!(vague < on, "{vague}");
+        // The weight is a probability.
+        for r in [-3.0, -0.5, 0.0, 0.2, 1.5] {
+            let w = association_weight(r, s, 0.7, quarter);
+            assert!((0.0..=1.0).contains(&w));
+        }
+    }
 }
 
 fn check_finite(s: &ImuInput) -> Result<(), SampleError> {
