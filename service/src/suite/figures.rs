@@ -1,0 +1,274 @@
+//! What the suite measures on the default run besides the footprint error: the NIS of each
+//! update type against its band, the use of heading information on straight and weave strides,
+//! the stances found against the footprint list, and the stride-length ratio.
+
+use crate::runner;
+use corridor_shared::truth_csv::TruthPoint;
+use serde::Serialize;
+
+/// Detected stances against the footprint list: a listed footprint (the end of its stance)
+/// is found when a detected stance ends within [`STANCE_MATCH_S`] of it.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct StanceMatch {
+    /// Listed footprints.
+    pub listed: usize,
+    /// Of them, found.
+    pub found: usize,
+    /// Detected stances within the listed span.
+    pub detected: usize,
+    /// Of them, matching a listed footprint.
+    pub matching: usize,
+}
+
+/// Largest distance between a detected and a listed stance end, s.
+pub const STANCE_MATCH_S: f64 = 0.05;
+
+impl StanceMatch {
+    pub(super) fn of(truth: &[TruthPoint], stances: &[(f64, f64)]) -> Self {
+        let (t0, t1) = match (truth.first(), truth.last()) {
+            (Some(a), Some(b)) => (a.t_s - STANCE_MATCH_S, b.t_s + STANCE_MATCH_S),
+            _ => return Self::default(),
+        };
+        let near = |a: f64, b: f64| (a - b).abs() <= STANCE_MATCH_S;
+        let detected: Vec<f64> = stances
+            .iter()
+            .map(|s| s.1)
+            .filter(|&e| e >= t0 && e <= t1)
+            .collect();
+        Self {
+            listed: truth.len(),
+            found: truth
+                .iter()
+                .filter(|p| detected.iter().any(|&e| near(e, p.t_s)))
+                .count(),
+            detected: detected.len(),
+            matching: detected
+                .iter()
+                .filter(|&&e| truth.iter().any(|p| near(e, p.t_s)))
+                .count(),
+        }
+    }
+
+    /// Found / listed.
+    pub fn recall(&self) -> f64 {
+        self.found as f64 / self.listed.max(1) as f64
+    }
+
+    /// Matching / detected.
+    pub fn precision(&self) -> f64 {
+        self.matching as f64 / self.detected.max(1) as f64
+    }
+}
+
+/// Summed distances between the run's positions at the truth footprints over the surveyed
+/// distances.
+pub(super) fn stride_ratio(trace: &runner::Trace, truth: &[TruthPoint]) -> f64 {
+    let at = |t: f64| {
+        let i = trace
+            .t_s
+            .partition_point(|&x| x < t)
+            .min(trace.t_s.len().saturating_sub(1));
+        trace.xy_m.get(i).copied().unwrap_or([f64::NAN; 2])
+    };
+    let (mut est, mut sur) = (0.0, 0.0);
+    for w in truth.windows(2) {
+        let (a, b) = (at(w[0].t_s), at(w[1].t_s));
+        est += (b[0] - a[0]).hypot(b[1] - a[1]);
+        sur += (w[1].x_m - w[0].x_m).hypot(w[1].y_m - w[0].y_m);
+    }
+    est / sur
+}
+
+/// What the suite measures on the default run besides the footprint error.
+pub(super) struct DefaultFigures {
+    pub(super) nis: [Option<NisFigure>; 3],
+    pub(super) stride_use: Option<StrideUse>,
+    pub(super) stride_ratio: f64,
+    pub(super) stances_found: Option<StanceMatch>,
+}
+
+/// The mean NIS of one update type against its two-sided 95 % χ² band.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct NisFigure {
+    /// Mean NIS per degree of freedom.
+    pub mean: f64,
+    /// Lower bound of the band, per degree of freedom.
+    pub lower: f64,
+    /// Upper bound of the band, per degree of freedom.
+    pub upper: f64,
+    /// Updates.
+    pub n: usize,
+}
+
+impl NisFigure {
+    fn of(nis: &[f64], dof: usize) -> Option<Self> {
+        let t = crate::stats::nis_consistency(nis, dof, 0.95).ok()?;
+        let d = dof as f64;
+        Some(Self {
+            mean: t.mean / d,
+            lower: t.lower / d,
+            upper: t.upper / d,
+            n: t.n,
+        })
+    }
+
+    /// Whether the mean lies inside the band.
+    pub fn in_band(&self) -> bool {
+        (self.lower..=self.upper).contains(&self.mean)
+    }
+}
+
+/// How the default run used heading information on the strides of a walk whose every
+/// footprint is surveyed. A truth stride lies on a *straight stretch* when it and both
+/// neighbours point within [`STRAIGHT_DEG`] of one dominant direction; it is a *weave* when it
+/// points more than [`WEAVE_DEG`] off the dominant direction that both neighbours follow (within
+/// [`WEAVE_DEG`]). Turns are neither.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct StrideUse {
+    /// Straight-stretch strides.
+    pub straight: usize,
+    /// Of them, strides whose stance used a stride-direction or foot-axis observation.
+    pub straight_used: usize,
+    /// Weave strides.
+    pub weave: usize,
+    /// Of them, strides whose direction was used as a stride-direction observation.
+    pub weave_used: usize,
+    /// Of them, strides whose stance used the foot axis (in a side-step the foot may still
+    /// point along the corridor: not an error in itself).
+    pub weave_foot_used: usize,
+}
+
+/// Largest deviation from the dominant direction of a straight-stretch stride, degrees.
+pub const STRAIGHT_DEG: f64 = 5.0;
+/// Smallest deviation of a weave stride, degrees.
+pub const WEAVE_DEG: f64 = 10.0;
+
+impl StrideUse {
+    /// Classifies the truth strides (grid spacing `step_rad` from `grid_rad`) and counts the
+    /// stances (time, heading information used) of the run that fall in each stride's window
+    /// (after the previous footprint, up to its own). `None` unless every stride is surveyed.
+    pub(super) fn of(
+        truth: &[TruthPoint],
+        grid_rad: f64,
+        step_rad: f64,
+        stances: &[StanceUse],
+    ) -> Option<Self> {
+        let every = truth.windows(2).all(|w| match (w[0].stride, w[1].stride) {
+            (Some(a), Some(b)) => b == a + 1,
+            _ => false,
+        });
+        if !every || truth.len() < 4 {
+            return None;
+        }
+        let wrap = crate::core::rotation::wrap_pi;
+        // (time of the footprint ending the stride, nearest dominant direction index, deviation)
+        let strides: Vec<(f64, f64, i64, f64)> = truth
+            .windows(2)
+            .map(|w| {
+                let d = (w[1].y_m - w[0].y_m).atan2(w[1].x_m - w[0].x_m);
+                let k = ((d - grid_rad) / step_rad).round();
+                let dev = wrap(d - grid_rad - k * step_rad).abs().to_degrees();
+                let n = (std::f64::consts::TAU / step_rad).round() as i64;
+                (w[0].t_s, w[1].t_s, (k as i64).rem_euclid(n.max(1)), dev)
+            })
+            .collect();
+        let mut u = StrideUse::default();
+        for i in 1..strides.len().saturating_sub(1) {
+            let (prev, cur, next) = (strides[i - 1], strides[i], strides[i + 1]);
+            let straight = [prev, cur, next]
+                .iter()
+                .all(|s| s.2 == cur.2 && s.3 <= STRAIGHT_DEG);
+            let weave = prev.2 == next.2
+                && prev.3 <= WEAVE_DEG
+                && next.3 <= WEAVE_DEG
+                && (cur.2 != prev.2 || cur.3 > WEAVE_DEG);
+            if !(straight || weave) {
+                continue;
+            }
+            let inside = |s: &&StanceUse| s.t_s > cur.0 && s.t_s <= cur.1;
+            let stride = stances.iter().filter(inside).any(|s| s.stride);
+            let foot = stances.iter().filter(inside).any(|s| s.foot_axis);
+            if straight {
+                u.straight += 1;
+                u.straight_used += usize::from(stride || foot);
+            } else {
+                u.weave += 1;
+                u.weave_used += usize::from(stride);
+                u.weave_foot_used += usize::from(foot);
+            }
+        }
+        Some(u)
+    }
+}
+
+/// One stance's use of heading information.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct StanceUse {
+    t_s: f64,
+    stride: bool,
+    foot_axis: bool,
+}
+
+/// The NIS of one run, by update type, and its stances with the use of heading information.
+#[derive(Debug, Default)]
+pub(super) struct NisSeries {
+    zupt_first: Vec<f64>,
+    stride: Vec<f64>,
+    heading: Vec<f64>,
+    in_stance: bool,
+    pub(super) stances: Vec<StanceUse>,
+    /// Detected stance intervals (start, end), s.
+    pub(super) intervals: Vec<(f64, f64)>,
+    detector_stance: Option<f64>,
+    last_t_s: f64,
+}
+
+impl NisSeries {
+    pub(super) fn push(&mut self, e: &crate::core::Estimate) {
+        match (e.stance, self.detector_stance) {
+            (true, None) => self.detector_stance = Some(e.t_s),
+            (false, Some(start)) => {
+                self.intervals.push((start, self.last_t_s));
+                self.detector_stance = None;
+            }
+            _ => {}
+        }
+        self.last_t_s = e.t_s;
+        match &e.zupt {
+            Some(z) if !self.in_stance => {
+                self.zupt_first.push(z.nis);
+                self.in_stance = true;
+            }
+            Some(_) => {}
+            None => self.in_stance = false,
+        }
+        let mut used = [false; 2];
+        for (k, (h, v)) in [
+            (&e.stride, &mut self.stride),
+            (&e.heading, &mut self.heading),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            if let Some(Ok(i)) = h.as_ref().map(|h| h.outcome) {
+                v.push(i.nis);
+                used[k] = true;
+            }
+        }
+        if e.stride.is_some() || e.heading.is_some() {
+            self.stances.push(StanceUse {
+                t_s: e.t_s,
+                stride: used[0],
+                foot_axis: used[1],
+            });
+        }
+    }
+
+    pub(super) fn figures(&self) -> [Option<NisFigure>; 3] {
+        [
+            NisFigure::of(&self.zupt_first, 3),
+            NisFigure::of(&self.stride, 1),
+            NisFigure::of(&self.heading, 1),
+        ]
+    }
+}

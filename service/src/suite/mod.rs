@@ -1,0 +1,415 @@
+//! The results table: every recording of a suite through the baselines and the bias modes, with
+//! footprint error and injected-bias recovery (`corridor eval --suite FILE`).
+//!
+//! Per recording:
+//! - (1) `zupt`: the ZUPT filter alone, no prior (the standard foot INS).
+//! - (1b) `zupt+rest`: the same with the gyro mean of the first rest subtracted.
+//! - (2) `zupt+inj`: the injected bias, uncorrected (ZUPT filter, no prior).
+//! - (3) `paper+inj`: the paper's mode with the injected bias, no prior.
+//! - (4) `best+inj`: the best mode with the injected bias, no prior.
+//!
+//! Recovery = (bias with injection − bias without) / injected, averaged over the samples after
+//! both runs have converged (the real-time σ criterion), no prior; and separately with the
+//! rest-mean prior and the injection starting when the initial rest ends.
+//!
+//! Map of the module:
+//! - this file: the suite file, the rows, and running them;
+//! - [`figures`]: what is measured on the default run besides the footprint error (NIS by
+//!   update type, heading use on straight and weave strides, stances found, stride lengths);
+//! - [`recovery`]: injected-bias recovery and its hindsight settling time;
+//! - [`tables`]: the summary and the Markdown tables;
+//! - [`loops`]: the residual-diagnosis loop on every recording.
+
+mod figures;
+mod loops;
+mod recovery;
+mod tables;
+
+use figures::{DefaultFigures, NisSeries, stride_ratio};
+pub use figures::{NisFigure, STANCE_MATCH_S, STRAIGHT_DEG, StanceMatch, StrideUse, WEAVE_DEG};
+pub use loops::run_loops;
+pub use recovery::{recovery, settled_at};
+pub use tables::{
+    NOT_WORSE_TOLERANCE_PCT, Summary, headline_markdown, markdown, nis_markdown, summary,
+};
+
+use crate::eval::EvalOptions;
+use crate::runner::{self, RunError, RunOutcome, heading_aid};
+use corridor_shared::config::{BiasPrior, Config, ConfigFile, Mode};
+use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The suite file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SuiteFile {
+    /// Injected bias for the recovery rows, rad/s (default the paper's [0.001, 0.001, 0.005]).
+    #[serde(default)]
+    pub inject_gyro_bias_rad_s: Option<[f64; 3]>,
+    /// The mode reported as "best" (default `eskf`).
+    #[serde(default)]
+    pub best_mode: Option<Mode>,
+    /// Recordings.
+    #[serde(rename = "recording")]
+    pub recordings: Vec<SuiteRecording>,
+}
+
+/// One recording of the suite; paths are relative to the suite file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SuiteRecording {
+    /// Short name.
+    pub name: String,
+    /// IMU log.
+    pub imu: PathBuf,
+    /// Footprint truth.
+    pub truth: PathBuf,
+    /// Sensor configuration (one per sensor).
+    pub config: PathBuf,
+    /// Configuration of the ZUPT baselines (rows 1, 1b, 2), when their noise set differs from
+    /// the default's (one per sensor; default: `config`).
+    #[serde(default)]
+    pub baseline_config: Option<PathBuf>,
+    /// Walking direction of the first leg in the map frame, degrees (map knowledge).
+    pub start_heading_deg: f64,
+    /// Grid orientation, degrees.
+    #[serde(default)]
+    pub grid_deg: f64,
+    /// Gait of the walk: fast or varying gait is reported but kept out of the normal-gait
+    /// summary.
+    #[serde(default)]
+    pub gait: Gait,
+}
+
+/// The gait of a suite recording, as its data set documents it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Gait {
+    /// Normal walking.
+    #[default]
+    Normal,
+    /// Fast or varying gait.
+    Fast,
+}
+
+/// Errors of the suite.
+#[derive(Debug, thiserror::Error)]
+pub enum SuiteError {
+    /// Suite file unreadable or invalid.
+    #[error("{path}: {message}")]
+    File {
+        /// File.
+        path: PathBuf,
+        /// Cause.
+        message: String,
+    },
+    /// A run failed.
+    #[error("recording {name}: {source}")]
+    Run {
+        /// Recording.
+        name: String,
+        /// Cause.
+        source: Box<RunError>,
+    },
+}
+
+/// Footprint figures of one run.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Footprint {
+    /// RMS over the GCPs after first-leg alignment, m.
+    pub rms_m: f64,
+    /// RMS as % of the truth path length.
+    pub rms_pct: f64,
+    /// Error at the last GCP, m.
+    pub final_m: f64,
+}
+
+/// One row of the results table.
+#[derive(Debug, Clone, Serialize)]
+pub struct SuiteRow {
+    /// Recording.
+    pub recording: String,
+    /// Its gait.
+    pub gait: Gait,
+    /// Truth path length, m.
+    pub path_m: f64,
+    /// 1. ZUPT filter alone.
+    pub zupt: Footprint,
+    /// 1b. ZUPT filter with the rest-mean prior.
+    pub zupt_rest: Footprint,
+    /// Best mode without injection, no prior.
+    pub best: Footprint,
+    /// Best mode without injection, with the rest-mean prior.
+    pub best_rest: Footprint,
+    /// 2. Injected, uncorrected.
+    pub zupt_inj: Footprint,
+    /// 3. Paper mode, injected.
+    pub paper_inj: Footprint,
+    /// 4. Best mode, injected.
+    pub best_inj: Footprint,
+    /// Recovery of the paper mode, per axis (fraction), no prior.
+    pub paper_recovery: [f64; 3],
+    /// Recovery of the best mode, per axis, no prior.
+    pub best_recovery: [f64; 3],
+    /// Recovery of the best mode with the prior and the injection after the first rest.
+    pub best_recovery_prior_late: [f64; 3],
+    /// Convergence time of the best mode with injection (s after the start of the log).
+    pub best_converged_at_s: Option<f64>,
+    /// Convergence time of the paper mode with injection.
+    pub paper_converged_at_s: Option<f64>,
+    /// Hindsight: when the best mode's recovered bias settles within ±5 % (no prior).
+    pub best_settled_at_s: Option<f64>,
+    /// Hindsight: the same with the prior and the injection after the rest.
+    pub best_settled_prior_late_at_s: Option<f64>,
+    /// Error reduction of the best mode over the uncorrected injected run, %.
+    pub best_reduction_pct: f64,
+    /// Stances of the default run (best mode, rest-mean prior).
+    pub stances: u64,
+    /// Foot-axis heading observations used in the default run.
+    pub heading_used: u64,
+    /// Stride-direction observations used in the default run.
+    pub stride_used: u64,
+    /// NIS of the default run: the first ZUPT of each stance, the stride directions and the
+    /// foot axes used.
+    pub nis: [Option<NisFigure>; 3],
+    /// Use of heading information on straight and weave strides (walks with every footprint).
+    pub stride_use: Option<StrideUse>,
+    /// Stride-length ratio of the default run: the summed distances between its positions at
+    /// the surveyed footprints over the surveyed distances.
+    pub stride_ratio: f64,
+    /// Detected stances against the surveyed footprints (walks with every footprint).
+    pub stances_found: Option<StanceMatch>,
+}
+
+/// Reads a suite file.
+pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
+    let text = std::fs::read_to_string(path).map_err(|e| SuiteError::File {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
+    toml::from_str(&text).map_err(|e| SuiteError::File {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })
+}
+
+/// Runs the suite (the table's rows).
+pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
+    let suite = read_suite(path)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let inj = suite
+        .inject_gyro_bias_rad_s
+        .unwrap_or([0.001, 0.001, 0.005]);
+    let best_mode = suite.best_mode.unwrap_or(Mode::Eskf);
+    suite
+        .recordings
+        .iter()
+        .map(|r| {
+            run_recording(base, r, inj, best_mode).map_err(|source| SuiteError::Run {
+                name: r.name.clone(),
+                source: Box::new(source),
+            })
+        })
+        .collect()
+}
+
+/// The recording's configuration with the mode, prior and map knowledge of one suite row.
+fn config_for(
+    file: &ConfigFile,
+    path: &Path,
+    r: &SuiteRecording,
+    mode: Mode,
+    prior: BiasPrior,
+) -> Result<Config, RunError> {
+    let mut file = file.clone();
+    file.estimator.mode = Some(mode);
+    file.alignment.gyro_bias_prior = Some(prior);
+    file.heading.start_heading_deg = Some(r.start_heading_deg);
+    file.heading.grid_deg = Some(r.grid_deg);
+    Ok(file
+        .validate()
+        .map_err(|e| corridor_shared::config::with_path(e, path))?)
+}
+
+struct Ctx<'a> {
+    base: &'a Path,
+    rec: &'a SuiteRecording,
+    config: ConfigFile,
+    baseline: ConfigFile,
+    log: ImuLog,
+    truth: Vec<TruthPoint>,
+}
+
+impl Ctx<'_> {
+    fn run(
+        &self,
+        mode: Mode,
+        prior: BiasPrior,
+        inj: BiasInjection,
+    ) -> Result<(RunOutcome, Footprint), RunError> {
+        self.run_with(&self.config, mode, prior, inj)
+    }
+
+    /// A ZUPT baseline run, with the baseline's configuration.
+    fn run_baseline(
+        &self,
+        prior: BiasPrior,
+        inj: BiasInjection,
+    ) -> Result<(RunOutcome, Footprint), RunError> {
+        self.run_with(&self.baseline, Mode::Zupt, prior, inj)
+    }
+
+    /// The NIS of the default run (the best mode with the rest-mean prior) and its use of
+    /// heading information on the truth strides.
+    fn default_figures(&self, mode: Mode) -> Result<DefaultFigures, RunError> {
+        let cfg = config_for(
+            &self.config,
+            &self.base.join(&self.rec.config),
+            self.rec,
+            mode,
+            BiasPrior::RestMean,
+        )?;
+        let aid = heading_aid(&cfg, None)?;
+        let mut nis = NisSeries::default();
+        let out = runner::run_log(&self.log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+            nis.push(e)
+        });
+        let grid = &cfg.heading;
+        let stride_use = StrideUse::of(
+            &self.truth,
+            grid.grid_rad,
+            grid.grid_step_rad.get(),
+            &nis.stances,
+        );
+        Ok(DefaultFigures {
+            nis: nis.figures(),
+            stances_found: stride_use.map(|_| StanceMatch::of(&self.truth, &nis.intervals)),
+            stride_use,
+            stride_ratio: stride_ratio(&out.trace, &self.truth),
+        })
+    }
+
+    fn run_with(
+        &self,
+        file: &ConfigFile,
+        mode: Mode,
+        prior: BiasPrior,
+        inj: BiasInjection,
+    ) -> Result<(RunOutcome, Footprint), RunError> {
+        let cfg = config_for(
+            file,
+            &self.base.join(&self.rec.config),
+            self.rec,
+            mode,
+            prior,
+        )?;
+        let aid = heading_aid(&cfg, None)?;
+        let out = runner::run_log(&self.log, &cfg, &aid, &inj, |_, _| {});
+        let rep = out
+            .trace
+            .evaluate(&self.truth, &EvalOptions::default())
+            .map_err(|source| RunError::Eval {
+                truth: self.base.join(&self.rec.truth),
+                source,
+            })?;
+        let fp = Footprint {
+            rms_m: rep.rms_error_m.unwrap_or(f64::NAN),
+            rms_pct: rep.rms_error_pct_of_path.unwrap_or(f64::NAN),
+            final_m: rep.final_gcp_error_m.unwrap_or(f64::NAN),
+        };
+        Ok((out, fp))
+    }
+}
+
+fn run_recording(
+    base: &Path,
+    r: &SuiteRecording,
+    inj: [f64; 3],
+    best: Mode,
+) -> Result<SuiteRow, RunError> {
+    let log = read_imu_csv(&base.join(&r.imu), &ImuCsvOptions::default())?;
+    let truth = read_truth_csv(&base.join(&r.truth))?;
+    let path_m = truth
+        .windows(2)
+        .map(|w| (w[1].x_m - w[0].x_m).hypot(w[1].y_m - w[0].y_m))
+        .sum();
+    let ctx = Ctx {
+        base,
+        rec: r,
+        config: ConfigFile::read(&base.join(&r.config))?,
+        baseline: ConfigFile::read(&base.join(r.baseline_config.as_ref().unwrap_or(&r.config)))?,
+        log,
+        truth,
+    };
+    let none = BiasInjection::default();
+    let injected = BiasInjection {
+        constant_rad_s: inj,
+        ..Default::default()
+    };
+    let (_, zupt) = ctx.run_baseline(BiasPrior::None, none)?;
+    let (_, zupt_rest) = ctx.run_baseline(BiasPrior::RestMean, none)?;
+    let (_, zupt_inj) = ctx.run_baseline(BiasPrior::None, injected)?;
+    let (paper0, _) = ctx.run(Mode::Paper, BiasPrior::None, none)?;
+    let (paper1, paper_inj) = ctx.run(Mode::Paper, BiasPrior::None, injected)?;
+    let (best0, best_fp) = ctx.run(best, BiasPrior::None, none)?;
+    let (best1, best_inj) = ctx.run(best, BiasPrior::None, injected)?;
+    let (best_r0, best_rest) = ctx.run(best, BiasPrior::RestMean, none)?;
+    let fig = ctx.default_figures(best)?;
+    let c = best_r0.counters;
+    let (stances, heading_used, stride_used) = (c.stances, c.heading_used, c.stride_used);
+    // The injection starts when the initial rest ends (the alignment instant of the clean run).
+    let rest_end = best_r0
+        .trace
+        .t_s
+        .first()
+        .copied()
+        .unwrap_or(0.0)
+        .max(first_motion_s(&best_r0));
+    let late = BiasInjection {
+        constant_rad_s: inj,
+        after_s: rest_end,
+        ..Default::default()
+    };
+    let (best_r1, _) = ctx.run(best, BiasPrior::RestMean, late)?;
+    Ok(SuiteRow {
+        recording: r.name.clone(),
+        gait: r.gait,
+        path_m,
+        zupt,
+        zupt_rest,
+        best: best_fp,
+        best_rest,
+        zupt_inj,
+        paper_inj,
+        best_inj,
+        paper_recovery: recovery(&paper1, &paper0, inj),
+        best_recovery: recovery(&best1, &best0, inj),
+        best_recovery_prior_late: recovery(&best_r1, &best_r0, inj),
+        best_converged_at_s: best1.converged_at_s,
+        paper_converged_at_s: paper1.converged_at_s,
+        best_settled_at_s: settled_at(&best1, &best0, inj),
+        best_settled_prior_late_at_s: settled_at(&best_r1, &best_r0, inj),
+        best_reduction_pct: 100.0 * (1.0 - best_inj.rms_m / zupt_inj.rms_m),
+        stances,
+        heading_used,
+        stride_used,
+        nis: fig.nis,
+        stride_use: fig.stride_use,
+        stride_ratio: fig.stride_ratio,
+        stances_found: fig.stances_found,
+    })
+}
+
+/// The end of the initial rest: the first sample whose bias σ is defined (the estimator has
+/// aligned and navigates).
+fn first_motion_s(o: &RunOutcome) -> f64 {
+    o.trace
+        .t_s
+        .iter()
+        .zip(&o.trace.bias_sd_rad_s)
+        .find(|(_, sd)| sd[0].is_finite())
+        .map_or(0.0, |(t, _)| *t)
+}

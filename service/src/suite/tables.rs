@@ -1,0 +1,247 @@
+//! The suite's summary over the normal-gait recordings and its Markdown tables.
+
+use super::{Footprint, Gait, NisFigure, STRAIGHT_DEG, StrideUse, SuiteRow, WEAVE_DEG};
+use serde::Serialize;
+
+/// How far the default may be worse than the baseline and still count as "not worse", % of path.
+pub const NOT_WORSE_TOLERANCE_PCT: f64 = 0.05;
+
+/// The headline over the normal-gait recordings: the default configuration (best mode with the
+/// rest-mean prior) against the ZUPT + rest-mean baseline.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Summary {
+    /// Normal-gait recordings.
+    pub n: usize,
+    /// Median footprint RMS of the baseline, % of path.
+    pub baseline_median_pct: f64,
+    /// Worst footprint RMS of the baseline, % of path.
+    pub baseline_worst_pct: f64,
+    /// Median footprint RMS of the default, % of path.
+    pub default_median_pct: f64,
+    /// Worst footprint RMS of the default, % of path.
+    pub default_worst_pct: f64,
+    /// Recordings on which the default is better than the baseline.
+    pub default_better: usize,
+    /// Recordings on which the default is worse than the baseline by more than
+    /// [`NOT_WORSE_TOLERANCE_PCT`].
+    pub default_worse: usize,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// The summary over the normal-gait rows.
+pub fn summary(rows: &[SuiteRow]) -> Summary {
+    let normal: Vec<&SuiteRow> = rows.iter().filter(|r| r.gait == Gait::Normal).collect();
+    let mut base: Vec<f64> = normal.iter().map(|r| r.zupt_rest.rms_pct).collect();
+    let mut def: Vec<f64> = normal.iter().map(|r| r.best_rest.rms_pct).collect();
+    let worst = |v: &[f64]| v.iter().copied().fold(f64::NAN, f64::max);
+    Summary {
+        n: normal.len(),
+        baseline_worst_pct: worst(&base),
+        default_worst_pct: worst(&def),
+        baseline_median_pct: median(&mut base),
+        default_median_pct: median(&mut def),
+        default_better: normal
+            .iter()
+            .filter(|r| r.best_rest.rms_pct < r.zupt_rest.rms_pct)
+            .count(),
+        default_worse: normal
+            .iter()
+            .filter(|r| r.best_rest.rms_pct > r.zupt_rest.rms_pct + NOT_WORSE_TOLERANCE_PCT)
+            .count(),
+    }
+}
+
+/// The headline table (default against the baseline, per recording) and its summary line.
+pub fn headline_markdown(rows: &[SuiteRow]) -> String {
+    let mut s = String::from(
+        "Default configuration (best mode, rest-mean prior) against the ZUPT + rest-mean baseline: footprint RMS, % of path.\n\n\
+         | recording | gait | path | baseline | default | default − baseline | stride directions / foot axes used / stances | stride-length ratio | stances found (recall / precision, ±50 ms) |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {} | {:.1} m | {:.2} % | {:.2} % | {:+.2} | {} / {} / {} | {:.3} | {} |\n",
+            r.recording,
+            match r.gait {
+                Gait::Normal => "normal",
+                Gait::Fast => "fast",
+            },
+            r.path_m,
+            r.zupt_rest.rms_pct,
+            r.best_rest.rms_pct,
+            r.best_rest.rms_pct - r.zupt_rest.rms_pct,
+            r.stride_used,
+            r.heading_used,
+            r.stances,
+            r.stride_ratio,
+            r.stances_found.map_or("—".to_string(), |m| format!(
+                "{} of {} ({:.0} %) / {} of {} ({:.0} %)",
+                m.found,
+                m.listed,
+                100.0 * m.recall(),
+                m.matching,
+                m.detected,
+                100.0 * m.precision()
+            )),
+        ));
+    }
+    let m = summary(rows);
+    s.push_str(&format!(
+        "\nNormal gait ({} recordings): median {:.2} % (baseline {:.2} %), worst {:.2} % (baseline {:.2} %); \
+         default better on {} of {}, worse by more than {:.2} % of path on {}.\n",
+        m.n,
+        m.default_median_pct,
+        m.baseline_median_pct,
+        m.default_worst_pct,
+        m.baseline_worst_pct,
+        m.default_better,
+        m.n,
+        NOT_WORSE_TOLERANCE_PCT,
+        m.default_worse
+    ));
+    s
+}
+
+/// The NIS table: mean per degree of freedom of each update type of the default run, and its
+/// 95 % band.
+pub fn nis_markdown(rows: &[SuiteRow]) -> String {
+    let mut s = String::from(
+        "Consistency of the default run: mean NIS per degree of freedom [95 % χ² band] (n); ✗ outside the band.\n\n\
+         | recording | first ZUPT of each stance | stride direction | foot axis |\n|---|---|---|---|\n",
+    );
+    let mut inside = [0usize; 3];
+    let f = |x: &Option<NisFigure>| {
+        x.map_or("—".to_string(), |x| {
+            format!(
+                "{:.2} [{:.2}, {:.2}] ({}){}",
+                x.mean,
+                x.lower,
+                x.upper,
+                x.n,
+                if x.in_band() { "" } else { " ✗" }
+            )
+        })
+    };
+    for r in rows {
+        for (k, x) in r.nis.iter().enumerate() {
+            inside[k] += usize::from(x.is_some_and(|x| x.in_band()));
+        }
+        s.push_str(&format!(
+            "| {} | {} | {} | {} |\n",
+            r.recording,
+            f(&r.nis[0]),
+            f(&r.nis[1]),
+            f(&r.nis[2])
+        ));
+    }
+    let mut u = StrideUse::default();
+    let mut use_rows = String::new();
+    for r in rows {
+        if let Some(x) = r.stride_use {
+            use_rows.push_str(&format!(
+                "| {} | {} of {} | {} of {} | {} of {} |\n",
+                r.recording,
+                x.straight_used,
+                x.straight,
+                x.weave_used,
+                x.weave,
+                x.weave_foot_used,
+                x.weave
+            ));
+            if r.gait == Gait::Normal {
+                u.straight += x.straight;
+                u.straight_used += x.straight_used;
+                u.weave += x.weave;
+                u.weave_used += x.weave_used;
+                u.weave_foot_used += x.weave_foot_used;
+            }
+        }
+    }
+    if !use_rows.is_empty() {
+        s.push_str(&format!(
+            "\nHeading information used on the strides of the walks surveyed at every stride \
+             (straight: the stride and both neighbours within {STRAIGHT_DEG}° of one dominant \
+             direction; weave: more than {WEAVE_DEG}° off the direction both neighbours follow).\n\n\
+             | recording | straight strides with heading information | weave strides whose direction was used | weave strides whose foot axis was used |\n|---|---|---|---|\n{use_rows}\
+             | all normal-gait walks | {} of {} ({:.0} %) | {} of {} | {} of {} |\n",
+            u.straight_used,
+            u.straight,
+            100.0 * u.straight_used as f64 / u.straight.max(1) as f64,
+            u.weave_used,
+            u.weave,
+            u.weave_foot_used,
+            u.weave
+        ));
+    }
+    s.push_str(&format!(
+        "\nInside the band: first ZUPT {} of {}, stride direction {} of {}, foot axis {} of {}.\n",
+        inside[0],
+        rows.len(),
+        inside[1],
+        rows.len(),
+        inside[2],
+        rows.len()
+    ));
+    s
+}
+
+/// The table as Markdown.
+pub fn markdown(rows: &[SuiteRow]) -> String {
+    let mut s = headline_markdown(rows);
+    s.push('\n');
+    s.push_str(&nis_markdown(rows));
+    s.push('\n');
+    s.push_str("Footprint RMS error after first-leg alignment, metres (% of path); final-GCP error in metres.\n\n");
+    s.push_str("| recording | path | (1) ZUPT | (1b) ZUPT + rest mean | (2) injected, uncorrected | (3) paper, injected | (4) best, injected | best, no injection | best + rest mean |\n");
+    s.push_str("|---|---|---|---|---|---|---|---|---|\n");
+    let f = |x: &Footprint| format!("{:.2} ({:.2} %), {:.2}", x.rms_m, x.rms_pct, x.final_m);
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {:.1} m | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.recording,
+            r.path_m,
+            f(&r.zupt),
+            f(&r.zupt_rest),
+            f(&r.zupt_inj),
+            f(&r.paper_inj),
+            f(&r.best_inj),
+            f(&r.best),
+            f(&r.best_rest)
+        ));
+    }
+    s.push_str("\nInjected-bias recovery ([0.001, 0.001, 0.005] rad/s), per axis x / y / z, % of the injected value; convergence time.\n\n");
+    s.push_str("| recording | paper, no prior | best, no prior | best, prior + injection after the rest | paper converged at | best converged at | best settled within ±5 % (hindsight) | best vs uncorrected |\n");
+    s.push_str("|---|---|---|---|---|---|---|---|\n");
+    let p = |v: &[f64; 3]| {
+        format!(
+            "{:.0} / {:.0} / {:.0}",
+            100.0 * v[0],
+            100.0 * v[1],
+            100.0 * v[2]
+        )
+    };
+    let t = |v: Option<f64>| v.map_or("never".to_string(), |v| format!("{v:.1} s"));
+    for r in rows {
+        s.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {} (prior, late: {}) | {:+.0} % |\n",
+            r.recording,
+            p(&r.paper_recovery),
+            p(&r.best_recovery),
+            p(&r.best_recovery_prior_late),
+            t(r.paper_converged_at_s),
+            t(r.best_converged_at_s),
+            t(r.best_settled_at_s),
+            t(r.best_settled_prior_late_at_s),
+            -r.best_reduction_pct
+        ));
+    }
+    s
+}
