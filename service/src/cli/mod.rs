@@ -25,41 +25,59 @@ use std::process::ExitCode;
 #[command(
     name = "corridor",
     version,
-    about = "Gyro-bias and attitude estimation for foot-mounted IMUs from map headings"
+    about = "Gyro-bias and attitude estimation for foot-mounted IMUs from map headings",
+    after_help = "Examples:\n  corridor demo\n  corridor run --imu imu.csv --config configs/gdins.toml --out out/run\n  corridor serve --config configs/service.toml --domain lab\n  corridor <COMMAND> --help"
 )]
 struct Cli {
     #[command(subcommand)]
     command: Command,
 }
 
+const RUN_EXAMPLES: &str = "Examples:
+  corridor run --imu tests/data/gdins_exp36_corridor_out_and_back/imu.csv --config configs/gdins.toml --out out/exp36
+  corridor run --imu imu.csv --config configs/gdins.toml --start-heading-deg -90 --mode paper --plots --out out/run
+  corridor run --imu imu.csv --inject-gyro-bias 0.001,-0.001,0.005 --truth ground_truth.csv --out out/injected";
+const EVAL_EXAMPLES: &str = "Examples:
+  corridor eval --suite configs/eval/gdins.toml
+  corridor eval --suite configs/eval/gdins.toml --out out/eval";
+const DEMO_EXAMPLES: &str = "Examples:
+  corridor demo
+  corridor demo --root /path/to/corridor --out /tmp/demo";
+const SERVE_EXAMPLES: &str = "Examples:
+  corridor serve --config configs/service.toml
+  corridor serve --config configs/gdins.toml --domain lab --delivery lossless --checkpoint /var/lib/corridor/bias.bin
+  (then, on the same domain: corridor-replay --imu imu.csv --domain lab; corridor status --domain lab)";
+const DIAGNOSE_EXAMPLES: &str = "Examples:
+  corridor diagnose --imu tests/data/gdins_exp25_multi_corridor/imu.csv --config configs/gdins.toml --out out/diag
+  corridor diagnose --imu imu.csv --truth ground_truth.csv --mode paper --out out/diag";
+
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run the estimator over a CSV log and write estimates, innovations and a summary.
+    #[command(after_help = RUN_EXAMPLES)]
     Run(Box<run::RunArgs>),
     /// Run a suite of recordings through the baselines and the bias modes; print the table.
+    #[command(after_help = EVAL_EXAMPLES)]
     Eval(eval::EvalArgs),
     /// The demo on the bundled measured recordings: the results table, the residual-diagnosis
     /// loop, one recording with the paper's injected bias (summary and figures), the second
     /// sensor, and the same injected run replayed through the daemon to a logger and a PDR
     /// consumer.
+    #[command(after_help = DEMO_EXAMPLES)]
     Demo(demo::DemoArgs),
     /// Run the estimator as a daemon behind iceoryx2 services until SIGINT/SIGTERM.
+    #[command(after_help = SERVE_EXAMPLES)]
     Serve(serve::ServeArgs),
     /// Diagnose the model on a log: rank the effects its residuals show, add the top one, and
     /// report the error before and after (report.json, report.md, residuals.svg).
+    #[command(after_help = DIAGNOSE_EXAMPLES)]
     Diagnose(diagnose::DiagnoseArgs),
 }
 
 pub fn main() -> ExitCode {
     corridor_client::init_tracing("info");
     let cli = Cli::parse();
-    match dispatch(cli) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    corridor_client::exit(dispatch(cli))
 }
 
 fn dispatch(cli: Cli) -> anyhow::Result<()> {
