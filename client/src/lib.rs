@@ -8,6 +8,8 @@
 //! - [`track`]: [`Tracker`], the stride-by-stride positions of the nav stream.
 //! - [`producer`]: [`Producer`], publishes [`ImuSample`]s and [`AngleObservation`]s (and the
 //!   end-of-stream marker) and wakes the daemon.
+//! - [`status`]: [`StatusReader`](status::StatusReader), the daemon's health from its
+//!   diagnostics and bias streams (`corridor status`).
 //! - [`subscriber`]: [`Subscriber<T>`], receives one of the daemon's outputs
 //!   ([`AttitudeSample`], [`BiasSample`], [`NavSample`], [`Diagnostics`]) with a blocking
 //!   [`Subscriber::recv_timeout`].
@@ -33,6 +35,7 @@ pub mod csv_rows;
 pub mod producer;
 pub mod record;
 pub mod replay;
+pub mod status;
 pub mod subscriber;
 pub mod track;
 

@@ -69,6 +69,7 @@ fn every_command_help_has_examples() {
         &["demo"],
         &["serve"],
         &["diagnose"],
+        &["status"],
     ] {
         let mut args = cmd.to_vec();
         args.push("--help");

@@ -6,6 +6,7 @@
 //! - [`run`]: `corridor run`, the offline runner;
 //! - [`eval`]: `corridor eval`, the results table of a suite;
 //! - [`serve`]: `corridor serve`, the daemon;
+//! - [`status`]: `corridor status`, the health of a running daemon;
 //! - [`diagnose`]: `corridor diagnose`, the residual diagnosis;
 //! - [`demo`]: `corridor demo`, the tour of the bundled recordings, and [`demo_daemon`], its
 //!   section that replays a run through the daemon to a logger and a PDR consumer.
@@ -17,6 +18,7 @@ mod eval;
 mod model;
 mod run;
 mod serve;
+mod status;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -51,6 +53,12 @@ const DIAGNOSE_EXAMPLES: &str = "Examples:
   corridor diagnose --imu tests/data/gdins_exp25_multi_corridor/imu.csv --config configs/gdins.toml --out out/diag
   corridor diagnose --imu imu.csv --truth ground_truth.csv --mode paper --out out/diag";
 
+const STATUS_EXAMPLES: &str = "Examples:
+  corridor status --domain lab
+  corridor status --domain lab --watch
+  corridor status --domain lab --timeout-s 2 || systemctl restart corridor
+Exit code: 0 healthy, 2 no daemon answered within the timeout (or it is shutting down), 1 other errors.";
+
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run the estimator over a CSV log and write estimates, innovations and a summary.
@@ -70,6 +78,10 @@ enum Command {
     Serve(serve::ServeArgs),
     /// Diagnose the model on a log: rank the effects its residuals show, add the top one, and
     /// report the error before and after (report.json, report.md, residuals.svg).
+    /// The health of the daemon of a domain: rates, counters, losses, latency, bias and its σ,
+    /// convergence (exit code 0 when healthy, 2 when no daemon answers).
+    #[command(after_help = STATUS_EXAMPLES)]
+    Status(status::StatusArgs),
     #[command(after_help = DIAGNOSE_EXAMPLES)]
     Diagnose(diagnose::DiagnoseArgs),
 }
@@ -77,15 +89,21 @@ enum Command {
 pub fn main() -> ExitCode {
     corridor_client::init_tracing("info");
     let cli = Cli::parse();
-    corridor_client::exit(dispatch(cli))
+    match dispatch(cli) {
+        Ok(code) => code,
+        Err(e) => corridor_client::exit(Err(e)),
+    }
 }
 
-fn dispatch(cli: Cli) -> anyhow::Result<()> {
+/// Runs the command; its exit code (`status` has its own, the others succeed or fail).
+fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
+    let done = |r: anyhow::Result<()>| r.map(|()| ExitCode::SUCCESS);
     match cli.command {
-        Command::Run(a) => run::run(&a),
-        Command::Demo(a) => demo::demo(&a),
-        Command::Serve(a) => serve::serve(&a),
-        Command::Diagnose(a) => diagnose::diagnose(&a),
-        Command::Eval(a) => eval::eval(a),
+        Command::Run(a) => done(run::run(&a)),
+        Command::Demo(a) => done(demo::demo(&a)),
+        Command::Serve(a) => done(serve::serve(&a)),
+        Command::Diagnose(a) => done(diagnose::diagnose(&a)),
+        Command::Eval(a) => done(eval::eval(a)),
+        Command::Status(a) => status::status(&a),
     }
 }
