@@ -70,6 +70,8 @@ fn every_command_help_has_examples() {
         &["serve"],
         &["diagnose"],
         &["status"],
+        &["completions"],
+        &["man"],
     ] {
         let mut args = cmd.to_vec();
         args.push("--help");
@@ -86,4 +88,50 @@ fn every_command_help_has_examples() {
             "{args:?}: {examples}"
         );
     }
+}
+
+#[test]
+fn the_command_list_describes_each_command() {
+    let o = corridor(&["--help"]);
+    let help = String::from_utf8_lossy(&o.stdout);
+    for (cmd, about) in [
+        ("diagnose", "Diagnose the model on a log"),
+        ("status", "The health of the daemon of a domain"),
+        ("completions", "shell completion"),
+        ("man", "man page"),
+    ] {
+        let line = help
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("{cmd} ")))
+            .unwrap_or_else(|| panic!("{cmd} not listed in\n{help}"));
+        assert!(line.contains(about), "{line}");
+    }
+}
+
+#[test]
+fn completions_and_man_page_cover_every_command() {
+    let bash = corridor(&["completions", "bash"]);
+    assert!(bash.status.success());
+    let bash = String::from_utf8_lossy(&bash.stdout);
+    assert!(bash.contains("_corridor()"), "{bash}");
+    for cmd in ["run", "serve", "status", "diagnose"] {
+        assert!(bash.contains(&format!("corridor__subcmd__{cmd}")), "{cmd}");
+    }
+    assert!(bash.contains("--start-heading-deg"));
+    let zsh = corridor(&["completions", "zsh"]);
+    assert!(
+        zsh.status.success() && String::from_utf8_lossy(&zsh.stdout).contains("#compdef corridor")
+    );
+
+    let man = corridor(&["man"]);
+    assert!(man.status.success());
+    let man = String::from_utf8_lossy(&man.stdout);
+    assert!(
+        man.starts_with(".ie") || man.contains(".TH corridor"),
+        "{man}"
+    );
+    for section in ["CORRIDOR RUN", "CORRIDOR SERVE", "CORRIDOR STATUS"] {
+        assert!(man.contains(section), "missing {section}");
+    }
+    assert!(man.contains("start\\-heading\\-deg"), "flags are listed");
 }

@@ -8,12 +8,14 @@
 //! - [`serve`]: `corridor serve`, the daemon;
 //! - [`status`]: `corridor status`, the health of a running daemon;
 //! - [`diagnose`]: `corridor diagnose`, the residual diagnosis;
+//! - [`docs`]: `corridor completions SHELL` and `corridor man`;
 //! - [`demo`]: `corridor demo`, the tour of the bundled recordings, and [`demo_daemon`], its
 //!   section that replays a run through the daemon to a logger and a PDR consumer.
 
 mod demo;
 mod demo_daemon;
 mod diagnose;
+mod docs;
 mod eval;
 mod model;
 mod run;
@@ -59,6 +61,14 @@ const STATUS_EXAMPLES: &str = "Examples:
   corridor status --domain lab --timeout-s 2 || systemctl restart corridor
 Exit code: 0 healthy, 2 no daemon answered within the timeout (or it is shutting down), 1 other errors.";
 
+const COMPLETIONS_EXAMPLES: &str = "Examples:
+  corridor completions bash > ~/.local/share/bash-completion/completions/corridor
+  corridor completions zsh > ~/.zfunc/_corridor
+  corridor completions fish > ~/.config/fish/completions/corridor.fish";
+const MAN_EXAMPLES: &str = "Examples:
+  corridor man > corridor.1 && man ./corridor.1
+  corridor man | gzip > /usr/local/share/man/man1/corridor.1.gz";
+
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run the estimator over a CSV log and write estimates, innovations and a summary.
@@ -76,12 +86,18 @@ enum Command {
     /// Run the estimator as a daemon behind iceoryx2 services until SIGINT/SIGTERM.
     #[command(after_help = SERVE_EXAMPLES)]
     Serve(serve::ServeArgs),
-    /// Diagnose the model on a log: rank the effects its residuals show, add the top one, and
-    /// report the error before and after (report.json, report.md, residuals.svg).
     /// The health of the daemon of a domain: rates, counters, losses, latency, bias and its σ,
     /// convergence (exit code 0 when healthy, 2 when no daemon answers).
     #[command(after_help = STATUS_EXAMPLES)]
     Status(status::StatusArgs),
+    /// Print the shell completion script of corridor.
+    #[command(after_help = COMPLETIONS_EXAMPLES)]
+    Completions(docs::CompletionsArgs),
+    /// Print the man page of corridor (roff), every command included.
+    #[command(after_help = MAN_EXAMPLES)]
+    Man,
+    /// Diagnose the model on a log: rank the effects its residuals show, add the top one, and
+    /// report the error before and after (report.json, report.md, residuals.svg).
     #[command(after_help = DIAGNOSE_EXAMPLES)]
     Diagnose(diagnose::DiagnoseArgs),
 }
@@ -105,5 +121,7 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Diagnose(a) => done(diagnose::diagnose(&a)),
         Command::Eval(a) => done(eval::eval(a)),
         Command::Status(a) => status::status(&a),
+        Command::Completions(a) => done(docs::completions(&a)),
+        Command::Man => done(docs::man()),
     }
 }
