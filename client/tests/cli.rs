@@ -35,6 +35,11 @@ fn tool(exe: &str, args: &[&str]) -> Output {
 /// reads it while `corridor-replay` (given `extra` flags) runs. Returns the replay's output and
 /// the samples received.
 fn replay_into_lossless_daemon(domain_name: &str, extra: &[&str]) -> (Output, usize) {
+    // One stand-in daemon per process at a time (see the README's known issue with two).
+    static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let domain = Domain::new(domain_name).unwrap();
     let node = domain
         .node("eco-fake-daemon", SignalHandlingMode::Disabled)
