@@ -109,6 +109,23 @@ impl Status {
     }
 }
 
+/// The `last checkpoint:` line for the daemon's checkpoint file (`daemon.checkpoint_path` or
+/// `corridor serve --checkpoint`): the daemon does not publish its checkpoints, but it writes
+/// the file atomically at each save, so its modification time is the last save.
+pub fn checkpoint_line(path: &std::path::Path) -> String {
+    let saved = std::fs::metadata(path).and_then(|m| Ok((m.len(), m.modified()?)));
+    match saved {
+        Ok((bytes, modified)) => {
+            let age_s = modified.elapsed().map_or(0.0, |d| d.as_secs_f64());
+            format!(
+                "last checkpoint:  {} ({bytes} B), saved {age_s:.1} s ago\n",
+                path.display()
+            )
+        }
+        Err(e) => format!("last checkpoint:  {} not readable ({e})\n", path.display()),
+    }
+}
+
 fn fmt_opt(x: f64, decimals: usize, unit: &str) -> String {
     if x.is_finite() {
         format!("{x:.decimals$}{unit}")

@@ -23,18 +23,19 @@ fn corridor() -> Command {
     Command::new(env!("CARGO_BIN_EXE_corridor"))
 }
 
-fn status(domain: &str, timeout_s: &str) -> Output {
+fn status(domain: &str, timeout_s: &str, extra: &[&str]) -> Output {
     corridor()
         .args(["status", "--domain", domain, "--timeout-s", timeout_s])
+        .args(extra)
         .output()
         .unwrap()
 }
 
-/// A lossless daemon on `domain`, killed when dropped.
+/// A lossless daemon on `domain` checkpointing into `checkpoint`, killed when dropped.
 struct Daemon(Child);
 
 impl Daemon {
-    fn start(domain: &str) -> Self {
+    fn start(domain: &str, checkpoint: &Path) -> Self {
         for dir in ["/dev/shm", "/tmp/iceoryx2", "/tmp/iceoryx2/services"] {
             for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
                 if e.file_name()
@@ -51,6 +52,8 @@ impl Daemon {
                 .args(["serve", "--delivery", "lossless", "--domain", domain])
                 .arg("--config")
                 .arg(config)
+                .arg("--checkpoint")
+                .arg(checkpoint)
                 .stdin(Stdio::null())
                 .stdout(Stdio::null())
                 .stderr(Stdio::null())
@@ -70,7 +73,10 @@ impl Drop for Daemon {
 #[test]
 fn status_shows_the_daemons_counters_and_final_bias() {
     let name = "eco_status";
-    let _daemon = Daemon::start(name);
+    let checkpoint =
+        std::env::temp_dir().join(format!("corridor-eco-status-{}.bin", std::process::id()));
+    let _ = std::fs::remove_file(&checkpoint);
+    let _daemon = Daemon::start(name, &checkpoint);
     let log = read_imu_csv(
         &root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
         &ImuCsvOptions::default(),
@@ -96,10 +102,11 @@ fn status_shows_the_daemons_counters_and_final_bias() {
     let b = last.unwrap().gyro_bias_rad_s;
     let bias = format!("[{:+.6}, {:+.6}, {:+.6}]", b[0], b[1], b[2]);
 
-    // The daemon counts the marker a moment after it was sent; poll until it has.
+    // The daemon counts the marker (and saves its checkpoint) a moment after it was sent;
+    // poll until it has.
     let mut screen = String::new();
     for _ in 0..30 {
-        let o = status(name, "20");
+        let o = status(name, "20", &["--checkpoint", checkpoint.to_str().unwrap()]);
         assert_eq!(
             o.status.code(),
             Some(0),
@@ -107,7 +114,7 @@ fn status_shows_the_daemons_counters_and_final_bias() {
             String::from_utf8_lossy(&o.stderr)
         );
         screen = String::from_utf8_lossy(&o.stdout).into_owned();
-        if screen.contains("received 14001") {
+        if screen.contains("received 14001") && screen.contains("s ago") {
             break;
         }
     }
@@ -119,6 +126,8 @@ fn status_shows_the_daemons_counters_and_final_bias() {
         &format!("gyro bias:        {bias} rad/s"),
         "bias σ:",
         "converged:",
+        &format!("last checkpoint:  {}", checkpoint.display()),
+        "s ago",
     ] {
         assert!(screen.contains(want), "missing {want:?} in\n{screen}");
     }
@@ -144,11 +153,12 @@ fn status_shows_the_daemons_counters_and_final_bias() {
     assert_ne!(first, second);
     let _ = watch.kill();
     let _ = watch.wait();
+    let _ = std::fs::remove_file(&checkpoint);
 }
 
 #[test]
 fn status_exits_2_when_no_daemon_answers() {
-    let o = status("eco_status_nobody", "0.5");
+    let o = status("eco_status_nobody", "0.5", &[]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

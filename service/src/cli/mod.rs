@@ -57,7 +57,7 @@ const DIAGNOSE_EXAMPLES: &str = "Examples:
 
 const STATUS_EXAMPLES: &str = "Examples:
   corridor status --domain lab
-  corridor status --domain lab --watch
+  corridor status --domain lab --watch --checkpoint /var/lib/corridor/bias.bin
   corridor status --domain lab --timeout-s 2 || systemctl restart corridor
 Exit code: 0 healthy, 2 no daemon answered within the timeout (or it is shutting down), 1 other errors.";
 

@@ -6,6 +6,7 @@ use clap::Args;
 use corridor_client::status::StatusReader;
 use corridor_client::{ClientError, Domain};
 use corridor_shared::services::DEFAULT_DOMAIN;
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -21,6 +22,10 @@ pub(super) struct StatusArgs {
     /// `daemon.diagnostics_period_s`, 1 s by default).
     #[arg(long, default_value_t = 5.0)]
     pub(super) timeout_s: f64,
+    /// The daemon's checkpoint file (`daemon.checkpoint_path`, or its `--checkpoint`): shows
+    /// when it was last saved (the daemon does not publish its checkpoints).
+    #[arg(long)]
+    pub(super) checkpoint: Option<PathBuf>,
     /// Refresh at every diagnostics until Ctrl-C (or until the daemon stops answering).
     #[arg(long)]
     pub(super) watch: bool,
@@ -56,6 +61,9 @@ pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
             print!("\x1b[2J\x1b[H");
         }
         print!("{}", status.render(domain.name()));
+        if let Some(p) = &a.checkpoint {
+            print!("{}", corridor_client::status::checkpoint_line(p));
+        }
         if !status.healthy() {
             return no_daemon("the daemon is shutting down");
         }
