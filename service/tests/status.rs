@@ -63,10 +63,23 @@ impl Daemon {
     }
 }
 
+/// SIGTERM (a clean exit removes the shared memory), SIGKILL if that takes over a minute.
+fn terminate(child: &mut Child) {
+    let pid = i32::try_from(child.id()).unwrap();
+    // SAFETY: plain kill(2) on our own child.
+    unsafe { libc::kill(pid, libc::SIGTERM) };
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > WAIT {
+            let _ = child.kill();
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
 impl Drop for Daemon {
     fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
+        terminate(&mut self.0);
     }
 }
 
@@ -151,8 +164,7 @@ fn status_shows_the_daemons_counters_and_final_bias() {
     let first = rx.recv_timeout(WAIT).expect("a first screen");
     let second = rx.recv_timeout(WAIT).expect("a refreshed screen");
     assert_ne!(first, second);
-    let _ = watch.kill();
-    let _ = watch.wait();
+    terminate(&mut watch);
     let _ = std::fs::remove_file(&checkpoint);
 }
 
