@@ -8,6 +8,8 @@
 //! - [`track`]: [`Tracker`], the stride-by-stride positions of the nav stream.
 //! - [`producer`]: [`Producer`], publishes [`ImuSample`]s and [`AngleObservation`]s (and the
 //!   end-of-stream marker) and wakes the daemon.
+//! - [`status`]: [`StatusReader`](status::StatusReader), the daemon's health from its
+//!   diagnostics and bias streams (`corridor status`).
 //! - [`subscriber`]: [`Subscriber<T>`], receives one of the daemon's outputs
 //!   ([`AttitudeSample`], [`BiasSample`], [`NavSample`], [`Diagnostics`]) with a blocking
 //!   [`Subscriber::recv_timeout`].
@@ -33,6 +35,7 @@ pub mod csv_rows;
 pub mod producer;
 pub mod record;
 pub mod replay;
+pub mod status;
 pub mod subscriber;
 pub mod track;
 
@@ -43,6 +46,7 @@ pub use replay::replay;
 pub use subscriber::Subscriber;
 pub use track::Tracker;
 
+use std::process::ExitCode;
 use std::time::Duration;
 
 /// A client-side failure.
@@ -86,4 +90,50 @@ pub fn init_tracing(default_filter: &str) {
         )
         .with_writer(std::io::stderr)
         .init();
+}
+
+/// The error and its causes on one line (`a: b: c`), each cause once: a cause whose text the
+/// message already contains (many errors repeat their source in their own text) is left out.
+/// No backtrace, whatever `RUST_BACKTRACE` says: these are user errors, not crashes.
+pub fn error_message(e: &anyhow::Error) -> String {
+    let mut msg = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if msg.contains(&text) {
+            continue;
+        }
+        if !msg.is_empty() {
+            msg.push_str(": ");
+        }
+        msg.push_str(&text);
+    }
+    msg
+}
+
+/// The exit of every corridor binary: success, or `error: ...` ([`error_message`]) once on
+/// stderr and a failure code.
+pub fn exit(result: anyhow::Result<()>) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", error_message(&e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn error_message_names_each_cause_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "no such file");
+        let inner = anyhow::Error::from(io).context("x.csv: cannot read: no such file");
+        let e = inner.context("reading x.csv");
+        assert_eq!(
+            error_message(&e),
+            "reading x.csv: x.csv: cannot read: no such file"
+        );
+    }
 }

@@ -2,7 +2,7 @@
 
 use crate::ClientError;
 use corridor_shared::services::{
-    ANGLES_SERVICE, Access, Delivery, Domain, IMU_SERVICE, PubSub, ServiceError,
+    ANGLES_SERVICE, Delivery, Domain, IMU_SERVICE, PubSub, ServiceError,
 };
 use corridor_shared::wire::{AngleObservation, FLAG_END_OF_STREAM, ImuSample, monotonic_ns};
 use iceoryx2::port::notifier::Notifier;
@@ -60,12 +60,24 @@ impl std::fmt::Debug for Producer {
 }
 
 impl Producer {
-    /// Opens (or creates) the input services of `domain` with `delivery` (which must match the
-    /// daemon's) and creates the publishers on a node called `node_name`. iceoryx2 handles
-    /// SIGINT/SIGTERM for this node: see [`Producer::termination_requested`].
+    /// [`Producer::open`] asserting `delivery`: fails when the daemon uses the other policy.
     pub fn new(domain: &Domain, node_name: &str, delivery: Delivery) -> Result<Self, ClientError> {
+        Self::open(domain, node_name, Some(delivery))
+    }
+
+    /// Opens (or creates) the input services of `domain` and creates the publishers on a node
+    /// called `node_name`. The delivery policy is the daemon's (the one the services exist
+    /// with); `delivery`, when given, is an assertion: another policy is an error
+    /// ([`ServiceError::DeliveryAssertion`]). Services that do not exist yet are created with
+    /// `delivery` or [`Delivery::Live`]. iceoryx2 handles SIGINT/SIGTERM for this node: see
+    /// [`Producer::termination_requested`].
+    pub fn open(
+        domain: &Domain,
+        node_name: &str,
+        delivery: Option<Delivery>,
+    ) -> Result<Self, ClientError> {
         let node = domain.node(node_name, SignalHandlingMode::HandleTerminationRequests)?;
-        let imu_service = domain.open::<ImuSample>(&node, Access::Owner(delivery))?;
+        let (imu_service, delivery) = domain.open_input::<ImuSample>(&node, delivery)?;
         let imu = imu_service
             .publisher_builder()
             .backpressure_strategy(delivery.backpressure())
@@ -77,7 +89,7 @@ impl Producer {
             .notifier_builder()
             .create()
             .map_err(|e| ServiceError::port(domain, IMU_SERVICE, "notifier", e))?;
-        let angles_service = domain.open::<AngleObservation>(&node, Access::Owner(delivery))?;
+        let (angles_service, _) = domain.open_input::<AngleObservation>(&node, Some(delivery))?;
         let angles = angles_service
             .publisher_builder()
             .backpressure_strategy(delivery.backpressure())

@@ -41,8 +41,8 @@ impl FromStr for Speed {
 pub struct ReplayOptions {
     /// Name of the producer's iceoryx2 node.
     pub node_name: String,
-    /// Delivery policy; must be the daemon's.
-    pub delivery: Delivery,
+    /// Delivery policy: `None` takes the daemon's; `Some` asserts it (another policy fails).
+    pub delivery: Option<Delivery>,
     /// Pacing.
     pub speed: Speed,
     /// Times the log is sent; the clock continues across loops (shifted by the log's span plus
@@ -57,6 +57,8 @@ pub struct ReplayOptions {
 /// What a replay sent.
 #[derive(Debug, Clone, Copy)]
 pub struct Replayed {
+    /// The delivery policy used (the daemon's).
+    pub delivery: Delivery,
     /// Data samples sent (the end-of-stream marker not included).
     pub samples: u64,
     /// The producer's counters (the marker included).
@@ -74,7 +76,7 @@ pub fn replay(
     rows: &[ImuRow],
     opts: &ReplayOptions,
 ) -> Result<Replayed, ClientError> {
-    let mut p = Producer::new(domain, &opts.node_name, opts.delivery)?;
+    let mut p = Producer::open(domain, &opts.node_name, opts.delivery)?;
     p.wait_for_daemon(opts.wait)?;
     let (first_t_s, loop_shift_s) = match (rows.first(), rows.last()) {
         (Some(first), Some(last)) => {
@@ -114,6 +116,7 @@ pub fn replay(
     p.finish()?;
     let stats = p.stats();
     Ok(Replayed {
+        delivery: p.delivery(),
         samples: stats.imu_sent.saturating_sub(1),
         stats,
         interrupted,

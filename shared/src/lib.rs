@@ -9,6 +9,8 @@
 //! - [`injection`]: synthetic gyro-bias injection (constant, ramp, delayed) used by the
 //!   offline runner and the replay producer.
 //! - [`wire`]: the zero-copy `#[repr(C)]` messages exchanged with the daemon over iceoryx2.
+//! - [`wire_layout`]: the measured layout of the wire types, and the C header and layout JSON
+//!   generated from it for the C and Python clients.
 //! - [`services`]: service names, QoS, the [`services::Domain`] namespace and the functions both
 //!   sides use to open the services.
 
@@ -18,3 +20,4 @@ pub mod injection;
 pub mod services;
 pub mod truth_csv;
 pub mod wire;
+pub mod wire_layout;

@@ -94,6 +94,21 @@ pub enum ServiceError {
         /// Policy asked for.
         requested: Delivery,
     },
+    /// The service exists with another delivery policy than the one this process asserted.
+    #[error(
+        "service {service:?} in domain {domain:?} uses {} delivery, but {} was asked for \
+         (leave --delivery out to take the daemon's policy)", actual.name(), requested.name()
+    )]
+    DeliveryAssertion {
+        /// Service name.
+        service: &'static str,
+        /// Domain.
+        domain: String,
+        /// Policy asked for.
+        requested: Delivery,
+        /// Policy of the existing service.
+        actual: Delivery,
+    },
     /// The service does not exist (yet): the daemon is not running on this domain.
     #[error(
         "service {service:?} does not exist in domain {domain:?} (is `corridor serve --domain {domain}` running?)"
@@ -471,6 +486,50 @@ impl Domain {
                 e => open_err(format!("{e:?}")),
             }),
         }
+    }
+
+    /// Opens the input service of `T` for a producer and returns it with its delivery policy.
+    /// An existing service (the daemon's) is taken with the policy it was created with;
+    /// `requested`, when given, is an assertion: another policy fails with
+    /// [`ServiceError::DeliveryAssertion`]. A missing one is created with `requested` (or the
+    /// default, [`Delivery::Live`]).
+    pub fn open_input<T: Topic>(
+        &self,
+        node: &Node<ipc::Service>,
+        requested: Option<Delivery>,
+    ) -> Result<(PubSub<T>, Delivery), ServiceError> {
+        // Creating can race with the daemon creating it with the other policy: open again.
+        for _ in 0..3 {
+            match self.open::<T>(node, Access::Reader) {
+                Ok(service) => {
+                    let actual = if service.static_config().has_safe_overflow() {
+                        Delivery::Live
+                    } else {
+                        Delivery::Lossless
+                    };
+                    return match requested {
+                        Some(r) if r != actual => Err(ServiceError::DeliveryAssertion {
+                            service: T::SERVICE,
+                            domain: self.name.clone(),
+                            requested: r,
+                            actual,
+                        }),
+                        _ => Ok((service, actual)),
+                    };
+                }
+                Err(ServiceError::NotFound { .. }) => {
+                    let delivery = requested.unwrap_or_default();
+                    match self.open::<T>(node, Access::Owner(delivery)) {
+                        Ok(service) => return Ok((service, delivery)),
+                        Err(ServiceError::DeliveryMismatch { .. }) => continue,
+                        Err(e) => return Err(e),
+                    }
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        self.open::<T>(node, Access::Owner(requested.unwrap_or_default()))
+            .map(|s| (s, requested.unwrap_or_default()))
     }
 
     /// Opens the event service paired with `service` (same name). `create`: open or create

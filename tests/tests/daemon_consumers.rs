@@ -354,7 +354,7 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
     }
     let opts = ReplayOptions {
         node_name: "test-replay".into(),
-        delivery: Delivery::Lossless,
+        delivery: Some(Delivery::Lossless),
         speed: Speed::Max,
         loops: 1,
         injection: BiasInjection::default(),

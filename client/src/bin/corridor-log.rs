@@ -19,7 +19,8 @@ use std::time::Duration;
 #[command(
     name = "corridor-log",
     version,
-    about = "Record the corridor daemon's attitude and bias streams to CSV"
+    about = "Record the corridor daemon's attitude and bias streams to CSV",
+    after_help = "Examples:\n  corridor-log --domain lab --out out/log\n  corridor-log --domain lab --out out/log --idle-timeout-s 1 --wait-s 60"
 )]
 struct Args {
     /// iceoryx2 domain of the daemon.
@@ -36,8 +37,12 @@ struct Args {
     wait_s: f64,
 }
 
-fn main() -> Result<()> {
+fn main() -> std::process::ExitCode {
     corridor_client::init_tracing("warn");
+    corridor_client::exit(run())
+}
+
+fn run() -> Result<()> {
     let a = Args::parse();
     let domain = Domain::new(&a.domain)?;
     let opts = RecordOptions {

@@ -13,7 +13,8 @@ use std::time::Duration;
 #[command(
     name = "corridor-pdr",
     version,
-    about = "Print stride-by-stride positions from the corridor daemon"
+    about = "Print stride-by-stride positions from the corridor daemon",
+    after_help = "Examples:\n  corridor-pdr --domain lab\n  corridor-pdr --domain lab --follow"
 )]
 struct Args {
     /// iceoryx2 domain of the daemon.
@@ -27,8 +28,12 @@ struct Args {
     follow: bool,
 }
 
-fn main() -> Result<()> {
+fn main() -> std::process::ExitCode {
     corridor_client::init_tracing("warn");
+    corridor_client::exit(run())
+}
+
+fn run() -> Result<()> {
     let a = Args::parse();
     let domain = Domain::new(&a.domain)?;
     let tracker = Tracker::open(

@@ -17,7 +17,8 @@ use std::time::Duration;
 #[command(
     name = "corridor-replay",
     version,
-    about = "Replay an IMU CSV log to the corridor daemon"
+    about = "Replay an IMU CSV log to the corridor daemon",
+    after_help = "Examples:\n  corridor-replay --imu tests/data/gdins_exp36_corridor_out_and_back/imu.csv --domain lab --speed max\n  corridor-replay --imu imu.csv --domain lab --speed 2 --loop 3 --inject-gyro-bias 0.001,0.001,-0.005\n  corridor-replay --imu imu.csv --domain lab --delivery lossless   (fails unless the daemon is lossless)"
 )]
 struct Args {
     /// IMU log (CSV: t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2,...).
@@ -32,22 +33,27 @@ struct Args {
     /// iceoryx2 domain of the daemon.
     #[arg(long, default_value = DEFAULT_DOMAIN)]
     domain: String,
-    /// Delivery policy: live or lossless (must match the daemon's).
-    #[arg(long, default_value = "live")]
-    delivery: Delivery,
+    /// Delivery policy, live or lossless: the daemon's when left out; when given, the replay
+    /// fails unless the daemon uses it.
+    #[arg(long)]
+    delivery: Option<Delivery>,
     /// Constant gyro bias to add, X,Y,Z in rad/s.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     inject_gyro_bias: Option<[f64; 3]>,
     /// Start the injection at this sensor time, s.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     inject_after_s: f64,
     /// How long to wait for the daemon, s.
     #[arg(long, default_value_t = 10.0)]
     wait_s: f64,
 }
 
-fn main() -> Result<()> {
+fn main() -> std::process::ExitCode {
     corridor_client::init_tracing("warn");
+    corridor_client::exit(run())
+}
+
+fn run() -> Result<()> {
     let a = Args::parse();
     if a.loops == 0 {
         bail!("--loop 0: nothing to send");
@@ -78,7 +84,7 @@ fn main() -> Result<()> {
         0.0
     };
     println!("imu: {}", a.imu.display());
-    println!("domain: {} (delivery {})", domain.name(), a.delivery.name());
+    println!("domain: {} (delivery {})", domain.name(), r.delivery.name());
     println!(
         "loops: {}{}",
         a.loops,

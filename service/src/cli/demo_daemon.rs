@@ -236,7 +236,7 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
 fn demo_replay(domain: &Domain, log: &ImuLog, injection: &BiasInjection) -> Result<ProducerStats> {
     let opts = ReplayOptions {
         node_name: "corridor-demo-replay".into(),
-        delivery: Delivery::Lossless,
+        delivery: Some(Delivery::Lossless),
         speed: Speed::Max,
         loops: 1,
         injection: *injection,

@@ -6,17 +6,21 @@
 //! - [`run`]: `corridor run`, the offline runner;
 //! - [`eval`]: `corridor eval`, the results table of a suite;
 //! - [`serve`]: `corridor serve`, the daemon;
+//! - [`status`]: `corridor status`, the health of a running daemon;
 //! - [`diagnose`]: `corridor diagnose`, the residual diagnosis;
+//! - [`docs`]: `corridor completions SHELL` and `corridor man`;
 //! - [`demo`]: `corridor demo`, the tour of the bundled recordings, and [`demo_daemon`], its
 //!   section that replays a run through the daemon to a logger and a PDR consumer.
 
 mod demo;
 mod demo_daemon;
 mod diagnose;
+mod docs;
 mod eval;
 mod model;
 mod run;
 mod serve;
+mod status;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -25,28 +29,76 @@ use std::process::ExitCode;
 #[command(
     name = "corridor",
     version,
-    about = "Gyro-bias and attitude estimation for foot-mounted IMUs from map headings"
+    about = "Gyro-bias and attitude estimation for foot-mounted IMUs from map headings",
+    after_help = "Examples:\n  corridor demo\n  corridor run --imu imu.csv --config configs/gdins.toml --out out/run\n  corridor serve --config configs/service.toml --domain lab\n  corridor <COMMAND> --help"
 )]
 struct Cli {
     #[command(subcommand)]
     command: Command,
 }
 
+const RUN_EXAMPLES: &str = "Examples:
+  corridor run --imu tests/data/gdins_exp36_corridor_out_and_back/imu.csv --config configs/gdins.toml --out out/exp36
+  corridor run --imu imu.csv --config configs/gdins.toml --start-heading-deg -90 --mode paper --plots --out out/run
+  corridor run --imu imu.csv --inject-gyro-bias 0.001,-0.001,0.005 --truth ground_truth.csv --out out/injected";
+const EVAL_EXAMPLES: &str = "Examples:
+  corridor eval --suite configs/eval/gdins.toml
+  corridor eval --suite configs/eval/gdins.toml --out out/eval";
+const DEMO_EXAMPLES: &str = "Examples:
+  corridor demo
+  corridor demo --root /path/to/corridor --out /tmp/demo";
+const SERVE_EXAMPLES: &str = "Examples:
+  corridor serve --config configs/service.toml
+  corridor serve --config configs/gdins.toml --domain lab --delivery lossless --checkpoint /var/lib/corridor/bias.bin
+  (then, on the same domain: corridor-replay --imu imu.csv --domain lab; corridor status --domain lab)";
+const DIAGNOSE_EXAMPLES: &str = "Examples:
+  corridor diagnose --imu tests/data/gdins_exp25_multi_corridor/imu.csv --config configs/gdins.toml --out out/diag
+  corridor diagnose --imu imu.csv --truth ground_truth.csv --mode paper --out out/diag";
+
+const STATUS_EXAMPLES: &str = "Examples:
+  corridor status --domain lab
+  corridor status --domain lab --watch --checkpoint /var/lib/corridor/bias.bin
+  corridor status --domain lab --timeout-s 2 || systemctl restart corridor
+Exit code: 0 healthy, 2 no daemon answered within the timeout (or it is shutting down), 1 other errors.";
+
+const COMPLETIONS_EXAMPLES: &str = "Examples:
+  corridor completions bash > ~/.local/share/bash-completion/completions/corridor
+  corridor completions zsh > ~/.zfunc/_corridor
+  corridor completions fish > ~/.config/fish/completions/corridor.fish";
+const MAN_EXAMPLES: &str = "Examples:
+  corridor man > corridor.1 && man ./corridor.1
+  corridor man | gzip > /usr/local/share/man/man1/corridor.1.gz";
+
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run the estimator over a CSV log and write estimates, innovations and a summary.
+    #[command(after_help = RUN_EXAMPLES)]
     Run(Box<run::RunArgs>),
     /// Run a suite of recordings through the baselines and the bias modes; print the table.
+    #[command(after_help = EVAL_EXAMPLES)]
     Eval(eval::EvalArgs),
     /// The demo on the bundled measured recordings: the results table, the residual-diagnosis
     /// loop, one recording with the paper's injected bias (summary and figures), the second
     /// sensor, and the same injected run replayed through the daemon to a logger and a PDR
     /// consumer.
+    #[command(after_help = DEMO_EXAMPLES)]
     Demo(demo::DemoArgs),
     /// Run the estimator as a daemon behind iceoryx2 services until SIGINT/SIGTERM.
+    #[command(after_help = SERVE_EXAMPLES)]
     Serve(serve::ServeArgs),
+    /// The health of the daemon of a domain: rates, counters, losses, latency, bias and its σ,
+    /// convergence (exit code 0 when healthy, 2 when no daemon answers).
+    #[command(after_help = STATUS_EXAMPLES)]
+    Status(status::StatusArgs),
+    /// Print the shell completion script of corridor.
+    #[command(after_help = COMPLETIONS_EXAMPLES)]
+    Completions(docs::CompletionsArgs),
+    /// Print the man page of corridor (roff), every command included.
+    #[command(after_help = MAN_EXAMPLES)]
+    Man,
     /// Diagnose the model on a log: rank the effects its residuals show, add the top one, and
     /// report the error before and after (report.json, report.md, residuals.svg).
+    #[command(after_help = DIAGNOSE_EXAMPLES)]
     Diagnose(diagnose::DiagnoseArgs),
 }
 
@@ -54,20 +106,22 @@ pub fn main() -> ExitCode {
     corridor_client::init_tracing("info");
     let cli = Cli::parse();
     match dispatch(cli) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+        Ok(code) => code,
+        Err(e) => corridor_client::exit(Err(e)),
     }
 }
 
-fn dispatch(cli: Cli) -> anyhow::Result<()> {
+/// Runs the command; its exit code (`status` has its own, the others succeed or fail).
+fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
+    let done = |r: anyhow::Result<()>| r.map(|()| ExitCode::SUCCESS);
     match cli.command {
-        Command::Run(a) => run::run(&a),
-        Command::Demo(a) => demo::demo(&a),
-        Command::Serve(a) => serve::serve(&a),
-        Command::Diagnose(a) => diagnose::diagnose(&a),
-        Command::Eval(a) => eval::eval(a),
+        Command::Run(a) => done(run::run(&a)),
+        Command::Demo(a) => done(demo::demo(&a)),
+        Command::Serve(a) => done(serve::serve(&a)),
+        Command::Diagnose(a) => done(diagnose::diagnose(&a)),
+        Command::Eval(a) => done(eval::eval(a)),
+        Command::Status(a) => status::status(&a),
+        Command::Completions(a) => done(docs::completions(&a)),
+        Command::Man => done(docs::man()),
     }
 }

@@ -15,10 +15,10 @@ pub struct ModelArgs {
     #[arg(long)]
     pub map: Option<PathBuf>,
     /// Walking direction at the start, degrees in the map frame (overrides the config).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub start_heading_deg: Option<f64>,
     /// Orientation of the building's dominant directions, degrees (overrides the config).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub grid_deg: Option<f64>,
     /// Estimation mode: zupt, paper, rotation_aware or eskf (overrides the config).
     #[arg(long)]

@@ -147,6 +147,9 @@ impl EstState {
         let d = self.diagnostics(rx, flags);
         let ok = out.diagnostics.publish(|v, q| v.seq = q, d);
         self.count(ok);
+        // Late readers of the bias and nav streams get their latest value even while idle.
+        out.bias.refresh();
+        out.nav.refresh();
         self.latency_diag.clear();
     }
 

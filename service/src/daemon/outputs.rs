@@ -43,6 +43,13 @@ impl<T: Topic> Out<T> {
         })
     }
 
+    /// Connects subscribers that joined since the last send and hands them the history (the
+    /// latest value), so a late reader of an idle daemon (`corridor status`) gets it too.
+    pub(super) fn refresh(&self) {
+        use iceoryx2::port::update_connections::UpdateConnections;
+        let _ = self.publisher.update_connections();
+    }
+
     /// Publishes `value` with the next `seq`; returns false when nobody received it.
     pub(super) fn publish(&mut self, set_seq: impl FnOnce(&mut T, u64), mut value: T) -> bool {
         set_seq(&mut value, self.seq);

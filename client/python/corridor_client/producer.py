@@ -1,0 +1,188 @@
+"""`Producer`: feeds IMU samples to the daemon (the Python twin of the Rust `Producer`)."""
+
+import csv
+import math
+import time
+from typing import Any, Iterable, Optional, Sequence
+
+import iceoryx2 as iox2
+
+from .services import CorridorError, Domain
+from .wire import FLAG_END_OF_STREAM, AngleObservation, ImuSample
+
+#: How long a lossless send retries a sample that reached no subscriber although one is
+#: connected (its receive side not attached yet), s.
+LOSSLESS_RETRY_S = 2.0
+
+
+class Producer:
+    """Publishes `ImuSample`s (and `AngleObservation`s) to the daemon of a domain.
+
+    The daemon must be running: the producer opens its input services and takes their
+    delivery policy (`live` or `lossless`); `delivery`, when given, is an assertion.
+    `seq` is numbered 0, 1, 2, ... and `sent_ns` stamped with the monotonic clock.
+    """
+
+    def __init__(
+        self,
+        domain: Domain,
+        node_name: str = "corridor-py-producer",
+        delivery: Optional[str] = None,
+        timeout_s: float = 10.0,
+    ) -> None:
+        self.domain = domain
+        self.node = domain.node(node_name)
+        self._imu_service = domain.open_existing(self.node, ImuSample, timeout_s)
+        live = self._imu_service.static_config.has_safe_overflow
+        self.delivery = "live" if live else "lossless"
+        if delivery is not None and delivery != self.delivery:
+            raise CorridorError(
+                f"service {ImuSample.SERVICE!r} in domain {domain.name!r} uses "
+                f"{self.delivery} delivery, but {delivery} was asked for "
+                "(leave delivery out to take the daemon's policy)"
+            )
+        strategy = (
+            iox2.BackpressureStrategy.DiscardData
+            if live
+            else iox2.BackpressureStrategy.RetryUntilDelivered
+        )
+        self._imu = (
+            self._imu_service.publisher_builder()
+            .backpressure_strategy(strategy)
+            .max_loaned_samples(2)
+            .create()
+        )
+        self._imu_notifier = domain.event(self.node, ImuSample.SERVICE).notifier_builder().create()
+        self._angles_service = domain.open_existing(self.node, AngleObservation, timeout_s)
+        self._angles = (
+            self._angles_service.publisher_builder()
+            .backpressure_strategy(strategy)
+            .max_loaned_samples(2)
+            .create()
+        )
+        self._angles_notifier = (
+            domain.event(self.node, AngleObservation.SERVICE).notifier_builder().create()
+        )
+        self.next_seq = 0
+        self.next_angles_seq = 0
+        self.sent = 0
+        self.undelivered = 0
+
+    def wait_for_daemon(self, timeout_s: float = 10.0) -> None:
+        """Waits until the daemon reads the IMU service."""
+        deadline = time.monotonic() + timeout_s
+        while self._imu_service.dynamic_config.number_of_subscribers == 0:
+            if time.monotonic() >= deadline:
+                raise CorridorError(
+                    f"service {ImuSample.SERVICE!r} in domain {self.domain.name!r}: "
+                    f"no subscriber after {timeout_s} s"
+                )
+            time.sleep(0.005)
+        self._imu.update_connections()
+
+    def send(
+        self,
+        t_s: float,
+        gyro_rad_s: Sequence[float],
+        accel_m_s2: Sequence[float],
+        temp_c: float = math.nan,
+    ) -> int:
+        """Sends one sample (sensor time in s, rad/s, m/s², °C); returns the receivers."""
+        s = ImuSample()
+        s.t_s = t_s
+        s.gyro_rad_s[:] = list(gyro_rad_s)
+        s.accel_m_s2[:] = list(accel_m_s2)
+        s.temp_c = temp_c
+        return self.send_sample(s)
+
+    def send_sample(self, s: ImuSample) -> int:
+        """Sends `s` with the next `seq` (and `sent_ns` when 0)."""
+        s.seq = self.next_seq
+        self.next_seq += 1
+        if s.sent_ns == 0:
+            s.sent_ns = time.monotonic_ns()
+        n = int(self._imu.send_copy(s))
+        if n == 0 and self.delivery == "lossless":
+            deadline = time.monotonic() + LOSSLESS_RETRY_S
+            while (
+                n == 0
+                and self._imu_service.dynamic_config.number_of_subscribers > 0
+                and time.monotonic() < deadline
+            ):
+                time.sleep(0.0002)
+                n = int(self._imu.send_copy(s))
+        self.sent += 1
+        if n == 0:
+            self.undelivered += 1
+        self._imu_notifier.notify()
+        return n
+
+    def send_angles(self, obs: AngleObservation) -> int:
+        """Sends an external attitude observation with the next `seq`."""
+        obs.seq = self.next_angles_seq
+        self.next_angles_seq += 1
+        n = int(self._angles.send_copy(obs))
+        self._angles_notifier.notify()
+        return n
+
+    def finish(self) -> int:
+        """Sends the end-of-stream marker: the daemon answers and resets for the next stream."""
+        s = ImuSample()
+        s.t_s = math.nan
+        s.temp_c = math.nan
+        s.flags = FLAG_END_OF_STREAM
+        return self.send_sample(s)
+
+    def close(self) -> None:
+        """Releases the ports and the node."""
+        for port in (self._imu, self._imu_notifier, self._angles, self._angles_notifier):
+            port.delete()
+        self._imu_service = self._angles_service = None
+        self.node = None
+
+    def __enter__(self) -> "Producer":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+def read_imu_csv(path: str) -> Iterable[ImuSample]:
+    """The rows of an IMU log (`t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2[,temp_c]`)
+    as samples; columns are found by name."""
+    with open(path, newline="") as f:
+        rows = csv.reader(f)
+        header = [h.strip() for h in next(rows)]
+        col = {name: i for i, name in enumerate(header)}
+        g = [col["gx_rad_s"], col["gy_rad_s"], col["gz_rad_s"]]
+        a = [col["ax_m_s2"], col["ay_m_s2"], col["az_m_s2"]]
+        t = col["t_s"]
+        temp = col.get("temp_c")
+        for row in rows:
+            if not row:
+                continue
+            s = ImuSample()
+            s.t_s = float(row[t])
+            s.gyro_rad_s[:] = [float(row[i]) for i in g]
+            s.accel_m_s2[:] = [float(row[i]) for i in a]
+            s.temp_c = float(row[temp]) if temp is not None and row[temp] else math.nan
+            yield s
+
+
+def replay_csv(producer: Producer, path: str, speed: float = math.inf) -> int:
+    """Sends a CSV log (`speed` × real time; `math.inf`: as fast as the daemon takes it), then
+    the end-of-stream marker; returns the samples sent."""
+    start = time.monotonic()
+    first_t: Optional[float] = None
+    n = 0
+    for s in read_imu_csv(path):
+        if first_t is None:
+            first_t = s.t_s
+        if math.isfinite(speed):
+            wait = start + (s.t_s - first_t) / speed - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+        producer.send_sample(s)
+        n += 1
+    producer.finish()
+    return n

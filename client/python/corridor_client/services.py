@@ -1,0 +1,104 @@
+"""Domains, QoS and service opening, mirroring shared/src/services.rs.
+
+Every service is opened with the same QoS as the Rust side (iceoryx2 refuses an opener that
+asks for more than the creator gave). Event services of the same name carry the wake-ups.
+"""
+
+import time
+from dataclasses import dataclass
+from typing import Any, Dict, Type
+
+import iceoryx2 as iox2
+
+from . import wire
+
+DEFAULT_DOMAIN = "default"
+MAX_DOMAIN_LEN = 48
+EVENT_MAX_NOTIFIERS = 4
+EVENT_MAX_LISTENERS = 8
+
+
+@dataclass(frozen=True)
+class Qos:
+    """Quality of service of one publish-subscribe service (`Topic::QOS` in Rust)."""
+
+    max_publishers: int
+    max_subscribers: int
+    buffer_size: int
+    history_size: int
+    max_borrowed: int
+
+
+QOS: Dict[Type[wire._Wire], Qos] = {
+    wire.ImuSample: Qos(2, 4, 4096, 0, 2),
+    wire.AngleObservation: Qos(4, 4, 64, 0, 2),
+    wire.AttitudeSample: Qos(1, 8, 4096, 0, 2),
+    wire.BiasSample: Qos(1, 8, 256, 1, 2),
+    wire.NavSample: Qos(1, 8, 256, 1, 2),
+    wire.Diagnostics: Qos(1, 8, 64, 1, 2),
+}
+
+
+class CorridorError(Exception):
+    """A service could not be opened or used; the message names service and domain."""
+
+
+class Domain:
+    """An isolated iceoryx2 namespace (`global.prefix = corridor_<name>_`), as in Rust."""
+
+    def __init__(self, name: str = DEFAULT_DOMAIN) -> None:
+        ok = all(c.isascii() and (c.isalnum() or c in "_-") for c in name)
+        if not name or len(name) > MAX_DOMAIN_LEN or not ok:
+            raise CorridorError(
+                f"domain {name!r}: 1 to {MAX_DOMAIN_LEN} characters of a-z, A-Z, 0-9, '_', '-'"
+            )
+        self.name = name
+        self.config = iox2.config.default()
+        self.config.global_cfg.prefix = iox2.FileName.new(f"corridor_{name}_")
+
+    def node(self, node_name: str) -> Any:
+        """A node in this domain; iceoryx2 handles SIGINT/SIGTERM (see `node.wait`)."""
+        return (
+            iox2.NodeBuilder.new()
+            .name(iox2.NodeName.new(node_name))
+            .config(self.config)
+            .signal_handling_mode(iox2.SignalHandlingMode.HandleTerminationRequests)
+            .create(iox2.ServiceType.Ipc)
+        )
+
+    def _builder(self, node: Any, t: Type[wire._Wire]) -> Any:
+        q = QOS[t]
+        return (
+            node.service_builder(iox2.ServiceName.new(t.SERVICE))
+            .publish_subscribe(t)
+            .max_publishers(q.max_publishers)
+            .max_subscribers(q.max_subscribers)
+            .subscriber_max_buffer_size(q.buffer_size)
+            .history_size(q.history_size)
+            .subscriber_max_borrowed_samples(q.max_borrowed)
+        )
+
+    def open_existing(self, node: Any, t: Type[wire._Wire], timeout_s: float) -> Any:
+        """Opens the service of `t` whatever its delivery policy, waiting up to `timeout_s`
+        for the daemon to create it."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            try:
+                return self._builder(node, t).open()
+            except iox2.PublishSubscribeOpenError as e:
+                if time.monotonic() >= deadline:
+                    raise CorridorError(
+                        f"service {t.SERVICE!r} in domain {self.name!r}: cannot open ({e}); "
+                        f"is `corridor serve --domain {self.name}` running?"
+                    ) from e
+                time.sleep(0.01)
+
+    def event(self, node: Any, service: str) -> Any:
+        """Opens (or creates) the event service paired with `service`."""
+        return (
+            node.service_builder(iox2.ServiceName.new(service))
+            .event()
+            .max_notifiers(EVENT_MAX_NOTIFIERS)
+            .max_listeners(EVENT_MAX_LISTENERS)
+            .open_or_create()
+        )

@@ -1,0 +1,141 @@
+"""The Python client against a real `corridor serve` process (domain `eco_python`): a Python
+producer replays exp36, a Python consumer receives every attitude sample, and the final bias
+equals `corridor run` on the same CSV, bit for bit.
+
+Needs CORRIDOR_BIN (the `corridor` binary) and CORRIDOR_ROOT (the repository); the Rust test
+service/tests/python_client.rs sets both."""
+
+import glob
+import json
+import os
+import subprocess
+import tempfile
+import time
+import unittest
+
+from corridor_client import (
+    AttitudeSample,
+    BiasSample,
+    Consumer,
+    Domain,
+    Producer,
+    read_imu_csv,
+    wire,
+)
+
+DOMAIN = "eco_python"
+
+
+def env(name: str) -> str:
+    value = os.environ.get(name)
+    if not value:
+        raise RuntimeError(f"{name} is not set: run through `cargo test --workspace`")
+    return value
+
+
+def clean_domain(name: str) -> None:
+    prefix = f"corridor_{name}_"
+    for d in ("/dev/shm", "/tmp/iceoryx2", "/tmp/iceoryx2/services"):
+        for p in glob.glob(os.path.join(d, prefix + "*")):
+            try:
+                os.remove(p)
+            except OSError:
+                pass
+
+
+class Daemon(unittest.TestCase):
+    def setUp(self) -> None:
+        self.corridor = env("CORRIDOR_BIN")
+        root = env("CORRIDOR_ROOT")
+        self.imu = os.path.join(root, "tests/data/gdins_exp36_corridor_out_and_back/imu.csv")
+        self.config = os.path.join(root, "configs/gdins.toml")
+        clean_domain(DOMAIN)
+        self.daemon = subprocess.Popen(
+            [self.corridor, "serve", "--domain", DOMAIN, "--delivery", "lossless",
+             "--config", self.config],
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        )
+
+    def tearDown(self) -> None:
+        self.daemon.terminate()
+        self.daemon.wait(timeout=60)
+
+    def offline_final_bias(self) -> list:
+        with tempfile.TemporaryDirectory(prefix="corridor-eco-py-") as out:
+            subprocess.run(
+                [self.corridor, "run", "--imu", self.imu, "--config", self.config,
+                 "--out", out],
+                check=True, stdout=subprocess.DEVNULL,
+            )
+            with open(os.path.join(out, "summary.json")) as f:
+                return json.load(f)["bias_rad_s"]
+
+    def test_python_producer_and_consumer_match_the_offline_run(self) -> None:
+        domain = Domain(DOMAIN)
+        attitude = Consumer(domain, AttitudeSample, "eco-py-attitude", timeout_s=30)
+        bias = Consumer(domain, BiasSample, "eco-py-bias", timeout_s=30)
+        producer = Producer(domain, "eco-py-producer", timeout_s=30)
+        self.assertEqual(producer.delivery, "lossless")  # taken from the daemon
+        producer.wait_for_daemon(30)
+
+        attitudes = []
+        biases = []
+
+        def drain() -> None:
+            for c, into in ((attitude, attitudes), (bias, biases)):
+                while (v := c.try_recv()) is not None:
+                    into.append(v)
+
+        samples = list(read_imu_csv(self.imu))
+        for s in samples:
+            self.assertEqual(producer.send_sample(s), 1)
+            drain()
+        producer.finish()
+        deadline = time.monotonic() + 60
+        while not (attitudes and attitudes[-1].flags & wire.FLAG_END_OF_STREAM):
+            self.assertLess(time.monotonic(), deadline, "no end-of-stream attitude")
+            v = attitude.recv(1.0)
+            if v is not None:
+                attitudes.append(v)
+        while not (biases and biases[-1].flags & wire.FLAG_END_OF_STREAM):
+            self.assertLess(time.monotonic(), deadline, "no end-of-stream bias")
+            v = bias.recv(1.0)
+            if v is not None:
+                biases.append(v)
+
+        # Every attitude: one per sample, then the marker; no seq gap.
+        self.assertEqual(len(attitudes), len(samples) + 1)
+        self.assertEqual([a.seq for a in attitudes], list(range(len(samples) + 1)))
+        self.assertEqual(attitude.missed, 0)
+        self.assertEqual(
+            [a.imu_seq for a in attitudes[:-1]], list(range(len(samples)))
+        )
+        # The final bias equals the offline run's, bit for bit.
+        final = list(biases[-1].gyro_bias_rad_s)
+        self.assertEqual(final, self.offline_final_bias())
+        self.assertEqual(list(attitudes[-2].gyro_bias_rad_s), final)
+        for c in (producer, attitude, bias):
+            c.close()
+
+    def test_the_driver_example_feeds_the_daemon(self) -> None:
+        domain = Domain(DOMAIN)
+        diagnostics = Consumer(domain, wire.Diagnostics, "eco-py-diag", timeout_s=30)
+        example = os.path.join(env("CORRIDOR_ROOT"), "client/python/examples/driver_producer.py")
+        out = subprocess.run(
+            ["python3", example, "--domain", DOMAIN, "--rate-hz", "400", "--seconds", "0.5"],
+            check=True, capture_output=True, text=True, timeout=120,
+        )
+        self.assertIn("sent 201 messages, 0 undelivered", out.stdout)
+        deadline = time.monotonic() + 60
+        received = 0
+        while received < 201:
+            self.assertLess(time.monotonic(), deadline, f"daemon received {received}")
+            d = diagnostics.recv(1.0)
+            if d is not None:
+                received = d.received
+        self.assertEqual(received, 201)
+        diagnostics.close()
+
+
+if __name__ == "__main__":
+    unittest.main()

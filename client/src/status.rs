@@ -1,0 +1,203 @@
+//! [`StatusReader`]: the health of a running daemon, read from what it publishes
+//! ([`Diagnostics`] every diagnostics period, the latest [`BiasSample`]), for `corridor status`.
+
+use crate::{ClientError, Subscriber};
+use corridor_shared::wire::{BiasSample, Diagnostics, FLAG_END_OF_STREAM, FLAG_SHUTDOWN, phase};
+use std::fmt::Write as _;
+use std::time::{Duration, Instant};
+
+/// One view of the daemon's health.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Status {
+    /// The latest diagnostics.
+    pub diagnostics: Diagnostics,
+    /// The diagnostics before them, when two were seen (for rates).
+    pub previous: Option<Diagnostics>,
+    /// The latest bias estimate, when the daemon has published one.
+    pub bias: Option<BiasSample>,
+    /// Diagnostics this reader missed (seq gaps).
+    pub missed: u64,
+}
+
+impl Status {
+    /// True when the daemon answered and is not shutting down.
+    pub fn healthy(&self) -> bool {
+        self.diagnostics.flags & FLAG_SHUTDOWN == 0
+    }
+
+    /// Accepted samples per second of sensor time between the last two diagnostics; `None`
+    /// when idle (sensor time did not advance) or with one diagnostics only.
+    pub fn sample_rate_hz(&self) -> Option<f64> {
+        let p = self.previous?;
+        let d = &self.diagnostics;
+        let dt_s = d.t_s - p.t_s;
+        (dt_s.is_finite() && dt_s > 0.0).then(|| (d.accepted - p.accepted) as f64 / dt_s)
+    }
+
+    /// The status as a screen of text.
+    pub fn render(&self, domain: &str) -> String {
+        let d = &self.diagnostics;
+        let mut s = String::new();
+        let state = if d.flags & FLAG_SHUTDOWN != 0 {
+            "shutting down"
+        } else if d.flags & FLAG_END_OF_STREAM != 0 {
+            "running, stream ended"
+        } else {
+            "running"
+        };
+        let _ = writeln!(s, "corridor daemon, domain {domain:?}: {state}");
+        let _ = writeln!(
+            s,
+            "phase:            {} (sensor time {})",
+            phase::name(d.phase),
+            fmt_opt(d.t_s, 3, " s")
+        );
+        let rate = self
+            .sample_rate_hz()
+            .map_or("idle".to_owned(), |r| format!("{r:.1} Hz (sensor clock)"));
+        let _ = writeln!(s, "IMU rate:         {rate}");
+        let _ = writeln!(
+            s,
+            "samples:          received {}, accepted {}, stances {}, heading updates {} (last NIS {})",
+            d.received,
+            d.accepted,
+            d.stances,
+            d.heading_used,
+            fmt_opt(d.last_nis, 2, "")
+        );
+        let _ = writeln!(
+            s,
+            "losses:           seq gaps {}, overflow drops {}, undelivered outputs {}",
+            d.seq_gaps, d.dropped_overflow, d.undelivered
+        );
+        let _ = writeln!(
+            s,
+            "rejected:         non-finite {}, time not increasing {}, duplicate seq {}, late {}",
+            d.rejected_non_finite, d.rejected_time, d.rejected_duplicate_seq, d.late
+        );
+        let _ = writeln!(s, "producer changes: {}", d.producer_changes);
+        let _ = writeln!(
+            s,
+            "latency:          p50 {}, p99 {}",
+            fmt_opt(d.latency_p50_s * 1e6, 0, " µs"),
+            fmt_opt(d.latency_p99_s * 1e6, 0, " µs")
+        );
+        match &self.bias {
+            Some(b) => {
+                let v = |x: [f64; 3]| {
+                    format!("[{:+.6}, {:+.6}, {:+.6}]", x[0], x[1], x[2]).replace("NaN", "nan")
+                };
+                let _ = writeln!(
+                    s,
+                    "gyro bias:        {} rad/s at t = {}",
+                    v(b.gyro_bias_rad_s),
+                    fmt_opt(b.t_s, 3, " s")
+                );
+                let _ = writeln!(s, "bias σ:           {} rad/s", v(b.gyro_bias_sd_rad_s));
+                let _ = writeln!(
+                    s,
+                    "converged:        {}",
+                    if b.converged != 0 { "yes" } else { "no" }
+                );
+            }
+            None => {
+                let _ = writeln!(s, "gyro bias:        none published yet");
+            }
+        }
+        let _ = writeln!(s, "diagnostics seq:  {}", d.seq);
+        s
+    }
+}
+
+/// The `last checkpoint:` line for the daemon's checkpoint file (`daemon.checkpoint_path` or
+/// `corridor serve --checkpoint`): the daemon does not publish its checkpoints, but it writes
+/// the file atomically at each save, so its modification time is the last save.
+pub fn checkpoint_line(path: &std::path::Path) -> String {
+    let saved = std::fs::metadata(path).and_then(|m| Ok((m.len(), m.modified()?)));
+    match saved {
+        Ok((bytes, modified)) => {
+            let age_s = modified.elapsed().map_or(0.0, |d| d.as_secs_f64());
+            format!(
+                "last checkpoint:  {} ({bytes} B), saved {age_s:.1} s ago\n",
+                path.display()
+            )
+        }
+        Err(e) => format!("last checkpoint:  {} not readable ({e})\n", path.display()),
+    }
+}
+
+fn fmt_opt(x: f64, decimals: usize, unit: &str) -> String {
+    if x.is_finite() {
+        format!("{x:.decimals$}{unit}")
+    } else {
+        "n/a".to_owned()
+    }
+}
+
+/// Reads the daemon's diagnostics and bias streams of a domain.
+#[derive(Debug)]
+pub struct StatusReader {
+    diagnostics: Subscriber<Diagnostics>,
+    bias: Subscriber<BiasSample>,
+    last: Option<Diagnostics>,
+    latest_bias: Option<BiasSample>,
+}
+
+impl StatusReader {
+    /// Opens the two streams, waiting up to `timeout` for the daemon's services.
+    pub fn open(domain: &crate::Domain, timeout: Duration) -> Result<Self, ClientError> {
+        let diagnostics = Subscriber::open(domain, "corridor-status", timeout)?;
+        let bias = Subscriber::open(domain, "corridor-status-bias", timeout)?;
+        Ok(Self {
+            diagnostics,
+            bias,
+            last: None,
+            latest_bias: None,
+        })
+    }
+
+    /// The next status: waits up to `timeout` for the next diagnostics (the daemon publishes
+    /// them every diagnostics period, idle or not). `want_rate`: on the first call, also wait
+    /// (within `timeout`) for a second diagnostics, so the rates can be computed. `Ok(None)`
+    /// when the daemon did not answer in time.
+    pub fn next(
+        &mut self,
+        timeout: Duration,
+        want_rate: bool,
+    ) -> Result<Option<Status>, ClientError> {
+        let deadline = Instant::now() + timeout;
+        let left = || deadline.saturating_duration_since(Instant::now());
+        let Some(mut d) = self.diagnostics.recv_timeout(left())? else {
+            return Ok(None);
+        };
+        // Take everything already queued: the newest diagnostics wins.
+        let mut previous = self.last;
+        while let Some(next) = self.diagnostics.try_recv()? {
+            previous = Some(d);
+            d = next;
+        }
+        if previous.is_none()
+            && want_rate
+            && let Some(next) = self.diagnostics.recv_timeout(left())?
+        {
+            previous = Some(d);
+            d = next;
+        }
+        // The daemon hands a late reader the latest bias right after its diagnostics.
+        if self.latest_bias.is_none() {
+            self.latest_bias = self
+                .bias
+                .recv_timeout(left().min(Duration::from_millis(200)))?;
+        }
+        while let Some(b) = self.bias.try_recv()? {
+            self.latest_bias = Some(b);
+        }
+        self.last = Some(d);
+        Ok(Some(Status {
+            diagnostics: d,
+            previous,
+            bias: self.latest_bias,
+            missed: self.diagnostics.missed(),
+        }))
+    }
+}

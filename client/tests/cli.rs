@@ -1,0 +1,157 @@
+//! CLI habits of the client tools (issue 12): the producer takes the daemon's delivery policy
+//! (`--delivery` is an assertion), errors are printed once without a backtrace, every tool's
+//! `--help` has examples.
+
+use corridor_shared::services::{Access, Delivery, Domain};
+use corridor_shared::wire::ImuSample;
+use iceoryx2::prelude::*;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The first `rows` rows of the exp36 log, in a fresh file.
+fn short_log(tag: &str, rows: usize) -> PathBuf {
+    let src = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let text = std::fs::read_to_string(src).unwrap();
+    let head: Vec<&str> = text.lines().take(rows + 1).collect();
+    let path = std::env::temp_dir().join(format!("corridor-eco-{tag}-{}.csv", std::process::id()));
+    std::fs::write(&path, head.join("\n") + "\n").unwrap();
+    path
+}
+
+fn tool(exe: &str, args: &[&str]) -> Output {
+    Command::new(exe)
+        .args(args)
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .expect("tool runs")
+}
+
+/// Stands in for a daemon that chose `lossless`: creates the IMU service with that policy and
+/// reads it while `corridor-replay` (given `extra` flags) runs. Returns the replay's output and
+/// the samples received.
+fn replay_into_lossless_daemon(domain_name: &str, extra: &[&str]) -> (Output, usize) {
+    // One stand-in daemon per process at a time (see the README's known issue with two).
+    static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let domain = Domain::new(domain_name).unwrap();
+    let node = domain
+        .node("eco-fake-daemon", SignalHandlingMode::Disabled)
+        .unwrap();
+    let service = domain
+        .open::<ImuSample>(&node, Access::Owner(Delivery::Lossless))
+        .unwrap();
+    let _event = domain
+        .open_event(&node, corridor_shared::services::IMU_SERVICE, true)
+        .unwrap();
+    let sub = service
+        .subscriber_builder()
+        .buffer_size(IMU_BUFFER)
+        .create()
+        .unwrap();
+    let log = short_log(domain_name, 200);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_corridor-replay"))
+        .args(["--imu", log.to_str().unwrap(), "--domain", domain_name])
+        .args(["--speed", "max", "--wait-s", "30"])
+        .args(extra)
+        .env("RUST_BACKTRACE", "1")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut received = 0;
+    let start = Instant::now();
+    loop {
+        while let Some(s) = sub.receive().unwrap() {
+            drop(s);
+            received += 1;
+        }
+        if child.try_wait().unwrap().is_some() {
+            while sub.receive().unwrap().is_some() {
+                received += 1;
+            }
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(120), "replay hangs");
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    let out = child.wait_with_output().unwrap();
+    let _ = std::fs::remove_file(log);
+    (out, received)
+}
+
+const IMU_BUFFER: usize = {
+    use corridor_shared::services::Topic;
+    ImuSample::QOS.buffer_size
+};
+
+#[test]
+fn replay_takes_the_daemons_delivery_policy() {
+    let (out, received) = replay_into_lossless_daemon("eco_delivery_adopt", &[]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("delivery lossless"), "{stdout}");
+    assert_eq!(
+        received,
+        200 + 1,
+        "every sample and the end-of-stream marker"
+    );
+}
+
+#[test]
+fn replay_delivery_flag_is_an_assertion() {
+    let (out, received) =
+        replay_into_lossless_daemon("eco_delivery_assert", &["--delivery", "live"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("uses lossless delivery") && err.contains("live was asked for"),
+        "{err}"
+    );
+    assert_eq!(received, 0);
+}
+
+#[test]
+fn replay_error_is_printed_once_without_a_backtrace() {
+    let o = tool(
+        env!("CARGO_BIN_EXE_corridor-replay"),
+        &["--imu", "/nonexistent/imu.csv"],
+    );
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.starts_with("error: "), "{err}");
+    assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
+    assert!(!err.contains("backtrace"), "{err}");
+}
+
+#[test]
+fn every_tool_help_has_examples() {
+    for (exe, name) in [
+        (env!("CARGO_BIN_EXE_corridor-replay"), "corridor-replay"),
+        (env!("CARGO_BIN_EXE_corridor-log"), "corridor-log"),
+        (env!("CARGO_BIN_EXE_corridor-pdr"), "corridor-pdr"),
+    ] {
+        let o = tool(exe, &["--help"]);
+        assert!(o.status.success(), "{name}");
+        let help = String::from_utf8_lossy(&o.stdout);
+        let examples = help
+            .split_once("Examples:")
+            .unwrap_or_else(|| panic!("{name}: no examples in\n{help}"))
+            .1;
+        assert!(
+            examples.contains(&format!("{name} --")),
+            "{name}: {examples}"
+        );
+    }
+}

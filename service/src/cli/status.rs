@@ -1,0 +1,74 @@
+//! `corridor status`: the health of the daemon of a domain, one screen, with an exit code for
+//! scripts ([`corridor_client::status`]).
+
+use anyhow::Result;
+use clap::Args;
+use corridor_client::status::StatusReader;
+use corridor_client::{ClientError, Domain};
+use corridor_shared::services::DEFAULT_DOMAIN;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+/// Exit code when no daemon answered in time or it is shutting down.
+pub(super) const EXIT_NO_DAEMON: u8 = 2;
+
+#[derive(Args, Debug)]
+pub(super) struct StatusArgs {
+    /// iceoryx2 domain of the daemon.
+    #[arg(long, default_value = DEFAULT_DOMAIN)]
+    pub(super) domain: String,
+    /// How long to wait for the daemon's answer, s (it publishes diagnostics every
+    /// `daemon.diagnostics_period_s`, 1 s by default).
+    #[arg(long, default_value_t = 5.0)]
+    pub(super) timeout_s: f64,
+    /// The daemon's checkpoint file (`daemon.checkpoint_path`, or its `--checkpoint`): shows
+    /// when it was last saved (the daemon does not publish its checkpoints).
+    #[arg(long)]
+    pub(super) checkpoint: Option<PathBuf>,
+    /// Refresh at every diagnostics until Ctrl-C (or until the daemon stops answering).
+    #[arg(long)]
+    pub(super) watch: bool,
+}
+
+/// Prints the status; exit code 0 when healthy, [`EXIT_NO_DAEMON`] when no daemon answers.
+pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
+    let domain = Domain::new(&a.domain)?;
+    let timeout = Duration::from_secs_f64(a.timeout_s.max(0.0));
+    let no_daemon = |why: &str| {
+        eprintln!(
+            "error: no corridor daemon answers on domain {:?}: {why}",
+            domain.name()
+        );
+        Ok(ExitCode::from(EXIT_NO_DAEMON))
+    };
+    let mut reader = match StatusReader::open(&domain, timeout) {
+        Ok(r) => r,
+        Err(e @ ClientError::NoPeer { .. }) => return no_daemon(&e.to_string()),
+        Err(e) => return Err(e.into()),
+    };
+    let mut first = true;
+    loop {
+        let status = match reader.next(timeout, first) {
+            Ok(Some(s)) => s,
+            Ok(None) => return no_daemon(&format!("no diagnostics within {timeout:?}")),
+            Err(ClientError::Interrupted) => return Ok(ExitCode::SUCCESS),
+            Err(e) => return Err(e.into()),
+        };
+        first = false;
+        if a.watch {
+            // Clear the screen and go home, then draw.
+            print!("\x1b[2J\x1b[H");
+        }
+        print!("{}", status.render(domain.name()));
+        if let Some(p) = &a.checkpoint {
+            print!("{}", corridor_client::status::checkpoint_line(p));
+        }
+        if !status.healthy() {
+            return no_daemon("the daemon is shutting down");
+        }
+        if !a.watch {
+            return Ok(ExitCode::SUCCESS);
+        }
+    }
+}

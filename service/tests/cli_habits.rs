@@ -1,0 +1,137 @@
+//! CLI habits of the `corridor` binary (issue 12): negative numbers are values, errors are
+//! printed once and without a backtrace, every command's `--help` has examples.
+
+mod common;
+
+use common::TempDir;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn corridor(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_corridor"))
+        .args(args)
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .expect("corridor runs")
+}
+
+#[test]
+fn negative_headings_are_values_not_flags() {
+    let out = TempDir::new(&format!("eco-negative-{}", std::process::id()));
+    let imu = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let o = corridor(&[
+        "run",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--config",
+        root().join("configs/gdins.toml").to_str().unwrap(),
+        "--start-heading-deg",
+        "-90",
+        "--grid-deg",
+        "-45",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["samples"], 14_000);
+}
+
+#[test]
+fn a_user_error_is_printed_once_without_a_backtrace() {
+    let out = TempDir::new(&format!("eco-error-{}", std::process::id()));
+    let o = corridor(&[
+        "run",
+        "--imu",
+        "/nonexistent/imu.csv",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.starts_with("error: /nonexistent/imu.csv"), "{err}");
+    assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
+    assert!(!err.contains("backtrace"), "{err}");
+}
+
+#[test]
+fn every_command_help_has_examples() {
+    for cmd in [
+        &[][..],
+        &["run"],
+        &["eval"],
+        &["demo"],
+        &["serve"],
+        &["diagnose"],
+        &["status"],
+        &["completions"],
+        &["man"],
+    ] {
+        let mut args = cmd.to_vec();
+        args.push("--help");
+        let o = corridor(&args);
+        assert!(o.status.success(), "{args:?}");
+        let help = String::from_utf8_lossy(&o.stdout);
+        let examples = help
+            .split_once("Examples:")
+            .unwrap_or_else(|| panic!("{args:?}: no examples in\n{help}"))
+            .1;
+        let invocation = format!("corridor {}", cmd.first().unwrap_or(&""));
+        assert!(
+            examples.contains(invocation.trim_end()),
+            "{args:?}: {examples}"
+        );
+    }
+}
+
+#[test]
+fn the_command_list_describes_each_command() {
+    let o = corridor(&["--help"]);
+    let help = String::from_utf8_lossy(&o.stdout);
+    for (cmd, about) in [
+        ("diagnose", "Diagnose the model on a log"),
+        ("status", "The health of the daemon of a domain"),
+        ("completions", "shell completion"),
+        ("man", "man page"),
+    ] {
+        let line = help
+            .lines()
+            .find(|l| l.trim_start().starts_with(&format!("{cmd} ")))
+            .unwrap_or_else(|| panic!("{cmd} not listed in\n{help}"));
+        assert!(line.contains(about), "{line}");
+    }
+}
+
+#[test]
+fn completions_and_man_page_cover_every_command() {
+    let bash = corridor(&["completions", "bash"]);
+    assert!(bash.status.success());
+    let bash = String::from_utf8_lossy(&bash.stdout);
+    assert!(bash.contains("_corridor()"), "{bash}");
+    for cmd in ["run", "serve", "status", "diagnose"] {
+        assert!(bash.contains(&format!("corridor__subcmd__{cmd}")), "{cmd}");
+    }
+    assert!(bash.contains("--start-heading-deg"));
+    let zsh = corridor(&["completions", "zsh"]);
+    assert!(
+        zsh.status.success() && String::from_utf8_lossy(&zsh.stdout).contains("#compdef corridor")
+    );
+
+    let man = corridor(&["man"]);
+    assert!(man.status.success());
+    let man = String::from_utf8_lossy(&man.stdout);
+    assert!(
+        man.starts_with(".ie") || man.contains(".TH corridor"),
+        "{man}"
+    );
+    for section in ["CORRIDOR RUN", "CORRIDOR SERVE", "CORRIDOR STATUS"] {
+        assert!(man.contains(section), "missing {section}");
+    }
+    assert!(man.contains("start\\-heading\\-deg"), "flags are listed");
+}

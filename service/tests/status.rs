@@ -1,0 +1,180 @@
+//! `corridor status` against a real `corridor serve` process (domains `eco_status*`): the
+//! one-screen health after a replayed stream, `--watch` refreshing, and exit code 2 when no
+//! daemon answers.
+
+use corridor_client::{Delivery, Domain, Producer};
+use corridor_service::runner::{heading_aid, run_log};
+use corridor_shared::config::ConfigFile;
+use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::wire::ImuSample;
+use std::io::BufRead;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::Duration;
+
+const WAIT: Duration = Duration::from_secs(60);
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn corridor() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_corridor"))
+}
+
+fn status(domain: &str, timeout_s: &str, extra: &[&str]) -> Output {
+    corridor()
+        .args(["status", "--domain", domain, "--timeout-s", timeout_s])
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+/// A lossless daemon on `domain` checkpointing into `checkpoint`, killed when dropped.
+struct Daemon(Child);
+
+impl Daemon {
+    fn start(domain: &str, checkpoint: &Path) -> Self {
+        for dir in ["/dev/shm", "/tmp/iceoryx2", "/tmp/iceoryx2/services"] {
+            for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+                if e.file_name()
+                    .to_string_lossy()
+                    .starts_with(&format!("corridor_{domain}_"))
+                {
+                    let _ = std::fs::remove_file(e.path());
+                }
+            }
+        }
+        let config = root().join("configs/gdins.toml");
+        Daemon(
+            corridor()
+                .args(["serve", "--delivery", "lossless", "--domain", domain])
+                .arg("--config")
+                .arg(config)
+                .arg("--checkpoint")
+                .arg(checkpoint)
+                .stdin(Stdio::null())
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap(),
+        )
+    }
+}
+
+/// SIGTERM (a clean exit removes the shared memory), SIGKILL if that takes over a minute.
+fn terminate(child: &mut Child) {
+    let pid = i32::try_from(child.id()).unwrap();
+    // SAFETY: plain kill(2) on our own child.
+    unsafe { libc::kill(pid, libc::SIGTERM) };
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > WAIT {
+            let _ = child.kill();
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+impl Drop for Daemon {
+    fn drop(&mut self) {
+        terminate(&mut self.0);
+    }
+}
+
+#[test]
+fn status_shows_the_daemons_counters_and_final_bias() {
+    let name = "eco_status";
+    let checkpoint =
+        std::env::temp_dir().join(format!("corridor-eco-status-{}.bin", std::process::id()));
+    let _ = std::fs::remove_file(&checkpoint);
+    let _daemon = Daemon::start(name, &checkpoint);
+    let log = read_imu_csv(
+        &root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
+        &ImuCsvOptions::default(),
+    )
+    .unwrap();
+    let domain = Domain::new(name).unwrap();
+    let mut p = Producer::new(&domain, "eco-status-producer", Delivery::Lossless).unwrap();
+    p.wait_for_daemon(WAIT).unwrap();
+    for r in &log.rows {
+        assert_eq!(p.send_imu(ImuSample::from(r)).unwrap(), 1);
+    }
+    p.finish().unwrap();
+
+    let cfg = ConfigFile::read(&root().join("configs/gdins.toml"))
+        .unwrap()
+        .validate()
+        .unwrap();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let mut last = None;
+    run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+        last = Some(*e)
+    });
+    let b = last.unwrap().gyro_bias_rad_s;
+    let bias = format!("[{:+.6}, {:+.6}, {:+.6}]", b[0], b[1], b[2]);
+
+    // The daemon counts the marker (and saves its checkpoint) a moment after it was sent;
+    // poll until it has.
+    let mut screen = String::new();
+    for _ in 0..30 {
+        let o = status(name, "20", &["--checkpoint", checkpoint.to_str().unwrap()]);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        screen = String::from_utf8_lossy(&o.stdout).into_owned();
+        if screen.contains("received 14001") && screen.contains("s ago") {
+            break;
+        }
+    }
+    for want in [
+        "domain \"eco_status\": running",
+        "received 14001, accepted 14000",
+        "seq gaps 0, overflow drops 0",
+        "latency:",
+        &format!("gyro bias:        {bias} rad/s"),
+        "bias σ:",
+        "converged:",
+        &format!("last checkpoint:  {}", checkpoint.display()),
+        "s ago",
+    ] {
+        assert!(screen.contains(want), "missing {want:?} in\n{screen}");
+    }
+
+    // --watch redraws at every diagnostics.
+    let mut watch = corridor()
+        .args(["status", "--watch", "--domain", name])
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let out = watch.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(out).lines() {
+            let Ok(line) = line else { break };
+            if line.starts_with("diagnostics seq:") && tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let first = rx.recv_timeout(WAIT).expect("a first screen");
+    let second = rx.recv_timeout(WAIT).expect("a refreshed screen");
+    assert_ne!(first, second);
+    terminate(&mut watch);
+    let _ = std::fs::remove_file(&checkpoint);
+}
+
+#[test]
+fn status_exits_2_when_no_daemon_answers() {
+    let o = status("eco_status_nobody", "0.5", &[]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("no corridor daemon answers on domain \"eco_status_nobody\""),
+        "{err}"
+    );
+}
