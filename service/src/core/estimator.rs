@@ -18,6 +18,7 @@ use super::bias_change::BiasChangeDetector;
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::eskf::{Eskf, EskfNoise, ExtensionEstimates, Extensions, Innovation};
 use super::heading::{HeadingAid, Rejection, StraightWalk};
+use super::plausibility::Plausibility;
 use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rot_z, tilt_from_specific_force, wrap_pi, yaw,
 };
@@ -49,7 +50,7 @@ pub enum SampleError {
         /// Its value.
         value: f64,
     },
-    /// The time does not increase.
+    /// The time does not increase (by more than `sensor.min_dt_s`).
     #[error("sample at t = {t_s} s does not follow the previous one at {prev_t_s} s")]
     TimeNotIncreasing {
         /// Sample time.
@@ -57,6 +58,43 @@ pub enum SampleError {
         /// The previous accepted time.
         prev_t_s: f64,
     },
+    /// A magnitude beyond what the sensor can output (`sensor.max_gyro_rad_s`,
+    /// `sensor.max_accel_m_s2`).
+    #[error("sample at t = {t_s} s: {field} = {value:e} is beyond the plausible {limit}")]
+    Implausible {
+        /// Sample time.
+        t_s: f64,
+        /// Which magnitude.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// The time jumps forward by more than `sensor.max_dt_s` and no later sample confirmed it.
+    #[error(
+        "sample at t = {t_s} s jumps from the previous one at {prev_t_s} s by more than {max_dt_s} s"
+    )]
+    TimeJump {
+        /// Sample time.
+        t_s: f64,
+        /// The previous accepted time.
+        prev_t_s: f64,
+        /// The bound.
+        max_dt_s: f64,
+    },
+}
+
+impl SampleError {
+    /// Stable snake_case name of the reason, for counters and summaries.
+    pub fn reason(&self) -> &'static str {
+        match self {
+            SampleError::NonFinite { .. } => "non_finite",
+            SampleError::TimeNotIncreasing { .. } => "time_not_increasing",
+            SampleError::Implausible { .. } => "implausible",
+            SampleError::TimeJump { .. } => "time_jump",
+        }
+    }
 }
 
 /// A saved bias state: gyro bias and its covariance, sensor axes.
@@ -121,6 +159,12 @@ pub struct Counters {
     pub rejected_non_finite: u64,
     /// Samples refused because time did not increase.
     pub rejected_time: u64,
+    /// Samples refused because a magnitude was beyond what the sensor can output.
+    pub rejected_implausible: u64,
+    /// Samples refused because their time jumped beyond `sensor.max_dt_s` unconfirmed.
+    pub rejected_time_jump: u64,
+    /// Accepted samples with an axis at the rail of its range (probably clipped).
+    pub clipped_samples: u64,
     /// Steps longer than `estimator.max_dt_s` (integrated over their real length).
     pub gaps: u64,
     /// Stances since alignment.
@@ -173,6 +217,8 @@ pub struct Estimate {
     pub gyro_bias_sd_rad_s: [f64; 3],
     /// Stance flag.
     pub stance: bool,
+    /// An axis of this sample is at the rail of its range (probably clipped).
+    pub clipped: bool,
     /// Zero-velocity detector statistic.
     pub detector_statistic: f64,
     /// Bias σ below the configured bound on every axis (and tracking).
@@ -200,6 +246,7 @@ impl Default for Estimate {
             gyro_bias_rad_s: [0.0; 3],
             gyro_bias_sd_rad_s: [f64::NAN; 3],
             stance: false,
+            clipped: false,
             detector_statistic: f64::NAN,
             converged: false,
             zupt: None,
@@ -323,6 +370,7 @@ pub struct Estimator {
     detector: StanceDetector,
     phase: Phase,
     counters: Counters,
+    plausibility: Plausibility,
     last: Option<(f64, Vector3<f64>, Vector3<f64>)>,
     rest: RestSums,
     eskf: Option<Eskf>,
@@ -360,6 +408,7 @@ impl Estimator {
             aid,
             phase: Phase::Aligning,
             counters: Counters::default(),
+            plausibility: Plausibility::new(cfg.sensor),
             last: None,
             rest: RestSums::new(cfg.alignment.rest_tail_s),
             eskf: None,
@@ -424,26 +473,28 @@ impl Estimator {
     pub fn step(&mut self, s: &ImuInput) -> Result<&Estimate, SampleError> {
         let w = Vector3::from(s.gyro_rad_s);
         let f = Vector3::from(s.accel_m_s2);
-        if let Err(e) = check_finite(s) {
-            self.counters.rejected_non_finite += 1;
-            return Err(e);
-        }
+        let clipped = match self.plausibility.check(s) {
+            Ok(clipped) => clipped,
+            Err(e) => {
+                let c = &mut self.counters;
+                *match e {
+                    SampleError::NonFinite { .. } => &mut c.rejected_non_finite,
+                    SampleError::TimeNotIncreasing { .. } => &mut c.rejected_time,
+                    SampleError::Implausible { .. } => &mut c.rejected_implausible,
+                    SampleError::TimeJump { .. } => &mut c.rejected_time_jump,
+                } += 1;
+                return Err(e);
+            }
+        };
         let prev = self.last;
-        if let Some((t_prev, _, _)) = prev
-            && s.t_s <= t_prev
-        {
-            self.counters.rejected_time += 1;
-            return Err(SampleError::TimeNotIncreasing {
-                t_s: s.t_s,
-                prev_t_s: t_prev,
-            });
-        }
         self.counters.samples += 1;
+        self.counters.clipped_samples += u64::from(clipped);
         self.last = Some((s.t_s, w, f));
         let decision = self.detector.push(s.t_s, &w, &f);
         let out = &mut self.out;
         out.t_s = s.t_s;
         out.stance = decision.stance;
+        out.clipped = clipped;
         out.detector_statistic = decision.statistic;
         out.zupt = None;
         out.heading = None;
@@ -999,26 +1050,6 @@ pub fn association_weight(r_rad: f64, s_rad2: f64, prior: f64, spacing_rad: f64)
         / (2.0 * std::f64::consts::PI * s_rad2).sqrt();
     let other = (1.0 - prior) / spacing_rad;
     aligned / (aligned + other)
-}
-
-fn check_finite(s: &ImuInput) -> Result<(), SampleError> {
-    let fields = [
-        ("t_s", s.t_s),
-        ("gx_rad_s", s.gyro_rad_s[0]),
-        ("gy_rad_s", s.gyro_rad_s[1]),
-        ("gz_rad_s", s.gyro_rad_s[2]),
-        ("ax_m_s2", s.accel_m_s2[0]),
-        ("ay_m_s2", s.accel_m_s2[1]),
-        ("az_m_s2", s.accel_m_s2[2]),
-    ];
-    match fields.iter().find(|(_, v)| !v.is_finite()) {
-        Some(&(field, value)) => Err(SampleError::NonFinite {
-            t_s: s.t_s,
-            field,
-            value,
-        }),
-        None => Ok(()),
-    }
 }
 
 #[cfg(test)]

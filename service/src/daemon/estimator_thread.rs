@@ -16,6 +16,9 @@ use iceoryx2::prelude::*;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
+/// Refused samples per stream that are logged as warnings (the rest at debug level; all counted).
+const REFUSED_WARNINGS_PER_STREAM: u64 = 10;
+
 /// Cumulative counters at the previous health line.
 #[derive(Debug, Clone, Copy)]
 struct HealthMark {
@@ -196,8 +199,18 @@ impl EstState {
         let e = match self.est.step(&input) {
             Ok(e) => *e,
             Err(err) => {
-                // Counted by the estimator, published in Diagnostics.
-                tracing::debug!(seq = s.seq, "sample refused: {err}");
+                // Counted by the estimator (Diagnostics and the health line); the first few of
+                // each stream are named with their sequence number.
+                let c = self.est.counters();
+                let refused = c.rejected_non_finite
+                    + c.rejected_time
+                    + c.rejected_implausible
+                    + c.rejected_time_jump;
+                if refused <= REFUSED_WARNINGS_PER_STREAM {
+                    tracing::warn!(seq = s.seq, reason = err.reason(), "sample refused: {err}");
+                } else {
+                    tracing::debug!(seq = s.seq, reason = err.reason(), "sample refused: {err}");
+                }
                 return;
             }
         };
@@ -281,6 +294,9 @@ impl EstState {
         p.samples += c.samples;
         p.rejected_non_finite += c.rejected_non_finite;
         p.rejected_time += c.rejected_time;
+        p.rejected_implausible += c.rejected_implausible;
+        p.rejected_time_jump += c.rejected_time_jump;
+        p.clipped_samples += c.clipped_samples;
         p.stances += c.stances;
         p.heading_used += c.heading_used;
         self.est = self.new_estimator(cfg);
@@ -329,14 +345,22 @@ impl EstState {
     fn log_health(&mut self, rx: &RxCounters) {
         let now = Instant::now();
         let d = self.diagnostics(rx, 0);
-        let rejected = d.rejected_non_finite + d.rejected_time + d.rejected_duplicate_seq + d.late;
+        let c = self.est.counters();
+        let rejected = d.rejected_non_finite
+            + d.rejected_time
+            + d.rejected_duplicate_seq
+            + d.late
+            + self.previous.rejected_implausible
+            + c.rejected_implausible
+            + self.previous.rejected_time_jump
+            + c.rejected_time_jump;
         let h = self.health;
         let secs = now.duration_since(h.at).as_secs_f64().max(1e-9);
         let rate = (d.received - h.received) as f64 / secs;
         tracing::info!(
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
-             σ {} rad/s, converged {}, phase {}",
+             σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
             d.seq_gaps,
@@ -351,6 +375,9 @@ impl EstState {
             Vec3Fmt(self.last.gyro_bias_sd_rad_s),
             if self.last.converged { "yes" } else { "no" },
             self.est.phase().name(),
+            self.previous.rejected_implausible + self.est.counters().rejected_implausible,
+            self.previous.rejected_time_jump + self.est.counters().rejected_time_jump,
+            self.previous.clipped_samples + self.est.counters().clipped_samples,
         );
         self.latency_health.clear();
         self.health = HealthMark {
