@@ -127,6 +127,14 @@ pub fn run_log(
         };
         match est.step(&input) {
             Ok(e) => {
+                if let Some(fault) = e.health_fault {
+                    tracing::warn!(
+                        "{}:{}: estimator state failed the health check ({}); last good state restored",
+                        log.path.display(),
+                        row.line,
+                        fault.name()
+                    );
+                }
                 trace.t_s.push(e.t_s);
                 trace.xy_m.push([e.p_m[0], e.p_m[1]]);
                 trace.bias_rad_s.push(e.gyro_bias_rad_s);
@@ -242,6 +250,8 @@ pub struct Summary {
     pub samples_refused: Vec<String>,
     /// Accepted samples with an axis at the rail of its range (probably clipped).
     pub clipped_samples: u64,
+    /// Updates that failed the estimator's health check (the last good state was restored).
+    pub health_restores: u64,
     /// Footprint evaluation (first-leg alignment), when truth was given.
     pub eval: Option<EvalReport>,
 }
@@ -300,6 +310,7 @@ pub fn summarize(
         ]),
         samples_refused: outcome.refused.clone(),
         clipped_samples: c.clipped_samples,
+        health_restores: c.health_restores,
         eval,
     }
 }

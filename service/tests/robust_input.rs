@@ -89,3 +89,67 @@ fn an_absurd_time_in_a_stream_does_not_become_the_time_base() {
         "{e:?}"
     );
 }
+
+#[test]
+fn a_state_broken_by_a_sample_the_limits_let_through_falls_back_to_the_last_good_state() {
+    // Limits so wide that the plausibility check lets 1e30 through: the health check after the
+    // update is what must catch it (before: positions of 1e26 m, or a NaN state with
+    // `converged = 1`, and a garbage bias saved in the daemon's checkpoint).
+    let (log, mut cfg) = exp36();
+    cfg.sensor = corridor_shared::sensor::SensorFile {
+        max_accel_m_s2: Some(1e301),
+        max_gyro_rad_s: Some(1e301),
+        ..Default::default()
+    }
+    .validate()
+    .unwrap();
+    let (xy_clean, bias_clean, _) = run(&log, &cfg);
+    // (Not 1e30: the stance detector's running window sums would lose every small value for
+    // the next 4096 samples; the plausibility check is what keeps such values out of them.)
+    for value in [1e4, 1e6] {
+        let mut bad = log.clone();
+        bad.rows[5000].accel_m_s2[2] = value;
+        bad.rows[9000].accel_m_s2[0] = -value;
+        let aid = heading_aid(&cfg, None).unwrap();
+        let mut faults = 0;
+        let mut worst_speed: f64 = 0.0;
+        let out = run_log(&bad, &cfg, &aid, &BiasInjection::default(), |_, e| {
+            faults += usize::from(e.health_fault.is_some());
+            let v = e.v_m_s;
+            worst_speed = worst_speed.max((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt());
+            assert!(
+                e.p_m
+                    .iter()
+                    .chain(&e.gyro_bias_rad_s)
+                    .all(|x| x.is_finite())
+            );
+        });
+        let c = out.counters;
+        assert_eq!(c.rejected_implausible, 0);
+        assert!(
+            c.health_restores >= 2 && faults as u64 == c.health_restores,
+            "{c:?}"
+        );
+        assert!(worst_speed <= cfg.max_speed_m_s.get(), "{worst_speed}");
+        let n = out.trace.t_s.len();
+        let (xy, bias) = (out.trace.xy_m[n - 1], out.trace.bias_rad_s[n - 1]);
+        // The failed update is undone: as if the sample had been refused.
+        assert!(
+            close(xy, xy_clean, 0.5),
+            "{value}: {xy:?} vs clean {xy_clean:?}"
+        );
+        for k in 0..3 {
+            assert!(
+                (bias[k] - bias_clean[k]).abs() < 5e-4,
+                "{bias:?} vs {bias_clean:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_clean_recording_never_fails_the_health_check() {
+    let (log, cfg) = exp36();
+    let (_, _, c) = run(&log, &cfg);
+    assert_eq!(c.health_restores, 0);
+}

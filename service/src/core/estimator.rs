@@ -18,6 +18,7 @@ use super::bias_change::BiasChangeDetector;
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::eskf::{Eskf, EskfNoise, ExtensionEstimates, Extensions, Innovation};
 use super::heading::{HeadingAid, Rejection, StraightWalk};
+use super::health::{self, HealthFault, HealthLimits, LastGood};
 use super::plausibility::Plausibility;
 use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rot_z, tilt_from_specific_force, wrap_pi, yaw,
@@ -106,9 +107,10 @@ pub struct WarmStart {
     pub gyro_bias_cov: [[f64; 3]; 3],
 }
 
-/// A warm-start state that is not finite, symmetric and positive definite.
+/// A warm-start state that is not finite, within `sensor.max_gyro_bias_rad_s`, symmetric and
+/// positive definite.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("warm-start state rejected (bias {:?}, covariance {:?}): must be finite, symmetric and positive definite", .state.gyro_bias_rad_s, .state.gyro_bias_cov)]
+#[error("warm-start state rejected (bias {:?}, covariance {:?}): must be finite, within sensor.max_gyro_bias_rad_s, symmetric and positive definite", .state.gyro_bias_rad_s, .state.gyro_bias_cov)]
 pub struct WarmStartError {
     /// The rejected state.
     pub state: WarmStart,
@@ -165,6 +167,9 @@ pub struct Counters {
     pub rejected_time_jump: u64,
     /// Accepted samples with an axis at the rail of its range (probably clipped).
     pub clipped_samples: u64,
+    /// Updates after which the state failed the health check and the last good state (of the
+    /// last healthy stance) was restored.
+    pub health_restores: u64,
     /// Steps longer than `estimator.max_dt_s` (integrated over their real length).
     pub gaps: u64,
     /// Stances since alignment.
@@ -219,6 +224,9 @@ pub struct Estimate {
     pub stance: bool,
     /// An axis of this sample is at the rail of its range (probably clipped).
     pub clipped: bool,
+    /// Set when the state failed the health check on this sample and the last good state was
+    /// restored (the estimate shows the restored state).
+    pub health_fault: Option<HealthFault>,
     /// Zero-velocity detector statistic.
     pub detector_statistic: f64,
     /// Bias σ below the configured bound on every axis (and tracking).
@@ -247,6 +255,7 @@ impl Default for Estimate {
             gyro_bias_sd_rad_s: [f64::NAN; 3],
             stance: false,
             clipped: false,
+            health_fault: None,
             detector_statistic: f64::NAN,
             converged: false,
             zupt: None,
@@ -345,6 +354,9 @@ impl RestSums {
     }
 }
 
+/// Failed health checks in a row that undo the update; beyond, the stance copy is restored.
+const MAX_UNDONE_UPDATES: u32 = 3;
+
 /// The bias filter of the `paper` and `rotation_aware` modes.
 #[derive(Debug, Clone)]
 enum BiasFilter {
@@ -375,6 +387,12 @@ pub struct Estimator {
     rest: RestSums,
     eskf: Option<Eskf>,
     bias: BiasFilter,
+    /// Filter and bias filter at the last healthy stance (or at alignment).
+    good: LastGood<(Eskf, BiasFilter)>,
+    good_saved_this_stance: bool,
+    /// Filter and bias filter before the current update (undone when it fails the check).
+    before: LastGood<(Eskf, BiasFilter)>,
+    consecutive_faults: u32,
     /// Tilt of the sensor on the flat foot: `R_y(pitch)·R_x(roll)` of the initial rest.
     tilt0: UnitQuaternion<f64>,
     /// Sensor yaw minus foot heading.
@@ -413,6 +431,10 @@ impl Estimator {
             rest: RestSums::new(cfg.alignment.rest_tail_s),
             eskf: None,
             bias: BiasFilter::InEskf,
+            good: LastGood::default(),
+            good_saved_this_stance: false,
+            before: LastGood::default(),
+            consecutive_faults: 0,
             tilt0: UnitQuaternion::identity(),
             mount_yaw_rad: 0.0,
             mount_sum: (0.0, 0.0, 0),
@@ -495,6 +517,7 @@ impl Estimator {
         out.t_s = s.t_s;
         out.stance = decision.stance;
         out.clipped = clipped;
+        out.health_fault = None;
         out.detector_statistic = decision.statistic;
         out.zupt = None;
         out.heading = None;
@@ -506,9 +529,17 @@ impl Estimator {
                 return Ok(&self.out);
             }
         }
+        if self.good.get().is_none()
+            && let Some(e) = &self.eskf
+        {
+            self.good.save(&(e.clone(), self.bias.clone()));
+        }
         let Some((t_prev, w_prev, f_prev)) = prev else {
             return Ok(&self.out);
         };
+        if let Some(e) = &self.eskf {
+            self.before.save(&(e.clone(), self.bias.clone()));
+        }
         let dt = s.t_s - t_prev;
         if dt > self.cfg.max_dt_s.get() {
             self.counters.gaps += 1;
@@ -524,8 +555,57 @@ impl Estimator {
             decision.stance,
             decision.stance_age_s,
         );
+        if self.guard_health(decision.stance) {
+            // The update was undone: the next step integrates from the previous sample.
+            self.last = prev;
+        }
         self.fill_output();
         Ok(&self.out)
+    }
+
+    /// The health check after an update; `true` when it failed. The first
+    /// [`MAX_UNDONE_UPDATES`] failures in a row undo the update (the state before it was
+    /// healthy, and unlike the stance copy it holds the foot's rotation since the stance);
+    /// further ones restore the state of the last healthy stance. Keeps a copy of the state at
+    /// the first sample of each healthy stance.
+    fn guard_health(&mut self, stance: bool) -> bool {
+        let (bias, _) = self.bias_sensor();
+        let limits = HealthLimits {
+            max_speed_m_s: self.cfg.max_speed_m_s.get(),
+            max_gyro_bias_rad_s: self.cfg.sensor.max_gyro_bias_rad_s(),
+        };
+        let Some(eskf) = self.eskf.as_mut() else {
+            return false;
+        };
+        let failed = match health::check(eskf, &bias, &limits) {
+            Ok(()) => {
+                self.consecutive_faults = 0;
+                if stance && !self.good_saved_this_stance {
+                    self.good.save(&(eskf.clone(), self.bias.clone()));
+                    self.good_saved_this_stance = true;
+                }
+                false
+            }
+            Err(fault) => {
+                self.consecutive_faults += 1;
+                let slot = if self.consecutive_faults <= MAX_UNDONE_UPDATES {
+                    &self.before
+                } else {
+                    &self.good
+                };
+                if let Some((e, b)) = slot.get() {
+                    eskf.clone_from(e);
+                    self.bias.clone_from(b);
+                }
+                self.counters.health_restores += 1;
+                self.out.health_fault = Some(fault);
+                true
+            }
+        };
+        if !stance {
+            self.good_saved_this_stance = false;
+        }
+        failed
     }
 
     fn align_step(&mut self, t_s: f64, w: &Vector3<f64>, f: &Vector3<f64>, stance: bool) {
@@ -649,7 +729,8 @@ impl Estimator {
     /// accelerometer, and the map frame from the first stride, because the foot may have moved
     /// while the estimator was down.
     pub fn set_warm_start(&mut self, ws: WarmStart) -> Result<(), WarmStartError> {
-        let finite = ws.gyro_bias_rad_s.iter().all(|v| v.is_finite())
+        let bound = self.cfg.sensor.max_gyro_bias_rad_s();
+        let finite = ws.gyro_bias_rad_s.iter().all(|v| v.abs() <= bound)
             && ws.gyro_bias_cov.iter().flatten().all(|v| v.is_finite());
         let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
         let symmetric = (p - p.transpose()).abs().max() <= 1e-12 * p.abs().max().max(1e-300);

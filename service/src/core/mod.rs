@@ -6,6 +6,7 @@
 //! - [`bias_kf`]: the paper's 3-state bias filter and its observers.
 //! - [`bias_change`]: CUSUM detection of a gyro-bias change after start-up.
 //! - [`heading`]: heading sources (grid, corridor map), association, straight-walk test.
+//! - [`health`]: the health check after every update and the last good state.
 //! - [`plausibility`]: which samples may enter the filter (sensor limits, time rule).
 //! - [`estimator`]: the per-sample pipeline that ties them together.
 
@@ -14,6 +15,7 @@ pub mod bias_kf;
 pub mod eskf;
 pub mod estimator;
 pub mod heading;
+pub mod health;
 pub mod plausibility;
 pub mod rotation;
 pub mod stance;

@@ -214,6 +214,13 @@ impl EstState {
                 return;
             }
         };
+        if let Some(fault) = e.health_fault {
+            tracing::warn!(
+                seq = s.seq,
+                "estimator state failed the health check ({}); last good state restored",
+                fault.name()
+            );
+        }
         self.last = e;
         self.last_imu_seq = s.seq;
         let ok = out
@@ -297,6 +304,7 @@ impl EstState {
         p.rejected_implausible += c.rejected_implausible;
         p.rejected_time_jump += c.rejected_time_jump;
         p.clipped_samples += c.clipped_samples;
+        p.health_restores += c.health_restores;
         p.stances += c.stances;
         p.heading_used += c.heading_used;
         self.est = self.new_estimator(cfg);
@@ -360,7 +368,7 @@ impl EstState {
         tracing::info!(
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
-             σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}",
+             σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, health restores {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
             d.seq_gaps,
@@ -378,6 +386,7 @@ impl EstState {
             self.previous.rejected_implausible + self.est.counters().rejected_implausible,
             self.previous.rejected_time_jump + self.est.counters().rejected_time_jump,
             self.previous.clipped_samples + self.est.counters().clipped_samples,
+            self.previous.health_restores + self.est.counters().health_restores,
         );
         self.latency_health.clear();
         self.health = HealthMark {
