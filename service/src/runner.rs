@@ -127,6 +127,13 @@ pub fn run_log(
         };
         match est.step(&input) {
             Ok(e) => {
+                if let Some(gap_s) = e.gap_s {
+                    tracing::warn!(
+                        "{}:{}: gap of {gap_s:.3} s in the data; a new segment starts here",
+                        log.path.display(),
+                        row.line
+                    );
+                }
                 if let Some(fault) = e.health_fault {
                     tracing::warn!(
                         "{}:{}: estimator state failed the health check ({}); last good state restored",

@@ -170,7 +170,8 @@ pub struct Counters {
     /// Updates after which the state failed the health check and the last good state (of the
     /// last healthy stance) was restored.
     pub health_restores: u64,
-    /// Steps longer than `estimator.max_dt_s` (integrated over their real length).
+    /// Steps longer than `estimator.max_dt_s`: each starts a new segment (nothing integrated over
+    /// the gap, velocity and attitude covariance widened).
     pub gaps: u64,
     /// Stances since alignment.
     pub stances: u64,
@@ -224,6 +225,9 @@ pub struct Estimate {
     pub stance: bool,
     /// An axis of this sample is at the rail of its range (probably clipped).
     pub clipped: bool,
+    /// Length of the gap before this sample, s, when the step was longer than
+    /// `estimator.max_dt_s` (a new segment starts here).
+    pub gap_s: Option<f64>,
     /// Set when the state failed the health check on this sample and the last good state was
     /// restored (the estimate shows the restored state).
     pub health_fault: Option<HealthFault>,
@@ -256,6 +260,7 @@ impl Default for Estimate {
             stance: false,
             clipped: false,
             health_fault: None,
+            gap_s: None,
             detector_statistic: f64::NAN,
             converged: false,
             zupt: None,
@@ -518,6 +523,7 @@ impl Estimator {
         out.stance = decision.stance;
         out.clipped = clipped;
         out.health_fault = None;
+        out.gap_s = None;
         out.detector_statistic = decision.statistic;
         out.zupt = None;
         out.heading = None;
@@ -542,7 +548,20 @@ impl Estimator {
         }
         let dt = s.t_s - t_prev;
         if dt > self.cfg.max_dt_s.get() {
+            // A new segment. Extrapolating two samples over the gap is meaningless (a 10 s gap
+            // once gave a vertical velocity of −286 m/s), so nothing is integrated over it. The
+            // velocity is kept (the best guess for a short gap; the next ZUPT settles it) but its
+            // variance grows by the largest plausible speed, so that ZUPT moves nothing else; the
+            // attitude variance grows by the gyro noise over the gap. A reset to zero would be
+            // wrong when the gap falls in a swing and the data go on with the same stride.
             self.counters.gaps += 1;
+            self.out.gap_s = Some(dt);
+            let v_max = self.cfg.max_speed_m_s.get();
+            if let Some(e) = self.eskf.as_mut() {
+                e.widen_after_gap(dt, v_max * v_max);
+            }
+            self.fill_output();
+            return Ok(&self.out);
         }
         let w_avg = (w + w_prev) * 0.5;
         let f_avg = (f + f_prev) * 0.5;

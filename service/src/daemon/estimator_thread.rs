@@ -214,6 +214,12 @@ impl EstState {
                 return;
             }
         };
+        if let Some(gap_s) = e.gap_s {
+            tracing::warn!(
+                seq = s.seq,
+                "gap of {gap_s:.3} s in the IMU stream; a new segment starts here"
+            );
+        }
         if let Some(fault) = e.health_fault {
             tracing::warn!(
                 seq = s.seq,
@@ -305,6 +311,7 @@ impl EstState {
         p.rejected_time_jump += c.rejected_time_jump;
         p.clipped_samples += c.clipped_samples;
         p.health_restores += c.health_restores;
+        p.gaps += c.gaps;
         p.stances += c.stances;
         p.heading_used += c.heading_used;
         self.est = self.new_estimator(cfg);
@@ -368,7 +375,7 @@ impl EstState {
         tracing::info!(
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
-             σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, health restores {}",
+             σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, health restores {}, time gaps {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
             d.seq_gaps,
@@ -387,6 +394,7 @@ impl EstState {
             self.previous.rejected_time_jump + self.est.counters().rejected_time_jump,
             self.previous.clipped_samples + self.est.counters().clipped_samples,
             self.previous.health_restores + self.est.counters().health_restores,
+            self.previous.gaps + self.est.counters().gaps,
         );
         self.latency_health.clear();
         self.health = HealthMark {
