@@ -267,6 +267,9 @@ pub struct DaemonFile {
     pub checkpoint_path: Option<PathBuf>,
     /// Period of checkpoints while running, s of wall-clock time (default 30.0).
     pub checkpoint_period_s: Option<f64>,
+    /// Longest a lossless publish waits on one consumer's full buffer, s (default 1.0); beyond
+    /// it the consumer counts as stalled and loses (counted) what its buffer cannot take.
+    pub stall_timeout_s: Option<f64>,
 }
 
 /// `[estimator]` section.
@@ -452,6 +455,8 @@ pub struct DaemonSettings {
     pub checkpoint_path: Option<PathBuf>,
     /// Checkpoint period.
     pub checkpoint_period_s: Positive,
+    /// Stall bound of lossless publishing.
+    pub stall_timeout_s: Positive,
 }
 
 /// Validated `[alignment]`.
@@ -656,6 +661,10 @@ impl ConfigFile {
             checkpoint_period_s: Positive::new(
                 "daemon.checkpoint_period_s",
                 dm.checkpoint_period_s.unwrap_or(30.0),
+            )?,
+            stall_timeout_s: Positive::new(
+                "daemon.stall_timeout_s",
+                dm.stall_timeout_s.unwrap_or(1.0),
             )?,
         };
         let md = &self.model;

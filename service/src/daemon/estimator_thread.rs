@@ -502,6 +502,12 @@ pub(super) fn estimator_thread(
         warm_started_from: st.warm_started_from,
         checkpoints_saved: st.checkpoints_saved,
         warnings: st.warnings,
+        stalls: [
+            out.attitude.stall.counts(),
+            out.bias.stall.counts(),
+            out.nav.stall.counts(),
+            out.diagnostics.stall.counts(),
+        ],
     })
 }
 
