@@ -375,7 +375,8 @@ impl EstState {
         tracing::info!(
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
-             σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, health restores {}, time gaps {}",
+             σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
+             health restores {}, time gaps {}, IMU head missing {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
             d.seq_gaps,
@@ -395,6 +396,7 @@ impl EstState {
             self.previous.clipped_samples + self.est.counters().clipped_samples,
             self.previous.health_restores + self.est.counters().health_restores,
             self.previous.gaps + self.est.counters().gaps,
+            rx.head_missing.load(Ordering::Relaxed),
         );
         self.latency_health.clear();
         self.health = HealthMark {
@@ -508,6 +510,7 @@ pub(super) fn estimator_thread(
             out.nav.stall.counts(),
             out.diagnostics.stall.counts(),
         ],
+        head_missing: counters.head_missing.load(Ordering::Relaxed),
     })
 }
 

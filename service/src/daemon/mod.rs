@@ -179,6 +179,10 @@ pub struct DaemonReport {
     /// Consumers that stalled an output for longer than [`DaemonConfig::stall_timeout`], and the
     /// samples they lost, per output: attitude, bias, nav, diagnostics.
     pub stalls: [stall::StallCounts; 4],
+    /// IMU samples of a producer's numbering before the first one this daemon received from it
+    /// (sent before it started, taken by an earlier daemon, or overwritten in its input buffer
+    /// before its first read); the gaps after that are in `diagnostics.seq_gaps`.
+    pub head_missing: u64,
 }
 
 /// A daemon failure.
