@@ -33,7 +33,8 @@ pub struct RecordOptions {
 /// Why a recording stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RecordStop {
-    /// The end-of-stream attitude and bias messages arrived.
+    /// The end-of-stream attitude and bias messages arrived (and the recorder does not follow
+    /// new streams).
     EndOfStream,
     /// Nothing arrived for [`RecordOptions::idle_timeout`].
     IdleTimeout,
@@ -60,6 +61,8 @@ impl RecordStop {
 pub struct Recorded {
     /// Why it stopped.
     pub stopped: RecordStop,
+    /// Streams whose end-of-stream attitude and bias messages both arrived.
+    pub streams_ended: u64,
     /// Rows written to `attitude.csv`.
     pub attitude_rows: u64,
     /// Rows written to `bias.csv`.
@@ -87,6 +90,7 @@ pub struct Recorder {
     bias_w: BufWriter<File>,
     opts: RecordOptions,
     got: Recorded,
+    follow: bool,
 }
 
 fn create(path: &Path) -> Result<BufWriter<File>, ClientError> {
@@ -125,8 +129,10 @@ impl Recorder {
             att_w,
             bias_w,
             opts: opts.clone(),
+            follow: false,
             got: Recorded {
                 stopped: RecordStop::EndOfStream,
+                streams_ended: 0,
                 attitude_rows: 0,
                 bias_rows: 0,
                 attitude_missed: 0,
@@ -139,7 +145,17 @@ impl Recorder {
         })
     }
 
-    /// Records until the end-of-stream attitude and bias messages, the idle timeout,
+    /// Goes on after an end of stream: the rows of the next stream (a restarted producer, the
+    /// next loop of a replay) are appended to the same files, and only the idle timeout,
+    /// SIGINT/SIGTERM or `abort` stop the recording. Before, a producer restart ended the
+    /// recording and the new stream went unlogged.
+    pub fn following_new_streams(mut self) -> Self {
+        self.follow = true;
+        self
+    }
+
+    /// Records until the end-of-stream attitude and bias messages (unless
+    /// [`Recorder::following_new_streams`]), the idle timeout,
     /// SIGINT/SIGTERM or `abort`; flushes the files and says what it got. The end-of-stream
     /// messages are not written as rows.
     pub fn run(mut self, abort: &AtomicBool) -> Result<Recorded, ClientError> {
@@ -149,7 +165,11 @@ impl Recorder {
         let mut last_rx = Instant::now();
         let stopped = loop {
             if attitude_done && bias_done {
-                break RecordStop::EndOfStream;
+                self.got.streams_ended += 1;
+                if !self.follow {
+                    break RecordStop::EndOfStream;
+                }
+                (attitude_done, bias_done) = (false, false);
             }
             if abort.load(Ordering::Relaxed) {
                 break RecordStop::Aborted;

@@ -24,6 +24,11 @@ use std::path::{Path, PathBuf};
 pub const MAGIC: [u8; 8] = *b"CORRCKPT";
 /// Format version written by [`save`]; [`load`] accepts only this one.
 pub const FORMAT_VERSION: u32 = 2;
+/// Largest gyro bias (per axis, rad/s) and bias σ a checkpoint may hold: 1 rad/s (57 °/s) is far
+/// beyond any gyro's bias, so a file beyond it holds garbage even when it decodes (a NaN-poisoned
+/// or diverged state once saved 1.30 rad/s). The estimator's own bound
+/// (`sensor.max_gyro_bias_rad_s`) is checked again at warm start.
+pub const MAX_BIAS_RAD_S: f64 = 1.0;
 /// Largest payload accepted by the decoder, bytes.
 const MAX_PAYLOAD: usize = 1 << 16;
 
@@ -116,8 +121,9 @@ fn display_opt(p: &Option<PathBuf>) -> String {
 }
 
 impl Checkpoint {
-    /// Checks that every value is finite, the covariance symmetric positive definite (what
-    /// `Estimator::set_warm_start` accepts) and the quaternion of unit norm (within 1e-6).
+    /// Checks that every value is finite, the bias and its σ within [`MAX_BIAS_RAD_S`], the
+    /// covariance symmetric positive definite (what `Estimator::set_warm_start` accepts) and the
+    /// quaternion of unit norm (within 1e-6).
     pub fn validate(&self) -> Result<(), String> {
         let finite = self.t_s.is_finite()
             && self.gyro_bias_rad_s.iter().all(|v| v.is_finite())
@@ -125,6 +131,21 @@ impl Checkpoint {
             && self.nav_from_body_wxyz.iter().all(|v| v.is_finite());
         if !finite {
             return Err("a value is not finite".into());
+        }
+        if let Some(b) = self
+            .gyro_bias_rad_s
+            .iter()
+            .find(|b| b.abs() > MAX_BIAS_RAD_S)
+        {
+            return Err(format!(
+                "gyro bias {b} rad/s is beyond the physical bound {MAX_BIAS_RAD_S} rad/s"
+            ));
+        }
+        if (0..3).any(|i| self.gyro_bias_cov[i][i] > MAX_BIAS_RAD_S * MAX_BIAS_RAD_S) {
+            return Err(format!(
+                "bias variance {:?} is beyond the physical bound {MAX_BIAS_RAD_S}² (rad/s)²",
+                self.gyro_bias_cov
+            ));
         }
         let p = nalgebra::Matrix3::from_fn(|i, j| self.gyro_bias_cov[i][j]);
         let scale = p.abs().max().max(1e-300);
@@ -435,6 +456,28 @@ mod tests {
             decode(&encode(&bad)),
             Err(DecodeError::Corrupt(_))
         ));
+    }
+
+    #[test]
+    fn a_valid_file_with_an_absurd_bias_is_refused_like_a_corrupt_one() {
+        // Before: a well-formed file holding 1000 rad/s was accepted as it was.
+        let d = tmp_dir("absurd");
+        let p = d.join("bias.ckpt");
+        let mut bad = sample();
+        bad.gyro_bias_rad_s[1] = 1000.0;
+        std::fs::write(&p, encode(&bad)).unwrap();
+        let e = load(&p).unwrap_err();
+        assert!(matches!(e, CheckpointError::Corrupt { .. }), "{e}");
+        assert!(e.is_cold_start());
+        assert!(e.to_string().contains("1000"), "{e}");
+        assert!(!p.exists() && d.join("bias.ckpt.corrupt-1").exists());
+        // And it is never written.
+        assert!(matches!(
+            save(&p, &bad),
+            Err(CheckpointError::Invalid { .. })
+        ));
+        assert!(!p.exists());
+        std::fs::remove_dir_all(&d).unwrap();
     }
 
     #[test]

@@ -94,7 +94,8 @@ pub struct RunOutcome {
     pub converged_at_s: Option<f64>,
     /// Sensor yaw on the foot, once calibrated.
     pub mount_yaw_rad: Option<f64>,
-    /// Samples refused by the estimator, with their reasons.
+    /// The first [`MAX_REFUSED_EXAMPLES`] samples refused by the estimator, with file, line and
+    /// reason (the counts are in `counters`).
     pub refused: Vec<String>,
     /// Final extension estimates and the scale factors' σ (see `Estimator::extensions`).
     pub extensions: Option<(
@@ -102,6 +103,9 @@ pub struct RunOutcome {
         Option<nalgebra::Vector3<f64>>,
     )>,
 }
+
+/// How many refused samples `summary.json` names.
+pub const MAX_REFUSED_EXAMPLES: usize = 10;
 
 /// Runs `log` through a new estimator; `sink` sees every estimate with the input it came from.
 pub fn run_log(
@@ -124,6 +128,21 @@ pub fn run_log(
         };
         match est.step(&input) {
             Ok(e) => {
+                if let Some(gap_s) = e.gap_s {
+                    tracing::warn!(
+                        "{}:{}: gap of {gap_s:.3} s in the data; a new segment starts here",
+                        log.path.display(),
+                        row.line
+                    );
+                }
+                if let Some(fault) = e.health_fault {
+                    tracing::warn!(
+                        "{}:{}: estimator state failed the health check ({}); last good state restored",
+                        log.path.display(),
+                        row.line,
+                        fault.name()
+                    );
+                }
                 trace.t_s.push(e.t_s);
                 trace.xy_m.push([e.p_m[0], e.p_m[1]]);
                 trace.bias_rad_s.push(e.gyro_bias_rad_s);
@@ -131,7 +150,10 @@ pub fn run_log(
                 trace.converged.push(e.converged);
                 sink(&input, e);
             }
-            Err(err) => refused.push(format!("{}:{}: {err}", log.path.display(), row.line)),
+            Err(err) if refused.len() < MAX_REFUSED_EXAMPLES => {
+                refused.push(format!("{}:{}: {err}", log.path.display(), row.line));
+            }
+            Err(_) => {}
         }
     }
     RunOutcome {
@@ -228,8 +250,14 @@ pub struct Summary {
     pub input_rows_rejected: BTreeMap<&'static str, u64>,
     /// The first few rejected rows, with file, line, column and value.
     pub input_rows_rejected_examples: Vec<String>,
-    /// Samples refused by the estimator (after the reader), with reasons.
+    /// Samples refused by the estimator (after the reader), by reason.
+    pub samples_refused_counts: BTreeMap<&'static str, u64>,
+    /// The first samples refused by the estimator, with file, line and reason.
     pub samples_refused: Vec<String>,
+    /// Accepted samples with an axis at the rail of its range (probably clipped).
+    pub clipped_samples: u64,
+    /// Updates that failed the estimator's health check (the last good state was restored).
+    pub health_restores: u64,
     /// Footprint evaluation (first-leg alignment), when truth was given.
     pub eval: Option<EvalReport>,
 }
@@ -279,7 +307,15 @@ pub fn summarize(
             .take(10)
             .map(|r: &RejectedRow| r.located(&log.path).to_string())
             .collect(),
+        samples_refused_counts: BTreeMap::from([
+            ("non_finite", c.rejected_non_finite),
+            ("time_not_increasing", c.rejected_time),
+            ("implausible", c.rejected_implausible),
+            ("time_jump", c.rejected_time_jump),
+        ]),
         samples_refused: outcome.refused.clone(),
+        clipped_samples: c.clipped_samples,
+        health_restores: c.health_restores,
         eval,
     }
 }
@@ -414,7 +450,12 @@ pub struct RunOptions {
 
 /// Runs a log and writes `estimates.csv`, `innovations.csv`, `summary.json` (and the figures).
 pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
-    let log = corridor_shared::imu_csv::read_imu_csv(&opts.imu, &opts.csv)?;
+    let csv = corridor_shared::imu_csv::ImuCsvOptions {
+        min_dt_s: opts.config.sensor.min_dt_s(),
+        max_dt_s: opts.config.sensor.max_dt_s(),
+        ..opts.csv.clone()
+    };
+    let log = corridor_shared::imu_csv::read_imu_csv(&opts.imu, &csv)?;
     for r in log.rejected.iter().take(20) {
         tracing::warn!("rejected input row: {}", r.located(&log.path));
     }

@@ -139,6 +139,84 @@ fn malformed_rows_are_counted_and_reported_with_line_column_and_value() {
 }
 
 #[test]
+fn absurd_values_and_times_are_refused_counted_and_named_in_the_summary() {
+    let dir = tmp("absurd");
+    let src = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let mut lines: Vec<String> = std::fs::read_to_string(src)
+        .unwrap()
+        .lines()
+        .map(String::from)
+        .collect();
+    // line 3001: az = 1e30; line 6001: t_s = 1e30 (before, it became the time base and the
+    // 8000 rows after it were rejected, the error naming line 6002); last line: t_s = 1e30.
+    let set = |lines: &mut Vec<String>, line: usize, col: usize, v: &str| {
+        let mut f: Vec<String> = lines[line - 1].split(',').map(String::from).collect();
+        f[col] = v.into();
+        lines[line - 1] = f.join(",");
+    };
+    set(&mut lines, 3001, 6, "1e30");
+    set(&mut lines, 6001, 0, "1e30");
+    let n = lines.len();
+    set(&mut lines, n, 0, "1e30");
+    let imu = dir.join("imu.csv");
+    std::fs::write(&imu, lines.join("\n") + "\n").unwrap();
+    let out = dir.join("o");
+    let o = corridor(&[
+        "run",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--config",
+        root().join("configs/gdins.toml").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["input_rows_rejected"]["time_jump"], 2);
+    assert_eq!(summary["samples_refused_counts"]["implausible"], 1);
+    assert_eq!(summary["samples"], 14_000 - 3);
+    let refused = summary["samples_refused"].to_string();
+    assert!(
+        refused.contains("imu.csv:3001") && refused.contains("1e30"),
+        "{refused}"
+    );
+    let examples = summary["input_rows_rejected_examples"].to_string();
+    assert!(examples.contains("imu.csv:6001"), "{examples}");
+    let est = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
+    let last: Vec<f64> = est
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .take(4)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(last.iter().all(|v| v.abs() < 1000.0), "{last:?}");
+}
+
+#[test]
+fn a_nan_flag_value_is_an_error_naming_the_flag() {
+    let data = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let out = tmp("nanflag");
+    let o = corridor(&[
+        "run",
+        "--imu",
+        data.to_str().unwrap(),
+        "--inject-after-s",
+        "nan",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--inject-after-s") && err.contains("nan"),
+        "{err}"
+    );
+}
+
+#[test]
 fn too_many_bad_rows_stop_the_run_with_the_first_one_named() {
     let dir = tmp("many");
     let mut text = String::from("t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2\n");

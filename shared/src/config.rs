@@ -105,6 +105,9 @@ fn non_negative(key: &str, value: f64) -> Result<f64, ConfigError> {
     }
 }
 
+/// Default largest plausible foot speed, m/s: the swinging foot of a sprinter peaks near 10 m/s.
+pub const DEFAULT_MAX_SPEED_M_S: f64 = 15.0;
+
 /// How the gyro bias is estimated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -221,6 +224,9 @@ pub struct ConfigFile {
     /// `[daemon]` (only `corridor serve` reads it)
     #[serde(default)]
     pub daemon: DaemonFile,
+    /// `[sensor]`: what the IMU can output, and the time-step bounds
+    #[serde(default)]
+    pub sensor: crate::sensor::SensorFile,
 }
 
 /// `[model]` section: extension states of the error-state filter (`eskf` and `zupt` modes).
@@ -261,6 +267,9 @@ pub struct DaemonFile {
     pub checkpoint_path: Option<PathBuf>,
     /// Period of checkpoints while running, s of wall-clock time (default 30.0).
     pub checkpoint_period_s: Option<f64>,
+    /// Longest a lossless publish waits on one consumer's full buffer, s (default 1.0); beyond
+    /// it the consumer counts as stalled and loses (counted) what its buffer cannot take.
+    pub stall_timeout_s: Option<f64>,
 }
 
 /// `[estimator]` section.
@@ -271,8 +280,10 @@ pub struct EstimatorFile {
     pub mode: Option<Mode>,
     /// Bias σ on every axis below which the estimate counts as converged (default 2e-4 rad/s).
     pub converged_sd_rad_s: Option<f64>,
-    /// Largest accepted time step; a longer one is a gap, integrated but counted (default 0.05 s).
+    /// Largest regular time step; a longer one is a gap: a new segment, counted (default 0.05 s).
     pub max_dt_s: Option<f64>,
+    /// Largest plausible foot speed, m/s; a faster estimate fails the health check (default 15).
+    pub max_speed_m_s: Option<f64>,
 }
 
 /// `[alignment]` section.
@@ -402,6 +413,10 @@ pub struct Config {
     pub converged_sd_rad_s: Positive,
     /// Largest regular time step.
     pub max_dt_s: Positive,
+    /// Largest plausible foot speed (health check).
+    pub max_speed_m_s: Positive,
+    /// What the sensor can output, and the time-step bounds.
+    pub sensor: crate::sensor::SensorLimits,
     /// Alignment.
     pub alignment: AlignmentConfig,
     /// Zero-velocity detection.
@@ -452,6 +467,8 @@ pub struct DaemonSettings {
     pub checkpoint_path: Option<PathBuf>,
     /// Checkpoint period.
     pub checkpoint_period_s: Positive,
+    /// Stall bound of lossless publishing.
+    pub stall_timeout_s: Positive,
 }
 
 /// Validated `[alignment]`.
@@ -661,6 +678,10 @@ impl ConfigFile {
                 "daemon.checkpoint_period_s",
                 dm.checkpoint_period_s.unwrap_or(30.0),
             )?,
+            stall_timeout_s: Positive::new(
+                "daemon.stall_timeout_s",
+                dm.stall_timeout_s.unwrap_or(1.0),
+            )?,
         };
         let md = &self.model;
         let opt = |key: &str, v: Option<f64>| v.map(|v| Positive::new(key, v)).transpose();
@@ -689,6 +710,14 @@ impl ConfigFile {
                 e.converged_sd_rad_s.unwrap_or(2e-4),
             )?,
             max_dt_s: Positive::new("estimator.max_dt_s", e.max_dt_s.unwrap_or(0.05))?,
+            max_speed_m_s: Positive::new(
+                "estimator.max_speed_m_s",
+                e.max_speed_m_s.unwrap_or(DEFAULT_MAX_SPEED_M_S),
+            )?,
+            sensor: self
+                .sensor
+                .validate()
+                .map_err(|e| invalid(e.key, e.value, e.rule))?,
             alignment: AlignmentConfig {
                 min_rest_s: Positive::new("alignment.min_rest_s", a.min_rest_s.unwrap_or(0.5))?,
                 gyro_bias_prior: a.gyro_bias_prior.unwrap_or(BiasPrior::RestMean),

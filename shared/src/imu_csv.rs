@@ -18,6 +18,7 @@
 //! refused with [`ImuCsvError::TooManyRejected`]. Finally a units check on the accepted rows
 //! refuses accelerometers logged in g and gyroscopes logged in deg/s ([`ImuCsvError::Units`]).
 
+use crate::sensor::{TimeGuard, TimeVerdict};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt;
@@ -77,22 +78,28 @@ pub enum RejectReason {
     NonFinite,
     /// `t_s` is not greater than the previous accepted row's `t_s` (duplicates included).
     TimeNotIncreasing,
+    /// `t_s` jumps forward by more than [`ImuCsvOptions::max_dt_s`] and the next row does not
+    /// follow it (an outlier such as `1e30`; the first row after a real gap also lands here).
+    TimeJump,
 }
 
 impl RejectReason {
     /// All reasons, in the order used by [`ImuLog::rejected_counts`].
-    pub const ALL: [RejectReason; 3] = [
+    pub const ALL: [RejectReason; 4] = [
         RejectReason::Malformed,
         RejectReason::NonFinite,
         RejectReason::TimeNotIncreasing,
+        RejectReason::TimeJump,
     ];
 
-    /// Stable snake_case name of the reason (`malformed`, `non_finite`, `time_not_increasing`).
+    /// Stable snake_case name of the reason (`malformed`, `non_finite`, `time_not_increasing`,
+    /// `time_jump`).
     pub fn name(self) -> &'static str {
         match self {
             RejectReason::Malformed => "malformed",
             RejectReason::NonFinite => "non_finite",
             RejectReason::TimeNotIncreasing => "time_not_increasing",
+            RejectReason::TimeJump => "time_jump",
         }
     }
 }
@@ -104,6 +111,9 @@ impl fmt::Display for RejectReason {
             RejectReason::Malformed => "is malformed",
             RejectReason::NonFinite => "is not finite",
             RejectReason::TimeNotIncreasing => "is not after the previous accepted t_s",
+            RejectReason::TimeJump => {
+                "jumps beyond the largest time step after the previous accepted t_s"
+            }
         })
     }
 }
@@ -205,6 +215,12 @@ pub struct ImuCsvOptions {
     pub max_rejected_fraction: f64,
     /// Whether to run the units check (accelerometer in m/s², gyroscope in rad/s). Default `true`.
     pub check_units: bool,
+    /// A row must follow the previous accepted one by more than this, s. Default 0.
+    pub min_dt_s: f64,
+    /// A row more than this after the previous accepted one is a time jump, accepted only when
+    /// the next row confirms it ([`crate::sensor::TimeGuard`]), s. Default
+    /// [`crate::sensor::DEFAULT_MAX_DT_S`].
+    pub max_dt_s: f64,
 }
 
 impl Default for ImuCsvOptions {
@@ -212,6 +228,8 @@ impl Default for ImuCsvOptions {
         Self {
             max_rejected_fraction: 0.01,
             check_units: true,
+            min_dt_s: 0.0,
+            max_dt_s: crate::sensor::DEFAULT_MAX_DT_S,
         }
     }
 }
@@ -339,7 +357,7 @@ pub fn parse_imu_csv(text: &str, path: &Path, opts: &ImuCsvOptions) -> Result<Im
     let mut rejected: Vec<RejectedRow> = Vec::new();
     let mut blank_lines: Vec<u64> = Vec::new();
     let mut total: u64 = 0;
-    let mut last_t_s = f64::NEG_INFINITY;
+    let mut time = TimeGuard::new(opts.min_dt_s, opts.max_dt_s);
     let mut line_no: u64 = 1;
     let mut pos = header_end + 1; // start of the current line
 
@@ -373,19 +391,25 @@ pub fn parse_imu_csv(text: &str, path: &Path, opts: &ImuCsvOptions) -> Result<Im
         }
         pos = line_end + 1;
         match result {
-            Ok(row) if row.t_s > last_t_s => {
-                last_t_s = row.t_s;
-                rows.push(row);
-            }
-            Ok(_) => rejected.push(RejectedRow {
-                line: line_no,
-                column: REQUIRED_COLUMNS[0].to_string(),
-                value: truncate_chars(
-                    line.split(',').next().unwrap_or("").trim_ascii(),
-                    MAX_VALUE_CHARS,
-                ),
-                reason: RejectReason::TimeNotIncreasing,
-            }),
+            Ok(row) => match time.check(row.t_s) {
+                TimeVerdict::Accept => {
+                    time.accept(row.t_s);
+                    rows.push(row);
+                }
+                verdict => rejected.push(RejectedRow {
+                    line: line_no,
+                    column: REQUIRED_COLUMNS[0].to_string(),
+                    value: truncate_chars(
+                        line.split(',').next().unwrap_or("").trim_ascii(),
+                        MAX_VALUE_CHARS,
+                    ),
+                    reason: if verdict == TimeVerdict::Jump {
+                        RejectReason::TimeJump
+                    } else {
+                        RejectReason::TimeNotIncreasing
+                    },
+                }),
+            },
             Err(RowProblem::FieldCount) => rejected.push(RejectedRow {
                 line: line_no,
                 column: String::new(),
@@ -670,7 +694,7 @@ mod tests {
     fn lenient() -> ImuCsvOptions {
         ImuCsvOptions {
             max_rejected_fraction: 0.5,
-            check_units: true,
+            ..ImuCsvOptions::default()
         }
     }
 
@@ -900,6 +924,25 @@ mod tests {
     }
 
     #[test]
+    fn an_absurd_time_is_rejected_and_the_rows_after_it_are_kept() {
+        // Before: t = 1e30 on line 6 became the time base and every later row was rejected as
+        // "not after the previous accepted t_s", the error naming line 7.
+        let text = replace_line(&good_file(200), 6, "1e30,0.01,0.02,0.03,0.1,0.2,9.8");
+        let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+        assert_eq!(log.rows.len(), 199);
+        assert_eq!(log.rejected.len(), 1);
+        let r = &log.rejected[0];
+        assert_eq!((r.line, r.reason), (6, RejectReason::TimeJump));
+        assert_eq!(log.rejected_counts()["time_jump"], 1);
+        // On the last row too.
+        let n = good_file(200).trim_end().lines().count();
+        let text = replace_line(&good_file(200), n, "1e30,0.01,0.02,0.03,0.1,0.2,9.8");
+        let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+        assert_eq!((log.rows.len(), log.rejected[0].line), (199, n as u64));
+        assert!(log.rows.iter().all(|r| r.t_s < 2.0));
+    }
+
+    #[test]
     fn duplicate_timestamp_is_rejected() {
         let text = replace_line(&good_file(200), 4, &row(0.005));
         let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
@@ -1032,7 +1075,7 @@ mod tests {
         // Fraction 0 refuses any rejection.
         let strict = ImuCsvOptions {
             max_rejected_fraction: 0.0,
-            check_units: true,
+            ..ImuCsvOptions::default()
         };
         assert!(matches!(
             parse_imu_csv(&text, path(), &strict),
@@ -1140,7 +1183,7 @@ mod tests {
         let all_bad = format!("{HEADER}\n0,1,2\n");
         let anything = ImuCsvOptions {
             max_rejected_fraction: 1.0,
-            check_units: true,
+            ..ImuCsvOptions::default()
         };
         assert!(matches!(
             parse_imu_csv(&all_bad, path(), &anything),

@@ -55,6 +55,16 @@ pub fn parse_vec3(text: &str) -> Result<[f64; 3], String> {
     Ok(out)
 }
 
+/// Parses a time in seconds that must be finite and ≥ 0, for command-line flags such as
+/// `--inject-after-s` (a NaN there used to run with 0 samples and exit 0).
+pub fn parse_time_s(text: &str) -> Result<f64, String> {
+    text.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && *v >= 0.0)
+        .ok_or_else(|| format!("{text:?} is not a finite number of seconds >= 0"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -86,5 +96,13 @@ mod tests {
         assert!(parse_vec3("1,2").unwrap_err().contains("three"));
         assert!(parse_vec3("1,x,3").unwrap_err().contains("\"x\""));
         assert!(parse_vec3("1,nan,3").is_err());
+    }
+
+    #[test]
+    fn time_parsing_refuses_nan_infinity_and_negative() {
+        assert_eq!(parse_time_s(" 2.5").unwrap(), 2.5);
+        for bad in ["nan", "inf", "-1", "1e400", "x"] {
+            assert!(parse_time_s(bad).unwrap_err().contains(bad), "{bad}");
+        }
     }
 }

@@ -5,6 +5,8 @@
 //!   types that cannot hold bad values.
 //! - [`imu_csv`]: the reader for IMU logs in the `t_s,gx_rad_s,...` CSV format, with row-level
 //!   rejection that names file, line, column and value.
+//! - [`sensor`]: the `[sensor]` limits (range, plausible magnitudes, time steps) and the time
+//!   rule shared by the CSV reader and the estimator.
 //! - [`truth_csv`]: the reader for surveyed footprint ground truth (`ground_truth.csv`).
 //! - [`injection`]: synthetic gyro-bias injection (constant, ramp, delayed) used by the
 //!   offline runner and the replay producer.
@@ -17,6 +19,7 @@
 pub mod config;
 pub mod imu_csv;
 pub mod injection;
+pub mod sensor;
 pub mod services;
 pub mod truth_csv;
 pub mod wire;

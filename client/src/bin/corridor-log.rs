@@ -10,6 +10,7 @@ use anyhow::Result;
 use clap::Parser;
 use corridor_client::Domain;
 use corridor_client::record::{RecordOptions, Recorder};
+use corridor_shared::injection::parse_time_s;
 use corridor_shared::services::DEFAULT_DOMAIN;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -30,11 +31,15 @@ struct Args {
     #[arg(long)]
     out: PathBuf,
     /// Stop when nothing arrived for this long after the first sample, s.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, value_parser = parse_time_s)]
     idle_timeout_s: f64,
     /// How long to wait for the daemon, s.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = parse_time_s)]
     wait_s: f64,
+    /// Stop at the first end of stream instead of following the next stream (a restarted
+    /// producer, the next loop of a replay) into the same files.
+    #[arg(long)]
+    stop_at_end_of_stream: bool,
 }
 
 fn main() -> std::process::ExitCode {
@@ -47,19 +52,26 @@ fn run() -> Result<()> {
     let domain = Domain::new(&a.domain)?;
     let opts = RecordOptions {
         node_name: "corridor-log".into(),
-        wait: Duration::from_secs_f64(a.wait_s.max(0.0)),
-        idle_timeout: Duration::from_secs_f64(a.idle_timeout_s.max(0.0)),
+        wait: Duration::from_secs_f64(a.wait_s),
+        idle_timeout: Duration::from_secs_f64(a.idle_timeout_s),
         idle_before_first: false,
         poll: Duration::from_millis(200),
     };
-    let recorder = Recorder::open(&domain, &a.out, &opts)?;
+    let mut recorder = Recorder::open(&domain, &a.out, &opts)?;
+    if !a.stop_at_end_of_stream {
+        recorder = recorder.following_new_streams();
+    }
     eprintln!(
         "recording domain {:?} into {}",
         domain.name(),
         a.out.display()
     );
     let r = recorder.run(&AtomicBool::new(false))?;
-    println!("stopped: {}", r.stopped.describe());
+    println!(
+        "stopped: {} ({} streams ended)",
+        r.stopped.describe(),
+        r.streams_ended
+    );
     println!(
         "attitude rows: {} ({})",
         r.attitude_rows,

@@ -8,7 +8,7 @@ use clap::Parser;
 use corridor_client::replay::{ReplayOptions, Speed, replay};
 use corridor_client::{Delivery, Domain};
 use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
-use corridor_shared::injection::{BiasInjection, parse_vec3};
+use corridor_shared::injection::{BiasInjection, parse_time_s, parse_vec3};
 use corridor_shared::services::DEFAULT_DOMAIN;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -41,10 +41,15 @@ struct Args {
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     inject_gyro_bias: Option<[f64; 3]>,
     /// Start the injection at this sensor time, s.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_negative_numbers = true,
+        value_parser = parse_time_s
+    )]
     inject_after_s: f64,
     /// How long to wait for the daemon, s.
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, value_parser = parse_time_s)]
     wait_s: f64,
 }
 

@@ -5,7 +5,7 @@ use anyhow::Result;
 use clap::Args;
 use corridor_service::runner::{self, RunOptions};
 use corridor_shared::imu_csv::ImuCsvOptions;
-use corridor_shared::injection::{BiasInjection, parse_vec3};
+use corridor_shared::injection::{BiasInjection, parse_time_s, parse_vec3};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -25,7 +25,12 @@ pub(super) struct RunArgs {
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub(super) inject_gyro_bias_ramp: Option<[f64; 3]>,
     /// Start the injection at this time instead of 0, s.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_negative_numbers = true,
+        value_parser = parse_time_s
+    )]
     pub(super) inject_after_s: f64,
     /// Write the figures (SVG).
     #[arg(long)]

@@ -730,6 +730,16 @@ impl Eskf {
         }
     }
 
+    /// After a gap in the data of `gap_s`: nothing is integrated over it; the velocity variance
+    /// grows by `vel_var` and the attitude variance by the gyro noise over the gap.
+    pub fn widen_after_gap(&mut self, gap_s: f64, vel_var: f64) {
+        let att_var = self.noise.gyro_rad_s.powi(2) * gap_s;
+        for i in 0..3 {
+            self.p[ix(V0 + i, V0 + i)] += vel_var;
+            self.p[ix(TH + i, TH + i)] += att_var;
+        }
+    }
+
     /// Sets the heading variance (after the map frame is fixed, the heading is known).
     pub fn set_heading_variance(&mut self, var_rad2: f64) {
         self.clear_state(TH + 2, var_rad2);

@@ -19,6 +19,8 @@ use super::eskf::{
     BiasStates, Eskf, EskfInit, EskfNoise, ExtensionEstimates, Extensions, Innovation,
 };
 use super::heading::{FootprintLine, HeadingAid, Rejection, StraightWalk};
+use super::health::{self, HealthFault, HealthLimits, LastGood};
+use super::plausibility::Plausibility;
 use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rot_z, tilt_from_specific_force, wrap_pi, yaw,
 };
@@ -50,7 +52,7 @@ pub enum SampleError {
         /// Its value.
         value: f64,
     },
-    /// The time does not increase.
+    /// The time does not increase (by more than `sensor.min_dt_s`).
     #[error("sample at t = {t_s} s does not follow the previous one at {prev_t_s} s")]
     TimeNotIncreasing {
         /// Sample time.
@@ -58,6 +60,43 @@ pub enum SampleError {
         /// The previous accepted time.
         prev_t_s: f64,
     },
+    /// A magnitude beyond what the sensor can output (`sensor.max_gyro_rad_s`,
+    /// `sensor.max_accel_m_s2`).
+    #[error("sample at t = {t_s} s: {field} = {value:e} is beyond the plausible {limit}")]
+    Implausible {
+        /// Sample time.
+        t_s: f64,
+        /// Which magnitude.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// The time jumps forward by more than `sensor.max_dt_s` and no later sample confirmed it.
+    #[error(
+        "sample at t = {t_s} s jumps from the previous one at {prev_t_s} s by more than {max_dt_s} s"
+    )]
+    TimeJump {
+        /// Sample time.
+        t_s: f64,
+        /// The previous accepted time.
+        prev_t_s: f64,
+        /// The bound.
+        max_dt_s: f64,
+    },
+}
+
+impl SampleError {
+    /// Stable snake_case name of the reason, for counters and summaries.
+    pub fn reason(&self) -> &'static str {
+        match self {
+            SampleError::NonFinite { .. } => "non_finite",
+            SampleError::TimeNotIncreasing { .. } => "time_not_increasing",
+            SampleError::Implausible { .. } => "implausible",
+            SampleError::TimeJump { .. } => "time_jump",
+        }
+    }
 }
 
 /// A saved bias state: gyro bias and its covariance, sensor axes.
@@ -69,9 +108,10 @@ pub struct WarmStart {
     pub gyro_bias_cov: [[f64; 3]; 3],
 }
 
-/// A warm-start state that is not finite, symmetric and positive definite.
+/// A warm-start state that is not finite, within `sensor.max_gyro_bias_rad_s`, symmetric and
+/// positive definite.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error("warm-start state rejected (bias {:?}, covariance {:?}): must be finite, symmetric and positive definite", .state.gyro_bias_rad_s, .state.gyro_bias_cov)]
+#[error("warm-start state rejected (bias {:?}, covariance {:?}): must be finite, within sensor.max_gyro_bias_rad_s, symmetric and positive definite", .state.gyro_bias_rad_s, .state.gyro_bias_cov)]
 pub struct WarmStartError {
     /// The rejected state.
     pub state: WarmStart,
@@ -122,7 +162,17 @@ pub struct Counters {
     pub rejected_non_finite: u64,
     /// Samples refused because time did not increase.
     pub rejected_time: u64,
-    /// Steps longer than `estimator.max_dt_s` (integrated over their real length).
+    /// Samples refused because a magnitude was beyond what the sensor can output.
+    pub rejected_implausible: u64,
+    /// Samples refused because their time jumped beyond `sensor.max_dt_s` unconfirmed.
+    pub rejected_time_jump: u64,
+    /// Accepted samples with an axis at the rail of its range (probably clipped).
+    pub clipped_samples: u64,
+    /// Updates after which the state failed the health check and the last good state (of the
+    /// last healthy stance) was restored.
+    pub health_restores: u64,
+    /// Steps longer than `estimator.max_dt_s`: each starts a new segment (nothing integrated over
+    /// the gap, velocity and attitude covariance widened).
     pub gaps: u64,
     /// Stances since alignment.
     pub stances: u64,
@@ -172,6 +222,14 @@ pub struct Estimate {
     pub gyro_bias_sd_rad_s: [f64; 3],
     /// Stance flag.
     pub stance: bool,
+    /// An axis of this sample is at the rail of its range (probably clipped).
+    pub clipped: bool,
+    /// Length of the gap before this sample, s, when the step was longer than
+    /// `estimator.max_dt_s` (a new segment starts here).
+    pub gap_s: Option<f64>,
+    /// Set when the state failed the health check on this sample and the last good state was
+    /// restored (the estimate shows the restored state).
+    pub health_fault: Option<HealthFault>,
     /// Zero-velocity detector statistic.
     pub detector_statistic: f64,
     /// Bias σ below the configured bound on every axis (and tracking).
@@ -199,6 +257,9 @@ impl Default for Estimate {
             gyro_bias_rad_s: [0.0; 3],
             gyro_bias_sd_rad_s: [f64::NAN; 3],
             stance: false,
+            clipped: false,
+            health_fault: None,
+            gap_s: None,
             detector_statistic: f64::NAN,
             converged: false,
             zupt: None,
@@ -297,6 +358,9 @@ impl RestSums {
     }
 }
 
+/// Failed health checks in a row that undo the update; beyond, the stance copy is restored.
+const MAX_UNDONE_UPDATES: u32 = 3;
+
 /// The bias filter of the `paper` and `rotation_aware` modes.
 #[derive(Debug, Clone)]
 enum BiasFilter {
@@ -322,10 +386,17 @@ pub struct Estimator {
     detector: StanceDetector,
     phase: Phase,
     counters: Counters,
+    plausibility: Plausibility,
     last: Option<(f64, Vector3<f64>, Vector3<f64>)>,
     rest: RestSums,
     eskf: Option<Eskf>,
     bias: BiasFilter,
+    /// Filter and bias filter at the last healthy stance (or at alignment).
+    good: LastGood<(Eskf, BiasFilter)>,
+    good_saved_this_stance: bool,
+    /// Filter and bias filter before the current update (undone when it fails the check).
+    before: LastGood<(Eskf, BiasFilter)>,
+    consecutive_faults: u32,
     /// Tilt of the sensor on the flat foot: `R_y(pitch)·R_x(roll)` of the initial rest.
     tilt0: UnitQuaternion<f64>,
     /// Sensor yaw minus foot heading.
@@ -365,10 +436,15 @@ impl Estimator {
             aid,
             phase: Phase::Aligning,
             counters: Counters::default(),
+            plausibility: Plausibility::new(cfg.sensor),
             last: None,
             rest: RestSums::new(cfg.alignment.rest_tail_s),
             eskf: None,
             bias: BiasFilter::InEskf,
+            good: LastGood::default(),
+            good_saved_this_stance: false,
+            before: LastGood::default(),
+            consecutive_faults: 0,
             tilt0: UnitQuaternion::identity(),
             mount_yaw_rad: 0.0,
             mount_sum: (0.0, 0.0, 0),
@@ -425,26 +501,30 @@ impl Estimator {
     pub fn step(&mut self, s: &ImuInput) -> Result<&Estimate, SampleError> {
         let w = Vector3::from(s.gyro_rad_s);
         let f = Vector3::from(s.accel_m_s2);
-        if let Err(e) = check_finite(s) {
-            self.counters.rejected_non_finite += 1;
-            return Err(e);
-        }
+        let clipped = match self.plausibility.check(s) {
+            Ok(clipped) => clipped,
+            Err(e) => {
+                let c = &mut self.counters;
+                *match e {
+                    SampleError::NonFinite { .. } => &mut c.rejected_non_finite,
+                    SampleError::TimeNotIncreasing { .. } => &mut c.rejected_time,
+                    SampleError::Implausible { .. } => &mut c.rejected_implausible,
+                    SampleError::TimeJump { .. } => &mut c.rejected_time_jump,
+                } += 1;
+                return Err(e);
+            }
+        };
         let prev = self.last;
-        if let Some((t_prev, _, _)) = prev
-            && s.t_s <= t_prev
-        {
-            self.counters.rejected_time += 1;
-            return Err(SampleError::TimeNotIncreasing {
-                t_s: s.t_s,
-                prev_t_s: t_prev,
-            });
-        }
         self.counters.samples += 1;
+        self.counters.clipped_samples += u64::from(clipped);
         self.last = Some((s.t_s, w, f));
         let decision = self.detector.push(s.t_s, &w, &f);
         let out = &mut self.out;
         out.t_s = s.t_s;
         out.stance = decision.stance;
+        out.clipped = clipped;
+        out.health_fault = None;
+        out.gap_s = None;
         out.detector_statistic = decision.statistic;
         out.zupt = None;
         out.heading = None;
@@ -456,12 +536,33 @@ impl Estimator {
                 return Ok(&self.out);
             }
         }
+        if self.good.get().is_none()
+            && let Some(e) = &self.eskf
+        {
+            self.good.save(&(e.clone(), self.bias.clone()));
+        }
         let Some((t_prev, w_prev, f_prev)) = prev else {
             return Ok(&self.out);
         };
+        if let Some(e) = &self.eskf {
+            self.before.save(&(e.clone(), self.bias.clone()));
+        }
         let dt = s.t_s - t_prev;
         if dt > self.cfg.max_dt_s.get() {
+            // A new segment. Extrapolating two samples over the gap is meaningless (a 10 s gap
+            // once gave a vertical velocity of −286 m/s), so nothing is integrated over it. The
+            // velocity is kept (the best guess for a short gap; the next ZUPT settles it) but its
+            // variance grows by the largest plausible speed, so that ZUPT moves nothing else; the
+            // attitude variance grows by the gyro noise over the gap. A reset to zero would be
+            // wrong when the gap falls in a swing and the data go on with the same stride.
             self.counters.gaps += 1;
+            self.out.gap_s = Some(dt);
+            let v_max = self.cfg.max_speed_m_s.get();
+            if let Some(e) = self.eskf.as_mut() {
+                e.widen_after_gap(dt, v_max * v_max);
+            }
+            self.fill_output();
+            return Ok(&self.out);
         }
         let w_avg = (w + w_prev) * 0.5;
         let f_avg = (f + f_prev) * 0.5;
@@ -474,8 +575,57 @@ impl Estimator {
             decision.stance,
             decision.stance_age_s,
         );
+        if self.guard_health(decision.stance) {
+            // The update was undone: the next step integrates from the previous sample.
+            self.last = prev;
+        }
         self.fill_output();
         Ok(&self.out)
+    }
+
+    /// The health check after an update; `true` when it failed. The first
+    /// [`MAX_UNDONE_UPDATES`] failures in a row undo the update (the state before it was
+    /// healthy, and unlike the stance copy it holds the foot's rotation since the stance);
+    /// further ones restore the state of the last healthy stance. Keeps a copy of the state at
+    /// the first sample of each healthy stance.
+    fn guard_health(&mut self, stance: bool) -> bool {
+        let (bias, _) = self.bias_sensor();
+        let limits = HealthLimits {
+            max_speed_m_s: self.cfg.max_speed_m_s.get(),
+            max_gyro_bias_rad_s: self.cfg.sensor.max_gyro_bias_rad_s(),
+        };
+        let Some(eskf) = self.eskf.as_mut() else {
+            return false;
+        };
+        let failed = match health::check(eskf, &bias, &limits) {
+            Ok(()) => {
+                self.consecutive_faults = 0;
+                if stance && !self.good_saved_this_stance {
+                    self.good.save(&(eskf.clone(), self.bias.clone()));
+                    self.good_saved_this_stance = true;
+                }
+                false
+            }
+            Err(fault) => {
+                self.consecutive_faults += 1;
+                let slot = if self.consecutive_faults <= MAX_UNDONE_UPDATES {
+                    &self.before
+                } else {
+                    &self.good
+                };
+                if let Some((e, b)) = slot.get() {
+                    eskf.clone_from(e);
+                    self.bias.clone_from(b);
+                }
+                self.counters.health_restores += 1;
+                self.out.health_fault = Some(fault);
+                true
+            }
+        };
+        if !stance {
+            self.good_saved_this_stance = false;
+        }
+        failed
     }
 
     fn align_step(&mut self, t_s: f64, w: &Vector3<f64>, f: &Vector3<f64>, stance: bool) {
@@ -605,7 +755,8 @@ impl Estimator {
     /// accelerometer, and the map frame from the first stride, because the foot may have moved
     /// while the estimator was down.
     pub fn set_warm_start(&mut self, ws: WarmStart) -> Result<(), WarmStartError> {
-        let finite = ws.gyro_bias_rad_s.iter().all(|v| v.is_finite())
+        let bound = self.cfg.sensor.max_gyro_bias_rad_s();
+        let finite = ws.gyro_bias_rad_s.iter().all(|v| v.abs() <= bound)
             && ws.gyro_bias_cov.iter().flatten().all(|v| v.is_finite());
         let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
         let symmetric = (p - p.transpose()).abs().max() <= 1e-12 * p.abs().max().max(1e-300);
@@ -1030,26 +1181,6 @@ mod association_tests {
             let w = association_weight(r, s, 0.7, quarter);
             assert!((0.0..=1.0).contains(&w));
         }
-    }
-}
-
-fn check_finite(s: &ImuInput) -> Result<(), SampleError> {
-    let fields = [
-        ("t_s", s.t_s),
-        ("gx_rad_s", s.gyro_rad_s[0]),
-        ("gy_rad_s", s.gyro_rad_s[1]),
-        ("gz_rad_s", s.gyro_rad_s[2]),
-        ("ax_m_s2", s.accel_m_s2[0]),
-        ("ay_m_s2", s.accel_m_s2[1]),
-        ("az_m_s2", s.accel_m_s2[2]),
-    ];
-    match fields.iter().find(|(_, v)| !v.is_finite()) {
-        Some(&(field, value)) => Err(SampleError::NonFinite {
-            t_s: s.t_s,
-            field,
-            value,
-        }),
-        None => Ok(()),
     }
 }
 

@@ -16,6 +16,9 @@ use iceoryx2::prelude::*;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
+/// Refused samples per stream that are logged as warnings (the rest at debug level; all counted).
+const REFUSED_WARNINGS_PER_STREAM: u64 = 10;
+
 /// Cumulative counters at the previous health line.
 #[derive(Debug, Clone, Copy)]
 struct HealthMark {
@@ -199,11 +202,34 @@ impl EstState {
         let e = match self.est.step(&input) {
             Ok(e) => *e,
             Err(err) => {
-                // Counted by the estimator, published in Diagnostics.
-                tracing::debug!(seq = s.seq, "sample refused: {err}");
+                // Counted by the estimator (Diagnostics and the health line); the first few of
+                // each stream are named with their sequence number.
+                let c = self.est.counters();
+                let refused = c.rejected_non_finite
+                    + c.rejected_time
+                    + c.rejected_implausible
+                    + c.rejected_time_jump;
+                if refused <= REFUSED_WARNINGS_PER_STREAM {
+                    tracing::warn!(seq = s.seq, reason = err.reason(), "sample refused: {err}");
+                } else {
+                    tracing::debug!(seq = s.seq, reason = err.reason(), "sample refused: {err}");
+                }
                 return;
             }
         };
+        if let Some(gap_s) = e.gap_s {
+            tracing::warn!(
+                seq = s.seq,
+                "gap of {gap_s:.3} s in the IMU stream; a new segment starts here"
+            );
+        }
+        if let Some(fault) = e.health_fault {
+            tracing::warn!(
+                seq = s.seq,
+                "estimator state failed the health check ({}); last good state restored",
+                fault.name()
+            );
+        }
         self.last = e;
         self.last_imu_seq = s.seq;
         let ok = out
@@ -284,6 +310,11 @@ impl EstState {
         p.samples += c.samples;
         p.rejected_non_finite += c.rejected_non_finite;
         p.rejected_time += c.rejected_time;
+        p.rejected_implausible += c.rejected_implausible;
+        p.rejected_time_jump += c.rejected_time_jump;
+        p.clipped_samples += c.clipped_samples;
+        p.health_restores += c.health_restores;
+        p.gaps += c.gaps;
         p.stances += c.stances;
         p.heading_used += c.heading_used;
         self.est = self.new_estimator(cfg);
@@ -332,14 +363,23 @@ impl EstState {
     fn log_health(&mut self, rx: &RxCounters) {
         let now = Instant::now();
         let d = self.diagnostics(rx, 0);
-        let rejected = d.rejected_non_finite + d.rejected_time + d.rejected_duplicate_seq + d.late;
+        let c = self.est.counters();
+        let rejected = d.rejected_non_finite
+            + d.rejected_time
+            + d.rejected_duplicate_seq
+            + d.late
+            + self.previous.rejected_implausible
+            + c.rejected_implausible
+            + self.previous.rejected_time_jump
+            + c.rejected_time_jump;
         let h = self.health;
         let secs = now.duration_since(h.at).as_secs_f64().max(1e-9);
         let rate = (d.received - h.received) as f64 / secs;
         tracing::info!(
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
-             σ {} rad/s, converged {}, phase {}",
+             σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
+             health restores {}, time gaps {}, IMU head missing {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
             d.seq_gaps,
@@ -354,6 +394,12 @@ impl EstState {
             Vec3Fmt(self.last.gyro_bias_sd_rad_s),
             if self.last.converged { "yes" } else { "no" },
             self.est.phase().name(),
+            self.previous.rejected_implausible + self.est.counters().rejected_implausible,
+            self.previous.rejected_time_jump + self.est.counters().rejected_time_jump,
+            self.previous.clipped_samples + self.est.counters().clipped_samples,
+            self.previous.health_restores + self.est.counters().health_restores,
+            self.previous.gaps + self.est.counters().gaps,
+            rx.head_missing.load(Ordering::Relaxed),
         );
         self.latency_health.clear();
         self.health = HealthMark {
@@ -461,6 +507,13 @@ pub(super) fn estimator_thread(
         warm_started_from: st.warm_started_from,
         checkpoints_saved: st.checkpoints_saved,
         warnings: st.warnings,
+        stalls: [
+            out.attitude.stall.counts(),
+            out.bias.stall.counts(),
+            out.nav.stall.counts(),
+            out.diagnostics.stall.counts(),
+        ],
+        head_missing: counters.head_missing.load(Ordering::Relaxed),
     })
 }
 

@@ -75,6 +75,7 @@ mod estimator_thread;
 mod latency;
 mod outputs;
 mod receive;
+pub mod stall;
 
 use crate::checkpoint::Checkpoint;
 use crate::core::heading::HeadingAid;
@@ -122,6 +123,9 @@ pub struct DaemonConfig {
     pub checkpoint: Option<PathBuf>,
     /// Period of the checkpoint saves, wall clock (only when the state changed).
     pub checkpoint_period: Duration,
+    /// Longest a lossless publish waits on one consumer's full buffer; beyond it the consumer
+    /// counts as stalled and loses (counted) what its buffer cannot take.
+    pub stall_timeout: Duration,
 }
 
 impl DaemonConfig {
@@ -154,6 +158,7 @@ impl DaemonConfig {
             health_period: Duration::from_secs_f64(d.health_period_s.get()),
             checkpoint: d.checkpoint_path,
             checkpoint_period: Duration::from_secs_f64(d.checkpoint_period_s.get()),
+            stall_timeout: Duration::from_secs_f64(d.stall_timeout_s.get()),
         }
     }
 }
@@ -171,6 +176,13 @@ pub struct DaemonReport {
     pub checkpoints_saved: u64,
     /// Non-fatal problems (a bad checkpoint, a failed save), in order.
     pub warnings: Vec<String>,
+    /// Consumers that stalled an output for longer than [`DaemonConfig::stall_timeout`], and the
+    /// samples they lost, per output: attitude, bias, nav, diagnostics.
+    pub stalls: [stall::StallCounts; 4],
+    /// IMU samples of a producer's numbering before the first one this daemon received from it
+    /// (sent before it started, taken by an earlier daemon, or overwritten in its input buffer
+    /// before its first read); the gaps after that are in `diagnostics.seq_gaps`.
+    pub head_missing: u64,
 }
 
 /// A daemon failure.

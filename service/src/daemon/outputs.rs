@@ -1,6 +1,7 @@
 //! The output publishers (attitude, bias, nav, diagnostics) and the conversion of an
 //! [`Estimate`] into the wire messages.
 
+use super::stall::StallGuard;
 use super::{DaemonConfig, DaemonError};
 use crate::core::{Estimate, Phase};
 use corridor_shared::services::{Access, ServiceError, Topic};
@@ -18,15 +19,19 @@ pub(super) struct Out<T: Topic> {
     pub(super) notifier: Notifier<ipc::Service>,
     pub(super) seq: u64,
     pub(super) failed_once: bool,
+    /// Consumers that stalled this publisher (lossless delivery).
+    pub(super) stall: StallGuard,
 }
 
 impl<T: Topic> Out<T> {
     pub(super) fn new(cfg: &DaemonConfig, node: &Node<ipc::Service>) -> Result<Self, DaemonError> {
         let d = &cfg.domain;
+        let stall = StallGuard::new(cfg.stall_timeout);
         let publisher = d
             .open::<T>(node, Access::Owner(cfg.delivery))?
             .publisher_builder()
             .backpressure_strategy(cfg.delivery.backpressure())
+            .set_backpressure_handler(stall.handler())
             .max_loaned_samples(2)
             .create()
             .map_err(|e| ServiceError::port(d, T::SERVICE, "publisher", e))?;
@@ -40,6 +45,7 @@ impl<T: Topic> Out<T> {
             notifier,
             seq: 0,
             failed_once: false,
+            stall,
         })
     }
 
@@ -59,6 +65,13 @@ impl<T: Topic> Out<T> {
             Err(e) => Err(e.into()),
         };
         let _ = self.notifier.notify();
+        for port in self.stall.take_new_stalls() {
+            tracing::warn!(
+                service = T::SERVICE,
+                "consumer {port:#x} stalled the publisher for more than the stall bound; it now \
+                 loses (counted) the samples its full buffer cannot take"
+            );
+        }
         match delivered {
             Ok(n) => n > 0,
             Err(e) => {

@@ -18,6 +18,11 @@ pub(super) struct RxCounters {
     pub(super) late: AtomicU64,
     pub(super) dropped: AtomicU64,
     pub(super) producer_changes: AtomicU64,
+    /// Samples of a producer's numbering (which starts at 0) before the first one this daemon
+    /// received from it: sent before the daemon started, delivered to an earlier daemon, or
+    /// overwritten in the input buffer before the daemon first read it. (`seq_gaps` counts the
+    /// gaps after that, and at the head of each later stream of the producer.)
+    pub(super) head_missing: AtomicU64,
 }
 
 /// Receive → estimator messages.
@@ -80,6 +85,8 @@ pub(super) fn rx_thread(
     let stopping = || shutdown.load(Ordering::Relaxed) || stop.load(Ordering::Relaxed);
     let mut last_seq: Option<u64> = None;
     let mut last_producer = None;
+    // The seq the next stream of the current producer starts with (after its end marker).
+    let mut next_stream_seq: Option<u64> = None;
     // True between the first data sample of a stream and its end-of-stream marker.
     let mut mid_stream = false;
     while !stopping() {
@@ -110,6 +117,10 @@ pub(super) fn rx_thread(
             let producer = smp.header().publisher_id();
             drop(smp); // return the shared-memory slot at once
             counters.received.fetch_add(1, Ordering::Relaxed);
+            let new_producer = last_producer != Some(producer);
+            if new_producer {
+                next_stream_seq = None;
+            }
             if last_producer.is_some_and(|p| p != producer) && mid_stream {
                 // A restarted or replaced producer: its numbering starts afresh unless it
                 // continues the old one (then the gap is real and counted below).
@@ -135,6 +146,14 @@ pub(super) fn rx_thread(
             }
             last_producer = Some(producer);
             if s.is_end_of_stream() {
+                if let Some(l) = last_seq
+                    && s.seq > l
+                {
+                    counters
+                        .seq_gaps
+                        .fetch_add(s.seq - l - 1, Ordering::Relaxed);
+                }
+                next_stream_seq = Some(s.seq.wrapping_add(1));
                 last_seq = None;
                 mid_stream = false;
                 // The marker is never dropped, whatever the policy.
@@ -144,6 +163,19 @@ pub(super) fn rx_thread(
                 continue;
             }
             mid_stream = true;
+            if last_seq.is_none() {
+                // The head of a stream: what the producer numbered before this sample.
+                match next_stream_seq.take() {
+                    Some(first) => {
+                        counters
+                            .seq_gaps
+                            .fetch_add(s.seq.saturating_sub(first), Ordering::Relaxed);
+                    }
+                    None => {
+                        counters.head_missing.fetch_add(s.seq, Ordering::Relaxed);
+                    }
+                }
+            }
             if let Some(l) = last_seq {
                 if s.seq == l {
                     counters.duplicate.fetch_add(1, Ordering::Relaxed);

@@ -1,0 +1,179 @@
+//! Input plausibility: the one place that decides whether an IMU sample may enter the filter,
+//! shared by the offline runner and the daemon (both go through `Estimator::step`).
+//!
+//! A sample is refused when a value is not finite, when |ω| or |f| is beyond what the sensor can
+//! output (`sensor.max_gyro_rad_s`, `sensor.max_accel_m_s2`), or when its time breaks the time
+//! rule of [`TimeGuard`] (not increasing by `sensor.min_dt_s`, or a jump beyond
+//! `sensor.max_dt_s` that the next sample does not confirm). A sample with an axis at the rail
+//! (within [`CLIP_FRACTION`] of the range) is accepted and flagged as clipped.
+
+use super::estimator::{ImuInput, SampleError};
+use corridor_shared::sensor::{CLIP_FRACTION, SensorLimits, TimeGuard, TimeVerdict};
+
+/// Field names in sample order, for messages.
+const FIELDS: [&str; 6] = [
+    "gx_rad_s", "gy_rad_s", "gz_rad_s", "ax_m_s2", "ay_m_s2", "az_m_s2",
+];
+
+/// The plausibility check of one stream.
+#[derive(Debug, Clone)]
+pub struct Plausibility {
+    limits: SensorLimits,
+    time: TimeGuard,
+}
+
+impl Plausibility {
+    /// A check with `limits` and no time base yet.
+    pub fn new(limits: SensorLimits) -> Self {
+        Self {
+            time: TimeGuard::from_limits(&limits),
+            limits,
+        }
+    }
+
+    /// The previous accepted time.
+    pub fn last_t_s(&self) -> Option<f64> {
+        self.time.last_s()
+    }
+
+    /// Checks `s`; on `Ok` the sample is accepted (its time is the new time base) and the flag
+    /// says whether an axis is at the rail. On `Err` nothing changed except that a time jump is
+    /// remembered as a candidate time base.
+    pub fn check(&mut self, s: &ImuInput) -> Result<bool, SampleError> {
+        if !s.t_s.is_finite() {
+            return Err(SampleError::NonFinite {
+                t_s: s.t_s,
+                field: "t_s",
+                value: s.t_s,
+            });
+        }
+        let values = [
+            s.gyro_rad_s[0],
+            s.gyro_rad_s[1],
+            s.gyro_rad_s[2],
+            s.accel_m_s2[0],
+            s.accel_m_s2[1],
+            s.accel_m_s2[2],
+        ];
+        if let Some((k, &value)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(SampleError::NonFinite {
+                t_s: s.t_s,
+                field: FIELDS[k],
+                value,
+            });
+        }
+        let norm = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let l = &self.limits;
+        for (field, value, limit) in [
+            ("|gyro_rad_s|", norm(&s.gyro_rad_s), l.max_gyro_rad_s()),
+            ("|accel_m_s2|", norm(&s.accel_m_s2), l.max_accel_m_s2()),
+        ] {
+            // The components are finite here; a norm that overflowed is +inf and caught too.
+            if value > limit {
+                return Err(SampleError::Implausible {
+                    t_s: s.t_s,
+                    field,
+                    value,
+                    limit,
+                });
+            }
+        }
+        match self.time.check(s.t_s) {
+            TimeVerdict::Accept => {}
+            TimeVerdict::NotIncreasing => {
+                return Err(SampleError::TimeNotIncreasing {
+                    t_s: s.t_s,
+                    prev_t_s: self.time.last_s().unwrap_or(f64::NAN),
+                });
+            }
+            TimeVerdict::Jump => {
+                return Err(SampleError::TimeJump {
+                    t_s: s.t_s,
+                    prev_t_s: self.time.last_s().unwrap_or(f64::NAN),
+                    max_dt_s: l.max_dt_s(),
+                });
+            }
+        }
+        self.time.accept(s.t_s);
+        let rail = |v: &[f64; 3], range: f64| v.iter().any(|x| x.abs() >= CLIP_FRACTION * range);
+        Ok(rail(&s.gyro_rad_s, l.gyro_range_rad_s()) || rail(&s.accel_m_s2, l.accel_range_m_s2()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use corridor_shared::sensor::SensorFile;
+
+    fn gx5() -> Plausibility {
+        let f = SensorFile {
+            gyro_range_rad_s: Some(8.73),
+            accel_range_m_s2: Some(78.45),
+            max_gyro_rad_s: Some(20.0),
+            max_accel_m_s2: Some(200.0),
+            ..Default::default()
+        };
+        Plausibility::new(f.validate().unwrap())
+    }
+
+    fn sample(t_s: f64, g: [f64; 3], a: [f64; 3]) -> ImuInput {
+        ImuInput {
+            t_s,
+            gyro_rad_s: g,
+            accel_m_s2: a,
+        }
+    }
+
+    #[test]
+    fn absurd_values_are_refused_rails_are_flagged_normal_values_pass() {
+        let mut p = gx5();
+        assert_eq!(p.check(&sample(0.0, [0.1; 3], [0.0, 0.0, 9.8])), Ok(false));
+        let err = p
+            .check(&sample(0.005, [0.1; 3], [0.0, 0.0, 1e30]))
+            .unwrap_err();
+        assert!(matches!(
+            err,
+            SampleError::Implausible {
+                field: "|accel_m_s2|",
+                ..
+            }
+        ));
+        assert!(err.to_string().contains("1e30"), "{err}");
+        let err = p
+            .check(&sample(0.005, [0.1, 1e300, 0.1], [0.0, 0.0, 9.8]))
+            .unwrap_err();
+        assert!(matches!(
+            err,
+            SampleError::Implausible {
+                field: "|gyro_rad_s|",
+                ..
+            }
+        ));
+        // At the rail (8.6 ≥ 0.98 × 8.73): accepted and flagged.
+        assert_eq!(
+            p.check(&sample(0.005, [0.0, 8.6, 0.0], [0.0, 0.0, 9.8])),
+            Ok(true)
+        );
+        assert_eq!(
+            p.check(&sample(0.010, [0.0; 3], [0.0, 0.0, 78.0])),
+            Ok(true)
+        );
+        assert_eq!(p.last_t_s(), Some(0.010));
+    }
+
+    #[test]
+    fn a_time_outlier_does_not_become_the_time_base() {
+        let mut p = gx5();
+        let rest = |t| sample(t, [0.0; 3], [0.0, 0.0, 9.8]);
+        p.check(&rest(0.0)).unwrap();
+        assert!(matches!(
+            p.check(&rest(1e30)),
+            Err(SampleError::TimeJump { prev_t_s: 0.0, .. })
+        ));
+        assert_eq!(p.check(&rest(0.005)), Ok(false));
+        assert!(matches!(
+            p.check(&rest(f64::INFINITY)),
+            Err(SampleError::NonFinite { field: "t_s", .. })
+        ));
+    }
+}

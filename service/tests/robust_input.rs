@@ -1,0 +1,155 @@
+//! Faults in the input (issue 10, findings 2 and 3): absurd values and absurd times are refused,
+//! counted, and leave the rest of the run as it would have been.
+
+use corridor_service::core::{Estimator, ImuInput};
+use corridor_service::runner::{heading_aid, run_log};
+use corridor_shared::config::Config;
+use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
+use corridor_shared::injection::BiasInjection;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn exp36() -> (ImuLog, Config) {
+    let log = read_imu_csv(
+        &root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
+        &ImuCsvOptions::default(),
+    )
+    .unwrap();
+    let cfg = Config::from_file(&root().join("configs/gdins.toml")).unwrap();
+    (log, cfg)
+}
+
+/// Final position and bias of `log` through the runner, and the estimator counters.
+fn run(log: &ImuLog, cfg: &Config) -> ([f64; 2], [f64; 3], corridor_service::core::Counters) {
+    let aid = heading_aid(cfg, None).unwrap();
+    let out = run_log(log, cfg, &aid, &BiasInjection::default(), |_, _| {});
+    let n = out.trace.t_s.len();
+    (
+        out.trace.xy_m[n - 1],
+        out.trace.bias_rad_s[n - 1],
+        out.counters,
+    )
+}
+
+fn close(a: [f64; 2], b: [f64; 2], tol_m: f64) -> bool {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt() < tol_m
+}
+
+#[test]
+fn one_absurd_accel_and_one_absurd_gyro_are_refused_and_the_run_matches_the_clean_one() {
+    let (log, cfg) = exp36();
+    let (xy_clean, bias_clean, _) = run(&log, &cfg);
+    let mut bad = log.clone();
+    // Before: az = 1e30 gave positions of 1e26 m, and 1e300 turned the whole state NaN.
+    bad.rows[5000].accel_m_s2[2] = 1e30;
+    bad.rows[9000].gyro_rad_s[1] = 1e300;
+    let (xy, bias, c) = run(&bad, &cfg);
+    assert_eq!(c.rejected_implausible, 2);
+    assert_eq!(c.samples, log.rows.len() as u64 - 2);
+    assert!(close(xy, xy_clean, 0.5), "{xy:?} vs clean {xy_clean:?}");
+    for k in 0..3 {
+        assert!(
+            (bias[k] - bias_clean[k]).abs() < 5e-4,
+            "{bias:?} vs {bias_clean:?}"
+        );
+    }
+}
+
+#[test]
+fn an_absurd_time_in_a_stream_does_not_become_the_time_base() {
+    // The daemon path: no CSV reader in front of the estimator.
+    let (log, cfg) = exp36();
+    let mut est = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
+    let n = log.rows.len();
+    let mut last = None;
+    for (k, r) in log.rows.iter().enumerate() {
+        let t_s = if k == n / 2 || k == n - 1 {
+            1e30
+        } else {
+            r.t_s
+        };
+        let s = ImuInput {
+            t_s,
+            gyro_rad_s: r.gyro_rad_s,
+            accel_m_s2: r.accel_m_s2,
+        };
+        if let Ok(e) = est.step(&s) {
+            last = Some(*e);
+        }
+    }
+    let c = est.counters();
+    assert_eq!((c.rejected_time_jump, c.rejected_time), (2, 0));
+    assert_eq!(c.samples, n as u64 - 2);
+    let e = last.unwrap();
+    assert!(
+        e.t_s < 100.0 && e.p_m.iter().all(|p| p.abs() < 100.0),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn a_state_broken_by_a_sample_the_limits_let_through_falls_back_to_the_last_good_state() {
+    // Limits so wide that the plausibility check lets 1e30 through: the health check after the
+    // update is what must catch it (before: positions of 1e26 m, or a NaN state with
+    // `converged = 1`, and a garbage bias saved in the daemon's checkpoint).
+    let (log, mut cfg) = exp36();
+    cfg.sensor = corridor_shared::sensor::SensorFile {
+        max_accel_m_s2: Some(1e301),
+        max_gyro_rad_s: Some(1e301),
+        ..Default::default()
+    }
+    .validate()
+    .unwrap();
+    let (xy_clean, bias_clean, _) = run(&log, &cfg);
+    // (Not 1e30: the stance detector's running window sums would lose every small value for
+    // the next 4096 samples; the plausibility check is what keeps such values out of them.)
+    for value in [1e4, 1e6] {
+        let mut bad = log.clone();
+        bad.rows[5000].accel_m_s2[2] = value;
+        bad.rows[9000].accel_m_s2[0] = -value;
+        let aid = heading_aid(&cfg, None).unwrap();
+        let mut faults = 0;
+        let mut worst_speed: f64 = 0.0;
+        let out = run_log(&bad, &cfg, &aid, &BiasInjection::default(), |_, e| {
+            faults += usize::from(e.health_fault.is_some());
+            let v = e.v_m_s;
+            worst_speed = worst_speed.max((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt());
+            assert!(
+                e.p_m
+                    .iter()
+                    .chain(&e.gyro_bias_rad_s)
+                    .all(|x| x.is_finite())
+            );
+        });
+        let c = out.counters;
+        assert_eq!(c.rejected_implausible, 0);
+        assert!(
+            c.health_restores >= 2 && faults as u64 == c.health_restores,
+            "{c:?}"
+        );
+        assert!(worst_speed <= cfg.max_speed_m_s.get(), "{worst_speed}");
+        let n = out.trace.t_s.len();
+        let (xy, bias) = (out.trace.xy_m[n - 1], out.trace.bias_rad_s[n - 1]);
+        // The failed update is undone: as if the sample had been refused.
+        assert!(
+            close(xy, xy_clean, 0.5),
+            "{value}: {xy:?} vs clean {xy_clean:?}"
+        );
+        for k in 0..3 {
+            assert!(
+                (bias[k] - bias_clean[k]).abs() < 5e-4,
+                "{bias:?} vs {bias_clean:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_clean_recording_never_fails_the_health_check() {
+    let (log, cfg) = exp36();
+    let (_, _, c) = run(&log, &cfg);
+    assert_eq!(c.health_restores, 0);
+}

@@ -1,0 +1,322 @@
+//! The `[sensor]` section: what the IMU can physically output, and the time rule shared by the
+//! CSV reader and the estimator.
+//!
+//! Two kinds of limits:
+//! - the **range** (full scale) of each axis. A value at the rail (within [`CLIP_FRACTION`] of
+//!   the range) was probably clipped: it is kept, flagged and counted, because it is real data
+//!   with a known error;
+//! - the **plausible magnitude** |ω| and |f| beyond which a value is absurd (a corrupt record, a
+//!   unit mix-up, a bit flip): the sample is rejected. It is set well above √3 × range because
+//!   factory calibration (scale factor, misalignment) lets a clipped axis read a few percent beyond
+//!   its nominal rail (the gdins logs of the ±8 g 3DM-GX5-25 hold a few values up to 12.5 g).
+//!
+//! There is no rate-of-change limit: with every axis bounded, a sample-to-sample change is bounded
+//! by the plausible magnitude already, and a tighter bound would need the sensor's bandwidth and
+//! would reject real heel strikes (tens of g within one sample).
+//!
+//! Time: a step not above `min_dt_s` is refused; a step longer than `max_dt_s` is a **time jump**:
+//! the sample is refused unless the next one confirms the new time base ([`TimeGuard`]), so one
+//! corrupt `t_s = 1e30` costs one row, and a real long gap costs one row too.
+
+use serde::{Deserialize, Serialize};
+
+/// Fraction of the range at which a value counts as clipped.
+pub const CLIP_FRACTION: f64 = 0.98;
+/// Default gyro range: ±2000 °/s, the widest common MEMS full scale, rad/s.
+pub const DEFAULT_GYRO_RANGE_RAD_S: f64 = 34.906_585;
+/// Default accelerometer range: ±16 g, m/s².
+pub const DEFAULT_ACCEL_RANGE_M_S2: f64 = 156.906_4;
+/// Default largest plausible |ω|: 2 × √3 × the default range, rad/s.
+pub const DEFAULT_MAX_GYRO_RAD_S: f64 = 120.0;
+/// Default largest plausible |f|: 2 × √3 × the default range, m/s².
+pub const DEFAULT_MAX_ACCEL_M_S2: f64 = 540.0;
+/// Default largest plausible gyro bias: 0.2 rad/s (11 °/s), above the turn-on bias of any MEMS
+/// gyro worth mounting on a foot (datasheets give 0.04–5 °/s).
+pub const DEFAULT_MAX_GYRO_BIAS_RAD_S: f64 = 0.2;
+/// Default smallest time step: 1 µs (no IMU samples at 1 MHz), s.
+pub const DEFAULT_MIN_DT_S: f64 = 1e-6;
+/// Default largest time step accepted without confirmation, s.
+pub const DEFAULT_MAX_DT_S: f64 = 1.0;
+
+/// `[sensor]` in the TOML file; every key optional.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorFile {
+    /// Gyro full scale per axis, rad/s (default ±2000 °/s).
+    pub gyro_range_rad_s: Option<f64>,
+    /// Accelerometer full scale per axis, m/s² (default ±16 g).
+    pub accel_range_m_s2: Option<f64>,
+    /// Largest plausible |ω|, rad/s; beyond it a sample is rejected (default 120).
+    pub max_gyro_rad_s: Option<f64>,
+    /// Largest plausible |f|, m/s²; beyond it a sample is rejected (default 540).
+    pub max_accel_m_s2: Option<f64>,
+    /// Largest plausible gyro bias per axis, rad/s (estimator health, checkpoints; default 0.2).
+    pub max_gyro_bias_rad_s: Option<f64>,
+    /// Smallest time step, s (default 1e-6).
+    pub min_dt_s: Option<f64>,
+    /// Largest time step accepted as it comes; a longer one needs the next sample to confirm it
+    /// (default 1.0 s).
+    pub max_dt_s: Option<f64>,
+}
+
+/// Validated `[sensor]`: every limit finite and positive, ranges below the plausible magnitudes,
+/// `min_dt_s < max_dt_s`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SensorLimits {
+    gyro_range_rad_s: f64,
+    accel_range_m_s2: f64,
+    max_gyro_rad_s: f64,
+    max_accel_m_s2: f64,
+    max_gyro_bias_rad_s: f64,
+    min_dt_s: f64,
+    max_dt_s: f64,
+}
+
+/// A `[sensor]` key that is not valid: the key, the value and the rule.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensorKeyError {
+    /// Dotted key.
+    pub key: &'static str,
+    /// Value found.
+    pub value: f64,
+    /// What it must satisfy.
+    pub rule: &'static str,
+}
+
+impl Default for SensorLimits {
+    fn default() -> Self {
+        SensorFile::default()
+            .validate()
+            .expect("the built-in sensor defaults are valid")
+    }
+}
+
+impl SensorFile {
+    /// Applies the defaults and checks every key.
+    pub fn validate(&self) -> Result<SensorLimits, SensorKeyError> {
+        let pos = |key: &'static str, v: Option<f64>, d: f64| {
+            let v = v.unwrap_or(d);
+            if v.is_finite() && v > 0.0 {
+                Ok(v)
+            } else {
+                Err(SensorKeyError {
+                    key,
+                    value: v,
+                    rule: "must be a finite number > 0",
+                })
+            }
+        };
+        let l = SensorLimits {
+            gyro_range_rad_s: pos(
+                "sensor.gyro_range_rad_s",
+                self.gyro_range_rad_s,
+                DEFAULT_GYRO_RANGE_RAD_S,
+            )?,
+            accel_range_m_s2: pos(
+                "sensor.accel_range_m_s2",
+                self.accel_range_m_s2,
+                DEFAULT_ACCEL_RANGE_M_S2,
+            )?,
+            max_gyro_rad_s: pos(
+                "sensor.max_gyro_rad_s",
+                self.max_gyro_rad_s,
+                DEFAULT_MAX_GYRO_RAD_S,
+            )?,
+            max_accel_m_s2: pos(
+                "sensor.max_accel_m_s2",
+                self.max_accel_m_s2,
+                DEFAULT_MAX_ACCEL_M_S2,
+            )?,
+            max_gyro_bias_rad_s: pos(
+                "sensor.max_gyro_bias_rad_s",
+                self.max_gyro_bias_rad_s,
+                DEFAULT_MAX_GYRO_BIAS_RAD_S,
+            )?,
+            min_dt_s: pos("sensor.min_dt_s", self.min_dt_s, DEFAULT_MIN_DT_S)?,
+            max_dt_s: pos("sensor.max_dt_s", self.max_dt_s, DEFAULT_MAX_DT_S)?,
+        };
+        let rule = |key, value, rule| Err(SensorKeyError { key, value, rule });
+        if l.max_gyro_rad_s < l.gyro_range_rad_s {
+            return rule(
+                "sensor.max_gyro_rad_s",
+                l.max_gyro_rad_s,
+                "must be >= sensor.gyro_range_rad_s",
+            );
+        }
+        if l.max_accel_m_s2 < l.accel_range_m_s2 {
+            return rule(
+                "sensor.max_accel_m_s2",
+                l.max_accel_m_s2,
+                "must be >= sensor.accel_range_m_s2",
+            );
+        }
+        if l.min_dt_s >= l.max_dt_s {
+            return rule("sensor.min_dt_s", l.min_dt_s, "must be < sensor.max_dt_s");
+        }
+        Ok(l)
+    }
+}
+
+impl SensorLimits {
+    /// Gyro full scale per axis, rad/s.
+    pub fn gyro_range_rad_s(&self) -> f64 {
+        self.gyro_range_rad_s
+    }
+    /// Accelerometer full scale per axis, m/s².
+    pub fn accel_range_m_s2(&self) -> f64 {
+        self.accel_range_m_s2
+    }
+    /// Largest plausible |ω|, rad/s.
+    pub fn max_gyro_rad_s(&self) -> f64 {
+        self.max_gyro_rad_s
+    }
+    /// Largest plausible |f|, m/s².
+    pub fn max_accel_m_s2(&self) -> f64 {
+        self.max_accel_m_s2
+    }
+    /// Largest plausible gyro bias per axis, rad/s.
+    pub fn max_gyro_bias_rad_s(&self) -> f64 {
+        self.max_gyro_bias_rad_s
+    }
+    /// Smallest time step, s.
+    pub fn min_dt_s(&self) -> f64 {
+        self.min_dt_s
+    }
+    /// Largest time step accepted without confirmation, s.
+    pub fn max_dt_s(&self) -> f64 {
+        self.max_dt_s
+    }
+}
+
+/// What [`TimeGuard::check`] decided about a sample time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TimeVerdict {
+    /// The time follows the time base: accept it.
+    Accept,
+    /// The time does not increase by more than `min_dt_s` (duplicates and going back included).
+    NotIncreasing,
+    /// The time jumps forward by more than `max_dt_s`: refused until a next sample confirms it.
+    Jump,
+}
+
+/// The time rule of the CSV reader and of the estimator: strictly increasing by more than
+/// `min_dt_s`; a forward jump beyond `max_dt_s` becomes the new time base only when the next
+/// sample follows it within `max_dt_s` (a real gap), otherwise the jumped sample was an outlier.
+/// The caller calls [`TimeGuard::accept`] with every time it accepts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimeGuard {
+    min_dt_s: f64,
+    max_dt_s: f64,
+    last_s: Option<f64>,
+    candidate_s: Option<f64>,
+}
+
+impl TimeGuard {
+    /// A guard with the given step bounds and no time base yet.
+    pub fn new(min_dt_s: f64, max_dt_s: f64) -> Self {
+        Self {
+            min_dt_s,
+            max_dt_s,
+            last_s: None,
+            candidate_s: None,
+        }
+    }
+
+    /// The guard of `limits`.
+    pub fn from_limits(limits: &SensorLimits) -> Self {
+        Self::new(limits.min_dt_s, limits.max_dt_s)
+    }
+
+    /// The last accepted time.
+    pub fn last_s(&self) -> Option<f64> {
+        self.last_s
+    }
+
+    /// Judges the finite time `t_s` against the time base; a jump is remembered as the candidate
+    /// for a new base.
+    pub fn check(&mut self, t_s: f64) -> TimeVerdict {
+        let Some(last) = self.last_s else {
+            return TimeVerdict::Accept;
+        };
+        let dt = t_s - last;
+        if dt.is_nan() || dt <= self.min_dt_s {
+            return TimeVerdict::NotIncreasing;
+        }
+        if dt <= self.max_dt_s {
+            return TimeVerdict::Accept;
+        }
+        if let Some(c) = self.candidate_s
+            && t_s - c > self.min_dt_s
+            && t_s - c <= self.max_dt_s
+        {
+            return TimeVerdict::Accept;
+        }
+        self.candidate_s = Some(t_s);
+        TimeVerdict::Jump
+    }
+
+    /// Records `t_s` as accepted: the new time base.
+    pub fn accept(&mut self, t_s: f64) {
+        self.last_s = Some(t_s);
+        self.candidate_s = None;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(times: &[f64]) -> Vec<TimeVerdict> {
+        let mut g = TimeGuard::new(1e-6, 1.0);
+        times
+            .iter()
+            .map(|&t| {
+                let v = g.check(t);
+                if v == TimeVerdict::Accept {
+                    g.accept(t);
+                }
+                v
+            })
+            .collect()
+    }
+
+    #[test]
+    fn an_outlier_time_is_refused_and_the_good_rows_after_it_are_kept() {
+        use TimeVerdict::*;
+        assert_eq!(
+            run(&[0.0, 0.01, 1e30, 0.02, 0.03]),
+            [Accept, Accept, Jump, Accept, Accept]
+        );
+        assert_eq!(run(&[0.0, 0.01, 1e30]), [Accept, Accept, Jump]);
+    }
+
+    #[test]
+    fn a_real_gap_costs_one_sample_then_becomes_the_time_base() {
+        use TimeVerdict::*;
+        assert_eq!(
+            run(&[0.0, 0.01, 10.0, 10.01, 10.02]),
+            [Accept, Accept, Jump, Accept, Accept]
+        );
+        assert_eq!(
+            run(&[0.0, 0.01, 0.01, 0.005]),
+            [Accept, Accept, NotIncreasing, NotIncreasing]
+        );
+    }
+
+    #[test]
+    fn bad_limits_name_the_key() {
+        let f = SensorFile {
+            max_gyro_rad_s: Some(1.0),
+            gyro_range_rad_s: Some(8.73),
+            ..Default::default()
+        };
+        assert_eq!(f.validate().unwrap_err().key, "sensor.max_gyro_rad_s");
+        let f = SensorFile {
+            min_dt_s: Some(f64::NAN),
+            ..Default::default()
+        };
+        assert_eq!(f.validate().unwrap_err().key, "sensor.min_dt_s");
+        let l = SensorLimits::default();
+        assert_eq!(l.max_dt_s(), DEFAULT_MAX_DT_S);
+    }
+}
