@@ -276,6 +276,28 @@ impl Eskf {
         f
     }
 
+    /// Copies `src`'s state into `self` (same configuration): the nominal state and the
+    /// leading `n × n` of the covariance only, a fraction of a full clone. For the copy of the
+    /// state before every sample that the health check can return to.
+    pub fn copy_state_from(&mut self, src: &Eskf) {
+        self.p_m = src.p_m;
+        self.v_m_s = src.v_m_s;
+        self.nav_from_body = src.nav_from_body;
+        self.gyro_bias_rad_s = src.gyro_bias_rad_s;
+        self.ext = src.ext;
+        self.footprint_xy_m = src.footprint_xy_m;
+        self.layout = src.layout;
+        self.gravity_m_s2 = src.gravity_m_s2;
+        self.noise = src.noise;
+        self.ext_cfg = src.ext_cfg;
+        self.estimate_bias = src.estimate_bias;
+        let n = src.layout.n;
+        for c in 0..n {
+            let col = c * MAX_N;
+            self.p[col..col + n].copy_from_slice(&src.p[col..col + n]);
+        }
+    }
+
     /// Error-state dimension in use.
     pub fn dim(&self) -> usize {
         self.layout.n
@@ -821,6 +843,52 @@ mod tests {
     fn dense(f: &Eskf) -> nalgebra::DMatrix<f64> {
         let n = f.dim();
         nalgebra::DMatrix::from_fn(n, n, |r, c| f.cov(r, c))
+    }
+
+    #[test]
+    fn a_state_copy_equals_a_clone_where_it_is_used() {
+        let mut a = Eskf::new(
+            EskfInit {
+                nav_from_body: from_euler_zyx(0.1, 0.2, 0.3),
+                gyro_bias_rad_s: Vector3::new(0.01, 0.0, -0.01),
+                tilt_sd_rad: 0.01,
+                bias_sd_rad_s: 0.01,
+                gravity_m_s2: 9.81,
+                bias: BiasStates::Estimated,
+            },
+            noise(),
+            all_ext(),
+        );
+        let mut b = a.clone();
+        for _ in 0..5 {
+            a.propagate(
+                &Vector3::new(1.0, -2.0, 0.5),
+                &Vector3::new(1.0, 2.0, 9.0),
+                0.005,
+            );
+            a.zupt();
+            a.clone_footprint();
+        }
+        b.copy_state_from(&a);
+        let n = a.dim();
+        assert_eq!(dense(&a), dense(&b));
+        assert_eq!(
+            (a.p_m, a.v_m_s, a.nav_from_body),
+            (b.p_m, b.v_m_s, b.nav_from_body)
+        );
+        assert_eq!((a.gyro_bias_rad_s, a.ext), (b.gyro_bias_rad_s, b.ext));
+        assert_eq!(a.footprint_xy_m, b.footprint_xy_m);
+        // The next steps agree to the bit.
+        for f in [&mut a, &mut b] {
+            f.propagate(
+                &Vector3::new(0.3, 0.1, -0.2),
+                &Vector3::new(0.5, 0.0, 9.8),
+                0.005,
+            );
+            f.stride_direction_update(0.2, 0.05);
+        }
+        assert_eq!(dense(&a), dense(&b));
+        assert_eq!(n, b.dim());
     }
 
     #[test]

@@ -545,7 +545,14 @@ impl Estimator {
             return Ok(&self.out);
         };
         if let Some(e) = &self.eskf {
-            self.before.save(&(e.clone(), self.bias.clone()));
+            // Every sample: copy in place, the used block of the covariance only.
+            match self.before.get_mut() {
+                Some((e0, b0)) => {
+                    e0.copy_state_from(e);
+                    b0.clone_from(&self.bias);
+                }
+                None => self.before.save(&(e.clone(), self.bias.clone())),
+            }
         }
         let dt = s.t_s - t_prev;
         if dt > self.cfg.max_dt_s.get() {
@@ -614,7 +621,7 @@ impl Estimator {
                     &self.good
                 };
                 if let Some((e, b)) = slot.get() {
-                    eskf.clone_from(e);
+                    eskf.copy_state_from(e);
                     self.bias.clone_from(b);
                 }
                 self.counters.health_restores += 1;

@@ -97,6 +97,11 @@ impl<T: Clone> LastGood<T> {
     pub fn get(&self) -> Option<&T> {
         self.state.as_ref()
     }
+
+    /// The saved copy, to overwrite in place.
+    pub fn get_mut(&mut self) -> Option<&mut T> {
+        self.state.as_mut()
+    }
 }
 
 #[cfg(test)]
