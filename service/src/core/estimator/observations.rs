@@ -1,0 +1,226 @@
+//! Once per stance: the calibration of the map frame and the mounting yaw, then the heading
+//! observations of the configured mode.
+
+use super::association::weighted_association;
+use super::*;
+
+impl Estimator {
+    /// Once per stance: calibration or a heading observation.
+    pub(super) fn stance_observation(&mut self, t_s: f64) {
+        let h = self.cfg.heading.clone();
+        let forward = self.foot_forward_body();
+        let eskf = self.eskf.as_mut().expect("aligned");
+        if self.phase == Phase::Calibrating {
+            let stride_dir = match self.last_footprint {
+                None => {
+                    let d = eskf.p_m;
+                    if d.x.hypot(d.y) < 0.2 {
+                        return; // not a stride yet (a shuffle in place)
+                    }
+                    eskf.rotate_frame(h.start_heading_rad - d.y.atan2(d.x));
+                    eskf.set_heading_variance(h.start_heading_sd_rad.get().powi(2));
+                    h.start_heading_rad
+                }
+                Some((xy, _)) => {
+                    let (dx, dy) = (eskf.p_m.x - xy[0], eskf.p_m.y - xy[1]);
+                    if dx.hypot(dy) < h.min_stride_m.get() {
+                        return; // a shuffle: wait for a real stride
+                    }
+                    dy.atan2(dx)
+                }
+            };
+            // The sensor's yaw on the foot is learnt on straight strides only (this stride in
+            // the direction of the previous one): in a turn the foot at touchdown does not
+            // point along the stride that brought it there.
+            let straight = self
+                .last_footprint
+                .and_then(|(_, prev)| prev)
+                .is_none_or(|prev| {
+                    wrap_pi(stride_dir - prev).abs() <= h.straight_max_change_rad.get()
+                });
+            self.last_footprint = Some(([eskf.p_m.x, eskf.p_m.y], Some(stride_dir)));
+            eskf.clone_footprint();
+            if !straight {
+                return;
+            }
+            // Heading of the sensor's levelled x axis: ≈ walking direction + mounting yaw.
+            let levelled = eskf.nav_from_body * self.tilt0.inverse();
+            let m = wrap_pi(yaw(&levelled) - stride_dir);
+            self.mount_sum.0 += m.cos();
+            self.mount_sum.1 += m.sin();
+            self.mount_sum.2 += 1;
+            self.straight.push(stride_dir);
+            if self.mount_sum.2 >= h.calibration_strides {
+                self.mount_yaw_rad = self.mount_sum.1.atan2(self.mount_sum.0);
+                self.phase = Phase::Tracking;
+                let q = eskf.nav_from_body;
+                match &mut self.bias {
+                    BiasFilter::InEskf => {}
+                    BiasFilter::Paper { kf, obs } => {
+                        // Re-express the prior with the now known mounting yaw.
+                        kf.b_rad_s = rot_z(self.mount_yaw_rad) * kf.b_rad_s;
+                        *obs = Some(PaperObserver::new(q, t_s));
+                    }
+                    BiasFilter::RotationAware { obs, .. } => {
+                        *obs = Some(RotationAwareObserver::new(q));
+                    }
+                }
+            }
+            return;
+        }
+        if self.cfg.mode == Mode::Eskf && self.pending_heading.is_none() {
+            self.eskf_observations(&forward);
+            return;
+        }
+        let foot_heading = wrap_pi(eskf.predicted_heading(&forward));
+        let straight = self.straight.push(foot_heading);
+        let xy = [eskf.p_m.x, eskf.p_m.y];
+        let (direction, sd) = match self.pending_heading.take() {
+            Some((dir, sd)) => (Ok(dir), sd),
+            None if self.cfg.mode == Mode::Zupt => (Err(Rejection::NoSource), h.sigma_rad.get()),
+            None if !straight => (Err(Rejection::NotStraight), h.sigma_rad.get()),
+            None => (
+                self.aid.associate(xy, foot_heading, h.gate_rad.get()),
+                h.sigma_rad.get(),
+            ),
+        };
+        let mut event = HeadingEvent {
+            foot_heading_rad: foot_heading,
+            direction_rad: f64::NAN,
+            outcome: Err(Rejection::NoSource),
+            baseline_s: 0.0,
+        };
+        match direction {
+            Err(r) => {
+                self.count_rejection(r);
+                event.outcome = Err(r);
+            }
+            Ok(dir) => {
+                event.direction_rad = dir;
+                let sensor_yaw = dir + self.mount_yaw_rad; // flat foot at heading `dir`
+                let tilt_sd = self.cfg.bias_kf.tilt_sd_rad.get();
+                let innovation = match &mut self.bias {
+                    BiasFilter::InEskf => Some(eskf.heading_update(dir, sd, &forward)),
+                    BiasFilter::Paper { kf, obs } => {
+                        let q_true = rot_z(sensor_yaw) * self.tilt0;
+                        obs.as_ref()
+                            .and_then(|o| o.observe(&q_true, t_s))
+                            .map(|(y, el)| {
+                                event.baseline_s = el;
+                                kf.predict(t_s);
+                                let r = Vector3::new(tilt_sd / el, tilt_sd / el, sd / el)
+                                    .map(|v| v * v);
+                                kf.update(&y, &Matrix3::identity(), &r)
+                            })
+                    }
+                    BiasFilter::RotationAware { kf, obs } => {
+                        let (sum, n) = self.stance_f_sum;
+                        let (roll, pitch) = tilt_from_specific_force(&(sum / n.max(1) as f64));
+                        // The accelerometer's tilt, turned about z until the foot axis points at `dir`.
+                        let tilt = from_euler_zyx(roll, pitch, 0.0);
+                        let q_true = rot_z(dir - heading_of_axis(&tilt, &forward)) * tilt;
+                        obs.as_ref().map(|o| {
+                            let (y, hm) = o.observe(&q_true);
+                            kf.predict(t_s);
+                            let r = Vector3::new(tilt_sd, tilt_sd, sd).map(|v| v * v);
+                            kf.update(&y, &hm, &r)
+                        })
+                    }
+                };
+                if let Some(i) = innovation {
+                    self.counters.heading_used += 1;
+                    event.outcome = Ok(i);
+                }
+            }
+        }
+        self.out.heading = Some(event);
+    }
+
+    /// The `eskf` mode's observations at a stance: the stride direction since the previous
+    /// footprint and the foot axis, each associated with the nearest dominant direction and
+    /// fused with the weight of that association (see [`association_weight`]).
+    fn eskf_observations(&mut self, forward: &Vector3<f64>) {
+        let h = &self.cfg.heading;
+        let eskf = self.eskf.as_mut().expect("aligned");
+        let xy = [eskf.p_m.x, eskf.p_m.y];
+        if h.observations.stride() {
+            let event = match eskf.stride_prediction() {
+                Some((len, dir, var)) if len >= h.min_stride_m.get() => {
+                    let sd = h.stride_sigma_rad.get();
+                    let mut event = HeadingEvent {
+                        foot_heading_rad: dir,
+                        direction_rad: f64::NAN,
+                        outcome: Err(Rejection::NoSource),
+                        baseline_s: 0.0,
+                    };
+                    let on_line = self.line.as_mut().and_then(|l| l.push(xy));
+                    let assoc = if on_line == Some(false) {
+                        Err(Rejection::NotStraight)
+                    } else {
+                        weighted_association(&self.aid, h, xy, dir, var + sd * sd)
+                    };
+                    match assoc {
+                        Ok((d, w)) => {
+                            event.direction_rad = d;
+                            if let Some(i) = eskf.stride_direction_update(d, sd / w.sqrt()) {
+                                self.counters.stride_used += 1;
+                                event.outcome = Ok(i);
+                            }
+                        }
+                        Err(r) => {
+                            self.counters.stride_rejected += 1;
+                            event.outcome = Err(r);
+                        }
+                    }
+                    Some(event)
+                }
+                Some(_) => {
+                    self.counters.stride_rejected += 1;
+                    None
+                }
+                None => None,
+            };
+            eskf.clone_footprint();
+            self.out.stride = event;
+        }
+        let (foot_heading, var) = eskf.heading_prediction(forward);
+        let straight = self.straight.push(foot_heading);
+        let mut event = HeadingEvent {
+            foot_heading_rad: foot_heading,
+            direction_rad: f64::NAN,
+            outcome: Err(Rejection::NoSource),
+            baseline_s: 0.0,
+        };
+        if h.observations.foot_axis() {
+            let sd = h.sigma_rad.get();
+            let assoc = if straight {
+                weighted_association(&self.aid, h, xy, foot_heading, var + sd * sd)
+            } else {
+                Err(Rejection::NotStraight)
+            };
+            match assoc {
+                Ok((d, w)) => {
+                    event.direction_rad = d;
+                    let i = eskf.heading_update(d, sd / w.sqrt(), forward);
+                    self.counters.heading_used += 1;
+                    event.outcome = Ok(i);
+                }
+                Err(r) => {
+                    self.count_rejection(r);
+                    event.outcome = Err(r);
+                }
+            }
+        }
+        self.out.heading = Some(event);
+    }
+
+    fn count_rejection(&mut self, r: Rejection) {
+        match r {
+            Rejection::NotStraight => self.counters.heading_not_straight += 1,
+            Rejection::OutsideGate => self.counters.heading_outside_gate += 1,
+            Rejection::OutsideMap => self.counters.heading_outside_map += 1,
+            Rejection::Unlikely => self.counters.heading_unlikely += 1,
+            Rejection::NoSource => {}
+        }
+    }
+}

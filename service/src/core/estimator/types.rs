@@ -1,0 +1,247 @@
+//! The estimator's inputs and outputs: samples, refusals, warm-start states, phases, heading
+//! events, counters and the per-sample estimate.
+
+use crate::core::eskf::Innovation;
+use crate::core::heading::Rejection;
+use crate::core::health::HealthFault;
+
+/// One IMU sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImuInput {
+    /// Sensor time, s.
+    pub t_s: f64,
+    /// Angular rate, rad/s, sensor axes.
+    pub gyro_rad_s: [f64; 3],
+    /// Specific force, m/s², sensor axes (points up at rest).
+    pub accel_m_s2: [f64; 3],
+}
+
+/// A sample the estimator refused; it changed nothing.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum SampleError {
+    /// A component is NaN or infinite.
+    #[error("sample at t = {t_s} s: {field} is not finite ({value})")]
+    NonFinite {
+        /// Sample time.
+        t_s: f64,
+        /// Which field.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// The time does not increase (by more than `sensor.min_dt_s`).
+    #[error("sample at t = {t_s} s does not follow the previous one at {prev_t_s} s")]
+    TimeNotIncreasing {
+        /// Sample time.
+        t_s: f64,
+        /// The previous accepted time.
+        prev_t_s: f64,
+    },
+    /// A magnitude beyond what the sensor can output (`sensor.max_gyro_rad_s`,
+    /// `sensor.max_accel_m_s2`).
+    #[error("sample at t = {t_s} s: {field} = {value:e} is beyond the plausible {limit}")]
+    Implausible {
+        /// Sample time.
+        t_s: f64,
+        /// Which magnitude.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// The time jumps forward by more than `sensor.max_dt_s` and no later sample confirmed it.
+    #[error(
+        "sample at t = {t_s} s jumps from the previous one at {prev_t_s} s by more than {max_dt_s} s"
+    )]
+    TimeJump {
+        /// Sample time.
+        t_s: f64,
+        /// The previous accepted time.
+        prev_t_s: f64,
+        /// The bound.
+        max_dt_s: f64,
+    },
+}
+
+impl SampleError {
+    /// Stable snake_case name of the reason, for counters and summaries.
+    pub fn reason(&self) -> &'static str {
+        match self {
+            SampleError::NonFinite { .. } => "non_finite",
+            SampleError::TimeNotIncreasing { .. } => "time_not_increasing",
+            SampleError::Implausible { .. } => "implausible",
+            SampleError::TimeJump { .. } => "time_jump",
+        }
+    }
+}
+
+/// A saved bias state: gyro bias and its covariance, sensor axes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WarmStart {
+    /// Gyro bias, rad/s.
+    pub gyro_bias_rad_s: [f64; 3],
+    /// Its covariance, (rad/s)², symmetric positive definite.
+    pub gyro_bias_cov: [[f64; 3]; 3],
+}
+
+/// A warm-start state that is not finite, within `sensor.max_gyro_bias_rad_s`, symmetric and
+/// positive definite.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("warm-start state rejected (bias {:?}, covariance {:?}): must be finite, within sensor.max_gyro_bias_rad_s, symmetric and positive definite", .state.gyro_bias_rad_s, .state.gyro_bias_cov)]
+pub struct WarmStartError {
+    /// The rejected state.
+    pub state: WarmStart,
+}
+
+/// Estimator phase.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Phase {
+    /// Waiting for the end of the initial rest.
+    #[default]
+    Aligning,
+    /// Fixing the map frame and the sensor's yaw on the foot.
+    Calibrating,
+    /// Heading observations in use.
+    Tracking,
+}
+
+impl Phase {
+    /// Stable name for CSV and logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Aligning => "aligning",
+            Phase::Calibrating => "calibrating",
+            Phase::Tracking => "tracking",
+        }
+    }
+}
+
+/// What happened to one heading observation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeadingEvent {
+    /// Foot heading before the update, rad, map frame.
+    pub foot_heading_rad: f64,
+    /// Associated direction, rad (NaN when rejected).
+    pub direction_rad: f64,
+    /// `Ok` with the filter innovation, or why it was not used.
+    pub outcome: Result<Innovation, Rejection>,
+    /// Elapsed time since the observer epoch (bias-filter modes), s.
+    pub baseline_s: f64,
+}
+
+/// Running counters.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Samples accepted.
+    pub samples: u64,
+    /// Samples refused because a value was not finite.
+    pub rejected_non_finite: u64,
+    /// Samples refused because time did not increase.
+    pub rejected_time: u64,
+    /// Samples refused because a magnitude was beyond what the sensor can output.
+    pub rejected_implausible: u64,
+    /// Samples refused because their time jumped beyond `sensor.max_dt_s` unconfirmed.
+    pub rejected_time_jump: u64,
+    /// Accepted samples with an axis at the rail of its range (probably clipped).
+    pub clipped_samples: u64,
+    /// Updates after which the state failed the health check and the last good state (of the
+    /// last healthy stance) was restored.
+    pub health_restores: u64,
+    /// Steps longer than `estimator.max_dt_s`: each starts a new segment (nothing integrated over
+    /// the gap, velocity and attitude covariance widened).
+    pub gaps: u64,
+    /// Stances since alignment.
+    pub stances: u64,
+    /// ZUPT updates.
+    pub zupts: u64,
+    /// Heading observations used.
+    pub heading_used: u64,
+    /// Rejected: not walking straight.
+    pub heading_not_straight: u64,
+    /// Rejected: no direction within the gate.
+    pub heading_outside_gate: u64,
+    /// Rejected: outside every corridor.
+    pub heading_outside_map: u64,
+    /// Rejected: the association weight was below `heading.min_weight` (the residual says the
+    /// walker is not walking along the associated direction: a weave, a side-step).
+    pub heading_unlikely: u64,
+    /// Stride-direction observations used.
+    pub stride_used: u64,
+    /// Stride-direction observations rejected (too short, outside the gate, unlikely).
+    pub stride_rejected: u64,
+    /// Times the initial rest was too short and alignment started over.
+    pub alignment_restarts: u64,
+}
+
+/// The estimate after one sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// Sample time, s.
+    pub t_s: f64,
+    /// Phase.
+    pub phase: Phase,
+    /// Position, m, map frame.
+    pub p_m: [f64; 3],
+    /// Velocity, m/s, map frame.
+    pub v_m_s: [f64; 3],
+    /// Attitude `nav_from_body` as (w, x, y, z).
+    pub nav_from_body: [f64; 4],
+    /// ZYX roll, rad.
+    pub roll_rad: f64,
+    /// ZYX pitch, rad.
+    pub pitch_rad: f64,
+    /// ZYX yaw, rad.
+    pub yaw_rad: f64,
+    /// Gyro bias, rad/s, sensor axes.
+    pub gyro_bias_rad_s: [f64; 3],
+    /// Its σ, rad/s.
+    pub gyro_bias_sd_rad_s: [f64; 3],
+    /// Stance flag.
+    pub stance: bool,
+    /// An axis of this sample is at the rail of its range (probably clipped).
+    pub clipped: bool,
+    /// Length of the gap before this sample, s, when the step was longer than
+    /// `estimator.max_dt_s` (a new segment starts here).
+    pub gap_s: Option<f64>,
+    /// Set when the state failed the health check on this sample and the last good state was
+    /// restored (the estimate shows the restored state).
+    pub health_fault: Option<HealthFault>,
+    /// Zero-velocity detector statistic.
+    pub detector_statistic: f64,
+    /// Bias σ below the configured bound on every axis (and tracking).
+    pub converged: bool,
+    /// ZUPT innovation, when one was applied on this sample.
+    pub zupt: Option<Innovation>,
+    /// Heading observation event, when one was taken on this sample.
+    pub heading: Option<HeadingEvent>,
+    /// Stride-direction observation event, when one was taken on this sample
+    /// (`foot_heading_rad` then holds the stride direction).
+    pub stride: Option<HeadingEvent>,
+}
+
+impl Default for Estimate {
+    fn default() -> Self {
+        Self {
+            t_s: f64::NAN,
+            phase: Phase::Aligning,
+            p_m: [0.0; 3],
+            v_m_s: [0.0; 3],
+            nav_from_body: [1.0, 0.0, 0.0, 0.0],
+            roll_rad: 0.0,
+            pitch_rad: 0.0,
+            yaw_rad: 0.0,
+            gyro_bias_rad_s: [0.0; 3],
+            gyro_bias_sd_rad_s: [f64::NAN; 3],
+            stance: false,
+            clipped: false,
+            health_fault: None,
+            gap_s: None,
+            detector_statistic: f64::NAN,
+            converged: false,
+            zupt: None,
+            heading: None,
+            stride: None,
+        }
+    }
+}
