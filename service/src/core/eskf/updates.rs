@@ -1,0 +1,227 @@
+//! Measurement updates: the generic sparse update, the ZUPT, the foot-axis heading and the
+//! stride direction on the cloned footprint.
+
+use super::*;
+
+impl Eskf {
+    /// A measurement update with an `m × n` Jacobian given by rows of (index, value) pairs over
+    /// at most 4 columns each, innovation `r` and noise variances `r_var`. Joseph-free
+    /// symmetric form: `P ← P − K·H·P` on one triangle, mirrored.
+    fn update<const M: usize>(
+        &mut self,
+        h: &[[(usize, f64); 4]; M],
+        r: [f64; M],
+        r_var: [f64; M],
+    ) -> Innovation {
+        let n = self.layout.n;
+        // PHᵀ (n × M)
+        let mut pht = [[0.0; M]; MAX_N];
+        for (i, row) in pht.iter_mut().enumerate().take(n) {
+            for (j, hj) in h.iter().enumerate() {
+                row[j] = hj.iter().map(|&(c, v)| v * self.p[ix(i, c)]).sum();
+            }
+        }
+        // S = H P Hᵀ + R
+        let mut s = nalgebra::SMatrix::<f64, M, M>::zeros();
+        for a in 0..M {
+            for b in 0..M {
+                s[(a, b)] = h[a].iter().map(|&(c, v)| v * pht[c][b]).sum::<f64>();
+            }
+            s[(a, a)] += r_var[a];
+        }
+        let Some(s_inv) = s.try_inverse() else {
+            return Innovation::default();
+        };
+        let rv = nalgebra::SVector::<f64, M>::from(r);
+        let s_inv_r = s_inv * rv;
+        let mut k = [[0.0; M]; MAX_N];
+        for (ki, pi) in k.iter_mut().zip(&pht).take(n) {
+            for (b, kb) in ki.iter_mut().enumerate() {
+                *kb = (0..M).map(|a| pi[a] * s_inv[(a, b)]).sum();
+            }
+        }
+        for (j, pj) in pht.iter().enumerate().take(n) {
+            for (i, ki) in k.iter().enumerate().take(j + 1) {
+                let d: f64 = (0..M).map(|a| ki[a] * pj[a]).sum();
+                let v = self.p[ix(i, j)] - d;
+                self.p[ix(i, j)] = v;
+                self.p[ix(j, i)] = v;
+            }
+        }
+        let mut dx = [0.0; MAX_N];
+        for (i, d) in dx.iter_mut().enumerate().take(n) {
+            *d = (0..M).map(|a| pht[i][a] * s_inv_r[a]).sum();
+        }
+        self.inject(&dx);
+        let mut out = Innovation {
+            nis: rv.dot(&s_inv_r),
+            dim: M as u8,
+            ..Default::default()
+        };
+        for a in 0..M.min(3) {
+            out.r[a] = r[a];
+            out.s_diag[a] = s[(a, a)];
+        }
+        out
+    }
+
+    /// Zero-velocity update (H selects the velocity: written out, it runs on every stance
+    /// sample).
+    pub fn zupt(&mut self) -> Innovation {
+        self.zupt_with_sd(self.noise.zupt_m_s)
+    }
+
+    /// Zero-velocity update with σ `sd_m_s` instead of the configured one.
+    pub fn zupt_with_sd(&mut self, sd_m_s: f64) -> Innovation {
+        let n = self.layout.n;
+        let rv = sd_m_s * sd_m_s;
+        let r = -self.v_m_s;
+        let mut pht = [[0.0; 3]; MAX_N];
+        for (i, row) in pht.iter_mut().enumerate().take(n) {
+            *row = [
+                self.p[ix(i, V0)],
+                self.p[ix(i, V0 + 1)],
+                self.p[ix(i, V0 + 2)],
+            ];
+        }
+        let mut s = Matrix3::from_fn(|a, b| pht[V0 + a][b]);
+        for a in 0..3 {
+            s[(a, a)] += rv;
+        }
+        let Some(s_inv) = s.try_inverse() else {
+            return Innovation::default();
+        };
+        let mut k = [[0.0; 3]; MAX_N];
+        for (ki, pi) in k.iter_mut().zip(&pht).take(n) {
+            let v = s_inv.transpose() * Vector3::from(*pi);
+            *ki = [v.x, v.y, v.z];
+        }
+        for (j, pj) in pht.iter().enumerate().take(n) {
+            for (i, ki) in k.iter().enumerate().take(j + 1) {
+                let v = self.p[ix(i, j)] - (ki[0] * pj[0] + ki[1] * pj[1] + ki[2] * pj[2]);
+                self.p[ix(i, j)] = v;
+                self.p[ix(j, i)] = v;
+            }
+        }
+        let s_inv_r = s_inv * r;
+        let mut dx = [0.0; MAX_N];
+        for (d, pi) in dx.iter_mut().zip(&pht).take(n) {
+            *d = pi[0] * s_inv_r.x + pi[1] * s_inv_r.y + pi[2] * s_inv_r.z;
+        }
+        self.inject(&dx);
+        Innovation {
+            r: [r.x, r.y, r.z],
+            s_diag: [s[(0, 0)], s[(1, 1)], s[(2, 2)]],
+            nis: r.dot(&s_inv_r),
+            dim: 3,
+        }
+    }
+
+    /// The heading of the body-frame direction `axis_body` (the foot's forward axis) as the
+    /// model predicts it: its attitude heading plus the heading-offset state.
+    pub fn predicted_heading(&self, axis_body: &Vector3<f64>) -> f64 {
+        heading_of_axis(&self.nav_from_body, axis_body) + self.ext.heading_offset_rad
+    }
+
+    /// Heading observation of `axis_body`: observed value `heading_obs_rad` with σ `sd_rad`.
+    pub fn heading_update(
+        &mut self,
+        heading_obs_rad: f64,
+        sd_rad: f64,
+        axis_body: &Vector3<f64>,
+    ) -> Innovation {
+        let r = wrap_pi(heading_obs_rad - self.predicted_heading(axis_body));
+        let h = self.heading_row(axis_body);
+        self.update(&[h], [r], [sd_rad * sd_rad])
+    }
+
+    /// The sparse Jacobian row of the foot-axis heading (attitude and heading offset).
+    fn heading_row(&self, axis_body: &Vector3<f64>) -> SparseRow {
+        let j = heading_jacobian(&self.nav_from_body, axis_body);
+        let off = self.layout.offset.map_or((0, 0.0), |i| (i, 1.0));
+        [(TH, j.x), (TH + 1, j.y), (TH + 2, j.z), off]
+    }
+
+    /// `H P Hᵀ` of one sparse row: the predicted variance of a scalar observation.
+    fn predicted_variance(&self, h: &SparseRow) -> f64 {
+        h.iter()
+            .map(|&(a, va)| {
+                h.iter()
+                    .map(|&(b, vb)| va * vb * self.p[ix(a, b)])
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
+    /// The foot-axis heading as the model predicts it and its variance, rad and rad².
+    pub fn heading_prediction(&self, axis_body: &Vector3<f64>) -> (f64, f64) {
+        (
+            wrap_pi(self.predicted_heading(axis_body)),
+            self.predicted_variance(&self.heading_row(axis_body)),
+        )
+    }
+
+    /// Starts a new stride: the current horizontal position becomes the cloned footprint,
+    /// with its covariance (rows and columns of the clone copied from those of x and y).
+    /// Without the clone states this does nothing.
+    pub fn clone_footprint(&mut self) {
+        let Some(c) = self.layout.clone else {
+            return;
+        };
+        let n = self.layout.n;
+        self.footprint_xy_m = [self.p_m.x, self.p_m.y];
+        for k in 0..2 {
+            for j in 0..n {
+                let v = if j == c || j == c + 1 {
+                    0.0
+                } else {
+                    self.p[ix(P0 + k, j)]
+                };
+                self.p[ix(c + k, j)] = v;
+                self.p[ix(j, c + k)] = v;
+            }
+        }
+        for a in 0..2 {
+            for b in 0..2 {
+                self.p[ix(c + a, c + b)] = self.p[ix(P0 + a, P0 + b)];
+            }
+        }
+    }
+
+    /// The stride since the cloned footprint: its horizontal length (m), direction (rad) and
+    /// the direction's sparse Jacobian row, or `None` without a clone.
+    fn stride(&self) -> Option<(f64, f64, SparseRow)> {
+        let c = self.layout.clone?;
+        let [x0, y0] = self.footprint_xy_m;
+        let (dx, dy) = (self.p_m.x - x0, self.p_m.y - y0);
+        let d2 = dx * dx + dy * dy;
+        if !d2.is_finite() || d2 <= 0.0 {
+            return None;
+        }
+        let (hx, hy) = (-dy / d2, dx / d2);
+        Some((
+            d2.sqrt(),
+            dy.atan2(dx),
+            [(P0, hx), (P0 + 1, hy), (c, -hx), (c + 1, -hy)],
+        ))
+    }
+
+    /// The stride since the cloned footprint: length (m), direction (rad) and the direction's
+    /// variance (rad²), or `None` without a clone.
+    pub fn stride_prediction(&self) -> Option<(f64, f64, f64)> {
+        self.stride()
+            .map(|(len, dir, h)| (len, dir, self.predicted_variance(&h)))
+    }
+
+    /// Stride-direction observation: the walking direction since the cloned footprint is
+    /// `direction_obs_rad` with σ `sd_rad`. `None` without a clone.
+    pub fn stride_direction_update(
+        &mut self,
+        direction_obs_rad: f64,
+        sd_rad: f64,
+    ) -> Option<Innovation> {
+        let (_, dir, h) = self.stride()?;
+        let r = wrap_pi(direction_obs_rad - dir);
+        Some(self.update(&[h], [r], [sd_rad * sd_rad]))
+    }
+}
