@@ -1,0 +1,213 @@
+//! The TOML file, key for key: every key optional, `deny_unknown_fields`.
+
+use super::*;
+use serde::{Deserialize, Serialize};
+
+/// The TOML file, key for key. Every key is optional; the defaults are documented in
+/// `configs/gdins.toml`.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConfigFile {
+    /// `[estimator]`
+    #[serde(default)]
+    pub estimator: EstimatorFile,
+    /// `[alignment]`
+    #[serde(default)]
+    pub alignment: AlignmentFile,
+    /// `[detector]`
+    #[serde(default)]
+    pub detector: DetectorFile,
+    /// `[eskf]`
+    #[serde(default)]
+    pub eskf: EskfFile,
+    /// `[bias_kf]`
+    #[serde(default)]
+    pub bias_kf: BiasKfFile,
+    /// `[heading]`
+    #[serde(default)]
+    pub heading: HeadingFile,
+    /// `[model]`: switchable model extensions of the `eskf` mode
+    #[serde(default)]
+    pub model: ModelFile,
+    /// `[daemon]` (only `corridor serve` reads it)
+    #[serde(default)]
+    pub daemon: DaemonFile,
+    /// `[sensor]`: what the IMU can output, and the time-step bounds
+    #[serde(default)]
+    pub sensor: crate::sensor::SensorFile,
+}
+
+/// `[model]` section: extension states of the error-state filter (`eskf` and `zupt` modes).
+/// Each key switches its extension on; absent means off.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    /// Gyro-bias rate states (a linear bias drift): random walk of the rate, rad/s²/√s.
+    pub bias_rate_rw_rad_s2_sqrt_s: Option<f64>,
+    /// Initial σ of the bias rate, rad/s² (default 1e-4).
+    pub bias_rate_initial_sd_rad_s2: Option<f64>,
+    /// Gyro scale-factor states per sensor axis: initial σ (dimensionless).
+    pub scale_factor_sd: Option<f64>,
+    /// Foot-heading offset state: initial σ, degrees.
+    pub heading_offset_sd_deg: Option<f64>,
+    /// Diagonal g-sensitivity states: initial σ, rad/s per m/s².
+    pub g_sensitivity_sd: Option<f64>,
+}
+
+/// `[daemon]` section: the estimator service.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DaemonFile {
+    /// iceoryx2 domain (a name prefix isolating independent process sets; default `default`).
+    pub domain: Option<String>,
+    /// `live` (a slow reader loses the oldest samples, counted) or `lossless` (backpressure end
+    /// to end); default `live`.
+    pub delivery: Option<String>,
+    /// Capacity of the receive → estimator channel, samples (default 4096).
+    pub channel_capacity: Option<usize>,
+    /// Period of bias samples between heading updates, s of sensor time (default 1.0).
+    pub bias_period_s: Option<f64>,
+    /// Period of diagnostics, s of wall-clock time (default 1.0).
+    pub diagnostics_period_s: Option<f64>,
+    /// Period of the one-line health log, s of wall-clock time (default 10.0).
+    pub health_period_s: Option<f64>,
+    /// Checkpoint file; absent: no checkpoint.
+    pub checkpoint_path: Option<PathBuf>,
+    /// Period of checkpoints while running, s of wall-clock time (default 30.0).
+    pub checkpoint_period_s: Option<f64>,
+    /// Longest a lossless publish waits on one consumer's full buffer, s (default 1.0); beyond
+    /// it the consumer counts as stalled and loses (counted) what its buffer cannot take.
+    pub stall_timeout_s: Option<f64>,
+}
+
+/// `[estimator]` section.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct EstimatorFile {
+    /// Bias estimation mode (default `eskf`).
+    pub mode: Option<Mode>,
+    /// Bias σ on every axis below which the estimate counts as converged (default 2e-4 rad/s).
+    pub converged_sd_rad_s: Option<f64>,
+    /// Largest regular time step; a longer one is a gap: a new segment, counted (default 0.05 s).
+    pub max_dt_s: Option<f64>,
+    /// Largest plausible foot speed, m/s; a faster estimate fails the health check (default 15).
+    pub max_speed_m_s: Option<f64>,
+}
+
+/// `[alignment]` section.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AlignmentFile {
+    /// Shortest initial rest that allows alignment (default 0.5 s).
+    pub min_rest_s: Option<f64>,
+    /// Gyro-bias prior (default `rest_mean`).
+    pub gyro_bias_prior: Option<BiasPrior>,
+    /// Gravity: the mean specific force over the rest is used when absent.
+    pub gravity_m_s2: Option<f64>,
+    /// The last part of the rest left out of the means: the foot starts to move before the
+    /// detector sees it (default 0.5 s).
+    pub rest_tail_s: Option<f64>,
+}
+
+/// `[detector]` section.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DetectorFile {
+    /// Statistic (default `shoe`).
+    pub kind: Option<DetectorKind>,
+    /// Window length in samples (default 5).
+    pub window: Option<usize>,
+    /// Threshold on the statistic (default 1e5 for SHOE with the default σ: about 0.6 rad/s of rotation).
+    pub threshold: Option<f64>,
+    /// Accelerometer noise σ used by the statistic (default 0.01 m/s²).
+    pub sigma_accel_m_s2: Option<f64>,
+    /// Gyro noise σ used by the statistic (default 0.1 °/s in rad/s).
+    pub sigma_gyro_rad_s: Option<f64>,
+    /// Shortest stance kept (default 0.04 s).
+    pub min_stance_s: Option<f64>,
+    /// Adaptive threshold: a sample is stance when its statistic is below `threshold` or below
+    /// this factor times the quietest statistic of the last `adaptive_window_s` (absent: off).
+    pub adaptive_factor: Option<f64>,
+    /// Look-back of the adaptive threshold, about one stride cycle (default 1.5 s).
+    pub adaptive_window_s: Option<f64>,
+    /// Largest adaptive threshold (default 10 × `threshold`).
+    pub adaptive_max_threshold: Option<f64>,
+}
+
+/// `[eskf]` section: the ZUPT-aided error-state filter.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct EskfFile {
+    /// Accelerometer white noise σ (default 0.5 m/s²: foot dynamics, not just sensor noise).
+    pub accel_noise_m_s2: Option<f64>,
+    /// Gyro white noise σ (default 0.01 rad/s).
+    pub gyro_noise_rad_s: Option<f64>,
+    /// Gyro-bias random walk σ per √s (default 1e-4 rad/s/√s).
+    pub gyro_bias_rw_rad_s_sqrt_s: Option<f64>,
+    /// Initial gyro-bias σ without a prior (default 0.01 rad/s).
+    pub gyro_bias_initial_sd_rad_s: Option<f64>,
+    /// Initial gyro-bias σ with the rest-mean prior (default 5e-4 rad/s).
+    pub gyro_bias_prior_sd_rad_s: Option<f64>,
+    /// Zero-velocity pseudo-measurement σ (default 0.01 m/s).
+    pub zupt_sd_m_s: Option<f64>,
+    /// Initial roll/pitch σ (default 0.5°, in rad).
+    pub initial_tilt_sd_rad: Option<f64>,
+    /// Lever arm between the sensor and the point the foot rolls about at the edges of a
+    /// stance (default 0: off): the ZUPT σ of a sample is √(zupt_sd² + (arm·|ω|)²).
+    pub zupt_lever_arm_m: Option<f64>,
+}
+
+/// `[bias_kf]` section: the paper's 3-state bias filter.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BiasKfFile {
+    /// σ of the roll/pitch reference at stance (default 1°, in rad). The paper takes it as exact.
+    pub tilt_sd_rad: Option<f64>,
+    /// Bias random walk σ per √s (default 1e-5 rad/s/√s; the paper's F = I with a small Q).
+    pub bias_rw_rad_s_sqrt_s: Option<f64>,
+}
+
+/// `[heading]` section.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeadingFile {
+    /// Source of heading observations (default `grid`).
+    pub source: Option<HeadingSource>,
+    /// σ of one heading observation (default 3°, in degrees).
+    pub sigma_deg: Option<f64>,
+    /// Orientation of the building grid in the map frame (default 0°).
+    pub grid_deg: Option<f64>,
+    /// Spacing of the dominant directions (default 90°; 180° means one corridor axis).
+    pub grid_step_deg: Option<f64>,
+    /// Walking direction at the start, in the map frame (default 0°).
+    pub start_heading_deg: Option<f64>,
+    /// Largest distance to the nearest direction that is still associated (default 15°).
+    pub gate_deg: Option<f64>,
+    /// Largest foot-heading change over the last `straight_strides` stances (default 10°).
+    pub straight_max_change_deg: Option<f64>,
+    /// How many previous stances the straight-walk test looks at (default 2).
+    pub straight_strides: Option<usize>,
+    /// Stances after the first stride used to fix the sensor's yaw on the foot (default 3).
+    pub calibration_strides: Option<usize>,
+    /// Seconds into a stance at which the heading observation is taken (default 0.05 s).
+    pub obs_delay_s: Option<f64>,
+    /// σ of the start heading: how well the first stride is known to follow
+    /// `start_heading_deg` (default 1°, in degrees).
+    pub start_heading_sd_deg: Option<f64>,
+    /// Which observations the `eskf` mode takes (default `both`).
+    pub observations: Option<HeadingObservations>,
+    /// σ of one stride-direction observation (default 2°, in degrees).
+    pub stride_sigma_deg: Option<f64>,
+    /// Shortest stride whose direction is observed (default 0.5 m).
+    pub min_stride_m: Option<f64>,
+    /// Footprints (this one included) that must lie on a line for a stride direction to be
+    /// observed (default 0: off; at most 8).
+    pub line_footprints: Option<usize>,
+    /// Largest distance of those footprints from their line (default 0.05 m).
+    pub line_lateral_m: Option<f64>,
+    /// Prior probability that a stance's walking direction is a dominant direction, for the
+    /// association weight (default 0.7).
+    pub aligned_prior: Option<f64>,
+    /// Smallest association weight that is still fused (default 0.5).
+    pub min_weight: Option<f64>,
+}

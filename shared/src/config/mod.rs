@@ -1,0 +1,317 @@
+//! The estimator configuration: one TOML file per sensor (see `configs/`).
+//!
+//! Parsing happens in two steps. [`ConfigFile`] mirrors the TOML one to one (serde,
+//! `deny_unknown_fields`, every key optional with a documented default). [`ConfigFile::validate`]
+//! turns it into [`Config`], whose fields are [`Positive`], [`Fraction`] or enums, so code that
+//! holds a `Config` never sees a negative noise, a zero window or an unknown mode. Every error
+//! names the key that is wrong and the value found.
+//!
+//! Files: this one holds the error, the checked number types and the enums; `file.rs` the
+//! TOML mirror ([`ConfigFile`]); `settings.rs` the validated types ([`Config`]);
+//! `validate.rs` the one validation pass between them, with the defaults.
+
+mod file;
+mod settings;
+mod validate;
+
+pub use file::*;
+pub use settings::*;
+
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// A configuration that could not be read or is not valid.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("{path}: cannot read config: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The TOML is malformed or has an unknown key (the message names it, with line and column).
+    #[error("{path}: {message}")]
+    Toml {
+        /// The file.
+        path: PathBuf,
+        /// The TOML parser's message, which names the key and position.
+        message: String,
+    },
+    /// A key has a value outside its allowed range.
+    #[error("{path}: key `{key}` = {value}: {rule}")]
+    Invalid {
+        /// The file (or `<override>` for a command-line override).
+        path: PathBuf,
+        /// Dotted key, e.g. `detector.threshold`.
+        key: String,
+        /// The value found, as text.
+        value: String,
+        /// What the value must satisfy.
+        rule: &'static str,
+    },
+}
+
+/// A finite, strictly positive number.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd, Serialize)]
+pub struct Positive(f64);
+
+impl Positive {
+    /// Checks `value`, naming `key` in the error.
+    pub fn new(key: &str, value: f64) -> Result<Self, ConfigError> {
+        if value.is_finite() && value > 0.0 {
+            Ok(Self(value))
+        } else {
+            Err(invalid(key, value, "must be a finite number > 0"))
+        }
+    }
+    /// The value.
+    pub fn get(self) -> f64 {
+        self.0
+    }
+}
+
+/// A finite number in [0, 1].
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd, Serialize)]
+pub struct Fraction(f64);
+
+impl Fraction {
+    /// Checks `value`, naming `key` in the error.
+    pub fn new(key: &str, value: f64) -> Result<Self, ConfigError> {
+        if (0.0..=1.0).contains(&value) {
+            Ok(Self(value))
+        } else {
+            Err(invalid(key, value, "must be in [0, 1]"))
+        }
+    }
+    /// The value.
+    pub fn get(self) -> f64 {
+        self.0
+    }
+}
+
+pub(crate) fn invalid(key: &str, value: impl std::fmt::Display, rule: &'static str) -> ConfigError {
+    ConfigError::Invalid {
+        path: PathBuf::new(),
+        key: key.to_owned(),
+        value: value.to_string(),
+        rule,
+    }
+}
+
+pub(crate) fn finite(key: &str, value: f64) -> Result<f64, ConfigError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(invalid(key, value, "must be finite"))
+    }
+}
+
+pub(crate) fn non_negative(key: &str, value: f64) -> Result<f64, ConfigError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(invalid(key, value, "must be a finite number >= 0"))
+    }
+}
+
+/// Default largest plausible foot speed, m/s: the swinging foot of a sprinter peaks near 10 m/s.
+pub const DEFAULT_MAX_SPEED_M_S: f64 = 15.0;
+
+/// How the gyro bias is estimated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Mode {
+    /// The standard ZUPT-aided error-state filter with gyro-bias states and no heading aid.
+    Zupt,
+    /// The reference paper: a 3-state bias Kalman filter (F = I, H = I) fed by the logarithm of
+    /// the quaternion between the gyro attitude and the map's "true" attitude at stance.
+    Paper,
+    /// The paper's 3-state filter with the body-to-navigation rotation integrated into the
+    /// observation matrix (the paper assumes they commute) and the roll/pitch reference taken from
+    /// the accelerometer at stance instead of zero.
+    RotationAware,
+    /// Map headings fused directly into the ZUPT error-state filter, whose gyro-bias states then
+    /// become observable on all three axes.
+    Eskf,
+}
+
+impl Mode {
+    /// The config spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Zupt => "zupt",
+            Mode::Paper => "paper",
+            Mode::RotationAware => "rotation_aware",
+            Mode::Eskf => "eskf",
+        }
+    }
+}
+
+/// Zero-velocity detector statistic (Skog et al. 2010).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DetectorKind {
+    /// Stance hypothesis optimal detector (GLRT on accelerometer and gyro).
+    Shoe,
+    /// Angular rate energy.
+    Are,
+    /// Accelerometer moving variance.
+    Mv,
+}
+
+/// Where heading observations come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HeadingSource {
+    /// No heading observations.
+    None,
+    /// Map-free dominant directions: the building grid at `grid_deg + k·90°`.
+    Grid,
+    /// Corridor segments from a map file: heading only while inside a corridor.
+    Map,
+}
+
+/// Which heading observations the `eskf` mode takes at a stance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HeadingObservations {
+    /// The heading of the foot's forward axis (needs the sensor's yaw on the foot).
+    FootAxis,
+    /// The direction of the stride since the previous footprint (needs no mounting yaw).
+    Stride,
+    /// Both, the stride first.
+    Both,
+}
+
+impl HeadingObservations {
+    /// Whether the stride direction is observed.
+    pub fn stride(self) -> bool {
+        matches!(self, Self::Stride | Self::Both)
+    }
+    /// Whether the foot axis is observed.
+    pub fn foot_axis(self) -> bool {
+        matches!(self, Self::FootAxis | Self::Both)
+    }
+}
+
+/// Whether the initial rest's gyro mean is used as a bias prior.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BiasPrior {
+    /// No prior: the bias starts at zero with `initial_sd_rad_s` (as in the paper).
+    None,
+    /// The mean gyro rate over the initial rest.
+    RestMean,
+}
+
+/// Fills in the file name of a validation error.
+pub fn with_path(err: ConfigError, path: &Path) -> ConfigError {
+    match err {
+        ConfigError::Invalid {
+            key, value, rule, ..
+        } => ConfigError::Invalid {
+            path: path.to_owned(),
+            key,
+            value,
+            rule,
+        },
+        other => other,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid() {
+        let c = Config::default();
+        assert_eq!(c.mode, Mode::Eskf);
+        assert_eq!(c.detector.window, 5);
+        assert!((c.heading.grid_step_rad.get() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn unknown_key_is_named() {
+        let err = ConfigFile::parse("[detector]\nthreshhold = 3.0\n", Path::new("x.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("threshhold"), "{err}");
+        assert!(err.contains("x.toml"), "{err}");
+    }
+
+    #[test]
+    fn bad_values_name_key_and_value() {
+        let f = ConfigFile::parse("[eskf]\nzupt_sd_m_s = -1.0\n", Path::new("a.toml")).unwrap();
+        let err = with_path(f.validate().unwrap_err(), Path::new("a.toml")).to_string();
+        assert!(err.contains("eskf.zupt_sd_m_s"), "{err}");
+        assert!(err.contains("-1"), "{err}");
+        assert!(err.contains("a.toml"), "{err}");
+
+        let f =
+            ConfigFile::parse("[heading]\ngrid_step_deg = 70.0\n", Path::new("a.toml")).unwrap();
+        assert!(
+            f.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("grid_step_deg")
+        );
+
+        let f = ConfigFile::parse("[detector]\nwindow = 0\n", Path::new("a.toml")).unwrap();
+        assert!(
+            f.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("detector.window")
+        );
+    }
+
+    #[test]
+    fn daemon_section_is_validated() {
+        let f =
+            ConfigFile::parse("[daemon]\ndelivery = \"sometimes\"\n", Path::new("s.toml")).unwrap();
+        assert!(
+            f.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("daemon.delivery")
+        );
+        let f = ConfigFile::parse("[daemon]\ndomain = \"a b\"\n", Path::new("s.toml")).unwrap();
+        assert!(
+            f.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("daemon.domain")
+        );
+        // The longest domain the services accept passes, one more character does not (config
+        // and `corridor serve` once disagreed: 64 against 48).
+        let long = |n: usize| format!("[daemon]\ndomain = \"{}\"\n", "d".repeat(n));
+        let max = crate::services::MAX_DOMAIN_LEN;
+        let ok = ConfigFile::parse(&long(max), Path::new("s.toml")).unwrap();
+        crate::services::Domain::new(&ok.validate().unwrap().daemon.domain).unwrap();
+        let err = ConfigFile::parse(&long(max + 1), Path::new("s.toml"))
+            .unwrap()
+            .validate()
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("daemon.domain") && err.contains("48"), "{err}");
+        let f = ConfigFile::parse(
+            "[daemon]\ndelivery = \"lossless\"\nchannel_capacity = 8\n",
+            Path::new("s.toml"),
+        )
+        .unwrap();
+        let c = f.validate().unwrap();
+        assert!(c.daemon.lossless);
+        assert_eq!(c.daemon.channel_capacity, 8);
+    }
+
+    #[test]
+    fn unknown_mode_is_rejected() {
+        let err = ConfigFile::parse("[estimator]\nmode = \"magic\"\n", Path::new("m.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("magic"), "{err}");
+    }
+}

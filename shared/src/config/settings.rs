@@ -1,0 +1,186 @@
+//! The validated configuration: types that cannot hold a bad value.
+
+use super::*;
+use serde::Serialize;
+
+/// A validated configuration.
+#[derive(Debug, Clone, Serialize)]
+pub struct Config {
+    /// Bias estimation mode.
+    pub mode: Mode,
+    /// Convergence bound on the bias σ.
+    pub converged_sd_rad_s: Positive,
+    /// Largest regular time step.
+    pub max_dt_s: Positive,
+    /// Largest plausible foot speed (health check).
+    pub max_speed_m_s: Positive,
+    /// What the sensor can output, and the time-step bounds.
+    pub sensor: crate::sensor::SensorLimits,
+    /// Alignment.
+    pub alignment: AlignmentConfig,
+    /// Zero-velocity detection.
+    pub detector: DetectorConfig,
+    /// ZUPT filter.
+    pub eskf: EskfConfig,
+    /// The paper's bias filter.
+    pub bias_kf: BiasKfConfig,
+    /// Heading aiding.
+    pub heading: HeadingConfig,
+    /// Model extensions.
+    pub model: ModelSettings,
+    /// The daemon.
+    pub daemon: DaemonSettings,
+}
+
+/// Validated `[model]`: `None` = extension off.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ModelSettings {
+    /// Bias-rate random walk.
+    pub bias_rate_rw_rad_s2_sqrt_s: Option<Positive>,
+    /// Initial σ of the bias rate.
+    pub bias_rate_initial_sd_rad_s2: Positive,
+    /// Scale-factor initial σ.
+    pub scale_factor_sd: Option<Positive>,
+    /// Heading-offset initial σ, rad.
+    pub heading_offset_sd_rad: Option<Positive>,
+    /// g-sensitivity initial σ.
+    pub g_sensitivity_sd: Option<Positive>,
+}
+
+/// Validated `[daemon]`.
+#[derive(Debug, Clone, Serialize)]
+pub struct DaemonSettings {
+    /// Domain name (validated again, against iceoryx2's rules, when the daemon opens it).
+    pub domain: String,
+    /// `true` for lossless delivery.
+    pub lossless: bool,
+    /// Channel capacity (≥ 1).
+    pub channel_capacity: usize,
+    /// Bias sample period.
+    pub bias_period_s: Positive,
+    /// Diagnostics period.
+    pub diagnostics_period_s: Positive,
+    /// Health log period.
+    pub health_period_s: Positive,
+    /// Checkpoint file.
+    pub checkpoint_path: Option<PathBuf>,
+    /// Checkpoint period.
+    pub checkpoint_period_s: Positive,
+    /// Stall bound of lossless publishing.
+    pub stall_timeout_s: Positive,
+}
+
+/// Validated `[alignment]`.
+#[derive(Debug, Clone, Serialize)]
+pub struct AlignmentConfig {
+    /// Shortest initial rest.
+    pub min_rest_s: Positive,
+    /// Gyro-bias prior.
+    pub gyro_bias_prior: BiasPrior,
+    /// Fixed gravity, or `None` for the rest mean.
+    pub gravity_m_s2: Option<Positive>,
+    /// Tail of the rest left out of the means.
+    pub rest_tail_s: f64,
+}
+
+/// Validated `[detector]`.
+#[derive(Debug, Clone, Serialize)]
+pub struct DetectorConfig {
+    /// Statistic.
+    pub kind: DetectorKind,
+    /// Window in samples (≥ 1).
+    pub window: usize,
+    /// Threshold.
+    pub threshold: Positive,
+    /// Accelerometer σ.
+    pub sigma_accel_m_s2: Positive,
+    /// Gyro σ.
+    pub sigma_gyro_rad_s: Positive,
+    /// Shortest stance.
+    pub min_stance_s: f64,
+    /// Adaptive factor (off when `None`).
+    pub adaptive_factor: Option<Positive>,
+    /// Adaptive look-back.
+    pub adaptive_window_s: Positive,
+    /// Largest adaptive threshold.
+    pub adaptive_max_threshold: Positive,
+}
+
+/// Validated `[eskf]`.
+#[derive(Debug, Clone, Serialize)]
+pub struct EskfConfig {
+    /// Accelerometer white noise σ.
+    pub accel_noise_m_s2: Positive,
+    /// Gyro white noise σ.
+    pub gyro_noise_rad_s: Positive,
+    /// Gyro-bias random walk.
+    pub gyro_bias_rw_rad_s_sqrt_s: f64,
+    /// Initial bias σ without prior.
+    pub gyro_bias_initial_sd_rad_s: Positive,
+    /// Initial bias σ with the rest-mean prior.
+    pub gyro_bias_prior_sd_rad_s: Positive,
+    /// ZUPT σ.
+    pub zupt_sd_m_s: Positive,
+    /// Initial tilt σ.
+    pub initial_tilt_sd_rad: Positive,
+    /// ZUPT lever arm (0 = a constant ZUPT σ).
+    pub zupt_lever_arm_m: f64,
+}
+
+/// Validated `[bias_kf]`.
+#[derive(Debug, Clone, Serialize)]
+pub struct BiasKfConfig {
+    /// Roll/pitch reference σ.
+    pub tilt_sd_rad: Positive,
+    /// Bias random walk.
+    pub bias_rw_rad_s_sqrt_s: f64,
+}
+
+/// Validated `[heading]`, angles in radians.
+#[derive(Debug, Clone, Serialize)]
+pub struct HeadingConfig {
+    /// Source.
+    pub source: HeadingSource,
+    /// Observation σ.
+    pub sigma_rad: Positive,
+    /// Grid orientation.
+    pub grid_rad: f64,
+    /// Grid spacing.
+    pub grid_step_rad: Positive,
+    /// Start walking direction.
+    pub start_heading_rad: f64,
+    /// Association gate.
+    pub gate_rad: Positive,
+    /// Straight-walk limit.
+    pub straight_max_change_rad: Positive,
+    /// Straight-walk look-back.
+    pub straight_strides: usize,
+    /// Mounting-yaw calibration stances.
+    pub calibration_strides: usize,
+    /// Observation delay into a stance.
+    pub obs_delay_s: f64,
+    /// σ of the start heading.
+    pub start_heading_sd_rad: Positive,
+    /// Observations of the `eskf` mode.
+    pub observations: HeadingObservations,
+    /// Stride-direction σ.
+    pub stride_sigma_rad: Positive,
+    /// Shortest observed stride.
+    pub min_stride_m: Positive,
+    /// Footprints of the straight-line test (0 = off).
+    pub line_footprints: usize,
+    /// Largest lateral distance of the straight-line test.
+    pub line_lateral_m: Positive,
+    /// Prior probability of an aligned stance.
+    pub aligned_prior: Fraction,
+    /// Smallest fused association weight.
+    pub min_weight: Fraction,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        ConfigFile::default()
+            .validate()
+            .expect("the built-in defaults are valid")
+    }
+}

@@ -1,0 +1,286 @@
+//! Reading and the one validation pass from [`ConfigFile`] to [`Config`], with the defaults.
+
+use super::*;
+use std::path::Path;
+
+impl ConfigFile {
+    /// Reads and parses a TOML file (no validation yet).
+    pub fn read(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses TOML text; `path` only names the source in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
+        toml::from_str(text).map_err(|e| ConfigError::Toml {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })
+    }
+
+    /// Validates every key, applying the defaults.
+    pub fn validate(&self) -> Result<Config, ConfigError> {
+        let e = &self.estimator;
+        let a = &self.alignment;
+        let d = &self.detector;
+        let k = &self.eskf;
+        let b = &self.bias_kf;
+        let h = &self.heading;
+        let deg = f64::to_radians;
+        let window = d.window.unwrap_or(5);
+        if window == 0 || window > 1000 {
+            return Err(invalid("detector.window", window, "must be in 1..=1000"));
+        }
+        let straight_strides = h.straight_strides.unwrap_or(2);
+        if straight_strides > 100 {
+            return Err(invalid(
+                "heading.straight_strides",
+                straight_strides,
+                "must be <= 100",
+            ));
+        }
+        let calibration_strides = h.calibration_strides.unwrap_or(3);
+        if calibration_strides == 0 || calibration_strides > 100 {
+            return Err(invalid(
+                "heading.calibration_strides",
+                calibration_strides,
+                "must be in 1..=100",
+            ));
+        }
+        let dm = &self.daemon;
+        let delivery = dm.delivery.as_deref().unwrap_or("live");
+        let lossless = match delivery.parse::<crate::services::Delivery>() {
+            Ok(d) => d == crate::services::Delivery::Lossless,
+            Err(_) => {
+                return Err(invalid(
+                    "daemon.delivery",
+                    delivery,
+                    "must be live or lossless",
+                ));
+            }
+        };
+        let channel_capacity = dm.channel_capacity.unwrap_or(4096);
+        if !(1..=1 << 24).contains(&channel_capacity) {
+            return Err(invalid(
+                "daemon.channel_capacity",
+                channel_capacity,
+                "must be in 1..=16777216",
+            ));
+        }
+        let domain = dm.domain.clone().unwrap_or_else(|| "default".to_owned());
+        // The same rule `corridor serve` applies when it opens the domain.
+        if let Err(crate::services::ServiceError::InvalidDomain { rule, .. }) =
+            crate::services::Domain::new(&domain)
+        {
+            return Err(invalid("daemon.domain", format!("{domain:?}"), rule));
+        }
+        let daemon = DaemonSettings {
+            domain,
+            lossless,
+            channel_capacity,
+            bias_period_s: Positive::new("daemon.bias_period_s", dm.bias_period_s.unwrap_or(1.0))?,
+            diagnostics_period_s: Positive::new(
+                "daemon.diagnostics_period_s",
+                dm.diagnostics_period_s.unwrap_or(1.0),
+            )?,
+            health_period_s: Positive::new(
+                "daemon.health_period_s",
+                dm.health_period_s.unwrap_or(10.0),
+            )?,
+            checkpoint_path: dm.checkpoint_path.clone(),
+            checkpoint_period_s: Positive::new(
+                "daemon.checkpoint_period_s",
+                dm.checkpoint_period_s.unwrap_or(30.0),
+            )?,
+            stall_timeout_s: Positive::new(
+                "daemon.stall_timeout_s",
+                dm.stall_timeout_s.unwrap_or(1.0),
+            )?,
+        };
+        let md = &self.model;
+        let opt = |key: &str, v: Option<f64>| v.map(|v| Positive::new(key, v)).transpose();
+        let model = ModelSettings {
+            bias_rate_rw_rad_s2_sqrt_s: opt(
+                "model.bias_rate_rw_rad_s2_sqrt_s",
+                md.bias_rate_rw_rad_s2_sqrt_s,
+            )?,
+            bias_rate_initial_sd_rad_s2: Positive::new(
+                "model.bias_rate_initial_sd_rad_s2",
+                md.bias_rate_initial_sd_rad_s2.unwrap_or(1e-4),
+            )?,
+            scale_factor_sd: opt("model.scale_factor_sd", md.scale_factor_sd)?,
+            heading_offset_sd_rad: opt(
+                "model.heading_offset_sd_deg",
+                md.heading_offset_sd_deg.map(f64::to_radians),
+            )?,
+            g_sensitivity_sd: opt("model.g_sensitivity_sd", md.g_sensitivity_sd)?,
+        };
+        Ok(Config {
+            daemon,
+            model,
+            mode: e.mode.unwrap_or(Mode::Eskf),
+            converged_sd_rad_s: Positive::new(
+                "estimator.converged_sd_rad_s",
+                e.converged_sd_rad_s.unwrap_or(2e-4),
+            )?,
+            max_dt_s: Positive::new("estimator.max_dt_s", e.max_dt_s.unwrap_or(0.05))?,
+            max_speed_m_s: Positive::new(
+                "estimator.max_speed_m_s",
+                e.max_speed_m_s.unwrap_or(DEFAULT_MAX_SPEED_M_S),
+            )?,
+            sensor: self
+                .sensor
+                .validate()
+                .map_err(|e| invalid(e.key, e.value, e.rule))?,
+            alignment: AlignmentConfig {
+                min_rest_s: Positive::new("alignment.min_rest_s", a.min_rest_s.unwrap_or(0.5))?,
+                gyro_bias_prior: a.gyro_bias_prior.unwrap_or(BiasPrior::RestMean),
+                gravity_m_s2: a
+                    .gravity_m_s2
+                    .map(|g| Positive::new("alignment.gravity_m_s2", g))
+                    .transpose()?,
+                rest_tail_s: non_negative("alignment.rest_tail_s", a.rest_tail_s.unwrap_or(0.5))?,
+            },
+            detector: DetectorConfig {
+                kind: d.kind.unwrap_or(DetectorKind::Shoe),
+                window,
+                threshold: Positive::new("detector.threshold", d.threshold.unwrap_or(1e5))?,
+                sigma_accel_m_s2: Positive::new(
+                    "detector.sigma_accel_m_s2",
+                    d.sigma_accel_m_s2.unwrap_or(0.01),
+                )?,
+                sigma_gyro_rad_s: Positive::new(
+                    "detector.sigma_gyro_rad_s",
+                    d.sigma_gyro_rad_s.unwrap_or(deg(0.1)),
+                )?,
+                min_stance_s: non_negative(
+                    "detector.min_stance_s",
+                    d.min_stance_s.unwrap_or(0.04),
+                )?,
+                adaptive_factor: d
+                    .adaptive_factor
+                    .map(|v| Positive::new("detector.adaptive_factor", v))
+                    .transpose()?,
+                adaptive_window_s: Positive::new(
+                    "detector.adaptive_window_s",
+                    d.adaptive_window_s.unwrap_or(1.5),
+                )?,
+                adaptive_max_threshold: Positive::new(
+                    "detector.adaptive_max_threshold",
+                    d.adaptive_max_threshold
+                        .unwrap_or(10.0 * d.threshold.unwrap_or(1e5)),
+                )?,
+            },
+            eskf: EskfConfig {
+                accel_noise_m_s2: Positive::new(
+                    "eskf.accel_noise_m_s2",
+                    k.accel_noise_m_s2.unwrap_or(0.5),
+                )?,
+                gyro_noise_rad_s: Positive::new(
+                    "eskf.gyro_noise_rad_s",
+                    k.gyro_noise_rad_s.unwrap_or(0.01),
+                )?,
+                gyro_bias_rw_rad_s_sqrt_s: non_negative(
+                    "eskf.gyro_bias_rw_rad_s_sqrt_s",
+                    k.gyro_bias_rw_rad_s_sqrt_s.unwrap_or(1e-4),
+                )?,
+                gyro_bias_initial_sd_rad_s: Positive::new(
+                    "eskf.gyro_bias_initial_sd_rad_s",
+                    k.gyro_bias_initial_sd_rad_s.unwrap_or(0.01),
+                )?,
+                gyro_bias_prior_sd_rad_s: Positive::new(
+                    "eskf.gyro_bias_prior_sd_rad_s",
+                    k.gyro_bias_prior_sd_rad_s.unwrap_or(5e-4),
+                )?,
+                zupt_sd_m_s: Positive::new("eskf.zupt_sd_m_s", k.zupt_sd_m_s.unwrap_or(0.01))?,
+                initial_tilt_sd_rad: Positive::new(
+                    "eskf.initial_tilt_sd_rad",
+                    k.initial_tilt_sd_rad.unwrap_or(deg(0.5)),
+                )?,
+                zupt_lever_arm_m: non_negative(
+                    "eskf.zupt_lever_arm_m",
+                    k.zupt_lever_arm_m.unwrap_or(0.0),
+                )?,
+            },
+            bias_kf: BiasKfConfig {
+                tilt_sd_rad: Positive::new(
+                    "bias_kf.tilt_sd_rad",
+                    b.tilt_sd_rad.unwrap_or(deg(1.0)),
+                )?,
+                bias_rw_rad_s_sqrt_s: non_negative(
+                    "bias_kf.bias_rw_rad_s_sqrt_s",
+                    b.bias_rw_rad_s_sqrt_s.unwrap_or(1e-5),
+                )?,
+            },
+            heading: HeadingConfig {
+                source: h.source.unwrap_or(HeadingSource::Grid),
+                sigma_rad: Positive::new("heading.sigma_deg", deg(h.sigma_deg.unwrap_or(3.0)))?,
+                grid_rad: deg(finite("heading.grid_deg", h.grid_deg.unwrap_or(0.0))?),
+                grid_step_rad: {
+                    let step = h.grid_step_deg.unwrap_or(90.0);
+                    if !(1.0..=360.0).contains(&step) || (360.0 / step).fract().abs() > 1e-9 {
+                        return Err(invalid(
+                            "heading.grid_step_deg",
+                            step,
+                            "must divide 360 and lie in [1, 360]",
+                        ));
+                    }
+                    Positive::new("heading.grid_step_deg", deg(step))?
+                },
+                start_heading_rad: deg(finite(
+                    "heading.start_heading_deg",
+                    h.start_heading_deg.unwrap_or(0.0),
+                )?),
+                gate_rad: Positive::new("heading.gate_deg", deg(h.gate_deg.unwrap_or(15.0)))?,
+                straight_max_change_rad: Positive::new(
+                    "heading.straight_max_change_deg",
+                    deg(h.straight_max_change_deg.unwrap_or(10.0)),
+                )?,
+                straight_strides,
+                calibration_strides,
+                obs_delay_s: non_negative("heading.obs_delay_s", h.obs_delay_s.unwrap_or(0.05))?,
+                start_heading_sd_rad: Positive::new(
+                    "heading.start_heading_sd_deg",
+                    deg(h.start_heading_sd_deg.unwrap_or(1.0)),
+                )?,
+                observations: h.observations.unwrap_or(HeadingObservations::Both),
+                stride_sigma_rad: Positive::new(
+                    "heading.stride_sigma_deg",
+                    deg(h.stride_sigma_deg.unwrap_or(2.0)),
+                )?,
+                min_stride_m: Positive::new("heading.min_stride_m", h.min_stride_m.unwrap_or(0.5))?,
+                line_footprints: match h.line_footprints.unwrap_or(0) {
+                    n @ (0 | 3..=8) => n,
+                    n => {
+                        return Err(invalid(
+                            "heading.line_footprints",
+                            n,
+                            "must be 0 (off) or 3..=8",
+                        ));
+                    }
+                },
+                line_lateral_m: Positive::new(
+                    "heading.line_lateral_m",
+                    h.line_lateral_m.unwrap_or(0.05),
+                )?,
+                aligned_prior: Fraction::new(
+                    "heading.aligned_prior",
+                    h.aligned_prior.unwrap_or(0.7),
+                )?,
+                min_weight: Fraction::new("heading.min_weight", h.min_weight.unwrap_or(0.5))?,
+            },
+        })
+    }
+}
+
+impl Config {
+    /// Reads, parses and validates a TOML file; errors name the file and the key.
+    pub fn from_file(path: &Path) -> Result<Self, ConfigError> {
+        ConfigFile::read(path)?
+            .validate()
+            .map_err(|e| with_path(e, path))
+    }
+}
