@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use corridor_shared::config::{BiasPrior, Config, ConfigFile, Mode};
+use corridor_shared::config::{BiasPrior, Config, ConfigFile, DaemonSettings, Mode};
 use std::path::PathBuf;
 
 /// Configuration flags shared by every command that runs the estimator.
@@ -38,6 +38,18 @@ impl ModelArgs {
             .unwrap_or_else(|| PathBuf::from("<built-in defaults>"));
         Ok(file
             .validate()
+            .map_err(|e| corridor_shared::config::with_path(e, &path))?)
+    }
+
+    /// The `[daemon]` section of the config file, validated.
+    pub fn daemon_settings(&self) -> Result<DaemonSettings> {
+        let path = self
+            .config
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("<built-in defaults>"));
+        Ok(self
+            .config_file()?
+            .validate_daemon()
             .map_err(|e| corridor_shared::config::with_path(e, &path))?)
     }
 

@@ -28,11 +28,17 @@ pub(super) struct ServeArgs {
 pub(super) fn serve(a: &ServeArgs) -> Result<()> {
     use corridor_service::daemon::{self, DaemonConfig};
     let config = a.model.config()?;
+    let settings = a.model.daemon_settings()?;
     let aid = runner::heading_aid(&config, a.model.map.as_deref())?;
     // The flags override the `[daemon]` section of the file.
     let mut cfg = match &a.domain {
-        Some(d) => DaemonConfig::new(corridor_shared::services::Domain::new(d)?, config, aid),
-        None => DaemonConfig::from_config(config, aid)?,
+        Some(d) => DaemonConfig::with_settings(
+            corridor_shared::services::Domain::new(d)?,
+            config,
+            &settings,
+            aid,
+        ),
+        None => DaemonConfig::from_config(config, &settings, aid)?,
     };
     if let Some(d) = a.delivery {
         cfg.delivery = d;

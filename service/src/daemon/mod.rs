@@ -79,7 +79,7 @@ pub mod stall;
 
 use crate::checkpoint::Checkpoint;
 use crate::core::heading::HeadingAid;
-use corridor_shared::config::Config;
+use corridor_shared::config::{Config, DaemonSettings};
 use corridor_shared::services::{Delivery, Domain, ServiceError};
 use corridor_shared::wire::Diagnostics;
 use estimator_thread::estimator_thread;
@@ -129,19 +129,33 @@ pub struct DaemonConfig {
 }
 
 impl DaemonConfig {
-    /// Everything from the configuration: the domain and the rest of its `[daemon]` section
-    /// ([`corridor_shared::config::DaemonSettings`]). Fails when the domain name is not usable
+    /// Everything from the configuration: the estimator's settings, and the domain and the rest
+    /// of the `[daemon]` section ([`DaemonSettings`]). Fails when the domain name is not usable
     /// by iceoryx2.
-    pub fn from_config(estimator: Config, aid: HeadingAid) -> Result<Self, DaemonError> {
-        let domain = Domain::new(&estimator.daemon.domain)?;
-        Ok(Self::new(domain, estimator, aid))
+    pub fn from_config(
+        estimator: Config,
+        daemon: &DaemonSettings,
+        aid: HeadingAid,
+    ) -> Result<Self, DaemonError> {
+        let domain = Domain::new(&daemon.domain)?;
+        Ok(Self::with_settings(domain, estimator, daemon, aid))
     }
 
-    /// `domain`, and the rest from the `[daemon]` section of `estimator` (its defaults: live
-    /// delivery, channel of 4096 samples, bias every 1 s, diagnostics every 1 s, health every
-    /// 10 s, no checkpoint, checkpoint every 30 s); 100 ms poll.
+    /// `domain`, and the rest from the built-in `[daemon]` defaults (live delivery, channel of
+    /// 4096 samples, bias every 1 s, diagnostics every 1 s, health every 10 s, no checkpoint,
+    /// checkpoint every 30 s); 100 ms poll.
     pub fn new(domain: Domain, estimator: Config, aid: HeadingAid) -> Self {
-        let d = estimator.daemon.clone();
+        Self::with_settings(domain, estimator, &DaemonSettings::default(), aid)
+    }
+
+    /// `domain`, and the rest from `d` (a `[daemon]` section).
+    pub fn with_settings(
+        domain: Domain,
+        estimator: Config,
+        d: &DaemonSettings,
+        aid: HeadingAid,
+    ) -> Self {
+        let d = d.clone();
         Self {
             domain,
             estimator,

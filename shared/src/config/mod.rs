@@ -290,7 +290,7 @@ mod tests {
         let long = |n: usize| format!("[daemon]\ndomain = \"{}\"\n", "d".repeat(n));
         let max = crate::services::MAX_DOMAIN_LEN;
         let ok = ConfigFile::parse(&long(max), Path::new("s.toml")).unwrap();
-        crate::services::Domain::new(&ok.validate().unwrap().daemon.domain).unwrap();
+        crate::services::Domain::new(&ok.validate_daemon().unwrap().domain).unwrap();
         let err = ConfigFile::parse(&long(max + 1), Path::new("s.toml"))
             .unwrap()
             .validate()
@@ -302,9 +302,10 @@ mod tests {
             Path::new("s.toml"),
         )
         .unwrap();
-        let c = f.validate().unwrap();
-        assert!(c.daemon.lossless);
-        assert_eq!(c.daemon.channel_capacity, 8);
+        f.validate().unwrap();
+        let d = f.validate_daemon().unwrap();
+        assert!(d.lossless);
+        assert_eq!(d.channel_capacity, 8);
     }
 
     #[test]

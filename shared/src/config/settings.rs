@@ -28,8 +28,6 @@ pub struct Config {
     pub heading: HeadingConfig,
     /// Model extensions.
     pub model: ModelSettings,
-    /// The daemon.
-    pub daemon: DaemonSettings,
 }
 
 /// Validated `[model]`: `None` = extension off.
@@ -175,6 +173,14 @@ pub struct HeadingConfig {
     pub aligned_prior: Fraction,
     /// Smallest fused association weight.
     pub min_weight: Fraction,
+}
+
+impl Default for DaemonSettings {
+    fn default() -> Self {
+        ConfigFile::default()
+            .validate_daemon()
+            .expect("the built-in daemon defaults are valid")
+    }
 }
 
 impl Default for Config {

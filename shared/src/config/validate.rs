@@ -21,35 +21,9 @@ impl ConfigFile {
         })
     }
 
-    /// Validates every key, applying the defaults.
-    pub fn validate(&self) -> Result<Config, ConfigError> {
-        let e = &self.estimator;
-        let a = &self.alignment;
-        let d = &self.detector;
-        let k = &self.eskf;
-        let b = &self.bias_kf;
-        let h = &self.heading;
-        let deg = f64::to_radians;
-        let window = d.window.unwrap_or(5);
-        if window == 0 || window > 1000 {
-            return Err(invalid("detector.window", window, "must be in 1..=1000"));
-        }
-        let straight_strides = h.straight_strides.unwrap_or(2);
-        if straight_strides > 100 {
-            return Err(invalid(
-                "heading.straight_strides",
-                straight_strides,
-                "must be <= 100",
-            ));
-        }
-        let calibration_strides = h.calibration_strides.unwrap_or(3);
-        if calibration_strides == 0 || calibration_strides > 100 {
-            return Err(invalid(
-                "heading.calibration_strides",
-                calibration_strides,
-                "must be in 1..=100",
-            ));
-        }
+    /// Validates the `[daemon]` section into [`DaemonSettings`] (what `corridor serve` needs
+    /// besides the estimator's [`Config`]).
+    pub fn validate_daemon(&self) -> Result<DaemonSettings, ConfigError> {
         let dm = &self.daemon;
         let delivery = dm.delivery.as_deref().unwrap_or("live");
         let lossless = match delivery.parse::<crate::services::Delivery>() {
@@ -100,6 +74,41 @@ impl ConfigFile {
                 dm.stall_timeout_s.unwrap_or(1.0),
             )?,
         };
+        Ok(daemon)
+    }
+
+    /// Validates every key, applying the defaults.
+    pub fn validate(&self) -> Result<Config, ConfigError> {
+        let e = &self.estimator;
+        let a = &self.alignment;
+        let d = &self.detector;
+        let k = &self.eskf;
+        let b = &self.bias_kf;
+        let h = &self.heading;
+        let deg = f64::to_radians;
+        let window = d.window.unwrap_or(5);
+        if window == 0 || window > 1000 {
+            return Err(invalid("detector.window", window, "must be in 1..=1000"));
+        }
+        let straight_strides = h.straight_strides.unwrap_or(2);
+        if straight_strides > 100 {
+            return Err(invalid(
+                "heading.straight_strides",
+                straight_strides,
+                "must be <= 100",
+            ));
+        }
+        let calibration_strides = h.calibration_strides.unwrap_or(3);
+        if calibration_strides == 0 || calibration_strides > 100 {
+            return Err(invalid(
+                "heading.calibration_strides",
+                calibration_strides,
+                "must be in 1..=100",
+            ));
+        }
+        // The [daemon] section is checked with the rest of the file (`corridor run` refuses a
+        // file whose daemon part is wrong too); its settings stay out of the estimator's.
+        self.validate_daemon()?;
         let md = &self.model;
         let opt = |key: &str, v: Option<f64>| v.map(|v| Positive::new(key, v)).transpose();
         let model = ModelSettings {
@@ -119,7 +128,6 @@ impl ConfigFile {
             g_sensitivity_sd: opt("model.g_sensitivity_sd", md.g_sensitivity_sd)?,
         };
         Ok(Config {
-            daemon,
             model,
             mode: e.mode.unwrap_or(Mode::Eskf),
             converged_sd_rad_s: Positive::new(
