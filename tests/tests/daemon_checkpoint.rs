@@ -1,65 +1,15 @@
-//! Checkpoint and warm start of the daemon (in-process, each test on its own domain).
-//!
-//! - `restart_warm_starts_from_the_saved_bias`: a daemon replays exp36 and is stopped; a second
-//!   daemon with the same checkpoint file publishes, at the end of its alignment, the saved bias
-//!   (not the rest-mean prior a cold start gives).
-//! - `corrupt_checkpoint_is_moved_aside_and_the_daemon_cold_starts`: a damaged file becomes a
-//!   warning, is renamed `<file>.corrupt-1`, and the daemon starts from the configured prior.
+//! Checkpoint and warm start of the daemon (in-process): a daemon replays exp36 and is
+//! stopped; a second daemon with the same checkpoint file publishes, at the end of its
+//! alignment, the saved bias (not the rest-mean prior a cold start gives). The corrupt-file case
+//! is in `daemon_checkpoint_corrupt.rs`: one test binary a scenario, so that no more than the two
+//! daemons this scenario needs ever run in one process (see the README's known issue).
 
 mod daemon_common;
 
 use corridor_client::{Delivery, Domain, Subscriber};
 use corridor_service::checkpoint;
-use corridor_service::core::{Estimate, Phase};
-use corridor_service::runner::{heading_aid, run_log};
-use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
-use corridor_shared::injection::BiasInjection;
 use corridor_shared::wire::{BiasSample, FLAG_END_OF_STREAM};
 use daemon_common::*;
-
-/// The offline estimates of exp36 and the index of the first aligned sample.
-fn offline_exp36() -> (Vec<Estimate>, usize) {
-    let cfg = config();
-    let aid = heading_aid(&cfg, None).unwrap();
-    let path = manifest().join("data/gdins_exp36_corridor_out_and_back/imu.csv");
-    let log = read_imu_csv(&path, &ImuCsvOptions::default()).unwrap();
-    let mut est = Vec::with_capacity(log.rows.len());
-    run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
-        est.push(*e)
-    });
-    let first = est
-        .iter()
-        .position(|e| e.phase != Phase::Aligning)
-        .expect("exp36 aligns");
-    (est, first)
-}
-
-/// Replays the first `n` rows of exp36 (then the end-of-stream marker) and returns the first
-/// bias sample with a finite σ (published at the end of alignment) and the report.
-fn first_aligned_bias(
-    domain: &Domain,
-    ckpt: &std::path::Path,
-    n: usize,
-) -> (BiasSample, corridor_service::daemon::DaemonReport) {
-    let mut dcfg = daemon_config(domain, Delivery::Lossless);
-    dcfg.checkpoint = Some(ckpt.to_owned());
-    let daemon = Running::start(dcfg);
-    let bias = Subscriber::<BiasSample>::open(domain, "test-bias", WAIT).unwrap();
-    let rows = exp36_rows()[..n].to_vec();
-    let producer = produce(domain, "test-replay", Delivery::Lossless, rows, true);
-    let got = until_end(&bias, |b| b.flags);
-    producer.join().unwrap();
-    let report = daemon.stop();
-    let first = *got
-        .iter()
-        .find(|b| b.gyro_bias_sd_rad_s[0].is_finite())
-        .expect("a bias sample after alignment");
-    (first, report)
-}
-
-fn max_abs_diff(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max)
-}
 
 #[test]
 fn restart_warm_starts_from_the_saved_bias() {
@@ -155,42 +105,6 @@ fn restart_warm_starts_from_the_saved_bias() {
     // The second life saved its own state over the first one.
     let resaved = checkpoint::load(&ckpt).unwrap();
     assert_eq!(resaved.t_s, offline[first_aligned + 399].t_s);
-
-    cleanup_domain(name);
-}
-
-#[test]
-fn corrupt_checkpoint_is_moved_aside_and_the_daemon_cold_starts() {
-    let _one = one_daemon_at_a_time();
-    let name = "test_daemon_corrupt";
-    cleanup_domain(name);
-    let dir = temp_dir("test-daemon-corrupt");
-    let ckpt = dir.join("checkpoint.bin");
-    let garbage = b"CORRCKPT\x02\x00\x00\x00 this is not bincode".to_vec();
-    std::fs::write(&ckpt, &garbage).unwrap();
-    let domain = Domain::new(name).unwrap();
-    let (offline, first_aligned) = offline_exp36();
-
-    let (first, report) = first_aligned_bias(&domain, &ckpt, first_aligned + 50);
-    assert!(report.warm_started_from.is_none());
-    assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
-    let w = &report.warnings[0];
-    assert!(
-        w.contains("corrupt checkpoint") && w.contains("cold start"),
-        "{w}"
-    );
-    let aside = dir.join("checkpoint.bin.corrupt-1");
-    assert!(w.contains(&aside.display().to_string()), "{w}");
-    assert_eq!(std::fs::read(&aside).unwrap(), garbage, "kept aside as is");
-
-    // Cold start: exactly the offline run's bias at alignment (configured rest-mean prior).
-    let cold = offline[first_aligned];
-    assert_eq!(first.imu_seq, first_aligned as u64);
-    assert_eq!(first.gyro_bias_rad_s, cold.gyro_bias_rad_s);
-    assert_eq!(first.gyro_bias_sd_rad_s, cold.gyro_bias_sd_rad_s);
-    // And a valid checkpoint replaced the corrupt one.
-    let cp = checkpoint::load(&ckpt).expect("new checkpoint");
-    assert_eq!(cp.t_s, offline[first_aligned + 49].t_s);
 
     cleanup_domain(name);
 }

@@ -183,3 +183,55 @@ pub fn one_daemon_at_a_time() -> std::sync::MutexGuard<'static, ()> {
     ONE.lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
+
+/// The offline estimates of exp36 and the index of the first aligned sample.
+pub fn offline_exp36() -> (Vec<corridor_service::core::Estimate>, usize) {
+    let cfg = config();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let path = manifest().join("data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let log = read_imu_csv(&path, &ImuCsvOptions::default()).unwrap();
+    let mut est = Vec::with_capacity(log.rows.len());
+    corridor_service::runner::run_log(
+        &log,
+        &cfg,
+        &aid,
+        &corridor_shared::injection::BiasInjection::default(),
+        |_, e| est.push(*e),
+    );
+    let first = est
+        .iter()
+        .position(|e| e.phase != corridor_service::core::Phase::Aligning)
+        .expect("exp36 aligns");
+    (est, first)
+}
+
+/// Replays the first `n` rows of exp36 (then the end-of-stream marker) and returns the first
+/// bias sample with a finite σ (published at the end of alignment) and the report.
+pub fn first_aligned_bias(
+    domain: &Domain,
+    ckpt: &std::path::Path,
+    n: usize,
+) -> (
+    corridor_shared::wire::BiasSample,
+    corridor_service::daemon::DaemonReport,
+) {
+    let mut dcfg = daemon_config(domain, Delivery::Lossless);
+    dcfg.checkpoint = Some(ckpt.to_owned());
+    let daemon = Running::start(dcfg);
+    let bias =
+        Subscriber::<corridor_shared::wire::BiasSample>::open(domain, "test-bias", WAIT).unwrap();
+    let rows = exp36_rows()[..n].to_vec();
+    let producer = produce(domain, "test-replay", Delivery::Lossless, rows, true);
+    let got = until_end(&bias, |b| b.flags);
+    producer.join().unwrap();
+    let report = daemon.stop();
+    let first = *got
+        .iter()
+        .find(|b| b.gyro_bias_sd_rad_s[0].is_finite())
+        .expect("a bias sample after alignment");
+    (first, report)
+}
+
+pub fn max_abs_diff(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max)
+}
