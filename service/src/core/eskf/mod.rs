@@ -489,6 +489,28 @@ mod tests {
         }
     }
 
+    /// A filter estimating its bias, with the test noise and 9.81 m/s² of gravity.
+    fn filter(
+        nav_from_body: UnitQuaternion<f64>,
+        gyro_bias_rad_s: Vector3<f64>,
+        tilt_sd_rad: f64,
+        bias_sd_rad_s: f64,
+        ext: Extensions,
+    ) -> Eskf {
+        Eskf::new(
+            EskfInit {
+                nav_from_body,
+                gyro_bias_rad_s,
+                tilt_sd_rad,
+                bias_sd_rad_s,
+                gravity_m_s2: 9.81,
+                bias: BiasStates::Estimated,
+            },
+            noise(),
+            ext,
+        )
+    }
+
     fn dense(f: &Eskf) -> nalgebra::DMatrix<f64> {
         let n = f.dim();
         nalgebra::DMatrix::from_fn(n, n, |r, c| f.cov(r, c))
@@ -496,16 +518,11 @@ mod tests {
 
     #[test]
     fn a_state_copy_equals_a_clone_where_it_is_used() {
-        let mut a = Eskf::new(
-            EskfInit {
-                nav_from_body: from_euler_zyx(0.1, 0.2, 0.3),
-                gyro_bias_rad_s: Vector3::new(0.01, 0.0, -0.01),
-                tilt_sd_rad: 0.01,
-                bias_sd_rad_s: 0.01,
-                gravity_m_s2: 9.81,
-                bias: BiasStates::Estimated,
-            },
-            noise(),
+        let mut a = filter(
+            from_euler_zyx(0.1, 0.2, 0.3),
+            Vector3::new(0.01, 0.0, -0.01),
+            0.01,
+            0.01,
             all_ext(),
         );
         let mut b = a.clone();
@@ -548,16 +565,11 @@ mod tests {
             ..Default::default()
         };
         for ext in [Extensions::default(), static_only, all_ext()] {
-            let mut f = Eskf::new(
-                EskfInit {
-                    nav_from_body: from_euler_zyx(0.2, -0.3, 1.0),
-                    gyro_bias_rad_s: Vector3::zeros(),
-                    tilt_sd_rad: 0.01,
-                    bias_sd_rad_s: 0.01,
-                    gravity_m_s2: 9.81,
-                    bias: BiasStates::Estimated,
-                },
-                noise(),
+            let mut f = filter(
+                from_euler_zyx(0.2, -0.3, 1.0),
+                Vector3::zeros(),
+                0.01,
+                0.01,
                 ext,
             );
             for _ in 0..3 {
@@ -614,16 +626,11 @@ mod tests {
 
     #[test]
     fn update_matches_the_textbook_kalman_formulas() {
-        let mut f = Eskf::new(
-            EskfInit {
-                nav_from_body: from_euler_zyx(0.2, -0.3, 1.0),
-                gyro_bias_rad_s: Vector3::zeros(),
-                tilt_sd_rad: 0.01,
-                bias_sd_rad_s: 0.01,
-                gravity_m_s2: 9.81,
-                bias: BiasStates::Estimated,
-            },
-            noise(),
+        let mut f = filter(
+            from_euler_zyx(0.2, -0.3, 1.0),
+            Vector3::zeros(),
+            0.01,
+            0.01,
             all_ext(),
         );
         for _ in 0..5 {
@@ -671,16 +678,11 @@ mod tests {
     #[test]
     fn heading_updates_make_z_bias_observable() {
         // Static sensor, level, with a z bias of 0.01 rad/s the filter does not know.
-        let mut f = Eskf::new(
-            EskfInit {
-                nav_from_body: UnitQuaternion::identity(),
-                gyro_bias_rad_s: Vector3::zeros(),
-                tilt_sd_rad: 0.01,
-                bias_sd_rad_s: 0.02,
-                gravity_m_s2: 9.81,
-                bias: BiasStates::Estimated,
-            },
-            noise(),
+        let mut f = filter(
+            UnitQuaternion::identity(),
+            Vector3::zeros(),
+            0.01,
+            0.02,
             Extensions::default(),
         );
         let true_bias = Vector3::new(0.0, 0.0, 0.01);
@@ -713,16 +715,11 @@ mod tests {
             scale_factor_sd: Some(0.05),
             ..Default::default()
         };
-        let mut f = Eskf::new(
-            EskfInit {
-                nav_from_body: UnitQuaternion::identity(),
-                gyro_bias_rad_s: Vector3::zeros(),
-                tilt_sd_rad: 0.01,
-                bias_sd_rad_s: 1e-4,
-                gravity_m_s2: 9.81,
-                bias: BiasStates::Estimated,
-            },
-            noise(),
+        let mut f = filter(
+            UnitQuaternion::identity(),
+            Vector3::zeros(),
+            0.01,
+            1e-4,
             ext,
         );
         let g = Vector3::new(0.0, 0.0, 9.81);
@@ -802,16 +799,11 @@ mod tests {
             g_sensitivity_sd: Some(5e-3),
             ..Default::default()
         };
-        let mut f = Eskf::new(
-            EskfInit {
-                nav_from_body: UnitQuaternion::identity(),
-                gyro_bias_rad_s: Vector3::zeros(),
-                tilt_sd_rad: 0.01,
-                bias_sd_rad_s: 1e-4,
-                gravity_m_s2: 9.81,
-                bias: BiasStates::Estimated,
-            },
-            noise(),
+        let mut f = filter(
+            UnitQuaternion::identity(),
+            Vector3::zeros(),
+            0.01,
+            1e-4,
             ext,
         );
         let dt = 0.005;
@@ -843,16 +835,11 @@ mod tests {
             heading_offset_sd: Some(0.1),
             ..Default::default()
         };
-        let mut f = Eskf::new(
-            EskfInit {
-                nav_from_body: UnitQuaternion::identity(),
-                gyro_bias_rad_s: Vector3::zeros(),
-                tilt_sd_rad: 0.01,
-                bias_sd_rad_s: 1e-5,
-                gravity_m_s2: 9.81,
-                bias: BiasStates::Estimated,
-            },
-            noise(),
+        let mut f = filter(
+            UnitQuaternion::identity(),
+            Vector3::zeros(),
+            0.01,
+            1e-5,
             ext,
         );
         let g = Vector3::new(0.0, 0.0, 9.81);

@@ -600,6 +600,25 @@ mod tests {
         }
     }
 
+    /// 3 s of level rest with the gyro reading `bias`, then one moving sample (alignment ends).
+    fn rest_then_move(est: &mut Estimator, bias: [f64; 3]) -> Estimate {
+        let dt = 0.005;
+        for k in 0..600 {
+            let s = ImuInput {
+                t_s: k as f64 * dt,
+                gyro_rad_s: bias,
+                accel_m_s2: [0.0, 0.0, 9.81],
+            };
+            est.step(&s).unwrap();
+        }
+        let moving = ImuInput {
+            t_s: 600.0 * dt,
+            gyro_rad_s: [0.0, 3.0, 0.0],
+            accel_m_s2: [0.0, 0.0, 9.81],
+        };
+        *est.step(&moving).unwrap()
+    }
+
     #[test]
     fn rotation_about_z_at_a_known_rate_gives_the_known_heading() {
         let mut est = Estimator::new(Config::default(), HeadingAid::None);
@@ -633,21 +652,7 @@ mod tests {
         let cfg = ConfigFile::default().validate().unwrap();
         let bias = [0.004, -0.002, 0.006];
         let mut est = Estimator::new(cfg, HeadingAid::None);
-        let dt = 0.005;
-        for k in 0..600 {
-            let s = ImuInput {
-                t_s: k as f64 * dt,
-                gyro_rad_s: bias,
-                accel_m_s2: [0.0, 0.0, 9.81],
-            };
-            est.step(&s).unwrap();
-        }
-        let moving = ImuInput {
-            t_s: 600.0 * dt,
-            gyro_rad_s: [0.0, 3.0, 0.0],
-            accel_m_s2: [0.0, 0.0, 9.81],
-        };
-        let e = est.step(&moving).unwrap();
+        let e = rest_then_move(&mut est, bias);
         for (got, want) in e.gyro_bias_rad_s.iter().zip(bias) {
             assert!((got - want).abs() < 1e-12, "{got} vs {want}");
         }
@@ -669,21 +674,7 @@ mod tests {
         assert!(est.set_warm_start(bad).is_err());
         assert!(est.bias_state().is_none(), "no state before alignment");
         est.set_warm_start(saved).unwrap();
-        let dt = 0.005;
-        for k in 0..600 {
-            let s = ImuInput {
-                t_s: k as f64 * dt,
-                gyro_rad_s: bias,
-                accel_m_s2: [0.0, 0.0, 9.81],
-            };
-            est.step(&s).unwrap();
-        }
-        let moving = ImuInput {
-            t_s: 600.0 * dt,
-            gyro_rad_s: [0.0, 3.0, 0.0],
-            accel_m_s2: [0.0, 0.0, 9.81],
-        };
-        est.step(&moving).unwrap();
+        rest_then_move(&mut est, bias);
         let state = est.bias_state().unwrap();
         // One propagation step later: the saved bias, and its covariance plus one step of noise.
         assert_eq!(state.gyro_bias_rad_s, saved.gyro_bias_rad_s);
