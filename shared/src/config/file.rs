@@ -107,6 +107,9 @@ pub struct AlignmentFile {
     /// The last part of the rest left out of the means: the foot starts to move before the
     /// detector sees it (default 0.5 s).
     pub rest_tail_s: Option<f64>,
+    /// Without an initial rest of `min_rest_s`, the first stance at least this long aligns the
+    /// filter, without a rest-mean bias prior (default 0.1 s; 0 waits for a rest).
+    pub min_start_stance_s: Option<f64>,
 }
 
 /// `[detector]` section.
@@ -155,6 +158,10 @@ pub struct EskfFile {
     /// Lever arm between the sensor and the point the foot rolls about at the edges of a
     /// stance (default 0: off): the ZUPT σ of a sample is √(zupt_sd² + (arm·|ω|)²).
     pub zupt_lever_arm_m: Option<f64>,
+    /// Zero-rate updates: every later rest of at least `alignment.min_rest_s` (its last
+    /// `alignment.rest_tail_s` left out) observes the gyro bias with σ `gyro_bias_prior_sd_rad_s`,
+    /// like the initial rest (default true).
+    pub zero_rate_updates: Option<bool>,
 }
 
 /// `[bias_kf]` section: the paper's 3-state bias filter.

@@ -119,6 +119,10 @@ pub(crate) fn non_negative(key: &str, value: f64) -> Result<f64, ConfigError> {
 /// Default largest plausible foot speed, m/s: the swinging foot of a sprinter peaks near 10 m/s.
 pub const DEFAULT_MAX_SPEED_M_S: f64 = 15.0;
 
+/// Default shortest first stance that aligns without an initial rest, s: a walking stance lasts
+/// 0.2–0.6 s; a tenth of a second of quiet foot gives roll and pitch to a few tenths of a degree.
+pub const DEFAULT_MIN_START_STANCE_S: f64 = 0.1;
+
 /// How the gyro bias is estimated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

@@ -79,6 +79,8 @@ pub struct AlignmentConfig {
     pub gravity_m_s2: Option<Positive>,
     /// Tail of the rest left out of the means.
     pub rest_tail_s: f64,
+    /// Shortest first stance that aligns without a rest (0: wait for a rest).
+    pub min_start_stance_s: f64,
 }
 
 /// Validated `[detector]`.
@@ -123,6 +125,8 @@ pub struct EskfConfig {
     pub initial_tilt_sd_rad: Positive,
     /// ZUPT lever arm (0 = a constant ZUPT σ).
     pub zupt_lever_arm_m: f64,
+    /// Zero-rate updates at later rests.
+    pub zero_rate_updates: bool,
 }
 
 /// Validated `[bias_kf]`.

@@ -151,6 +151,10 @@ impl ConfigFile {
                     .map(|g| Positive::new("alignment.gravity_m_s2", g))
                     .transpose()?,
                 rest_tail_s: non_negative("alignment.rest_tail_s", a.rest_tail_s.unwrap_or(0.5))?,
+                min_start_stance_s: non_negative(
+                    "alignment.min_start_stance_s",
+                    a.min_start_stance_s.unwrap_or(DEFAULT_MIN_START_STANCE_S),
+                )?,
             },
             detector: DetectorConfig {
                 kind: d.kind.unwrap_or(DetectorKind::Shoe),
@@ -212,6 +216,7 @@ impl ConfigFile {
                     "eskf.zupt_lever_arm_m",
                     k.zupt_lever_arm_m.unwrap_or(0.0),
                 )?,
+                zero_rate_updates: k.zero_rate_updates.unwrap_or(true),
             },
             bias_kf: BiasKfConfig {
                 tilt_sd_rad: Positive::new(

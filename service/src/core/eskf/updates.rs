@@ -117,6 +117,33 @@ impl Eskf {
         }
     }
 
+    /// Zero-rate update: during a rest the gyro reads its bias (plus its g-sensitivity times the
+    /// specific force, when that is a state). `mean_rate_rad_s` and `mean_f_m_s2` are the means
+    /// over the rest (sensor axes); `sd_rad_s` is the σ of the mean rate per axis. `None` when
+    /// the bias is not estimated (the paper's and the rotation-aware modes keep their own).
+    pub fn zero_rate_update(
+        &mut self,
+        mean_rate_rad_s: &Vector3<f64>,
+        mean_f_m_s2: &Vector3<f64>,
+        sd_rad_s: f64,
+    ) -> Option<Innovation> {
+        if !self.estimate_bias {
+            return None;
+        }
+        let mut predicted = self.gyro_bias_rad_s;
+        let mut h = [[(BG, 1.0), (0, 0.0), (0, 0.0), (0, 0.0)]; 3];
+        for (k, row) in h.iter_mut().enumerate() {
+            row[0].0 = BG + k;
+            if let Some(g) = self.layout.gsens {
+                predicted[k] += self.ext.g_sensitivity[k] * mean_f_m_s2[k];
+                row[1] = (g + k, mean_f_m_s2[k]);
+            }
+        }
+        let r = mean_rate_rad_s - predicted;
+        let var = sd_rad_s * sd_rad_s;
+        Some(self.update(&h, [r.x, r.y, r.z], [var; 3]))
+    }
+
     /// The heading of the body-frame direction `axis_body` (the foot's forward axis) as the
     /// model predicts it: its attitude heading plus the heading-offset state.
     pub fn predicted_heading(&self, axis_body: &Vector3<f64>) -> f64 {

@@ -336,13 +336,19 @@ impl Estimator {
         } else {
             t_s - self.rest.t_first_s
         };
-        if rest_s < self.cfg.alignment.min_rest_s.get() {
+        let a = &self.cfg.alignment;
+        // Without a rest, the first stance of at least `min_start_stance_s` aligns: roll and
+        // pitch from its mean specific force (the ZUPTs refine them), no bias prior (the later
+        // rests' zero-rate updates and the heading observations give the bias).
+        let short_start = rest_s < a.min_rest_s.get();
+        if short_start && (a.min_start_stance_s <= 0.0 || rest_s < a.min_start_stance_s) {
             if !self.rest.is_empty() {
                 self.counters.alignment_restarts += 1;
             }
             self.rest.clear();
             return;
         }
+        self.counters.started_without_rest = short_start;
         let (mean_f, mean_w) = self.rest.means();
         let g = self
             .cfg
@@ -353,8 +359,10 @@ impl Estimator {
         let (roll, pitch) = tilt_from_specific_force(&mean_f);
         self.tilt0 = from_euler_zyx(roll, pitch, 0.0);
         let (b0, sd0) = match self.cfg.alignment.gyro_bias_prior {
-            BiasPrior::RestMean => (mean_w, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get()),
-            BiasPrior::None => (
+            BiasPrior::RestMean if !short_start => {
+                (mean_w, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
+            }
+            BiasPrior::RestMean | BiasPrior::None => (
                 Vector3::zeros(),
                 self.cfg.eskf.gyro_bias_initial_sd_rad_s.get(),
             ),
@@ -549,6 +557,7 @@ impl Estimator {
             self.counters.zupts += 1;
             if !self.in_stance {
                 self.in_stance = true;
+                self.rest.clear();
                 self.stance_obs_done = false;
                 self.stance_f_sum = (Vector3::zeros(), 0);
                 self.counters.stances += 1;
@@ -559,8 +568,30 @@ impl Estimator {
                 self.stance_obs_done = true;
                 self.stance_observation(t_s);
             }
+            if self.cfg.eskf.zero_rate_updates {
+                self.rest.push(t_s, f_avg, w_avg);
+            }
         } else {
+            if self.in_stance && self.cfg.eskf.zero_rate_updates {
+                self.zero_rate_update();
+            }
             self.in_stance = false;
+        }
+    }
+
+    /// At the end of a stance: when it was a rest (its part before the last
+    /// `alignment.rest_tail_s` lasts `alignment.min_rest_s`), the mean rate over that part
+    /// observes the gyro bias with the σ of the rest-mean prior, as the initial rest does.
+    fn zero_rate_update(&mut self) {
+        let Some((mean_f, mean_w)) = self.rest.settled_means(self.cfg.alignment.min_rest_s.get())
+        else {
+            return;
+        };
+        let sd = self.cfg.eskf.gyro_bias_prior_sd_rad_s.get();
+        if let Some(e) = self.eskf.as_mut()
+            && e.zero_rate_update(&mean_w, &mean_f, sd).is_some()
+        {
+            self.counters.zero_rate_updates += 1;
         }
     }
 
@@ -656,6 +687,81 @@ mod tests {
         for (got, want) in e.gyro_bias_rad_s.iter().zip(bias) {
             assert!((got - want).abs() < 1e-12, "{got} vs {want}");
         }
+    }
+
+    /// `n` samples from `t0_s` reading `gyro` and `accel` (level foot: gravity along z).
+    fn feed(est: &mut Estimator, t0_s: f64, n: usize, gyro: [f64; 3], accel: [f64; 3]) -> f64 {
+        let dt = 0.005;
+        for k in 0..n {
+            let s = ImuInput {
+                t_s: t0_s + k as f64 * dt,
+                gyro_rad_s: gyro,
+                accel_m_s2: accel,
+            };
+            est.step(&s).unwrap();
+        }
+        t0_s + n as f64 * dt
+    }
+
+    #[test]
+    fn a_short_first_stance_aligns_without_a_bias_prior_unless_switched_off() {
+        let bias = [0.004, -0.002, 0.006];
+        let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
+        for min_start_stance_s in [0.1, 0.0] {
+            let mut cfg = Config::default();
+            cfg.alignment.min_start_stance_s = min_start_stance_s;
+            let mut est = Estimator::new(cfg, HeadingAid::None);
+            // 0.2 s of stance (shorter than min_rest_s = 0.5 s), then the foot moves.
+            let t = feed(&mut est, 0.0, 40, bias, level);
+            let e = *est
+                .step(&ImuInput {
+                    t_s: t,
+                    gyro_rad_s: bias,
+                    accel_m_s2: pushed,
+                })
+                .unwrap();
+            if min_start_stance_s > 0.0 {
+                assert_ne!(est.phase(), Phase::Aligning);
+                assert!(est.counters().started_without_rest);
+                // No rest-mean prior from a walking stance: the bias starts at zero.
+                assert_eq!(e.gyro_bias_rad_s, [0.0; 3]);
+            } else {
+                assert_eq!(est.phase(), Phase::Aligning, "waits for a rest");
+                assert_eq!(est.counters().alignment_restarts, 1);
+            }
+        }
+    }
+
+    #[test]
+    fn a_later_rest_observes_the_bias_with_a_zero_rate_update() {
+        let bias = [0.004, -0.002, 0.006];
+        let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
+        let mut z_error = Vec::new();
+        for zero_rate_updates in [true, false] {
+            let mut cfg = Config::default();
+            cfg.alignment.gyro_bias_prior = BiasPrior::None;
+            cfg.eskf.zero_rate_updates = zero_rate_updates;
+            let mut est = Estimator::new(cfg, HeadingAid::None);
+            // Aligned on a 1 s rest without prior, a push, a 2 s rest, a push (the rest ends).
+            let t = feed(&mut est, 0.0, 200, bias, level);
+            let t = feed(&mut est, t, 10, bias, pushed);
+            let t = feed(&mut est, t, 400, bias, level);
+            feed(&mut est, t, 1, bias, pushed);
+            let e = *est
+                .step(&ImuInput {
+                    t_s: t + 0.005,
+                    gyro_rad_s: bias,
+                    accel_m_s2: pushed,
+                })
+                .unwrap();
+            let want = u64::from(zero_rate_updates);
+            assert_eq!(est.counters().zero_rate_updates, want);
+            z_error.push((e.gyro_bias_rad_s[2] - bias[2]).abs());
+        }
+        // The heading axis is unobservable by zero velocity alone: only the zero-rate update
+        // finds its bias.
+        assert!(z_error[0] < 5e-4, "with zero-rate update: {}", z_error[0]);
+        assert!(z_error[1] > 3e-3, "without: {}", z_error[1]);
     }
 
     #[test]

@@ -6,6 +6,8 @@ use nalgebra::Vector3;
 #[derive(Debug, Clone, Copy, Default)]
 struct Sums {
     n: u64,
+    /// Blocks summed (settled part only).
+    blocks: u64,
     f: Vector3<f64>,
     w: Vector3<f64>,
 }
@@ -13,6 +15,7 @@ struct Sums {
 impl Sums {
     fn add(&mut self, o: &Sums) {
         self.n += o.n;
+        self.blocks += 1;
         self.f += o.f;
         self.w += o.w;
     }
@@ -75,6 +78,14 @@ impl RestSums {
         self.current.n += 1;
         self.current.f += f;
         self.current.w += w;
+    }
+
+    /// Means of specific force and rate over the settled part (the rest without its tail), when
+    /// that part lasts at least `min_s`.
+    pub(super) fn settled_means(&self, min_s: f64) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        let s = &self.settled;
+        (s.n > 0 && s.blocks as f64 * REST_BLOCK_S >= min_s)
+            .then(|| (s.f / s.n as f64, s.w / s.n as f64))
     }
 
     /// Means over the settled part, or over everything when the rest was too short for that.

@@ -172,6 +172,11 @@ pub struct Counters {
     pub stride_rejected: u64,
     /// Times the initial rest was too short and alignment started over.
     pub alignment_restarts: u64,
+    /// Alignment came from a first stance shorter than `alignment.min_rest_s` (no rest-mean
+    /// bias prior).
+    pub started_without_rest: bool,
+    /// Zero-rate updates of the gyro bias at rests after the alignment.
+    pub zero_rate_updates: u64,
 }
 
 /// The estimate after one sample.
