@@ -162,6 +162,12 @@ pub struct EskfFile {
     /// `alignment.rest_tail_s` left out) observes the gyro bias with σ `gyro_bias_prior_sd_rad_s`,
     /// like the initial rest (default true).
     pub zero_rate_updates: Option<bool>,
+    /// A gyro axis at its rail (`sensor.gyro_range_rad_s`) read less than the true rate: the
+    /// rate used is the rail plus this mean excess, rad/s (default 0).
+    pub clipped_rate_excess_rad_s: Option<f64>,
+    /// ... and the attitude variance grows about that axis by (this σ × dt)² per clipped
+    /// sample, rad/s (default 0.5).
+    pub clipped_rate_sd_rad_s: Option<f64>,
 }
 
 /// `[bias_kf]` section: the paper's 3-state bias filter.

@@ -127,6 +127,10 @@ pub struct EskfConfig {
     pub zupt_lever_arm_m: f64,
     /// Zero-rate updates at later rests.
     pub zero_rate_updates: bool,
+    /// Mean excess of the true rate over a clipped gyro axis.
+    pub clipped_rate_excess_rad_s: f64,
+    /// σ of that excess.
+    pub clipped_rate_sd_rad_s: f64,
 }
 
 /// Validated `[bias_kf]`.

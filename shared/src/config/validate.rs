@@ -217,6 +217,15 @@ impl ConfigFile {
                     k.zupt_lever_arm_m.unwrap_or(0.0),
                 )?,
                 zero_rate_updates: k.zero_rate_updates.unwrap_or(true),
+                clipped_rate_excess_rad_s: non_negative(
+                    "eskf.clipped_rate_excess_rad_s",
+                    k.clipped_rate_excess_rad_s.unwrap_or(0.0),
+                )?,
+                clipped_rate_sd_rad_s: non_negative(
+                    "eskf.clipped_rate_sd_rad_s",
+                    k.clipped_rate_sd_rad_s
+                        .unwrap_or(DEFAULT_CLIPPED_RATE_SD_RAD_S),
+                )?,
             },
             bias_kf: BiasKfConfig {
                 tilt_sd_rad: Positive::new(

@@ -411,6 +411,18 @@ impl Eskf {
         }
     }
 
+    /// A rotation of unknown size about the body axis `axis_body` (unit vector) with variance
+    /// `var_rad2` happened: the attitude covariance grows along that axis (in the navigation
+    /// frame). Used for the rotation a clipped gyro axis did not measure.
+    pub fn widen_attitude_about(&mut self, axis_body: &Vector3<f64>, var_rad2: f64) {
+        let a = self.nav_from_body * axis_body;
+        for i in 0..3 {
+            for j in 0..3 {
+                self.p[ix(TH + i, TH + j)] += var_rad2 * a[i] * a[j];
+            }
+        }
+    }
+
     /// Sets the heading variance (after the map frame is fixed, the heading is known).
     pub fn set_heading_variance(&mut self, var_rad2: f64) {
         self.clear_state(TH + 2, var_rad2);
@@ -825,6 +837,19 @@ mod tests {
             "{}",
             f.ext.g_sensitivity
         );
+    }
+
+    #[test]
+    fn unmeasured_rotation_widens_the_attitude_about_its_axis_in_the_nav_frame() {
+        // Yawed by 90°: the body x axis is the nav y axis.
+        let q = UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::FRAC_PI_2);
+        let mut f = filter(q, Vector3::zeros(), 0.01, 0.01, Extensions::default());
+        let before = dense(&f);
+        f.widen_attitude_about(&Vector3::x(), 4e-4);
+        let d = dense(&f) - before;
+        assert!((d[(TH + 1, TH + 1)] - 4e-4).abs() < 1e-12, "{d}");
+        let rest: f64 = d.iter().map(|v| v.abs()).sum::<f64>() - d[(TH + 1, TH + 1)].abs();
+        assert!(rest < 1e-12, "only the nav-y attitude variance grows: {d}");
     }
 
     #[test]

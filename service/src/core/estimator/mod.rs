@@ -41,6 +41,7 @@ use super::rotation::{
 };
 use super::stance::StanceDetector;
 use corridor_shared::config::{BiasPrior, Config, Mode};
+use corridor_shared::sensor::CLIP_FRACTION;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// Failed health checks in a row that undo the update; beyond, the stance copy is restored.
@@ -93,6 +94,8 @@ pub struct Estimator {
     straight: StraightWalk,
     line: Option<FootprintLine>,
     in_stance: bool,
+    /// Gyro axes of the current sample at their rail.
+    clipped_gyro_axes: [bool; 3],
     stance_obs_done: bool,
     stance_f_sum: (Vector3<f64>, u64),
     pending_heading: Option<(f64, f64)>,
@@ -135,6 +138,7 @@ impl Estimator {
             mount_sum: (0.0, 0.0, 0),
             last_footprint: None,
             in_stance: false,
+            clipped_gyro_axes: [false; 3],
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
             pending_heading: None,
@@ -184,7 +188,7 @@ impl Estimator {
 
     /// Processes one sample. On error nothing changed and the sample is counted as rejected.
     pub fn step(&mut self, s: &ImuInput) -> Result<&Estimate, SampleError> {
-        let w = Vector3::from(s.gyro_rad_s);
+        let mut w = Vector3::from(s.gyro_rad_s);
         let f = Vector3::from(s.accel_m_s2);
         let clipped = match self.plausibility.check(s) {
             Ok(clipped) => clipped,
@@ -202,6 +206,19 @@ impl Estimator {
         let prev = self.last;
         self.counters.samples += 1;
         self.counters.clipped_samples += u64::from(clipped);
+        // A gyro axis at its rail read less than the true rate: the mean excess is added, and
+        // the attitude variance grows about that axis in `navigate`.
+        self.clipped_gyro_axes = [false; 3];
+        if clipped {
+            let rail = CLIP_FRACTION * self.cfg.sensor.gyro_range_rad_s();
+            let excess = self.cfg.eskf.clipped_rate_excess_rad_s;
+            for (k, c) in self.clipped_gyro_axes.iter_mut().enumerate() {
+                *c = w[k].abs() >= rail;
+                if *c {
+                    w[k] += excess.copysign(w[k]);
+                }
+            }
+        }
         self.last = Some((s.t_s, w, f));
         let decision = self.detector.push(s.t_s, &w, &f);
         let out = &mut self.out;
@@ -548,6 +565,12 @@ impl Estimator {
         let eskf = self.eskf.as_mut().expect("aligned");
         let omega = eskf.corrected_rate(w_avg, f_avg, &bias);
         eskf.propagate(&omega, f_avg, dt);
+        let clip_var = (self.cfg.eskf.clipped_rate_sd_rad_s * dt).powi(2);
+        for (k, &c) in self.clipped_gyro_axes.iter().enumerate() {
+            if c && clip_var > 0.0 {
+                eskf.widen_attitude_about(&Vector3::ith(k, 1.0), clip_var);
+            }
+        }
         if stance {
             // A foot that rolls about its heel or toe moves the sensor at the lever arm times the
             // rotation rate: at the edges of a stance the zero velocity is that much less sure.
@@ -762,6 +785,29 @@ mod tests {
         // finds its bias.
         assert!(z_error[0] < 5e-4, "with zero-rate update: {}", z_error[0]);
         assert!(z_error[1] > 3e-3, "without: {}", z_error[1]);
+    }
+
+    #[test]
+    fn a_clipped_gyro_axis_is_counted_and_widens_the_attitude_only_when_modelled() {
+        let bias = [0.0; 3];
+        let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
+        let mut roll = Vec::new();
+        for sd in [0.5, 0.0] {
+            let mut cfg = Config::default();
+            cfg.eskf.clipped_rate_sd_rad_s = sd;
+            let rail = cfg.sensor.gyro_range_rad_s();
+            let mut est = Estimator::new(cfg, HeadingAid::None);
+            let t = feed(&mut est, 0.0, 200, bias, level);
+            // A swing with the x axis at its rail, then a long stance: the ZUPTs see the tilt
+            // the unmeasured rotation would have caused and correct the attitude, more so when
+            // its variance says that the attitude is uncertain.
+            let t = feed(&mut est, t, 20, [rail, 0.0, 0.0], pushed);
+            let t = feed(&mut est, t, 20, [-rail, 0.0, 0.0], pushed);
+            feed(&mut est, t, 100, bias, level);
+            assert_eq!(est.counters().clipped_samples, 40);
+            roll.push(est.out.roll_rad);
+        }
+        assert_ne!(roll[0], roll[1], "the clipping model changes the estimate");
     }
 
     #[test]
