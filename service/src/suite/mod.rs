@@ -21,12 +21,14 @@
 //! - [`loops`]: the residual-diagnosis loop on every recording.
 
 mod figures;
+mod front_end;
 mod loops;
 mod recovery;
 mod tables;
 
 use figures::{DefaultFigures, NisSeries, stride_ratio};
 pub use figures::{NisFigure, STANCE_MATCH_S, STRAIGHT_DEG, StanceMatch, StrideUse, WEAVE_DEG};
+pub use front_end::{DETECTORS, FrontEnd, KEPT_REST_S, detector_label, front_end_markdown};
 pub use loops::run_loops;
 pub use recovery::{recovery, settled_at};
 pub use tables::{
@@ -182,6 +184,8 @@ pub struct SuiteRow {
     pub stride_ratio: f64,
     /// Detected stances against the surveyed footprints (walks with every footprint).
     pub stances_found: Option<StanceMatch>,
+    /// Front end: detectors compared, start without rest, clipping model off.
+    pub front_end: FrontEnd,
 }
 
 /// Reads a suite file.
@@ -292,6 +296,54 @@ impl Ctx<'_> {
         })
     }
 
+    /// The front-end figures: the default without its initial rest and without the clipping
+    /// model, and (walks surveyed at every stride) the stance detectors compared.
+    fn front_end(
+        &self,
+        mode: Mode,
+        clipped_samples: u64,
+        every_stride: bool,
+    ) -> Result<FrontEnd, RunError> {
+        let mut off = self.config.clone();
+        off.eskf.clipped_rate_sd_rad_s = Some(0.0);
+        let (_, clipping_off) =
+            self.run_with(&off, mode, BiasPrior::RestMean, BiasInjection::default())?;
+        let without_rest = match front_end::without_rest(&self.log.rows, &self.truth) {
+            Some(rows) => {
+                let cut = Ctx {
+                    log: ImuLog {
+                        rows: rows.to_vec(),
+                        rejected: Vec::new(),
+                        ..self.log.clone()
+                    },
+                    config: self.config.clone(),
+                    baseline: self.baseline.clone(),
+                    truth: self.truth.clone(),
+                    ..*self
+                };
+                Some(
+                    cut.run(mode, BiasPrior::RestMean, BiasInjection::default())?
+                        .1,
+                )
+            }
+            None => None,
+        };
+        let cfg = config_for(
+            &self.config,
+            &self.base.join(&self.rec.config),
+            self.rec,
+            mode,
+            BiasPrior::RestMean,
+        )?;
+        Ok(FrontEnd {
+            clipped_samples,
+            clipping_off,
+            without_rest,
+            detectors: every_stride
+                .then(|| front_end::compare_detectors(&self.log.rows, &self.truth, &cfg)),
+        })
+    }
+
     fn run_with(
         &self,
         file: &ConfigFile,
@@ -374,6 +426,11 @@ fn run_recording(
         ..Default::default()
     };
     let (best_r1, _) = ctx.run(best, BiasPrior::RestMean, late)?;
+    let front_end = ctx.front_end(
+        best,
+        best_r0.counters.clipped_samples,
+        fig.stances_found.is_some(),
+    )?;
     Ok(SuiteRow {
         recording: r.name.clone(),
         gait: r.gait,
@@ -400,6 +457,7 @@ fn run_recording(
         stride_use: fig.stride_use,
         stride_ratio: fig.stride_ratio,
         stances_found: fig.stances_found,
+        front_end,
     })
 }
 

@@ -199,6 +199,8 @@ pub fn markdown(rows: &[SuiteRow]) -> String {
     s.push('\n');
     s.push_str(&nis_markdown(rows));
     s.push('\n');
+    s.push_str(&super::front_end_markdown(rows));
+    s.push('\n');
     s.push_str("Footprint RMS error after first-leg alignment, metres (% of path); final-GCP error in metres.\n\n");
     s.push_str("| recording | path | (1) ZUPT | (1b) ZUPT + rest mean | (2) injected, uncorrected | (3) paper, injected | (4) best, injected | best, no injection | best + rest mean |\n");
     s.push_str("|---|---|---|---|---|---|---|---|---|\n");

@@ -1,0 +1,159 @@
+//! What the suite measures of the front end: the stance detectors at fixed thresholds against
+//! the adaptive one (stances found against the footprint list), a start without the initial rest,
+//! and the clipping model on and off.
+
+use super::figures::StanceMatch;
+use super::{Footprint, SuiteRow};
+use crate::core::stance::StanceDetector;
+use corridor_shared::config::{Config, DetectorConfig, DetectorKind, Positive};
+use corridor_shared::imu_csv::ImuRow;
+use corridor_shared::truth_csv::TruthPoint;
+use nalgebra::Vector3;
+use serde::Serialize;
+
+/// How much of the initial rest the "start without rest" run keeps before the first footprint
+/// (the end of that rest), s: less than a walking stance, far less than `min_rest_s`.
+pub const KEPT_REST_S: f64 = 0.2;
+
+/// The detectors compared: statistic, fixed threshold, and whether the configured adaptive
+/// threshold is on. Thresholds in the statistic's own units (σ-normalised, see
+/// `core/stance.rs`): for SHOE and ARE 3e4 / 1e5 / 3e5 are a stance rotating at most about
+/// 0.3 / 0.55 / 0.95 rad/s; for MV 1e3 / 1e4 / 1e5 an accelerometer spread of about 0.3 / 1 /
+/// 3 m/s².
+pub const DETECTORS: [(DetectorKind, f64, bool); 10] = [
+    (DetectorKind::Shoe, 3e4, false),
+    (DetectorKind::Shoe, 1e5, false),
+    (DetectorKind::Shoe, 3e5, false),
+    (DetectorKind::Are, 3e4, false),
+    (DetectorKind::Are, 1e5, false),
+    (DetectorKind::Are, 3e5, false),
+    (DetectorKind::Mv, 1e3, false),
+    (DetectorKind::Mv, 1e4, false),
+    (DetectorKind::Mv, 1e5, false),
+    (DetectorKind::Shoe, 1e5, true),
+];
+
+/// Label of one of [`DETECTORS`].
+pub fn detector_label(kind: DetectorKind, threshold: f64, adaptive: bool) -> String {
+    let name = match kind {
+        DetectorKind::Shoe => "SHOE",
+        DetectorKind::Are => "ARE",
+        DetectorKind::Mv => "MV",
+    };
+    let tail = if adaptive { " + adaptive" } else { "" };
+    format!("{name} {threshold:.0e}{tail}")
+}
+
+/// Front-end figures of one recording.
+#[derive(Debug, Clone, Serialize)]
+pub struct FrontEnd {
+    /// Samples with a gyro or accelerometer axis at its rail.
+    pub clipped_samples: u64,
+    /// The default run with the clipping model off (footprint RMS).
+    pub clipping_off: Footprint,
+    /// The default run on the log cut to its last [`KEPT_REST_S`] of initial rest.
+    pub without_rest: Option<Footprint>,
+    /// Each of [`DETECTORS`] against the footprint list (walks surveyed at every stride).
+    pub detectors: Option<Vec<StanceMatch>>,
+}
+
+/// The stance intervals (start, end of the last stance sample) the detector `cfg` finds.
+pub fn stance_intervals(rows: &[ImuRow], cfg: &DetectorConfig) -> Vec<(f64, f64)> {
+    let mut d = StanceDetector::new(cfg, 9.80665);
+    let mut out = Vec::new();
+    let (mut start, mut last_t) = (None, f64::NAN);
+    for r in rows {
+        let w = Vector3::from(r.gyro_rad_s);
+        let f = Vector3::from(r.accel_m_s2);
+        let stance = d.push(r.t_s, &w, &f).stance;
+        match (stance, start) {
+            (true, None) => start = Some(r.t_s),
+            (false, Some(s)) => {
+                out.push((s, last_t));
+                start = None;
+            }
+            _ => {}
+        }
+        last_t = r.t_s;
+    }
+    out
+}
+
+/// [`DETECTORS`] on one log, with the window, σ and minimum stance of `cfg`.
+pub fn compare_detectors(rows: &[ImuRow], truth: &[TruthPoint], cfg: &Config) -> Vec<StanceMatch> {
+    DETECTORS
+        .iter()
+        .map(|&(kind, threshold, adaptive)| {
+            let mut d = cfg.detector.clone();
+            d.kind = kind;
+            d.threshold =
+                Positive::new("detector.threshold", threshold).expect("a positive table value");
+            if !adaptive {
+                d.adaptive_factor = None;
+            }
+            StanceMatch::of(truth, &stance_intervals(rows, &d))
+        })
+        .collect()
+}
+
+/// The rows of `rows` from [`KEPT_REST_S`] before the first footprint on.
+pub fn without_rest<'a>(rows: &'a [ImuRow], truth: &[TruthPoint]) -> Option<&'a [ImuRow]> {
+    let t0 = truth.first()?.t_s - KEPT_REST_S;
+    let k = rows.partition_point(|r| r.t_s < t0);
+    (k > 0).then(|| &rows[k..])
+}
+
+/// The front-end tables as Markdown.
+pub fn front_end_markdown(rows: &[SuiteRow]) -> String {
+    let mut s = format!(
+        "Start without rest (the log cut to its last {KEPT_REST_S} s of initial rest: alignment on that short \
+         stance, no rest-mean prior) and the clipping model (attitude variance about a clipped gyro axis), \
+         footprint RMS, % of path.\n\n\
+         | recording | default | without rest | difference | clipped samples | clipping model off |\n\
+         |---|---|---|---|---|---|\n"
+    );
+    for r in rows {
+        let fe = &r.front_end;
+        let cut = fe
+            .without_rest
+            .map_or("—".into(), |f| format!("{:.2} %", f.rms_pct));
+        let diff = fe.without_rest.map_or("—".into(), |f| {
+            format!("{:+.2}", f.rms_pct - r.best_rest.rms_pct)
+        });
+        s.push_str(&format!(
+            "| {} | {:.2} % | {} | {} | {} | {:.2} % |\n",
+            r.recording,
+            r.best_rest.rms_pct,
+            cut,
+            diff,
+            fe.clipped_samples,
+            fe.clipping_off.rms_pct
+        ));
+    }
+    s.push_str(
+        "\nStance detectors against the footprint list (walks surveyed at every stride): recall / precision of \
+         the stance ends within ±50 ms, the detector alone (window, σ and minimum stance of the sensor's \
+         configuration; the last column is the configured one).\n\n| recording |",
+    );
+    for &(k, t, a) in &DETECTORS {
+        s.push_str(&format!(" {} |", detector_label(k, t, a)));
+    }
+    s.push_str("\n|---|");
+    s.push_str(&"---|".repeat(DETECTORS.len()));
+    s.push('\n');
+    for r in rows {
+        let Some(d) = &r.front_end.detectors else {
+            continue;
+        };
+        s.push_str(&format!("| {} |", r.recording));
+        for m in d {
+            s.push_str(&format!(
+                " {:.0} / {:.0} |",
+                100.0 * m.recall(),
+                100.0 * m.precision()
+            ));
+        }
+        s.push('\n');
+    }
+    s
+}
