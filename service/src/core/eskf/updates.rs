@@ -73,9 +73,19 @@ impl Eskf {
 
     /// Zero-velocity update with σ `sd_m_s` instead of the configured one.
     pub fn zupt_with_sd(&mut self, sd_m_s: f64) -> Innovation {
+        self.stance_velocity_update(&Vector3::zeros(), sd_m_s)
+    }
+
+    /// Stance velocity update: the sensor's velocity is `expected_m_s` (navigation frame; zero
+    /// for a flat foot, the rolling motion at the edges of a stance) with σ `sd_m_s` per axis.
+    pub fn stance_velocity_update(
+        &mut self,
+        expected_m_s: &Vector3<f64>,
+        sd_m_s: f64,
+    ) -> Innovation {
         let n = self.layout.n;
         let rv = sd_m_s * sd_m_s;
-        let r = -self.v_m_s;
+        let r = expected_m_s - self.v_m_s;
         let mut pht = [[0.0; 3]; MAX_N];
         for (i, row) in pht.iter_mut().enumerate().take(n) {
             *row = [
@@ -119,13 +129,13 @@ impl Eskf {
 
     /// Zero-rate update: during a rest the gyro reads its bias (plus its g-sensitivity times the
     /// specific force, when that is a state). `mean_rate_rad_s` and `mean_f_m_s2` are the means
-    /// over the rest (sensor axes); `sd_rad_s` is the σ of the mean rate per axis. `None` when
+    /// over the rest (sensor axes); `sd_rad_s` the σ of the mean rate, per axis. `None` when
     /// the bias is not estimated (the paper's and the rotation-aware modes keep their own).
     pub fn zero_rate_update(
         &mut self,
         mean_rate_rad_s: &Vector3<f64>,
         mean_f_m_s2: &Vector3<f64>,
-        sd_rad_s: f64,
+        sd_rad_s: &Vector3<f64>,
     ) -> Option<Innovation> {
         if !self.estimate_bias {
             return None;
@@ -140,8 +150,8 @@ impl Eskf {
             }
         }
         let r = mean_rate_rad_s - predicted;
-        let var = sd_rad_s * sd_rad_s;
-        Some(self.update(&h, [r.x, r.y, r.z], [var; 3]))
+        let var = sd_rad_s.map(|v| v * v);
+        Some(self.update(&h, [r.x, r.y, r.z], [var.x, var.y, var.z]))
     }
 
     /// The heading of the body-frame direction `axis_body` (the foot's forward axis) as the

@@ -367,6 +367,12 @@ impl Estimator {
         }
         self.counters.started_without_rest = short_start;
         let (mean_f, mean_w) = self.rest.means();
+        // The prior's σ: the bias instability floor, or the standard error of the rest's mean
+        // rate when that is larger (a rest during which the foot still sways).
+        let prior_sd = self
+            .rest
+            .rate_sd_of_mean()
+            .map(|v| v.hypot(self.cfg.eskf.gyro_bias_prior_sd_rad_s.get()));
         let g = self
             .cfg
             .alignment
@@ -439,6 +445,13 @@ impl Estimator {
                 obs: None,
             },
         };
+        if own_bias
+            && self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean
+            && !short_start
+            && let Some(e) = self.eskf.as_mut()
+        {
+            e.set_gyro_bias(b0, &Matrix3::from_diagonal(&prior_sd.map(|v| v * v)));
+        }
         if let Some(ws) = self.warm_start {
             self.apply_warm_start(&ws);
         }
@@ -604,15 +617,18 @@ impl Estimator {
 
     /// At the end of a stance: when it was a rest (its part before the last
     /// `alignment.rest_tail_s` lasts `alignment.min_rest_s`), the mean rate over that part
-    /// observes the gyro bias with the σ of the rest-mean prior, as the initial rest does.
+    /// observes the gyro bias with the σ of the rest-mean prior (the floor, or the mean's
+    /// standard error when larger), as the initial rest does.
     fn zero_rate_update(&mut self) {
-        let Some((mean_f, mean_w)) = self.rest.settled_means(self.cfg.alignment.min_rest_s.get())
+        let Some((mean_f, mean_w, sem)) =
+            self.rest.settled_means(self.cfg.alignment.min_rest_s.get())
         else {
             return;
         };
-        let sd = self.cfg.eskf.gyro_bias_prior_sd_rad_s.get();
+        let floor = self.cfg.eskf.gyro_bias_prior_sd_rad_s.get();
+        let sd = sem.map(|v| v.hypot(floor));
         if let Some(e) = self.eskf.as_mut()
-            && e.zero_rate_update(&mean_w, &mean_f, sd).is_some()
+            && e.zero_rate_update(&mean_w, &mean_f, &sd).is_some()
         {
             self.counters.zero_rate_updates += 1;
         }
@@ -808,6 +824,42 @@ mod tests {
             roll.push(est.out.roll_rad);
         }
         assert_ne!(roll[0], roll[1], "the clipping model changes the estimate");
+    }
+
+    #[test]
+    fn a_rest_that_sways_gives_a_prior_as_uncertain_as_its_mean() {
+        let cfg = ConfigFile::default().validate().unwrap();
+        let floor = cfg.eskf.gyro_bias_prior_sd_rad_s.get();
+        let mut est = Estimator::new(cfg, HeadingAid::None);
+        // 3 s of "rest" whose x rate alternates ±0.05 rad/s every 0.25 s (a foot that sways
+        // without the detector noticing), then motion.
+        let dt = 0.005;
+        for k in 0..600 {
+            let sway = if (k / 50) % 2 == 0 { 0.05 } else { -0.05 };
+            let s = ImuInput {
+                t_s: k as f64 * dt,
+                gyro_rad_s: [0.002 + sway, -0.001, 0.003],
+                accel_m_s2: [0.0, 0.0, 9.81],
+            };
+            est.step(&s).unwrap();
+        }
+        let moving = ImuInput {
+            t_s: 600.0 * dt,
+            gyro_rad_s: [0.0, 3.0, 0.0],
+            accel_m_s2: [0.0, 0.0, 9.81],
+        };
+        est.step(&moving).unwrap();
+        let p = est.bias_state().unwrap().gyro_bias_cov;
+        // x: 0.05 rad/s spread over √(number of 50 ms blocks) ≈ 0.05/√(50) ≈ 7e-3; y, z still
+        // (within one step of noise) at the floor.
+        assert!(p[0][0].sqrt() > 5e-3, "x σ {}", p[0][0].sqrt());
+        for axis in [1, 2] {
+            assert!(
+                p[axis][axis].sqrt() < 1.1 * floor,
+                "axis {axis}: {}",
+                p[axis][axis].sqrt()
+            );
+        }
     }
 
     #[test]

@@ -10,6 +10,8 @@ struct Sums {
     blocks: u64,
     f: Vector3<f64>,
     w: Vector3<f64>,
+    /// Sum of the squared rates, per axis.
+    w2: Vector3<f64>,
 }
 
 impl Sums {
@@ -18,6 +20,7 @@ impl Sums {
         self.blocks += 1;
         self.f += o.f;
         self.w += o.w;
+        self.w2 += o.w2;
     }
 }
 
@@ -78,26 +81,50 @@ impl RestSums {
         self.current.n += 1;
         self.current.f += f;
         self.current.w += w;
+        self.current.w2 += w.component_mul(w);
     }
 
     /// Means of specific force and rate over the settled part (the rest without its tail), when
     /// that part lasts at least `min_s`.
-    pub(super) fn settled_means(&self, min_s: f64) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    /// With the standard error of the mean rate ([`RestSums::rate_sd_of_mean`]).
+    pub(super) fn settled_means(
+        &self,
+        min_s: f64,
+    ) -> Option<(Vector3<f64>, Vector3<f64>, Vector3<f64>)> {
         let s = &self.settled;
         (s.n > 0 && s.blocks as f64 * REST_BLOCK_S >= min_s)
-            .then(|| (s.f / s.n as f64, s.w / s.n as f64))
+            .then(|| (s.f / s.n as f64, s.w / s.n as f64, self.rate_sd_of_mean()))
     }
 
     /// Means over the settled part, or over everything when the rest was too short for that.
     pub(super) fn means(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let s = self.used();
+        let n = s.n.max(1) as f64;
+        (s.f / n, s.w / n)
+    }
+
+    /// The standard error of the mean rate of [`RestSums::means`], per axis: the rate's spread
+    /// over the square root of the number of blocks (samples within a block are not
+    /// independent when the foot sways). A rest that is not one (a foot that still moves) gives
+    /// a mean rate far from the bias, and says so here.
+    pub(super) fn rate_sd_of_mean(&self) -> Vector3<f64> {
+        let s = self.used();
+        let n = s.n.max(1) as f64;
+        let mean = s.w / n;
+        let var = (s.w2 / n - mean.component_mul(&mean)).map(|v| v.max(0.0));
+        var.map(|v| (v / s.blocks.max(1) as f64).sqrt())
+    }
+
+    /// The part the means use: the settled part, or everything when that is empty.
+    fn used(&self) -> Sums {
         let mut s = self.settled;
         if s.n == 0 {
+            s.blocks = 0;
             for b in &self.recent {
                 s.add(b);
             }
             s.add(&self.current);
         }
-        let n = s.n.max(1) as f64;
-        (s.f / n, s.w / n)
+        s
     }
 }
