@@ -129,6 +129,30 @@ pub fn heading_jacobian(q: &UnitQuaternion<f64>, axis_body: &Vector3<f64>) -> Ve
     )
 }
 
+/// The velocity (navigation frame) of a sensor `height_m` above the floor contact of a foot that
+/// rolls about its lateral axis, as it does from heel strike to foot flat (about the heel) and
+/// at heel-off (about the ball): a point at height h above a contact point on the floor moves
+/// at ω × h·ẑ, whatever the contact's place along the foot, so only the height matters. Only
+/// the rate about the foot's lateral axis is used (the forward axis `forward_body`, in body
+/// axes, gives it); the result points along the walking direction. Zero when the foot axis is
+/// vertical.
+pub fn rolling_velocity(
+    q: &UnitQuaternion<f64>,
+    omega_body_rad_s: &Vector3<f64>,
+    forward_body: &Vector3<f64>,
+    height_m: f64,
+) -> Vector3<f64> {
+    let f = q * forward_body;
+    let n = f.x.hypot(f.y);
+    if n < 1e-6 {
+        return Vector3::zeros();
+    }
+    let d = Vector3::new(f.x / n, f.y / n, 0.0);
+    let lateral = Vector3::new(-d.y, d.x, 0.0); // ẑ × d: left of the walking direction
+    // (ω_l·l) × h·ẑ = h·ω_l·(l × ẑ) = h·ω_l·d.
+    d * (height_m * (q * omega_body_rad_s).dot(&lateral))
+}
+
 /// Roll and pitch (ZYX) of a body frame whose measured specific force (pointing up at rest)
 /// is `f_body`.
 pub fn tilt_from_specific_force(f_body: &Vector3<f64>) -> (f64, f64) {
@@ -139,6 +163,23 @@ pub fn tilt_from_specific_force(f_body: &Vector3<f64>) -> (f64, f64) {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn a_foot_rolling_nose_down_moves_a_sensor_above_the_floor_forward() {
+        // Foot along nav x; its lateral (left) axis is nav y. A nose-down roll is a positive
+        // rotation about y (it takes x towards −z); the top of the foot then moves forward.
+        let q = UnitQuaternion::identity();
+        let v = rolling_velocity(&q, &Vector3::new(0.0, 2.0, 0.0), &Vector3::x(), 0.08);
+        assert!((v - Vector3::new(0.16, 0.0, 0.0)).norm() < 1e-12, "{v}");
+        // A roll about the foot's own long axis and a twist about the vertical give nothing.
+        let v = rolling_velocity(&q, &Vector3::new(3.0, 0.0, 1.0), &Vector3::x(), 0.08);
+        assert!(v.norm() < 1e-12, "{v}");
+        // The same foot walking along nav y (yawed by 90°): forward is now nav y.
+        let q = rot_z(std::f64::consts::FRAC_PI_2);
+        let v = rolling_velocity(&q, &Vector3::new(0.0, 2.0, 0.0), &Vector3::x(), 0.08);
+        assert!((v - Vector3::new(0.0, 0.16, 0.0)).norm() < 1e-12, "{v}");
+    }
+
     use super::*;
 
     #[test]

@@ -162,6 +162,11 @@ pub struct EskfFile {
     /// `alignment.rest_tail_s` left out) observes the gyro bias with σ `gyro_bias_prior_sd_rad_s`,
     /// like the initial rest (default true).
     pub zero_rate_updates: Option<bool>,
+    /// Height of the sensor above the floor contact about which the foot rolls at heel strike
+    /// and heel-off, m: the stance velocity update expects the sensor to move at this height
+    /// times the rate about the foot's lateral axis, along the walking direction (default 0: a
+    /// plain zero-velocity update).
+    pub zupt_rolling_height_m: Option<f64>,
     /// A gyro axis at its rail (`sensor.gyro_range_rad_s`) read less than the true rate: the
     /// rate used is the rail plus this mean excess, rad/s (default 0).
     pub clipped_rate_excess_rad_s: Option<f64>,

@@ -127,6 +127,8 @@ pub struct EskfConfig {
     pub zupt_lever_arm_m: f64,
     /// Zero-rate updates at later rests.
     pub zero_rate_updates: bool,
+    /// Sensor height above the rolling contact (0: plain ZUPT).
+    pub zupt_rolling_height_m: f64,
     /// Mean excess of the true rate over a clipped gyro axis.
     pub clipped_rate_excess_rad_s: f64,
     /// σ of that excess.

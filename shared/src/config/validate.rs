@@ -217,6 +217,10 @@ impl ConfigFile {
                     k.zupt_lever_arm_m.unwrap_or(0.0),
                 )?,
                 zero_rate_updates: k.zero_rate_updates.unwrap_or(true),
+                zupt_rolling_height_m: non_negative(
+                    "eskf.zupt_rolling_height_m",
+                    k.zupt_rolling_height_m.unwrap_or(0.0),
+                )?,
                 clipped_rate_excess_rad_s: non_negative(
                     "eskf.clipped_rate_excess_rad_s",
                     k.clipped_rate_excess_rad_s.unwrap_or(0.0),

@@ -840,6 +840,30 @@ mod tests {
     }
 
     #[test]
+    fn a_stance_velocity_update_pulls_the_velocity_to_the_expected_one() {
+        let mut f = filter(
+            UnitQuaternion::identity(),
+            Vector3::zeros(),
+            0.01,
+            0.01,
+            Extensions::default(),
+        );
+        f.v_m_s = Vector3::new(0.3, 0.0, 0.0);
+        f.widen_after_gap(0.0, 1.0); // the velocity is unknown to 1 m/s
+        let expected = Vector3::new(0.1, 0.0, 0.0);
+        let i = f.stance_velocity_update(&expected, 0.01);
+        assert!(
+            (i.r[0] + 0.2).abs() < 1e-12,
+            "residual is expected − v: {:?}",
+            i.r
+        );
+        for _ in 0..50 {
+            f.stance_velocity_update(&expected, 0.01);
+        }
+        assert!((f.v_m_s - expected).norm() < 0.01, "{}", f.v_m_s);
+    }
+
+    #[test]
     fn unmeasured_rotation_widens_the_attitude_about_its_axis_in_the_nav_frame() {
         // Yawed by 90°: the body x axis is the nav y axis.
         let q = UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::FRAC_PI_2);

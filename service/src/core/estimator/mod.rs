@@ -37,7 +37,8 @@ use super::heading::{FootprintLine, HeadingAid, Rejection, StraightWalk};
 use super::health::{self, HealthLimits, LastGood};
 use super::plausibility::Plausibility;
 use super::rotation::{
-    euler_zyx, from_euler_zyx, heading_of_axis, rot_z, tilt_from_specific_force, wrap_pi, yaw,
+    euler_zyx, from_euler_zyx, heading_of_axis, rolling_velocity, rot_z, tilt_from_specific_force,
+    wrap_pi, yaw,
 };
 use super::stance::StanceDetector;
 use corridor_shared::config::{BiasPrior, Config, Mode};
@@ -562,6 +563,7 @@ impl Estimator {
         stance_age_s: f64,
     ) {
         let (bias, _) = self.bias_sensor();
+        let forward = self.foot_forward_body();
         match &mut self.bias {
             BiasFilter::InEskf => {}
             BiasFilter::Paper { obs, .. } => {
@@ -589,7 +591,15 @@ impl Estimator {
             // rotation rate: at the edges of a stance the zero velocity is that much less sure.
             let arm = self.cfg.eskf.zupt_lever_arm_m * omega.norm();
             let sd = self.cfg.eskf.zupt_sd_m_s.get().hypot(arm);
-            self.out.zupt = Some(eskf.zupt_with_sd(sd));
+            // ... and, rolling about its heel or ball, along the walking direction at its height
+            // above the floor times the rate about the foot's lateral axis.
+            let h = self.cfg.eskf.zupt_rolling_height_m;
+            self.out.zupt = Some(if h > 0.0 {
+                let v = rolling_velocity(&eskf.nav_from_body, &omega, &forward, h);
+                eskf.stance_velocity_update(&v, sd)
+            } else {
+                eskf.zupt_with_sd(sd)
+            });
             self.counters.zupts += 1;
             if !self.in_stance {
                 self.in_stance = true;
