@@ -1584,8 +1584,8 @@ mod tests {
         // 2 of 100 rejected at the end: the rows come first, then the error, then nothing.
         let text = replace_line(&good_file(100), 99, "x");
         let text = replace_line(&text, 100, "y");
-        let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &ImuCsvOptions::default())
-            .unwrap();
+        let mut reader =
+            ImuCsvReader::new(text.as_bytes(), path(), &ImuCsvOptions::default()).unwrap();
         let items: Vec<_> = reader.by_ref().collect();
         assert_eq!(items.len(), 99);
         assert!(items[..98].iter().all(Result::is_ok));
@@ -1600,7 +1600,11 @@ mod tests {
     fn units_file(n: usize, n_ms2: usize) -> String {
         let mut s = String::from(HEADER);
         for i in 0..n {
-            let az = if i < n_ms2 { 9.8 } else { 1.0 + (i % 7) as f64 * 1e-3 };
+            let az = if i < n_ms2 {
+                9.8
+            } else {
+                1.0 + (i % 7) as f64 * 1e-3
+            };
             s.push_str(&format!("\n{},0.01,0.02,0.03,0,0,{az}", i as f64 * 0.005));
         }
         s
