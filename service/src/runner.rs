@@ -418,12 +418,12 @@ impl PlotTrace {
     }
 
     fn push(&mut self, e: &Estimate) {
-        if self.seen % self.stride == 0 {
+        if self.seen.is_multiple_of(self.stride) {
             if self.trace.len() == PLOT_POINTS {
                 self.trace.halve();
                 self.stride *= 2;
             }
-            if self.seen % self.stride == 0 {
+            if self.seen.is_multiple_of(self.stride) {
                 self.trace.push(e);
             }
         }

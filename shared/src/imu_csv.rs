@@ -22,7 +22,7 @@
 //! refused with [`ImuCsvError::TooManyRejected`]. Finally a units check on the accepted rows
 //! refuses accelerometers logged in g and gyroscopes logged in deg/s ([`ImuCsvError::Units`]).
 //! The checks over the whole log come at its end, also when streaming: the decision is exact at
-//! any length; the median |a| quoted in the message is exact up to 65 536 rows and read from a
+//! any length; the median |a| quoted in the message is exact up to 16 384 rows and read from a
 //! 0.07 % histogram beyond.
 
 use crate::sensor::{TimeGuard, TimeVerdict};
@@ -313,7 +313,7 @@ pub const REJECTED_ROWS_KEPT: usize = 20;
 /// Up to this many accepted rows the units check takes the exact median of |a| (their norms are
 /// kept, 8 bytes a row); beyond, the decision is still exact (counts per band) and the median in
 /// the message is read from a histogram with 1/1024-octave bins (0.07 %).
-const EXACT_MEDIAN_ROWS: usize = 1 << 16;
+const EXACT_MEDIAN_ROWS: usize = 1 << 14;
 
 /// Reads and parses the IMU CSV file at `path` into memory; see [`parse_imu_csv`]. A long log
 /// is better streamed with [`ImuCsvReader::open`].
@@ -1612,10 +1612,11 @@ mod tests {
 
     #[test]
     fn the_units_decision_is_the_whole_logs_beyond_the_exact_median_rows() {
-        // Longer than the exact-median buffer: the first 70 000 rows in m/s², the 80 000 after
+        // Longer than the exact-median buffer: the first 24 000 rows in m/s², the 26 000 after
         // them in g. The whole log's median is in g, as the in-memory reader decided.
-        let n = EXACT_MEDIAN_ROWS + 80_000;
-        let text = units_file(n + 4_464, 74_464);
+        let n = 50_000;
+        assert!(n > 2 * EXACT_MEDIAN_ROWS);
+        let text = units_file(n, 24_000);
         let err = stream(&text).find_map(Result::err).expect("refused");
         match &err {
             ImuCsvError::Units {
