@@ -316,6 +316,12 @@ pub enum EvalError {
         /// Distance between the trajectory's positions at GCP0 and GCPk, metres.
         moved_m: f64,
     },
+    /// A streamed trajectory row did not come after the previous one ([`GcpSampler`]).
+    #[error("trajectory row at t = {t_s} s is not after the previous row")]
+    NotIncreasing {
+        /// The row's time, seconds.
+        t_s: f64,
+    },
     /// Unknown alignment name given to [`Align::from_str`].
     #[error("unknown --align {0}")]
     UnknownAlign(String),
@@ -461,19 +467,73 @@ pub fn evaluate(
     let t: Vec<f64> = rows.iter().map(|r| r.0).collect();
     let xy: Vec<P2> = rows.iter().map(|r| r.1).collect();
 
-    let truth: Vec<&TruthGcp> = truth
+    let truth = finite_gcps(truth)?;
+    let n = truth.len();
+    let tg: Vec<f64> = truth.iter().map(|g| g.t_s).collect();
+    let (p, dt_used) = sample_traj(&t, &xy, &tg, opts.interp);
+    let in_span: Vec<P2> = t
+        .iter()
+        .zip(&xy)
+        .filter(|&(&tk, _)| tk >= tg[0] && tk <= tg[n - 1])
+        .map(|(_, &pk)| pk)
+        .collect();
+    let traj_len = if in_span.len() >= 2 {
+        polyline_length(&in_span)
+    } else {
+        0.0
+    };
+    let sampled = Sampled {
+        p,
+        dt_used,
+        t_first: t[0],
+        t_last: t[t.len() - 1],
+        traj_len_m: traj_len,
+    };
+    report(sampled, &truth, opts, warnings)
+}
+
+/// The GCPs with a finite time and position (at least two).
+fn finite_gcps(truth: &[TruthGcp]) -> Result<Vec<TruthGcp>, EvalError> {
+    let truth: Vec<TruthGcp> = truth
         .iter()
         .filter(|g| g.t_s.is_finite() && g.x_m.is_finite() && g.y_m.is_finite())
+        .copied()
         .collect();
-    let n = truth.len();
-    if n < 2 {
-        return Err(EvalError::TooFewGcps { gcps: n });
+    if truth.len() < 2 {
+        return Err(EvalError::TooFewGcps { gcps: truth.len() });
     }
+    Ok(truth)
+}
+
+/// What the evaluation needs of a trajectory: its positions at the GCP times, how far in time
+/// each was taken from its GCP, its time span and its path length between the first and last
+/// GCP times. [`evaluate`] takes it from the whole trajectory, [`GcpSampler`] as it streams.
+#[derive(Debug, Clone, PartialEq)]
+struct Sampled {
+    p: Vec<P2>,
+    dt_used: Vec<f64>,
+    t_first: f64,
+    t_last: f64,
+    traj_len_m: f64,
+}
+
+/// The evaluation of a sampled trajectory against the (finite) GCPs.
+fn report(
+    s: Sampled,
+    truth: &[TruthGcp],
+    opts: &EvalOptions,
+    mut warnings: Vec<String>,
+) -> Result<EvalReport, EvalError> {
+    let Sampled {
+        p,
+        dt_used,
+        t_first,
+        t_last,
+        traj_len_m: traj_len,
+    } = s;
+    let n = truth.len();
     let tg: Vec<f64> = truth.iter().map(|g| g.t_s).collect();
     let g: Vec<P2> = truth.iter().map(|g| [g.x_m, g.y_m]).collect();
-
-    let (p, dt_used) = sample_traj(&t, &xy, &tg, opts.interp);
-    let (t_first, t_last) = (t[0], t[t.len() - 1]);
     let out_of_span: Vec<String> = (0..n)
         .filter(|&i| tg[i] < t_first - SPAN_SLACK_S || tg[i] > t_last + SPAN_SLACK_S)
         .map(|i| i.to_string())
@@ -487,17 +547,6 @@ pub fn evaluate(
 
     let closed = norm(sub(g[n - 1], g[0])) <= opts.closed_tol_m;
     let truth_len = polyline_length(&g);
-    let in_span: Vec<P2> = t
-        .iter()
-        .zip(&xy)
-        .filter(|&(&tk, _)| tk >= tg[0] && tk <= tg[n - 1])
-        .map(|(_, &pk)| pk)
-        .collect();
-    let traj_len = if in_span.len() >= 2 {
-        polyline_length(&in_span)
-    } else {
-        0.0
-    };
     // numpy.max propagates NaN.
     let max_dt = dt_used.iter().copied().fold(f64::NEG_INFINITY, |a, b| {
         if a.is_nan() || b.is_nan() {
@@ -668,6 +717,174 @@ pub fn evaluate(
     res.gcp = Some(gcps);
     res.warnings = warnings;
     Ok(res)
+}
+
+/// A sample of a streamed trajectory: time and position.
+type Fix = (f64, P2);
+
+/// Evaluates a trajectory as it streams, in memory independent of its length: it keeps, per
+/// GCP, only the trajectory rows just before and at or after the GCP time, and the path length
+/// as it grows. [`GcpSampler::finish`] gives exactly what [`evaluate`] gives for the same rows
+/// (tested), provided the rows come in strictly increasing time, as the estimator emits them;
+/// rows with a non-finite time or position are left out, as [`evaluate`] leaves them out.
+#[derive(Debug, Clone)]
+pub struct GcpSampler {
+    truth: Vec<TruthGcp>,
+    opts: EvalOptions,
+    /// GCP indices in time order (stable).
+    order: Vec<usize>,
+    /// Position in `order` of the first GCP whose time no row has reached.
+    next: usize,
+    /// Per GCP: the last row before its time, the first row at or after it.
+    before: Vec<Option<Fix>>,
+    after: Vec<Option<Fix>>,
+    first: Option<Fix>,
+    last: Option<Fix>,
+    rows: usize,
+    /// Last row between the first and last GCP's times, and the path length through them.
+    span_last: Option<P2>,
+    span_rows: usize,
+    span_len_m: f64,
+    /// The first row that did not come after the previous one.
+    out_of_order_s: Option<f64>,
+}
+
+impl GcpSampler {
+    /// A sampler for `truth` (its non-finite GCPs are left out, as [`evaluate`] does).
+    pub fn new(truth: &[TruthGcp], opts: &EvalOptions) -> Self {
+        let truth: Vec<TruthGcp> = truth
+            .iter()
+            .filter(|g| g.t_s.is_finite() && g.x_m.is_finite() && g.y_m.is_finite())
+            .copied()
+            .collect();
+        let mut order: Vec<usize> = (0..truth.len()).collect();
+        order.sort_by(|&a, &b| truth[a].t_s.total_cmp(&truth[b].t_s));
+        Self {
+            before: vec![None; truth.len()],
+            after: vec![None; truth.len()],
+            truth,
+            opts: *opts,
+            order,
+            next: 0,
+            first: None,
+            last: None,
+            rows: 0,
+            span_last: None,
+            span_rows: 0,
+            span_len_m: 0.0,
+            out_of_order_s: None,
+        }
+    }
+
+    /// One trajectory row.
+    pub fn push(&mut self, t_s: f64, x_m: f64, y_m: f64) {
+        if !(t_s.is_finite() && x_m.is_finite() && y_m.is_finite()) {
+            return;
+        }
+        if let Some((t_last, _)) = self.last
+            && t_s <= t_last
+        {
+            self.out_of_order_s.get_or_insert(t_s);
+            return;
+        }
+        let p = [x_m, y_m];
+        while let Some(&i) = self.order.get(self.next)
+            && self.truth[i].t_s <= t_s
+        {
+            self.before[i] = self.last;
+            self.after[i] = Some((t_s, p));
+            self.next += 1;
+        }
+        if let (Some(g0), Some(gn)) = (self.truth.first(), self.truth.last())
+            && t_s >= g0.t_s
+            && t_s <= gn.t_s
+        {
+            if let Some(q) = self.span_last {
+                self.span_len_m += norm(sub(p, q));
+            }
+            self.span_last = Some(p);
+            self.span_rows += 1;
+        }
+        self.first.get_or_insert((t_s, p));
+        self.last = Some((t_s, p));
+        self.rows += 1;
+    }
+
+    /// The evaluation of the rows pushed so far.
+    pub fn finish(&self) -> Result<EvalReport, EvalError> {
+        let (Some((t0, p0)), Some((t1, p1))) = (self.first, self.last) else {
+            return Err(EvalError::TooFewTrajRows { rows: self.rows });
+        };
+        if self.rows < 2 {
+            return Err(EvalError::TooFewTrajRows { rows: self.rows });
+        }
+        if self.truth.len() < 2 {
+            return Err(EvalError::TooFewGcps {
+                gcps: self.truth.len(),
+            });
+        }
+        if let Some(t_s) = self.out_of_order_s {
+            return Err(EvalError::NotIncreasing { t_s });
+        }
+        let n = self.truth.len();
+        let (mut p, mut dt_used) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for (i, g) in self.truth.iter().enumerate() {
+            let q = g.t_s;
+            let (pos, dt) = match self.opts.interp {
+                // As `sample_traj`: the nearest row, ties to the earlier; clamped to the ends.
+                Interp::Nearest => match (self.before[i], self.after[i]) {
+                    (_, None) => (p1, (t1 - q).abs()),
+                    (None, Some(_)) => (p0, (t0 - q).abs()),
+                    (Some((tb, pb)), Some((ta, pa))) => {
+                        if q - tb <= ta - q {
+                            (pb, (tb - q).abs())
+                        } else {
+                            (pa, (ta - q).abs())
+                        }
+                    }
+                },
+                // As `interp` on the clamped time.
+                Interp::Linear => {
+                    let qc = q.clamp(t0, t1);
+                    let pos = match (self.before[i], self.after[i]) {
+                        _ if qc >= t1 => p1,
+                        (_, Some((ta, pa))) if ta == qc => pa,
+                        (Some(b), Some(a)) => [lerp(qc, b, a, 0), lerp(qc, b, a, 1)],
+                        _ => p0,
+                    };
+                    (pos, (q - qc).abs())
+                }
+            };
+            p.push(pos);
+            dt_used.push(dt);
+        }
+        let sampled = Sampled {
+            p,
+            dt_used,
+            t_first: t0,
+            t_last: t1,
+            traj_len_m: if self.span_rows >= 2 {
+                self.span_len_m
+            } else {
+                0.0
+            },
+        };
+        report(sampled, &self.truth, &self.opts, Vec::new())
+    }
+}
+
+/// Coordinate `c` at `x` between the rows `b` and `a` (`b.0 < x < a.0`), with the arithmetic
+/// of [`interp`].
+fn lerp(x: f64, b: Fix, a: Fix, c: usize) -> f64 {
+    let slope = (a.1[c] - b.1[c]) / (a.0 - b.0);
+    let mut r = slope * (x - b.0) + b.1[c];
+    if r.is_nan() {
+        r = slope * (x - a.0) + a.1[c];
+        if r.is_nan() && b.1[c] == a.1[c] {
+            r = b.1[c];
+        }
+    }
+    r
 }
 
 #[cfg(test)]
@@ -1024,5 +1241,97 @@ mod tests {
             "median".parse::<Interp>().unwrap_err().to_string(),
             "unknown --interp median"
         );
+    }
+
+    /// The streamed evaluation of `t, x, y`.
+    fn streamed(
+        t: &[f64],
+        x: &[f64],
+        y: &[f64],
+        truth: &[TruthGcp],
+        o: &EvalOptions,
+    ) -> Result<EvalReport, EvalError> {
+        let mut s = GcpSampler::new(truth, o);
+        for k in 0..t.len() {
+            s.push(t[k], x[k], y[k]);
+        }
+        s.finish()
+    }
+
+    #[test]
+    fn streamed_evaluation_equals_the_whole_trajectorys_on_the_fixtures() {
+        for stem in ["loop", "out_and_back", "closure"] {
+            // In time order (out_and_back is not, to test the warning): the estimator's order.
+            let (t, x, y, truth) = load(stem);
+            let mut k: Vec<usize> = (0..t.len()).collect();
+            k.sort_by(|&a, &b| t[a].total_cmp(&t[b]));
+            let (t, x, y): (Vec<f64>, Vec<f64>, Vec<f64>) = (
+                k.iter().map(|&i| t[i]).collect(),
+                k.iter().map(|&i| x[i]).collect(),
+                k.iter().map(|&i| y[i]).collect(),
+            );
+            assert!(t.windows(2).all(|w| w[0] < w[1]), "{stem}");
+            for align in [Align::FirstLeg, Align::Lsq] {
+                for interp in [Interp::Nearest, Interp::Linear] {
+                    let o = opts(align, interp);
+                    assert_eq!(
+                        streamed(&t, &x, &y, &truth, &o),
+                        evaluate(&t, &x, &y, &truth, &o),
+                        "{stem} {align:?} {interp:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn streamed_evaluation_equals_the_whole_trajectorys_at_the_edges() {
+        // GCP times before the first row, after the last, exactly on rows, halfway between two
+        // rows (a tie of the nearest), and out of time order; a NaN row and a NaN GCP.
+        let truth = l_walk();
+        let (mut t, mut x, mut y) = traj_from(&truth, |p| [p[0] * 1.02, p[1] + 0.1 * p[0]]);
+        let mut gcps = truth.clone();
+        gcps[0].t_s = t[0] - 0.5;
+        gcps[3].t_s = t[t.len() - 1] + 2.0;
+        gcps.push(TruthGcp {
+            t_s: 0.5 * (t[4] + t[5]),
+            ..truth[1]
+        });
+        gcps.push(TruthGcp {
+            t_s: t[30],
+            ..truth[2]
+        });
+        gcps.push(TruthGcp {
+            t_s: f64::NAN,
+            ..truth[2]
+        });
+        x[10] = f64::NAN;
+        for interp in [Interp::Nearest, Interp::Linear] {
+            let o = opts(Align::FirstLeg, interp);
+            let whole = evaluate(&t, &x, &y, &gcps, &o).unwrap();
+            assert_eq!(
+                streamed(&t, &x, &y, &gcps, &o).unwrap(),
+                whole,
+                "{interp:?}"
+            );
+            assert!(!whole.warnings.is_empty());
+        }
+        // Too few rows, too few GCPs: the same errors.
+        let o = EvalOptions::default();
+        assert_eq!(
+            streamed(&t[..1], &x[..1], &y[..1], &gcps, &o),
+            evaluate(&t[..1], &x[..1], &y[..1], &gcps, &o)
+        );
+        assert_eq!(
+            streamed(&t, &x, &y, &gcps[..1], &o),
+            evaluate(&t, &x, &y, &gcps[..1], &o)
+        );
+        // A row that goes back in time is refused, not silently mis-sampled.
+        t.swap(20, 21);
+        y.swap(20, 21);
+        assert!(matches!(
+            streamed(&t, &x, &y, &gcps, &o),
+            Err(EvalError::NotIncreasing { .. })
+        ));
     }
 }

@@ -1,13 +1,25 @@
 //! The offline runner: a CSV log through the estimator core, to `estimates.csv`,
 //! `innovations.csv`, `summary.json` and optional plots. It is an adapter: every line of
 //! estimation is in [`crate::core`], shared with the daemon.
+//!
+//! [`run`] (`corridor run`, the demo) streams: the log is read row by row
+//! ([`ImuCsvReader`]), each row goes through the estimator and its estimate straight to
+//! `estimates.csv` and `innovations.csv`; what the summary needs is kept as it goes (the last
+//! bias, the converged-phase mean, the positions next to the footprint times in a
+//! [`GcpSampler`], for `--plots` at most [`PLOT_POINTS`] samples of each trace), so its memory
+//! does not depend on the log's length. Every output is written as `NAME.partial` and renamed
+//! only when the run succeeded; a run that fails removes its partial files (one killed leaves
+//! them named `.partial`), and earlier outputs in the directory stay as they were.
+//!
+//! [`run_log`] runs a log already in memory and keeps the whole per-sample [`Trace`]: the
+//! suite, the diagnosis and the tests use it on the bundled recordings.
 
 use crate::core::heading::HeadingAid;
 use crate::core::{Counters, Estimate, Estimator, ImuInput};
-use crate::eval::{self, EvalOptions, EvalReport, TruthGcp};
+use crate::eval::{self, EvalOptions, EvalReport, GcpSampler, TruthGcp};
 use crate::map_file::{MapError, read_corridor_map};
 use corridor_shared::config::{Config, HeadingSource};
-use corridor_shared::imu_csv::{ImuCsvError, ImuLog, RejectedRow};
+use corridor_shared::imu_csv::{ImuCsvError, ImuCsvReader, ImuLog, ImuRow, RejectedRow};
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::truth_csv::{TruthCsvError, TruthPoint};
 use serde::Serialize;
@@ -107,7 +119,79 @@ pub struct RunOutcome {
 /// How many refused samples `summary.json` names.
 pub const MAX_REFUSED_EXAMPLES: usize = 10;
 
-/// Runs `log` through a new estimator; `sink` sees every estimate with the input it came from.
+/// One estimator fed row by row: the injection, the warnings naming file and line, the first
+/// refused samples.
+struct Feed<'a> {
+    est: Estimator,
+    injection: &'a BiasInjection,
+    path: &'a Path,
+    refused: Vec<String>,
+}
+
+impl<'a> Feed<'a> {
+    fn new(cfg: &Config, aid: &HeadingAid, injection: &'a BiasInjection, path: &'a Path) -> Self {
+        Self {
+            est: Estimator::new(cfg.clone(), aid.clone()),
+            injection,
+            path,
+            refused: Vec::new(),
+        }
+    }
+
+    /// The estimate of one row and the first convergence time after it, or `None` when the
+    /// estimator refused the row.
+    fn step(&mut self, row: &ImuRow) -> Option<(ImuInput, &Estimate, Option<f64>)> {
+        let mut gyro = row.gyro_rad_s;
+        self.injection.apply(row.t_s, &mut gyro);
+        let input = ImuInput {
+            t_s: row.t_s,
+            gyro_rad_s: gyro,
+            accel_m_s2: row.accel_m_s2,
+        };
+        match self.est.step(&input) {
+            Ok(e) => {
+                if let Some(gap_s) = e.gap_s {
+                    tracing::warn!(
+                        "{}:{}: gap of {gap_s:.3} s in the data; a new segment starts here",
+                        self.path.display(),
+                        row.line
+                    );
+                }
+                if let Some(fault) = e.health_fault {
+                    tracing::warn!(
+                        "{}:{}: estimator state failed the health check ({}); last good state restored",
+                        self.path.display(),
+                        row.line,
+                        fault.name()
+                    );
+                }
+            }
+            Err(err) => {
+                if self.refused.len() < MAX_REFUSED_EXAMPLES {
+                    self.refused
+                        .push(format!("{}:{}: {err}", self.path.display(), row.line));
+                }
+                return None;
+            }
+        }
+        Some((input, self.est.last_estimate(), self.est.converged_at_s()))
+    }
+
+    /// The outcome, with the trace kept by the caller.
+    fn outcome(self, trace: Trace) -> RunOutcome {
+        RunOutcome {
+            trace,
+            counters: *self.est.counters(),
+            converged_at_s: self.est.converged_at_s(),
+            mount_yaw_rad: self.est.mount_yaw_rad(),
+            extensions: self.est.extensions(),
+            refused: self.refused,
+        }
+    }
+}
+
+/// Runs `log` (in memory) through a new estimator and keeps the whole per-sample trace; `sink`
+/// sees every estimate with the input it came from. For a log of any length, [`run`] streams.
 pub fn run_log(
     log: &ImuLog,
     cfg: &Config,
@@ -115,58 +199,53 @@ pub fn run_log(
     injection: &BiasInjection,
     mut sink: impl FnMut(&ImuInput, &Estimate),
 ) -> RunOutcome {
-    let mut est = Estimator::new(cfg.clone(), aid.clone());
+    let mut feed = Feed::new(cfg, aid, injection, &log.path);
     let mut trace = Trace::default();
-    let mut refused = Vec::new();
     for row in &log.rows {
-        let mut gyro = row.gyro_rad_s;
-        injection.apply(row.t_s, &mut gyro);
-        let input = ImuInput {
-            t_s: row.t_s,
-            gyro_rad_s: gyro,
-            accel_m_s2: row.accel_m_s2,
-        };
-        match est.step(&input) {
-            Ok(e) => {
-                if let Some(gap_s) = e.gap_s {
-                    tracing::warn!(
-                        "{}:{}: gap of {gap_s:.3} s in the data; a new segment starts here",
-                        log.path.display(),
-                        row.line
-                    );
-                }
-                if let Some(fault) = e.health_fault {
-                    tracing::warn!(
-                        "{}:{}: estimator state failed the health check ({}); last good state restored",
-                        log.path.display(),
-                        row.line,
-                        fault.name()
-                    );
-                }
-                trace.t_s.push(e.t_s);
-                trace.xy_m.push([e.p_m[0], e.p_m[1]]);
-                trace.bias_rad_s.push(e.gyro_bias_rad_s);
-                trace.bias_sd_rad_s.push(e.gyro_bias_sd_rad_s);
-                trace.converged.push(e.converged);
-                sink(&input, e);
-            }
-            Err(err) if refused.len() < MAX_REFUSED_EXAMPLES => {
-                refused.push(format!("{}:{}: {err}", log.path.display(), row.line));
-            }
-            Err(_) => {}
+        if let Some((input, e, _)) = feed.step(row) {
+            trace.push(e);
+            sink(&input, e);
         }
     }
-    RunOutcome {
-        trace,
-        counters: *est.counters(),
-        converged_at_s: est.converged_at_s(),
-        mount_yaw_rad: est.mount_yaw_rad(),
-        extensions: est.extensions(),
-        refused,
-    }
+    feed.outcome(trace)
 }
 
 impl Trace {
+    /// Appends one estimate.
+    pub fn push(&mut self, e: &Estimate) {
+        self.t_s.push(e.t_s);
+        self.xy_m.push([e.p_m[0], e.p_m[1]]);
+        self.bias_rad_s.push(e.gyro_bias_rad_s);
+        self.bias_sd_rad_s.push(e.gyro_bias_sd_rad_s);
+        self.converged.push(e.converged);
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t_s.len()
+    }
+
+    /// Whether it holds no sample.
+    pub fn is_empty(&self) -> bool {
+        self.t_s.is_empty()
+    }
+
+    /// Keeps every other sample (the first, the third, …).
+    fn halve(&mut self) {
+        fn keep_even<T: Copy>(v: &mut Vec<T>) {
+            let mut i = 0;
+            v.retain(|_| {
+                i += 1;
+                i % 2 == 1
+            });
+        }
+        keep_even(&mut self.t_s);
+        keep_even(&mut self.xy_m);
+        keep_even(&mut self.bias_rad_s);
+        keep_even(&mut self.bias_sd_rad_s);
+        keep_even(&mut self.converged);
+    }
+
     /// Mean bias over the samples at or after `from_s`.
     pub fn mean_bias_from(&self, from_s: f64) -> Option<[f64; 3]> {
         let mut sum = [0.0; 3];
@@ -262,61 +341,152 @@ pub struct Summary {
     pub eval: Option<EvalReport>,
 }
 
-/// Builds the summary of one run.
-pub fn summarize(
-    log: &ImuLog,
-    cfg: &Config,
-    injection: &BiasInjection,
-    outcome: &RunOutcome,
-    eval: Option<EvalReport>,
-) -> Summary {
-    let n = outcome.trace.t_s.len();
-    let last = |v: &Vec<[f64; 3]>| if n > 0 { v[n - 1] } else { [f64::NAN; 3] };
-    let c = &outcome.counters;
-    Summary {
-        imu: log.path.display().to_string(),
-        mode: cfg.mode.name(),
-        bias_rad_s: last(&outcome.trace.bias_rad_s),
-        bias_sd_rad_s: last(&outcome.trace.bias_sd_rad_s),
-        bias_mean_converged_rad_s: outcome
-            .converged_at_s
-            .and_then(|t| outcome.trace.mean_bias_from(t)),
-        converged_at_s: outcome.converged_at_s,
-        mount_yaw_deg: outcome.mount_yaw_rad.map(f64::to_degrees),
-        injected_gyro_bias_rad_s: injection.constant_rad_s,
-        injected_gyro_bias_ramp_rad_s2: injection.ramp_rad_s2,
-        injected_after_s: injection.after_s,
-        samples_read: log.rows.len() as u64,
-        samples: c.samples,
-        stances: c.stances,
-        zupts: c.zupts,
-        gaps: c.gaps,
-        heading_observations_used: c.heading_used,
-        heading_observations_rejected: BTreeMap::from([
-            ("not_straight", c.heading_not_straight),
-            ("outside_gate", c.heading_outside_gate),
-            ("outside_map", c.heading_outside_map),
-            ("unlikely", c.heading_unlikely),
-        ]),
-        stride_observations_used: c.stride_used,
-        stride_observations_rejected: c.stride_rejected,
-        input_rows_rejected: log.rejected_counts(),
-        input_rows_rejected_examples: log
-            .rejected
-            .iter()
-            .take(10)
-            .map(|r: &RejectedRow| r.located(&log.path).to_string())
-            .collect(),
-        samples_refused_counts: BTreeMap::from([
-            ("non_finite", c.rejected_non_finite),
-            ("time_not_increasing", c.rejected_time),
-            ("implausible", c.rejected_implausible),
-            ("time_jump", c.rejected_time_jump),
-        ]),
-        samples_refused: outcome.refused.clone(),
-        clipped_samples: c.clipped_samples,
-        health_restores: c.health_restores,
-        eval,
+/// What a streamed run keeps of its estimates: memory independent of the log's length.
+struct Kept {
+    /// Bias and σ of the last estimate.
+    last: Option<([f64; 3], [f64; 3])>,
+    /// Sum and count of the bias from the first converged sample on.
+    converged_sum: [f64; 3],
+    converged_n: usize,
+    /// Positions next to the footprint times, when truth was given.
+    gcps: Option<GcpSampler>,
+    /// The figures' traces, with `--plots`.
+    plot: Option<PlotTrace>,
+}
+
+impl Kept {
+    fn new(truth: Option<&[TruthGcp]>, plots: bool) -> Self {
+        Self {
+            last: None,
+            converged_sum: [0.0; 3],
+            converged_n: 0,
+            gcps: truth.map(|t| GcpSampler::new(t, &EvalOptions::default())),
+            plot: plots.then(PlotTrace::new),
+        }
+    }
+
+    /// One estimate; `converged_at_s` is the estimator's after it (the same sum as
+    /// [`Trace::mean_bias_from`] over the whole trace).
+    fn push(&mut self, e: &Estimate, converged_at_s: Option<f64>) {
+        self.last = Some((e.gyro_bias_rad_s, e.gyro_bias_sd_rad_s));
+        if converged_at_s.is_some_and(|t| e.t_s >= t) {
+            for k in 0..3 {
+                self.converged_sum[k] += e.gyro_bias_rad_s[k];
+            }
+            self.converged_n += 1;
+        }
+        if let Some(g) = &mut self.gcps {
+            g.push(e.t_s, e.p_m[0], e.p_m[1]);
+        }
+        if let Some(p) = &mut self.plot {
+            p.push(e);
+        }
+    }
+
+    fn mean_bias_converged(&self) -> Option<[f64; 3]> {
+        let n = self.converged_n;
+        (n > 0).then(|| self.converged_sum.map(|s| s / n as f64))
+    }
+}
+
+/// How many samples of each trace `--plots` keeps at most (about 2.4 MB a trace): a log up to
+/// this length is drawn sample by sample, a longer one decimated evenly.
+pub const PLOT_POINTS: usize = 1 << 15;
+
+/// A trace of at most [`PLOT_POINTS`] samples: every `stride`-th estimate; when full, every
+/// other sample is dropped and the stride doubles.
+struct PlotTrace {
+    trace: Trace,
+    stride: u64,
+    seen: u64,
+}
+
+impl PlotTrace {
+    fn new() -> Self {
+        let n = PLOT_POINTS;
+        Self {
+            trace: Trace {
+                t_s: Vec::with_capacity(n),
+                xy_m: Vec::with_capacity(n),
+                bias_rad_s: Vec::with_capacity(n),
+                bias_sd_rad_s: Vec::with_capacity(n),
+                converged: Vec::with_capacity(n),
+            },
+            stride: 1,
+            seen: 0,
+        }
+    }
+
+    fn push(&mut self, e: &Estimate) {
+        if self.seen.is_multiple_of(self.stride) {
+            if self.trace.len() == PLOT_POINTS {
+                self.trace.halve();
+                self.stride *= 2;
+            }
+            if self.seen.is_multiple_of(self.stride) {
+                self.trace.push(e);
+            }
+        }
+        self.seen += 1;
+    }
+}
+
+/// Outputs written as `NAME.partial` and renamed to `NAME` by [`Staged::commit`]; dropped
+/// without it (a failed run), the partial files are removed.
+struct Staged {
+    /// The final paths.
+    files: Vec<PathBuf>,
+    committed: bool,
+}
+
+impl Staged {
+    fn new() -> Self {
+        Self {
+            files: Vec::new(),
+            committed: false,
+        }
+    }
+
+    fn partial(path: &Path) -> PathBuf {
+        let mut name = path.as_os_str().to_owned();
+        name.push(".partial");
+        PathBuf::from(name)
+    }
+
+    /// The temporary path to write `path` under.
+    fn stage(&mut self, path: PathBuf) -> PathBuf {
+        let partial = Self::partial(&path);
+        self.files.push(path);
+        partial
+    }
+
+    /// Creates `path`'s temporary file for buffered writing.
+    fn create(
+        &mut self,
+        path: PathBuf,
+    ) -> Result<(std::io::BufWriter<std::fs::File>, PathBuf), RunError> {
+        let partial = self.stage(path);
+        Ok((create(&partial)?, partial))
+    }
+
+    /// Renames every file to its final name.
+    fn commit(mut self) -> Result<(), RunError> {
+        for f in &self.files {
+            std::fs::rename(Self::partial(f), f).map_err(io_at(f))?;
+        }
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if !self.committed {
+            for f in &self.files {
+                // Files not yet created, or already renamed, are not there: nothing to do.
+                let _ = std::fs::remove_file(Self::partial(f));
+            }
+        }
     }
 }
 
@@ -448,94 +618,153 @@ pub struct RunOptions {
     pub csv: corridor_shared::imu_csv::ImuCsvOptions,
 }
 
-/// Runs a log and writes `estimates.csv`, `innovations.csv`, `summary.json` (and the figures).
+/// How many rejected input rows are logged as warnings (all are counted in `summary.json`).
+const REJECTED_ROWS_LOGGED: usize = 20;
+
+/// Streams a log through the estimator and writes `estimates.csv`, `innovations.csv`,
+/// `summary.json` (and the figures); see the module's documentation for what is kept and what
+/// a failed run leaves.
 pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     let csv = corridor_shared::imu_csv::ImuCsvOptions {
         min_dt_s: opts.config.sensor.min_dt_s(),
         max_dt_s: opts.config.sensor.max_dt_s(),
         ..opts.csv.clone()
     };
-    let log = corridor_shared::imu_csv::read_imu_csv(&opts.imu, &csv)?;
-    for r in log.rejected.iter().take(20) {
-        tracing::warn!("rejected input row: {}", r.located(&log.path));
-    }
-    if log.rejected.len() > 20 {
-        tracing::warn!(
-            "{} more rejected rows (counts in summary.json)",
-            log.rejected.len() - 20
-        );
-    }
+    let mut reader = ImuCsvReader::open(&opts.imu, &csv)?;
     let truth = opts
         .truth
         .as_deref()
         .map(corridor_shared::truth_csv::read_truth_csv)
         .transpose()?;
+    let gcps: Option<Vec<TruthGcp>> = truth.as_ref().map(|t| t.iter().map(to_gcp).collect());
     let aid = heading_aid(&opts.config, opts.map.as_deref())?;
     std::fs::create_dir_all(&opts.out_dir).map_err(io_at(&opts.out_dir))?;
-    let est_path = opts.out_dir.join("estimates.csv");
-    let inn_path = opts.out_dir.join("innovations.csv");
-    let mut est_w = create(&est_path)?;
-    let mut inn_w = create(&inn_path)?;
+    let mut staged = Staged::new();
+    let (mut est_w, est_path) = staged.create(opts.out_dir.join("estimates.csv"))?;
+    let (mut inn_w, inn_path) = staged.create(opts.out_dir.join("innovations.csv"))?;
     writeln!(est_w, "{ESTIMATES_HEADER}").map_err(io_at(&est_path))?;
     writeln!(inn_w, "{INNOVATIONS_HEADER}").map_err(io_at(&inn_path))?;
-    let mut io_err: Option<RunError> = None;
-    let mut progress = Progress::new(log.rows.len());
-    let outcome = run_log(&log, &opts.config, &aid, &opts.injection, |input, e| {
-        progress.tick();
-        if io_err.is_some() {
-            return;
-        }
-        if let Err(err) = write_estimate_row(&mut est_w, e) {
-            io_err = Some(io_at(&est_path)(err));
-        } else if let Err(err) = write_innovation_rows(&mut inn_w, input, e) {
-            io_err = Some(io_at(&inn_path)(err));
-        }
+
+    let mut feed = Feed::new(&opts.config, &aid, &opts.injection, &opts.imu);
+    let mut kept = Kept::new(gcps.as_deref(), opts.plots);
+    // "Before" for the figures: the same rows through the ZUPT filter alone, without any bias
+    // correction, in the same pass.
+    let mut before = opts.plots.then(|| {
+        let mut base = opts.config.clone();
+        base.mode = corridor_shared::config::Mode::Zupt;
+        base.alignment.gyro_bias_prior = corridor_shared::config::BiasPrior::None;
+        (
+            Feed::new(&base, &HeadingAid::None, &opts.injection, &opts.imu),
+            Kept::new(gcps.as_deref(), true),
+        )
     });
-    if let Some(e) = io_err {
-        return Err(e);
+    let mut progress = Progress::new(reader.progress_bytes().1.unwrap_or(0));
+    let mut logged = 0;
+    loop {
+        let item = reader.next();
+        while logged < reader.rejected_rows().len().min(REJECTED_ROWS_LOGGED) {
+            tracing::warn!(
+                "rejected input row: {}",
+                reader.rejected_rows()[logged].located(reader.path())
+            );
+            logged += 1;
+        }
+        let Some(row) = item else { break };
+        let row = row?;
+        progress.show(reader.progress_bytes().0);
+        if let Some((input, e, converged_at_s)) = feed.step(&row) {
+            write_estimate_row(&mut est_w, e).map_err(io_at(&est_path))?;
+            write_innovation_rows(&mut inn_w, &input, e).map_err(io_at(&inn_path))?;
+            kept.push(e, converged_at_s);
+        }
+        if let Some((feed, kept)) = &mut before
+            && let Some((_, e, converged_at_s)) = feed.step(&row)
+        {
+            kept.push(e, converged_at_s);
+        }
+    }
+    if reader.rows_rejected() > logged as u64 {
+        tracing::warn!(
+            "{} more rejected rows (counts in summary.json)",
+            reader.rows_rejected() - logged as u64
+        );
     }
     progress.finish();
     est_w.flush().map_err(io_at(&est_path))?;
     inn_w.flush().map_err(io_at(&inn_path))?;
-    if outcome.counters.samples > 0
-        && outcome.mount_yaw_rad.is_none()
-        && outcome.counters.stances == 0
-    {
+    drop((est_w, inn_w));
+    let c = *feed.est.counters();
+    if c.samples > 0 && feed.est.mount_yaw_rad().is_none() && c.stances == 0 {
         return Err(RunError::NeverAligned {
             path: opts.imu.clone(),
             min_rest_s: opts.config.alignment.min_rest_s.get(),
         });
     }
-    let eval = match (&truth, &opts.truth) {
-        (Some(t), Some(path)) => Some(outcome.trace.evaluate(t, &EvalOptions::default()).map_err(
-            |source| RunError::Eval {
-                truth: path.clone(),
-                source,
-            },
-        )?),
+    let eval = match (&kept.gcps, &opts.truth) {
+        (Some(g), Some(path)) => Some(g.finish().map_err(|source| RunError::Eval {
+            truth: path.clone(),
+            source,
+        })?),
         _ => None,
     };
-    if opts.plots {
-        // "Before": the same log through the ZUPT filter alone, without any bias correction.
-        let mut base = opts.config.clone();
-        base.mode = corridor_shared::config::Mode::Zupt;
-        base.alignment.gyro_bias_prior = corridor_shared::config::BiasPrior::None;
-        let before = run_log(&log, &base, &HeadingAid::None, &opts.injection, |_, _| {});
-        let eval_before = truth
-            .as_deref()
-            .and_then(|t| before.trace.evaluate(t, &EvalOptions::default()).ok());
-        write_figures(
-            &opts.out_dir,
-            &before.trace,
-            &outcome.trace,
+    if let (Some((_, b)), Some(after)) = (&before, &kept.plot) {
+        let eval_before = b.gcps.as_ref().and_then(|g| g.finish().ok());
+        let before_trace = &b.plot.as_ref().expect("the before run keeps a trace").trace;
+        write_figures_to(
+            &mut |name| staged.stage(opts.out_dir.join(name)),
+            before_trace,
+            &after.trace,
             truth.as_deref(),
             (eval_before.as_ref(), eval.as_ref()),
         )?;
     }
-    let summary = summarize(&log, &opts.config, &opts.injection, &outcome, eval);
-    let sum_path = opts.out_dir.join("summary.json");
+    let summary = Summary {
+        imu: opts.imu.display().to_string(),
+        mode: opts.config.mode.name(),
+        bias_rad_s: kept.last.map_or([f64::NAN; 3], |l| l.0),
+        bias_sd_rad_s: kept.last.map_or([f64::NAN; 3], |l| l.1),
+        bias_mean_converged_rad_s: kept.mean_bias_converged(),
+        converged_at_s: feed.est.converged_at_s(),
+        mount_yaw_deg: feed.est.mount_yaw_rad().map(f64::to_degrees),
+        injected_gyro_bias_rad_s: opts.injection.constant_rad_s,
+        injected_gyro_bias_ramp_rad_s2: opts.injection.ramp_rad_s2,
+        injected_after_s: opts.injection.after_s,
+        samples_read: reader.rows_accepted(),
+        samples: c.samples,
+        stances: c.stances,
+        zupts: c.zupts,
+        gaps: c.gaps,
+        heading_observations_used: c.heading_used,
+        heading_observations_rejected: BTreeMap::from([
+            ("not_straight", c.heading_not_straight),
+            ("outside_gate", c.heading_outside_gate),
+            ("outside_map", c.heading_outside_map),
+            ("unlikely", c.heading_unlikely),
+        ]),
+        stride_observations_used: c.stride_used,
+        stride_observations_rejected: c.stride_rejected,
+        input_rows_rejected: reader.rejected_counts(),
+        input_rows_rejected_examples: reader
+            .rejected_rows()
+            .iter()
+            .take(10)
+            .map(|r: &RejectedRow| r.located(reader.path()).to_string())
+            .collect(),
+        samples_refused_counts: BTreeMap::from([
+            ("non_finite", c.rejected_non_finite),
+            ("time_not_increasing", c.rejected_time),
+            ("implausible", c.rejected_implausible),
+            ("time_jump", c.rejected_time_jump),
+        ]),
+        samples_refused: feed.refused,
+        clipped_samples: c.clipped_samples,
+        health_restores: c.health_restores,
+        eval,
+    };
+    let sum_path = staged.stage(opts.out_dir.join("summary.json"));
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
     std::fs::write(&sum_path, json + "\n").map_err(io_at(&sum_path))?;
+    staged.commit()?;
     Ok(summary)
 }
 
@@ -573,6 +802,17 @@ pub fn write_figures(
     truth: Option<&[TruthPoint]>,
     evals: (Option<&EvalReport>, Option<&EvalReport>),
 ) -> Result<(), RunError> {
+    write_figures_to(&mut |name| dir.join(name), before, after, truth, evals)
+}
+
+/// [`write_figures`], each figure to `path_of(its name)`.
+fn write_figures_to(
+    path_of: &mut dyn FnMut(&str) -> PathBuf,
+    before: &Trace,
+    after: &Trace,
+    truth: Option<&[TruthPoint]>,
+    evals: (Option<&EvalReport>, Option<&EvalReport>),
+) -> Result<(), RunError> {
     use crate::plot::{Figure, Panel, Series};
     let (bx, by) = aligned_xy(before, truth, evals.0);
     let (ax, ay) = aligned_xy(after, truth, evals.1);
@@ -590,7 +830,7 @@ pub fn write_figures(
             .with_point_labels((0..t.len()).map(|i| i.to_string()).collect()),
         );
     }
-    let f = dir.join("trajectory.svg");
+    let f = path_of("trajectory.svg");
     Figure::new("corridor: trajectory before and after bias correction")
         .with_panel(traj)
         .with_size(900, 700)
@@ -615,44 +855,46 @@ pub fn write_figures(
             )),
         );
     }
-    let f = dir.join("bias.svg");
+    let f = path_of("bias.svg");
     bias.write_svg(&f).map_err(io_at(&f))?;
-    let f = dir.join("covariance.svg");
+    let f = path_of("covariance.svg");
     cov.write_svg(&f).map_err(io_at(&f))?;
     Ok(())
 }
 
-/// A progress bar on stderr, shown only when stderr is a terminal and the log is long.
+/// A progress bar on stderr over the bytes of the log, shown only when stderr is a terminal and
+/// the log is long.
 struct Progress {
-    total: usize,
-    done: usize,
-    shown_pct: usize,
+    total_bytes: u64,
+    shown_pct: u64,
     enabled: bool,
 }
 
+/// Logs shorter than this get no progress bar (about 100 000 rows), bytes.
+const PROGRESS_MIN_BYTES: u64 = 8 << 20;
+
 impl Progress {
-    fn new(total: usize) -> Self {
+    fn new(total_bytes: u64) -> Self {
         use std::io::IsTerminal;
         Self {
-            total,
-            done: 0,
+            total_bytes,
             shown_pct: 0,
-            enabled: total >= 100_000 && std::io::stderr().is_terminal(),
+            enabled: total_bytes >= PROGRESS_MIN_BYTES && std::io::stderr().is_terminal(),
         }
     }
 
-    fn tick(&mut self) {
-        self.done += 1;
+    fn show(&mut self, done_bytes: u64) {
         if !self.enabled {
             return;
         }
-        let pct = self.done * 100 / self.total.max(1);
+        let pct = done_bytes * 100 / self.total_bytes.max(1);
         if pct > self.shown_pct {
             self.shown_pct = pct;
-            let bar = "#".repeat(pct / 2);
+            let bar = "#".repeat(pct as usize / 2);
             eprint!(
-                "\r[{bar:<50}] {pct:3} % ({} / {} samples)",
-                self.done, self.total
+                "\r[{bar:<50}] {pct:3} % ({} / {} MB)",
+                done_bytes >> 20,
+                self.total_bytes >> 20
             );
         }
     }

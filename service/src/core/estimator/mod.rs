@@ -165,6 +165,11 @@ impl Estimator {
         self.phase
     }
 
+    /// The estimate of the last sample accepted by [`Self::step`].
+    pub fn last_estimate(&self) -> &Estimate {
+        &self.out
+    }
+
     /// First time the bias counted as converged.
     pub fn converged_at_s(&self) -> Option<f64> {
         self.converged_at_s

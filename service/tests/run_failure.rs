@@ -1,0 +1,129 @@
+//! A failed `corridor run` leaves no partial output (issue 10, finding 6).
+//!
+//! Before the runner streamed, `estimates.csv` and `innovations.csv` were written to their final
+//! names while the run went on, and a run that failed after them (the log never aligned, the
+//! truth could not be evaluated) left them behind as if they were results. Now every output is
+//! written as `NAME.partial` and renamed only when the run succeeded.
+
+mod common;
+
+use common::TempDir;
+use corridor_service::runner::{RunError, RunOptions, run};
+use corridor_shared::config::Config;
+use corridor_shared::imu_csv::{ImuCsvError, ImuCsvOptions};
+use corridor_shared::injection::BiasInjection;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn exp36() -> PathBuf {
+    root().join("tests/data/gdins_exp36_corridor_out_and_back")
+}
+
+fn options(imu: &Path, truth: Option<PathBuf>, out: &Path) -> RunOptions {
+    RunOptions {
+        imu: imu.to_owned(),
+        config: Config::from_file(&root().join("configs/gdins.toml")).unwrap(),
+        map: None,
+        truth,
+        injection: BiasInjection::default(),
+        plots: true,
+        out_dir: out.to_owned(),
+        csv: ImuCsvOptions::default(),
+    }
+}
+
+/// The names in `dir`, sorted.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// exp36's rows from line `from` on (no initial rest), with its header.
+fn without_rest(dir: &Path, from: usize) -> PathBuf {
+    let text = std::fs::read_to_string(exp36().join("imu.csv")).unwrap();
+    let mut lines = text.lines();
+    let mut out = String::from(lines.next().unwrap());
+    out.push('\n');
+    for l in lines.skip(from) {
+        out.push_str(l);
+        out.push('\n');
+    }
+    let path = dir.join("no_rest.csv");
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+#[test]
+fn a_run_that_fails_after_writing_leaves_no_output() {
+    let dir = TempDir::new(&format!("run-failure-{}", std::process::id()));
+    let out = dir.join("out");
+    // A log that starts walking: it never aligns, found only after every row was estimated.
+    let imu = without_rest(&dir, 1500);
+    let err = run(&options(&imu, None, &out)).unwrap_err();
+    assert!(matches!(err, RunError::NeverAligned { .. }), "{err}");
+    assert_eq!(listing(&out), Vec::<String>::new());
+
+    // Truth that cannot be evaluated (one footprint): found after the outputs were written.
+    let truth = dir.join("one_footprint.csv");
+    let gt = std::fs::read_to_string(exp36().join("ground_truth.csv")).unwrap();
+    std::fs::write(&truth, gt.lines().take(2).collect::<Vec<_>>().join("\n")).unwrap();
+    let err = run(&options(&exp36().join("imu.csv"), Some(truth), &out)).unwrap_err();
+    assert!(matches!(err, RunError::Eval { .. }), "{err}");
+    assert_eq!(listing(&out), Vec::<String>::new());
+
+    // Too many bad rows at the end of a log: the reader says so at its end.
+    let bad = dir.join("bad_tail.csv");
+    let mut text = std::fs::read_to_string(exp36().join("imu.csv")).unwrap();
+    for _ in 0..200 {
+        text.push_str("garbage\n");
+    }
+    std::fs::write(&bad, text).unwrap();
+    let err = run(&options(&bad, None, &out)).unwrap_err();
+    assert!(
+        matches!(err, RunError::Imu(ImuCsvError::TooManyRejected { .. })),
+        "{err}"
+    );
+    assert_eq!(listing(&out), Vec::<String>::new());
+}
+
+#[test]
+fn a_failed_run_leaves_the_previous_outputs_as_they_were() {
+    let dir = TempDir::new(&format!("run-failure-prev-{}", std::process::id()));
+    let out = dir.join("out");
+    let truth = exp36().join("ground_truth.csv");
+    run(&options(
+        &exp36().join("imu.csv"),
+        Some(truth.clone()),
+        &out,
+    ))
+    .unwrap();
+    let names = listing(&out);
+    assert_eq!(
+        names,
+        [
+            "bias.svg",
+            "covariance.svg",
+            "estimates.csv",
+            "innovations.csv",
+            "summary.json",
+            "trajectory.svg"
+        ]
+    );
+    let summary = std::fs::read(out.join("summary.json")).unwrap();
+    let estimates_len = std::fs::metadata(out.join("estimates.csv")).unwrap().len();
+    let imu = without_rest(&dir, 1500);
+    assert!(run(&options(&imu, Some(truth), &out)).is_err());
+    assert_eq!(listing(&out), names);
+    assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
+    assert_eq!(
+        std::fs::metadata(out.join("estimates.csv")).unwrap().len(),
+        estimates_len
+    );
+}
