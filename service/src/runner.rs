@@ -337,6 +337,12 @@ pub struct Summary {
     pub clipped_samples: u64,
     /// Updates that failed the estimator's health check (the last good state was restored).
     pub health_restores: u64,
+    /// Samples integrated on the smoothed clock because the stamps jitter (host arrival times).
+    pub jittery_clock_samples: u64,
+    /// Alignment came from a short first stance (no initial rest, no rest-mean prior).
+    pub started_without_rest: bool,
+    /// Zero-rate updates of the bias at rests after the alignment.
+    pub zero_rate_updates: u64,
     /// Footprint evaluation (first-leg alignment), when truth was given.
     pub eval: Option<EvalReport>,
 }
@@ -759,6 +765,9 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         samples_refused: feed.refused,
         clipped_samples: c.clipped_samples,
         health_restores: c.health_restores,
+        jittery_clock_samples: c.jittery_clock_samples,
+        started_without_rest: c.started_without_rest,
+        zero_rate_updates: c.zero_rate_updates,
         eval,
     };
     let sum_path = staged.stage(opts.out_dir.join("summary.json"));

@@ -64,6 +64,26 @@ pub(super) fn run(a: &RunArgs) -> Result<()> {
 /// The summary fields printed by `corridor run` and `corridor demo`.
 pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
     let e = s.eval.as_ref();
+    // What the input did that a user should know about, said once in words.
+    let mut notes = Vec::new();
+    if s.jittery_clock_samples > 0 {
+        notes.push(format!(
+            "the time stamps jitter (host arrival times?): {} samples integrated on a smoothed clock",
+            s.jittery_clock_samples
+        ));
+    }
+    if s.started_without_rest {
+        notes.push(
+            "no initial rest: aligned on a short first stance, without a rest-mean bias prior"
+                .into(),
+        );
+    }
+    if s.clipped_samples > 0 {
+        notes.push(format!(
+            "{} samples at a sensor rail (clipped)",
+            s.clipped_samples
+        ));
+    }
     serde_json::json!({
         "mode": s.mode,
         "bias_rad_s": s.bias_rad_s,
@@ -76,5 +96,6 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
         "gcp_rms_m": e.and_then(|e| e.rms_error_m),
         "gcp_rms_pct": e.and_then(|e| e.rms_error_pct_of_path),
         "final_gcp_error_m": e.and_then(|e| e.final_gcp_error_m),
+        "notes": notes,
     })
 }

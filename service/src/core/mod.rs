@@ -2,6 +2,7 @@
 //!
 //! - [`rotation`]: quaternion exponential/logarithm (closed form and Newton), Euler angles.
 //! - [`stance`]: SHOE / ARE / MV zero-velocity detection.
+//! - [`clock`]: the time base samples are integrated on (host-stamp jitter recognised, smoothed).
 //! - [`eskf`]: the ZUPT-aided error-state Kalman filter (position, velocity, attitude, gyro bias).
 //! - [`bias_kf`]: the paper's 3-state bias filter and its observers.
 //! - [`heading`]: heading sources (grid, corridor map), association, straight-walk test.
@@ -10,6 +11,7 @@
 //! - [`estimator`]: the per-sample pipeline that ties them together.
 
 pub mod bias_kf;
+pub mod clock;
 pub mod eskf;
 pub mod estimator;
 pub mod heading;

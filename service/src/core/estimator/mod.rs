@@ -32,6 +32,7 @@ pub use types::{
 use rest::RestSums;
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
+use super::clock::SampleClock;
 use super::eskf::{BiasStates, Eskf, EskfInit, EskfNoise, ExtensionEstimates, Extensions};
 use super::heading::{FootprintLine, HeadingAid, Rejection, StraightWalk};
 use super::health::{self, HealthLimits, LastGood};
@@ -95,6 +96,7 @@ pub struct Estimator {
     straight: StraightWalk,
     line: Option<FootprintLine>,
     in_stance: bool,
+    clock: SampleClock,
     /// Gyro axes of the current sample at their rail.
     clipped_gyro_axes: [bool; 3],
     stance_obs_done: bool,
@@ -140,6 +142,7 @@ impl Estimator {
             last_footprint: None,
             in_stance: false,
             clipped_gyro_axes: [false; 3],
+            clock: SampleClock::default(),
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
             pending_heading: None,
@@ -225,7 +228,11 @@ impl Estimator {
                 }
             }
         }
-        self.last = Some((s.t_s, w, f));
+        // Integration runs on the sample clock: the stamps, or while they jitter (host arrival
+        // times) a smoothed clock.
+        let t_clock = self.clock.push(s.t_s);
+        self.counters.jittery_clock_samples += u64::from(self.clock.jittery());
+        self.last = Some((t_clock, w, f));
         let decision = self.detector.push(s.t_s, &w, &f);
         let out = &mut self.out;
         out.t_s = s.t_s;
@@ -262,7 +269,7 @@ impl Estimator {
                 None => self.before.save(&(e.clone(), self.bias.clone())),
             }
         }
-        let dt = s.t_s - t_prev;
+        let dt = t_clock - t_prev;
         if dt > self.cfg.max_dt_s.get() {
             // A new segment. Extrapolating two samples over the gap is meaningless (a 10 s gap
             // once gave a vertical velocity of −286 m/s), so nothing is integrated over it. The

@@ -177,6 +177,9 @@ pub struct Counters {
     pub started_without_rest: bool,
     /// Zero-rate updates of the gyro bias at rests after the alignment.
     pub zero_rate_updates: u64,
+    /// Samples integrated on the smoothed clock because the time stamps jitter (host arrival
+    /// times; see `core/clock.rs`).
+    pub jittery_clock_samples: u64,
 }
 
 /// The estimate after one sample.
