@@ -14,6 +14,10 @@
 //!    associated with a map direction; an accepted direction becomes a heading observation for the
 //!    configured mode.
 //!
+//! The state machine is explicit: a private `Stage` holds the rest sums while aligning and the
+//! error-state filter from then on, and every step that needs the filter takes it from there as
+//! an argument, so no path can reach the filter before it exists.
+//!
 //! Files: this one holds [`Estimator`] and its per-sample pipeline; `types.rs` the data it
 //! takes and gives (samples, estimates, counters, warm start); `observations.rs` what happens
 //! once per stance (calibration and heading observations); `association.rs` the weighted
@@ -63,9 +67,29 @@ enum BiasFilter {
     },
 }
 
+/// Where the estimator is in its state machine. The error-state filter exists only once the
+/// initial rest has given roll, pitch and gravity, so it lives in the stage that needs it.
+#[derive(Debug, Clone)]
+enum Stage {
+    /// Accumulating the initial rest until motion starts after enough of it
+    /// ([`Phase::Aligning`]).
+    Aligning(RestSums),
+    /// Aligned: the filter runs ([`Phase::Calibrating`], then [`Phase::Tracking`]). Boxed: the
+    /// filter's covariance is stored inline.
+    Running(Box<Eskf>),
+}
+
 /// The estimator.
 #[derive(Debug, Clone)]
 pub struct Estimator {
+    stage: Stage,
+    p: Pipeline,
+}
+
+/// Everything of the estimator but its stage: the per-sample pipeline around the filter, whose
+/// methods take the filter from [`Stage::Running`] as an argument.
+#[derive(Debug, Clone)]
+struct Pipeline {
     cfg: Config,
     aid: HeadingAid,
     detector: StanceDetector,
@@ -73,8 +97,6 @@ pub struct Estimator {
     counters: Counters,
     plausibility: Plausibility,
     last: Option<(f64, Vector3<f64>, Vector3<f64>)>,
-    rest: RestSums,
-    eskf: Option<Eskf>,
     bias: BiasFilter,
     /// Filter and bias filter at the last healthy stance (or at alignment).
     good: LastGood<(Eskf, BiasFilter)>,
@@ -109,7 +131,7 @@ impl Estimator {
             cfg.heading.straight_strides,
             cfg.heading.straight_max_change_rad.get(),
         );
-        Self {
+        let p = Pipeline {
             detector,
             straight,
             line: (cfg.heading.line_footprints > 0).then(|| {
@@ -123,8 +145,6 @@ impl Estimator {
             counters: Counters::default(),
             plausibility: Plausibility::new(cfg.sensor),
             last: None,
-            rest: RestSums::new(cfg.alignment.rest_tail_s),
-            eskf: None,
             bias: BiasFilter::InEskf,
             good: LastGood::default(),
             good_saved_this_stance: false,
@@ -142,54 +162,62 @@ impl Estimator {
             converged_at_s: None,
             out: Estimate::default(),
             cfg,
+        };
+        Self {
+            stage: Stage::Aligning(RestSums::new(p.cfg.alignment.rest_tail_s)),
+            p,
         }
     }
 
     /// The configuration.
     pub fn config(&self) -> &Config {
-        &self.cfg
+        &self.p.cfg
     }
 
     /// Counters so far.
     pub fn counters(&self) -> &Counters {
-        &self.counters
+        &self.p.counters
     }
 
     /// The phase.
     pub fn phase(&self) -> Phase {
-        self.phase
+        self.p.phase
     }
 
     /// First time the bias counted as converged.
     pub fn converged_at_s(&self) -> Option<f64> {
-        self.converged_at_s
+        self.p.converged_at_s
     }
 
     /// The error-state filter's extension estimates (zero for the extensions that are off),
     /// with the σ of the scale factors when they are on.
     pub fn extensions(&self) -> Option<(ExtensionEstimates, Option<Vector3<f64>>)> {
-        self.eskf.as_ref().map(|e| (e.ext, e.scale_factor_sd()))
+        match &self.stage {
+            Stage::Aligning(_) => None,
+            Stage::Running(e) => Some((e.ext, e.scale_factor_sd())),
+        }
     }
 
     /// The sensor's yaw on the foot (mounting yaw and toe-out), rad, once calibrated.
     pub fn mount_yaw_rad(&self) -> Option<f64> {
-        (self.phase == Phase::Tracking).then_some(self.mount_yaw_rad)
+        (self.p.phase == Phase::Tracking).then_some(self.p.mount_yaw_rad)
     }
 
     /// An external observation of the walking (foot) heading in the map frame with its σ; it is
     /// used at the next stance instead of the map.
     pub fn queue_heading(&mut self, heading_rad: f64, sd_rad: f64) {
-        self.pending_heading = Some((heading_rad, sd_rad));
+        self.p.pending_heading = Some((heading_rad, sd_rad));
     }
 
     /// Processes one sample. On error nothing changed and the sample is counted as rejected.
     pub fn step(&mut self, s: &ImuInput) -> Result<&Estimate, SampleError> {
         let w = Vector3::from(s.gyro_rad_s);
         let f = Vector3::from(s.accel_m_s2);
-        let clipped = match self.plausibility.check(s) {
+        let p = &mut self.p;
+        let clipped = match p.plausibility.check(s) {
             Ok(clipped) => clipped,
             Err(e) => {
-                let c = &mut self.counters;
+                let c = &mut p.counters;
                 *match e {
                     SampleError::NonFinite { .. } => &mut c.rejected_non_finite,
                     SampleError::TimeNotIncreasing { .. } => &mut c.rejected_time,
@@ -199,12 +227,12 @@ impl Estimator {
                 return Err(e);
             }
         };
-        let prev = self.last;
-        self.counters.samples += 1;
-        self.counters.clipped_samples += u64::from(clipped);
-        self.last = Some((s.t_s, w, f));
-        let decision = self.detector.push(s.t_s, &w, &f);
-        let out = &mut self.out;
+        let prev = p.last;
+        p.counters.samples += 1;
+        p.counters.clipped_samples += u64::from(clipped);
+        p.last = Some((s.t_s, w, f));
+        let decision = p.detector.push(s.t_s, &w, &f);
+        let out = &mut p.out;
         out.t_s = s.t_s;
         out.stance = decision.stance;
         out.clipped = clipped;
@@ -215,31 +243,98 @@ impl Estimator {
         out.heading = None;
         out.stride = None;
 
-        if self.phase == Phase::Aligning {
-            self.align_step(s.t_s, &w, &f, decision.stance);
-            if self.phase == Phase::Aligning {
-                return Ok(&self.out);
-            }
+        if let Stage::Aligning(rest) = &mut self.stage {
+            let Some(eskf) = p.align_step(rest, s.t_s, &w, &f, decision.stance) else {
+                return Ok(&self.p.out);
+            };
+            self.stage = Stage::Running(Box::new(eskf));
         }
-        if self.good.get().is_none()
-            && let Some(e) = &self.eskf
-        {
-            self.good.save(&(e.clone(), self.bias.clone()));
+        let Stage::Running(eskf) = &mut self.stage else {
+            return Ok(&self.p.out); // not reached: aligned just above
+        };
+        p.step_running(
+            eskf,
+            s.t_s,
+            prev,
+            &w,
+            &f,
+            decision.stance,
+            decision.stance_age_s,
+        );
+        Ok(&self.p.out)
+    }
+
+    /// Starts from a saved bias state (e.g. a daemon checkpoint) instead of the configured prior:
+    /// used at the end of the next alignment. Attitude is always re-aligned from the
+    /// accelerometer, and the map frame from the first stride, because the foot may have moved
+    /// while the estimator was down.
+    pub fn set_warm_start(&mut self, ws: WarmStart) -> Result<(), WarmStartError> {
+        let bound = self.p.cfg.sensor.max_gyro_bias_rad_s();
+        let finite = ws.gyro_bias_rad_s.iter().all(|v| v.abs() <= bound)
+            && ws.gyro_bias_cov.iter().flatten().all(|v| v.is_finite());
+        let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
+        let symmetric = (p - p.transpose()).abs().max() <= 1e-12 * p.abs().max().max(1e-300);
+        let positive = p.cholesky().is_some();
+        if !(finite && symmetric && positive) {
+            return Err(WarmStartError { state: ws });
+        }
+        self.p.warm_start = Some(ws);
+        if let Stage::Running(eskf) = &mut self.stage {
+            self.p.apply_warm_start(eskf, &ws);
+        }
+        Ok(())
+    }
+
+    /// Gyro bias (sensor axes) and its full covariance: what a checkpoint saves.
+    pub fn bias_state(&self) -> Option<WarmStart> {
+        let Stage::Running(eskf) = &self.stage else {
+            return None;
+        };
+        let (b, _) = self.p.bias_sensor(eskf);
+        let p = match &self.p.bias {
+            BiasFilter::InEskf => eskf.gyro_bias_cov(),
+            BiasFilter::Paper { kf, .. } => {
+                let c = self.p.foot_from_sensor().to_rotation_matrix().into_inner();
+                c.transpose() * kf.p * c
+            }
+            BiasFilter::RotationAware { kf, .. } => kf.p,
+        };
+        Some(WarmStart {
+            gyro_bias_rad_s: b.into(),
+            gyro_bias_cov: std::array::from_fn(|i| std::array::from_fn(|j| p[(i, j)])),
+        })
+    }
+}
+
+impl Pipeline {
+    /// The rest of [`Estimator::step`] once aligned: the segment check, navigation and the
+    /// stance observations, the health check, the output.
+    #[allow(clippy::too_many_arguments)]
+    fn step_running(
+        &mut self,
+        eskf: &mut Eskf,
+        t_s: f64,
+        prev: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+        w: &Vector3<f64>,
+        f: &Vector3<f64>,
+        stance: bool,
+        stance_age_s: f64,
+    ) {
+        if self.good.get().is_none() {
+            self.good.save(&(eskf.clone(), self.bias.clone()));
         }
         let Some((t_prev, w_prev, f_prev)) = prev else {
-            return Ok(&self.out);
+            return;
         };
-        if let Some(e) = &self.eskf {
-            // Every sample: copy in place, the used block of the covariance only.
-            match self.before.get_mut() {
-                Some((e0, b0)) => {
-                    e0.copy_state_from(e);
-                    b0.clone_from(&self.bias);
-                }
-                None => self.before.save(&(e.clone(), self.bias.clone())),
+        // Every sample: copy in place, the used block of the covariance only.
+        match self.before.get_mut() {
+            Some((e0, b0)) => {
+                e0.copy_state_from(eskf);
+                b0.clone_from(&self.bias);
             }
+            None => self.before.save(&(eskf.clone(), self.bias.clone())),
         }
-        let dt = s.t_s - t_prev;
+        let dt = t_s - t_prev;
         if dt > self.cfg.max_dt_s.get() {
             // A new segment. Extrapolating two samples over the gap is meaningless (a 10 s gap
             // once gave a vertical velocity of −286 m/s), so nothing is integrated over it. The
@@ -250,29 +345,18 @@ impl Estimator {
             self.counters.gaps += 1;
             self.out.gap_s = Some(dt);
             let v_max = self.cfg.max_speed_m_s.get();
-            if let Some(e) = self.eskf.as_mut() {
-                e.widen_after_gap(dt, v_max * v_max);
-            }
-            self.fill_output();
-            return Ok(&self.out);
+            eskf.widen_after_gap(dt, v_max * v_max);
+            self.fill_output(eskf);
+            return;
         }
         let w_avg = (w + w_prev) * 0.5;
         let f_avg = (f + f_prev) * 0.5;
-        self.navigate(
-            s.t_s,
-            dt,
-            &w_avg,
-            &f_avg,
-            &f,
-            decision.stance,
-            decision.stance_age_s,
-        );
-        if self.guard_health(decision.stance) {
+        self.navigate(eskf, t_s, dt, &w_avg, &f_avg, f, stance, stance_age_s);
+        if self.guard_health(eskf, stance) {
             // The update was undone: the next step integrates from the previous sample.
             self.last = prev;
         }
-        self.fill_output();
-        Ok(&self.out)
+        self.fill_output(eskf);
     }
 
     /// The health check after an update; `true` when it failed. The first
@@ -280,14 +364,11 @@ impl Estimator {
     /// healthy, and unlike the stance copy it holds the foot's rotation since the stance);
     /// further ones restore the state of the last healthy stance. Keeps a copy of the state at
     /// the first sample of each healthy stance.
-    fn guard_health(&mut self, stance: bool) -> bool {
-        let (bias, _) = self.bias_sensor();
+    fn guard_health(&mut self, eskf: &mut Eskf, stance: bool) -> bool {
+        let (bias, _) = self.bias_sensor(eskf);
         let limits = HealthLimits {
             max_speed_m_s: self.cfg.max_speed_m_s.get(),
             max_gyro_bias_rad_s: self.cfg.sensor.max_gyro_bias_rad_s(),
-        };
-        let Some(eskf) = self.eskf.as_mut() else {
-            return false;
         };
         let failed = match health::check(eskf, &bias, &limits) {
             Ok(()) => {
@@ -320,30 +401,38 @@ impl Estimator {
         failed
     }
 
-    fn align_step(&mut self, t_s: f64, w: &Vector3<f64>, f: &Vector3<f64>, stance: bool) {
+    /// One sample of the initial rest; the filter when the alignment ends with it.
+    fn align_step(
+        &mut self,
+        rest: &mut RestSums,
+        t_s: f64,
+        w: &Vector3<f64>,
+        f: &Vector3<f64>,
+        stance: bool,
+    ) -> Option<Eskf> {
         if stance {
-            self.rest.push(t_s, f, w);
-            let (mean_f, _) = self.rest.means();
+            rest.push(t_s, f, w);
+            let (mean_f, _) = rest.means();
             let (roll, pitch) = tilt_from_specific_force(&mean_f);
             let q = from_euler_zyx(roll, pitch, 0.0);
             self.out.nav_from_body = [q.w, q.i, q.j, q.k];
             self.out.roll_rad = roll;
             self.out.pitch_rad = pitch;
-            return;
+            return None;
         }
-        let rest_s = if self.rest.is_empty() {
+        let rest_s = if rest.is_empty() {
             0.0
         } else {
-            t_s - self.rest.t_first_s
+            t_s - rest.t_first_s
         };
         if rest_s < self.cfg.alignment.min_rest_s.get() {
-            if !self.rest.is_empty() {
+            if !rest.is_empty() {
                 self.counters.alignment_restarts += 1;
             }
-            self.rest.clear();
-            return;
+            rest.clear();
+            return None;
         }
-        let (mean_f, mean_w) = self.rest.means();
+        let (mean_f, mean_w) = rest.means();
         let g = self
             .cfg
             .alignment
@@ -383,7 +472,7 @@ impl Estimator {
             // bias-filter modes do not make.
             Extensions::default()
         };
-        self.eskf = Some(Eskf::new(
+        let mut eskf = Eskf::new(
             EskfInit {
                 nav_from_body: self.tilt0,
                 gyro_bias_rad_s: if own_bias { b0 } else { Vector3::zeros() },
@@ -398,7 +487,7 @@ impl Estimator {
             },
             noise,
             ext,
-        ));
+        );
         let rw = self.cfg.bias_kf.bias_rw_rad_s_sqrt_s;
         self.bias = match self.cfg.mode {
             Mode::Zupt | Mode::Eskf => BiasFilter::InEskf,
@@ -415,22 +504,19 @@ impl Estimator {
             },
         };
         if let Some(ws) = self.warm_start {
-            self.apply_warm_start(&ws);
+            self.apply_warm_start(&mut eskf, &ws);
         }
         self.phase = Phase::Calibrating;
+        Some(eskf)
     }
 
     /// Replaces the bias prior by a saved state (bias and covariance in sensor axes).
-    fn apply_warm_start(&mut self, ws: &WarmStart) {
+    fn apply_warm_start(&mut self, eskf: &mut Eskf, ws: &WarmStart) {
         let b = Vector3::from(ws.gyro_bias_rad_s);
         let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
         let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
         match &mut self.bias {
-            BiasFilter::InEskf => {
-                if let Some(e) = self.eskf.as_mut() {
-                    e.set_gyro_bias(b, &p);
-                }
-            }
+            BiasFilter::InEskf => eskf.set_gyro_bias(b, &p),
             BiasFilter::Paper { kf, .. } => {
                 kf.b_rad_s = c * b;
                 kf.p = c * p * c.transpose();
@@ -440,45 +526,6 @@ impl Estimator {
                 kf.p = p;
             }
         }
-    }
-
-    /// Starts from a saved bias state (e.g. a daemon checkpoint) instead of the configured prior:
-    /// used at the end of the next alignment. Attitude is always re-aligned from the
-    /// accelerometer, and the map frame from the first stride, because the foot may have moved
-    /// while the estimator was down.
-    pub fn set_warm_start(&mut self, ws: WarmStart) -> Result<(), WarmStartError> {
-        let bound = self.cfg.sensor.max_gyro_bias_rad_s();
-        let finite = ws.gyro_bias_rad_s.iter().all(|v| v.abs() <= bound)
-            && ws.gyro_bias_cov.iter().flatten().all(|v| v.is_finite());
-        let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
-        let symmetric = (p - p.transpose()).abs().max() <= 1e-12 * p.abs().max().max(1e-300);
-        let positive = p.cholesky().is_some();
-        if !(finite && symmetric && positive) {
-            return Err(WarmStartError { state: ws });
-        }
-        self.warm_start = Some(ws);
-        if self.phase != Phase::Aligning {
-            self.apply_warm_start(&ws);
-        }
-        Ok(())
-    }
-
-    /// Gyro bias (sensor axes) and its full covariance: what a checkpoint saves.
-    pub fn bias_state(&self) -> Option<WarmStart> {
-        self.eskf.as_ref()?;
-        let (b, _) = self.bias_sensor();
-        let p = match &self.bias {
-            BiasFilter::InEskf => self.eskf.as_ref().expect("aligned").gyro_bias_cov(),
-            BiasFilter::Paper { kf, .. } => {
-                let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
-                c.transpose() * kf.p * c
-            }
-            BiasFilter::RotationAware { kf, .. } => kf.p,
-        };
-        Some(WarmStart {
-            gyro_bias_rad_s: b.into(),
-            gyro_bias_cov: std::array::from_fn(|i| std::array::from_fn(|j| p[(i, j)])),
-        })
     }
 
     /// Foot-from-sensor rotation: `R_z(mount_yaw)·tilt0`.
@@ -494,12 +541,9 @@ impl Estimator {
     }
 
     /// Gyro bias in sensor axes and its σ.
-    fn bias_sensor(&self) -> (Vector3<f64>, Vector3<f64>) {
+    fn bias_sensor(&self, eskf: &Eskf) -> (Vector3<f64>, Vector3<f64>) {
         match &self.bias {
-            BiasFilter::InEskf => {
-                let e = self.eskf.as_ref().expect("aligned");
-                (e.gyro_bias_rad_s, e.gyro_bias_sd())
-            }
+            BiasFilter::InEskf => (eskf.gyro_bias_rad_s, eskf.gyro_bias_sd()),
             BiasFilter::Paper { kf, .. } => {
                 let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
                 let p = c.transpose() * kf.p * c;
@@ -515,6 +559,7 @@ impl Estimator {
     #[allow(clippy::too_many_arguments)]
     fn navigate(
         &mut self,
+        eskf: &mut Eskf,
         t_s: f64,
         dt: f64,
         w_avg: &Vector3<f64>,
@@ -523,7 +568,7 @@ impl Estimator {
         stance: bool,
         stance_age_s: f64,
     ) {
-        let (bias, _) = self.bias_sensor();
+        let (bias, _) = self.bias_sensor(eskf);
         match &mut self.bias {
             BiasFilter::InEskf => {}
             BiasFilter::Paper { obs, .. } => {
@@ -537,7 +582,6 @@ impl Estimator {
                 }
             }
         }
-        let eskf = self.eskf.as_mut().expect("aligned");
         let omega = eskf.corrected_rate(w_avg, f_avg, &bias);
         eskf.propagate(&omega, f_avg, dt);
         if stance {
@@ -557,16 +601,15 @@ impl Estimator {
             self.stance_f_sum.1 += 1;
             if !self.stance_obs_done && stance_age_s >= self.cfg.heading.obs_delay_s {
                 self.stance_obs_done = true;
-                self.stance_observation(t_s);
+                self.stance_observation(eskf, t_s);
             }
         } else {
             self.in_stance = false;
         }
     }
 
-    fn fill_output(&mut self) {
-        let (b, sd) = self.bias_sensor();
-        let e = self.eskf.as_ref().expect("aligned");
+    fn fill_output(&mut self, e: &Eskf) {
+        let (b, sd) = self.bias_sensor(e);
         let q = e.nav_from_body;
         let (roll, pitch, yaw) = euler_zyx(&q);
         let out = &mut self.out;
