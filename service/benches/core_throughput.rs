@@ -6,7 +6,7 @@
 
 use corridor_service::core::{Estimator, ImuInput};
 use corridor_service::runner::heading_aid;
-use corridor_shared::config::{ConfigFile, Mode};
+use corridor_shared::config::{ConfigFile, ConfigOverrides, Mode};
 use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -31,10 +31,14 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("core");
     group.throughput(Throughput::Elements(inputs.len() as u64));
     for mode in [Mode::Zupt, Mode::Paper, Mode::RotationAware, Mode::Eskf] {
-        let mut file = ConfigFile::read(&root.join("configs/gdins.toml")).expect("config");
-        file.estimator.mode = Some(mode);
-        file.heading.start_heading_deg = Some(90.0);
-        let cfg = file.validate().expect("valid");
+        let path = root.join("configs/gdins.toml");
+        let cfg = ConfigOverrides {
+            mode: Some(mode),
+            start_heading_deg: Some(90.0),
+            ..Default::default()
+        }
+        .validate(&ConfigFile::read(&path).expect("config"), &path)
+        .expect("valid");
         let aid = heading_aid(&cfg, None).expect("aid");
         group.bench_function(mode.name(), |b| {
             b.iter(|| {

@@ -5,7 +5,7 @@
 
 use corridor_service::diagnose::{Effect, Report, SIGNIFICANT, apply_fix, run_diagnosis};
 use corridor_service::runner::{heading_aid, run_log};
-use corridor_shared::config::{ConfigFile, HeadingObservations};
+use corridor_shared::config::{ConfigFile, ConfigOverrides, HeadingObservations};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
@@ -46,7 +46,11 @@ fn config(start_heading_deg: f64, offset: bool) -> ConfigFile {
     f.eskf = ConfigFile::read(&root().join("configs/gdins_zupt_baseline.toml"))
         .unwrap()
         .eskf;
-    f.heading.start_heading_deg = Some(start_heading_deg);
+    ConfigOverrides {
+        start_heading_deg: Some(start_heading_deg),
+        ..Default::default()
+    }
+    .apply(&mut f);
     f.model.heading_offset_sd_deg = offset.then_some(5.0);
     f
 }

@@ -4,7 +4,7 @@
 use corridor_service::eval::EvalOptions;
 use corridor_service::runner::{RunOutcome, heading_aid, run_log};
 use corridor_service::suite::recovery;
-use corridor_shared::config::{BiasPrior, ConfigFile, Mode};
+use corridor_shared::config::{BiasPrior, ConfigFile, ConfigOverrides, Mode};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::truth_csv::read_truth_csv;
@@ -17,11 +17,15 @@ fn root() -> PathBuf {
 }
 
 fn run(log: &ImuLog, mode: Mode, inj: BiasInjection) -> RunOutcome {
-    let mut file = ConfigFile::read(&root().join("configs/gdins.toml")).unwrap();
-    file.estimator.mode = Some(mode);
-    file.alignment.gyro_bias_prior = Some(BiasPrior::None);
-    file.heading.start_heading_deg = Some(0.0);
-    let cfg = file.validate().unwrap();
+    let path = root().join("configs/gdins.toml");
+    let cfg = ConfigOverrides {
+        mode: Some(mode),
+        gyro_bias_prior: Some(BiasPrior::None),
+        start_heading_deg: Some(0.0),
+        grid_deg: None,
+    }
+    .validate(&ConfigFile::read(&path).unwrap(), &path)
+    .unwrap();
     let aid = heading_aid(&cfg, None).unwrap();
     run_log(log, &cfg, &aid, &inj, |_, _| {})
 }

@@ -6,7 +6,7 @@ use super::run::brief;
 use anyhow::{Context, Result};
 use clap::Args;
 use corridor_service::runner::{self, RunOptions};
-use corridor_shared::config::{BiasPrior, Config, ConfigFile};
+use corridor_shared::config::{BiasPrior, Config, ConfigFile, ConfigOverrides};
 use corridor_shared::imu_csv::ImuCsvOptions;
 use corridor_shared::injection::BiasInjection;
 use std::path::{Path, PathBuf};
@@ -95,10 +95,10 @@ pub(super) fn demo(a: &DemoArgs) -> Result<()> {
 /// `configs/gdins.toml` without a gyro-bias prior, walking off at heading 0°.
 fn demo_exp25_config(root: &Path) -> Result<Config> {
     let path = root.join("configs/gdins.toml");
-    let mut file = ConfigFile::read(&path)?;
-    file.alignment.gyro_bias_prior = Some(BiasPrior::None);
-    file.heading.start_heading_deg = Some(0.0);
-    Ok(file
-        .validate()
-        .map_err(|e| corridor_shared::config::with_path(e, &path))?)
+    let overrides = ConfigOverrides {
+        gyro_bias_prior: Some(BiasPrior::None),
+        start_heading_deg: Some(0.0),
+        ..Default::default()
+    };
+    Ok(overrides.validate(&ConfigFile::read(&path)?, &path)?)
 }

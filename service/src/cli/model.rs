@@ -2,7 +2,9 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use corridor_shared::config::{BiasPrior, Config, ConfigFile, DaemonSettings, Mode};
+use corridor_shared::config::{
+    BiasPrior, Config, ConfigFile, ConfigOverrides, DaemonSettings, Mode,
+};
 use std::path::PathBuf;
 
 /// Configuration flags shared by every command that runs the estimator.
@@ -59,28 +61,35 @@ impl ModelArgs {
             Some(p) => ConfigFile::read(p)?,
             None => ConfigFile::default(),
         };
-        if let Some(v) = self.start_heading_deg {
-            file.heading.start_heading_deg = Some(v);
-        }
-        if let Some(v) = self.grid_deg {
-            file.heading.grid_deg = Some(v);
-        }
-        if let Some(m) = &self.mode {
-            file.estimator.mode = Some(
+        self.overrides()?.apply(&mut file);
+        Ok(file)
+    }
+
+    /// The flags that override the config file.
+    pub fn overrides(&self) -> Result<ConfigOverrides> {
+        let mode = match &self.mode {
+            Some(m) => Some(
                 toml::Value::String(m.clone())
                     .try_into::<Mode>()
                     .with_context(|| {
                         format!("--mode {m:?}: expected zupt, paper, rotation_aware or eskf")
                     })?,
-            );
-        }
-        if let Some(p) = &self.prior {
-            file.alignment.gyro_bias_prior = Some(
+            ),
+            None => None,
+        };
+        let gyro_bias_prior = match &self.prior {
+            Some(p) => Some(
                 toml::Value::String(p.clone())
                     .try_into::<BiasPrior>()
                     .with_context(|| format!("--prior {p:?}: expected none or rest_mean"))?,
-            );
-        }
-        Ok(file)
+            ),
+            None => None,
+        };
+        Ok(ConfigOverrides {
+            mode,
+            gyro_bias_prior,
+            start_heading_deg: self.start_heading_deg,
+            grid_deg: self.grid_deg,
+        })
     }
 }

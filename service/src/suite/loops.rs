@@ -25,10 +25,9 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<String, SuiteError> {
             .map_err(|e| wrap(e.into()))?;
         let truth = read_truth_csv(&base.join(&r.truth)).map_err(|e| wrap(e.into()))?;
         let mut file = ConfigFile::read(&base.join(&r.config)).map_err(|e| wrap(e.into()))?;
+        // The paper's model: no extension states (a model change, not an override).
         file.model = Default::default();
-        file.estimator.mode = Some(Mode::Paper);
-        file.heading.start_heading_deg = Some(r.start_heading_deg);
-        file.heading.grid_deg = Some(r.grid_deg);
+        r.overrides(Mode::Paper, None).apply(&mut file);
         let crate::diagnose::Diagnosis {
             report,
             before,

@@ -37,7 +37,7 @@ pub use tables::{
 
 use crate::eval::EvalOptions;
 use crate::runner::{self, RunError, RunOutcome, heading_aid};
-use corridor_shared::config::{BiasPrior, Config, ConfigFile, Mode};
+use corridor_shared::config::{BiasPrior, Config, ConfigFile, ConfigOverrides, Mode};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
@@ -220,6 +220,18 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
         .collect()
 }
 
+impl SuiteRecording {
+    /// The recording's map knowledge with the mode and prior of one suite row.
+    pub fn overrides(&self, mode: Mode, prior: Option<BiasPrior>) -> ConfigOverrides {
+        ConfigOverrides {
+            mode: Some(mode),
+            gyro_bias_prior: prior,
+            start_heading_deg: Some(self.start_heading_deg),
+            grid_deg: Some(self.grid_deg),
+        }
+    }
+}
+
 /// The recording's configuration with the mode, prior and map knowledge of one suite row.
 fn config_for(
     file: &ConfigFile,
@@ -228,14 +240,7 @@ fn config_for(
     mode: Mode,
     prior: BiasPrior,
 ) -> Result<Config, RunError> {
-    let mut file = file.clone();
-    file.estimator.mode = Some(mode);
-    file.alignment.gyro_bias_prior = Some(prior);
-    file.heading.start_heading_deg = Some(r.start_heading_deg);
-    file.heading.grid_deg = Some(r.grid_deg);
-    Ok(file
-        .validate()
-        .map_err(|e| corridor_shared::config::with_path(e, path))?)
+    Ok(r.overrides(mode, Some(prior)).validate(file, path)?)
 }
 
 struct Ctx<'a> {

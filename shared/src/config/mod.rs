@@ -8,13 +8,16 @@
 //!
 //! Files: this one holds the error, the checked number types and the enums; `file.rs` the
 //! TOML mirror ([`ConfigFile`]); `settings.rs` the validated types ([`Config`]);
-//! `validate.rs` the one validation pass between them, with the defaults.
+//! `validate.rs` the one validation pass between them, with the defaults; `overrides.rs`
+//! [`ConfigOverrides`], the one way to replace a file's values (command line, suite, tests).
 
 mod file;
+mod overrides;
 mod settings;
 mod validate;
 
 pub use file::*;
+pub use overrides::ConfigOverrides;
 pub use settings::*;
 
 use serde::{Deserialize, Serialize};
@@ -42,7 +45,7 @@ pub enum ConfigError {
     /// A key has a value outside its allowed range.
     #[error("{path}: key `{key}` = {value}: {rule}")]
     Invalid {
-        /// The file (or `<override>` for a command-line override).
+        /// The file (overridden values are reported under the file they replace).
         path: PathBuf,
         /// Dotted key, e.g. `detector.threshold`.
         key: String,

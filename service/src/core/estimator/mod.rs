@@ -14,6 +14,10 @@
 //!    associated with a map direction; an accepted direction becomes a heading observation for the
 //!    configured mode.
 //!
+//! The state machine is explicit: a private `Stage` holds the rest sums while aligning and the
+//! error-state filter from then on, and every step that needs the filter takes it from there as
+//! an argument, so no path can reach the filter before it exists.
+//!
 //! Files: this one holds [`Estimator`] and its per-sample pipeline; `types.rs` the data it
 //! takes and gives (samples, estimates, counters, warm start); `observations.rs` what happens
 //! once per stance (calibration and heading observations); `association.rs` the weighted
@@ -66,9 +70,29 @@ enum BiasFilter {
     },
 }
 
+/// Where the estimator is in its state machine. The error-state filter exists only once the
+/// initial rest has given roll, pitch and gravity, so it lives in the stage that needs it.
+#[derive(Debug, Clone)]
+enum Stage {
+    /// Accumulating the initial rest until motion starts after enough of it
+    /// ([`Phase::Aligning`]).
+    Aligning(RestSums),
+    /// Aligned: the filter runs ([`Phase::Calibrating`], then [`Phase::Tracking`]). Boxed: the
+    /// filter's covariance is stored inline.
+    Running(Box<Eskf>),
+}
+
 /// The estimator.
 #[derive(Debug, Clone)]
 pub struct Estimator {
+    stage: Stage,
+    p: Pipeline,
+}
+
+/// Everything of the estimator but its stage: the per-sample pipeline around the filter, whose
+/// methods take the filter from [`Stage::Running`] as an argument.
+#[derive(Debug, Clone)]
+struct Pipeline {
     cfg: Config,
     aid: HeadingAid,
     detector: StanceDetector,
@@ -76,8 +100,6 @@ pub struct Estimator {
     counters: Counters,
     plausibility: Plausibility,
     last: Option<(f64, Vector3<f64>, Vector3<f64>)>,
-    rest: RestSums,
-    eskf: Option<Eskf>,
     bias: BiasFilter,
     /// Filter and bias filter at the last healthy stance (or at alignment).
     good: LastGood<(Eskf, BiasFilter)>,
@@ -97,6 +119,8 @@ pub struct Estimator {
     line: Option<FootprintLine>,
     in_stance: bool,
     clock: SampleClock,
+    /// The current stance's sums, for the zero-rate update when it turns out to be a rest.
+    stance_rest: RestSums,
     /// Gyro axes of the current sample at their rail.
     clipped_gyro_axes: [bool; 3],
     stance_obs_done: bool,
@@ -115,7 +139,7 @@ impl Estimator {
             cfg.heading.straight_strides,
             cfg.heading.straight_max_change_rad.get(),
         );
-        Self {
+        let p = Pipeline {
             detector,
             straight,
             line: (cfg.heading.line_footprints > 0).then(|| {
@@ -129,8 +153,6 @@ impl Estimator {
             counters: Counters::default(),
             plausibility: Plausibility::new(cfg.sensor),
             last: None,
-            rest: RestSums::new(cfg.alignment.rest_tail_s),
-            eskf: None,
             bias: BiasFilter::InEskf,
             good: LastGood::default(),
             good_saved_this_stance: false,
@@ -143,6 +165,7 @@ impl Estimator {
             in_stance: false,
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
+            stance_rest: RestSums::new(cfg.alignment.rest_tail_s),
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
             pending_heading: None,
@@ -150,59 +173,67 @@ impl Estimator {
             converged_at_s: None,
             out: Estimate::default(),
             cfg,
+        };
+        Self {
+            stage: Stage::Aligning(RestSums::new(p.cfg.alignment.rest_tail_s)),
+            p,
         }
     }
 
     /// The configuration.
     pub fn config(&self) -> &Config {
-        &self.cfg
+        &self.p.cfg
     }
 
     /// Counters so far.
     pub fn counters(&self) -> &Counters {
-        &self.counters
+        &self.p.counters
     }
 
     /// The phase.
     pub fn phase(&self) -> Phase {
-        self.phase
+        self.p.phase
     }
 
     /// The estimate of the last sample accepted by [`Self::step`].
     pub fn last_estimate(&self) -> &Estimate {
-        &self.out
+        &self.p.out
     }
 
     /// First time the bias counted as converged.
     pub fn converged_at_s(&self) -> Option<f64> {
-        self.converged_at_s
+        self.p.converged_at_s
     }
 
     /// The error-state filter's extension estimates (zero for the extensions that are off),
     /// with the σ of the scale factors when they are on.
     pub fn extensions(&self) -> Option<(ExtensionEstimates, Option<Vector3<f64>>)> {
-        self.eskf.as_ref().map(|e| (e.ext, e.scale_factor_sd()))
+        match &self.stage {
+            Stage::Aligning(_) => None,
+            Stage::Running(e) => Some((e.ext, e.scale_factor_sd())),
+        }
     }
 
     /// The sensor's yaw on the foot (mounting yaw and toe-out), rad, once calibrated.
     pub fn mount_yaw_rad(&self) -> Option<f64> {
-        (self.phase == Phase::Tracking).then_some(self.mount_yaw_rad)
+        (self.p.phase == Phase::Tracking).then_some(self.p.mount_yaw_rad)
     }
 
     /// An external observation of the walking (foot) heading in the map frame with its σ; it is
     /// used at the next stance instead of the map.
     pub fn queue_heading(&mut self, heading_rad: f64, sd_rad: f64) {
-        self.pending_heading = Some((heading_rad, sd_rad));
+        self.p.pending_heading = Some((heading_rad, sd_rad));
     }
 
     /// Processes one sample. On error nothing changed and the sample is counted as rejected.
     pub fn step(&mut self, s: &ImuInput) -> Result<&Estimate, SampleError> {
         let mut w = Vector3::from(s.gyro_rad_s);
         let f = Vector3::from(s.accel_m_s2);
-        let clipped = match self.plausibility.check(s) {
+        let p = &mut self.p;
+        let clipped = match p.plausibility.check(s) {
             Ok(clipped) => clipped,
             Err(e) => {
-                let c = &mut self.counters;
+                let c = &mut p.counters;
                 *match e {
                     SampleError::NonFinite { .. } => &mut c.rejected_non_finite,
                     SampleError::TimeNotIncreasing { .. } => &mut c.rejected_time,
@@ -212,16 +243,16 @@ impl Estimator {
                 return Err(e);
             }
         };
-        let prev = self.last;
-        self.counters.samples += 1;
-        self.counters.clipped_samples += u64::from(clipped);
+        let prev = p.last;
+        p.counters.samples += 1;
+        p.counters.clipped_samples += u64::from(clipped);
         // A gyro axis at its rail read less than the true rate: the mean excess is added, and
         // the attitude variance grows about that axis in `navigate`.
-        self.clipped_gyro_axes = [false; 3];
+        p.clipped_gyro_axes = [false; 3];
         if clipped {
-            let rail = CLIP_FRACTION * self.cfg.sensor.gyro_range_rad_s();
-            let excess = self.cfg.eskf.clipped_rate_excess_rad_s;
-            for (k, c) in self.clipped_gyro_axes.iter_mut().enumerate() {
+            let rail = CLIP_FRACTION * p.cfg.sensor.gyro_range_rad_s();
+            let excess = p.cfg.eskf.clipped_rate_excess_rad_s;
+            for (k, c) in p.clipped_gyro_axes.iter_mut().enumerate() {
                 *c = w[k].abs() >= rail;
                 if *c {
                     w[k] += excess.copysign(w[k]);
@@ -230,11 +261,11 @@ impl Estimator {
         }
         // Integration runs on the sample clock: the stamps, or while they jitter (host arrival
         // times) a smoothed clock.
-        let t_clock = self.clock.push(s.t_s);
-        self.counters.jittery_clock_samples += u64::from(self.clock.jittery());
-        self.last = Some((t_clock, w, f));
-        let decision = self.detector.push(s.t_s, &w, &f);
-        let out = &mut self.out;
+        let t_clock = p.clock.push(s.t_s);
+        p.counters.jittery_clock_samples += u64::from(p.clock.jittery());
+        p.last = Some((t_clock, w, f));
+        let decision = p.detector.push(s.t_s, &w, &f);
+        let out = &mut p.out;
         out.t_s = s.t_s;
         out.stance = decision.stance;
         out.clipped = clipped;
@@ -245,30 +276,99 @@ impl Estimator {
         out.heading = None;
         out.stride = None;
 
-        if self.phase == Phase::Aligning {
-            self.align_step(s.t_s, &w, &f, decision.stance);
-            if self.phase == Phase::Aligning {
-                return Ok(&self.out);
-            }
+        if let Stage::Aligning(rest) = &mut self.stage {
+            let Some(eskf) = p.align_step(rest, s.t_s, &w, &f, decision.stance) else {
+                return Ok(&self.p.out);
+            };
+            self.stage = Stage::Running(Box::new(eskf));
         }
-        if self.good.get().is_none()
-            && let Some(e) = &self.eskf
-        {
-            self.good.save(&(e.clone(), self.bias.clone()));
+        let Stage::Running(eskf) = &mut self.stage else {
+            return Ok(&self.p.out); // not reached: aligned just above
+        };
+        p.step_running(
+            eskf,
+            s.t_s,
+            prev,
+            &w,
+            &f,
+            decision.stance,
+            decision.stance_age_s,
+        );
+        Ok(&self.p.out)
+    }
+
+    /// Starts from a saved bias state (e.g. a daemon checkpoint) instead of the configured prior:
+    /// used at the end of the next alignment. Attitude is always re-aligned from the
+    /// accelerometer, and the map frame from the first stride, because the foot may have moved
+    /// while the estimator was down.
+    pub fn set_warm_start(&mut self, ws: WarmStart) -> Result<(), WarmStartError> {
+        let bound = self.p.cfg.sensor.max_gyro_bias_rad_s();
+        let finite = ws.gyro_bias_rad_s.iter().all(|v| v.abs() <= bound)
+            && ws.gyro_bias_cov.iter().flatten().all(|v| v.is_finite());
+        let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
+        let symmetric = (p - p.transpose()).abs().max() <= 1e-12 * p.abs().max().max(1e-300);
+        let positive = p.cholesky().is_some();
+        if !(finite && symmetric && positive) {
+            return Err(WarmStartError { state: ws });
+        }
+        self.p.warm_start = Some(ws);
+        if let Stage::Running(eskf) = &mut self.stage {
+            self.p.apply_warm_start(eskf, &ws);
+        }
+        Ok(())
+    }
+
+    /// Gyro bias (sensor axes) and its full covariance: what a checkpoint saves.
+    pub fn bias_state(&self) -> Option<WarmStart> {
+        let Stage::Running(eskf) = &self.stage else {
+            return None;
+        };
+        let (b, _) = self.p.bias_sensor(eskf);
+        let p = match &self.p.bias {
+            BiasFilter::InEskf => eskf.gyro_bias_cov(),
+            BiasFilter::Paper { kf, .. } => {
+                let c = self.p.foot_from_sensor().to_rotation_matrix().into_inner();
+                c.transpose() * kf.p * c
+            }
+            BiasFilter::RotationAware { kf, .. } => kf.p,
+        };
+        Some(WarmStart {
+            gyro_bias_rad_s: b.into(),
+            gyro_bias_cov: std::array::from_fn(|i| std::array::from_fn(|j| p[(i, j)])),
+        })
+    }
+}
+
+impl Pipeline {
+    /// The rest of [`Estimator::step`] once aligned: the segment check, navigation and the
+    /// stance observations, the health check, the output.
+    #[allow(clippy::too_many_arguments)]
+    fn step_running(
+        &mut self,
+        eskf: &mut Eskf,
+        t_s: f64,
+        prev: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+        w: &Vector3<f64>,
+        f: &Vector3<f64>,
+        stance: bool,
+        stance_age_s: f64,
+    ) {
+        if self.good.get().is_none() {
+            self.good.save(&(eskf.clone(), self.bias.clone()));
         }
         let Some((t_prev, w_prev, f_prev)) = prev else {
-            return Ok(&self.out);
+            return;
         };
-        if let Some(e) = &self.eskf {
-            // Every sample: copy in place, the used block of the covariance only.
-            match self.before.get_mut() {
-                Some((e0, b0)) => {
-                    e0.copy_state_from(e);
-                    b0.clone_from(&self.bias);
-                }
-                None => self.before.save(&(e.clone(), self.bias.clone())),
+        // Every sample: copy in place, the used block of the covariance only.
+        match self.before.get_mut() {
+            Some((e0, b0)) => {
+                e0.copy_state_from(eskf);
+                b0.clone_from(&self.bias);
             }
+            None => self.before.save(&(eskf.clone(), self.bias.clone())),
         }
+        // `prev` and `last` hold the sample clock's times (see `step`).
+        let t_clock = self.last.map_or(t_s, |l| l.0);
         let dt = t_clock - t_prev;
         if dt > self.cfg.max_dt_s.get() {
             // A new segment. Extrapolating two samples over the gap is meaningless (a 10 s gap
@@ -280,29 +380,18 @@ impl Estimator {
             self.counters.gaps += 1;
             self.out.gap_s = Some(dt);
             let v_max = self.cfg.max_speed_m_s.get();
-            if let Some(e) = self.eskf.as_mut() {
-                e.widen_after_gap(dt, v_max * v_max);
-            }
-            self.fill_output();
-            return Ok(&self.out);
+            eskf.widen_after_gap(dt, v_max * v_max);
+            self.fill_output(eskf);
+            return;
         }
         let w_avg = (w + w_prev) * 0.5;
         let f_avg = (f + f_prev) * 0.5;
-        self.navigate(
-            s.t_s,
-            dt,
-            &w_avg,
-            &f_avg,
-            &f,
-            decision.stance,
-            decision.stance_age_s,
-        );
-        if self.guard_health(decision.stance) {
+        self.navigate(eskf, t_s, dt, &w_avg, &f_avg, f, stance, stance_age_s);
+        if self.guard_health(eskf, stance) {
             // The update was undone: the next step integrates from the previous sample.
             self.last = prev;
         }
-        self.fill_output();
-        Ok(&self.out)
+        self.fill_output(eskf);
     }
 
     /// The health check after an update; `true` when it failed. The first
@@ -310,14 +399,11 @@ impl Estimator {
     /// healthy, and unlike the stance copy it holds the foot's rotation since the stance);
     /// further ones restore the state of the last healthy stance. Keeps a copy of the state at
     /// the first sample of each healthy stance.
-    fn guard_health(&mut self, stance: bool) -> bool {
-        let (bias, _) = self.bias_sensor();
+    fn guard_health(&mut self, eskf: &mut Eskf, stance: bool) -> bool {
+        let (bias, _) = self.bias_sensor(eskf);
         let limits = HealthLimits {
             max_speed_m_s: self.cfg.max_speed_m_s.get(),
             max_gyro_bias_rad_s: self.cfg.sensor.max_gyro_bias_rad_s(),
-        };
-        let Some(eskf) = self.eskf.as_mut() else {
-            return false;
         };
         let failed = match health::check(eskf, &bias, &limits) {
             Ok(()) => {
@@ -350,21 +436,29 @@ impl Estimator {
         failed
     }
 
-    fn align_step(&mut self, t_s: f64, w: &Vector3<f64>, f: &Vector3<f64>, stance: bool) {
+    /// One sample of the initial rest; the filter when the alignment ends with it.
+    fn align_step(
+        &mut self,
+        rest: &mut RestSums,
+        t_s: f64,
+        w: &Vector3<f64>,
+        f: &Vector3<f64>,
+        stance: bool,
+    ) -> Option<Eskf> {
         if stance {
-            self.rest.push(t_s, f, w);
-            let (mean_f, _) = self.rest.means();
+            rest.push(t_s, f, w);
+            let (mean_f, _) = rest.means();
             let (roll, pitch) = tilt_from_specific_force(&mean_f);
             let q = from_euler_zyx(roll, pitch, 0.0);
             self.out.nav_from_body = [q.w, q.i, q.j, q.k];
             self.out.roll_rad = roll;
             self.out.pitch_rad = pitch;
-            return;
+            return None;
         }
-        let rest_s = if self.rest.is_empty() {
+        let rest_s = if rest.is_empty() {
             0.0
         } else {
-            t_s - self.rest.t_first_s
+            t_s - rest.t_first_s
         };
         let a = &self.cfg.alignment;
         // Without a rest, the first stance of at least `min_start_stance_s` aligns: roll and
@@ -372,18 +466,17 @@ impl Estimator {
         // rests' zero-rate updates and the heading observations give the bias).
         let short_start = rest_s < a.min_rest_s.get();
         if short_start && (a.min_start_stance_s <= 0.0 || rest_s < a.min_start_stance_s) {
-            if !self.rest.is_empty() {
+            if !rest.is_empty() {
                 self.counters.alignment_restarts += 1;
             }
-            self.rest.clear();
-            return;
+            rest.clear();
+            return None;
         }
         self.counters.started_without_rest = short_start;
-        let (mean_f, mean_w) = self.rest.means();
+        let (mean_f, mean_w) = rest.means();
         // The prior's σ: the bias instability floor, or the standard error of the rest's mean
         // rate when that is larger (a rest during which the foot still sways).
-        let prior_sd = self
-            .rest
+        let prior_sd = rest
             .rate_sd_of_mean()
             .map(|v| v.hypot(self.cfg.eskf.gyro_bias_prior_sd_rad_s.get()));
         let g = self
@@ -427,7 +520,7 @@ impl Estimator {
             // bias-filter modes do not make.
             Extensions::default()
         };
-        self.eskf = Some(Eskf::new(
+        let mut eskf = Eskf::new(
             EskfInit {
                 nav_from_body: self.tilt0,
                 gyro_bias_rad_s: if own_bias { b0 } else { Vector3::zeros() },
@@ -442,7 +535,7 @@ impl Estimator {
             },
             noise,
             ext,
-        ));
+        );
         let rw = self.cfg.bias_kf.bias_rw_rad_s_sqrt_s;
         self.bias = match self.cfg.mode {
             Mode::Zupt | Mode::Eskf => BiasFilter::InEskf,
@@ -458,30 +551,23 @@ impl Estimator {
                 obs: None,
             },
         };
-        if own_bias
-            && self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean
-            && !short_start
-            && let Some(e) = self.eskf.as_mut()
-        {
-            e.set_gyro_bias(b0, &Matrix3::from_diagonal(&prior_sd.map(|v| v * v)));
+        if own_bias && self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean && !short_start {
+            eskf.set_gyro_bias(b0, &Matrix3::from_diagonal(&prior_sd.map(|v| v * v)));
         }
         if let Some(ws) = self.warm_start {
-            self.apply_warm_start(&ws);
+            self.apply_warm_start(&mut eskf, &ws);
         }
         self.phase = Phase::Calibrating;
+        Some(eskf)
     }
 
     /// Replaces the bias prior by a saved state (bias and covariance in sensor axes).
-    fn apply_warm_start(&mut self, ws: &WarmStart) {
+    fn apply_warm_start(&mut self, eskf: &mut Eskf, ws: &WarmStart) {
         let b = Vector3::from(ws.gyro_bias_rad_s);
         let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
         let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
         match &mut self.bias {
-            BiasFilter::InEskf => {
-                if let Some(e) = self.eskf.as_mut() {
-                    e.set_gyro_bias(b, &p);
-                }
-            }
+            BiasFilter::InEskf => eskf.set_gyro_bias(b, &p),
             BiasFilter::Paper { kf, .. } => {
                 kf.b_rad_s = c * b;
                 kf.p = c * p * c.transpose();
@@ -491,45 +577,6 @@ impl Estimator {
                 kf.p = p;
             }
         }
-    }
-
-    /// Starts from a saved bias state (e.g. a daemon checkpoint) instead of the configured prior:
-    /// used at the end of the next alignment. Attitude is always re-aligned from the
-    /// accelerometer, and the map frame from the first stride, because the foot may have moved
-    /// while the estimator was down.
-    pub fn set_warm_start(&mut self, ws: WarmStart) -> Result<(), WarmStartError> {
-        let bound = self.cfg.sensor.max_gyro_bias_rad_s();
-        let finite = ws.gyro_bias_rad_s.iter().all(|v| v.abs() <= bound)
-            && ws.gyro_bias_cov.iter().flatten().all(|v| v.is_finite());
-        let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
-        let symmetric = (p - p.transpose()).abs().max() <= 1e-12 * p.abs().max().max(1e-300);
-        let positive = p.cholesky().is_some();
-        if !(finite && symmetric && positive) {
-            return Err(WarmStartError { state: ws });
-        }
-        self.warm_start = Some(ws);
-        if self.phase != Phase::Aligning {
-            self.apply_warm_start(&ws);
-        }
-        Ok(())
-    }
-
-    /// Gyro bias (sensor axes) and its full covariance: what a checkpoint saves.
-    pub fn bias_state(&self) -> Option<WarmStart> {
-        self.eskf.as_ref()?;
-        let (b, _) = self.bias_sensor();
-        let p = match &self.bias {
-            BiasFilter::InEskf => self.eskf.as_ref().expect("aligned").gyro_bias_cov(),
-            BiasFilter::Paper { kf, .. } => {
-                let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
-                c.transpose() * kf.p * c
-            }
-            BiasFilter::RotationAware { kf, .. } => kf.p,
-        };
-        Some(WarmStart {
-            gyro_bias_rad_s: b.into(),
-            gyro_bias_cov: std::array::from_fn(|i| std::array::from_fn(|j| p[(i, j)])),
-        })
     }
 
     /// Foot-from-sensor rotation: `R_z(mount_yaw)·tilt0`.
@@ -545,12 +592,9 @@ impl Estimator {
     }
 
     /// Gyro bias in sensor axes and its σ.
-    fn bias_sensor(&self) -> (Vector3<f64>, Vector3<f64>) {
+    fn bias_sensor(&self, eskf: &Eskf) -> (Vector3<f64>, Vector3<f64>) {
         match &self.bias {
-            BiasFilter::InEskf => {
-                let e = self.eskf.as_ref().expect("aligned");
-                (e.gyro_bias_rad_s, e.gyro_bias_sd())
-            }
+            BiasFilter::InEskf => (eskf.gyro_bias_rad_s, eskf.gyro_bias_sd()),
             BiasFilter::Paper { kf, .. } => {
                 let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
                 let p = c.transpose() * kf.p * c;
@@ -566,6 +610,7 @@ impl Estimator {
     #[allow(clippy::too_many_arguments)]
     fn navigate(
         &mut self,
+        eskf: &mut Eskf,
         t_s: f64,
         dt: f64,
         w_avg: &Vector3<f64>,
@@ -574,7 +619,7 @@ impl Estimator {
         stance: bool,
         stance_age_s: f64,
     ) {
-        let (bias, _) = self.bias_sensor();
+        let (bias, _) = self.bias_sensor(eskf);
         let forward = self.foot_forward_body();
         match &mut self.bias {
             BiasFilter::InEskf => {}
@@ -589,7 +634,6 @@ impl Estimator {
                 }
             }
         }
-        let eskf = self.eskf.as_mut().expect("aligned");
         let omega = eskf.corrected_rate(w_avg, f_avg, &bias);
         eskf.propagate(&omega, f_avg, dt);
         let clip_var = (self.cfg.eskf.clipped_rate_sd_rad_s * dt).powi(2);
@@ -615,7 +659,7 @@ impl Estimator {
             self.counters.zupts += 1;
             if !self.in_stance {
                 self.in_stance = true;
-                self.rest.clear();
+                self.stance_rest.clear();
                 self.stance_obs_done = false;
                 self.stance_f_sum = (Vector3::zeros(), 0);
                 self.counters.stances += 1;
@@ -624,14 +668,14 @@ impl Estimator {
             self.stance_f_sum.1 += 1;
             if !self.stance_obs_done && stance_age_s >= self.cfg.heading.obs_delay_s {
                 self.stance_obs_done = true;
-                self.stance_observation(t_s);
+                self.stance_observation(eskf, t_s);
             }
             if self.cfg.eskf.zero_rate_updates {
-                self.rest.push(t_s, f_avg, w_avg);
+                self.stance_rest.push(t_s, f_avg, w_avg);
             }
         } else {
             if self.in_stance && self.cfg.eskf.zero_rate_updates {
-                self.zero_rate_update();
+                self.zero_rate_update(eskf);
             }
             self.in_stance = false;
         }
@@ -641,24 +685,22 @@ impl Estimator {
     /// `alignment.rest_tail_s` lasts `alignment.min_rest_s`), the mean rate over that part
     /// observes the gyro bias with the σ of the rest-mean prior (the floor, or the mean's
     /// standard error when larger), as the initial rest does.
-    fn zero_rate_update(&mut self) {
-        let Some((mean_f, mean_w, sem)) =
-            self.rest.settled_means(self.cfg.alignment.min_rest_s.get())
+    fn zero_rate_update(&mut self, eskf: &mut Eskf) {
+        let Some((mean_f, mean_w, sem)) = self
+            .stance_rest
+            .settled_means(self.cfg.alignment.min_rest_s.get())
         else {
             return;
         };
         let floor = self.cfg.eskf.gyro_bias_prior_sd_rad_s.get();
         let sd = sem.map(|v| v.hypot(floor));
-        if let Some(e) = self.eskf.as_mut()
-            && e.zero_rate_update(&mean_w, &mean_f, &sd).is_some()
-        {
+        if eskf.zero_rate_update(&mean_w, &mean_f, &sd).is_some() {
             self.counters.zero_rate_updates += 1;
         }
     }
 
-    fn fill_output(&mut self) {
-        let (b, sd) = self.bias_sensor();
-        let e = self.eskf.as_ref().expect("aligned");
+    fn fill_output(&mut self, e: &Eskf) {
+        let (b, sd) = self.bias_sensor(e);
         let q = e.nav_from_body;
         let (roll, pitch, yaw) = euler_zyx(&q);
         let out = &mut self.out;
@@ -843,7 +885,7 @@ mod tests {
             let t = feed(&mut est, t, 20, [-rail, 0.0, 0.0], pushed);
             feed(&mut est, t, 100, bias, level);
             assert_eq!(est.counters().clipped_samples, 40);
-            roll.push(est.out.roll_rad);
+            roll.push(est.p.out.roll_rad);
         }
         assert_ne!(roll[0], roll[1], "the clipping model changes the estimate");
     }

@@ -4,12 +4,11 @@
 use super::association::weighted_association;
 use super::*;
 
-impl Estimator {
+impl Pipeline {
     /// Once per stance: calibration or a heading observation.
-    pub(super) fn stance_observation(&mut self, t_s: f64) {
+    pub(super) fn stance_observation(&mut self, eskf: &mut Eskf, t_s: f64) {
         let h = self.cfg.heading.clone();
         let forward = self.foot_forward_body();
-        let eskf = self.eskf.as_mut().expect("aligned");
         if self.phase == Phase::Calibrating {
             let stride_dir = match self.last_footprint {
                 None => {
@@ -69,7 +68,7 @@ impl Estimator {
             return;
         }
         if self.cfg.mode == Mode::Eskf && self.pending_heading.is_none() {
-            self.eskf_observations(&forward);
+            self.eskf_observations(eskf, &forward);
             return;
         }
         let foot_heading = wrap_pi(eskf.predicted_heading(&forward));
@@ -139,9 +138,8 @@ impl Estimator {
     /// The `eskf` mode's observations at a stance: the stride direction since the previous
     /// footprint and the foot axis, each associated with the nearest dominant direction and
     /// fused with the weight of that association (see [`association_weight`]).
-    fn eskf_observations(&mut self, forward: &Vector3<f64>) {
+    fn eskf_observations(&mut self, eskf: &mut Eskf, forward: &Vector3<f64>) {
         let h = &self.cfg.heading;
-        let eskf = self.eskf.as_mut().expect("aligned");
         let xy = [eskf.p_m.x, eskf.p_m.y];
         if h.observations.stride() {
             let event = match eskf.stride_prediction() {
