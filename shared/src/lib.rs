@@ -15,10 +15,13 @@
 //!   generated from it for the C and Python clients.
 //! - [`services`]: service names, QoS, the [`services::Domain`] namespace and the functions both
 //!   sides use to open the services.
+//! - [`runtime_dir`]: the runtime directory of a secured domain (who can reach iceoryx2's files,
+//!   what iceoryx2 0.10 lets one control, the daemon's lock and prefix token).
 
 pub mod config;
 pub mod imu_csv;
 pub mod injection;
+pub mod runtime_dir;
 pub mod sensor;
 pub mod services;
 pub mod truth_csv;

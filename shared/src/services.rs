@@ -119,6 +119,14 @@ pub enum ServiceError {
         /// Domain.
         domain: String,
     },
+    /// The runtime directory of a secured domain is unusable, or this user may not use it.
+    #[error("domain {domain:?}: {detail}")]
+    RuntimeDir {
+        /// Domain.
+        domain: String,
+        /// The path and what is wrong.
+        detail: String,
+    },
     /// Another daemon already serves this domain.
     #[error(
         "another corridor daemon already serves domain {domain:?} (service {DAEMON_SERVICE:?} exists)"
@@ -377,17 +385,30 @@ pub type PubSub<T> =
 /// An event service handle.
 pub type Event = iceoryx2::service::port_factory::event::PortFactory<ipc::Service>;
 
+/// Environment variable naming the runtime directory of secured domains: when it is set,
+/// [`Domain::new`] joins the domain the daemon serves there (see [`crate::runtime_dir`]).
+pub const RUNTIME_DIR_ENV: &str = "CORRIDOR_RUNTIME_DIR";
+
 /// An isolated iceoryx2 namespace: processes on different domains never see each other.
+///
+/// An open domain (`global.prefix = corridor_<name>_`, root `/tmp/iceoryx2`) is what tests and
+/// development use. A secured domain lives in a runtime directory only the daemon's user can
+/// enter, under a prefix other users cannot read ([`crate::runtime_dir`]): the daemon takes it
+/// with [`Domain::serve`] and `daemon.runtime_dir`, clients join it with [`Domain::join`] (or
+/// [`Domain::new`] with [`RUNTIME_DIR_ENV`] set).
 #[derive(Debug, Clone)]
 pub struct Domain {
     name: String,
     config: Config,
+    /// The daemon's hold on a secured domain (its lock), shared by the clones.
+    hold: Option<std::sync::Arc<crate::runtime_dir::DaemonHold>>,
+    /// The prefix of a secured domain, whose `global_mgmt` each new node restricts.
+    secured_prefix: Option<String>,
 }
 
 impl Domain {
-    /// Validates `name` (1–48 characters out of `a-z A-Z 0-9 _ -`) and builds the iceoryx2
-    /// config whose `global.prefix` is `corridor_<name>_`.
-    pub fn new(name: &str) -> Result<Self, ServiceError> {
+    /// Checks a domain name: 1–48 characters out of `a-z A-Z 0-9 _ -`.
+    pub fn check_name(name: &str) -> Result<(), ServiceError> {
         let invalid = |rule| ServiceError::InvalidDomain {
             name: name.to_owned(),
             rule,
@@ -401,13 +422,108 @@ impl Domain {
         {
             return Err(invalid("may only contain a-z, A-Z, 0-9, '_' and '-'"));
         }
+        Ok(())
+    }
+
+    /// The domain `name` for a client: the secured domain of the runtime directory in
+    /// [`RUNTIME_DIR_ENV`] when it is set, else the open one ([`Domain::unsecured`]).
+    pub fn new(name: &str) -> Result<Self, ServiceError> {
+        match std::env::var_os(RUNTIME_DIR_ENV) {
+            Some(dir) if !dir.is_empty() => Self::join(name, std::path::Path::new(&dir)),
+            _ => Self::unsecured(name),
+        }
+    }
+
+    /// The open domain `name`: the iceoryx2 config whose `global.prefix` is `corridor_<name>_`.
+    pub fn unsecured(name: &str) -> Result<Self, ServiceError> {
+        Self::with_prefix(name, &format!("corridor_{name}_"), None)
+    }
+
+    fn with_prefix(
+        name: &str,
+        prefix: &str,
+        root: Option<&std::path::Path>,
+    ) -> Result<Self, ServiceError> {
+        Self::check_name(name)?;
+        let invalid = |rule| ServiceError::InvalidDomain {
+            name: name.to_owned(),
+            rule,
+        };
         let mut config = Config::default();
-        config.global.prefix = FileName::new(format!("corridor_{name}_").as_bytes())
+        config.global.prefix = FileName::new(prefix.as_bytes())
             .map_err(|_| invalid("is not usable in a file name"))?;
+        if let Some(root) = root {
+            let path = iceoryx2::prelude::Path::new(root.as_os_str().as_encoded_bytes())
+                .map_err(|_| invalid("gives a runtime path iceoryx2 cannot use"))?;
+            config.global.set_root_path(&path);
+        }
         Ok(Self {
             name: name.to_owned(),
             config,
+            hold: None,
+            secured_prefix: root.map(|_| prefix.to_owned()),
         })
+    }
+
+    /// Joins the secured domain `name` that a daemon serves under `runtime_dir` (as the daemon's
+    /// user: nobody else can read its prefix).
+    pub fn join(name: &str, runtime_dir: &std::path::Path) -> Result<Self, ServiceError> {
+        use crate::runtime_dir as rd;
+        Self::check_name(name)?;
+        let token = rd::read_token(runtime_dir, name).map_err(|e| ServiceError::RuntimeDir {
+            domain: name.to_owned(),
+            detail: e.to_string(),
+        })?;
+        Self::with_prefix(
+            name,
+            &rd::prefix(&token),
+            Some(&rd::iox2_root(runtime_dir, &token)),
+        )
+    }
+
+    /// The domain `name` for its daemon: secured under `runtime_dir` when given (the directory
+    /// checked or created, the daemon lock taken, a new prefix when the old one was planted or
+    /// corrupted, the dead nodes of earlier runs cleaned up), else open.
+    pub fn serve(name: &str, runtime_dir: Option<&std::path::Path>) -> Result<Self, ServiceError> {
+        use crate::runtime_dir as rd;
+        let Some(runtime_dir) = runtime_dir else {
+            return Self::unsecured(name);
+        };
+        Self::check_name(name)?;
+        let dir_err = |detail: String| ServiceError::RuntimeDir {
+            domain: name.to_owned(),
+            detail,
+        };
+        let mut hold = rd::hold(runtime_dir, name).map_err(|e| match e {
+            rd::HoldError::Locked { .. } => ServiceError::DaemonAlreadyRunning {
+                domain: name.to_owned(),
+            },
+            rd::HoldError::Dir(e) => dir_err(e.to_string()),
+        })?;
+        let make = |hold: &rd::DaemonHold| {
+            Self::with_prefix(name, &rd::prefix(&hold.token), Some(&hold.iox2_root()))
+        };
+        // A first node cleans up dead nodes and shows whether the segments are usable.
+        let probe = |d: &Self| {
+            d.node("corridor-start", SignalHandlingMode::Disabled)
+                .map(drop)
+        };
+        let mut domain = make(&hold)?;
+        if let Err(e) = probe(&domain) {
+            tracing::warn!("domain {name:?}: {e}; new prefix");
+            let old = hold.token.clone();
+            hold.rotate(name, Some(&old))
+                .map_err(|e| dir_err(e.to_string()))?;
+            domain = make(&hold)?;
+            probe(&domain)?;
+        }
+        domain.hold = Some(std::sync::Arc::new(hold));
+        Ok(domain)
+    }
+
+    /// Whether this domain is secured (lives in a runtime directory).
+    pub fn is_secured(&self) -> bool {
+        self.secured_prefix.is_some()
     }
 
     /// The domain name.
@@ -433,12 +549,16 @@ impl Domain {
             detail,
         };
         let name: NodeName = node_name.try_into().map_err(|e| err(format!("{e:?}")))?;
-        NodeBuilder::new()
+        let node = NodeBuilder::new()
             .name(&name)
             .config(&self.config)
             .signal_handling_mode(signals)
             .create::<ipc::Service>()
-            .map_err(|e| err(format!("{e:?}")))
+            .map_err(|e| err(format!("{e:?}")))?;
+        if let Some(prefix) = &self.secured_prefix {
+            crate::runtime_dir::restrict_global_mgmt(prefix).map_err(|e| err(e.to_string()))?;
+        }
+        Ok(node)
     }
 
     /// Opens the publish-subscribe service of `T` with its [`Topic::QOS`].

@@ -4,6 +4,7 @@ Every service is opened with the same QoS as the Rust side (iceoryx2 refuses an 
 asks for more than the creator gave). Event services of the same name carry the wake-ups.
 """
 
+import os
 import time
 from dataclasses import dataclass
 from typing import Any, Dict, Type
@@ -43,8 +44,15 @@ class CorridorError(Exception):
     """A service could not be opened or used; the message names service and domain."""
 
 
+RUNTIME_DIR_ENV = "CORRIDOR_RUNTIME_DIR"
+"""Environment variable naming the runtime directory of secured domains (as in Rust)."""
+
+
 class Domain:
-    """An isolated iceoryx2 namespace (`global.prefix = corridor_<name>_`), as in Rust."""
+    """An isolated iceoryx2 namespace, as in Rust: the open domain
+    (`global.prefix = corridor_<name>_`), or, when `CORRIDOR_RUNTIME_DIR` is set, the secured
+    domain a daemon serves there (prefix `cr_<token>_`, root `<dir>/<token>`; only the daemon's
+    user can read the token)."""
 
     def __init__(self, name: str = DEFAULT_DOMAIN) -> None:
         ok = all(c.isascii() and (c.isalnum() or c in "_-") for c in name)
@@ -54,17 +62,42 @@ class Domain:
             )
         self.name = name
         self.config = iox2.config.default()
-        self.config.global_cfg.prefix = iox2.FileName.new(f"corridor_{name}_")
+        self.secured_prefix = None
+        runtime_dir = os.environ.get(RUNTIME_DIR_ENV)
+        if runtime_dir:
+            path = os.path.join(runtime_dir, name, "prefix")
+            try:
+                with open(path) as f:
+                    token = f.read().strip()
+            except OSError as e:
+                raise CorridorError(f"domain {name!r}: {path}: {e.strerror}") from e
+            if len(token) != 16 or any(c not in "0123456789abcdef" for c in token):
+                raise CorridorError(f"domain {name!r}: {path}: holds {token!r}, not a token")
+            self.secured_prefix = f"cr_{token}_"
+            self.config.global_cfg.prefix = iox2.FileName.new(self.secured_prefix)
+            self.config.global_cfg.root_path = iox2.Path.new(os.path.join(runtime_dir, token))
+        else:
+            self.config.global_cfg.prefix = iox2.FileName.new(f"corridor_{name}_")
 
     def node(self, node_name: str) -> Any:
         """A node in this domain; iceoryx2 handles SIGINT/SIGTERM (see `node.wait`)."""
-        return (
+        node = (
             iox2.NodeBuilder.new()
             .name(iox2.NodeName.new(node_name))
             .config(self.config)
             .signal_handling_mode(iox2.SignalHandlingMode.HandleTerminationRequests)
             .create(iox2.ServiceType.Ipc)
         )
+        if self.secured_prefix:
+            # iceoryx2 makes the node-counter segment world-writable; owner only, as in Rust.
+            for entry in os.scandir("/dev/shm"):
+                if (
+                    entry.name.startswith(self.secured_prefix)
+                    and entry.name.endswith(".global_mgmt")
+                    and entry.stat().st_uid == os.geteuid()
+                ):
+                    os.chmod(entry.path, 0o600)
+        return node
 
     def _builder(self, node: Any, t: Type[wire._Wire]) -> Any:
         q = QOS[t]

@@ -18,6 +18,10 @@ pub(super) struct ServeArgs {
     /// waits); overrides `daemon.delivery`.
     #[arg(long)]
     pub(super) delivery: Option<corridor_shared::services::Delivery>,
+    /// Serve a secured domain from this runtime directory (overrides `daemon.runtime_dir`):
+    /// only this user can connect, with CORRIDOR_RUNTIME_DIR set to the same directory.
+    #[arg(long)]
+    pub(super) runtime_dir: Option<PathBuf>,
     /// Checkpoint file (overrides `daemon.checkpoint_path`): loaded at start (a bad one is
     /// moved aside, cold start), saved periodically, at each end of stream and at shutdown.
     #[arg(long)]
@@ -28,12 +32,20 @@ pub(super) struct ServeArgs {
 pub(super) fn serve(a: &ServeArgs) -> Result<()> {
     use corridor_service::daemon::{self, DaemonConfig};
     let config = a.model.config()?;
-    let settings = a.model.daemon_settings()?;
+    let mut settings = a.model.daemon_settings()?;
+    if let Some(dir) = &a.runtime_dir {
+        anyhow::ensure!(
+            dir.is_absolute(),
+            "--runtime-dir {}: must be an absolute path",
+            dir.display()
+        );
+        settings.runtime_dir = Some(dir.clone());
+    }
     let aid = runner::heading_aid(&config, a.model.map.as_deref())?;
     // The flags override the `[daemon]` section of the file.
     let mut cfg = match &a.domain {
         Some(d) => DaemonConfig::with_settings(
-            corridor_shared::services::Domain::new(d)?,
+            corridor_shared::services::Domain::serve(d, settings.runtime_dir.as_deref())?,
             config,
             &settings,
             aid,

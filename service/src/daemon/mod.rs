@@ -131,13 +131,14 @@ pub struct DaemonConfig {
 impl DaemonConfig {
     /// Everything from the configuration: the estimator's settings, and the domain and the rest
     /// of the `[daemon]` section ([`DaemonSettings`]). Fails when the domain name is not usable
-    /// by iceoryx2.
+    /// by iceoryx2, or its runtime directory (`daemon.runtime_dir`) is not usable or held by
+    /// another daemon.
     pub fn from_config(
         estimator: Config,
         daemon: &DaemonSettings,
         aid: HeadingAid,
     ) -> Result<Self, DaemonError> {
-        let domain = Domain::new(&daemon.domain)?;
+        let domain = Domain::serve(&daemon.domain, daemon.runtime_dir.as_deref())?;
         Ok(Self::with_settings(domain, estimator, daemon, aid))
     }
 

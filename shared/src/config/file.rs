@@ -73,6 +73,9 @@ pub struct DaemonFile {
     pub health_period_s: Option<f64>,
     /// Checkpoint file; absent: no checkpoint.
     pub checkpoint_path: Option<PathBuf>,
+    /// Runtime directory of a secured domain (absolute; see `corridor_shared::runtime_dir`);
+    /// absent: the open domain in `/tmp/iceoryx2`.
+    pub runtime_dir: Option<PathBuf>,
     /// Period of checkpoints while running, s of wall-clock time (default 30.0).
     pub checkpoint_period_s: Option<f64>,
     /// Longest a lossless publish waits on one consumer's full buffer, s (default 1.0); beyond

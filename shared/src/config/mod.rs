@@ -281,6 +281,31 @@ mod tests {
     }
 
     #[test]
+    fn daemon_runtime_dir_must_be_absolute() {
+        let f = ConfigFile::parse(
+            "[daemon]\nruntime_dir = \"run/corridor\"\n",
+            Path::new("s.toml"),
+        )
+        .unwrap();
+        let err = f.validate_daemon().unwrap_err().to_string();
+        assert!(
+            err.contains("daemon.runtime_dir")
+                && err.contains("run/corridor")
+                && err.contains("absolute"),
+            "{err}"
+        );
+        let f = ConfigFile::parse(
+            "[daemon]\nruntime_dir = \"/run/corridor\"\n",
+            Path::new("s.toml"),
+        )
+        .unwrap();
+        assert_eq!(
+            f.validate_daemon().unwrap().runtime_dir.as_deref(),
+            Some(Path::new("/run/corridor"))
+        );
+    }
+
+    #[test]
     fn daemon_section_is_validated() {
         let f =
             ConfigFile::parse("[daemon]\ndelivery = \"sometimes\"\n", Path::new("s.toml")).unwrap();

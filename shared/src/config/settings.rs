@@ -62,6 +62,8 @@ pub struct DaemonSettings {
     pub health_period_s: Positive,
     /// Checkpoint file.
     pub checkpoint_path: Option<PathBuf>,
+    /// Runtime directory of the secured domain (absolute), or `None` for the open domain.
+    pub runtime_dir: Option<PathBuf>,
     /// Checkpoint period.
     pub checkpoint_period_s: Positive,
     /// Stall bound of lossless publishing.

@@ -47,9 +47,18 @@ impl ConfigFile {
         let domain = dm.domain.clone().unwrap_or_else(|| "default".to_owned());
         // The same rule `corridor serve` applies when it opens the domain.
         if let Err(crate::services::ServiceError::InvalidDomain { rule, .. }) =
-            crate::services::Domain::new(&domain)
+            crate::services::Domain::check_name(&domain)
         {
             return Err(invalid("daemon.domain", format!("{domain:?}"), rule));
+        }
+        if let Some(dir) = &dm.runtime_dir
+            && !dir.is_absolute()
+        {
+            return Err(invalid(
+                "daemon.runtime_dir",
+                format!("{:?}", dir.display().to_string()),
+                "must be an absolute path",
+            ));
         }
         let daemon = DaemonSettings {
             domain,
@@ -65,6 +74,7 @@ impl ConfigFile {
                 dm.health_period_s.unwrap_or(10.0),
             )?,
             checkpoint_path: dm.checkpoint_path.clone(),
+            runtime_dir: dm.runtime_dir.clone(),
             checkpoint_period_s: Positive::new(
                 "daemon.checkpoint_period_s",
                 dm.checkpoint_period_s.unwrap_or(30.0),
