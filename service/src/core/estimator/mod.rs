@@ -76,7 +76,7 @@ enum BiasFilter {
 enum Stage {
     /// Accumulating the initial rest until motion starts after enough of it
     /// ([`Phase::Aligning`]).
-    Aligning(RestSums),
+    Aligning(Box<RestSums>),
     /// Aligned: the filter runs ([`Phase::Calibrating`], then [`Phase::Tracking`]). Boxed: the
     /// filter's covariance is stored inline.
     Running(Box<Eskf>),
@@ -175,7 +175,7 @@ impl Estimator {
             cfg,
         };
         Self {
-            stage: Stage::Aligning(RestSums::new(p.cfg.alignment.rest_tail_s)),
+            stage: Stage::Aligning(Box::new(RestSums::new(p.cfg.alignment.rest_tail_s))),
             p,
         }
     }
