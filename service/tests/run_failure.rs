@@ -64,9 +64,12 @@ fn without_rest(dir: &Path, from: usize) -> PathBuf {
 fn a_run_that_fails_after_writing_leaves_no_output() {
     let dir = TempDir::new(&format!("run-failure-{}", std::process::id()));
     let out = dir.join("out");
-    // A log that starts walking: it never aligns, found only after every row was estimated.
+    // A log that starts walking, with the start from a short stance switched off: it never
+    // aligns, found only after every row was estimated.
     let imu = without_rest(&dir, 1500);
-    let err = run(&options(&imu, None, &out)).unwrap_err();
+    let mut opts = options(&imu, None, &out);
+    opts.config.alignment.min_start_stance_s = 0.0;
+    let err = run(&opts).unwrap_err();
     assert!(matches!(err, RunError::NeverAligned { .. }), "{err}");
     assert_eq!(listing(&out), Vec::<String>::new());
 
