@@ -620,7 +620,6 @@ impl Pipeline {
         stance_age_s: f64,
     ) {
         let (bias, _) = self.bias_sensor(eskf);
-        let forward = self.foot_forward_body();
         match &mut self.bias {
             BiasFilter::InEskf => {}
             BiasFilter::Paper { obs, .. } => {
@@ -651,6 +650,7 @@ impl Pipeline {
             // above the floor times the rate about the foot's lateral axis.
             let h = self.cfg.eskf.zupt_rolling_height_m;
             self.out.zupt = Some(if h > 0.0 {
+                let forward = self.foot_forward_body();
                 let v = rolling_velocity(&eskf.nav_from_body, &omega, &forward, h);
                 eskf.stance_velocity_update(&v, sd)
             } else {
