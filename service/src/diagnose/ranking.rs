@@ -100,7 +100,8 @@ pub(super) fn rank_effects(used: &[&HeadingResidual], mode: Mode) -> Vec<Finding
                 anova_p
             ),
             fix: Some(Fix::HeadingOffset),
-            mde: None,
+            // the mean's standard error at the ranking's false-alarm rate
+            mde: Some(super::power::MDE_Z * a.std_err).filter(|m| m.is_finite()),
         });
     }
 
