@@ -139,8 +139,8 @@ impl LogInjection {
                 r.t_s = t0 + (r.t_s - t0) * (1.0 + fraction);
             }),
             LogInjection::GSensitivity { k_rad_s_per_m_s2 } => rows.iter_mut().for_each(|r| {
-                for k in 0..3 {
-                    r.gyro_rad_s[k] += k_rad_s_per_m_s2 * r.accel_m_s2[k];
+                for (g, a) in r.gyro_rad_s.iter_mut().zip(r.accel_m_s2) {
+                    *g += k_rad_s_per_m_s2 * a;
                 }
             }),
             LogInjection::Clipping { range_rad_s } => rows.iter_mut().for_each(|r| {
@@ -153,8 +153,8 @@ impl LogInjection {
                 let n = first.len().max(1) as f64;
                 let mut up = [0.0; 3];
                 for r in &first {
-                    for k in 0..3 {
-                        up[k] += r.accel_m_s2[k] / n;
+                    for (u, a) in up.iter_mut().zip(r.accel_m_s2) {
+                        *u += a / n;
                     }
                 }
                 let norm = up.iter().map(|v| v * v).sum::<f64>().sqrt();

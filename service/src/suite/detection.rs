@@ -23,8 +23,7 @@ pub enum CaseInjection {
     Clean,
     /// A sensor error added to the samples; times given as fractions of the walk's duration.
     Log(LogInjection),
-    /// The map's directions turned by this many degrees (the walker walks off the map's
-    /// directions by a constant: a heading offset).
+    /// The map's directions turned by this many degrees.
     GridOffsetDeg(f64),
 }
 
@@ -40,6 +39,9 @@ pub struct MatrixCase {
     pub injection: CaseInjection,
     /// Size in the unit of the expected effect's detectable size (fraction, rad, rad/s …).
     pub size: f64,
+    /// The power variant of the diagnosis that measures this injection
+    /// ([`Power::variant`](crate::diagnose::Power)).
+    pub variant: Option<&'static str>,
 }
 
 impl MatrixCase {
@@ -82,7 +84,7 @@ impl MatrixCase {
 /// g-sensitivity, clipping at a smaller range than the sensor's, mounting slip). Ramp, step and
 /// slip sizes are those of the bundled tests; they start at a fixed fraction of each walk.
 pub fn matrix_cases() -> Vec<MatrixCase> {
-    use CaseInjection::{Clean, GridOffsetDeg, Log};
+    use CaseInjection::{Clean, Log};
     use Effect::{AxisMisalignment, BiasDrift, GyroScaleFactor, HeadingOffset, Timing};
     use LogInjection::*;
     let deg = f64::to_radians;
@@ -94,6 +96,7 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
             fraction: f,
         }),
         size: f,
+        variant: Some("z scale"),
     };
     let couple = |label, from: usize, d: f64| MatrixCase {
         label,
@@ -104,12 +107,18 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
             coupling_rad: deg(d),
         }),
         size: deg(d),
+        variant: Some(if from == 1 {
+            "y→z coupling"
+        } else {
+            "x→z coupling"
+        }),
     };
     let clock = |label, f: f64| MatrixCase {
         label,
         expected: Some(Timing),
         injection: Log(ClockRate { fraction: f }),
         size: f,
+        variant: Some("clock rate"),
     };
     vec![
         MatrixCase {
@@ -117,6 +126,7 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
             expected: None,
             injection: Clean,
             size: 0.0,
+            variant: None,
         },
         scale("z scale +1 %", 0.01),
         scale("z scale +2 %", 0.02),
@@ -134,6 +144,7 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
                 after_s: 0.1,
             }),
             size: 2e-4,
+            variant: Some("z bias ramp"),
         },
         MatrixCase {
             label: "bias step 0.01 rad/s",
@@ -144,12 +155,20 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
                 at_s: 0.5,
             }),
             size: 0.01,
+            variant: None,
         },
         MatrixCase {
+            // The foot axis off the walking direction from early on (a mounting yaw that the
+            // calibration strides did not see). Turning the map's grid instead is no heading
+            // offset: the filter's frame turns with it, strides and foot alike.
             label: "heading offset 3°",
             expected: Some(HeadingOffset),
-            injection: GridOffsetDeg(3.0),
+            injection: Log(MountingSlip {
+                angle_rad: deg(3.0),
+                after_s: 0.15,
+            }),
             size: deg(3.0),
+            variant: None,
         },
         clock("clock +1 %", 0.01),
         clock("clock +3 %", 0.03),
@@ -160,6 +179,7 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
                 k_rad_s_per_m_s2: 2e-3,
             }),
             size: 2e-3,
+            variant: Some("g-sensitivity"),
         },
         MatrixCase {
             // Outside the catalogue: at most `unexplained` can name it.
@@ -167,6 +187,7 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
             expected: None,
             injection: Log(Clipping { range_rad_s: 5.0 }),
             size: 5.0,
+            variant: None,
         },
         MatrixCase {
             label: "mounting slip 6°",
@@ -176,6 +197,7 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
                 after_s: 0.33,
             }),
             size: deg(6.0),
+            variant: None,
         },
     ]
 }
@@ -215,11 +237,27 @@ pub struct MatrixCell {
     pub named_first: bool,
     /// The expected effect scores ≥ 3.
     pub named_at_all: bool,
+    /// The starting model already has the expected effect's fix (a state the clean walk needed):
+    /// nothing is left to name, the cell is out of the counts.
+    pub already_modelled: bool,
     /// Its score.
     pub expected_score: Option<f64>,
     /// The detectable size the diagnosis predicts for the expected effect on this walk (same
     /// unit as `size`), when it predicts one.
     pub expected_mde: Option<f64>,
+    /// The power fit of the injected variant: the size the residuals show.
+    pub power_estimate: Option<f64>,
+    /// Its score.
+    pub power_score: Option<f64>,
+    /// The response the diagnosis measured for that variant by its own probe injection.
+    pub power_response: Option<f64>,
+    /// The diagnosis's verdict.
+    pub verdict: String,
+    /// The detectable size of every measured variant on this cell's log (`None`: cannot show).
+    pub detectable: Vec<(String, Option<f64>)>,
+    /// Extension states of the starting model (the clean walk's own effects, for the injected
+    /// columns).
+    pub start_model: Vec<String>,
     /// Every effect scoring ≥ 3, best first, as `name score`.
     pub significant: Vec<String>,
     /// Footprint RMS of the starting model, m.
@@ -265,8 +303,13 @@ pub fn detection_matrix(
         let truth = read_truth_csv(&base.join(&r.truth)).map_err(|e| wrap(e.into()))?;
         let model = diagnosis_model(base, r).map_err(wrap)?;
         out.recordings.push(r.name.clone());
-        for case in &cases {
-            let cell = run_cell(&log, &truth, &model, r, case).map_err(wrap)?;
+        // The clean column first: the effects it names are the walk's own (documented in that
+        // column), and the injected columns start from the model with their fixes.
+        let (clean, documented) = run_cell(&log, &truth, &model, r, &cases[0]).map_err(wrap)?;
+        progress(&clean);
+        out.cells.push(clean);
+        for case in &cases[1..] {
+            let (cell, _) = run_cell(&log, &truth, &documented, r, case).map_err(wrap)?;
             progress(&cell);
             out.cells.push(cell);
         }
@@ -274,13 +317,15 @@ pub fn detection_matrix(
     Ok(out)
 }
 
+/// One cell, and the cell's model with the fixes of every significant effect it names added (in
+/// the order named).
 fn run_cell(
     log: &ImuLog,
     truth: &[TruthPoint],
     model: &ConfigFile,
     r: &SuiteRecording,
     case: &MatrixCase,
-) -> Result<MatrixCell, RunError> {
+) -> Result<(MatrixCell, ConfigFile), RunError> {
     let t0 = log.rows.first().map_or(0.0, |x| x.t_s);
     let duration = log.rows.last().map_or(0.0, |x| x.t_s) - t0;
     let mut log = log.clone();
@@ -300,15 +345,44 @@ fn run_cell(
     let expected = case
         .expected
         .and_then(|e| report.effects.iter().find(|f| f.name == e));
-    Ok(MatrixCell {
+    let mut with_fixes = model.clone();
+    for f in report.effects.iter().filter(|f| f.score >= SIGNIFICANT) {
+        if let Some(fix) = f.fix {
+            crate::diagnose::apply_fix(fix, &mut with_fixes);
+        }
+    }
+    let power = case
+        .variant
+        .and_then(|v| report.power.iter().find(|p| p.variant == v));
+    let already_modelled = case.expected.is_some_and(|e| {
+        !e.fixes().is_empty()
+            && e.fixes()
+                .iter()
+                .all(|&(fix, _)| !crate::diagnose::apply_fix(fix, &mut model.clone()))
+    });
+    let cell = MatrixCell {
         recording: r.name.clone(),
         case: case.label.to_string(),
         expected: case.expected.map(|e| e.to_string()),
         size: case.size,
         named_first: case.expected.is_some_and(|e| report.top_effect == e.name()),
         named_at_all: expected.is_some_and(|f| f.score >= SIGNIFICANT),
+        already_modelled,
         expected_score: expected.map(|f| f.score),
-        expected_mde: expected.and_then(|f| f.mde),
+        expected_mde: match case.variant {
+            Some(_) => power.and_then(|p| p.mde),
+            None => expected.and_then(|f| f.mde),
+        },
+        power_estimate: power.map(|p| p.estimate),
+        power_score: power.map(|p| p.score),
+        power_response: power.and_then(|p| p.response),
+        verdict: report.verdict.clone(),
+        detectable: report
+            .power
+            .iter()
+            .map(|p| (p.variant.to_string(), p.mde))
+            .collect(),
+        start_model: model_keys(&model),
         top_effect: report.top_effect.clone(),
         significant: report
             .effects
@@ -324,7 +398,24 @@ fn run_cell(
             .filter(|i| i.kept)
             .map(|i| i.effect.to_string())
             .collect(),
-    })
+    };
+    // the grid offset of the heading-offset column is the injection, not part of the model
+    with_fixes.heading.grid_deg = Some(r.grid_deg);
+    Ok((cell, with_fixes))
+}
+
+fn model_keys(f: &ConfigFile) -> Vec<String> {
+    let m = &f.model;
+    [
+        (m.heading_offset_sd_deg.is_some(), "heading_offset"),
+        (m.bias_rate_rw_rad_s2_sqrt_s.is_some(), "bias_rate"),
+        (m.scale_factor_sd.is_some(), "scale_factor"),
+        (m.g_sensitivity_sd.is_some(), "g_sensitivity"),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .map(|(_, k)| k.to_string())
+    .collect()
 }
 
 /// `detection.md`: per column the counts over the recordings, then the matrix of the effect
@@ -332,10 +423,13 @@ fn run_cell(
 pub fn matrix_markdown(m: &DetectionMatrix) -> String {
     let n = m.recordings.len();
     let mut md = format!(
-        "Per column, over the {n} normal-gait recordings: the injected effect named first, named at all (score ≥ 3), the footprint error lower after the loop, and any effect named on the clean walk. The detectable size is the diagnosis's prediction for the injected effect on each walk (median over the walks; `cannot` when the walk cannot show it); `detected at` is the injected size.\n\n| injection | expected | named first | named at all | after-error lower | median score | predicted detectable size (median) | size injected |\n|---|---|---|---|---|---|---|---|\n"
+        "The diagnosis on its own model (the sensor configuration without `[model]` extensions, the foot axis observed alone, the plain gate, the baseline's filter noise; see `diagnosis_model`). The clean column runs first; the effects it names are the walk's own, and the injected columns start from the model with their fixes (a column whose effect is already in that model is left out of its counts). Per column, over the {n} normal-gait recordings: the injected effect named first, named at all (score ≥ 3), the footprint error lower after the loop, and, for the clean and out-of-catalogue columns, how many walks name anything. The predicted detectable size is the diagnosis's own for the injected variant on each walk (median over the walks).\n\n| injection | expected | named first | named at all | after-error lower | median score | predicted detectable size (median) | size injected |\n|---|---|---|---|---|---|---|---|\n"
     );
     for case in &m.cases {
-        let cells: Vec<&MatrixCell> = m.cells.iter().filter(|c| &c.case == case).collect();
+        let all: Vec<&MatrixCell> = m.cells.iter().filter(|c| &c.case == case).collect();
+        let modelled = all.iter().filter(|c| c.already_modelled).count();
+        let cells: Vec<&MatrixCell> = all.into_iter().filter(|c| !c.already_modelled).collect();
+        let n = cells.len();
         let count = |f: &dyn Fn(&MatrixCell) -> bool| cells.iter().filter(|c| f(c)).count();
         let expected = cells.first().and_then(|c| c.expected.clone());
         let lower =
@@ -351,8 +445,13 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
             continue;
         }
         md.push_str(&format!(
-            "| {case} | {} | {} of {n} | {} of {n} | {lower} of {n} | {} | {} | {} |\n",
+            "| {case} | {}{} | {} of {n} | {} of {n} | {lower} of {n} | {} | {} | {} |\n",
             expected.as_deref().unwrap_or("—"),
+            if modelled > 0 {
+                format!(" ({modelled} walks left out: already modelled)")
+            } else {
+                String::new()
+            },
             count(&|c| c.named_first),
             count(&|c| c.named_at_all),
             median(&mut scores).map_or("—".into(), |v| format!("{v:.1}")),
@@ -360,7 +459,7 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
             format_args!("{size:.3e}"),
         ));
     }
-    md.push_str("\nThe effect named first on each walk (`·` nothing significant; **bold** = the injected effect):\n\n| recording |");
+    md.push_str("\nThe effect named first on each walk (`·` nothing significant; **bold** = the injected effect; in parentheses: the starting model already had the injected effect's state):\n\n| recording |");
     for case in &m.cases {
         md.push_str(&format!(" {case} |"));
     }
@@ -380,7 +479,9 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
                 } else {
                     short(&c.top_effect).to_string()
                 };
-                if c.named_first {
+                if c.already_modelled {
+                    format!("({name})")
+                } else if c.named_first {
                     format!("**{name}**")
                 } else {
                     name
@@ -390,6 +491,7 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
         }
         md.push('\n');
     }
+    md.push_str(&prediction_markdown(m));
     md.push_str("\nAbbreviations: sf gyro_scale_factor, mis axis_misalignment, drift bias_drift, off heading_offset, time timing, gs g_sensitivity, tilt mounting_tilt, unexp unexplained.\n");
     md
 }
@@ -414,4 +516,104 @@ fn median(v: &mut [f64]) -> Option<f64> {
     }
     v.sort_by(f64::total_cmp);
     Some(v[v.len() / 2])
+}
+
+/// Predicted against shown: per walk and injected family (z scale, clock, couplings, the
+/// sizes of [`matrix_cases`]), the detectable size the diagnosis predicts on the clean walk and
+/// the sizes at which the injection was named at all. The shown threshold lies between the
+/// largest size missed below the smallest named and that size; the prediction agrees within a
+/// factor of 2 when that interval meets [MDE/2, 2·MDE].
+pub fn prediction_markdown(m: &DetectionMatrix) -> String {
+    let families: [(&str, &str); 4] = [
+        ("z scale", "z scale"),
+        ("y→z coupling", "y→z"),
+        ("x→z coupling", "x→z"),
+        ("clock rate", "clock"),
+    ];
+    let mut md = String::from(
+        "\nPredicted detectable size (on the clean walk) against the injections: `named at` lists the injected sizes named at all (score ≥ 3); `agrees` when the shown threshold (between the largest size missed and the smallest named, above the largest injected when none is named) meets [½, 2] × the prediction. Cells where the starting model already had the effect's state are left out.\n\n| recording |",
+    );
+    for (variant, _) in &families {
+        md.push_str(&format!(" {variant}: predicted | named at | agrees |"));
+    }
+    md.push_str("\n|---|");
+    md.push_str(&"---|---|---|".repeat(families.len()));
+    md.push('\n');
+    let mut agree = vec![(0usize, 0usize); families.len()];
+    for rec in &m.recordings {
+        md.push_str(&format!("| {rec} |"));
+        let clean = m
+            .cells
+            .iter()
+            .find(|c| &c.recording == rec && c.case == "clean");
+        for (k, (variant, prefix)) in families.iter().enumerate() {
+            let predicted = clean.and_then(|c| {
+                c.detectable
+                    .iter()
+                    .find(|(v, _)| v == variant)
+                    .and_then(|(_, m)| *m)
+            });
+            let cells: Vec<&MatrixCell> = m
+                .cells
+                .iter()
+                .filter(|c| &c.recording == rec && c.case.starts_with(prefix))
+                .collect();
+            if cells.is_empty() || cells.iter().any(|c| c.already_modelled) {
+                md.push_str(" — | (modelled) | — |");
+                continue;
+            }
+            let mut sizes: Vec<(f64, bool)> =
+                cells.iter().map(|c| (c.size, c.named_at_all)).collect();
+            sizes.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let named: Vec<f64> = sizes.iter().filter(|s| s.1).map(|s| s.0).collect();
+            let (lo, hi) = match named.first() {
+                Some(&first) => (
+                    sizes
+                        .iter()
+                        .filter(|s| s.0 < first && !s.1)
+                        .map(|s| s.0)
+                        .fold(0.0, f64::max),
+                    first,
+                ),
+                None => (sizes.last().map_or(0.0, |s| s.0), f64::INFINITY),
+            };
+            let agrees = predicted.map(|p| lo <= 2.0 * p && hi >= 0.5 * p);
+            if let Some(a) = agrees {
+                agree[k].1 += 1;
+                agree[k].0 += usize::from(a);
+            }
+            let unit = |v: f64| {
+                if variant.contains("coupling") {
+                    format!("{:.2}°", v.to_degrees())
+                } else {
+                    format!("{:.2} %", 100.0 * v)
+                }
+            };
+            md.push_str(&format!(
+                " {} | {} | {} |",
+                predicted.map_or("cannot".to_string(), unit),
+                if named.is_empty() {
+                    "none".to_string()
+                } else {
+                    named
+                        .iter()
+                        .map(|&v| unit(v))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                },
+                match agrees {
+                    Some(true) => "yes",
+                    Some(false) => "no",
+                    None => "—",
+                }
+            ));
+        }
+        md.push('\n');
+    }
+    md.push_str("| **agree** |");
+    for (a, n) in &agree {
+        md.push_str(&format!(" | | {a} of {n} |"));
+    }
+    md.push('\n');
+    md
 }

@@ -30,7 +30,7 @@ mod tables;
 
 pub use detection::{
     CaseInjection, DetectionMatrix, MatrixCase, MatrixCell, detection_matrix, diagnosis_model,
-    matrix_cases, matrix_markdown,
+    matrix_cases, matrix_markdown, prediction_markdown,
 };
 use figures::{DefaultFigures, NisSeries, stride_ratio};
 pub use figures::{NisFigure, STANCE_MATCH_S, STRAIGHT_DEG, StanceMatch, StrideUse, WEAVE_DEG};
