@@ -347,7 +347,11 @@ pub fn analyse(
     };
     let mut effects = rank_effects(&used, cfg.mode);
     let power = super::power::walk_power(&stances);
-    super::power::apply_power(&mut effects, &power);
+    super::power::apply_power(
+        &mut effects,
+        &power,
+        matches!(cfg.mode, Mode::Eskf | Mode::Zupt),
+    );
     let scale_factor = outcome
         .extensions
         .and_then(|(x, sd)| sd.map(|sd| std::array::from_fn(|k| [x.scale_factor[k], sd[k]])));

@@ -557,8 +557,11 @@ pub fn fit_signature(rows: &[Row], lags: usize) -> Option<SignatureFit> {
 
 /// Puts the power into the findings: the signature test scores the effects that only it tests
 /// well (scale factor, axis misalignment, g-sensitivity: the best variant); for timing and bias
-/// drift, whose own tests stay, it adds the detectable size to the evidence.
-pub fn apply_power(effects: &mut [Finding], power: &[Power]) {
+/// drift, whose own tests stay, it adds the detectable size to the evidence. With `score` false
+/// (the bias-filter modes: their heading observations correct the bias, not the heading, which
+/// the signature's `R/S` does not model, and the signature then grows like a drift) the
+/// evidence is added and the residual tests keep scoring.
+pub fn apply_power(effects: &mut [Finding], power: &[Power], score: bool) {
     for f in effects.iter_mut() {
         let mine: Vec<&Power> = power.iter().filter(|p| p.effect == f.name).collect();
         let Some(best) = mine.iter().max_by(|a, b| a.score.total_cmp(&b.score)) else {
@@ -597,10 +600,11 @@ pub fn apply_power(effects: &mut [Finding], power: &[Power]) {
                 )
             })
             .collect();
-        let scored_here = matches!(
-            f.name,
-            Effect::GyroScaleFactor | Effect::AxisMisalignment | Effect::GSensitivity
-        );
+        let scored_here = score
+            && matches!(
+                f.name,
+                Effect::GyroScaleFactor | Effect::AxisMisalignment | Effect::GSensitivity
+            );
         if scored_here {
             f.score = best.score;
             f.evidence = format!("{}; residual regression: {}", words.join("; "), f.evidence);
