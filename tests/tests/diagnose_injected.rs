@@ -282,7 +282,9 @@ fn a_two_percent_z_scale_factor_is_named_where_the_walk_can_show_it() {
             .iter()
             .find(|p| p.variant == "z scale")
             .expect("the z scale factor's power is measured");
-        let mde = z.mde.expect("these walks turn often: they can show a scale factor");
+        let mde = z
+            .mde
+            .expect("these walks turn often: they can show a scale factor");
         eprintln!("{name}: predicted detectable z scale {:.2} %", 100.0 * mde);
         assert!(
             (0.01..=0.04).contains(&mde),
@@ -290,7 +292,11 @@ fn a_two_percent_z_scale_factor_is_named_where_the_walk_can_show_it() {
         );
         let injected = modified(&log, |_, g, _| g[2] *= 1.02);
         let r = run(&injected, &truth, &cfg);
-        assert_eq!(r.top_effect, "gyro_scale_factor", "{name}: {:#?}", r.effects);
+        assert_eq!(
+            r.top_effect, "gyro_scale_factor",
+            "{name}: {:#?}",
+            r.effects
+        );
         let (b, a) = (r.before.gcp_rms_m.unwrap(), r.after.gcp_rms_m.unwrap());
         assert!(a < b, "{name}: footprint RMS {b:.2} -> {a:.2} m");
     }
