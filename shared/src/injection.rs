@@ -38,6 +38,161 @@ impl BiasInjection {
     }
 }
 
+/// A sensor error added to a whole recording, for the diagnosis's detection matrix and its
+/// power checks: each variant changes the samples the way the named sensor or mounting error
+/// would (sensor axes, rad/s and m/s²).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LogInjection {
+    /// Gyro scale-factor error on one axis: `g[axis] *= 1 + fraction`.
+    GyroScale {
+        /// Sensor axis (0 x, 1 y, 2 z).
+        axis: usize,
+        /// Scale error (0.02 = +2 %).
+        fraction: f64,
+    },
+    /// Gyro cross-coupling (axis misalignment): `g[to] += coupling_rad · g[from]`.
+    GyroCoupling {
+        /// Axis whose rate leaks.
+        from: usize,
+        /// Axis it leaks into.
+        to: usize,
+        /// Coupling, rad (small angle).
+        coupling_rad: f64,
+    },
+    /// A gyro bias growing linearly from `after_s`: `g[axis] += rate · (t − after_s)`.
+    BiasRamp {
+        /// Sensor axis.
+        axis: usize,
+        /// Growth rate, rad/s².
+        rate_rad_s2: f64,
+        /// Start time, s.
+        after_s: f64,
+    },
+    /// A gyro bias step at `at_s`.
+    BiasStep {
+        /// Sensor axis.
+        axis: usize,
+        /// Step, rad/s.
+        step_rad_s: f64,
+        /// Time of the step, s.
+        at_s: f64,
+    },
+    /// The logger's clock runs fast: every time stamp becomes `t0 + (t − t0)(1 + fraction)`.
+    ClockRate {
+        /// Rate error (0.01 = 1 % fast).
+        fraction: f64,
+    },
+    /// A g-sensitive gyro: `g[k] += k_rad_s_per_m_s2 · f[k]` on every axis.
+    GSensitivity {
+        /// Sensitivity, rad/s per m/s².
+        k_rad_s_per_m_s2: f64,
+    },
+    /// A gyro with a smaller range: every axis clamped to `±range_rad_s`.
+    Clipping {
+        /// Range, rad/s.
+        range_rad_s: f64,
+    },
+    /// The sensor turns on the shoe about the vertical at `after_s` (the gyro does not see the
+    /// turn): from then on gyro and specific force are rotated by `angle_rad` about the up
+    /// direction of the first second of the log.
+    MountingSlip {
+        /// Rotation, rad.
+        angle_rad: f64,
+        /// Time of the slip, s.
+        after_s: f64,
+    },
+}
+
+impl LogInjection {
+    /// Applies the error to `rows` in place (rows in time order, as read).
+    pub fn apply(&self, rows: &mut [crate::imu_csv::ImuRow]) {
+        let Some(t0) = rows.first().map(|r| r.t_s) else {
+            return;
+        };
+        match *self {
+            LogInjection::GyroScale { axis, fraction } => {
+                rows.iter_mut()
+                    .for_each(|r| r.gyro_rad_s[axis] *= 1.0 + fraction);
+            }
+            LogInjection::GyroCoupling {
+                from,
+                to,
+                coupling_rad,
+            } => rows.iter_mut().for_each(|r| {
+                r.gyro_rad_s[to] += coupling_rad * r.gyro_rad_s[from];
+            }),
+            LogInjection::BiasRamp {
+                axis,
+                rate_rad_s2,
+                after_s,
+            } => rows.iter_mut().for_each(|r| {
+                r.gyro_rad_s[axis] += rate_rad_s2 * (r.t_s - after_s).max(0.0);
+            }),
+            LogInjection::BiasStep {
+                axis,
+                step_rad_s,
+                at_s,
+            } => rows.iter_mut().filter(|r| r.t_s >= at_s).for_each(|r| {
+                r.gyro_rad_s[axis] += step_rad_s;
+            }),
+            LogInjection::ClockRate { fraction } => rows.iter_mut().for_each(|r| {
+                r.t_s = t0 + (r.t_s - t0) * (1.0 + fraction);
+            }),
+            LogInjection::GSensitivity { k_rad_s_per_m_s2 } => rows.iter_mut().for_each(|r| {
+                for (g, a) in r.gyro_rad_s.iter_mut().zip(r.accel_m_s2) {
+                    *g += k_rad_s_per_m_s2 * a;
+                }
+            }),
+            LogInjection::Clipping { range_rad_s } => rows.iter_mut().for_each(|r| {
+                for g in &mut r.gyro_rad_s {
+                    *g = g.clamp(-range_rad_s, range_rad_s);
+                }
+            }),
+            LogInjection::MountingSlip { angle_rad, after_s } => {
+                let first: Vec<_> = rows.iter().take_while(|r| r.t_s < t0 + 1.0).collect();
+                let n = first.len().max(1) as f64;
+                let mut up = [0.0; 3];
+                for r in &first {
+                    for (u, a) in up.iter_mut().zip(r.accel_m_s2) {
+                        *u += a / n;
+                    }
+                }
+                let norm = up.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if norm == 0.0 {
+                    return;
+                }
+                let up = up.map(|v| v / norm);
+                let (s, c) = angle_rad.sin_cos();
+                // Rodrigues' rotation about `up`.
+                let rot = |v: &mut [f64; 3]| {
+                    let d = up[0] * v[0] + up[1] * v[1] + up[2] * v[2];
+                    let x = [
+                        up[1] * v[2] - up[2] * v[1],
+                        up[2] * v[0] - up[0] * v[2],
+                        up[0] * v[1] - up[1] * v[0],
+                    ];
+                    for i in 0..3 {
+                        v[i] = v[i] * c + x[i] * s + up[i] * d * (1.0 - c);
+                    }
+                };
+                for r in rows.iter_mut().filter(|r| r.t_s > after_s) {
+                    rot(&mut r.gyro_rad_s);
+                    rot(&mut r.accel_m_s2);
+                }
+            }
+        }
+    }
+
+    /// The time on the injected log's clock of an event at `t_s` on the original clock
+    /// (`t0` the log's first time stamp): only a clock-rate error moves it.
+    pub fn map_time(&self, t0: f64, t_s: f64) -> f64 {
+        match *self {
+            LogInjection::ClockRate { fraction } => t0 + (t_s - t0) * (1.0 + fraction),
+            _ => t_s,
+        }
+    }
+}
+
 /// Parses `X,Y,Z` (three comma-separated numbers), for command-line flags.
 pub fn parse_vec3(text: &str) -> Result<[f64; 3], String> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
@@ -85,6 +240,71 @@ mod tests {
         assert_eq!(g, [1.001, 2.001, 3.005]);
         assert!(!inj.is_none());
         assert!(BiasInjection::default().is_none());
+    }
+
+    #[test]
+    fn log_injections_change_what_they_name() {
+        use crate::imu_csv::ImuRow;
+        let row = |t: f64| ImuRow {
+            t_s: t,
+            gyro_rad_s: [1.0, 2.0, 3.0],
+            accel_m_s2: [0.0, 0.0, 9.8],
+            temp_c: None,
+            line: 2,
+        };
+        let run = |inj: LogInjection| {
+            let mut rows: Vec<ImuRow> = (0..400).map(|i| row(10.0 + 0.01 * f64::from(i))).collect();
+            inj.apply(&mut rows);
+            rows
+        };
+        let r = run(LogInjection::GyroScale {
+            axis: 2,
+            fraction: 0.02,
+        });
+        assert_eq!(r[5].gyro_rad_s, [1.0, 2.0, 3.0 * 1.02]);
+        let r = run(LogInjection::GyroCoupling {
+            from: 1,
+            to: 2,
+            coupling_rad: 0.01,
+        });
+        assert_eq!(r[5].gyro_rad_s, [1.0, 2.0, 3.02]);
+        let r = run(LogInjection::BiasStep {
+            axis: 0,
+            step_rad_s: 0.5,
+            at_s: 12.0,
+        });
+        assert_eq!(r[199].gyro_rad_s[0], 1.0);
+        assert_eq!(r[200].gyro_rad_s[0], 1.5);
+        let r = run(LogInjection::BiasRamp {
+            axis: 1,
+            rate_rad_s2: 0.1,
+            after_s: 11.0,
+        });
+        assert_eq!(r[50].gyro_rad_s[1], 2.0);
+        assert!((r[300].gyro_rad_s[1] - 2.2).abs() < 1e-12);
+        let inj = LogInjection::ClockRate { fraction: 0.03 };
+        let r = run(inj);
+        assert_eq!(r[0].t_s, 10.0);
+        assert!((r[100].t_s - 11.03).abs() < 1e-12);
+        assert!((inj.map_time(10.0, 11.0) - 11.03).abs() < 1e-12);
+        let r = run(LogInjection::GSensitivity {
+            k_rad_s_per_m_s2: 0.001,
+        });
+        assert!((r[0].gyro_rad_s[2] - (3.0 + 0.0098)).abs() < 1e-12);
+        let r = run(LogInjection::Clipping { range_rad_s: 1.5 });
+        assert_eq!(r[0].gyro_rad_s, [1.0, 1.5, 1.5]);
+        // A slip about the vertical (up = z here) turns x into y and leaves z and gravity.
+        let r = run(LogInjection::MountingSlip {
+            angle_rad: std::f64::consts::FRAC_PI_2,
+            after_s: 12.0,
+        });
+        assert_eq!(r[100].gyro_rad_s, [1.0, 2.0, 3.0]);
+        let g = r[300].gyro_rad_s;
+        assert!(
+            (g[0] + 2.0).abs() < 1e-12 && (g[1] - 1.0).abs() < 1e-12 && (g[2] - 3.0).abs() < 1e-12,
+            "{g:?}"
+        );
+        assert!((r[300].accel_m_s2[2] - 9.8).abs() < 1e-12);
     }
 
     #[test]

@@ -9,7 +9,8 @@
 //!   rule shared by the CSV reader and the estimator.
 //! - [`truth_csv`]: the reader for surveyed footprint ground truth (`ground_truth.csv`).
 //! - [`injection`]: synthetic gyro-bias injection (constant, ramp, delayed) used by the
-//!   offline runner and the replay producer.
+//!   offline runner and the replay producer, and the sensor errors ([`injection::LogInjection`]:
+//!   scale, cross-coupling, drift, clock, g-sensitivity, clipping, slip) of the detection matrix.
 //! - [`wire`]: the zero-copy `#[repr(C)]` messages exchanged with the daemon over iceoryx2.
 //! - [`wire_layout`]: the measured layout of the wire types, and the C header and layout JSON
 //!   generated from it for the C and Python clients.

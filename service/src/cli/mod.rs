@@ -53,7 +53,8 @@ const SERVE_EXAMPLES: &str = "Examples:
   (then, on the same domain: corridor-replay --imu imu.csv --domain lab; corridor status --domain lab)";
 const DIAGNOSE_EXAMPLES: &str = "Examples:
   corridor diagnose --imu tests/data/gdins_exp25_multi_corridor/imu.csv --config configs/gdins.toml --out out/diag
-  corridor diagnose --imu imu.csv --truth ground_truth.csv --mode paper --out out/diag";
+  corridor diagnose --imu imu.csv --truth ground_truth.csv --mode paper --out out/diag
+  corridor diagnose --suite configs/eval/gdins.toml --out docs/results   (the detection matrix)";
 
 const STATUS_EXAMPLES: &str = "Examples:
   corridor status --domain lab

@@ -47,6 +47,51 @@ pub struct HeadingResidual {
     pub tilt_change: [f64; 3],
 }
 
+/// Which heading a stance residual compares with the map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ResidualKind {
+    /// The foot axis (the heading the model predicts for the foot).
+    FootAxis,
+    /// The stride direction: from the previous stance's position to this one's.
+    Stride,
+}
+
+/// The heading residual of one stance, used or not: the most likely map direction (the
+/// nearest) minus the heading, with the probability that the walker walked along that
+/// direction ([`association_weight`](crate::core::estimator::association_weight) with
+/// [`DIAGNOSIS_ALIGNED_PRIOR`]).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct StanceResidual {
+    /// Index of the sample in the log (the same stance in a run of the same log with an
+    /// injected error).
+    pub sample: usize,
+    /// Time, s.
+    pub t_s: f64,
+    /// Foot axis or stride direction.
+    pub kind: ResidualKind,
+    /// Nearest map direction minus the heading, rad.
+    pub r_rad: f64,
+    /// The nearest map direction, rad.
+    pub direction_rad: f64,
+    /// Association weight (0–1).
+    pub weight: f64,
+    /// The σ the weight was computed with, rad.
+    pub sd_rad: f64,
+    /// The spacing of the map's directions, rad.
+    pub spacing_rad: f64,
+    /// The filter used this observation (foot axis only).
+    pub accepted: bool,
+    /// The residual a unit amount of each effect of [`super::power::REFERENCES`] would add at
+    /// this stance (see [`super::power`]).
+    pub signature: [f64; super::power::N_REFERENCES],
+}
+
+/// Prior probability of walking along a map direction used to weigh every stance's residual:
+/// the shipped `heading.aligned_prior` of `configs/gdins.toml` (chosen there on the weave
+/// strides of the suite), independent of the gate the model under diagnosis uses.
+pub const DIAGNOSIS_ALIGNED_PRIOR: f64 = 0.7;
+
 /// Consistency figures of one run.
 #[derive(Debug, Clone, Serialize)]
 pub struct Consistency {
@@ -90,9 +135,15 @@ pub struct Analysis {
     /// The residuals (for plots and the report).
     #[serde(skip)]
     pub residuals: Vec<HeadingResidual>,
+    /// The heading residuals of every stance (foot axis and stride direction).
+    #[serde(skip)]
+    pub stances: Vec<StanceResidual>,
+    /// The power of this walk for the catalogue's effects.
+    pub power: Vec<super::power::Power>,
 }
 
-/// Runs the model of `file` on `log` and analyses its residuals.
+/// Runs the model of `file` on `log` and analyses its residuals, with the power of the walk
+/// for each effect (see [`super::power`]).
 pub fn analyse(
     log: &ImuLog,
     file: &ConfigFile,
@@ -113,7 +164,17 @@ pub fn analyse(
     let mut stance_sum = (Vector3::zeros(), 0u32);
     let mut last_t: Option<f64> = None;
     let mut last_dir: Option<f64> = None;
+    let mut stances = Vec::new();
+    let mut sample = 0usize;
+    let mut last_stance_xy: Option<[f64; 2]> = None;
+    let sd_foot = cfg.heading.sigma_rad.get();
+    let sd_stride = cfg.heading.stride_sigma_rad.get();
+    let spacing = aid.spacing_rad();
+    let mut rest_n = 0u32;
+    // yaw error built up by a unit amount of each effect since the filter last removed it
+    let mut yaw_error = [0.0; super::power::N_REFERENCES];
     let outcome = run_log(log, &cfg, &aid, &BiasInjection::default(), |input, e| {
+        sample += 1;
         let w = Vector3::from(input.gyro_rad_s);
         let f = Vector3::from(input.accel_m_s2);
         let dt = last_t.map_or(0.0, |t| input.t_s - t);
@@ -121,6 +182,7 @@ pub fn analyse(
         if e.phase == crate::core::Phase::Aligning {
             if e.stance {
                 rest_sum += f;
+                rest_n += 1;
             }
             return;
         }
@@ -131,6 +193,14 @@ pub fn analyse(
             e.nav_from_body[2],
             e.nav_from_body[3],
         ));
+        if e.phase == crate::core::Phase::Tracking {
+            let f_rest = rest_sum / f64::from(rest_n.max(1));
+            for (k, r) in super::power::REFERENCES.iter().enumerate() {
+                yaw_error[k] += (q * (r.rate_error)(&w, &f, &f_rest)).z * dt;
+            }
+        } else {
+            yaw_error = [0.0; super::power::N_REFERENCES]; // the frame is set at calibration
+        }
         acc.dt_s += dt;
         acc.turn_rad += (q * w).z * dt;
         acc.rotation_rad += w.norm() * dt;
@@ -143,6 +213,66 @@ pub fn analyse(
             stance_sum = (Vector3::zeros(), 0);
         }
         let Some(h) = &e.heading else { return };
+        // Every stance: the foot axis and the stride direction against the nearest map
+        // direction, weighted by the probability of walking along it.
+        let xy = [e.p_m[0], e.p_m[1]];
+        // What an update leaves of the yaw error: R/S.
+        let leaves = |o: &Result<crate::core::eskf::Innovation, _>, sd: f64| match o {
+            Ok(i) if i.dim == 1 && i.s_diag[0] > 0.0 => (sd * sd / i.s_diag[0]).min(1.0),
+            _ => 1.0,
+        };
+        let stride_signature = yaw_error.map(|v| -v);
+        if let Some(s) = &e.stride {
+            let k = leaves(&s.outcome, sd_stride);
+            yaw_error.iter_mut().for_each(|v| *v *= k);
+        }
+        let foot_signature = yaw_error.map(|v| -v);
+        let k = leaves(&h.outcome, sd_foot);
+        yaw_error.iter_mut().for_each(|v| *v *= k);
+        let mut push = |kind, heading: f64, sd: f64, accepted, signature| {
+            if let Ok(d) = aid.associate(xy, heading, std::f64::consts::PI) {
+                let r = crate::core::rotation::wrap_pi(d - heading);
+                stances.push(StanceResidual {
+                    sample,
+                    t_s: e.t_s,
+                    kind,
+                    r_rad: r,
+                    direction_rad: d,
+                    weight: crate::core::estimator::association_weight(
+                        r,
+                        sd * sd,
+                        DIAGNOSIS_ALIGNED_PRIOR,
+                        spacing,
+                    ),
+                    sd_rad: sd,
+                    spacing_rad: spacing,
+                    accepted,
+                    signature,
+                });
+            }
+        };
+        if h.foot_heading_rad.is_finite() {
+            push(
+                ResidualKind::FootAxis,
+                h.foot_heading_rad,
+                sd_foot,
+                h.outcome.is_ok(),
+                foot_signature,
+            );
+        }
+        if let Some(prev) = last_stance_xy {
+            let (dx, dy) = (xy[0] - prev[0], xy[1] - prev[1]);
+            if dx.hypot(dy) >= cfg.heading.min_stride_m.get() {
+                push(
+                    ResidualKind::Stride,
+                    dy.atan2(dx),
+                    sd_stride,
+                    false,
+                    stride_signature,
+                );
+            }
+        }
+        last_stance_xy = Some(xy);
         if h.direction_rad.is_nan() {
             return; // rejected before association: keep accumulating to the next observation
         }
@@ -215,7 +345,13 @@ pub fn analyse(
         bias_rad_s: bias,
         bias_sd_rad_s: bias_sd,
     };
-    let effects = rank_effects(&used, cfg.mode);
+    let mut effects = rank_effects(&used, cfg.mode);
+    let power = super::power::walk_power(&stances);
+    super::power::apply_power(
+        &mut effects,
+        &power,
+        matches!(cfg.mode, Mode::Eskf | Mode::Zupt),
+    );
     let scale_factor = outcome
         .extensions
         .and_then(|(x, sd)| sd.map(|sd| std::array::from_fn(|k| [x.scale_factor[k], sd[k]])));
@@ -225,6 +361,8 @@ pub fn analyse(
         effects,
         scale_factor,
         residuals: res,
+        stances,
+        power,
     })
 }
 

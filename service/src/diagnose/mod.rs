@@ -12,6 +12,13 @@
 //! the total rotation (∫|ω|), the specific-force excess (∫| |f| − g |), and the deviation of
 //! the time steps from their median.
 //!
+//! Every stance also gives a residual, used or not: the foot axis and the stride direction
+//! against the most likely (nearest) map direction, weighted by the association probability.
+//! These feed the power analysis (`power`): each parametric effect's signature (the residual a
+//! unit of it adds, through the model's attitude and updates) is fitted to them, and the
+//! fit scores the scale factor, the axis misalignment and the g-sensitivity and gives every
+//! measured effect its detectable size on this walk (or says the walk cannot show it).
+//!
 //! Each fixable effect is also scored by a nested-model F test: the model with the effect added
 //! against the current one, on the heading innovations (see [`score_by_likelihood`]); its score
 //! is the larger of the two.
@@ -38,16 +45,26 @@
 //!   [`Consistency`], [`HeadingResidual`]);
 //! - `ranking`: the evidence for each effect ([`Finding`]), the residual tests and the
 //!   nested-model F test ([`score_by_likelihood`]);
+//! - `power`: the power of the walk for each effect: every stance's residual fitted on the
+//!   effect's signature ([`Power`]);
 //! - `report`: `report.md`, `report.json` and `residuals.svg` ([`write_report`]);
 //! - this file: the loop ([`run_diagnosis`] → [`Diagnosis`]).
 
 mod analysis;
 mod catalogue;
+mod power;
 mod ranking;
 mod report;
 
-pub use analysis::{Analysis, Consistency, HeadingResidual, analyse};
+pub use analysis::{
+    Analysis, Consistency, DIAGNOSIS_ALIGNED_PRIOR, HeadingResidual, ResidualKind, StanceResidual,
+    analyse,
+};
 pub use catalogue::{Effect, Fix, apply_fix};
+pub use power::{
+    HAC_LAGS, MDE_Z, MIN_RESPONSE, N_REFERENCES, Power, REFERENCES, Reference, Row, SignatureFit,
+    calibrate_by_injection, fit_signature, quarter_turns,
+};
 pub use ranking::{Candidate, Finding, score_by_likelihood};
 pub use report::write_report;
 
@@ -89,6 +106,11 @@ pub struct Report {
     pub effects: Vec<Finding>,
     /// The first effect, or `none` when nothing is significant.
     pub top_effect: String,
+    /// The verdict in words: the top effect, or what the walk could have shown (the detectable
+    /// sizes) and what it cannot show.
+    pub verdict: String,
+    /// The power of the walk on the starting model, per effect variant.
+    pub power: Vec<Power>,
     /// The starting model.
     pub before: Consistency,
     /// The final model.
@@ -136,6 +158,7 @@ pub fn run_diagnosis(
     map: Option<&Path>,
 ) -> Result<Diagnosis, RunError> {
     let mut first = analyse(log, start, truth, map)?;
+    power::calibrate_by_injection(log, start, map, &mut first)?;
     let mut candidates = score_by_likelihood(log, start, &mut first, truth, map)?;
     let mut current = first.clone();
     let mut file = start.clone();
@@ -168,12 +191,14 @@ pub fn run_diagnosis(
         current = cand.analysis;
         candidates = score_by_likelihood(log, &file, &mut current, truth, map)?;
     }
+    let top = first.effects.first().filter(|e| e.score >= SIGNIFICANT);
     let report = Report {
-        top_effect: first
-            .effects
-            .first()
-            .filter(|e| e.score >= SIGNIFICANT)
-            .map_or("none".to_string(), |e| e.name.to_string()),
+        top_effect: top.map_or("none".to_string(), |e| e.name.to_string()),
+        verdict: top.map_or_else(
+            || power::nothing_found(&first.power, &first.effects),
+            |e| format!("{} (score {:.1})", e.name, e.score),
+        ),
+        power: first.power.clone(),
         effects: first.effects.clone(),
         before: first.consistency.clone(),
         after: current.consistency.clone(),

@@ -23,6 +23,9 @@ pub struct Finding {
     pub evidence: String,
     /// The model change that adds it, if corridor has one.
     pub fix: Option<Fix>,
+    /// The smallest size of the effect this walk shows at the ranking's false-alarm rate, in
+    /// the effect's unit (see [`super::power`]); `None` when not predicted.
+    pub mde: Option<f64>,
 }
 
 fn score(p: f64) -> f64 {
@@ -43,6 +46,7 @@ pub(super) fn rank_effects(used: &[&HeadingResidual], mode: Mode) -> Vec<Finding
             score: 0.0,
             evidence: format!("only {} heading observations: too few to test", used.len()),
             fix: None,
+            mde: None,
         });
         return out;
     }
@@ -96,6 +100,8 @@ pub(super) fn rank_effects(used: &[&HeadingResidual], mode: Mode) -> Vec<Finding
                 anova_p
             ),
             fix: Some(Fix::HeadingOffset),
+            // the mean's standard error at the ranking's false-alarm rate
+            mde: Some(super::power::MDE_Z * a.std_err).filter(|m| m.is_finite()),
         });
     }
 
@@ -143,6 +149,7 @@ pub(super) fn rank_effects(used: &[&HeadingResidual], mode: Mode) -> Vec<Finding
         } else {
             Fix::BiasRate
         }),
+        mde: None,
     });
     let mut reg_effect = |name: Effect, key: &str, what: &str, unit: &str, fix: Option<Fix>| {
         if let Some(c) = coef(key) {
@@ -154,6 +161,7 @@ pub(super) fn rank_effects(used: &[&HeadingResidual], mode: Mode) -> Vec<Finding
                     c.value, c.t, c.p_value
                 ),
                 fix,
+                mde: None,
             });
         }
     };
@@ -193,6 +201,7 @@ pub(super) fn rank_effects(used: &[&HeadingResidual], mode: Mode) -> Vec<Finding
                     score: 0.0,
                     evidence: "time steps are regular: no jitter or gap to test".into(),
                     fix: None,
+                    mde: None,
                 });
             }
         }
@@ -230,6 +239,7 @@ pub(super) fn rank_effects(used: &[&HeadingResidual], mode: Mode) -> Vec<Finding
             }
         ),
         fix: paper.then_some(Fix::RotationAware),
+        mde: None,
     });
 
     out.sort_by(|a, b| b.score.total_cmp(&a.score));
@@ -251,6 +261,7 @@ fn add_unexplained(effects: &mut Vec<Finding>, c: &Consistency) {
                     c.nis_mean, c.nis_band[0], c.nis_band[1], c.whiteness_p
                 ),
                 fix: None,
+                mde: None,
             },
         );
     }

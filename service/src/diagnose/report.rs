@@ -52,14 +52,31 @@ pub fn write_report(
     let mut md = String::from("# corridor diagnose\n\n");
     md.push_str(&format!(
         "Top effect on the starting model: **{}**.\n\n",
-        report.top_effect
+        report.verdict
     ));
-    md.push_str("## Effects on the starting model (score = −log₁₀ p; significant from 3)\n\n| effect | score | evidence | fix |\n|---|---|---|---|\n");
+    md.push_str("## Effects on the starting model (score = −log₁₀ p; significant from 3)\n\n| effect | score | detectable size on this walk | evidence | fix |\n|---|---|---|---|---|\n");
     for e in &report.effects {
+        let variants: Vec<String> = report
+            .power
+            .iter()
+            .filter(|p| p.effect == e.name)
+            .map(|p| match p.mde {
+                Some(m) => format!("{} ≥ {}", p.variant, p.format_size(m)),
+                None => format!("{}: cannot show", p.variant),
+            })
+            .collect();
+        let detectable = if !variants.is_empty() {
+            variants.join("; ")
+        } else if let Some(m) = e.mde {
+            format!("≥ {:.2}°", m.to_degrees())
+        } else {
+            "—".to_string()
+        };
         md.push_str(&format!(
-            "| {} | {:.1} | {} | {} |\n",
+            "| {} | {:.1} | {} | {} | {} |\n",
             e.name,
             e.score,
+            detectable,
             e.evidence.replace('|', "/"),
             e.fix.map_or("—", Fix::label)
         ));

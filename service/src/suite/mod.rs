@@ -18,14 +18,20 @@
 //!   update type, heading use on straight and weave strides, stances found, stride lengths);
 //! - [`recovery`]: injected-bias recovery and its hindsight settling time;
 //! - [`tables`]: the summary and the Markdown tables;
-//! - [`loops`]: the residual-diagnosis loop on every recording.
+//! - [`loops`]: the residual-diagnosis loop on every recording;
+//! - [`detection`]: the diagnosis's detection matrix (injected sensor errors × recordings).
 
+mod detection;
 mod figures;
 mod front_end;
 mod loops;
 mod recovery;
 mod tables;
 
+pub use detection::{
+    CaseInjection, DetectionMatrix, MatrixCase, MatrixCell, detection_matrix, diagnosis_model,
+    matrix_cases, matrix_markdown, prediction_markdown,
+};
 use figures::{DefaultFigures, NisSeries, stride_ratio};
 pub use figures::{NisFigure, STANCE_MATCH_S, STRAIGHT_DEG, StanceMatch, StrideUse, WEAVE_DEG};
 pub use front_end::{DETECTORS, FrontEnd, KEPT_REST_S, detector_label, front_end_markdown};

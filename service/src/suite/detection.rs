@@ -1,0 +1,619 @@
+//! The detection matrix of the residual diagnosis (`corridor diagnose --suite FILE`): every
+//! normal-gait recording of a suite × each injected sensor error of [`matrix_cases`] (and the
+//! clean recording), through [`run_diagnosis`](crate::diagnose::run_diagnosis) on the model the
+//! diagnosis was built on ([`diagnosis_model`]). Per cell: the effect named first, whether the
+//! injected one is named first and named at all (score ≥ 3), the footprint error before and
+//! after the loop, the detectable size the diagnosis predicts for the injected effect and its
+//! score. Slow (a few minutes): a bench-style command, not a test.
+
+use super::{Gait, SuiteError, SuiteRecording, read_suite};
+use crate::diagnose::{Effect, SIGNIFICANT, run_diagnosis};
+use crate::runner::RunError;
+use corridor_shared::config::{ConfigFile, HeadingObservations};
+use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
+use corridor_shared::injection::LogInjection;
+use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
+use serde::Serialize;
+use std::path::Path;
+
+/// What one column of the matrix does to a recording.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CaseInjection {
+    /// Nothing: the clean recording.
+    Clean,
+    /// A sensor error added to the samples; times given as fractions of the walk's duration.
+    Log(LogInjection),
+    /// The map's directions turned by this many degrees.
+    GridOffsetDeg(f64),
+}
+
+/// One column of the matrix.
+#[derive(Debug, Clone, Copy)]
+pub struct MatrixCase {
+    /// Short label (`z scale +2 %`).
+    pub label: &'static str,
+    /// The effect of the catalogue the diagnosis should name (`None` for the clean column and for
+    /// errors outside the catalogue).
+    pub expected: Option<Effect>,
+    /// The injection, with times in fractions of the walk (see [`MatrixCase::resolve`]).
+    pub injection: CaseInjection,
+    /// Size in the unit of the expected effect's detectable size (fraction, rad, rad/s …).
+    pub size: f64,
+    /// The power variant of the diagnosis that measures this injection
+    /// ([`Power::variant`](crate::diagnose::Power)).
+    pub variant: Option<&'static str>,
+}
+
+impl MatrixCase {
+    /// The injection for a walk from `t0_s` lasting `duration_s`: the times of drifts, steps
+    /// and slips are given in the case as fractions of the walk and resolved here.
+    pub fn resolve(&self, t0_s: f64, duration_s: f64) -> CaseInjection {
+        let at = |frac: f64| t0_s + frac * duration_s;
+        match self.injection {
+            CaseInjection::Log(LogInjection::BiasRamp {
+                axis,
+                rate_rad_s2,
+                after_s,
+            }) => CaseInjection::Log(LogInjection::BiasRamp {
+                axis,
+                rate_rad_s2,
+                after_s: at(after_s),
+            }),
+            CaseInjection::Log(LogInjection::BiasStep {
+                axis,
+                step_rad_s,
+                at_s,
+            }) => CaseInjection::Log(LogInjection::BiasStep {
+                axis,
+                step_rad_s,
+                at_s: at(at_s),
+            }),
+            CaseInjection::Log(LogInjection::MountingSlip { angle_rad, after_s }) => {
+                CaseInjection::Log(LogInjection::MountingSlip {
+                    angle_rad,
+                    after_s: at(after_s),
+                })
+            }
+            other => other,
+        }
+    }
+}
+
+/// The columns: the clean recording and the list of injections (z scale 1/2/5 %, 1° and
+/// 2° y→z and x→z couplings, bias ramp and step, heading offset, clock 1 % and 3 %,
+/// g-sensitivity, clipping at a smaller range than the sensor's, mounting slip). Ramp, step and
+/// slip sizes are those of the bundled tests; they start at a fixed fraction of each walk.
+pub fn matrix_cases() -> Vec<MatrixCase> {
+    use CaseInjection::{Clean, Log};
+    use Effect::{AxisMisalignment, BiasDrift, GyroScaleFactor, HeadingOffset, Timing};
+    use LogInjection::*;
+    let deg = f64::to_radians;
+    let scale = |label, f: f64| MatrixCase {
+        label,
+        expected: Some(GyroScaleFactor),
+        injection: Log(GyroScale {
+            axis: 2,
+            fraction: f,
+        }),
+        size: f,
+        variant: Some("z scale"),
+    };
+    let couple = |label, from: usize, d: f64| MatrixCase {
+        label,
+        expected: Some(AxisMisalignment),
+        injection: Log(GyroCoupling {
+            from,
+            to: 2,
+            coupling_rad: deg(d),
+        }),
+        size: deg(d),
+        variant: Some(if from == 1 {
+            "y→z coupling"
+        } else {
+            "x→z coupling"
+        }),
+    };
+    let clock = |label, f: f64| MatrixCase {
+        label,
+        expected: Some(Timing),
+        injection: Log(ClockRate { fraction: f }),
+        size: f,
+        variant: Some("clock rate"),
+    };
+    vec![
+        MatrixCase {
+            label: "clean",
+            expected: None,
+            injection: Clean,
+            size: 0.0,
+            variant: None,
+        },
+        scale("z scale +1 %", 0.01),
+        scale("z scale +2 %", 0.02),
+        scale("z scale +5 %", 0.05),
+        couple("y→z 1°", 1, 1.0),
+        couple("y→z 2°", 1, 2.0),
+        couple("x→z 1°", 0, 1.0),
+        couple("x→z 2°", 0, 2.0),
+        MatrixCase {
+            label: "bias ramp 2e-4 rad/s²",
+            expected: Some(BiasDrift),
+            injection: Log(BiasRamp {
+                axis: 2,
+                rate_rad_s2: 2e-4,
+                after_s: 0.1,
+            }),
+            size: 2e-4,
+            variant: Some("z bias ramp"),
+        },
+        MatrixCase {
+            label: "bias step 0.01 rad/s",
+            expected: Some(BiasDrift),
+            injection: Log(BiasStep {
+                axis: 2,
+                step_rad_s: 0.01,
+                at_s: 0.5,
+            }),
+            size: 0.01,
+            variant: None,
+        },
+        MatrixCase {
+            // The foot axis off the walking direction from early on (a mounting yaw that the
+            // calibration strides did not see). Turning the map's grid instead is no heading
+            // offset: the filter's frame turns with it, strides and foot alike.
+            label: "heading offset 3°",
+            expected: Some(HeadingOffset),
+            injection: Log(MountingSlip {
+                angle_rad: deg(3.0),
+                after_s: 0.15,
+            }),
+            size: deg(3.0),
+            variant: None,
+        },
+        clock("clock +1 %", 0.01),
+        clock("clock +3 %", 0.03),
+        MatrixCase {
+            label: "g-sensitivity 2e-3 rad/s per m/s²",
+            expected: Some(Effect::GSensitivity),
+            injection: Log(GSensitivity {
+                k_rad_s_per_m_s2: 2e-3,
+            }),
+            size: 2e-3,
+            variant: Some("g-sensitivity"),
+        },
+        MatrixCase {
+            // Outside the catalogue: at most `unexplained` can name it.
+            label: "clipping at ±5 rad/s",
+            expected: None,
+            injection: Log(Clipping { range_rad_s: 5.0 }),
+            size: 5.0,
+            variant: None,
+        },
+        MatrixCase {
+            label: "mounting slip 6°",
+            expected: Some(HeadingOffset),
+            injection: Log(MountingSlip {
+                angle_rad: deg(6.0),
+                after_s: 0.33,
+            }),
+            size: deg(6.0),
+            variant: None,
+        },
+    ]
+}
+
+/// The model the diagnosis was built on and is tested with (`tests/diagnose_injected.rs`): the
+/// recording's sensor configuration without its `[model]` extensions (the heading-offset state
+/// of the default is one of the effects to find), the foot axis observed alone, the plain gate
+/// (`aligned_prior = 1`), the filter noise of the recording's baseline configuration, and the
+/// walk's map knowledge (start heading, grid).
+pub fn diagnosis_model(base: &Path, r: &SuiteRecording) -> Result<ConfigFile, RunError> {
+    let mut f = ConfigFile::read(&base.join(&r.config))?;
+    f.model = Default::default();
+    f.heading.observations = Some(HeadingObservations::FootAxis);
+    f.heading.aligned_prior = Some(1.0);
+    if let Some(b) = &r.baseline_config {
+        f.eskf = ConfigFile::read(&base.join(b))?.eskf;
+    }
+    f.heading.start_heading_deg = Some(r.start_heading_deg);
+    f.heading.grid_deg = Some(r.grid_deg);
+    Ok(f)
+}
+
+/// One cell of the matrix.
+#[derive(Debug, Clone, Serialize)]
+pub struct MatrixCell {
+    /// Recording.
+    pub recording: String,
+    /// Column label.
+    pub case: String,
+    /// The effect that should be named.
+    pub expected: Option<String>,
+    /// Injected size (unit of the expected effect's detectable size).
+    pub size: f64,
+    /// The effect named first (`none` when nothing is significant).
+    pub top_effect: String,
+    /// The expected effect is named first.
+    pub named_first: bool,
+    /// The expected effect scores ≥ 3.
+    pub named_at_all: bool,
+    /// The starting model already has the expected effect's fix (a state the clean walk needed):
+    /// nothing is left to name, the cell is out of the counts.
+    pub already_modelled: bool,
+    /// Its score.
+    pub expected_score: Option<f64>,
+    /// The detectable size the diagnosis predicts for the expected effect on this walk (same
+    /// unit as `size`), when it predicts one.
+    pub expected_mde: Option<f64>,
+    /// The power fit of the injected variant: the size the residuals show.
+    pub power_estimate: Option<f64>,
+    /// Its score.
+    pub power_score: Option<f64>,
+    /// The response the diagnosis measured for that variant by its own probe injection.
+    pub power_response: Option<f64>,
+    /// The diagnosis's verdict.
+    pub verdict: String,
+    /// The detectable size of every measured variant on this cell's log (`None`: cannot show).
+    pub detectable: Vec<(String, Option<f64>)>,
+    /// Extension states of the starting model (the clean walk's own effects, for the injected
+    /// columns).
+    pub start_model: Vec<String>,
+    /// Every effect scoring ≥ 3, best first, as `name score`.
+    pub significant: Vec<String>,
+    /// Footprint RMS of the starting model, m.
+    pub rms_before_m: Option<f64>,
+    /// Footprint RMS of the model the loop ends with, m.
+    pub rms_after_m: Option<f64>,
+    /// Effects the loop added and kept.
+    pub added: Vec<String>,
+}
+
+/// The whole matrix.
+#[derive(Debug, Clone, Serialize)]
+pub struct DetectionMatrix {
+    /// Normal-gait recordings, in suite order.
+    pub recordings: Vec<String>,
+    /// Column labels, in order.
+    pub cases: Vec<String>,
+    /// Cells, recording-major.
+    pub cells: Vec<MatrixCell>,
+}
+
+/// Runs the matrix over the normal-gait recordings of the suite at `path`; `progress` sees each
+/// cell as it is done.
+pub fn detection_matrix(
+    path: &Path,
+    mut progress: impl FnMut(&MatrixCell),
+) -> Result<DetectionMatrix, SuiteError> {
+    let suite = read_suite(path)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let cases = matrix_cases();
+    let mut out = DetectionMatrix {
+        recordings: Vec::new(),
+        cases: cases.iter().map(|c| c.label.to_string()).collect(),
+        cells: Vec::new(),
+    };
+    for r in suite.recordings.iter().filter(|r| r.gait == Gait::Normal) {
+        let wrap = |source: RunError| SuiteError::Run {
+            name: r.name.clone(),
+            source: Box::new(source),
+        };
+        let log = read_imu_csv(&base.join(&r.imu), &ImuCsvOptions::default())
+            .map_err(|e| wrap(e.into()))?;
+        let truth = read_truth_csv(&base.join(&r.truth)).map_err(|e| wrap(e.into()))?;
+        let model = diagnosis_model(base, r).map_err(wrap)?;
+        out.recordings.push(r.name.clone());
+        // The clean column first: the effects it names are the walk's own (documented in that
+        // column), and the injected columns start from the model with their fixes.
+        let (clean, documented) = run_cell(&log, &truth, &model, r, &cases[0]).map_err(wrap)?;
+        progress(&clean);
+        out.cells.push(clean);
+        for case in &cases[1..] {
+            let (cell, _) = run_cell(&log, &truth, &documented, r, case).map_err(wrap)?;
+            progress(&cell);
+            out.cells.push(cell);
+        }
+    }
+    Ok(out)
+}
+
+/// One cell, and the cell's model with the fixes of every significant effect it names added (in
+/// the order named).
+fn run_cell(
+    log: &ImuLog,
+    truth: &[TruthPoint],
+    model: &ConfigFile,
+    r: &SuiteRecording,
+    case: &MatrixCase,
+) -> Result<(MatrixCell, ConfigFile), RunError> {
+    let t0 = log.rows.first().map_or(0.0, |x| x.t_s);
+    let duration = log.rows.last().map_or(0.0, |x| x.t_s) - t0;
+    let mut log = log.clone();
+    let mut truth = truth.to_vec();
+    let mut model = model.clone();
+    match case.resolve(t0, duration) {
+        CaseInjection::Clean => {}
+        CaseInjection::Log(inj) => {
+            inj.apply(&mut log.rows);
+            for p in &mut truth {
+                p.t_s = inj.map_time(t0, p.t_s);
+            }
+        }
+        CaseInjection::GridOffsetDeg(d) => model.heading.grid_deg = Some(r.grid_deg + d),
+    }
+    let report = run_diagnosis(&log, &model, Some(&truth), None)?.report;
+    let expected = case
+        .expected
+        .and_then(|e| report.effects.iter().find(|f| f.name == e));
+    let mut with_fixes = model.clone();
+    for f in report.effects.iter().filter(|f| f.score >= SIGNIFICANT) {
+        if let Some(fix) = f.fix {
+            crate::diagnose::apply_fix(fix, &mut with_fixes);
+        }
+    }
+    let power = case
+        .variant
+        .and_then(|v| report.power.iter().find(|p| p.variant == v));
+    let already_modelled = case.expected.is_some_and(|e| {
+        !e.fixes().is_empty()
+            && e.fixes()
+                .iter()
+                .all(|&(fix, _)| !crate::diagnose::apply_fix(fix, &mut model.clone()))
+    });
+    let cell = MatrixCell {
+        recording: r.name.clone(),
+        case: case.label.to_string(),
+        expected: case.expected.map(|e| e.to_string()),
+        size: case.size,
+        named_first: case.expected.is_some_and(|e| report.top_effect == e.name()),
+        named_at_all: expected.is_some_and(|f| f.score >= SIGNIFICANT),
+        already_modelled,
+        expected_score: expected.map(|f| f.score),
+        expected_mde: match case.variant {
+            Some(_) => power.and_then(|p| p.mde),
+            None => expected.and_then(|f| f.mde),
+        },
+        power_estimate: power.map(|p| p.estimate),
+        power_score: power.map(|p| p.score),
+        power_response: power.and_then(|p| p.response),
+        verdict: report.verdict.clone(),
+        detectable: report
+            .power
+            .iter()
+            .map(|p| (p.variant.to_string(), p.mde))
+            .collect(),
+        start_model: model_keys(&model),
+        top_effect: report.top_effect.clone(),
+        significant: report
+            .effects
+            .iter()
+            .filter(|f| f.score >= SIGNIFICANT)
+            .map(|f| format!("{} {:.1}", f.name, f.score))
+            .collect(),
+        rms_before_m: report.before.gcp_rms_m,
+        rms_after_m: report.after.gcp_rms_m,
+        added: report
+            .iterations
+            .iter()
+            .filter(|i| i.kept)
+            .map(|i| i.effect.to_string())
+            .collect(),
+    };
+    // the grid offset of the heading-offset column is the injection, not part of the model
+    with_fixes.heading.grid_deg = Some(r.grid_deg);
+    Ok((cell, with_fixes))
+}
+
+fn model_keys(f: &ConfigFile) -> Vec<String> {
+    let m = &f.model;
+    [
+        (m.heading_offset_sd_deg.is_some(), "heading_offset"),
+        (m.bias_rate_rw_rad_s2_sqrt_s.is_some(), "bias_rate"),
+        (m.scale_factor_sd.is_some(), "scale_factor"),
+        (m.g_sensitivity_sd.is_some(), "g_sensitivity"),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .map(|(_, k)| k.to_string())
+    .collect()
+}
+
+/// `detection.md`: per column the counts over the recordings, then the matrix of the effect
+/// named first.
+pub fn matrix_markdown(m: &DetectionMatrix) -> String {
+    let n = m.recordings.len();
+    let mut md = format!(
+        "The diagnosis on its own model (the sensor configuration without `[model]` extensions, the foot axis observed alone, the plain gate, the baseline's filter noise; see `diagnosis_model`). The clean column runs first; the effects it names are the walk's own, and the injected columns start from the model with their fixes (a column whose effect is already in that model is left out of its counts). Per column, over the {n} normal-gait recordings: the injected effect named first, named at all (score ≥ 3), the footprint error lower after the loop, and, for the clean and out-of-catalogue columns, how many walks name anything. The predicted detectable size is the diagnosis's own for the injected variant on each walk (median over the walks).\n\n| injection | expected | named first | named at all | after-error lower | median score | predicted detectable size (median) | size injected |\n|---|---|---|---|---|---|---|---|\n"
+    );
+    for case in &m.cases {
+        let all: Vec<&MatrixCell> = m.cells.iter().filter(|c| &c.case == case).collect();
+        let modelled = all.iter().filter(|c| c.already_modelled).count();
+        let cells: Vec<&MatrixCell> = all.into_iter().filter(|c| !c.already_modelled).collect();
+        let n = cells.len();
+        let count = |f: &dyn Fn(&MatrixCell) -> bool| cells.iter().filter(|c| f(c)).count();
+        let expected = cells.first().and_then(|c| c.expected.clone());
+        let lower =
+            count(&|c| matches!((c.rms_before_m, c.rms_after_m), (Some(b), Some(a)) if a < b));
+        let mut scores: Vec<f64> = cells.iter().filter_map(|c| c.expected_score).collect();
+        let mut mdes: Vec<f64> = cells.iter().filter_map(|c| c.expected_mde).collect();
+        let size = cells.first().map_or(0.0, |c| c.size);
+        if expected.is_none() {
+            let named = count(&|c| c.top_effect != "none");
+            md.push_str(&format!(
+                "| {case} | (nothing) | — | named something: {named} of {n} | {lower} of {n} | — | — | — |\n"
+            ));
+            continue;
+        }
+        md.push_str(&format!(
+            "| {case} | {}{} | {} of {n} | {} of {n} | {lower} of {n} | {} | {} | {} |\n",
+            expected.as_deref().unwrap_or("—"),
+            if modelled > 0 {
+                format!(" ({modelled} walks left out: already modelled)")
+            } else {
+                String::new()
+            },
+            count(&|c| c.named_first),
+            count(&|c| c.named_at_all),
+            median(&mut scores).map_or("—".into(), |v| format!("{v:.1}")),
+            median(&mut mdes).map_or("—".into(), |v| format!("{v:.3e}")),
+            format_args!("{size:.3e}"),
+        ));
+    }
+    md.push_str("\nThe effect named first on each walk (`·` nothing significant; **bold** = the injected effect; in parentheses: the starting model already had the injected effect's state):\n\n| recording |");
+    for case in &m.cases {
+        md.push_str(&format!(" {case} |"));
+    }
+    md.push_str("\n|---|");
+    md.push_str(&"---|".repeat(m.cases.len()));
+    md.push('\n');
+    for rec in &m.recordings {
+        md.push_str(&format!("| {rec} |"));
+        for case in &m.cases {
+            let c = m
+                .cells
+                .iter()
+                .find(|c| &c.recording == rec && &c.case == case);
+            let text = c.map_or("?".to_string(), |c| {
+                let name = if c.top_effect == "none" {
+                    "·".to_string()
+                } else {
+                    short(&c.top_effect).to_string()
+                };
+                if c.already_modelled {
+                    format!("({name})")
+                } else if c.named_first {
+                    format!("**{name}**")
+                } else {
+                    name
+                }
+            });
+            md.push_str(&format!(" {text} |"));
+        }
+        md.push('\n');
+    }
+    md.push_str(&prediction_markdown(m));
+    md.push_str("\nAbbreviations: sf gyro_scale_factor, mis axis_misalignment, drift bias_drift, off heading_offset, time timing, gs g_sensitivity, tilt mounting_tilt, unexp unexplained.\n");
+    md
+}
+
+fn short(name: &str) -> &str {
+    match name {
+        "gyro_scale_factor" => "sf",
+        "axis_misalignment" => "mis",
+        "bias_drift" => "drift",
+        "heading_offset" => "off",
+        "timing" => "time",
+        "g_sensitivity" => "gs",
+        "mounting_tilt" => "tilt",
+        "unexplained" => "unexp",
+        other => other,
+    }
+}
+
+fn median(v: &mut [f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(v[v.len() / 2])
+}
+
+/// Predicted against shown: per walk and injected family (z scale, clock, couplings, the
+/// sizes of [`matrix_cases`]), the detectable size the diagnosis predicts on the clean walk and
+/// the sizes at which the injection was named at all. The shown threshold lies between the
+/// largest size missed below the smallest named and that size; the prediction agrees within a
+/// factor of 2 when that interval meets [MDE/2, 2·MDE].
+pub fn prediction_markdown(m: &DetectionMatrix) -> String {
+    let families: [(&str, &str); 4] = [
+        ("z scale", "z scale"),
+        ("y→z coupling", "y→z"),
+        ("x→z coupling", "x→z"),
+        ("clock rate", "clock"),
+    ];
+    let mut md = String::from(
+        "\nPredicted detectable size (on the clean walk) against the injections: `named at` lists the injected sizes named at all (score ≥ 3); `agrees` when the shown threshold (between the largest size missed and the smallest named, above the largest injected when none is named) meets [½, 2] × the prediction. Cells where the starting model already had the effect's state are left out.\n\n| recording |",
+    );
+    for (variant, _) in &families {
+        md.push_str(&format!(" {variant}: predicted | named at | agrees |"));
+    }
+    md.push_str("\n|---|");
+    md.push_str(&"---|---|---|".repeat(families.len()));
+    md.push('\n');
+    let mut agree = vec![(0usize, 0usize); families.len()];
+    for rec in &m.recordings {
+        md.push_str(&format!("| {rec} |"));
+        let clean = m
+            .cells
+            .iter()
+            .find(|c| &c.recording == rec && c.case == "clean");
+        for (k, (variant, prefix)) in families.iter().enumerate() {
+            let predicted = clean.and_then(|c| {
+                c.detectable
+                    .iter()
+                    .find(|(v, _)| v == variant)
+                    .and_then(|(_, m)| *m)
+            });
+            let cells: Vec<&MatrixCell> = m
+                .cells
+                .iter()
+                .filter(|c| &c.recording == rec && c.case.starts_with(prefix))
+                .collect();
+            if cells.is_empty() || cells.iter().any(|c| c.already_modelled) {
+                md.push_str(" — | (modelled) | — |");
+                continue;
+            }
+            let mut sizes: Vec<(f64, bool)> =
+                cells.iter().map(|c| (c.size, c.named_at_all)).collect();
+            sizes.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let named: Vec<f64> = sizes.iter().filter(|s| s.1).map(|s| s.0).collect();
+            let (lo, hi) = match named.first() {
+                Some(&first) => (
+                    sizes
+                        .iter()
+                        .filter(|s| s.0 < first && !s.1)
+                        .map(|s| s.0)
+                        .fold(0.0, f64::max),
+                    first,
+                ),
+                None => (sizes.last().map_or(0.0, |s| s.0), f64::INFINITY),
+            };
+            let agrees = predicted.map(|p| lo <= 2.0 * p && hi >= 0.5 * p);
+            if let Some(a) = agrees {
+                agree[k].1 += 1;
+                agree[k].0 += usize::from(a);
+            }
+            let unit = |v: f64| {
+                if variant.contains("coupling") {
+                    format!("{:.2}°", v.to_degrees())
+                } else {
+                    format!("{:.2} %", 100.0 * v)
+                }
+            };
+            md.push_str(&format!(
+                " {} | {} | {} |",
+                predicted.map_or("cannot".to_string(), unit),
+                if named.is_empty() {
+                    "none".to_string()
+                } else {
+                    named
+                        .iter()
+                        .map(|&v| unit(v))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                },
+                match agrees {
+                    Some(true) => "yes",
+                    Some(false) => "no",
+                    None => "—",
+                }
+            ));
+        }
+        md.push('\n');
+    }
+    md.push_str("| **agree** |");
+    for (a, n) in &agree {
+        md.push_str(&format!(" | | {a} of {n} |"));
+    }
+    md.push('\n');
+    md
+}
