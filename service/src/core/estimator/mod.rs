@@ -111,6 +111,8 @@ struct Pipeline {
     tilt0: UnitQuaternion<f64>,
     /// Sensor yaw minus foot heading.
     mount_yaw_rad: f64,
+    /// The foot's forward axis in sensor axes (from `tilt0` and `mount_yaw_rad`).
+    forward_body: Vector3<f64>,
     mount_sum: (f64, f64, usize),
     /// The previous footprint (nominal, map frame) and the direction of the stride that ended
     /// there, for the mounting-yaw calibration.
@@ -160,6 +162,7 @@ impl Estimator {
             consecutive_faults: 0,
             tilt0: UnitQuaternion::identity(),
             mount_yaw_rad: 0.0,
+            forward_body: Vector3::x(),
             mount_sum: (0.0, 0.0, 0),
             last_footprint: None,
             in_stance: false,
@@ -487,6 +490,7 @@ impl Pipeline {
         self.detector.set_gravity(g);
         let (roll, pitch) = tilt_from_specific_force(&mean_f);
         self.tilt0 = from_euler_zyx(roll, pitch, 0.0);
+        self.update_forward_body();
         let (b0, sd0) = match self.cfg.alignment.gyro_bias_prior {
             BiasPrior::RestMean if !short_start => {
                 (mean_w, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
@@ -588,7 +592,12 @@ impl Pipeline {
     /// any foot pitch or roll, unlike the sensor's ZYX yaw minus the mounting yaw, which is only
     /// right while the foot is flat.
     fn foot_forward_body(&self) -> Vector3<f64> {
-        self.foot_from_sensor().inverse() * Vector3::x()
+        self.forward_body
+    }
+
+    /// Recomputes [`Self::foot_forward_body`] after the tilt or the mounting yaw changed.
+    pub(super) fn update_forward_body(&mut self) {
+        self.forward_body = self.foot_from_sensor().inverse() * Vector3::x();
     }
 
     /// Gyro bias in sensor axes and its σ.

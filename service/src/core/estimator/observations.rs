@@ -51,6 +51,7 @@ impl Pipeline {
             self.straight.push(stride_dir);
             if self.mount_sum.2 >= h.calibration_strides {
                 self.mount_yaw_rad = self.mount_sum.1.atan2(self.mount_sum.0);
+                self.update_forward_body();
                 self.phase = Phase::Tracking;
                 let q = eskf.nav_from_body;
                 match &mut self.bias {
