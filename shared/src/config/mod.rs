@@ -8,9 +8,11 @@
 //!
 //! Files: this one holds the error, the checked number types and the enums; `file.rs` the
 //! TOML mirror ([`ConfigFile`]); `settings.rs` the validated types ([`Config`]);
-//! `validate.rs` the one validation pass between them, with the defaults; `overrides.rs`
+//! `validate.rs` the one validation pass between them; `defaults.rs` every default, as a
+//! named constant; `overrides.rs`
 //! [`ConfigOverrides`], the one way to replace a file's values (command line, suite, tests).
 
+pub mod defaults;
 mod file;
 mod overrides;
 mod settings;
@@ -118,18 +120,6 @@ pub(crate) fn non_negative(key: &str, value: f64) -> Result<f64, ConfigError> {
         Err(invalid(key, value, "must be a finite number >= 0"))
     }
 }
-
-/// Default largest plausible foot speed, m/s: the swinging foot of a sprinter peaks near 10 m/s.
-pub const DEFAULT_MAX_SPEED_M_S: f64 = 15.0;
-
-/// Default shortest first stance that aligns without an initial rest, s: a walking stance lasts
-/// 0.2–0.6 s; a tenth of a second of quiet foot gives roll and pitch to a few tenths of a degree.
-pub const DEFAULT_MIN_START_STANCE_S: f64 = 0.1;
-
-/// Default σ of the rate a clipped gyro axis did not measure, rad/s: the RMS excess of the peaks
-/// reconstructed (a parabola through the samples around each clipped run) in the 110 clipped runs
-/// of the 16 gdins walks was 0.44 rad/s.
-pub const DEFAULT_CLIPPED_RATE_SD_RAD_S: f64 = 0.5;
 
 /// How the gyro bias is estimated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -1,5 +1,6 @@
 //! Reading and the one validation pass from [`ConfigFile`] to [`Config`], with the defaults.
 
+use super::defaults::*;
 use super::*;
 use std::path::Path;
 
@@ -25,7 +26,7 @@ impl ConfigFile {
     /// besides the estimator's [`Config`]).
     pub fn validate_daemon(&self) -> Result<DaemonSettings, ConfigError> {
         let dm = &self.daemon;
-        let delivery = dm.delivery.as_deref().unwrap_or("live");
+        let delivery = dm.delivery.as_deref().unwrap_or(DAEMON_DELIVERY);
         let lossless = match delivery.parse::<crate::services::Delivery>() {
             Ok(d) => d == crate::services::Delivery::Lossless,
             Err(_) => {
@@ -36,7 +37,7 @@ impl ConfigFile {
                 ));
             }
         };
-        let channel_capacity = dm.channel_capacity.unwrap_or(4096);
+        let channel_capacity = dm.channel_capacity.unwrap_or(DAEMON_CHANNEL_CAPACITY);
         if !(1..=1 << 24).contains(&channel_capacity) {
             return Err(invalid(
                 "daemon.channel_capacity",
@@ -44,7 +45,10 @@ impl ConfigFile {
                 "must be in 1..=16777216",
             ));
         }
-        let domain = dm.domain.clone().unwrap_or_else(|| "default".to_owned());
+        let domain = dm
+            .domain
+            .clone()
+            .unwrap_or_else(|| DAEMON_DOMAIN.to_owned());
         // The same rule `corridor serve` applies when it opens the domain.
         if let Err(crate::services::ServiceError::InvalidDomain { rule, .. }) =
             crate::services::Domain::check_name(&domain)
@@ -64,24 +68,28 @@ impl ConfigFile {
             domain,
             lossless,
             channel_capacity,
-            bias_period_s: Positive::new("daemon.bias_period_s", dm.bias_period_s.unwrap_or(1.0))?,
+            bias_period_s: Positive::new(
+                "daemon.bias_period_s",
+                dm.bias_period_s.unwrap_or(DAEMON_BIAS_PERIOD_S),
+            )?,
             diagnostics_period_s: Positive::new(
                 "daemon.diagnostics_period_s",
-                dm.diagnostics_period_s.unwrap_or(1.0),
+                dm.diagnostics_period_s
+                    .unwrap_or(DAEMON_DIAGNOSTICS_PERIOD_S),
             )?,
             health_period_s: Positive::new(
                 "daemon.health_period_s",
-                dm.health_period_s.unwrap_or(10.0),
+                dm.health_period_s.unwrap_or(DAEMON_HEALTH_PERIOD_S),
             )?,
             checkpoint_path: dm.checkpoint_path.clone(),
             runtime_dir: dm.runtime_dir.clone(),
             checkpoint_period_s: Positive::new(
                 "daemon.checkpoint_period_s",
-                dm.checkpoint_period_s.unwrap_or(30.0),
+                dm.checkpoint_period_s.unwrap_or(DAEMON_CHECKPOINT_PERIOD_S),
             )?,
             stall_timeout_s: Positive::new(
                 "daemon.stall_timeout_s",
-                dm.stall_timeout_s.unwrap_or(1.0),
+                dm.stall_timeout_s.unwrap_or(DAEMON_STALL_TIMEOUT_S),
             )?,
         };
         Ok(daemon)
@@ -96,11 +104,11 @@ impl ConfigFile {
         let b = &self.bias_kf;
         let h = &self.heading;
         let deg = f64::to_radians;
-        let window = d.window.unwrap_or(5);
+        let window = d.window.unwrap_or(DETECTOR_WINDOW);
         if window == 0 || window > 1000 {
             return Err(invalid("detector.window", window, "must be in 1..=1000"));
         }
-        let straight_strides = h.straight_strides.unwrap_or(2);
+        let straight_strides = h.straight_strides.unwrap_or(HEADING_STRAIGHT_STRIDES);
         if straight_strides > 100 {
             return Err(invalid(
                 "heading.straight_strides",
@@ -108,7 +116,7 @@ impl ConfigFile {
                 "must be <= 100",
             ));
         }
-        let calibration_strides = h.calibration_strides.unwrap_or(3);
+        let calibration_strides = h.calibration_strides.unwrap_or(HEADING_CALIBRATION_STRIDES);
         if calibration_strides == 0 || calibration_strides > 100 {
             return Err(invalid(
                 "heading.calibration_strides",
@@ -128,7 +136,8 @@ impl ConfigFile {
             )?,
             bias_rate_initial_sd_rad_s2: Positive::new(
                 "model.bias_rate_initial_sd_rad_s2",
-                md.bias_rate_initial_sd_rad_s2.unwrap_or(1e-4),
+                md.bias_rate_initial_sd_rad_s2
+                    .unwrap_or(MODEL_BIAS_RATE_INITIAL_SD_RAD_S2),
             )?,
             scale_factor_sd: opt("model.scale_factor_sd", md.scale_factor_sd)?,
             heading_offset_sd_rad: opt(
@@ -139,48 +148,60 @@ impl ConfigFile {
         };
         Ok(Config {
             model,
-            mode: e.mode.unwrap_or(Mode::Eskf),
+            mode: e.mode.unwrap_or(ESTIMATOR_MODE),
             converged_sd_rad_s: Positive::new(
                 "estimator.converged_sd_rad_s",
-                e.converged_sd_rad_s.unwrap_or(2e-4),
+                e.converged_sd_rad_s.unwrap_or(ESTIMATOR_CONVERGED_SD_RAD_S),
             )?,
-            max_dt_s: Positive::new("estimator.max_dt_s", e.max_dt_s.unwrap_or(0.05))?,
+            max_dt_s: Positive::new(
+                "estimator.max_dt_s",
+                e.max_dt_s.unwrap_or(ESTIMATOR_MAX_DT_S),
+            )?,
             max_speed_m_s: Positive::new(
                 "estimator.max_speed_m_s",
-                e.max_speed_m_s.unwrap_or(DEFAULT_MAX_SPEED_M_S),
+                e.max_speed_m_s.unwrap_or(ESTIMATOR_MAX_SPEED_M_S),
             )?,
             sensor: self
                 .sensor
                 .validate()
                 .map_err(|e| invalid(e.key, e.value, e.rule))?,
             alignment: AlignmentConfig {
-                min_rest_s: Positive::new("alignment.min_rest_s", a.min_rest_s.unwrap_or(0.5))?,
-                gyro_bias_prior: a.gyro_bias_prior.unwrap_or(BiasPrior::RestMean),
+                min_rest_s: Positive::new(
+                    "alignment.min_rest_s",
+                    a.min_rest_s.unwrap_or(ALIGNMENT_MIN_REST_S),
+                )?,
+                gyro_bias_prior: a.gyro_bias_prior.unwrap_or(ALIGNMENT_GYRO_BIAS_PRIOR),
                 gravity_m_s2: a
                     .gravity_m_s2
                     .map(|g| Positive::new("alignment.gravity_m_s2", g))
                     .transpose()?,
-                rest_tail_s: non_negative("alignment.rest_tail_s", a.rest_tail_s.unwrap_or(0.5))?,
+                rest_tail_s: non_negative(
+                    "alignment.rest_tail_s",
+                    a.rest_tail_s.unwrap_or(ALIGNMENT_REST_TAIL_S),
+                )?,
                 min_start_stance_s: non_negative(
                     "alignment.min_start_stance_s",
-                    a.min_start_stance_s.unwrap_or(DEFAULT_MIN_START_STANCE_S),
+                    a.min_start_stance_s.unwrap_or(ALIGNMENT_MIN_START_STANCE_S),
                 )?,
             },
             detector: DetectorConfig {
-                kind: d.kind.unwrap_or(DetectorKind::Shoe),
+                kind: d.kind.unwrap_or(DETECTOR_KIND),
                 window,
-                threshold: Positive::new("detector.threshold", d.threshold.unwrap_or(1e5))?,
+                threshold: Positive::new(
+                    "detector.threshold",
+                    d.threshold.unwrap_or(DETECTOR_THRESHOLD),
+                )?,
                 sigma_accel_m_s2: Positive::new(
                     "detector.sigma_accel_m_s2",
-                    d.sigma_accel_m_s2.unwrap_or(0.01),
+                    d.sigma_accel_m_s2.unwrap_or(DETECTOR_SIGMA_ACCEL_M_S2),
                 )?,
                 sigma_gyro_rad_s: Positive::new(
                     "detector.sigma_gyro_rad_s",
-                    d.sigma_gyro_rad_s.unwrap_or(deg(0.1)),
+                    d.sigma_gyro_rad_s.unwrap_or(DETECTOR_SIGMA_GYRO_RAD_S),
                 )?,
                 min_stance_s: non_negative(
                     "detector.min_stance_s",
-                    d.min_stance_s.unwrap_or(0.04),
+                    d.min_stance_s.unwrap_or(DETECTOR_MIN_STANCE_S),
                 )?,
                 adaptive_factor: d
                     .adaptive_factor
@@ -188,75 +209,91 @@ impl ConfigFile {
                     .transpose()?,
                 adaptive_window_s: Positive::new(
                     "detector.adaptive_window_s",
-                    d.adaptive_window_s.unwrap_or(1.5),
+                    d.adaptive_window_s.unwrap_or(DETECTOR_ADAPTIVE_WINDOW_S),
                 )?,
                 adaptive_max_threshold: Positive::new(
                     "detector.adaptive_max_threshold",
-                    d.adaptive_max_threshold
-                        .unwrap_or(10.0 * d.threshold.unwrap_or(1e5)),
+                    d.adaptive_max_threshold.unwrap_or(
+                        DETECTOR_ADAPTIVE_MAX_FACTOR * d.threshold.unwrap_or(DETECTOR_THRESHOLD),
+                    ),
                 )?,
             },
             eskf: EskfConfig {
                 accel_noise_m_s2: Positive::new(
                     "eskf.accel_noise_m_s2",
-                    k.accel_noise_m_s2.unwrap_or(0.5),
+                    k.accel_noise_m_s2.unwrap_or(ESKF_ACCEL_NOISE_M_S2),
                 )?,
                 gyro_noise_rad_s: Positive::new(
                     "eskf.gyro_noise_rad_s",
-                    k.gyro_noise_rad_s.unwrap_or(0.01),
+                    k.gyro_noise_rad_s.unwrap_or(ESKF_GYRO_NOISE_RAD_S),
                 )?,
                 gyro_bias_rw_rad_s_sqrt_s: non_negative(
                     "eskf.gyro_bias_rw_rad_s_sqrt_s",
-                    k.gyro_bias_rw_rad_s_sqrt_s.unwrap_or(1e-4),
+                    k.gyro_bias_rw_rad_s_sqrt_s
+                        .unwrap_or(ESKF_GYRO_BIAS_RW_RAD_S_SQRT_S),
                 )?,
                 gyro_bias_initial_sd_rad_s: Positive::new(
                     "eskf.gyro_bias_initial_sd_rad_s",
-                    k.gyro_bias_initial_sd_rad_s.unwrap_or(0.01),
+                    k.gyro_bias_initial_sd_rad_s
+                        .unwrap_or(ESKF_GYRO_BIAS_INITIAL_SD_RAD_S),
                 )?,
                 gyro_bias_prior_sd_rad_s: Positive::new(
                     "eskf.gyro_bias_prior_sd_rad_s",
-                    k.gyro_bias_prior_sd_rad_s.unwrap_or(5e-4),
+                    k.gyro_bias_prior_sd_rad_s
+                        .unwrap_or(ESKF_GYRO_BIAS_PRIOR_SD_RAD_S),
                 )?,
-                zupt_sd_m_s: Positive::new("eskf.zupt_sd_m_s", k.zupt_sd_m_s.unwrap_or(0.01))?,
+                zupt_sd_m_s: Positive::new(
+                    "eskf.zupt_sd_m_s",
+                    k.zupt_sd_m_s.unwrap_or(ESKF_ZUPT_SD_M_S),
+                )?,
                 initial_tilt_sd_rad: Positive::new(
                     "eskf.initial_tilt_sd_rad",
-                    k.initial_tilt_sd_rad.unwrap_or(deg(0.5)),
+                    k.initial_tilt_sd_rad.unwrap_or(ESKF_INITIAL_TILT_SD_RAD),
                 )?,
                 zupt_lever_arm_m: non_negative(
                     "eskf.zupt_lever_arm_m",
-                    k.zupt_lever_arm_m.unwrap_or(0.0),
+                    k.zupt_lever_arm_m.unwrap_or(ESKF_ZUPT_LEVER_ARM_M),
                 )?,
-                zero_rate_updates: k.zero_rate_updates.unwrap_or(true),
+                zero_rate_updates: k.zero_rate_updates.unwrap_or(ESKF_ZERO_RATE_UPDATES),
                 zupt_rolling_height_m: non_negative(
                     "eskf.zupt_rolling_height_m",
-                    k.zupt_rolling_height_m.unwrap_or(0.0),
+                    k.zupt_rolling_height_m
+                        .unwrap_or(ESKF_ZUPT_ROLLING_HEIGHT_M),
                 )?,
                 clipped_rate_excess_rad_s: non_negative(
                     "eskf.clipped_rate_excess_rad_s",
-                    k.clipped_rate_excess_rad_s.unwrap_or(0.0),
+                    k.clipped_rate_excess_rad_s
+                        .unwrap_or(ESKF_CLIPPED_RATE_EXCESS_RAD_S),
                 )?,
                 clipped_rate_sd_rad_s: non_negative(
                     "eskf.clipped_rate_sd_rad_s",
                     k.clipped_rate_sd_rad_s
-                        .unwrap_or(DEFAULT_CLIPPED_RATE_SD_RAD_S),
+                        .unwrap_or(ESKF_CLIPPED_RATE_SD_RAD_S),
                 )?,
             },
             bias_kf: BiasKfConfig {
                 tilt_sd_rad: Positive::new(
                     "bias_kf.tilt_sd_rad",
-                    b.tilt_sd_rad.unwrap_or(deg(1.0)),
+                    b.tilt_sd_rad.unwrap_or(BIAS_KF_TILT_SD_RAD),
                 )?,
                 bias_rw_rad_s_sqrt_s: non_negative(
                     "bias_kf.bias_rw_rad_s_sqrt_s",
-                    b.bias_rw_rad_s_sqrt_s.unwrap_or(1e-5),
+                    b.bias_rw_rad_s_sqrt_s
+                        .unwrap_or(BIAS_KF_BIAS_RW_RAD_S_SQRT_S),
                 )?,
             },
             heading: HeadingConfig {
-                source: h.source.unwrap_or(HeadingSource::Grid),
-                sigma_rad: Positive::new("heading.sigma_deg", deg(h.sigma_deg.unwrap_or(3.0)))?,
-                grid_rad: deg(finite("heading.grid_deg", h.grid_deg.unwrap_or(0.0))?),
+                source: h.source.unwrap_or(HEADING_SOURCE),
+                sigma_rad: Positive::new(
+                    "heading.sigma_deg",
+                    deg(h.sigma_deg.unwrap_or(HEADING_SIGMA_DEG)),
+                )?,
+                grid_rad: deg(finite(
+                    "heading.grid_deg",
+                    h.grid_deg.unwrap_or(HEADING_GRID_DEG),
+                )?),
                 grid_step_rad: {
-                    let step = h.grid_step_deg.unwrap_or(90.0);
+                    let step = h.grid_step_deg.unwrap_or(HEADING_GRID_STEP_DEG);
                     if !(1.0..=360.0).contains(&step) || (360.0 / step).fract().abs() > 1e-9 {
                         return Err(invalid(
                             "heading.grid_step_deg",
@@ -268,27 +305,40 @@ impl ConfigFile {
                 },
                 start_heading_rad: deg(finite(
                     "heading.start_heading_deg",
-                    h.start_heading_deg.unwrap_or(0.0),
+                    h.start_heading_deg.unwrap_or(HEADING_START_HEADING_DEG),
                 )?),
-                gate_rad: Positive::new("heading.gate_deg", deg(h.gate_deg.unwrap_or(15.0)))?,
+                gate_rad: Positive::new(
+                    "heading.gate_deg",
+                    deg(h.gate_deg.unwrap_or(HEADING_GATE_DEG)),
+                )?,
                 straight_max_change_rad: Positive::new(
                     "heading.straight_max_change_deg",
-                    deg(h.straight_max_change_deg.unwrap_or(10.0)),
+                    deg(h
+                        .straight_max_change_deg
+                        .unwrap_or(HEADING_STRAIGHT_MAX_CHANGE_DEG)),
                 )?,
                 straight_strides,
                 calibration_strides,
-                obs_delay_s: non_negative("heading.obs_delay_s", h.obs_delay_s.unwrap_or(0.05))?,
+                obs_delay_s: non_negative(
+                    "heading.obs_delay_s",
+                    h.obs_delay_s.unwrap_or(HEADING_OBS_DELAY_S),
+                )?,
                 start_heading_sd_rad: Positive::new(
                     "heading.start_heading_sd_deg",
-                    deg(h.start_heading_sd_deg.unwrap_or(1.0)),
+                    deg(h
+                        .start_heading_sd_deg
+                        .unwrap_or(HEADING_START_HEADING_SD_DEG)),
                 )?,
-                observations: h.observations.unwrap_or(HeadingObservations::Both),
+                observations: h.observations.unwrap_or(HEADING_OBSERVATIONS),
                 stride_sigma_rad: Positive::new(
                     "heading.stride_sigma_deg",
-                    deg(h.stride_sigma_deg.unwrap_or(2.0)),
+                    deg(h.stride_sigma_deg.unwrap_or(HEADING_STRIDE_SIGMA_DEG)),
                 )?,
-                min_stride_m: Positive::new("heading.min_stride_m", h.min_stride_m.unwrap_or(0.5))?,
-                line_footprints: match h.line_footprints.unwrap_or(0) {
+                min_stride_m: Positive::new(
+                    "heading.min_stride_m",
+                    h.min_stride_m.unwrap_or(HEADING_MIN_STRIDE_M),
+                )?,
+                line_footprints: match h.line_footprints.unwrap_or(HEADING_LINE_FOOTPRINTS) {
                     n @ (0 | 3..=8) => n,
                     n => {
                         return Err(invalid(
@@ -300,13 +350,16 @@ impl ConfigFile {
                 },
                 line_lateral_m: Positive::new(
                     "heading.line_lateral_m",
-                    h.line_lateral_m.unwrap_or(0.05),
+                    h.line_lateral_m.unwrap_or(HEADING_LINE_LATERAL_M),
                 )?,
                 aligned_prior: Fraction::new(
                     "heading.aligned_prior",
-                    h.aligned_prior.unwrap_or(0.7),
+                    h.aligned_prior.unwrap_or(HEADING_ALIGNED_PRIOR),
                 )?,
-                min_weight: Fraction::new("heading.min_weight", h.min_weight.unwrap_or(0.5))?,
+                min_weight: Fraction::new(
+                    "heading.min_weight",
+                    h.min_weight.unwrap_or(HEADING_MIN_WEIGHT),
+                )?,
             },
         })
     }

@@ -1,0 +1,207 @@
+//! Every default of the configuration, in one place: the value a key takes when the file
+//! leaves it out. Each sensor's file (`configs/*.toml`) sets its own figures with how they were
+//! chosen; these are the generic fallbacks. Units are in the names, as in the keys. (The
+//! `[sensor]` limits keep theirs beside their rules, in `crate::sensor`.) Angles given in
+//! degrees in the file are converted exactly as `f64::to_radians` does.
+
+use super::{BiasPrior, DetectorKind, HeadingObservations, HeadingSource, Mode};
+
+/// `estimator.max_speed_m_s`: the swinging foot of a sprinter peaks near 10 m/s.
+pub const ESTIMATOR_MAX_SPEED_M_S: f64 = 15.0;
+
+/// `alignment.min_start_stance_s`: a walking stance lasts 0.2–0.6 s; a tenth of a second of
+/// quiet foot gives roll and pitch to a few tenths of a degree (0: wait for a rest).
+pub const ALIGNMENT_MIN_START_STANCE_S: f64 = 0.1;
+
+/// `eskf.clipped_rate_sd_rad_s`: the RMS excess of the peaks reconstructed (a parabola through
+/// the samples around each clipped run) in the 110 clipped runs of the 16 gdins walks was
+/// 0.44 rad/s.
+pub const ESKF_CLIPPED_RATE_SD_RAD_S: f64 = 0.5;
+
+/// `daemon.delivery`: a slow consumer loses the oldest samples, never stalls the daemon.
+pub const DAEMON_DELIVERY: &str = "live";
+
+/// `daemon.channel_capacity`, samples: 20 s at 200 Hz between the receive and estimator threads.
+pub const DAEMON_CHANNEL_CAPACITY: usize = 4096;
+
+/// `daemon.domain`.
+pub const DAEMON_DOMAIN: &str = "default";
+
+/// `daemon.bias_period_s`, s of sensor time between bias samples.
+pub const DAEMON_BIAS_PERIOD_S: f64 = 1.0;
+
+/// `daemon.diagnostics_period_s`, s.
+pub const DAEMON_DIAGNOSTICS_PERIOD_S: f64 = 1.0;
+
+/// `daemon.health_period_s`, s between health log lines.
+pub const DAEMON_HEALTH_PERIOD_S: f64 = 10.0;
+
+/// `daemon.checkpoint_period_s`, s.
+pub const DAEMON_CHECKPOINT_PERIOD_S: f64 = 30.0;
+
+/// `daemon.stall_timeout_s`: a lossless consumer that takes nothing for this long is dropped, s.
+pub const DAEMON_STALL_TIMEOUT_S: f64 = 1.0;
+
+/// `detector.window`, samples.
+pub const DETECTOR_WINDOW: usize = 5;
+
+/// `heading.straight_strides`.
+pub const HEADING_STRAIGHT_STRIDES: usize = 2;
+
+/// `heading.calibration_strides`: straight strides that fix the mounting yaw.
+pub const HEADING_CALIBRATION_STRIDES: usize = 3;
+
+/// `model.bias_rate_initial_sd_rad_s2`.
+pub const MODEL_BIAS_RATE_INITIAL_SD_RAD_S2: f64 = 1e-4;
+
+/// `estimator.mode`.
+pub const ESTIMATOR_MODE: Mode = Mode::Eskf;
+
+/// `estimator.converged_sd_rad_s`.
+pub const ESTIMATOR_CONVERGED_SD_RAD_S: f64 = 2e-4;
+
+/// `estimator.max_dt_s`: a longer step starts a new segment, s.
+pub const ESTIMATOR_MAX_DT_S: f64 = 0.05;
+
+/// `alignment.min_rest_s`, s.
+pub const ALIGNMENT_MIN_REST_S: f64 = 0.5;
+
+/// `alignment.gyro_bias_prior`.
+pub const ALIGNMENT_GYRO_BIAS_PRIOR: BiasPrior = BiasPrior::RestMean;
+
+/// `alignment.rest_tail_s`: the end of a rest left out of its means, s.
+pub const ALIGNMENT_REST_TAIL_S: f64 = 0.5;
+
+/// `detector.kind`.
+pub const DETECTOR_KIND: DetectorKind = DetectorKind::Shoe;
+
+/// `detector.threshold` (SHOE: about 0.55 rad/s of rotation at the default σ).
+pub const DETECTOR_THRESHOLD: f64 = 1e5;
+
+/// `detector.sigma_accel_m_s2`.
+pub const DETECTOR_SIGMA_ACCEL_M_S2: f64 = 0.01;
+
+/// `detector.sigma_gyro_rad_s` (0.1°/s).
+pub const DETECTOR_SIGMA_GYRO_RAD_S: f64 = 0.1 * (std::f64::consts::PI / 180.0);
+
+/// `detector.min_stance_s`.
+pub const DETECTOR_MIN_STANCE_S: f64 = 0.04;
+
+/// `detector.adaptive_window_s`: about one stride cycle, s.
+pub const DETECTOR_ADAPTIVE_WINDOW_S: f64 = 1.5;
+
+/// `detector.adaptive_max_threshold` when absent: this many times the fixed threshold.
+pub const DETECTOR_ADAPTIVE_MAX_FACTOR: f64 = 10.0;
+
+/// `eskf.accel_noise_m_s2` (generic and pessimistic; each sensor config sets its own).
+pub const ESKF_ACCEL_NOISE_M_S2: f64 = 0.5;
+
+/// `eskf.gyro_noise_rad_s`.
+pub const ESKF_GYRO_NOISE_RAD_S: f64 = 0.01;
+
+/// `eskf.gyro_bias_rw_rad_s_sqrt_s`.
+pub const ESKF_GYRO_BIAS_RW_RAD_S_SQRT_S: f64 = 1e-4;
+
+/// `eskf.gyro_bias_initial_sd_rad_s`: the bias σ without a prior.
+pub const ESKF_GYRO_BIAS_INITIAL_SD_RAD_S: f64 = 0.01;
+
+/// `eskf.gyro_bias_prior_sd_rad_s`: the floor of the rest-mean prior's σ.
+pub const ESKF_GYRO_BIAS_PRIOR_SD_RAD_S: f64 = 5e-4;
+
+/// `eskf.zupt_sd_m_s`.
+pub const ESKF_ZUPT_SD_M_S: f64 = 0.01;
+
+/// `eskf.initial_tilt_sd_rad` (0.5°).
+pub const ESKF_INITIAL_TILT_SD_RAD: f64 = 0.5 * (std::f64::consts::PI / 180.0);
+
+/// `eskf.zupt_lever_arm_m` (0: a constant ZUPT σ).
+pub const ESKF_ZUPT_LEVER_ARM_M: f64 = 0.0;
+
+/// `eskf.zero_rate_updates`.
+pub const ESKF_ZERO_RATE_UPDATES: bool = true;
+
+/// `eskf.zupt_rolling_height_m` (0: a plain zero-velocity update).
+pub const ESKF_ZUPT_ROLLING_HEIGHT_M: f64 = 0.0;
+
+/// `eskf.clipped_rate_excess_rad_s`.
+pub const ESKF_CLIPPED_RATE_EXCESS_RAD_S: f64 = 0.0;
+
+/// `bias_kf.tilt_sd_rad` (1°).
+pub const BIAS_KF_TILT_SD_RAD: f64 = std::f64::consts::PI / 180.0;
+
+/// `bias_kf.bias_rw_rad_s_sqrt_s`.
+pub const BIAS_KF_BIAS_RW_RAD_S_SQRT_S: f64 = 1e-5;
+
+/// `heading.source`.
+pub const HEADING_SOURCE: HeadingSource = HeadingSource::Grid;
+
+/// `heading.sigma_deg`: the foot-axis observation's σ.
+pub const HEADING_SIGMA_DEG: f64 = 3.0;
+
+/// `heading.grid_deg`.
+pub const HEADING_GRID_DEG: f64 = 0.0;
+
+/// `heading.grid_step_deg`: corridors at right angles.
+pub const HEADING_GRID_STEP_DEG: f64 = 90.0;
+
+/// `heading.start_heading_deg`.
+pub const HEADING_START_HEADING_DEG: f64 = 0.0;
+
+/// `heading.gate_deg`.
+pub const HEADING_GATE_DEG: f64 = 15.0;
+
+/// `heading.straight_max_change_deg`.
+pub const HEADING_STRAIGHT_MAX_CHANGE_DEG: f64 = 10.0;
+
+/// `heading.obs_delay_s`: stance age at which the observations are made, s.
+pub const HEADING_OBS_DELAY_S: f64 = 0.05;
+
+/// `heading.start_heading_sd_deg`.
+pub const HEADING_START_HEADING_SD_DEG: f64 = 1.0;
+
+/// `heading.observations`.
+pub const HEADING_OBSERVATIONS: HeadingObservations = HeadingObservations::Both;
+
+/// `heading.stride_sigma_deg`.
+pub const HEADING_STRIDE_SIGMA_DEG: f64 = 2.0;
+
+/// `heading.min_stride_m`: shorter displacements are shuffles, m.
+pub const HEADING_MIN_STRIDE_M: f64 = 0.5;
+
+/// `heading.line_footprints` (0: no footprint-line test).
+pub const HEADING_LINE_FOOTPRINTS: usize = 0;
+
+/// `heading.line_lateral_m`.
+pub const HEADING_LINE_LATERAL_M: f64 = 0.05;
+
+/// `heading.aligned_prior`: prior probability of walking along a dominant direction.
+pub const HEADING_ALIGNED_PRIOR: f64 = 0.7;
+
+/// `heading.min_weight`.
+pub const HEADING_MIN_WEIGHT: f64 = 0.5;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::ConfigFile;
+
+    #[test]
+    fn an_empty_file_takes_every_default_and_degrees_convert_as_to_radians_does() {
+        let c = ConfigFile::default().validate().unwrap();
+        assert_eq!(c.mode, ESTIMATOR_MODE);
+        assert_eq!(c.max_speed_m_s.get(), ESTIMATOR_MAX_SPEED_M_S);
+        assert_eq!(c.detector.window, DETECTOR_WINDOW);
+        assert_eq!(c.detector.sigma_gyro_rad_s.get(), 0.1f64.to_radians());
+        assert_eq!(c.eskf.initial_tilt_sd_rad.get(), 0.5f64.to_radians());
+        assert_eq!(c.bias_kf.tilt_sd_rad.get(), 1.0f64.to_radians());
+        assert_eq!(c.heading.sigma_rad.get(), HEADING_SIGMA_DEG.to_radians());
+        assert_eq!(c.eskf.clipped_rate_sd_rad_s, ESKF_CLIPPED_RATE_SD_RAD_S);
+        assert_eq!(
+            c.detector.adaptive_max_threshold.get(),
+            DETECTOR_ADAPTIVE_MAX_FACTOR * DETECTOR_THRESHOLD
+        );
+        let d = ConfigFile::default().validate_daemon().unwrap();
+        assert_eq!(d.domain, DAEMON_DOMAIN);
+        assert_eq!(d.channel_capacity, DAEMON_CHANNEL_CAPACITY);
+    }
+}
