@@ -1,0 +1,296 @@
+//! The offline runner: a CSV log through the estimator core, to `estimates.csv`,
+//! `innovations.csv`, `summary.json` and optional plots. It is an adapter: every line of
+//! estimation is in [`crate::core`], shared with the daemon.
+//!
+//! [`run`] (`corridor run`, the demo) streams: the log is read row by row
+//! ([`ImuCsvReader`]), each row goes through the estimator and its estimate straight to
+//! `estimates.csv` and `innovations.csv`; what the summary needs is kept as it goes (the last
+//! bias, the converged-phase mean, the positions next to the footprint times in a
+//! [`GcpSampler`], for `--plots` at most [`PLOT_POINTS`] samples of each trace), so its memory
+//! does not depend on the log's length. Every output is written as `NAME.partial` and renamed
+//! only when the run succeeded; a run that fails removes its partial files (one killed leaves
+//! them named `.partial`), and earlier outputs in the directory stay as they were.
+//!
+//! [`run_log`] runs a log already in memory and keeps the whole per-sample [`Trace`]: the
+//! suite, the diagnosis and the tests use it on the bundled recordings.
+
+use crate::core::heading::HeadingAid;
+use crate::core::{Counters, Estimate, Estimator, ImuInput};
+use crate::eval::{self, EvalOptions, EvalReport, GcpSampler, TruthGcp};
+use crate::map_file::{MapError, read_corridor_map};
+use corridor_shared::config::{Config, HeadingSource};
+use corridor_shared::imu_csv::{ImuCsvError, ImuCsvReader, ImuLog, ImuRow, RejectedRow};
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::truth_csv::{TruthCsvError, TruthPoint};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+mod figures;
+mod outputs;
+mod stream;
+
+pub use figures::write_figures;
+use figures::write_figures_to;
+pub use outputs::{
+    ESTIMATES_HEADER, INNOVATIONS_HEADER, create, io_at, write_estimate_row, write_innovation_rows,
+};
+pub use stream::{PLOT_POINTS, RunOptions, Summary, run};
+
+/// Anything that stops a run.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The IMU log is unreadable or invalid.
+    #[error(transparent)]
+    Imu(#[from] ImuCsvError),
+    /// The ground truth is unreadable or invalid.
+    #[error(transparent)]
+    Truth(#[from] TruthCsvError),
+    /// The corridor map is unreadable or invalid.
+    #[error(transparent)]
+    Map(#[from] MapError),
+    /// The evaluation failed.
+    #[error("evaluation against {truth}: {source}")]
+    Eval {
+        /// Truth file.
+        truth: PathBuf,
+        /// Cause.
+        source: eval::EvalError,
+    },
+    /// Writing an output failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// File.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The configuration is unreadable or invalid.
+    #[error(transparent)]
+    Config(#[from] corridor_shared::config::ConfigError),
+    /// The log never left the alignment phase.
+    #[error("{path}: no initial rest of at least {min_rest_s} s followed by motion was found")]
+    NeverAligned {
+        /// The log.
+        path: PathBuf,
+        /// Required rest.
+        min_rest_s: f64,
+    },
+}
+
+/// Builds the heading source the configuration asks for.
+pub fn heading_aid(cfg: &Config, map: Option<&Path>) -> Result<HeadingAid, RunError> {
+    Ok(match (cfg.heading.source, map) {
+        (_, Some(path)) => HeadingAid::Map(read_corridor_map(path)?),
+        (HeadingSource::Map, None) | (HeadingSource::None, None) => HeadingAid::None,
+        (HeadingSource::Grid, None) => HeadingAid::Grid {
+            grid_rad: cfg.heading.grid_rad,
+            step_rad: cfg.heading.grid_step_rad.get(),
+        },
+    })
+}
+
+/// Per-sample trace kept in memory for evaluation and plots.
+#[derive(Debug, Clone, Default)]
+pub struct Trace {
+    /// Sample times.
+    pub t_s: Vec<f64>,
+    /// Positions, map frame.
+    pub xy_m: Vec<[f64; 2]>,
+    /// Bias, sensor axes.
+    pub bias_rad_s: Vec<[f64; 3]>,
+    /// Bias σ.
+    pub bias_sd_rad_s: Vec<[f64; 3]>,
+    /// Converged flag.
+    pub converged: Vec<bool>,
+}
+
+/// Result of running a log through the estimator.
+#[derive(Debug, Clone)]
+pub struct RunOutcome {
+    /// The trace.
+    pub trace: Trace,
+    /// Counters of the estimator.
+    pub counters: Counters,
+    /// First convergence time.
+    pub converged_at_s: Option<f64>,
+    /// Sensor yaw on the foot, once calibrated.
+    pub mount_yaw_rad: Option<f64>,
+    /// The first [`MAX_REFUSED_EXAMPLES`] samples refused by the estimator, with file, line and
+    /// reason (the counts are in `counters`).
+    pub refused: Vec<String>,
+    /// Final extension estimates and the scale factors' σ (see `Estimator::extensions`).
+    pub extensions: Option<(
+        crate::core::eskf::ExtensionEstimates,
+        Option<nalgebra::Vector3<f64>>,
+    )>,
+}
+
+/// How many refused samples `summary.json` names.
+pub const MAX_REFUSED_EXAMPLES: usize = 10;
+
+/// One estimator fed row by row: the injection, the warnings naming file and line, the first
+/// refused samples.
+struct Feed<'a> {
+    est: Estimator,
+    injection: &'a BiasInjection,
+    path: &'a Path,
+    refused: Vec<String>,
+}
+
+impl<'a> Feed<'a> {
+    fn new(cfg: &Config, aid: &HeadingAid, injection: &'a BiasInjection, path: &'a Path) -> Self {
+        Self {
+            est: Estimator::new(cfg.clone(), aid.clone()),
+            injection,
+            path,
+            refused: Vec::new(),
+        }
+    }
+
+    /// The estimate of one row and the first convergence time after it, or `None` when the
+    /// estimator refused the row.
+    fn step(&mut self, row: &ImuRow) -> Option<(ImuInput, &Estimate, Option<f64>)> {
+        let mut gyro = row.gyro_rad_s;
+        self.injection.apply(row.t_s, &mut gyro);
+        let input = ImuInput {
+            t_s: row.t_s,
+            gyro_rad_s: gyro,
+            accel_m_s2: row.accel_m_s2,
+        };
+        match self.est.step(&input) {
+            Ok(e) => {
+                if let Some(gap_s) = e.gap_s {
+                    tracing::warn!(
+                        "{}:{}: gap of {gap_s:.3} s in the data; a new segment starts here",
+                        self.path.display(),
+                        row.line
+                    );
+                }
+                if let Some(fault) = e.health_fault {
+                    tracing::warn!(
+                        "{}:{}: estimator state failed the health check ({}); last good state restored",
+                        self.path.display(),
+                        row.line,
+                        fault.name()
+                    );
+                }
+            }
+            Err(err) => {
+                if self.refused.len() < MAX_REFUSED_EXAMPLES {
+                    self.refused
+                        .push(format!("{}:{}: {err}", self.path.display(), row.line));
+                }
+                return None;
+            }
+        }
+        Some((input, self.est.last_estimate(), self.est.converged_at_s()))
+    }
+
+    /// The outcome, with the trace kept by the caller.
+    fn outcome(self, trace: Trace) -> RunOutcome {
+        RunOutcome {
+            trace,
+            counters: *self.est.counters(),
+            converged_at_s: self.est.converged_at_s(),
+            mount_yaw_rad: self.est.mount_yaw_rad(),
+            extensions: self.est.extensions(),
+            refused: self.refused,
+        }
+    }
+}
+
+/// Runs `log` (in memory) through a new estimator and keeps the whole per-sample trace; `sink`
+/// sees every estimate with the input it came from. For a log of any length, [`run`] streams.
+pub fn run_log(
+    log: &ImuLog,
+    cfg: &Config,
+    aid: &HeadingAid,
+    injection: &BiasInjection,
+    mut sink: impl FnMut(&ImuInput, &Estimate),
+) -> RunOutcome {
+    let mut feed = Feed::new(cfg, aid, injection, &log.path);
+    let mut trace = Trace::default();
+    for row in &log.rows {
+        if let Some((input, e, _)) = feed.step(row) {
+            trace.push(e);
+            sink(&input, e);
+        }
+    }
+    feed.outcome(trace)
+}
+
+impl Trace {
+    /// Appends one estimate.
+    pub fn push(&mut self, e: &Estimate) {
+        self.t_s.push(e.t_s);
+        self.xy_m.push([e.p_m[0], e.p_m[1]]);
+        self.bias_rad_s.push(e.gyro_bias_rad_s);
+        self.bias_sd_rad_s.push(e.gyro_bias_sd_rad_s);
+        self.converged.push(e.converged);
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t_s.len()
+    }
+
+    /// Whether it holds no sample.
+    pub fn is_empty(&self) -> bool {
+        self.t_s.is_empty()
+    }
+
+    /// Keeps every other sample (the first, the third, …).
+    fn halve(&mut self) {
+        fn keep_even<T: Copy>(v: &mut Vec<T>) {
+            let mut i = 0;
+            v.retain(|_| {
+                i += 1;
+                i % 2 == 1
+            });
+        }
+        keep_even(&mut self.t_s);
+        keep_even(&mut self.xy_m);
+        keep_even(&mut self.bias_rad_s);
+        keep_even(&mut self.bias_sd_rad_s);
+        keep_even(&mut self.converged);
+    }
+
+    /// Mean bias over the samples at or after `from_s`.
+    pub fn mean_bias_from(&self, from_s: f64) -> Option<[f64; 3]> {
+        let mut sum = [0.0; 3];
+        let mut n = 0usize;
+        for (t, b) in self.t_s.iter().zip(&self.bias_rad_s) {
+            if *t >= from_s {
+                for k in 0..3 {
+                    sum[k] += b[k];
+                }
+                n += 1;
+            }
+        }
+        (n > 0).then(|| sum.map(|s| s / n as f64))
+    }
+
+    /// Evaluates the trajectory against footprint truth as `eval_traj.py` does by default.
+    pub fn evaluate(
+        &self,
+        truth: &[TruthPoint],
+        opts: &EvalOptions,
+    ) -> Result<EvalReport, eval::EvalError> {
+        let x: Vec<f64> = self.xy_m.iter().map(|p| p[0]).collect();
+        let y: Vec<f64> = self.xy_m.iter().map(|p| p[1]).collect();
+        let gcps: Vec<TruthGcp> = truth.iter().map(to_gcp).collect();
+        eval::evaluate(&self.t_s, &x, &y, &gcps, opts)
+    }
+}
+
+/// Converts a truth row for the evaluator.
+pub fn to_gcp(p: &TruthPoint) -> TruthGcp {
+    TruthGcp {
+        t_s: p.t_s,
+        x_m: p.x_m,
+        y_m: p.y_m,
+        stride: p.stride,
+    }
+}

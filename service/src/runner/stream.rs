@@ -1,0 +1,433 @@
+//! `corridor run`: the streamed run, what it keeps, its staged outputs and its progress bar.
+
+use super::*;
+
+/// `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// The IMU log.
+    pub imu: String,
+    /// Estimation mode.
+    pub mode: &'static str,
+    /// Final bias, rad/s, sensor axes.
+    pub bias_rad_s: [f64; 3],
+    /// Final bias σ.
+    pub bias_sd_rad_s: [f64; 3],
+    /// Mean bias over the converged phase (from `converged_at_s` on), or null.
+    pub bias_mean_converged_rad_s: Option<[f64; 3]>,
+    /// First time every bias σ was below `estimator.converged_sd_rad_s` (a real-time criterion).
+    pub converged_at_s: Option<f64>,
+    /// Sensor yaw on the foot found by the calibration, degrees.
+    pub mount_yaw_deg: Option<f64>,
+    /// Injected bias (constant part), rad/s.
+    pub injected_gyro_bias_rad_s: [f64; 3],
+    /// Injected ramp, rad/s².
+    pub injected_gyro_bias_ramp_rad_s2: [f64; 3],
+    /// Injection start, s.
+    pub injected_after_s: f64,
+    /// Input rows in the file (accepted by the reader).
+    pub samples_read: u64,
+    /// Samples the estimator processed.
+    pub samples: u64,
+    /// Stances.
+    pub stances: u64,
+    /// ZUPT updates.
+    pub zupts: u64,
+    /// Gaps (steps above `estimator.max_dt_s`).
+    pub gaps: u64,
+    /// Heading observations used.
+    pub heading_observations_used: u64,
+    /// Heading observations rejected, by reason.
+    pub heading_observations_rejected: BTreeMap<&'static str, u64>,
+    /// Stride-direction observations used.
+    pub stride_observations_used: u64,
+    /// Stride-direction observations rejected (too short, outside the gate or unlikely).
+    pub stride_observations_rejected: u64,
+    /// Input rows rejected by the CSV reader, by reason.
+    pub input_rows_rejected: BTreeMap<&'static str, u64>,
+    /// The first few rejected rows, with file, line, column and value.
+    pub input_rows_rejected_examples: Vec<String>,
+    /// Samples refused by the estimator (after the reader), by reason.
+    pub samples_refused_counts: BTreeMap<&'static str, u64>,
+    /// The first samples refused by the estimator, with file, line and reason.
+    pub samples_refused: Vec<String>,
+    /// Accepted samples with an axis at the rail of its range (probably clipped).
+    pub clipped_samples: u64,
+    /// Updates that failed the estimator's health check (the last good state was restored).
+    pub health_restores: u64,
+    /// Samples integrated on the smoothed clock because the stamps jitter (host arrival times).
+    pub jittery_clock_samples: u64,
+    /// Alignment came from a short first stance (no initial rest, no rest-mean prior).
+    pub started_without_rest: bool,
+    /// Zero-rate updates of the bias at rests after the alignment.
+    pub zero_rate_updates: u64,
+    /// Footprint evaluation (first-leg alignment), when truth was given.
+    pub eval: Option<EvalReport>,
+}
+
+/// What a streamed run keeps of its estimates: memory independent of the log's length.
+struct Kept {
+    /// Bias and σ of the last estimate.
+    last: Option<([f64; 3], [f64; 3])>,
+    /// Sum and count of the bias from the first converged sample on.
+    converged_sum: [f64; 3],
+    converged_n: usize,
+    /// Positions next to the footprint times, when truth was given.
+    gcps: Option<GcpSampler>,
+    /// The figures' traces, with `--plots`.
+    plot: Option<PlotTrace>,
+}
+
+impl Kept {
+    fn new(truth: Option<&[TruthGcp]>, plots: bool) -> Self {
+        Self {
+            last: None,
+            converged_sum: [0.0; 3],
+            converged_n: 0,
+            gcps: truth.map(|t| GcpSampler::new(t, &EvalOptions::default())),
+            plot: plots.then(PlotTrace::new),
+        }
+    }
+
+    /// One estimate; `converged_at_s` is the estimator's after it (the same sum as
+    /// [`Trace::mean_bias_from`] over the whole trace).
+    fn push(&mut self, e: &Estimate, converged_at_s: Option<f64>) {
+        self.last = Some((e.gyro_bias_rad_s, e.gyro_bias_sd_rad_s));
+        if converged_at_s.is_some_and(|t| e.t_s >= t) {
+            for k in 0..3 {
+                self.converged_sum[k] += e.gyro_bias_rad_s[k];
+            }
+            self.converged_n += 1;
+        }
+        if let Some(g) = &mut self.gcps {
+            g.push(e.t_s, e.p_m[0], e.p_m[1]);
+        }
+        if let Some(p) = &mut self.plot {
+            p.push(e);
+        }
+    }
+
+    fn mean_bias_converged(&self) -> Option<[f64; 3]> {
+        let n = self.converged_n;
+        (n > 0).then(|| self.converged_sum.map(|s| s / n as f64))
+    }
+}
+
+/// How many samples of each trace `--plots` keeps at most (about 2.4 MB a trace): a log up to
+/// this length is drawn sample by sample, a longer one decimated evenly.
+pub const PLOT_POINTS: usize = 1 << 15;
+
+/// A trace of at most [`PLOT_POINTS`] samples: every `stride`-th estimate; when full, every
+/// other sample is dropped and the stride doubles.
+struct PlotTrace {
+    trace: Trace,
+    stride: u64,
+    seen: u64,
+}
+
+impl PlotTrace {
+    fn new() -> Self {
+        let n = PLOT_POINTS;
+        Self {
+            trace: Trace {
+                t_s: Vec::with_capacity(n),
+                xy_m: Vec::with_capacity(n),
+                bias_rad_s: Vec::with_capacity(n),
+                bias_sd_rad_s: Vec::with_capacity(n),
+                converged: Vec::with_capacity(n),
+            },
+            stride: 1,
+            seen: 0,
+        }
+    }
+
+    fn push(&mut self, e: &Estimate) {
+        if self.seen.is_multiple_of(self.stride) {
+            if self.trace.len() == PLOT_POINTS {
+                self.trace.halve();
+                self.stride *= 2;
+            }
+            if self.seen.is_multiple_of(self.stride) {
+                self.trace.push(e);
+            }
+        }
+        self.seen += 1;
+    }
+}
+
+/// Outputs written as `NAME.partial` and renamed to `NAME` by [`Staged::commit`]; dropped
+/// without it (a failed run), the partial files are removed.
+struct Staged {
+    /// The final paths.
+    files: Vec<PathBuf>,
+    committed: bool,
+}
+
+impl Staged {
+    fn new() -> Self {
+        Self {
+            files: Vec::new(),
+            committed: false,
+        }
+    }
+
+    fn partial(path: &Path) -> PathBuf {
+        let mut name = path.as_os_str().to_owned();
+        name.push(".partial");
+        PathBuf::from(name)
+    }
+
+    /// The temporary path to write `path` under.
+    fn stage(&mut self, path: PathBuf) -> PathBuf {
+        let partial = Self::partial(&path);
+        self.files.push(path);
+        partial
+    }
+
+    /// Creates `path`'s temporary file for buffered writing.
+    fn create(
+        &mut self,
+        path: PathBuf,
+    ) -> Result<(std::io::BufWriter<std::fs::File>, PathBuf), RunError> {
+        let partial = self.stage(path);
+        Ok((create(&partial)?, partial))
+    }
+
+    /// Renames every file to its final name.
+    fn commit(mut self) -> Result<(), RunError> {
+        for f in &self.files {
+            std::fs::rename(Self::partial(f), f).map_err(io_at(f))?;
+        }
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if !self.committed {
+            for f in &self.files {
+                // Files not yet created, or already renamed, are not there: nothing to do.
+                let _ = std::fs::remove_file(Self::partial(f));
+            }
+        }
+    }
+}
+
+/// Everything `corridor run` needs.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// IMU log.
+    pub imu: PathBuf,
+    /// Validated configuration (with command-line overrides applied).
+    pub config: Config,
+    /// Corridor map file.
+    pub map: Option<PathBuf>,
+    /// Ground truth.
+    pub truth: Option<PathBuf>,
+    /// Synthetic bias injection.
+    pub injection: BiasInjection,
+    /// Write the figures.
+    pub plots: bool,
+    /// Output directory.
+    pub out_dir: PathBuf,
+    /// Reader options.
+    pub csv: corridor_shared::imu_csv::ImuCsvOptions,
+}
+
+/// How many rejected input rows are logged as warnings (all are counted in `summary.json`).
+const REJECTED_ROWS_LOGGED: usize = 20;
+
+/// Streams a log through the estimator and writes `estimates.csv`, `innovations.csv`,
+/// `summary.json` (and the figures); see the module's documentation for what is kept and what
+/// a failed run leaves.
+pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
+    let csv = corridor_shared::imu_csv::ImuCsvOptions {
+        min_dt_s: opts.config.sensor.min_dt_s(),
+        max_dt_s: opts.config.sensor.max_dt_s(),
+        ..opts.csv.clone()
+    };
+    let mut reader = ImuCsvReader::open(&opts.imu, &csv)?;
+    let truth = opts
+        .truth
+        .as_deref()
+        .map(corridor_shared::truth_csv::read_truth_csv)
+        .transpose()?;
+    let gcps: Option<Vec<TruthGcp>> = truth.as_ref().map(|t| t.iter().map(to_gcp).collect());
+    let aid = heading_aid(&opts.config, opts.map.as_deref())?;
+    std::fs::create_dir_all(&opts.out_dir).map_err(io_at(&opts.out_dir))?;
+    let mut staged = Staged::new();
+    let (mut est_w, est_path) = staged.create(opts.out_dir.join("estimates.csv"))?;
+    let (mut inn_w, inn_path) = staged.create(opts.out_dir.join("innovations.csv"))?;
+    writeln!(est_w, "{ESTIMATES_HEADER}").map_err(io_at(&est_path))?;
+    writeln!(inn_w, "{INNOVATIONS_HEADER}").map_err(io_at(&inn_path))?;
+
+    let mut feed = Feed::new(&opts.config, &aid, &opts.injection, &opts.imu);
+    let mut kept = Kept::new(gcps.as_deref(), opts.plots);
+    // "Before" for the figures: the same rows through the ZUPT filter alone, without any bias
+    // correction, in the same pass.
+    let mut before = opts.plots.then(|| {
+        let mut base = opts.config.clone();
+        base.mode = corridor_shared::config::Mode::Zupt;
+        base.alignment.gyro_bias_prior = corridor_shared::config::BiasPrior::None;
+        (
+            Feed::new(&base, &HeadingAid::None, &opts.injection, &opts.imu),
+            Kept::new(gcps.as_deref(), true),
+        )
+    });
+    let mut progress = Progress::new(reader.progress_bytes().1.unwrap_or(0));
+    let mut logged = 0;
+    loop {
+        let item = reader.next();
+        while logged < reader.rejected_rows().len().min(REJECTED_ROWS_LOGGED) {
+            tracing::warn!(
+                "rejected input row: {}",
+                reader.rejected_rows()[logged].located(reader.path())
+            );
+            logged += 1;
+        }
+        let Some(row) = item else { break };
+        let row = row?;
+        progress.show(reader.progress_bytes().0);
+        if let Some((input, e, converged_at_s)) = feed.step(&row) {
+            write_estimate_row(&mut est_w, e).map_err(io_at(&est_path))?;
+            write_innovation_rows(&mut inn_w, &input, e).map_err(io_at(&inn_path))?;
+            kept.push(e, converged_at_s);
+        }
+        if let Some((feed, kept)) = &mut before
+            && let Some((_, e, converged_at_s)) = feed.step(&row)
+        {
+            kept.push(e, converged_at_s);
+        }
+    }
+    if reader.rows_rejected() > logged as u64 {
+        tracing::warn!(
+            "{} more rejected rows (counts in summary.json)",
+            reader.rows_rejected() - logged as u64
+        );
+    }
+    progress.finish();
+    est_w.flush().map_err(io_at(&est_path))?;
+    inn_w.flush().map_err(io_at(&inn_path))?;
+    drop((est_w, inn_w));
+    let c = *feed.est.counters();
+    if c.samples > 0 && feed.est.mount_yaw_rad().is_none() && c.stances == 0 {
+        return Err(RunError::NeverAligned {
+            path: opts.imu.clone(),
+            min_rest_s: opts.config.alignment.min_rest_s.get(),
+        });
+    }
+    let eval = match (&kept.gcps, &opts.truth) {
+        (Some(g), Some(path)) => Some(g.finish().map_err(|source| RunError::Eval {
+            truth: path.clone(),
+            source,
+        })?),
+        _ => None,
+    };
+    if let (Some((_, b)), Some(after)) = (&before, &kept.plot) {
+        let eval_before = b.gcps.as_ref().and_then(|g| g.finish().ok());
+        let before_trace = &b.plot.as_ref().expect("the before run keeps a trace").trace;
+        write_figures_to(
+            &mut |name| staged.stage(opts.out_dir.join(name)),
+            before_trace,
+            &after.trace,
+            truth.as_deref(),
+            (eval_before.as_ref(), eval.as_ref()),
+        )?;
+    }
+    let summary = Summary {
+        imu: opts.imu.display().to_string(),
+        mode: opts.config.mode.name(),
+        bias_rad_s: kept.last.map_or([f64::NAN; 3], |l| l.0),
+        bias_sd_rad_s: kept.last.map_or([f64::NAN; 3], |l| l.1),
+        bias_mean_converged_rad_s: kept.mean_bias_converged(),
+        converged_at_s: feed.est.converged_at_s(),
+        mount_yaw_deg: feed.est.mount_yaw_rad().map(f64::to_degrees),
+        injected_gyro_bias_rad_s: opts.injection.constant_rad_s,
+        injected_gyro_bias_ramp_rad_s2: opts.injection.ramp_rad_s2,
+        injected_after_s: opts.injection.after_s,
+        samples_read: reader.rows_accepted(),
+        samples: c.samples,
+        stances: c.stances,
+        zupts: c.zupts,
+        gaps: c.gaps,
+        heading_observations_used: c.heading_used,
+        heading_observations_rejected: BTreeMap::from([
+            ("not_straight", c.heading_not_straight),
+            ("outside_gate", c.heading_outside_gate),
+            ("outside_map", c.heading_outside_map),
+            ("unlikely", c.heading_unlikely),
+        ]),
+        stride_observations_used: c.stride_used,
+        stride_observations_rejected: c.stride_rejected,
+        input_rows_rejected: reader.rejected_counts(),
+        input_rows_rejected_examples: reader
+            .rejected_rows()
+            .iter()
+            .take(10)
+            .map(|r: &RejectedRow| r.located(reader.path()).to_string())
+            .collect(),
+        samples_refused_counts: BTreeMap::from([
+            ("non_finite", c.rejected_non_finite),
+            ("time_not_increasing", c.rejected_time),
+            ("implausible", c.rejected_implausible),
+            ("time_jump", c.rejected_time_jump),
+        ]),
+        samples_refused: feed.refused,
+        clipped_samples: c.clipped_samples,
+        health_restores: c.health_restores,
+        jittery_clock_samples: c.jittery_clock_samples,
+        started_without_rest: c.started_without_rest,
+        zero_rate_updates: c.zero_rate_updates,
+        eval,
+    };
+    let sum_path = staged.stage(opts.out_dir.join("summary.json"));
+    let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
+    std::fs::write(&sum_path, json + "\n").map_err(io_at(&sum_path))?;
+    staged.commit()?;
+    Ok(summary)
+}
+
+/// A progress bar on stderr over the bytes of the log, shown only when stderr is a terminal and
+/// the log is long.
+struct Progress {
+    total_bytes: u64,
+    shown_pct: u64,
+    enabled: bool,
+}
+
+/// Logs shorter than this get no progress bar (about 100 000 rows), bytes.
+const PROGRESS_MIN_BYTES: u64 = 8 << 20;
+
+impl Progress {
+    fn new(total_bytes: u64) -> Self {
+        use std::io::IsTerminal;
+        Self {
+            total_bytes,
+            shown_pct: 0,
+            enabled: total_bytes >= PROGRESS_MIN_BYTES && std::io::stderr().is_terminal(),
+        }
+    }
+
+    fn show(&mut self, done_bytes: u64) {
+        if !self.enabled {
+            return;
+        }
+        let pct = done_bytes * 100 / self.total_bytes.max(1);
+        if pct > self.shown_pct {
+            self.shown_pct = pct;
+            let bar = "#".repeat(pct as usize / 2);
+            eprint!(
+                "\r[{bar:<50}] {pct:3} % ({} / {} MB)",
+                done_bytes >> 20,
+                self.total_bytes >> 20
+            );
+        }
+    }
+
+    fn finish(&self) {
+        if self.enabled {
+            eprintln!();
+        }
+    }
+}

@@ -1,0 +1,360 @@
+//! [`ImuCsvReader`]: the log row by row, in memory independent of its length.
+
+use super::*;
+
+/// A streaming reader of an IMU CSV log: an iterator of the accepted rows in file order, in
+/// memory independent of the log's length (one line buffer, the counters, the first
+/// [`REJECTED_ROWS_KEPT`] rejected rows and the units statistics).
+///
+/// It applies exactly the rules of [`parse_imu_csv`]: bad rows are rejected, counted by reason
+/// and kept with line, column and value; the checks that need the whole log (more than
+/// [`ImuCsvOptions::max_rejected_fraction`] rejected, no sample, the units) are made at its end,
+/// where the iterator yields the error as its last item instead of ending. A consumer must
+/// therefore treat what it did with the rows as provisional until the iterator has ended
+/// without an error. An unreadable line (IO error, invalid UTF-8) is an error naming the line.
+#[derive(Debug)]
+pub struct ImuCsvReader<R> {
+    pub(super) src: R,
+    pub(super) path: PathBuf,
+    pub(super) max_rejected_fraction: f64,
+    pub(super) check_units: bool,
+    /// Header column names, trimmed.
+    pub(super) names: Vec<String>,
+    pub(super) temp_index: Option<usize>,
+    /// 1-based number of the last line read.
+    pub(super) line_no: u64,
+    pub(super) line: Vec<u8>,
+    pub(super) bytes_read: u64,
+    /// Bytes of the first data line (for [`Self::rows_hint`]).
+    pub(super) first_row_bytes: u64,
+    /// Length of the source when known (a file's size), bytes.
+    pub(super) len_bytes: Option<u64>,
+    pub(super) time: TimeGuard,
+    /// Blank lines since the last non-blank one: (first line, count). Fine at the end of the
+    /// file; rejected as malformed when a data row follows.
+    pub(super) blank: Option<(u64, u64)>,
+    /// Data rows (accepted and rejected).
+    pub(super) total: u64,
+    pub(super) rejected_counts: [u64; 4],
+    pub(super) rejected: Vec<RejectedRow>,
+    pub(super) keep_rejected: usize,
+    pub(super) accepted: u64,
+    pub(super) units: UnitsStats,
+    pub(super) done: bool,
+}
+
+impl ImuCsvReader<std::io::BufReader<std::fs::File>> {
+    /// Opens the file at `path` and reads its header.
+    pub fn open(path: &Path, opts: &ImuCsvOptions) -> Result<Self, ImuCsvError> {
+        let io = |source| ImuCsvError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let file = std::fs::File::open(path).map_err(io)?;
+        let len = file.metadata().map_err(io)?.len();
+        let mut reader = Self::new(
+            std::io::BufReader::with_capacity(READ_BUFFER_BYTES, file),
+            path,
+            opts,
+        )?;
+        reader.len_bytes = Some(len);
+        Ok(reader)
+    }
+}
+
+/// Read buffer of [`ImuCsvReader::open`], bytes.
+pub(super) const READ_BUFFER_BYTES: usize = 1 << 16;
+
+impl<R: BufRead> ImuCsvReader<R> {
+    /// Reads the header from `src` (the content of `path`, which is only used in messages).
+    pub fn new(src: R, path: &Path, opts: &ImuCsvOptions) -> Result<Self, ImuCsvError> {
+        let mut reader = Self {
+            src,
+            path: path.to_path_buf(),
+            max_rejected_fraction: opts.max_rejected_fraction,
+            check_units: opts.check_units,
+            names: Vec::new(),
+            temp_index: None,
+            line_no: 0,
+            line: Vec::new(),
+            bytes_read: 0,
+            first_row_bytes: 0,
+            len_bytes: None,
+            time: TimeGuard::new(opts.min_dt_s, opts.max_dt_s),
+            blank: None,
+            total: 0,
+            rejected_counts: [0; 4],
+            rejected: Vec::new(),
+            keep_rejected: REJECTED_ROWS_KEPT,
+            accepted: 0,
+            units: UnitsStats::default(),
+            done: false,
+        };
+        reader.read_header()?;
+        Ok(reader)
+    }
+
+    /// The log's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Accepted rows so far.
+    pub fn rows_accepted(&self) -> u64 {
+        self.accepted
+    }
+
+    /// Rejected rows so far.
+    pub fn rows_rejected(&self) -> u64 {
+        self.rejected_counts.iter().sum()
+    }
+
+    /// The first [`REJECTED_ROWS_KEPT`] rejected rows, in file order.
+    pub fn rejected_rows(&self) -> &[RejectedRow] {
+        &self.rejected
+    }
+
+    /// Rejected rows per reason name, every reason present (as [`ImuLog::rejected_counts`]).
+    pub fn rejected_counts(&self) -> BTreeMap<&'static str, u64> {
+        RejectReason::ALL
+            .iter()
+            .zip(self.rejected_counts)
+            .map(|(r, n)| (r.name(), n))
+            .collect()
+    }
+
+    /// Bytes read so far and the source's length when known (progress).
+    pub fn progress_bytes(&self) -> (u64, Option<u64>) {
+        (self.bytes_read, self.len_bytes)
+    }
+
+    /// Whether the file has a `temp_c` column.
+    pub fn has_temperature(&self) -> bool {
+        self.temp_index.is_some()
+    }
+
+    /// A guess of the number of rows from the length and the first row (for a collecting caller).
+    pub(super) fn rows_hint(&self) -> usize {
+        match (self.len_bytes, self.first_row_bytes) {
+            (Some(len), first) if first > 0 => (len / first * 9 / 8 + 16) as usize,
+            _ => 0,
+        }
+    }
+
+    /// Reads the next line into `self.line` without its `\n`; `false` at the end of the source.
+    pub(super) fn read_line(&mut self) -> Result<bool, ImuCsvError> {
+        self.line.clear();
+        let n = self
+            .src
+            .read_until(b'\n', &mut self.line)
+            .map_err(|source| ImuCsvError::Io {
+                path: self.path.clone(),
+                source,
+            })?;
+        if n == 0 {
+            return Ok(false);
+        }
+        self.bytes_read += n as u64;
+        self.line_no += 1;
+        if self.line.last() == Some(&b'\n') {
+            self.line.pop();
+        }
+        if self.line_no == 1 && self.line.starts_with("\u{feff}".as_bytes()) {
+            self.line.drain(..3);
+        }
+        if std::str::from_utf8(&self.line).is_err() {
+            return Err(ImuCsvError::Io {
+                path: self.path.clone(),
+                source: std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("line {}: not valid UTF-8", self.line_no),
+                ),
+            });
+        }
+        Ok(true)
+    }
+
+    /// The current line as text (checked by [`Self::read_line`]).
+    pub(super) fn line_str(line: &[u8]) -> &str {
+        std::str::from_utf8(line).expect("read_line checked the UTF-8")
+    }
+
+    /// Reads and checks line 1.
+    pub(super) fn read_header(&mut self) -> Result<(), ImuCsvError> {
+        let path = self.path.clone();
+        let empty = || ImuCsvError::Empty { path: path.clone() };
+        if !self.read_line()? {
+            return Err(empty());
+        }
+        let header = strip_cr(Self::line_str(&self.line)).to_string();
+        if header.trim().is_empty() {
+            // Blank first line: an empty file if nothing but white space follows.
+            loop {
+                if !self.read_line()? {
+                    return Err(empty());
+                }
+                if !Self::line_str(&self.line).trim().is_empty() {
+                    break;
+                }
+            }
+        }
+        let names: Vec<&str> = header.split(',').map(str::trim_ascii).collect();
+        let header_ok = names.len() >= REQUIRED_COLUMNS.len()
+            && names.iter().zip(REQUIRED_COLUMNS).all(|(a, b)| *a == b)
+            && names.iter().all(|n| !n.is_empty())
+            && names
+                .iter()
+                .enumerate()
+                .all(|(i, n)| !names[..i].contains(n));
+        if !header_ok {
+            return Err(ImuCsvError::Header {
+                path: self.path.clone(),
+                found: truncate_chars(&header, MAX_HEADER_CHARS),
+                expected: IMU_HEADER,
+            });
+        }
+        self.temp_index = names.iter().position(|n| *n == TEMPERATURE_COLUMN);
+        self.names = names.into_iter().map(str::to_string).collect();
+        Ok(())
+    }
+
+    /// Counts a rejected row and keeps it while fewer than `keep_rejected` are kept.
+    pub(super) fn reject(&mut self, row: RejectedRow) {
+        let k = RejectReason::ALL
+            .iter()
+            .position(|r| *r == row.reason)
+            .expect("every reason is in ALL");
+        self.rejected_counts[k] += 1;
+        if self.rejected.len() < self.keep_rejected {
+            self.rejected.push(row);
+        }
+    }
+
+    /// The next accepted row, or an error, or `None` at the end of the source.
+    pub(super) fn next_row(&mut self) -> Result<Option<ImuRow>, ImuCsvError> {
+        let n_fields = self.names.len();
+        loop {
+            if !self.read_line()? {
+                return Ok(None);
+            }
+            let line_no = self.line_no;
+            if self.line.iter().all(u8::is_ascii_whitespace) {
+                // Blank lines are fine at the end of the file; in the middle they are malformed.
+                self.blank.get_or_insert((line_no, 0)).1 += 1;
+                continue;
+            }
+            if let Some((first, n)) = self.blank.take() {
+                for blank in first..first + n {
+                    self.total += 1;
+                    self.reject(RejectedRow {
+                        line: blank,
+                        column: String::new(),
+                        value: String::new(),
+                        reason: RejectReason::Malformed,
+                    });
+                }
+            }
+            self.total += 1;
+            if self.first_row_bytes == 0 {
+                self.first_row_bytes = self.line.len() as u64 + 1;
+            }
+            let line = std::mem::take(&mut self.line);
+            let text = strip_cr(Self::line_str(&line));
+            let verdict = match parse_row(text, line_no, n_fields, self.temp_index) {
+                Ok(row) => match self.time.check(row.t_s) {
+                    TimeVerdict::Accept => {
+                        self.time.accept(row.t_s);
+                        Ok(row)
+                    }
+                    verdict => Err(RejectedRow {
+                        line: line_no,
+                        column: REQUIRED_COLUMNS[0].to_string(),
+                        value: truncate_chars(
+                            text.split(',').next().unwrap_or("").trim_ascii(),
+                            MAX_VALUE_CHARS,
+                        ),
+                        reason: if verdict == TimeVerdict::Jump {
+                            RejectReason::TimeJump
+                        } else {
+                            RejectReason::TimeNotIncreasing
+                        },
+                    }),
+                },
+                Err(RowProblem::FieldCount) => Err(RejectedRow {
+                    line: line_no,
+                    column: String::new(),
+                    value: truncate_chars(text, MAX_VALUE_CHARS),
+                    reason: RejectReason::Malformed,
+                }),
+                Err(RowProblem::Field {
+                    index,
+                    text,
+                    reason,
+                }) => Err(RejectedRow {
+                    line: line_no,
+                    column: self.names[index].clone(),
+                    value: truncate_chars(text, MAX_VALUE_CHARS),
+                    reason,
+                }),
+            };
+            self.line = line;
+            match verdict {
+                Ok(row) => {
+                    self.accepted += 1;
+                    if self.check_units {
+                        self.units.add(&row);
+                    }
+                    return Ok(Some(row));
+                }
+                Err(rejected) => self.reject(rejected),
+            }
+        }
+    }
+
+    /// The checks over the whole log, in the order of [`parse_imu_csv`].
+    pub(super) fn finish(&mut self) -> Result<(), ImuCsvError> {
+        let path = || self.path.clone();
+        if self.total == 0 {
+            return Err(ImuCsvError::Empty { path: path() });
+        }
+        let max_fraction = if self.max_rejected_fraction.is_nan() {
+            0.0
+        } else {
+            self.max_rejected_fraction
+        };
+        let n_rejected = self.rows_rejected();
+        if n_rejected as f64 > max_fraction * self.total as f64 {
+            return Err(ImuCsvError::TooManyRejected {
+                path: path(),
+                rejected: n_rejected,
+                total: self.total,
+                max_rejected_fraction: self.max_rejected_fraction,
+                first: self.rejected[0].clone(),
+            });
+        }
+        if self.accepted == 0 {
+            return Err(ImuCsvError::Empty { path: path() });
+        }
+        if self.check_units {
+            self.units.check(&self.path)?;
+        }
+        Ok(())
+    }
+}
+
+impl<R: BufRead> Iterator for ImuCsvReader<R> {
+    type Item = Result<ImuRow, ImuCsvError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        let result = match self.next_row() {
+            Ok(Some(row)) => return Some(Ok(row)),
+            Ok(None) => self.finish(),
+            Err(e) => Err(e),
+        };
+        self.done = true;
+        result.err().map(Err)
+    }
+}

@@ -1,0 +1,129 @@
+//! One data row: split at the commas, parsed, checked.
+
+use super::*;
+
+/// What is wrong with one data row.
+pub(super) enum RowProblem<'a> {
+    /// The field count differs from the header's.
+    FieldCount,
+    /// The first bad field: its index, its (trimmed) text and why.
+    Field {
+        index: usize,
+        text: &'a str,
+        reason: RejectReason,
+    },
+}
+
+/// Parses one non-blank data line (without its line end), in one pass over its bytes; time
+/// ordering is checked by the caller.
+#[inline]
+pub(super) fn parse_row(
+    text: &str,
+    line_no: u64,
+    n_fields: usize,
+    temp_index: Option<usize>,
+) -> Result<ImuRow, RowProblem<'_>> {
+    let bytes = text.as_bytes();
+    let mut values = [0.0f64; 7];
+    let mut temp_c: Option<f64> = None;
+    let mut problem: Option<RowProblem<'_>> = None;
+    let mut index = 0usize;
+    let mut field_start = 0;
+    loop {
+        let field_end = find_comma_or_newline(bytes, field_start);
+        // Keep counting fields after a problem: a wrong count outranks a bad field.
+        if problem.is_none() && (index < values.len() || Some(index) == temp_index) {
+            // `,` is ASCII, so both ends are char boundaries.
+            let field = text[field_start..field_end].trim_ascii();
+            match field.parse::<f64>() {
+                Ok(v) if v.is_finite() => {
+                    if index < values.len() {
+                        values[index] = v;
+                    } else {
+                        temp_c = Some(v);
+                    }
+                }
+                Ok(_) => {
+                    problem = Some(RowProblem::Field {
+                        index,
+                        text: field,
+                        reason: RejectReason::NonFinite,
+                    })
+                }
+                Err(_) => {
+                    problem = Some(RowProblem::Field {
+                        index,
+                        text: field,
+                        reason: RejectReason::Malformed,
+                    })
+                }
+            }
+        }
+        index += 1;
+        if field_end == bytes.len() {
+            break;
+        }
+        field_start = field_end + 1;
+    }
+    if index != n_fields {
+        Err(RowProblem::FieldCount)
+    } else if let Some(p) = problem {
+        Err(p)
+    } else {
+        Ok(ImuRow {
+            t_s: values[0],
+            gyro_rad_s: [values[1], values[2], values[3]],
+            accel_m_s2: [values[4], values[5], values[6]],
+            temp_c,
+            line: line_no,
+        })
+    }
+}
+
+/// Index of the first `,` or `\n` in `bytes` at or after `from`, or `bytes.len()` if none.
+///
+/// Looks at eight bytes at a time (SWAR): CSV fields are a dozen bytes long, too short for
+/// `memchr` (used by `str::split`) to pay off, and a byte loop costs one branch per byte.
+#[inline]
+pub(super) fn find_comma_or_newline(bytes: &[u8], from: usize) -> usize {
+    const ONES: u64 = 0x0101_0101_0101_0101;
+    const HIGHS: u64 = 0x8080_8080_8080_8080;
+    const COMMAS: u64 = ONES * b',' as u64;
+    const NEWLINES: u64 = ONES * b'\n' as u64;
+    let mut i = from;
+    while let Some(chunk) = bytes.get(i..i + 8) {
+        let word = u64::from_le_bytes(chunk.try_into().expect("chunk has 8 bytes"));
+        let (c, n) = (word ^ COMMAS, word ^ NEWLINES);
+        // Sets the high bit of each zero byte of `c` or `n`; only bytes above the first zero byte
+        // can be false positives, so the lowest set bit is exact.
+        let hits = ((c.wrapping_sub(ONES) & !c) | (n.wrapping_sub(ONES) & !n)) & HIGHS;
+        if hits != 0 {
+            return i + (hits.trailing_zeros() / 8) as usize;
+        }
+        i += 8;
+    }
+    bytes[i.min(bytes.len())..]
+        .iter()
+        .position(|&b| b == b',' || b == b'\n')
+        .map_or(bytes.len(), |p| i + p)
+}
+
+/// Euclidean norm of a 3-vector.
+#[inline]
+pub(super) fn norm3(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+/// Removes one trailing `\r` (CRLF line ends).
+#[inline]
+pub(super) fn strip_cr(line: &str) -> &str {
+    line.strip_suffix('\r').unwrap_or(line)
+}
+
+/// The first `max` characters of `s` (all of it when shorter).
+pub(crate) fn truncate_chars(s: &str, max: usize) -> String {
+    match s.char_indices().nth(max) {
+        Some((end, _)) => s[..end].to_string(),
+        None => s.to_string(),
+    }
+}

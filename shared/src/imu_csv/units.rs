@@ -1,0 +1,158 @@
+//! The units check over the accepted rows: accelerometers in g, gyroscopes in deg/s.
+
+use super::*;
+
+/// Bands of |a| (m/s²) that decide the units check: below "g", "g", between, plausible, above.
+/// The median's band decides; the bands' bounds are those of [`check_units`] (g and plausible
+/// inclusive).
+pub(super) fn accel_band(norm: f64) -> usize {
+    if norm < ACCEL_LOOKS_LIKE_G_M_S2.0 {
+        0
+    } else if norm <= ACCEL_LOOKS_LIKE_G_M_S2.1 {
+        1
+    } else if norm < ACCEL_PLAUSIBLE_MEDIAN_M_S2.0 {
+        2
+    } else if norm <= ACCEL_PLAUSIBLE_MEDIAN_M_S2.1 {
+        3
+    } else {
+        4
+    }
+}
+
+/// Bins per octave of the |a| histogram (a power of two: mantissa bits of a key).
+pub(super) const HIST_BITS: u32 = 10;
+/// The histogram spans |a| in [2^HIST_MIN_EXP, 2^HIST_MAX_EXP) m/s²; values outside fall in the
+/// first or last bin.
+pub(super) const HIST_MIN_EXP: i32 = -10;
+pub(super) const HIST_MAX_EXP: i32 = 16;
+
+/// The units statistics of the accepted rows, in memory independent of their number.
+#[derive(Debug, Default)]
+pub(super) struct UnitsStats {
+    /// |a| of every row while there are at most [`EXACT_MEDIAN_ROWS`].
+    pub(super) norms: Vec<f64>,
+    /// Rows per [`accel_band`].
+    pub(super) bands: [u64; 5],
+    /// |a| histogram, once `norms` overflowed.
+    pub(super) hist: Vec<u32>,
+    /// Largest |ω| and its line (the first on ties).
+    pub(super) max_gyro: (f64, u64),
+}
+
+impl UnitsStats {
+    pub(super) fn hist_index(norm: f64) -> usize {
+        let lo = 2f64.powi(HIST_MIN_EXP);
+        let shift = 52 - HIST_BITS;
+        let n_bins = ((HIST_MAX_EXP - HIST_MIN_EXP) as usize) << HIST_BITS;
+        if norm.is_nan() || norm < lo {
+            return 0;
+        }
+        let i = ((norm.to_bits() - lo.to_bits()) >> shift) as usize;
+        i.min(n_bins - 1)
+    }
+
+    pub(super) fn add(&mut self, row: &ImuRow) {
+        let a = norm3(row.accel_m_s2);
+        self.bands[accel_band(a)] += 1;
+        if self.hist.is_empty() {
+            if self.norms.len() < EXACT_MEDIAN_ROWS {
+                self.norms.push(a);
+            } else {
+                self.hist = vec![0; ((HIST_MAX_EXP - HIST_MIN_EXP) as usize) << HIST_BITS];
+                for n in std::mem::take(&mut self.norms) {
+                    self.hist[Self::hist_index(n)] += 1;
+                }
+            }
+        }
+        if !self.hist.is_empty() {
+            self.hist[Self::hist_index(a)] += 1;
+        }
+        let w = norm3(row.gyro_rad_s);
+        if w > self.max_gyro.0 {
+            self.max_gyro = (w, row.line);
+        }
+    }
+
+    /// The median |a| (exact while the norms are kept) and the statistic's name.
+    pub(super) fn median(&mut self) -> (f64, &'static str) {
+        if self.hist.is_empty() {
+            let mid = self.norms.len() / 2;
+            let (_, median, _) = self.norms.select_nth_unstable_by(mid, f64::total_cmp);
+            return (*median, "median |a| (m/s²)");
+        }
+        let n: u64 = self.bands.iter().sum();
+        let mut left = n / 2;
+        let lo = 2f64.powi(HIST_MIN_EXP).to_bits();
+        let shift = 52 - HIST_BITS;
+        for (i, &c) in self.hist.iter().enumerate() {
+            if left < u64::from(c) {
+                // The bin's middle.
+                let bits = lo + ((i as u64) << shift) + (1 << (shift - 1));
+                return (f64::from_bits(bits), "median |a| (m/s², to 0.07 %)");
+            }
+            left -= u64::from(c);
+        }
+        unreachable!("the histogram holds every row")
+    }
+
+    /// Refuses logs whose accelerometer does not look like m/s² or whose gyroscope does not
+    /// look like rad/s. The decision is the median's band, exact for any length.
+    pub(super) fn check(&mut self, path: &Path) -> Result<(), ImuCsvError> {
+        let n: u64 = self.bands.iter().sum();
+        let mut rank = n / 2;
+        let mut band = 0;
+        for (i, &c) in self.bands.iter().enumerate() {
+            if rank < c {
+                band = i;
+                break;
+            }
+            rank -= c;
+        }
+        let units = |column, statistic: &str, value, hint: String| ImuCsvError::Units {
+            path: path.to_path_buf(),
+            column,
+            statistic: statistic.to_string(),
+            value,
+            hint,
+        };
+        const ACCEL_COLUMNS: &str = "ax_m_s2,ay_m_s2,az_m_s2";
+        if band == 1 {
+            let (median, stat) = self.median();
+            return Err(units(
+                ACCEL_COLUMNS,
+                stat,
+                median,
+                format!(
+                    "the accelerometer looks like it is in g, not m/s²; multiply by {STANDARD_GRAVITY_M_S2}"
+                ),
+            ));
+        }
+        if band != 3 {
+            let (median, stat) = self.median();
+            return Err(units(
+                ACCEL_COLUMNS,
+                stat,
+                median,
+                format!(
+                    "expected specific force in m/s² with gravity included (median |a| about {STANDARD_GRAVITY_M_S2}, \
+                     allowed {}..{}); check the accelerometer's units and scale, and that gravity was not removed",
+                    ACCEL_PLAUSIBLE_MEDIAN_M_S2.0, ACCEL_PLAUSIBLE_MEDIAN_M_S2.1
+                ),
+            ));
+        }
+        let (max_gyro, max_line) = self.max_gyro;
+        if max_gyro > GYRO_MAX_PLAUSIBLE_RAD_S {
+            return Err(units(
+                "gx_rad_s,gy_rad_s,gz_rad_s",
+                &format!("max |ω| (rad/s) at line {max_line}"),
+                max_gyro,
+                format!(
+                    "above {GYRO_MAX_PLAUSIBLE_RAD_S} rad/s (≈ 2300 °/s, beyond any consumer gyro; a foot peaks near 12 rad/s): \
+                     the gyroscope looks like it is in deg/s; multiply by π/180 = {:.9}",
+                    std::f64::consts::PI / 180.0
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
