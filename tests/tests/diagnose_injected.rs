@@ -7,7 +7,7 @@ use corridor_service::diagnose::{Effect, Report, SIGNIFICANT, apply_fix, run_dia
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::{ConfigFile, ConfigOverrides, HeadingObservations};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
-use corridor_shared::injection::BiasInjection;
+use corridor_shared::injection::{BiasInjection, LogInjection};
 use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
 use std::path::{Path, PathBuf};
 
@@ -192,36 +192,12 @@ fn injected_mounting_slip_is_a_heading_offset() {
     // vertical, and the gyro does not see it: from then on the foot's heading differs from the
     // one calibrated at the start.
     let (log, truth) = load("gdins_exp36_corridor_out_and_back");
-    let up = {
-        let n = 300.0;
-        let s = log.rows[..300].iter().fold([0.0; 3], |a, r| {
-            [
-                a[0] + r.accel_m_s2[0] / n,
-                a[1] + r.accel_m_s2[1] / n,
-                a[2] + r.accel_m_s2[2] / n,
-            ]
-        });
-        let k = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
-        [s[0] / k, s[1] / k, s[2] / k]
-    };
-    let rot = |v: &mut [f64; 3]| {
-        let (s, c) = 6f64.to_radians().sin_cos();
-        let d = up[0] * v[0] + up[1] * v[1] + up[2] * v[2];
-        let x = [
-            up[1] * v[2] - up[2] * v[1],
-            up[2] * v[0] - up[0] * v[2],
-            up[0] * v[1] - up[1] * v[0],
-        ];
-        for i in 0..3 {
-            v[i] = v[i] * c + x[i] * s + up[i] * d * (1.0 - c);
-        }
-    };
-    let log = modified(&log, |t, g, a| {
-        if t > 8.0 {
-            rot(g);
-            rot(a);
-        }
-    });
+    let mut log = log;
+    LogInjection::MountingSlip {
+        angle_rad: 6f64.to_radians(),
+        after_s: 8.0,
+    }
+    .apply(&mut log.rows);
     // Calibrated on one straight stride: with the default three, the slip is still named first
     // (heading_offset 4.4) but adding the offset state raises the footprint error of this walk
     // (1.88 -> 2.10 m), with one it lowers it (1.96 -> 1.75 m). How the fix depends on the
