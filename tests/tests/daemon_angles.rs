@@ -1,0 +1,106 @@
+//! An external heading (`AngleObservation` over `corridor/v2/angles`, e.g. from a map matcher)
+//! reaches the estimator end to end: the daemon's attitude stream is the offline run's with the
+//! same heading queued (to 1e-12, as the replay test compares), and differs in yaw from the run
+//! without it. Its own binary:
+//! one daemon per test process (README, known issues).
+
+mod daemon_common;
+
+use corridor_client::{Delivery, Domain, Producer, Subscriber};
+use corridor_service::core::{Estimate, Estimator, ImuInput, Phase};
+use corridor_service::runner::heading_aid;
+use corridor_shared::wire::{ANGLE_HEADING, AngleObservation, AttitudeSample, ImuSample};
+use daemon_common::*;
+use std::time::Instant;
+
+/// The heading the "map matcher" reports: 20° off the corridor the walk starts in, trusted to
+/// 0.5°, so that the first tracking stance visibly turns the estimate.
+const HEADING_RAD: f64 = 0.349;
+const HEADING_SD_RAD: f64 = 0.0087;
+
+/// The offline estimates of exp36, with `queued` heading observation given before the first
+/// sample (as the daemon gets it), or none.
+fn offline(queued: Option<(f64, f64)>) -> Vec<Estimate> {
+    let cfg = config();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let mut est = Estimator::new(cfg, aid);
+    if let Some((h, sd)) = queued {
+        est.queue_heading(h, sd);
+    }
+    exp36_rows()
+        .iter()
+        .map(|r| {
+            *est.step(&ImuInput {
+                t_s: r.t_s,
+                gyro_rad_s: r.gyro_rad_s,
+                accel_m_s2: r.accel_m_s2,
+            })
+            .unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn an_external_heading_moves_the_published_yaw_as_offline() {
+    let with = offline(Some((HEADING_RAD, HEADING_SD_RAD)));
+    let without = offline(None);
+    let first_tracking = with
+        .iter()
+        .position(|e| e.phase == Phase::Tracking)
+        .expect("exp36 reaches tracking");
+    let differ = with
+        .iter()
+        .zip(&without)
+        .skip(first_tracking)
+        .filter(|(a, b)| (a.yaw_rad - b.yaw_rad).abs() > 1e-3)
+        .count();
+    assert!(
+        differ > 1000,
+        "the heading changes the yaw offline ({differ} samples)"
+    );
+
+    let domain = Domain::new("test_daemon_angles").unwrap();
+    cleanup_domain("test_daemon_angles");
+    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
+    let attitude = Subscriber::<AttitudeSample>::open(&domain, "test-attitude", WAIT).unwrap();
+    let rows = exp36_rows();
+    let d = domain.clone();
+    let producer = std::thread::spawn(move || {
+        let mut p = Producer::new(&d, "test-angles", Delivery::Lossless).unwrap();
+        p.wait_for_daemon(WAIT).unwrap();
+        // The heading first: the daemon drains angle observations before IMU samples, so it is
+        // queued before the first sample, as offline. Sent again until the daemon's angle
+        // subscriber is connected (it is created next to the IMU one).
+        let obs = AngleObservation {
+            t_s: rows[0].t_s,
+            heading_rad: HEADING_RAD,
+            heading_sd_rad: HEADING_SD_RAD,
+            valid: ANGLE_HEADING,
+            ..AngleObservation::default()
+        };
+        let start = Instant::now();
+        while p.send_angles(obs).unwrap() == 0 {
+            assert!(start.elapsed() < WAIT, "no angle subscriber");
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        for r in &rows {
+            p.send_imu(ImuSample::from(r)).unwrap();
+        }
+        p.finish().unwrap();
+        p.stats()
+    });
+    let got = until_end(&attitude, |a| a.flags);
+    let stats = producer.join().unwrap();
+    daemon.stop();
+    assert_eq!(stats.angles_undelivered, stats.angles_sent - 1);
+    assert_eq!(got.len(), with.len() + 1, "every sample and the marker");
+    for (i, (a, e)) in got.iter().zip(&with).enumerate() {
+        let close = |x: f64, y: f64| x == y || (x - y).abs() <= 1e-12;
+        assert!(
+            close(a.yaw_rad, e.yaw_rad),
+            "yaw at {i}: {} vs {}",
+            a.yaw_rad,
+            e.yaw_rad
+        );
+    }
+}
