@@ -25,7 +25,7 @@ fn offline(queued: Option<(f64, f64)>) -> Vec<Estimate> {
     let aid = heading_aid(&cfg, None).unwrap();
     let mut est = Estimator::new(cfg, aid);
     if let Some((h, sd)) = queued {
-        est.queue_heading(h, sd);
+        est.queue_heading(h, sd).unwrap();
     }
     exp36_rows()
         .iter()

@@ -473,10 +473,9 @@ pub(super) fn estimator_thread(
                 heading_rad,
                 sd_rad,
             }) => {
-                if heading_rad.is_finite() && sd_rad.is_finite() && sd_rad > 0.0 {
-                    st.est.queue_heading(heading_rad, sd_rad);
-                } else {
-                    tracing::debug!(heading_rad, sd_rad, "angle observation refused");
+                // Refused and counted by the estimator when absurd.
+                if let Err(e) = st.est.queue_heading(heading_rad, sd_rad) {
+                    tracing::warn!("{e}");
                 }
             }
             Ok(Msg::NewProducer) => st.producer_changed = true,

@@ -30,7 +30,8 @@ mod types;
 
 pub use association::association_weight;
 pub use types::{
-    Counters, Estimate, HeadingEvent, ImuInput, Phase, SampleError, WarmStart, WarmStartError,
+    Counters, Estimate, HeadingEvent, HeadingRefused, ImuInput, Phase, SampleError, WarmStart,
+    WarmStartError,
 };
 
 use rest::RestSums;
@@ -223,9 +224,19 @@ impl Estimator {
     }
 
     /// An external observation of the walking (foot) heading in the map frame with its σ; it is
-    /// used at the next stance instead of the map.
-    pub fn queue_heading(&mut self, heading_rad: f64, sd_rad: f64) {
+    /// used at the next stance instead of the map. A heading that is not finite, or a σ that is
+    /// not in (0, π], is refused and counted (`headings_refused`): nothing absurd is fused.
+    pub fn queue_heading(&mut self, heading_rad: f64, sd_rad: f64) -> Result<(), HeadingRefused> {
+        let sane = heading_rad.is_finite() && sd_rad > 0.0 && sd_rad <= std::f64::consts::PI;
+        if !sane {
+            self.p.counters.headings_refused += 1;
+            return Err(HeadingRefused {
+                heading_rad,
+                sd_rad,
+            });
+        }
         self.p.pending_heading = Some((heading_rad, sd_rad));
+        Ok(())
     }
 
     /// Processes one sample. On error nothing changed and the sample is counted as rejected.
@@ -933,6 +944,24 @@ mod tests {
                 p[axis][axis].sqrt()
             );
         }
+    }
+
+    #[test]
+    fn an_absurd_external_heading_is_refused_and_counted() {
+        let mut est = Estimator::new(Config::default(), HeadingAid::None);
+        for (h, sd) in [
+            (f64::NAN, 0.01),
+            (0.3, 0.0),
+            (0.3, -1.0),
+            (0.3, f64::INFINITY),
+            (1e300 * 1e300, 0.1),
+        ] {
+            assert!(est.queue_heading(h, sd).is_err(), "{h} {sd}");
+        }
+        assert_eq!(est.counters().headings_refused, 5);
+        assert!(est.p.pending_heading.is_none());
+        est.queue_heading(0.3, 0.01).unwrap();
+        assert_eq!(est.p.pending_heading, Some((0.3, 0.01)));
     }
 
     #[test]

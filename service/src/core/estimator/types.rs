@@ -180,6 +180,8 @@ pub struct Counters {
     /// Samples integrated on the smoothed clock because the time stamps jitter (host arrival
     /// times; see `core/clock.rs`).
     pub jittery_clock_samples: u64,
+    /// External heading observations refused (not finite, or σ not in (0, π]).
+    pub headings_refused: u64,
 }
 
 /// The estimate after one sample.
@@ -252,4 +254,16 @@ impl Default for Estimate {
             stride: None,
         }
     }
+}
+
+/// An external heading observation that cannot be fused.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error(
+    "heading observation refused: heading {heading_rad} rad, σ {sd_rad} rad (finite heading and σ in (0, π] needed)"
+)]
+pub struct HeadingRefused {
+    /// The heading given.
+    pub heading_rad: f64,
+    /// Its σ.
+    pub sd_rad: f64,
 }
