@@ -1,6 +1,6 @@
-//! The shipped configuration files agree with each other: `configs/service.toml` is the sensor's
-//! `configs/gdins.toml` plus a `[daemon]` section, so the daemon runs the same estimator as
-//! `corridor run` and the results suite.
+//! The shipped configuration files agree with each other: `configs/service.toml` layers a
+//! `[daemon]` section over the sensor's `configs/gdins.toml` (`base`), so the daemon runs the same
+//! estimator as `corridor run` and the results suite; and a layered file's own keys win.
 
 use corridor_shared::config::ConfigFile;
 use std::path::{Path, PathBuf};
@@ -29,4 +29,36 @@ fn the_daemon_config_runs_the_sensor_config_estimator() {
             || d.channel_capacity != 4096,
         "configs/service.toml should say something about the daemon"
     );
+}
+
+#[test]
+fn a_layered_file_takes_its_base_and_replaces_only_the_keys_it_sets() {
+    let dir = std::env::temp_dir().join(format!("corridor-layer-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("sensor.toml"),
+        "[eskf]\nzupt_sd_m_s = 0.02\naccel_noise_m_s2 = 0.1\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("daemon.toml"),
+        "base = \"sensor.toml\"\n[eskf]\naccel_noise_m_s2 = 0.3\n[daemon]\ndomain = \"x\"\n",
+    )
+    .unwrap();
+    let c = ConfigFile::read(&dir.join("daemon.toml")).unwrap();
+    assert_eq!(c.eskf.zupt_sd_m_s, Some(0.02), "from the base");
+    assert_eq!(c.eskf.accel_noise_m_s2, Some(0.3), "replaced by the layer");
+    assert_eq!(c.daemon.domain.as_deref(), Some("x"));
+    // A base with a base, and a base with a bad key, are errors naming the place.
+    std::fs::write(dir.join("sensor.toml"), "base = \"other.toml\"\n").unwrap();
+    let e = ConfigFile::read(&dir.join("daemon.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("base"), "{e}");
+    std::fs::write(dir.join("sensor.toml"), "[eskf]\nzupt_sd = 1.0\n").unwrap();
+    let e = ConfigFile::read(&dir.join("daemon.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("sensor.toml") && e.contains("zupt_sd"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -14,12 +14,54 @@ impl ConfigFile {
         Self::parse(&text, path)
     }
 
-    /// Parses TOML text; `path` only names the source in errors.
+    /// Parses TOML text; `path` names the source in errors and anchors a `base`.
+    ///
+    /// A top-level `base = "FILE"` (relative to this file's directory) layers this file over
+    /// another: the base is read first, and every key this file sets replaces the base's (a
+    /// daemon file is the sensor's file plus a `[daemon]` section, without copying it). One
+    /// level only: a base may not have a base.
     pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
-        toml::from_str(text).map_err(|e| ConfigError::Toml {
-            path: path.to_owned(),
-            message: e.to_string(),
-        })
+        let toml_err = |p: &Path, message: String| ConfigError::Toml {
+            path: p.to_owned(),
+            message,
+        };
+        let mut table: toml::Table =
+            toml::from_str(text).map_err(|e| toml_err(path, e.to_string()))?;
+        if let Some(base) = table.remove("base") {
+            let Some(name) = base.as_str() else {
+                return Err(invalid("base", base, "must be a file name (a string)"));
+            };
+            let base_path = path.parent().unwrap_or(Path::new(".")).join(name);
+            let base_text =
+                std::fs::read_to_string(&base_path).map_err(|source| ConfigError::Io {
+                    path: base_path.clone(),
+                    source,
+                })?;
+            let mut merged: toml::Table =
+                toml::from_str(&base_text).map_err(|e| toml_err(&base_path, e.to_string()))?;
+            if merged.contains_key("base") {
+                return Err(invalid(
+                    "base",
+                    name,
+                    "a base file may not name a base itself",
+                ));
+            }
+            // Validate the base alone first, so its errors name it.
+            merged
+                .clone()
+                .try_into::<ConfigFile>()
+                .map_err(|e| toml_err(&base_path, e.to_string()))?;
+            for (section, value) in table {
+                match (merged.get_mut(&section), value) {
+                    (Some(toml::Value::Table(into)), toml::Value::Table(keys)) => into.extend(keys),
+                    (_, value) => {
+                        merged.insert(section, value);
+                    }
+                }
+            }
+            table = merged;
+        }
+        table.try_into().map_err(|e| toml_err(path, e.to_string()))
     }
 
     /// Validates the `[daemon]` section into [`DaemonSettings`] (what `corridor serve` needs
