@@ -521,6 +521,23 @@ impl Domain {
         Ok(domain)
     }
 
+    /// The daemon's accounting file of this domain (its input counters, the position in the
+    /// current producer's numbering and the output sequence numbers, kept across daemon
+    /// restarts): `DIR/<domain>/daemon.state` for a secured domain served by this process,
+    /// else `/dev/shm/<prefix>daemon.state` (removed at reboot, like the domain's segments).
+    pub fn daemon_state_path(&self) -> std::path::PathBuf {
+        match &self.hold {
+            Some(h) => h.dir.join("daemon.state"),
+            None => {
+                let prefix = match &self.secured_prefix {
+                    Some(p) => p.clone(),
+                    None => format!("corridor_{}_", self.name),
+                };
+                std::path::Path::new("/dev/shm").join(format!("{prefix}daemon.state"))
+            }
+        }
+    }
+
     /// Whether this domain is secured (lives in a runtime directory).
     pub fn is_secured(&self) -> bool {
         self.secured_prefix.is_some()
