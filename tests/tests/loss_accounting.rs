@@ -200,7 +200,9 @@ fn check_sums(scenario: &str, sent: u64, undelivered: u64, r: &Value, loggers: &
     println!(
         "{scenario}: sent {sent} (producer: {undelivered} reached no daemon) = received \
          {received} + head_missing {head} + seq_gaps {gaps} + missing_at_restart {restart}; \
-         dropped_overflow {} lost_in_daemon {} accepted (last life) {} daemon lives {}",
+         handed to the estimator {} + dropped_overflow {}; lost_in_daemon {} accepted (last \
+         life) {} daemon lives {}",
+        n(r, "handed_to_estimator"),
         n(r, "dropped_overflow"),
         n(r, "lost_in_daemon"),
         n(r, "accepted"),
@@ -219,6 +221,11 @@ fn check_sums(scenario: &str, sent: u64, undelivered: u64, r: &Value, loggers: &
         );
     }
     assert_eq!((n(r, "rejected_duplicate_seq"), n(r, "late")), (0, 0));
+    assert_eq!(
+        n(r, "handed_to_estimator") + n(r, "dropped_overflow"),
+        received,
+        "{scenario}: inside the daemon"
+    );
     assert_eq!(
         received + head + gaps + restart,
         sent,

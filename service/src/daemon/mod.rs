@@ -45,6 +45,12 @@
 //! would. Without a checkpoint every stream starts from the configured prior (bit-identical to
 //! `corridor run`).
 //!
+//! Loss accounting: the input counters, the position in the current producer's numbering and
+//! the output `seq`s live in the domain's accounting file (`state`), a shared file mapping that
+//! survives the process however it ends; the next daemon of the domain continues them, so what
+//! a restart cost is counted once ([`DaemonReport::missing_at_restart`],
+//! [`DaemonReport::lost_in_daemon`]) and consumers see one continuous numbering.
+//!
 //! One daemon per domain: [`run`] claims the domain ([`Domain::claim_daemon`]) and fails with
 //! [`ServiceError::DaemonAlreadyRunning`] when another daemon holds it.
 //!
@@ -60,6 +66,7 @@
 //!   stream, the checkpoint saves and the health line.
 //! - `outputs`: the output publishers and the conversion of an estimate into wire messages.
 //! - `latency`: the allocation-free latency histogram behind the diagnostics and health line.
+//! - `state`: the accounting file (the receive thread's counters, the output `seq`s).
 //!
 //! [`Estimator`]: crate::core::Estimator
 //! [`Estimator::set_warm_start`]: crate::core::Estimator::set_warm_start
@@ -212,6 +219,9 @@ pub struct DaemonReport {
     /// life received and the first one the next life received: sent while no daemon was there,
     /// or left unread in the input buffer of a daemon that stopped or was killed.
     pub missing_at_restart: u64,
+    /// IMU samples handed to the estimator thread (`received` less `dropped_overflow`,
+    /// `rejected_duplicate_seq` and `late`).
+    pub handed_to_estimator: u64,
     /// IMU samples an earlier daemon life received and handed to its estimator thread, but
     /// never estimated (killed with them in its channel).
     pub lost_in_daemon: u64,
