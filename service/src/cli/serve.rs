@@ -76,7 +76,7 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
             "producer_changes": d.producer_changes,
             "head_missing": report.head_missing,
             "missing_at_restart": report.missing_at_restart,
-            "handed_to_estimator": report.handed_to_estimator,
+            "estimated": report.estimated,
             "lost_in_daemon": report.lost_in_daemon,
             "angles_dropped": report.angles_dropped,
             "published": {

@@ -526,7 +526,7 @@ pub(super) fn estimator_thread(
         ],
         head_missing: counters.head_missing.load(Ordering::Relaxed),
         missing_at_restart: counters.missing_at_restart.load(Ordering::Relaxed),
-        handed_to_estimator: counters.forwarded.load(Ordering::Relaxed),
+        estimated: counters.taken.load(Ordering::Relaxed),
         lost_in_daemon: counters.lost_in_daemon.load(Ordering::Relaxed),
         angles_dropped: counters.angles_dropped.load(Ordering::Relaxed),
         published: [

@@ -219,11 +219,11 @@ pub struct DaemonReport {
     /// life received and the first one the next life received: sent while no daemon was there,
     /// or left unread in the input buffer of a daemon that stopped or was killed.
     pub missing_at_restart: u64,
-    /// IMU samples handed to the estimator thread (`received` less `dropped_overflow`,
-    /// `rejected_duplicate_seq` and `late`).
-    pub handed_to_estimator: u64,
-    /// IMU samples an earlier daemon life received and handed to its estimator thread, but
-    /// never estimated (killed with them in its channel).
+    /// IMU samples the estimator took (estimated or refused by it, markers included).
+    pub estimated: u64,
+    /// IMU samples an earlier daemon life received but neither estimated, refused by `seq` nor
+    /// dropped (killed with them in its receive thread or channel): `received = estimated +
+    /// dropped_overflow + rejected_duplicate_seq + late + lost_in_daemon` after a clean stop.
     pub lost_in_daemon: u64,
     /// Angle observations dropped because the estimator's channel was full (live delivery).
     pub angles_dropped: u64,

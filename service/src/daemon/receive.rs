@@ -110,7 +110,8 @@ pub(super) fn rx_thread(
             let s: ImuSample = *smp.payload();
             let producer = smp.header().publisher_id().value();
             drop(smp); // return the shared-memory slot at once
-            counters.received.fetch_add(1, Ordering::Relaxed);
+            // `received` is counted next to the store of the position (`last_seq_plus1`), so a
+            // SIGKILL can misplace at most the one sample between the two stores.
             let new_producer = last_producer != Some(producer);
             // Gaps in the numbering of the producer an earlier daemon life was receiving, up to
             // this life's first sample of it, are the restart's.
@@ -159,8 +160,9 @@ pub(super) fn rx_thread(
                 last_seq = None;
                 mid_stream = false;
                 store_opt(&counters.next_stream_seq_plus1, next_stream_seq);
-                store_opt(&counters.last_seq_plus1, None);
                 counters.mid_stream.store(0, Ordering::Relaxed);
+                store_opt(&counters.last_seq_plus1, None);
+                counters.received.fetch_add(1, Ordering::Relaxed);
                 // The marker is never dropped, whatever the policy.
                 if !forward(Delivery::Lossless, &tx, Msg::Imu(s), counters, &stopping) {
                     return Ok(());
@@ -185,10 +187,12 @@ pub(super) fn rx_thread(
             }
             if let Some(l) = last_seq {
                 if s.seq == l {
+                    counters.received.fetch_add(1, Ordering::Relaxed);
                     counters.duplicate.fetch_add(1, Ordering::Relaxed);
                     continue;
                 }
                 if s.seq < l {
+                    counters.received.fetch_add(1, Ordering::Relaxed);
                     counters.late.fetch_add(1, Ordering::Relaxed);
                     continue;
                 }
@@ -196,6 +200,7 @@ pub(super) fn rx_thread(
             }
             last_seq = Some(s.seq);
             store_opt(&counters.last_seq_plus1, last_seq);
+            counters.received.fetch_add(1, Ordering::Relaxed);
             if !forward(cfg.delivery, &tx, Msg::Imu(s), counters, &stopping) {
                 return Ok(());
             }

@@ -75,8 +75,10 @@ pub(super) struct Record {
     pub(super) forwarded: AtomicU64,
     /// IMU samples the estimator thread took from the channel.
     pub(super) taken: AtomicU64,
-    /// IMU samples handed to the estimator thread of a daemon life that ended (killed) before
-    /// it took them.
+    /// IMU samples a daemon life received but neither estimated, refused by `seq` nor dropped:
+    /// it was killed with them in its receive thread or its estimator channel. So
+    /// `received = taken + dropped + duplicate + late + lost_in_daemon` whenever no sample is in
+    /// flight.
     pub(super) lost_in_daemon: AtomicU64,
     /// The next `seq` of each output ([`OUT_ATTITUDE`], [`OUT_BIAS`], [`OUT_NAV`],
     /// [`OUT_DIAGNOSTICS`]) = messages published so far.
@@ -189,7 +191,7 @@ impl Drop for StateFile {
 impl StateFile {
     /// Opens (or creates, mode 0600) the accounting file at `path` and maps it; a file of another
     /// layout, or a new one, starts from zero. Counts one more daemon life, and the samples the
-    /// previous life received but never estimated (killed with samples in its channel).
+    /// previous life received but never estimated (killed with samples in flight).
     pub(super) fn open(path: &Path) -> Result<Self, StateFileError> {
         let err = |what| {
             move |source| StateFileError {
@@ -234,11 +236,18 @@ impl StateFile {
             state.reset();
         }
         state.lives.fetch_add(1, Ordering::Relaxed);
-        let forwarded = state.forwarded.load(Ordering::Relaxed);
-        let taken = state.taken.swap(forwarded, Ordering::Relaxed);
+        // What the previous life received but neither estimated nor refused by `seq` nor dropped
+        // (in its receive thread or its channel when it was killed) is lost in the daemon; the
+        // channel of this life starts empty.
+        let load = |a: &AtomicU64| a.load(Ordering::Relaxed);
+        let accounted =
+            load(&state.taken) + load(&state.dropped) + load(&state.duplicate) + load(&state.late);
+        let unestimated =
+            load(&state.received).saturating_sub(accounted + load(&state.lost_in_daemon));
         state
             .lost_in_daemon
-            .fetch_add(forwarded.saturating_sub(taken), Ordering::Relaxed);
+            .fetch_add(unestimated, Ordering::Relaxed);
+        state.forwarded.store(load(&state.taken), Ordering::Relaxed);
         Ok(state)
     }
 
@@ -262,6 +271,7 @@ mod tests {
             s.received.store(10, Ordering::Relaxed);
             s.forwarded.store(9, Ordering::Relaxed);
             s.taken.store(6, Ordering::Relaxed);
+            s.dropped.store(1, Ordering::Relaxed);
             s.set_producer(u128::MAX - 5);
             store_opt(&s.last_seq_plus1, Some(41));
             s.out_seq[OUT_ATTITUDE].store(7, Ordering::Relaxed);
@@ -269,8 +279,9 @@ mod tests {
         let s = StateFile::open(&path).unwrap();
         assert_eq!(s.lives.load(Ordering::Relaxed), 2);
         assert_eq!(s.received.load(Ordering::Relaxed), 10);
+        // 10 received = 6 estimated + 1 dropped + 3 lost (in the channel or the receive thread).
         assert_eq!(s.lost_in_daemon.load(Ordering::Relaxed), 3);
-        assert_eq!(s.taken.load(Ordering::Relaxed), 9);
+        assert_eq!(s.forwarded.load(Ordering::Relaxed), 6);
         assert_eq!(s.producer(), Some(u128::MAX - 5));
         assert_eq!(load_opt(&s.last_seq_plus1), Some(41));
         assert_eq!(load_opt(&s.next_stream_seq_plus1), None);
