@@ -67,10 +67,18 @@ pub struct Recorded {
     pub attitude_rows: u64,
     /// Rows written to `bias.csv`.
     pub bias_rows: u64,
-    /// Attitude messages missing from the `seq` numbering.
+    /// Attitude messages received (end-of-stream messages included).
+    pub attitude_received: u64,
+    /// Attitude messages missing from the `seq` numbering after the first one received.
     pub attitude_missed: u64,
-    /// Bias messages missing from the `seq` numbering.
+    /// Attitude messages published before the first one received (a logger that started late).
+    pub attitude_missed_at_start: u64,
+    /// Bias messages received (end-of-stream messages included).
+    pub bias_received: u64,
+    /// Bias messages missing from the `seq` numbering after the first one received.
     pub bias_missed: u64,
+    /// Bias messages published before the first one received.
+    pub bias_missed_at_start: u64,
     /// The bias of the last attitude row.
     pub last_attitude_bias_rad_s: [f64; 3],
     /// The bias of the end-of-stream bias message (the daemon's final bias), if it came.
@@ -135,8 +143,12 @@ impl Recorder {
                 streams_ended: 0,
                 attitude_rows: 0,
                 bias_rows: 0,
+                attitude_received: 0,
                 attitude_missed: 0,
+                attitude_missed_at_start: 0,
+                bias_received: 0,
                 bias_missed: 0,
+                bias_missed_at_start: 0,
                 last_attitude_bias_rad_s: [0.0; 3],
                 final_bias_rad_s: None,
                 attitude_path,
@@ -222,8 +234,12 @@ impl Recorder {
             .map_err(file_err(&self.got.attitude_path))?;
         self.bias_w.flush().map_err(file_err(&self.got.bias_path))?;
         self.got.stopped = stopped;
+        self.got.attitude_received = self.attitude.received();
         self.got.attitude_missed = self.attitude.missed();
+        self.got.attitude_missed_at_start = self.attitude.missed_at_start();
+        self.got.bias_received = self.bias.received();
         self.got.bias_missed = self.bias.missed();
+        self.got.bias_missed_at_start = self.bias.missed_at_start();
         Ok(self.got)
     }
 }

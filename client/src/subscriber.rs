@@ -13,7 +13,12 @@ use std::time::{Duration, Instant};
 ///
 /// It counts what it lost from the `seq` numbers ([`Subscriber::missed`]): with the `live`
 /// policy a reader that falls behind by more than the buffer ([`Topic::QOS`]) loses the oldest
-/// messages, and iceoryx2 does not tell the publisher, so only the reader can count them.
+/// messages, and iceoryx2 does not tell the publisher, so only the reader can count them. The
+/// daemon's numbering continues across its restarts (its accounting file), so what a reader
+/// misses around a restart is a gap too. With [`Subscriber::received`] and
+/// [`Subscriber::missed_at_start`] (what was published before this reader's first message),
+/// the daemon's published count of the output (its next `seq`) is accounted for:
+/// `published = missed_at_start + received + missed`, up to the last message received.
 ///
 /// [`AttitudeSample`]: corridor_shared::wire::AttitudeSample
 pub struct Subscriber<T: Topic> {
@@ -22,7 +27,9 @@ pub struct Subscriber<T: Topic> {
     sub: iceoryx2::port::subscriber::Subscriber<ipc::Service, T, ()>,
     listener: Listener<ipc::Service>,
     last_seq: Cell<Option<u64>>,
+    received: Cell<u64>,
     missed: Cell<u64>,
+    missed_at_start: Cell<u64>,
     restarts: Cell<u64>,
     // Declared last: dropped after the ports.
     node: Node<ipc::Service>,
@@ -95,7 +102,9 @@ impl<T: Topic> Subscriber<T> {
             sub,
             listener,
             last_seq: Cell::new(None),
+            received: Cell::new(0),
             missed: Cell::new(0),
+            missed_at_start: Cell::new(0),
             restarts: Cell::new(0),
             node,
         })
@@ -140,21 +149,38 @@ impl<T: Topic> Subscriber<T> {
     }
 
     fn track(&self, seq: u64) {
+        self.received.set(self.received.get() + 1);
         match self.last_seq.get() {
             Some(l) if seq > l => self.missed.set(self.missed.get() + (seq - l - 1)),
-            Some(_) => self.restarts.set(self.restarts.get() + 1),
-            None => {}
+            Some(_) => {
+                // A new numbering (a daemon that lost its accounting file): its head is missed.
+                self.restarts.set(self.restarts.get() + 1);
+                self.missed.set(self.missed.get() + seq);
+            }
+            None => self.missed_at_start.set(seq),
         }
         self.last_seq.set(Some(seq));
     }
 
-    /// Messages lost so far according to their `seq` (overwritten in this reader's buffer
-    /// because it fell behind, with the `live` policy).
+    /// Messages received so far.
+    pub fn received(&self) -> u64 {
+        self.received.get()
+    }
+
+    /// Messages lost so far according to their `seq`, after this reader's first message
+    /// (overwritten in its buffer because it fell behind with the `live` policy, discarded for
+    /// a stalled reader, or published by a daemon killed before they reached this reader).
     pub fn missed(&self) -> u64 {
         self.missed.get()
     }
 
-    /// Times the `seq` numbering went back (a restarted daemon).
+    /// Messages the daemon published before this reader's first message (the `seq` of that
+    /// message): a reader that started late, or missed the head of the stream.
+    pub fn missed_at_start(&self) -> u64 {
+        self.missed_at_start.get()
+    }
+
+    /// Times the `seq` numbering went back (a restarted daemon without its accounting file).
     pub fn publisher_restarts(&self) -> u64 {
         self.restarts.get()
     }

@@ -363,6 +363,9 @@ impl Topic for Diagnostics {
     }
 }
 
+/// Longest wait, at daemon start, for the cleanup of a killed daemon's claim.
+const CLAIM_CLEANUP_WAIT: std::time::Duration = std::time::Duration::from_secs(5);
+
 /// Maximum notifiers on a paired event service.
 pub const EVENT_MAX_NOTIFIERS: usize = 4;
 /// Maximum listeners on a paired event service.
@@ -519,6 +522,23 @@ impl Domain {
         }
         domain.hold = Some(std::sync::Arc::new(hold));
         Ok(domain)
+    }
+
+    /// The daemon's accounting file of this domain (its input counters, the position in the
+    /// current producer's numbering and the output sequence numbers, kept across daemon
+    /// restarts): `DIR/<domain>/daemon.state` for a secured domain served by this process,
+    /// else `/dev/shm/<prefix>daemon.state` (removed at reboot, like the domain's segments).
+    pub fn daemon_state_path(&self) -> std::path::PathBuf {
+        match &self.hold {
+            Some(h) => h.dir.join("daemon.state"),
+            None => {
+                let prefix = match &self.secured_prefix {
+                    Some(p) => p.clone(),
+                    None => format!("corridor_{}_", self.name),
+                };
+                std::path::Path::new("/dev/shm").join(format!("{prefix}daemon.state"))
+            }
+        }
     }
 
     /// Whether this domain is secured (lives in a runtime directory).
@@ -698,25 +718,37 @@ impl Domain {
             domain: self.name.clone(),
             detail: format!("{e:?}"),
         })?;
-        node.service_builder(&name)
-            .event()
-            .max_notifiers(1)
-            .max_listeners(EVENT_MAX_LISTENERS)
-            .create()
-            .map_err(|e| match e {
-                EventCreateError::AlreadyExists
-                | EventCreateError::IsBeingCreatedByAnotherInstance => {
-                    ServiceError::DaemonAlreadyRunning {
-                        domain: self.name.clone(),
-                    }
-                }
-                e => ServiceError::Open {
-                    service: DAEMON_SERVICE,
-                    pattern: "event",
+        let create = || {
+            node.service_builder(&name)
+                .event()
+                .max_notifiers(1)
+                .max_listeners(EVENT_MAX_LISTENERS)
+                .create()
+        };
+        let claim = match create() {
+            // The claim of a daemon that was killed: the node creation's cleanup of dead nodes
+            // does not wait for a cleanup another process (a client) is doing at that moment,
+            // so the dead daemon's service can still be there (2 of 9 restarts after SIGKILL
+            // in tests/tests/loss_accounting.rs). Wait for the cleanup, then try again.
+            Err(EventCreateError::AlreadyExists) => {
+                node.blocking_cleanup_dead_nodes(CLAIM_CLEANUP_WAIT);
+                create()
+            }
+            r => r,
+        };
+        claim.map_err(|e| match e {
+            EventCreateError::AlreadyExists | EventCreateError::IsBeingCreatedByAnotherInstance => {
+                ServiceError::DaemonAlreadyRunning {
                     domain: self.name.clone(),
-                    detail: format!("{e:?}"),
-                },
-            })
+                }
+            }
+            e => ServiceError::Open {
+                service: DAEMON_SERVICE,
+                pattern: "event",
+                domain: self.name.clone(),
+                detail: format!("{e:?}"),
+            },
+        })
     }
 }
 

@@ -222,7 +222,11 @@ pub struct NavSample {
 }
 
 /// Counters of the daemon, daemon → clients (`corridor/v2/diagnostics`): periodically (wall
-/// clock), at end of stream and at shutdown. Every counter is cumulative over the daemon's life.
+/// clock), at end of stream and at shutdown. The input counters (`received`, `seq_gaps`,
+/// `rejected_duplicate_seq`, `late`, `dropped_overflow`, `producer_changes`) and `undelivered`
+/// are cumulative over every life of the domain's daemon (they live in its accounting file, so a
+/// restarted daemon continues them); the estimator's counts (`accepted`, `rejected_non_finite`,
+/// `rejected_time`, `stances`, `heading_used`) over the current life.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
 #[type_name("corridor_v2_Diagnostics")]
 #[repr(C)]

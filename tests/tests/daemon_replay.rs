@@ -88,6 +88,8 @@ fn replay_matches_offline_run_sample_by_sample() {
     assert_eq!(offline.len(), log.rows.len());
 
     let domain = Domain::new("test_daemon_replay").unwrap();
+    // No accounting file of an earlier run (counters, output seq continue across daemon lives).
+    let _ = std::fs::remove_file(domain.daemon_state_path());
     let mut dcfg = DaemonConfig::new(domain.clone(), cfg, aid);
     dcfg.delivery = Delivery::Lossless;
     let daemon = Running::start(dcfg);
@@ -189,6 +191,8 @@ fn bad_samples_over_ipc_are_rejected_and_counted() {
     let cfg = config();
     let aid = heading_aid(&cfg, None).unwrap();
     let domain = Domain::new("test_daemon_reject").unwrap();
+    // No accounting file of an earlier run (counters, output seq continue across daemon lives).
+    let _ = std::fs::remove_file(domain.daemon_state_path());
     let mut dcfg = DaemonConfig::new(domain.clone(), cfg, aid);
     dcfg.delivery = Delivery::Lossless;
     let daemon = Running::start(dcfg.clone());

@@ -78,6 +78,15 @@ fn run() -> Result<()> {
         r.attitude_path.display()
     );
     println!("bias rows: {} ({})", r.bias_rows, r.bias_path.display());
-    println!("attitude samples missing (seq gaps): {}", r.attitude_missed);
+    // Every attitude message the daemon published up to the last one received is here:
+    // published = before start + received + missing.
+    println!(
+        "attitude messages: {} received, {} missing (seq gaps), {} published before the first",
+        r.attitude_received, r.attitude_missed, r.attitude_missed_at_start
+    );
+    println!(
+        "bias messages: {} received, {} missing (seq gaps), {} published before the first",
+        r.bias_received, r.bias_missed, r.bias_missed_at_start
+    );
     Ok(())
 }

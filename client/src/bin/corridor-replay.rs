@@ -96,7 +96,12 @@ fn run() -> Result<()> {
         if r.interrupted { " (interrupted)" } else { "" }
     );
     println!("samples sent: {} (+1 end-of-stream marker)", r.samples);
-    println!("samples nobody received: {}", s.imu_undelivered);
+    // Also counted by the daemon, from the numbering, when it next receives from this
+    // producer (head_missing, missing_at_restart): not an extra loss.
+    println!(
+        "samples nobody received: {} (sent while no daemon was reading)",
+        s.imu_undelivered
+    );
     println!("lossless retries: {}", s.retries);
     println!("rows rejected by the CSV reader: {}", log.rejected.len());
     println!("elapsed: {:.3} s ({rate:.0} samples/s)", r.elapsed_s);

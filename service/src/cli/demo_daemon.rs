@@ -109,6 +109,11 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
             domain.config(),
         )
     };
+    // The daemon's accounting file (kept for a restarted daemon of the domain): this domain
+    // ends with this process.
+    let state_path = domain.daemon_state_path();
+    std::fs::remove_file(&state_path)
+        .with_context(|| format!("removing {}", state_path.display()))?;
     let stats = replay.context("replaying through the daemon")?;
     let logged = logged.context("logger consumer")?;
     let tracked = tracked.context("PDR consumer")?;

@@ -5,6 +5,7 @@
 use super::latency::LatencyHistogram;
 use super::outputs::{Out, Outputs, attitude_of, bias_of, flags_of, phase_code};
 use super::receive::{Msg, RxCounters};
+use super::state::{OUT_ATTITUDE, OUT_BIAS, OUT_DIAGNOSTICS, OUT_NAV, StateFile};
 use super::{DaemonConfig, DaemonError, DaemonReport};
 use crate::checkpoint::{self, Checkpoint, CheckpointError};
 use crate::core::{Counters, Estimate, Estimator, ImuInput, Phase, WarmStart};
@@ -13,6 +14,7 @@ use corridor_shared::wire::{
 };
 use crossbeam_channel::{RecvTimeoutError, TryRecvError};
 use iceoryx2::prelude::*;
+use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -30,7 +32,9 @@ struct HealthMark {
 }
 
 /// State of the estimator thread.
-struct EstState {
+struct EstState<'a> {
+    /// The accounting file (input counters, `undelivered`).
+    rec: &'a RxCounters,
     est: Estimator,
     /// Counters of the estimators of finished streams.
     previous: Counters,
@@ -40,7 +44,6 @@ struct EstState {
     last_phase: Phase,
     last_stances: u64,
     last_nis: f64,
-    undelivered: u64,
     streams_finished: u64,
     /// The next sample comes from a new producer (see [`Msg::NewProducer`]).
     producer_changed: bool,
@@ -79,9 +82,10 @@ impl std::fmt::Display for MicrosFmt {
     }
 }
 
-impl EstState {
-    fn new(cfg: &DaemonConfig) -> Self {
+impl<'a> EstState<'a> {
+    fn new(cfg: &DaemonConfig, rec: &'a RxCounters) -> Self {
         Self {
+            rec,
             est: Estimator::new(cfg.estimator.clone(), cfg.aid.clone()),
             previous: Counters::default(),
             last: Estimate::default(),
@@ -90,7 +94,6 @@ impl EstState {
             last_phase: Phase::Aligning,
             last_stances: 0,
             last_nis: f64::NAN,
-            undelivered: 0,
             streams_finished: 0,
             producer_changed: false,
             warm: None,
@@ -134,7 +137,7 @@ impl EstState {
             rejected_time: p.rejected_time + c.rejected_time,
             dropped_overflow: rx.dropped.load(Ordering::Relaxed),
             accepted: p.samples + c.samples,
-            undelivered: self.undelivered,
+            undelivered: self.rec.undelivered.load(Ordering::Relaxed),
             stances: p.stances + c.stances,
             heading_used: p.heading_used + c.heading_used,
             last_nis: self.last_nis,
@@ -158,7 +161,7 @@ impl EstState {
 
     fn count(&mut self, delivered: bool) {
         if !delivered {
-            self.undelivered += 1;
+            self.rec.undelivered.fetch_add(1, Ordering::Relaxed);
         }
     }
 
@@ -379,7 +382,8 @@ impl EstState {
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
              σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
-             health restores {}, time gaps {}, IMU head missing {}",
+             health restores {}, time gaps {}, IMU head missing {}, missing at restart {}, \
+             lost in a killed daemon {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
             d.seq_gaps,
@@ -400,6 +404,8 @@ impl EstState {
             self.previous.health_restores + self.est.counters().health_restores,
             self.previous.gaps + self.est.counters().gaps,
             rx.head_missing.load(Ordering::Relaxed),
+            rx.missing_at_restart.load(Ordering::Relaxed),
+            rx.lost_in_daemon.load(Ordering::Relaxed),
         );
         self.latency_health.clear();
         self.health = HealthMark {
@@ -415,18 +421,19 @@ impl EstState {
 pub(super) fn estimator_thread(
     cfg: &DaemonConfig,
     rx: crossbeam_channel::Receiver<Msg>,
-    counters: &RxCounters,
+    state: &Arc<StateFile>,
     ready: crossbeam_channel::Sender<Result<(), DaemonError>>,
 ) -> Result<DaemonReport, DaemonError> {
+    let counters: &RxCounters = state;
     let setup = || -> Result<_, DaemonError> {
         let node = cfg
             .domain
             .node("corridor-daemon-estimator", SignalHandlingMode::Disabled)?;
         let out = Outputs {
-            attitude: Out::new(cfg, &node)?,
-            bias: Out::new(cfg, &node)?,
-            nav: Out::new(cfg, &node)?,
-            diagnostics: Out::new(cfg, &node)?,
+            attitude: Out::new(cfg, &node, state, OUT_ATTITUDE)?,
+            bias: Out::new(cfg, &node, state, OUT_BIAS)?,
+            nav: Out::new(cfg, &node, state, OUT_NAV)?,
+            diagnostics: Out::new(cfg, &node, state, OUT_DIAGNOSTICS)?,
         };
         Ok((out, node))
     };
@@ -441,7 +448,7 @@ pub(super) fn estimator_thread(
         }
     };
     drop(ready);
-    let mut st = EstState::new(cfg);
+    let mut st = EstState::new(cfg, counters);
     load_warm_start(cfg, &mut st);
     st.est = st.new_estimator(cfg);
     let start = Instant::now();
@@ -465,10 +472,14 @@ pub(super) fn estimator_thread(
         };
         match msg {
             Ok(Msg::Imu(s)) if s.is_end_of_stream() => {
+                counters.taken.fetch_add(1, Ordering::Relaxed);
                 st.on_end_of_stream(cfg, &mut out, counters, &s);
                 next_diag = Instant::now() + cfg.diagnostics_period;
             }
-            Ok(Msg::Imu(s)) => st.on_sample(cfg, &mut out, counters, &s),
+            Ok(Msg::Imu(s)) => {
+                counters.taken.fetch_add(1, Ordering::Relaxed);
+                st.on_sample(cfg, &mut out, counters, &s);
+            }
             Ok(Msg::Heading {
                 heading_rad,
                 sd_rad,
@@ -513,11 +524,22 @@ pub(super) fn estimator_thread(
             out.diagnostics.stall.counts(),
         ],
         head_missing: counters.head_missing.load(Ordering::Relaxed),
+        missing_at_restart: counters.missing_at_restart.load(Ordering::Relaxed),
+        estimated: counters.taken.load(Ordering::Relaxed),
+        lost_in_daemon: counters.lost_in_daemon.load(Ordering::Relaxed),
+        angles_dropped: counters.angles_dropped.load(Ordering::Relaxed),
+        published: [
+            out.attitude.seq,
+            out.bias.seq,
+            out.nav.seq,
+            out.diagnostics.seq,
+        ],
+        lives: counters.lives.load(Ordering::Relaxed),
     })
 }
 
 /// Loads the checkpoint into `st.warm`; a bad one becomes a warning and a cold start.
-fn load_warm_start(cfg: &DaemonConfig, st: &mut EstState) {
+fn load_warm_start(cfg: &DaemonConfig, st: &mut EstState<'_>) {
     let Some(path) = &cfg.checkpoint else { return };
     match checkpoint::load(path) {
         Ok(cp) if cp.mode != cfg.estimator.mode.name() => {

@@ -45,6 +45,12 @@
 //! would. Without a checkpoint every stream starts from the configured prior (bit-identical to
 //! `corridor run`).
 //!
+//! Loss accounting: the input counters, the position in the current producer's numbering and
+//! the output `seq`s live in the domain's accounting file (`state`), a shared file mapping that
+//! survives the process however it ends; the next daemon of the domain continues them, so what
+//! a restart cost is counted once ([`DaemonReport::missing_at_restart`],
+//! [`DaemonReport::lost_in_daemon`]) and consumers see one continuous numbering.
+//!
 //! One daemon per domain: [`run`] claims the domain ([`Domain::claim_daemon`]) and fails with
 //! [`ServiceError::DaemonAlreadyRunning`] when another daemon holds it.
 //!
@@ -60,6 +66,7 @@
 //!   stream, the checkpoint saves and the health line.
 //! - `outputs`: the output publishers and the conversion of an estimate into wire messages.
 //! - `latency`: the allocation-free latency histogram behind the diagnostics and health line.
+//! - `state`: the accounting file (the receive thread's counters, the output `seq`s).
 //!
 //! [`Estimator`]: crate::core::Estimator
 //! [`Estimator::set_warm_start`]: crate::core::Estimator::set_warm_start
@@ -76,6 +83,9 @@ mod latency;
 mod outputs;
 mod receive;
 pub mod stall;
+mod state;
+
+pub use state::StateFileError;
 
 use crate::checkpoint::Checkpoint;
 use crate::core::heading::HeadingAid;
@@ -84,7 +94,8 @@ use corridor_shared::services::{Delivery, Domain, ServiceError};
 use corridor_shared::wire::Diagnostics;
 use estimator_thread::estimator_thread;
 use iceoryx2::prelude::*;
-use receive::{Msg, RxCounters, ToEstimator, rx_thread};
+use receive::{Msg, ToEstimator, rx_thread};
+use state::StateFile;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -179,6 +190,12 @@ impl DaemonConfig {
 }
 
 /// What a daemon did, returned by [`run`] after shutdown.
+///
+/// The input counters (`diagnostics.received`, `seq_gaps`, `late`, `rejected_duplicate_seq`,
+/// `dropped_overflow`, `producer_changes`, and the loss counters below), `undelivered` and
+/// [`DaemonReport::published`] count over every life of the domain's daemon that used its
+/// accounting file ([`Domain::daemon_state_path`]), this one included; the estimator's counts
+/// (`accepted`, the rejections, `stances`, `heading_used`) over this life only.
 #[derive(Debug, Clone, Default)]
 pub struct DaemonReport {
     /// The last diagnostics published (cumulative counters).
@@ -194,10 +211,27 @@ pub struct DaemonReport {
     /// Consumers that stalled an output for longer than [`DaemonConfig::stall_timeout`], and the
     /// samples they lost, per output: attitude, bias, nav, diagnostics.
     pub stalls: [stall::StallCounts; 4],
-    /// IMU samples of a producer's numbering before the first one this daemon received from it
-    /// (sent before it started, taken by an earlier daemon, or overwritten in its input buffer
-    /// before its first read); the gaps after that are in `diagnostics.seq_gaps`.
+    /// IMU samples of a producer's numbering before the first one a daemon received from it
+    /// (sent before any daemon read it, or overwritten in the input buffer before the first
+    /// read); the gaps after that are in `diagnostics.seq_gaps` and `missing_at_restart`.
     pub head_missing: u64,
+    /// IMU samples of the current producer's numbering between the last one an earlier daemon
+    /// life received and the first one the next life received: sent while no daemon was there,
+    /// or left unread in the input buffer of a daemon that stopped or was killed.
+    pub missing_at_restart: u64,
+    /// IMU samples the estimator took (estimated or refused by it, markers included).
+    pub estimated: u64,
+    /// IMU samples an earlier daemon life received but neither estimated, refused by `seq` nor
+    /// dropped (killed with them in its receive thread or channel): `received = estimated +
+    /// dropped_overflow + rejected_duplicate_seq + late + lost_in_daemon` after a clean stop.
+    pub lost_in_daemon: u64,
+    /// Angle observations dropped because the estimator's channel was full (live delivery).
+    pub angles_dropped: u64,
+    /// Messages published per output (attitude, bias, nav, diagnostics): the next `seq` of each,
+    /// continued across daemon lives.
+    pub published: [u64; 4],
+    /// Daemon lives that used the accounting file, this one included.
+    pub lives: u64,
 }
 
 /// A daemon failure.
@@ -206,6 +240,9 @@ pub enum DaemonError {
     /// A service or port could not be set up or used (includes another daemon on the domain).
     #[error(transparent)]
     Service(#[from] ServiceError),
+    /// The daemon's accounting file could not be opened.
+    #[error(transparent)]
+    State(#[from] StateFileError),
     /// A thread could not be started.
     #[error("cannot start thread {thread}: {source}")]
     Spawn {
@@ -279,7 +316,13 @@ pub fn run(cfg: DaemonConfig, shutdown: Arc<AtomicBool>) -> Result<DaemonReport,
     let (tx, rx) = crossbeam_channel::bounded::<Msg>(cfg.channel_capacity);
     let (ready_tx, ready_rx) = crossbeam_channel::bounded::<Result<(), DaemonError>>(2);
     let stop = Arc::new(AtomicBool::new(false));
-    let counters = Arc::new(RxCounters::default());
+    // After the claim: one daemon at a time uses the domain's accounting file.
+    let counters = Arc::new(StateFile::open(&cfg.domain.daemon_state_path())?);
+    tracing::info!(
+        path = %counters.path().display(),
+        life = counters.lives.load(Ordering::Relaxed),
+        "daemon accounting file"
+    );
 
     let est_handle = {
         let cfg = cfg.clone();

@@ -2,6 +2,7 @@
 //! [`Estimate`] into the wire messages.
 
 use super::stall::StallGuard;
+use super::state::StateFile;
 use super::{DaemonConfig, DaemonError};
 use crate::core::{Estimate, Phase};
 use corridor_shared::services::{Access, ServiceError, Topic};
@@ -12,19 +13,30 @@ use corridor_shared::wire::{
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::prelude::*;
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
 
 /// A publisher with its paired notifier.
 pub(super) struct Out<T: Topic> {
     pub(super) publisher: Publisher<ipc::Service, T, ()>,
     pub(super) notifier: Notifier<ipc::Service>,
     pub(super) seq: u64,
+    /// The accounting file and this output's slot in [`super::state::Record::out_seq`]: `seq`
+    /// continues across daemon lives.
+    state: Arc<StateFile>,
+    slot: usize,
     pub(super) failed_once: bool,
     /// Consumers that stalled this publisher (lossless delivery).
     pub(super) stall: StallGuard,
 }
 
 impl<T: Topic> Out<T> {
-    pub(super) fn new(cfg: &DaemonConfig, node: &Node<ipc::Service>) -> Result<Self, DaemonError> {
+    pub(super) fn new(
+        cfg: &DaemonConfig,
+        node: &Node<ipc::Service>,
+        state: &Arc<StateFile>,
+        slot: usize,
+    ) -> Result<Self, DaemonError> {
         let d = &cfg.domain;
         let stall = StallGuard::new(cfg.stall_timeout);
         let publisher = d
@@ -43,7 +55,9 @@ impl<T: Topic> Out<T> {
         Ok(Self {
             publisher,
             notifier,
-            seq: 0,
+            seq: state.out_seq[slot].load(Ordering::Relaxed),
+            state: Arc::clone(state),
+            slot,
             failed_once: false,
             stall,
         })
@@ -60,6 +74,7 @@ impl<T: Topic> Out<T> {
     pub(super) fn publish(&mut self, set_seq: impl FnOnce(&mut T, u64), mut value: T) -> bool {
         set_seq(&mut value, self.seq);
         self.seq += 1;
+        self.state.out_seq[self.slot].store(self.seq, Ordering::Relaxed);
         let delivered = match self.publisher.loan_uninit() {
             Ok(slot) => slot.write_payload(value).send(),
             Err(e) => Err(e.into()),

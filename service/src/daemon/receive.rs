@@ -1,29 +1,18 @@
 //! The receive thread (`corridor-rx`): input subscribers, `seq` and producer checks, and the
 //! bounded channel to the estimator thread.
 
+use super::state::{load_opt, store_opt};
 use super::{DaemonConfig, DaemonError};
 use corridor_shared::services::{Access, Delivery, ServiceError, Topic};
 use corridor_shared::wire::{ANGLE_HEADING, AngleObservation, ImuSample};
 use crossbeam_channel::TrySendError;
 use iceoryx2::prelude::*;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-/// Counters of the receive thread, read by the estimator thread.
-#[derive(Debug, Default)]
-pub(super) struct RxCounters {
-    pub(super) received: AtomicU64,
-    pub(super) seq_gaps: AtomicU64,
-    pub(super) duplicate: AtomicU64,
-    pub(super) late: AtomicU64,
-    pub(super) dropped: AtomicU64,
-    pub(super) producer_changes: AtomicU64,
-    /// Samples of a producer's numbering (which starts at 0) before the first one this daemon
-    /// received from it: sent before the daemon started, delivered to an earlier daemon, or
-    /// overwritten in the input buffer before the daemon first read it. (`seq_gaps` counts the
-    /// gaps after that, and at the head of each later stream of the producer.)
-    pub(super) head_missing: AtomicU64,
-}
+/// Counters of the receive thread, read by the estimator thread: the daemon's accounting file
+/// ([`super::state::Record`]), so they continue across daemon lives.
+pub(super) type RxCounters = super::state::Record;
 
 /// Receive → estimator messages.
 #[derive(Debug, Clone, Copy)]
@@ -83,12 +72,17 @@ pub(super) fn rx_thread(
     drop(ready);
     let d = &cfg.domain;
     let stopping = || shutdown.load(Ordering::Relaxed) || stop.load(Ordering::Relaxed);
-    let mut last_seq: Option<u64> = None;
-    let mut last_producer = None;
+    // The position in the current producer's numbering, continued from the daemon's
+    // accounting file (an earlier life of the daemon, see `super::state`).
+    let mut last_seq: Option<u64> = load_opt(&counters.last_seq_plus1);
+    let mut last_producer: Option<u128> = counters.producer();
     // The seq the next stream of the current producer starts with (after its end marker).
-    let mut next_stream_seq: Option<u64> = None;
+    let mut next_stream_seq: Option<u64> = load_opt(&counters.next_stream_seq_plus1);
     // True between the first data sample of a stream and its end-of-stream marker.
-    let mut mid_stream = false;
+    let mut mid_stream = counters.mid_stream.load(Ordering::Relaxed) != 0;
+    // True until this life's first sample: a gap before it, in the numbering of the producer an
+    // earlier life was receiving, is counted in `missing_at_restart`.
+    let mut first_of_life = true;
     while !stopping() {
         listener
             .timed_wait(|_| {}, cfg.poll_timeout)
@@ -114,10 +108,18 @@ pub(super) fn rx_thread(
             .map_err(|e| ServiceError::io(d, ImuSample::SERVICE, "receive", e))?
         {
             let s: ImuSample = *smp.payload();
-            let producer = smp.header().publisher_id();
+            let producer = smp.header().publisher_id().value();
             drop(smp); // return the shared-memory slot at once
-            counters.received.fetch_add(1, Ordering::Relaxed);
+            // `received` is counted next to the store of the position (`last_seq_plus1`), so a
+            // SIGKILL can misplace at most the one sample between the two stores.
             let new_producer = last_producer != Some(producer);
+            // Gaps in the numbering of the producer an earlier daemon life was receiving, up to
+            // this life's first sample of it, are the restart's.
+            let gaps = if std::mem::take(&mut first_of_life) && !new_producer {
+                &counters.missing_at_restart
+            } else {
+                &counters.seq_gaps
+            };
             if new_producer {
                 next_stream_seq = None;
             }
@@ -144,52 +146,61 @@ pub(super) fn rx_thread(
                     return Ok(());
                 }
             }
-            last_producer = Some(producer);
+            if new_producer {
+                last_producer = Some(producer);
+                counters.set_producer(producer);
+            }
             if s.is_end_of_stream() {
                 if let Some(l) = last_seq
                     && s.seq > l
                 {
-                    counters
-                        .seq_gaps
-                        .fetch_add(s.seq - l - 1, Ordering::Relaxed);
+                    gaps.fetch_add(s.seq - l - 1, Ordering::Relaxed);
                 }
                 next_stream_seq = Some(s.seq.wrapping_add(1));
                 last_seq = None;
                 mid_stream = false;
+                store_opt(&counters.next_stream_seq_plus1, next_stream_seq);
+                counters.mid_stream.store(0, Ordering::Relaxed);
+                store_opt(&counters.last_seq_plus1, None);
+                counters.received.fetch_add(1, Ordering::Relaxed);
                 // The marker is never dropped, whatever the policy.
                 if !forward(Delivery::Lossless, &tx, Msg::Imu(s), counters, &stopping) {
                     return Ok(());
                 }
                 continue;
             }
-            mid_stream = true;
+            if !mid_stream {
+                mid_stream = true;
+                counters.mid_stream.store(1, Ordering::Relaxed);
+            }
             if last_seq.is_none() {
                 // The head of a stream: what the producer numbered before this sample.
                 match next_stream_seq.take() {
                     Some(first) => {
-                        counters
-                            .seq_gaps
-                            .fetch_add(s.seq.saturating_sub(first), Ordering::Relaxed);
+                        gaps.fetch_add(s.seq.saturating_sub(first), Ordering::Relaxed);
                     }
                     None => {
                         counters.head_missing.fetch_add(s.seq, Ordering::Relaxed);
                     }
                 }
+                store_opt(&counters.next_stream_seq_plus1, None);
             }
             if let Some(l) = last_seq {
                 if s.seq == l {
+                    counters.received.fetch_add(1, Ordering::Relaxed);
                     counters.duplicate.fetch_add(1, Ordering::Relaxed);
                     continue;
                 }
                 if s.seq < l {
+                    counters.received.fetch_add(1, Ordering::Relaxed);
                     counters.late.fetch_add(1, Ordering::Relaxed);
                     continue;
                 }
-                counters
-                    .seq_gaps
-                    .fetch_add(s.seq - l - 1, Ordering::Relaxed);
+                gaps.fetch_add(s.seq - l - 1, Ordering::Relaxed);
             }
             last_seq = Some(s.seq);
+            store_opt(&counters.last_seq_plus1, last_seq);
+            counters.received.fetch_add(1, Ordering::Relaxed);
             if !forward(cfg.delivery, &tx, Msg::Imu(s), counters, &stopping) {
                 return Ok(());
             }
@@ -218,14 +229,21 @@ fn forward(
     stopping: &impl Fn() -> bool,
 ) -> bool {
     let tx = &to.tx;
+    let is_imu = matches!(msg, Msg::Imu(_));
     match delivery {
         Delivery::Live => match tx.try_send(msg) {
             Ok(()) => {
+                if is_imu {
+                    counters.forwarded.fetch_add(1, Ordering::Relaxed);
+                }
                 to.wake.unpark();
                 true
             }
             Err(TrySendError::Full(_)) => {
-                counters.dropped.fetch_add(1, Ordering::Relaxed);
+                match msg {
+                    Msg::Imu(_) => counters.dropped.fetch_add(1, Ordering::Relaxed),
+                    _ => counters.angles_dropped.fetch_add(1, Ordering::Relaxed),
+                };
                 to.wake.unpark();
                 true
             }
@@ -241,6 +259,9 @@ fn forward(
             loop {
                 match tx.try_send(msg) {
                     Ok(()) => {
+                        if is_imu {
+                            counters.forwarded.fetch_add(1, Ordering::Relaxed);
+                        }
                         to.wake.unpark();
                         return true;
                     }
@@ -252,6 +273,9 @@ fn forward(
                         if waited >= Duration::from_millis(100) {
                             waited = Duration::ZERO;
                             if stopping() {
+                                if is_imu {
+                                    counters.dropped.fetch_add(1, Ordering::Relaxed);
+                                }
                                 return false;
                             }
                         }
