@@ -15,6 +15,12 @@ use std::time::{Duration, Instant};
 /// connected (its receive side not attached yet, see the iceoryx2 notes).
 const LOSSLESS_RETRY: Duration = Duration::from_secs(2);
 
+/// After the daemon's subscriber appears, the time the producer waits before its first send.
+/// Without it, about one in six in-process test daemons never received a sample although every
+/// send reported one receiver (iceoryx2 0.10; the subscriber's side of the new connection not yet
+/// in place, cause not found; a delay in the first send made it disappear).
+pub const SETTLE: Duration = Duration::from_millis(100);
+
 /// What a [`Producer`] has sent so far.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ProducerStats {
@@ -116,7 +122,8 @@ impl Producer {
         })
     }
 
-    /// Waits until at least one subscriber (the daemon) reads the IMU service, up to `timeout`.
+    /// Waits until at least one subscriber (the daemon) reads the IMU service, up to `timeout`,
+    /// then [`SETTLE`] more.
     pub fn wait_for_daemon(&self, timeout: Duration) -> Result<(), ClientError> {
         let start = Instant::now();
         while self.imu_service.dynamic_config().number_of_subscribers() == 0 {
@@ -133,6 +140,10 @@ impl Producer {
             }
             std::thread::sleep(Duration::from_millis(5));
         }
+        self.imu
+            .update_connections()
+            .map_err(|e| ServiceError::io(&self.domain, IMU_SERVICE, "update connections", e))?;
+        std::thread::sleep(SETTLE);
         self.imu
             .update_connections()
             .map_err(|e| ServiceError::io(&self.domain, IMU_SERVICE, "update connections", e))?;
