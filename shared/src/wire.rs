@@ -37,9 +37,11 @@ pub const FLAG_CONVERGED: u32 = 1 << 3;
 /// [`Diagnostics::flags`]: published because the daemon is shutting down.
 pub const FLAG_SHUTDOWN: u32 = 1 << 4;
 
-/// [`AngleObservation::valid`] bit: `roll_rad` is valid.
+/// [`AngleObservation::valid`] bit: `roll_rad` is valid. The daemon does not fuse an external
+/// roll (its tilt comes from gravity at every stance): such observations are counted
+/// (`angles_ignored` in its report) and their heading, if any, is used.
 pub const ANGLE_ROLL: u32 = 1 << 0;
-/// [`AngleObservation::valid`] bit: `pitch_rad` is valid.
+/// [`AngleObservation::valid`] bit: `pitch_rad` is valid. Not fused either (see [`ANGLE_ROLL`]).
 pub const ANGLE_PITCH: u32 = 1 << 1;
 /// [`AngleObservation::valid`] bit: `heading_rad` is valid.
 pub const ANGLE_HEADING: u32 = 1 << 2;
@@ -112,7 +114,8 @@ impl From<&ImuRow> for ImuSample {
 }
 
 /// An external attitude observation, producer → daemon (`corridor/v2/angles`), e.g. a heading
-/// from a map matcher or a camera. Only the components whose bit is set in `valid` are used.
+/// from a map matcher or a camera. The heading is used when its bit is set in `valid` (at the
+/// next stance, instead of the map); roll and pitch are not fused (see [`ANGLE_ROLL`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
 #[type_name("corridor_v2_AngleObservation")]
 #[repr(C)]

@@ -9,7 +9,9 @@ mod daemon_common;
 use corridor_client::{Delivery, Domain, Producer, Subscriber};
 use corridor_service::core::{Estimate, Estimator, ImuInput, Phase};
 use corridor_service::runner::heading_aid;
-use corridor_shared::wire::{ANGLE_HEADING, AngleObservation, AttitudeSample, ImuSample};
+use corridor_shared::wire::{
+    ANGLE_HEADING, ANGLE_ROLL, AngleObservation, AttitudeSample, ImuSample,
+};
 use daemon_common::*;
 use std::time::Instant;
 
@@ -83,6 +85,14 @@ fn an_external_heading_moves_the_published_yaw_as_offline() {
             assert!(start.elapsed() < WAIT, "no angle subscriber");
             std::thread::sleep(std::time::Duration::from_millis(10));
         }
+        // Roll and pitch are not fused: counted, nothing else happens.
+        let tilt = AngleObservation {
+            roll_rad: 0.2,
+            roll_sd_rad: 0.01,
+            valid: ANGLE_ROLL,
+            ..obs
+        };
+        assert_eq!(p.send_angles(tilt).unwrap(), 1);
         for r in &rows {
             p.send_imu(ImuSample::from(r)).unwrap();
         }
@@ -91,7 +101,8 @@ fn an_external_heading_moves_the_published_yaw_as_offline() {
     });
     let got = until_end(&attitude, |a| a.flags);
     let stats = producer.join().unwrap();
-    daemon.stop();
+    let report = daemon.stop();
+    assert_eq!(report.angles_ignored, 1, "the roll observation is counted");
     assert_eq!(stats.angles_undelivered, stats.angles_sent - 1);
     assert_eq!(got.len(), with.len() + 1, "every sample and the marker");
     for (i, (a, e)) in got.iter().zip(&with).enumerate() {

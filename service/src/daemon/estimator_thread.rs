@@ -528,6 +528,7 @@ pub(super) fn estimator_thread(
         estimated: counters.taken.load(Ordering::Relaxed),
         lost_in_daemon: counters.lost_in_daemon.load(Ordering::Relaxed),
         angles_dropped: counters.angles_dropped.load(Ordering::Relaxed),
+        angles_ignored: counters.angles_ignored.load(Ordering::Relaxed),
         published: [
             out.attitude.seq,
             out.bias.seq,

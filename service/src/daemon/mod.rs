@@ -227,6 +227,8 @@ pub struct DaemonReport {
     pub lost_in_daemon: u64,
     /// Angle observations dropped because the estimator's channel was full (live delivery).
     pub angles_dropped: u64,
+    /// Angle observations carrying roll or pitch, which are not fused (their heading is used).
+    pub angles_ignored: u64,
     /// Messages published per output (attitude, bias, nav, diagnostics): the next `seq` of each,
     /// continued across daemon lives.
     pub published: [u64; 4],

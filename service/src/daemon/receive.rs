@@ -4,7 +4,7 @@
 use super::state::{load_opt, store_opt};
 use super::{DaemonConfig, DaemonError};
 use corridor_shared::services::{Access, Delivery, ServiceError, Topic};
-use corridor_shared::wire::{ANGLE_HEADING, AngleObservation, ImuSample};
+use corridor_shared::wire::{ANGLE_HEADING, ANGLE_PITCH, ANGLE_ROLL, AngleObservation, ImuSample};
 use crossbeam_channel::TrySendError;
 use iceoryx2::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -93,6 +93,18 @@ pub(super) fn rx_thread(
         {
             let o: AngleObservation = *obs.payload();
             drop(obs);
+            // Roll and pitch come from gravity at every stance; an external one is not fused
+            // (counted, and said once).
+            if o.valid & (ANGLE_ROLL | ANGLE_PITCH) != 0
+                && counters.angles_ignored.fetch_add(1, Ordering::Relaxed) == 0
+            {
+                tracing::warn!(
+                    seq = o.seq,
+                    "angle observation with roll or pitch: not fused (the filter's tilt comes \
+                     from gravity at every stance); its heading, if any, is used; counted in \
+                     angles_ignored"
+                );
+            }
             if o.valid & ANGLE_HEADING != 0 {
                 let msg = Msg::Heading {
                     heading_rad: o.heading_rad,

@@ -87,6 +87,9 @@ pub(super) struct Record {
     pub(super) undelivered: AtomicU64,
     /// Angle observations dropped because the estimator's channel was full (live).
     pub(super) angles_dropped: AtomicU64,
+    /// Angle observations carrying roll or pitch, which the daemon does not fuse (their heading,
+    /// if any, is used).
+    pub(super) angles_ignored: AtomicU64,
 }
 
 const _: () = assert!(size_of::<Record>() <= FILE_LEN);
@@ -127,6 +130,7 @@ impl Record {
             &self.lost_in_daemon,
             &self.undelivered,
             &self.angles_dropped,
+            &self.angles_ignored,
         ];
         for f in fields.into_iter().chain(&self.out_seq) {
             f.store(0, Ordering::Relaxed);
