@@ -147,6 +147,10 @@ impl Producer {
         self.imu
             .update_connections()
             .map_err(|e| ServiceError::io(&self.domain, IMU_SERVICE, "update connections", e))?;
+        // The daemon opens its angle subscriber next to the IMU one: connected now too.
+        self.angles
+            .update_connections()
+            .map_err(|e| ServiceError::io(&self.domain, ANGLES_SERVICE, "update connections", e))?;
         Ok(())
     }
 
