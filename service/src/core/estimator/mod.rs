@@ -414,7 +414,7 @@ impl Pipeline {
     /// further ones restore the state of the last healthy stance. Keeps a copy of the state at
     /// the first sample of each healthy stance.
     fn guard_health(&mut self, eskf: &mut Eskf, stance: bool) -> bool {
-        let (bias, _) = self.bias_sensor(eskf);
+        let bias = self.bias_only(eskf);
         let limits = HealthLimits {
             max_speed_m_s: self.cfg.max_speed_m_s.get(),
             max_gyro_bias_rad_s: self.cfg.sensor.max_gyro_bias_rad_s(),
@@ -612,6 +612,18 @@ impl Pipeline {
     }
 
     /// Gyro bias in sensor axes and its σ.
+    /// The gyro bias in sensor axes, without its σ (the per-sample paths need only this).
+    fn bias_only(&self, eskf: &Eskf) -> Vector3<f64> {
+        match &self.bias {
+            BiasFilter::InEskf => eskf.gyro_bias_rad_s,
+            BiasFilter::Paper { kf, .. } => {
+                let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
+                c.transpose() * kf.b_rad_s
+            }
+            BiasFilter::RotationAware { kf, .. } => kf.b_rad_s,
+        }
+    }
+
     fn bias_sensor(&self, eskf: &Eskf) -> (Vector3<f64>, Vector3<f64>) {
         match &self.bias {
             BiasFilter::InEskf => (eskf.gyro_bias_rad_s, eskf.gyro_bias_sd()),
@@ -639,7 +651,7 @@ impl Pipeline {
         stance: bool,
         stance_age_s: f64,
     ) {
-        let (bias, _) = self.bias_sensor(eskf);
+        let bias = self.bias_only(eskf);
         match &mut self.bias {
             BiasFilter::InEskf => {}
             BiasFilter::Paper { obs, .. } => {
