@@ -277,16 +277,21 @@ impl Ctx<'_> {
         self.run_with(&self.baseline, Mode::Zupt, prior, inj)
     }
 
-    /// The NIS of the default run (the best mode with the rest-mean prior) and its use of
-    /// heading information on the truth strides.
-    fn default_figures(&self, mode: Mode) -> Result<DefaultFigures, RunError> {
-        let cfg = config_for(
+    /// The default run's configuration: `mode` with the rest-mean prior.
+    fn default_config(&self, mode: Mode) -> Result<Config, RunError> {
+        config_for(
             &self.config,
             &self.base.join(&self.rec.config),
             self.rec,
             mode,
             BiasPrior::RestMean,
-        )?;
+        )
+    }
+
+    /// The NIS of the default run (the best mode with the rest-mean prior) and its use of
+    /// heading information on the truth strides.
+    fn default_figures(&self, mode: Mode) -> Result<DefaultFigures, RunError> {
+        let cfg = self.default_config(mode)?;
         let aid = heading_aid(&cfg, None)?;
         let mut nis = NisSeries::default();
         let out = runner::run_log(&self.log, &cfg, &aid, &BiasInjection::default(), |_, e| {
@@ -339,13 +344,7 @@ impl Ctx<'_> {
             }
             None => None,
         };
-        let cfg = config_for(
-            &self.config,
-            &self.base.join(&self.rec.config),
-            self.rec,
-            mode,
-            BiasPrior::RestMean,
-        )?;
+        let cfg = self.default_config(mode)?;
         Ok(FrontEnd {
             clipped_samples,
             clipping_off,

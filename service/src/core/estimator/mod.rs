@@ -929,22 +929,13 @@ mod tests {
         let mut est = Estimator::new(cfg, HeadingAid::None);
         // 3 s of "rest" whose x rate alternates ±0.05 rad/s every 0.25 s (a foot that sways
         // without the detector noticing), then motion.
-        let dt = 0.005;
-        for k in 0..600 {
-            let sway = if (k / 50) % 2 == 0 { 0.05 } else { -0.05 };
-            let s = ImuInput {
-                t_s: k as f64 * dt,
-                gyro_rad_s: [0.002 + sway, -0.001, 0.003],
-                accel_m_s2: [0.0, 0.0, 9.81],
-            };
-            est.step(&s).unwrap();
+        let level = [0.0, 0.0, 9.81];
+        let mut t = 0.0;
+        for k in 0..12 {
+            let sway = if k % 2 == 0 { 0.05 } else { -0.05 };
+            t = feed(&mut est, t, 50, [0.002 + sway, -0.001, 0.003], level);
         }
-        let moving = ImuInput {
-            t_s: 600.0 * dt,
-            gyro_rad_s: [0.0, 3.0, 0.0],
-            accel_m_s2: [0.0, 0.0, 9.81],
-        };
-        est.step(&moving).unwrap();
+        feed(&mut est, t, 1, [0.0, 3.0, 0.0], level);
         let p = est.bias_state().unwrap().gyro_bias_cov;
         // x: 0.05 rad/s spread over √(number of 50 ms blocks) ≈ 0.05/√(50) ≈ 7e-3; y, z still
         // (within one step of noise) at the floor.
