@@ -680,6 +680,11 @@ impl Pipeline {
             let sd = self.cfg.eskf.zupt_sd_m_s.get().hypot(arm);
             // ... and, rolling about its heel or ball, along the walking direction at its height
             // above the floor times the rate about the foot's lateral axis.
+            // Before the mounting yaw is calibrated the sensor's x axis stands in for the
+            // foot's: a mounting off by an angle a turns the expected velocity by a and scales
+            // it by cos a (25° here), and a sensor across the foot gets about a plain ZUPT. A
+            // provisional yaw from the first "straight" strides was tried: on a walk that starts
+            // in a spiral it was confidently wrong (exp37's no-prior recovery 112 -> 795 %).
             let h = self.cfg.eskf.zupt_rolling_height_m;
             self.out.zupt = Some(if h > 0.0 {
                 let forward = self.foot_forward_body();
