@@ -23,54 +23,117 @@ const PHASE_GAIN: f64 = 0.02;
 const FREQUENCY_GAIN: f64 = PHASE_GAIN * PHASE_GAIN / 4.0;
 /// A stamp further than this many periods from the smoothed clock re-synchronises it (a gap).
 const RESYNC_PERIODS: f64 = 3.0;
+/// A step this many periods long or longer is a lost sample (left out of the jitter statistic).
+const LOST_SAMPLE_PERIODS: f64 = 1.5;
 
 /// The time base samples are integrated on.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct SampleClock {
     steps: u64,
-    first_stamp_s: f64,
+    warm_sum_s: f64,
+    warm_steps_s: [f64; WARMUP_STEPS as usize],
     last_stamp_s: Option<f64>,
+    last_out_s: f64,
     period_s: f64,
     deviation: f64,
     jittery: bool,
     smoothed_s: f64,
 }
 
+impl Default for SampleClock {
+    fn default() -> Self {
+        Self {
+            steps: 0,
+            warm_sum_s: 0.0,
+            warm_steps_s: [0.0; WARMUP_STEPS as usize],
+            last_stamp_s: None,
+            last_out_s: 0.0,
+            period_s: 0.0,
+            deviation: 0.0,
+            jittery: false,
+            smoothed_s: 0.0,
+        }
+    }
+}
+
 impl SampleClock {
     /// The time to integrate with for a sample stamped `t_s` (strictly after the previous one):
-    /// the stamp itself, or the smoothed clock while the stamps are jittery.
+    /// the stamp itself, or the smoothed clock while the stamps are jittery. Never earlier than
+    /// the previous time it returned.
     pub fn push(&mut self, t_s: f64) -> f64 {
         let Some(last) = self.last_stamp_s.replace(t_s) else {
-            self.first_stamp_s = t_s;
             self.smoothed_s = t_s;
+            self.last_out_s = t_s;
             return t_s;
         };
         let dt = t_s - last;
+        // A gap (several periods without a sample) is no part of the clock's statistics: the
+        // smoothed clock jumps to the stamp (missing samples keep their time), and a warm-up in
+        // progress starts again from it.
+        if self.period_s > 0.0 && dt > RESYNC_PERIODS * self.period_s {
+            if self.steps < WARMUP_STEPS {
+                self.steps = 0;
+                self.warm_sum_s = 0.0;
+                self.period_s = 0.0;
+            }
+            self.smoothed_s = t_s;
+            self.last_out_s = t_s;
+            return t_s;
+        }
         self.steps += 1;
         if self.steps <= WARMUP_STEPS {
-            // The mean step so far (unbiased by symmetric scatter), and the clock on the stamps.
-            self.period_s = (t_s - self.first_stamp_s) / self.steps as f64;
+            // The clock on the stamps; the period from the steps: their running mean (for the gap
+            // test) and, at the end of the warm-up, their median (lost samples and symmetric
+            // scatter move it little).
+            let k = (self.steps - 1) as usize;
+            self.warm_steps_s[k] = dt;
+            self.warm_sum_s += dt;
+            self.period_s = self.warm_sum_s / self.steps as f64;
+            if self.steps == WARMUP_STEPS {
+                let mut steps = self.warm_steps_s;
+                let (_, median, _) = steps.select_nth_unstable_by(k / 2, f64::total_cmp);
+                self.period_s = *median;
+            }
             self.smoothed_s = t_s;
         } else {
             // A second-order phase-locked loop: the phase follows the stamps with PHASE_GAIN,
             // the period with FREQUENCY_GAIN (critically damped).
-            let predicted = self.smoothed_s + self.period_s;
+            // On a device clock a lost sample is a skipped tick (the step says how many); in
+            // host stamps that scatter by most of a period a step cannot tell, so one tick.
+            let ticks = if self.jittery {
+                1.0
+            } else {
+                (dt / self.period_s).round().max(1.0)
+            };
+            let predicted = self.smoothed_s + ticks * self.period_s;
             let error = t_s - predicted;
             if error.abs() > RESYNC_PERIODS * self.period_s {
+                // Far off (a burst after a stall, a gap): the phase jumps to the stamp, the
+                // period is not touched, and the returned time stays monotonic (below).
                 self.smoothed_s = t_s;
             } else {
                 self.smoothed_s = predicted + PHASE_GAIN * error;
-                self.period_s += FREQUENCY_GAIN * error;
+                self.period_s += FREQUENCY_GAIN * error / ticks;
             }
         }
-        let rel = ((dt - self.period_s).abs() / self.period_s).min(1.0);
-        self.deviation += DEVIATION_GAIN * (rel - self.deviation);
+        // A step of about two periods is a lost sample, not jitter: left out of the deviation
+        // (measured against the warm-up's median period only).
+        if self.steps > WARMUP_STEPS && dt < LOST_SAMPLE_PERIODS * self.period_s {
+            let rel = ((dt - self.period_s).abs() / self.period_s).min(1.0);
+            self.deviation += DEVIATION_GAIN * (rel - self.deviation);
+        }
         self.jittery = if self.jittery {
             self.deviation > JITTER_OFF
         } else {
             self.steps > WARMUP_STEPS && self.deviation > JITTER_ON
         };
-        if self.jittery { self.smoothed_s } else { t_s }
+        let out = if self.jittery {
+            self.smoothed_s.max(self.last_out_s + 0.5 * self.period_s)
+        } else {
+            t_s
+        };
+        self.last_out_s = out;
+        out
     }
 
     /// Whether the stamps are being smoothed.
@@ -101,6 +164,66 @@ mod tests {
         let mut c = SampleClock::default();
         for k in 0..5000 {
             let t = k as f64 * 0.005 * (1.0 + 1e-5);
+            assert_eq!(c.push(t), t);
+        }
+        assert!(!c.jittery());
+    }
+
+    /// Arrival delays of 0–4 ms at 200 Hz; `stalls` (at sample, length s, then the buffered
+    /// samples arrive 0.1 ms apart).
+    fn host_stamps(n: usize, gaps: &[(usize, f64)], stalls: &[(usize, f64)]) -> Vec<f64> {
+        let mut seed = 11;
+        let (mut out, mut last, mut shift) = (Vec::new(), f64::NEG_INFINITY, 0.0);
+        let mut burst_until = 0.0;
+        for k in 0..n {
+            if let Some(&(_, g)) = gaps.iter().find(|g| g.0 == k) {
+                shift += g;
+            }
+            let t_true = k as f64 * 0.005 + shift;
+            let mut stamp = t_true + 0.004 * lcg(&mut seed);
+            if let Some(&(_, s)) = stalls.iter().find(|s| s.0 == k) {
+                burst_until = t_true + s;
+            }
+            if t_true < burst_until {
+                stamp = burst_until;
+            }
+            stamp = stamp.max(last + 1e-4);
+            last = stamp;
+            out.push(stamp);
+        }
+        out
+    }
+
+    #[test]
+    fn the_clock_never_runs_backwards_and_a_gap_in_warm_up_does_not_spoil_the_period() {
+        // A stall whose buffered samples arrive in a burst; a device clock with an early gap.
+        for stamps in [
+            host_stamps(4000, &[], &[(1500, 0.05), (2500, 0.2)]),
+            (0..4000)
+                .map(|k| k as f64 * 0.005 + if k >= 100 { 10.0 } else { 0.0 })
+                .collect(),
+        ] {
+            let mut c = SampleClock::default();
+            let mut prev = f64::NEG_INFINITY;
+            for &t in &stamps {
+                let got = c.push(t);
+                assert!(got > prev, "time went back: {prev} -> {got}");
+                prev = got;
+            }
+            assert!(
+                (c.period_s() - 0.005).abs() < 1e-4,
+                "period {}",
+                c.period_s()
+            );
+        }
+    }
+
+    #[test]
+    fn lost_samples_on_a_device_clock_are_not_jitter() {
+        // 8 % of the samples lost (every 12th), exact stamps otherwise.
+        let mut c = SampleClock::default();
+        for k in (0..6000).filter(|k| k % 12 != 5) {
+            let t = k as f64 * 0.005;
             assert_eq!(c.push(t), t);
         }
         assert!(!c.jittery());
