@@ -49,6 +49,9 @@ use super::rotation::{
 use super::stance::StanceDetector;
 use corridor_shared::config::{BiasPrior, Config, Mode};
 use corridor_shared::sensor::CLIP_FRACTION;
+
+/// Standard gravity, m/s² (a start without rest: no rest to measure it on).
+const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// Failed health checks in a row that undo the update; beyond, the stance copy is restored.
@@ -493,11 +496,16 @@ impl Pipeline {
         let prior_sd = rest
             .rate_sd_of_mean()
             .map(|v| v.hypot(self.cfg.eskf.gyro_bias_prior_sd_rad_s.get()));
-        let g = self
-            .cfg
-            .alignment
-            .gravity_m_s2
-            .map_or(mean_f.norm(), |g| g.get());
+        // Gravity from the rest's mean specific force, but not from a walking stance (its
+        // push-off would bias it): standard gravity then, unless configured.
+        let g = self.cfg.alignment.gravity_m_s2.map_or(
+            if short_start {
+                STANDARD_GRAVITY_M_S2
+            } else {
+                mean_f.norm()
+            },
+            |g| g.get(),
+        );
         self.detector.set_gravity(g);
         let (roll, pitch) = tilt_from_specific_force(&mean_f);
         self.tilt0 = from_euler_zyx(roll, pitch, 0.0);
@@ -566,8 +574,20 @@ impl Pipeline {
                 obs: None,
             },
         };
-        if own_bias && self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean && !short_start {
-            eskf.set_gyro_bias(b0, &Matrix3::from_diagonal(&prior_sd.map(|v| v * v)));
+        let rest_prior = self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean && !short_start;
+        // The prior's covariance per axis (floor and the rest's own spread), in each filter's
+        // axes.
+        let prior_cov = Matrix3::from_diagonal(&prior_sd.map(|v| v * v));
+        match &mut self.bias {
+            BiasFilter::Paper { kf, .. } if rest_prior => {
+                let c = self.tilt0.to_rotation_matrix().into_inner();
+                kf.p = c * prior_cov * c.transpose();
+            }
+            BiasFilter::RotationAware { kf, .. } if rest_prior => kf.p = prior_cov,
+            _ => {}
+        }
+        if own_bias && rest_prior {
+            eskf.set_gyro_bias(b0, &prior_cov);
         }
         if let Some(ws) = self.warm_start {
             self.apply_warm_start(&mut eskf, &ws);

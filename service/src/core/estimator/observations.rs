@@ -58,7 +58,9 @@ impl Pipeline {
                     BiasFilter::InEskf => {}
                     BiasFilter::Paper { kf, obs } => {
                         // Re-express the prior with the now known mounting yaw.
-                        kf.b_rad_s = rot_z(self.mount_yaw_rad) * kf.b_rad_s;
+                        let r = rot_z(self.mount_yaw_rad).to_rotation_matrix().into_inner();
+                        kf.b_rad_s = r * kf.b_rad_s;
+                        kf.p = r * kf.p * r.transpose();
                         *obs = Some(PaperObserver::new(q, t_s));
                     }
                     BiasFilter::RotationAware { obs, .. } => {
