@@ -60,5 +60,14 @@ fn a_layered_file_takes_its_base_and_replaces_only_the_keys_it_sets() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("sensor.toml") && e.contains("zupt_sd"), "{e}");
+    // A value out of range in the base names the base, not the layer.
+    std::fs::write(dir.join("sensor.toml"), "[eskf]\nzupt_sd_m_s = -1.0\n").unwrap();
+    let e = ConfigFile::read(&dir.join("daemon.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("sensor.toml") && e.contains("eskf.zupt_sd_m_s"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

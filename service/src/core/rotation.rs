@@ -129,10 +129,11 @@ pub fn heading_jacobian(q: &UnitQuaternion<f64>, axis_body: &Vector3<f64>) -> Ve
     )
 }
 
-/// The velocity (navigation frame) of a sensor `height_m` above the floor contact of a foot that
-/// rolls about its lateral axis, as it does from heel strike to foot flat (about the heel) and
-/// at heel-off (about the ball): a point at height h above a contact point on the floor moves
-/// at ω × h·ẑ, whatever the contact's place along the foot, so only the height matters. Only
+/// The horizontal velocity (navigation frame) of a sensor `height_m` above the floor contact of a
+/// foot that rolls about its lateral axis, as it does from heel strike to foot flat (about the
+/// heel) and at heel-off (about the ball): a point at height h above a contact point on the floor
+/// moves horizontally at ω × h·ẑ, whatever the contact's place along the foot, so only the height
+/// matters (its vertical speed depends on that place: left at zero, within the lever-arm σ). Only
 /// the rate about the foot's lateral axis is used (the forward axis `forward_body`, in body
 /// axes, gives it); the result points along the walking direction. Zero when the foot axis is
 /// vertical.

@@ -25,43 +25,51 @@ impl ConfigFile {
             path: p.to_owned(),
             message,
         };
-        let mut table: toml::Table =
-            toml::from_str(text).map_err(|e| toml_err(path, e.to_string()))?;
-        if let Some(base) = table.remove("base") {
-            let Some(name) = base.as_str() else {
-                return Err(invalid("base", base, "must be a file name (a string)"));
-            };
-            let base_path = path.parent().unwrap_or(Path::new(".")).join(name);
-            let base_text =
-                std::fs::read_to_string(&base_path).map_err(|source| ConfigError::Io {
-                    path: base_path.clone(),
-                    source,
-                })?;
-            let mut merged: toml::Table =
-                toml::from_str(&base_text).map_err(|e| toml_err(&base_path, e.to_string()))?;
-            if merged.contains_key("base") {
-                return Err(invalid(
-                    "base",
-                    name,
-                    "a base file may not name a base itself",
-                ));
-            }
-            // Validate the base alone first, so its errors name it.
-            merged
-                .clone()
-                .try_into::<ConfigFile>()
-                .map_err(|e| toml_err(&base_path, e.to_string()))?;
-            for (section, value) in table {
-                match (merged.get_mut(&section), value) {
-                    (Some(toml::Value::Table(into)), toml::Value::Table(keys)) => into.extend(keys),
-                    (_, value) => {
-                        merged.insert(section, value);
-                    }
+        let table: toml::Table = toml::from_str(text).map_err(|e| toml_err(path, e.to_string()))?;
+        let Some(base) = table.get("base") else {
+            // No layering: parsed from the text itself, so errors keep their line and column.
+            return toml::from_str(text).map_err(|e| toml_err(path, e.to_string()));
+        };
+        let Some(name) = base.as_str() else {
+            return Err(with_path(
+                invalid("base", base, "must be a file name (a string)"),
+                path,
+            ));
+        };
+        let base_path = path.parent().unwrap_or(Path::new(".")).join(name);
+        let base_text = std::fs::read_to_string(&base_path).map_err(|source| ConfigError::Io {
+            path: base_path.clone(),
+            source,
+        })?;
+        let mut merged: toml::Table =
+            toml::from_str(&base_text).map_err(|e| toml_err(&base_path, e.to_string()))?;
+        if merged.contains_key("base") {
+            return Err(with_path(
+                invalid("base", name, "a base file may not name a base itself"),
+                &base_path,
+            ));
+        }
+        // The base alone first, so that its own errors (unknown keys with their line, values out
+        // of range) name it rather than the layer.
+        let alone: ConfigFile =
+            toml::from_str(&base_text).map_err(|e| toml_err(&base_path, e.to_string()))?;
+        alone.validate().map_err(|e| with_path(e, &base_path))?;
+        // The layer alone too (without its `base`), for its unknown keys.
+        let mut layer = table;
+        layer.remove("base");
+        layer
+            .clone()
+            .try_into::<ConfigFile>()
+            .map_err(|e| toml_err(path, e.to_string()))?;
+        for (section, value) in layer {
+            match (merged.get_mut(&section), value) {
+                (Some(toml::Value::Table(into)), toml::Value::Table(keys)) => into.extend(keys),
+                (_, value) => {
+                    merged.insert(section, value);
                 }
             }
-            table = merged;
         }
-        table.try_into().map_err(|e| toml_err(path, e.to_string()))
+        merged.try_into().map_err(|e| toml_err(path, e.to_string()))
     }
 
     /// Validates the `[daemon]` section into [`DaemonSettings`] (what `corridor serve` needs
@@ -217,10 +225,11 @@ impl ConfigFile {
                     .gravity_m_s2
                     .map(|g| Positive::new("alignment.gravity_m_s2", g))
                     .transpose()?,
-                rest_tail_s: non_negative(
-                    "alignment.rest_tail_s",
-                    a.rest_tail_s.unwrap_or(ALIGNMENT_REST_TAIL_S),
-                )?,
+                rest_tail_s: match a.rest_tail_s.unwrap_or(ALIGNMENT_REST_TAIL_S) {
+                    // The rest is kept in 50 ms blocks for this long: bounded.
+                    v if (0.0..=60.0).contains(&v) => v,
+                    v => return Err(invalid("alignment.rest_tail_s", v, "must be in [0, 60] s")),
+                },
                 min_start_stance_s: non_negative(
                     "alignment.min_start_stance_s",
                     a.min_start_stance_s.unwrap_or(ALIGNMENT_MIN_START_STANCE_S),

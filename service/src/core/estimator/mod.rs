@@ -491,8 +491,8 @@ impl Pipeline {
         }
         self.counters.started_without_rest = short_start;
         let (mean_f, mean_w) = rest.means();
-        // The prior's σ: the bias instability floor, or the standard error of the rest's mean
-        // rate when that is larger (a rest during which the foot still sways).
+        // The prior's σ: √(floor² + spread²), the bias instability floor and the rest's rate
+        // spread over √(number of 50 ms blocks) (a rest during which the foot still sways).
         let prior_sd = rest
             .rate_sd_of_mean()
             .map(|v| v.hypot(self.cfg.eskf.gyro_bias_prior_sd_rad_s.get()));
@@ -740,8 +740,8 @@ impl Pipeline {
 
     /// At the end of a stance: when it was a rest (its part before the last
     /// `alignment.rest_tail_s` lasts `alignment.min_rest_s`), the mean rate over that part
-    /// observes the gyro bias with the σ of the rest-mean prior (the floor, or the mean's
-    /// standard error when larger), as the initial rest does.
+    /// observes the gyro bias with the σ of the rest-mean prior (√(floor² + spread²), see
+    /// `rest.rs`), as the initial rest does.
     fn zero_rate_update(&mut self, eskf: &mut Eskf) {
         let Some((mean_f, mean_w, sem)) = self
             .stance_rest

@@ -103,9 +103,10 @@ impl RestSums {
         (s.f / n, s.w / n)
     }
 
-    /// The standard error of the mean rate of [`RestSums::means`], per axis: the rate's spread
-    /// over the square root of the number of blocks (samples within a block are not
-    /// independent when the foot sways). A rest that is not one (a foot that still moves) gives
+    /// A conservative standard error of the mean rate of [`RestSums::means`], per axis: the
+    /// rate's per-sample spread over the square root of the number of 50 ms blocks, not of
+    /// samples (samples within a block are not independent when the foot sways; for white noise
+    /// alone this overstates the error by √(samples per block)). A rest that is not one (a foot that still moves) gives
     /// a mean rate far from the bias, and says so here.
     pub(super) fn rate_sd_of_mean(&self) -> Vector3<f64> {
         let s = self.used();
