@@ -127,6 +127,8 @@ struct Pipeline {
     clock: SampleClock,
     /// The current stance's sums, for the zero-rate update when it turns out to be a rest.
     stance_rest: RestSums,
+    /// A zero-rate update was made with the current sample (see `step_running`).
+    zero_rate_applied: bool,
     /// Gyro axes of the current sample at their rail.
     clipped_gyro_axes: [bool; 3],
     stance_obs_done: bool,
@@ -173,6 +175,7 @@ impl Estimator {
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
             stance_rest: RestSums::new(cfg.alignment.rest_tail_s),
+            zero_rate_applied: false,
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
             pending_heading: None,
@@ -404,9 +407,14 @@ impl Pipeline {
         let w_avg = (w + w_prev) * 0.5;
         let f_avg = (f + f_prev) * 0.5;
         self.navigate(eskf, t_s, dt, &w_avg, &f_avg, f, stance, stance_age_s);
+        let applied = std::mem::take(&mut self.zero_rate_applied);
         if self.guard_health(eskf, stance) {
-            // The update was undone: the next step integrates from the previous sample.
+            // The update was undone: the next step integrates from the previous sample (and a
+            // zero-rate update made with it is made again at the next sample).
             self.last = prev;
+            self.in_stance |= applied;
+        } else if applied {
+            self.counters.zero_rate_updates += 1;
         }
         self.fill_output(eskf);
     }
@@ -732,7 +740,7 @@ impl Pipeline {
             }
         } else {
             if self.in_stance && self.cfg.eskf.zero_rate_updates {
-                self.zero_rate_update(eskf);
+                self.zero_rate_applied = self.zero_rate_update(eskf);
             }
             self.in_stance = false;
         }
@@ -742,18 +750,17 @@ impl Pipeline {
     /// `alignment.rest_tail_s` lasts `alignment.min_rest_s`), the mean rate over that part
     /// observes the gyro bias with the σ of the rest-mean prior (√(floor² + spread²), see
     /// `rest.rs`), as the initial rest does.
-    fn zero_rate_update(&mut self, eskf: &mut Eskf) {
+    /// Whether the update was made (counted once the health check has passed).
+    fn zero_rate_update(&mut self, eskf: &mut Eskf) -> bool {
         let Some((mean_f, mean_w, sem)) = self
             .stance_rest
             .settled_means(self.cfg.alignment.min_rest_s.get())
         else {
-            return;
+            return false;
         };
         let floor = self.cfg.eskf.gyro_bias_prior_sd_rad_s.get();
         let sd = sem.map(|v| v.hypot(floor));
-        if eskf.zero_rate_update(&mean_w, &mean_f, &sd).is_some() {
-            self.counters.zero_rate_updates += 1;
-        }
+        eskf.zero_rate_update(&mean_w, &mean_f, &sd).is_some()
     }
 
     fn fill_output(&mut self, e: &Eskf) {
