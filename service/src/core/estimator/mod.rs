@@ -318,7 +318,8 @@ impl Estimator {
     }
 
     /// Starts from a saved bias state (e.g. a daemon checkpoint) instead of the configured prior:
-    /// used at the end of the next alignment. Attitude is always re-aligned from the
+    /// used at the end of the next alignment, where a rest-mean prior from that alignment's rest
+    /// is fused into it (zupt and eskf modes). Attitude is always re-aligned from the
     /// accelerometer, and the map frame from the first stride, because the foot may have moved
     /// while the estimator was down.
     pub fn set_warm_start(&mut self, ws: WarmStart) -> Result<(), WarmStartError> {
@@ -599,6 +600,11 @@ impl Pipeline {
         }
         if let Some(ws) = self.warm_start {
             self.apply_warm_start(&mut eskf, &ws);
+            // A saved state (hours old, perhaps) and a fresh rest are two observations of the
+            // same bias: the rest is fused into the saved state rather than thrown away.
+            if own_bias && rest_prior {
+                eskf.zero_rate_update(&mean_w, &mean_f, &prior_sd);
+            }
         }
         self.phase = Phase::Calibrating;
         Some(eskf)
@@ -1000,7 +1006,7 @@ mod tests {
     }
 
     #[test]
-    fn warm_start_replaces_the_prior_and_bad_states_are_refused() {
+    fn warm_start_takes_the_saved_state_fuses_a_fresh_rest_and_refuses_bad_states() {
         let bias = [0.004, -0.002, 0.006];
         let saved = WarmStart {
             gyro_bias_rad_s: [0.001, 0.002, 0.003],
@@ -1017,7 +1023,24 @@ mod tests {
         est.set_warm_start(saved).unwrap();
         rest_then_move(&mut est, bias);
         let state = est.bias_state().unwrap();
-        // One propagation step later: the saved bias, and its covariance plus one step of noise.
+        // The fresh rest is fused into the saved state: each axis between the two (nearer the
+        // saved one, whose σ, 1e-4, is below the rest's floor of 5e-4), its variance below the
+        // saved one.
+        for (k, &r) in bias.iter().enumerate() {
+            let (s, got) = (saved.gyro_bias_rad_s[k], state.gyro_bias_rad_s[k]);
+            assert!(
+                (got - s) * (r - s) > 0.0 && (got - s).abs() < 0.5 * (r - s).abs(),
+                "axis {k}: {got}"
+            );
+            assert!(state.gyro_bias_cov[k][k] < saved.gyro_bias_cov[k][k]);
+        }
+        // Without a rest prior the saved state is taken as it is (one step of noise later).
+        let mut cfg = Config::default();
+        cfg.alignment.gyro_bias_prior = BiasPrior::None;
+        let mut est = Estimator::new(cfg, HeadingAid::None);
+        est.set_warm_start(saved).unwrap();
+        rest_then_move(&mut est, bias);
+        let state = est.bias_state().unwrap();
         assert_eq!(state.gyro_bias_rad_s, saved.gyro_bias_rad_s);
         assert!((state.gyro_bias_cov[1][2] - 1e-9).abs() < 1e-15);
         assert!(state.gyro_bias_cov[0][0] >= 1e-8 && state.gyro_bias_cov[0][0] < 1.01e-8);
