@@ -226,9 +226,37 @@ fn sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint() {
         }
     };
     assert_eq!(first_bias.imu_seq, first_aligned as u64);
+    // Warm start from the killed daemon's checkpoint, the new rest fused in: as the offline
+    // estimator warm-started from the same state over the same rows.
+    let warm = {
+        let cfg = ConfigFile::read(&config).unwrap().validate().unwrap();
+        let aid = heading_aid(&cfg, None).unwrap();
+        let mut est = corridor_service::core::Estimator::new(cfg, aid);
+        est.set_warm_start(corridor_service::core::WarmStart {
+            gyro_bias_rad_s: saved.gyro_bias_rad_s,
+            gyro_bias_cov: saved.gyro_bias_cov,
+        })
+        .unwrap();
+        let mut last = None;
+        for r in &log.rows[..=first_aligned] {
+            last = Some(
+                *est.step(&corridor_service::core::ImuInput {
+                    t_s: r.t_s,
+                    gyro_rad_s: r.gyro_rad_s,
+                    accel_m_s2: r.accel_m_s2,
+                })
+                .unwrap(),
+            );
+        }
+        last.unwrap()
+    };
     assert_eq!(
-        first_bias.gyro_bias_rad_s, saved.gyro_bias_rad_s,
+        first_bias.gyro_bias_rad_s, warm.gyro_bias_rad_s,
         "warm start from the checkpoint of the killed daemon"
+    );
+    assert_ne!(
+        first_bias.gyro_bias_rad_s, offline[first_aligned].gyro_bias_rad_s,
+        "not a cold start"
     );
     // The consumer that stayed connected through the crash gets the new daemon's attitude.
     let mut after = 0u64;
