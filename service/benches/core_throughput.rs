@@ -19,15 +19,7 @@ fn bench(c: &mut Criterion) {
         &ImuCsvOptions::default(),
     )
     .expect("bundled recording");
-    let inputs: Vec<ImuInput> = log
-        .rows
-        .iter()
-        .map(|r| ImuInput {
-            t_s: r.t_s,
-            gyro_rad_s: r.gyro_rad_s,
-            accel_m_s2: r.accel_m_s2,
-        })
-        .collect();
+    let inputs: Vec<ImuInput> = log.rows.iter().map(ImuInput::from).collect();
     let mut group = c.benchmark_group("core");
     group.throughput(Throughput::Elements(inputs.len() as u64));
     for mode in [Mode::Zupt, Mode::Paper, Mode::RotationAware, Mode::Eskf] {

@@ -239,14 +239,7 @@ fn sigkill_then_restart_cleans_up_and_resumes_from_the_periodic_checkpoint() {
         .unwrap();
         let mut last = None;
         for r in &log.rows[..=first_aligned] {
-            last = Some(
-                *est.step(&corridor_service::core::ImuInput {
-                    t_s: r.t_s,
-                    gyro_rad_s: r.gyro_rad_s,
-                    accel_m_s2: r.accel_m_s2,
-                })
-                .unwrap(),
-            );
+            last = Some(*est.step(&r.into()).unwrap());
         }
         last.unwrap()
     };

@@ -135,13 +135,9 @@ fn estimator_core_does_not_allocate_per_sample() {
             let rows = exp36_rows();
             let mut est = Estimator::new(cfg, aid);
             let step = |est: &mut Estimator, r: &ImuRow| {
-                est.step(&ImuInput {
-                    t_s: r.t_s,
-                    gyro_rad_s: r.gyro_rad_s,
-                    accel_m_s2: r.accel_m_s2,
-                })
-                .map(|e| e.heading.is_some())
-                .unwrap()
+                est.step(&ImuInput::from(r))
+                    .map(|e| e.heading.is_some())
+                    .unwrap()
             };
             for r in &rows[..WARM_UP] {
                 step(&mut est, r);

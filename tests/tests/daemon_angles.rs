@@ -7,8 +7,7 @@
 mod daemon_common;
 
 use corridor_client::{Delivery, Domain, Producer, Subscriber};
-use corridor_service::core::{Estimate, Estimator, ImuInput, Phase};
-use corridor_service::runner::heading_aid;
+use corridor_service::core::{Estimate, Phase};
 use corridor_shared::wire::{
     ANGLE_HEADING, ANGLE_ROLL, AngleObservation, AttitudeSample, ImuSample,
 };
@@ -23,23 +22,11 @@ const HEADING_SD_RAD: f64 = 0.0087;
 /// The offline estimates of exp36, with `queued` heading observation given before the first
 /// sample (as the daemon gets it), or none.
 fn offline(queued: Option<(f64, f64)>) -> Vec<Estimate> {
-    let cfg = config();
-    let aid = heading_aid(&cfg, None).unwrap();
-    let mut est = Estimator::new(cfg, aid);
-    if let Some((h, sd)) = queued {
-        est.queue_heading(h, sd).unwrap();
-    }
-    exp36_rows()
-        .iter()
-        .map(|r| {
-            *est.step(&ImuInput {
-                t_s: r.t_s,
-                gyro_rad_s: r.gyro_rad_s,
-                accel_m_s2: r.accel_m_s2,
-            })
-            .unwrap()
-        })
-        .collect()
+    offline_exp36_with(|est| {
+        if let Some((h, sd)) = queued {
+            est.queue_heading(h, sd).unwrap();
+        }
+    })
 }
 
 #[test]

@@ -91,28 +91,13 @@ fn restart_warm_starts_from_the_saved_bias() {
     );
     // The offline estimator warm-started from the saved state over the same rows: the same
     // bias and σ (the saved state with the fresh rest fused in, so σ below the saved one).
-    let warm = {
-        let cfg = config();
-        let aid = corridor_service::runner::heading_aid(&cfg, None).unwrap();
-        let mut est = corridor_service::core::Estimator::new(cfg, aid);
+    let warm = offline_exp36_with(|est| {
         est.set_warm_start(corridor_service::core::WarmStart {
             gyro_bias_rad_s: saved.gyro_bias_rad_s,
             gyro_bias_cov: saved.gyro_bias_cov,
         })
         .unwrap();
-        let mut last = None;
-        for r in &exp36_rows()[..=first_aligned] {
-            last = Some(
-                *est.step(&corridor_service::core::ImuInput {
-                    t_s: r.t_s,
-                    gyro_rad_s: r.gyro_rad_s,
-                    accel_m_s2: r.accel_m_s2,
-                })
-                .unwrap(),
-            );
-        }
-        last.unwrap()
-    };
+    })[first_aligned];
     assert!(
         max_abs_diff(first.gyro_bias_rad_s, warm.gyro_bias_rad_s) <= 1e-12,
         "first bias after alignment {:?}, offline warm start {:?}",

@@ -184,6 +184,21 @@ pub fn one_daemon_at_a_time() -> std::sync::MutexGuard<'static, ()> {
         .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
+/// The offline estimates of exp36 from an estimator that `prepare` set up first (a queued
+/// heading, a warm start), sample by sample as the daemon runs it.
+pub fn offline_exp36_with(
+    prepare: impl FnOnce(&mut corridor_service::core::Estimator),
+) -> Vec<corridor_service::core::Estimate> {
+    let cfg = config();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let mut est = corridor_service::core::Estimator::new(cfg, aid);
+    prepare(&mut est);
+    exp36_rows()
+        .iter()
+        .map(|r| *est.step(&r.into()).unwrap())
+        .collect()
+}
+
 /// The offline estimates of exp36 and the index of the first aligned sample.
 pub fn offline_exp36() -> (Vec<corridor_service::core::Estimate>, usize) {
     let cfg = config();

@@ -16,6 +16,17 @@ pub struct ImuInput {
     pub accel_m_s2: [f64; 3],
 }
 
+impl From<&corridor_shared::imu_csv::ImuRow> for ImuInput {
+    /// A logged row as the estimator takes it (its temperature, if any, is not used).
+    fn from(r: &corridor_shared::imu_csv::ImuRow) -> Self {
+        Self {
+            t_s: r.t_s,
+            gyro_rad_s: r.gyro_rad_s,
+            accel_m_s2: r.accel_m_s2,
+        }
+    }
+}
+
 /// A sample the estimator refused; it changed nothing.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum SampleError {
