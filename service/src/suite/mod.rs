@@ -322,7 +322,6 @@ impl Ctx<'_> {
     ) -> Result<FrontEnd, RunError> {
         let mut off = self.config.clone();
         off.eskf.clipped_rate_sd_rad_s = Some(0.0);
-        off.eskf.clipped_rate_excess_rad_s = Some(0.0);
         let (_, clipping_off) =
             self.run_with(&off, mode, BiasPrior::RestMean, BiasInjection::default())?;
         let without_rest = match front_end::without_rest(&self.log.rows, &self.truth) {

@@ -123,9 +123,6 @@ pub const ESKF_ZERO_RATE_UPDATES: bool = true;
 /// `eskf.zupt_rolling_height_m` (0: a plain zero-velocity update).
 pub const ESKF_ZUPT_ROLLING_HEIGHT_M: f64 = 0.0;
 
-/// `eskf.clipped_rate_excess_rad_s`.
-pub const ESKF_CLIPPED_RATE_EXCESS_RAD_S: f64 = 0.0;
-
 /// `bias_kf.tilt_sd_rad` (1°).
 pub const BIAS_KF_TILT_SD_RAD: f64 = std::f64::consts::PI / 180.0;
 

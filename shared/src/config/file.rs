@@ -171,10 +171,8 @@ pub struct EskfFile {
     /// plain zero-velocity update).
     pub zupt_rolling_height_m: Option<f64>,
     /// A gyro axis at its rail (`sensor.gyro_range_rad_s`) read less than the true rate: the
-    /// rate used is the rail plus this mean excess, rad/s (default 0).
-    pub clipped_rate_excess_rad_s: Option<f64>,
-    /// ... and the attitude variance grows about that axis by (this σ × dt)² per clipped
-    /// sample, rad/s (default 0.5).
+    /// attitude variance grows about that axis by (this σ × dt)² per clipped sample, rad/s
+    /// (default 0.5; 0: no clipping model).
     pub clipped_rate_sd_rad_s: Option<f64>,
 }
 

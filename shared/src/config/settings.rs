@@ -131,9 +131,7 @@ pub struct EskfConfig {
     pub zero_rate_updates: bool,
     /// Sensor height above the rolling contact (0: plain ZUPT).
     pub zupt_rolling_height_m: f64,
-    /// Mean excess of the true rate over a clipped gyro axis.
-    pub clipped_rate_excess_rad_s: f64,
-    /// σ of that excess.
+    /// σ of the true rate's excess over a clipped gyro axis.
     pub clipped_rate_sd_rad_s: f64,
 }
 

@@ -311,11 +311,6 @@ impl ConfigFile {
                     k.zupt_rolling_height_m
                         .unwrap_or(ESKF_ZUPT_ROLLING_HEIGHT_M),
                 )?,
-                clipped_rate_excess_rad_s: non_negative(
-                    "eskf.clipped_rate_excess_rad_s",
-                    k.clipped_rate_excess_rad_s
-                        .unwrap_or(ESKF_CLIPPED_RATE_EXCESS_RAD_S),
-                )?,
                 clipped_rate_sd_rad_s: non_negative(
                     "eskf.clipped_rate_sd_rad_s",
                     k.clipped_rate_sd_rad_s

@@ -247,7 +247,7 @@ impl Estimator {
 
     /// Processes one sample. On error nothing changed and the sample is counted as rejected.
     pub fn step(&mut self, s: &ImuInput) -> Result<&Estimate, SampleError> {
-        let mut w = Vector3::from(s.gyro_rad_s);
+        let w = Vector3::from(s.gyro_rad_s);
         let f = Vector3::from(s.accel_m_s2);
         let p = &mut self.p;
         let clipped = match p.plausibility.check(s) {
@@ -266,19 +266,14 @@ impl Estimator {
         let prev = p.last;
         p.counters.samples += 1;
         p.counters.clipped_samples += u64::from(clipped);
-        // A gyro axis at its rail read less than the true rate: the mean excess is added, and
-        // the attitude variance grows about that axis in `navigate`.
-        p.clipped_gyro_axes = [false; 3];
-        if clipped {
-            let rail = CLIP_FRACTION * p.cfg.sensor.gyro_range_rad_s();
-            let excess = p.cfg.eskf.clipped_rate_excess_rad_s;
-            for (k, c) in p.clipped_gyro_axes.iter_mut().enumerate() {
-                *c = w[k].abs() >= rail;
-                if *c {
-                    w[k] += excess.copysign(w[k]);
-                }
-            }
-        }
+        // A gyro axis at its rail read less than the true rate: the attitude variance grows
+        // about that axis in `navigate`.
+        let rail = CLIP_FRACTION * p.cfg.sensor.gyro_range_rad_s();
+        p.clipped_gyro_axes = if clipped {
+            w.map(|v| v.abs() >= rail).into()
+        } else {
+            [false; 3]
+        };
         // Integration runs on the sample clock: the stamps, or while they jitter (host arrival
         // times) a smoothed clock.
         let t_clock = p.clock.push(s.t_s);
