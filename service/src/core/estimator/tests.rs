@@ -1,0 +1,273 @@
+//! Unit tests of the estimator's per-sample pipeline.
+
+use super::*;
+use corridor_shared::config::{Config, ConfigFile};
+
+fn level_rest(t_s: f64) -> ImuInput {
+    ImuInput {
+        t_s,
+        gyro_rad_s: [0.0; 3],
+        accel_m_s2: [0.0, 0.0, 9.81],
+    }
+}
+
+/// 3 s of level rest with the gyro reading `bias`, then one moving sample (alignment ends).
+fn rest_then_move(est: &mut Estimator, bias: [f64; 3]) -> Estimate {
+    let dt = 0.005;
+    for k in 0..600 {
+        let s = ImuInput {
+            t_s: k as f64 * dt,
+            gyro_rad_s: bias,
+            accel_m_s2: [0.0, 0.0, 9.81],
+        };
+        est.step(&s).unwrap();
+    }
+    let moving = ImuInput {
+        t_s: 600.0 * dt,
+        gyro_rad_s: [0.0, 3.0, 0.0],
+        accel_m_s2: [0.0, 0.0, 9.81],
+    };
+    *est.step(&moving).unwrap()
+}
+
+#[test]
+fn rotation_about_z_at_a_known_rate_gives_the_known_heading() {
+    let mut est = Estimator::new(Config::default(), HeadingAid::None);
+    let dt = 0.005;
+    let mut k = 0;
+    while k < 400 {
+        est.step(&level_rest(k as f64 * dt)).unwrap();
+        k += 1;
+    }
+    assert_eq!(est.phase(), Phase::Aligning);
+    // 0.25 s at 4 rad/s about z: the heading turns by exactly 1 rad. (The rate is high
+    // enough for the windowed detector to call the first rotating sample motion.)
+    for _ in 0..50 {
+        let s = ImuInput {
+            t_s: k as f64 * dt,
+            gyro_rad_s: [0.0, 0.0, 4.0],
+            accel_m_s2: [0.0, 0.0, 9.81],
+        };
+        est.step(&s).unwrap();
+        k += 1;
+    }
+    let e = est.step(&level_rest(k as f64 * dt)).unwrap();
+    assert_eq!(e.phase, Phase::Calibrating);
+    // 49 full steps plus half of the first and of the last step (trapezoid) = 50 steps.
+    assert!((e.yaw_rad - 1.0).abs() < 1e-9, "yaw {}", e.yaw_rad);
+    assert!(e.roll_rad.abs() < 1e-9 && e.pitch_rad.abs() < 1e-9);
+}
+
+#[test]
+fn rest_mean_prior_recovers_a_static_bias() {
+    let cfg = ConfigFile::default().validate().unwrap();
+    let bias = [0.004, -0.002, 0.006];
+    let mut est = Estimator::new(cfg, HeadingAid::None);
+    let e = rest_then_move(&mut est, bias);
+    for (got, want) in e.gyro_bias_rad_s.iter().zip(bias) {
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+    }
+}
+
+/// `n` samples from `t0_s` reading `gyro` and `accel` (level foot: gravity along z).
+fn feed(est: &mut Estimator, t0_s: f64, n: usize, gyro: [f64; 3], accel: [f64; 3]) -> f64 {
+    let dt = 0.005;
+    for k in 0..n {
+        let s = ImuInput {
+            t_s: t0_s + k as f64 * dt,
+            gyro_rad_s: gyro,
+            accel_m_s2: accel,
+        };
+        est.step(&s).unwrap();
+    }
+    t0_s + n as f64 * dt
+}
+
+#[test]
+fn a_short_first_stance_aligns_without_a_bias_prior_unless_switched_off() {
+    let bias = [0.004, -0.002, 0.006];
+    let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
+    for min_start_stance_s in [0.1, 0.0] {
+        let mut cfg = Config::default();
+        cfg.alignment.min_start_stance_s = min_start_stance_s;
+        let mut est = Estimator::new(cfg, HeadingAid::None);
+        // 0.2 s of stance (shorter than min_rest_s = 0.5 s), then the foot moves.
+        let t = feed(&mut est, 0.0, 40, bias, level);
+        let e = *est
+            .step(&ImuInput {
+                t_s: t,
+                gyro_rad_s: bias,
+                accel_m_s2: pushed,
+            })
+            .unwrap();
+        if min_start_stance_s > 0.0 {
+            assert_ne!(est.phase(), Phase::Aligning);
+            assert!(est.counters().started_without_rest);
+            // No rest-mean prior from a walking stance: the bias starts at zero.
+            assert_eq!(e.gyro_bias_rad_s, [0.0; 3]);
+        } else {
+            assert_eq!(est.phase(), Phase::Aligning, "waits for a rest");
+            assert_eq!(est.counters().alignment_restarts, 1);
+        }
+    }
+}
+
+#[test]
+fn a_later_rest_observes_the_bias_with_a_zero_rate_update() {
+    let bias = [0.004, -0.002, 0.006];
+    let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
+    let mut z_error = Vec::new();
+    for zero_rate_updates in [true, false] {
+        let mut cfg = Config::default();
+        cfg.alignment.gyro_bias_prior = BiasPrior::None;
+        cfg.eskf.zero_rate_updates = zero_rate_updates;
+        let mut est = Estimator::new(cfg, HeadingAid::None);
+        // Aligned on a 1 s rest without prior, a push, a 2 s rest, a push (the rest ends).
+        let t = feed(&mut est, 0.0, 200, bias, level);
+        let t = feed(&mut est, t, 10, bias, pushed);
+        let t = feed(&mut est, t, 400, bias, level);
+        feed(&mut est, t, 1, bias, pushed);
+        let e = *est
+            .step(&ImuInput {
+                t_s: t + 0.005,
+                gyro_rad_s: bias,
+                accel_m_s2: pushed,
+            })
+            .unwrap();
+        let want = u64::from(zero_rate_updates);
+        assert_eq!(est.counters().zero_rate_updates, want);
+        z_error.push((e.gyro_bias_rad_s[2] - bias[2]).abs());
+    }
+    // The heading axis is unobservable by zero velocity alone: only the zero-rate update
+    // finds its bias.
+    assert!(z_error[0] < 5e-4, "with zero-rate update: {}", z_error[0]);
+    assert!(z_error[1] > 3e-3, "without: {}", z_error[1]);
+}
+
+#[test]
+fn a_clipped_gyro_axis_is_counted_and_widens_the_attitude_only_when_modelled() {
+    let bias = [0.0; 3];
+    let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
+    let mut roll = Vec::new();
+    for sd in [0.5, 0.0] {
+        let mut cfg = Config::default();
+        cfg.eskf.clipped_rate_sd_rad_s = sd;
+        let rail = cfg.sensor.gyro_range_rad_s();
+        let mut est = Estimator::new(cfg, HeadingAid::None);
+        let t = feed(&mut est, 0.0, 200, bias, level);
+        // A swing with the x axis at its rail, then a long stance: the ZUPTs see the tilt
+        // the unmeasured rotation would have caused and correct the attitude, more so when
+        // its variance says that the attitude is uncertain.
+        let t = feed(&mut est, t, 20, [rail, 0.0, 0.0], pushed);
+        let t = feed(&mut est, t, 20, [-rail, 0.0, 0.0], pushed);
+        feed(&mut est, t, 100, bias, level);
+        assert_eq!(est.counters().clipped_samples, 40);
+        roll.push(est.p.out.roll_rad);
+    }
+    assert_ne!(roll[0], roll[1], "the clipping model changes the estimate");
+}
+
+#[test]
+fn a_rest_that_sways_gives_a_prior_as_uncertain_as_its_mean() {
+    let cfg = ConfigFile::default().validate().unwrap();
+    let floor = cfg.eskf.gyro_bias_prior_sd_rad_s.get();
+    let mut est = Estimator::new(cfg, HeadingAid::None);
+    // 3 s of "rest" whose x rate alternates ±0.05 rad/s every 0.25 s (a foot that sways
+    // without the detector noticing), then motion.
+    let level = [0.0, 0.0, 9.81];
+    let mut t = 0.0;
+    for k in 0..12 {
+        let sway = if k % 2 == 0 { 0.05 } else { -0.05 };
+        t = feed(&mut est, t, 50, [0.002 + sway, -0.001, 0.003], level);
+    }
+    feed(&mut est, t, 1, [0.0, 3.0, 0.0], level);
+    let p = est.bias_state().unwrap().gyro_bias_cov;
+    // x: 0.05 rad/s spread over √(number of 50 ms blocks) ≈ 0.05/√(50) ≈ 7e-3; y, z still
+    // (within one step of noise) at the floor.
+    assert!(p[0][0].sqrt() > 5e-3, "x σ {}", p[0][0].sqrt());
+    for axis in [1, 2] {
+        assert!(
+            p[axis][axis].sqrt() < 1.1 * floor,
+            "axis {axis}: {}",
+            p[axis][axis].sqrt()
+        );
+    }
+}
+
+#[test]
+fn an_absurd_external_heading_is_refused_and_counted() {
+    let mut est = Estimator::new(Config::default(), HeadingAid::None);
+    for (h, sd) in [
+        (f64::NAN, 0.01),
+        (0.3, 0.0),
+        (0.3, -1.0),
+        (0.3, f64::INFINITY),
+        (1e300 * 1e300, 0.1),
+    ] {
+        assert!(est.queue_heading(h, sd).is_err(), "{h} {sd}");
+    }
+    assert_eq!(est.counters().headings_refused, 5);
+    assert!(est.p.pending_heading.is_none());
+    est.queue_heading(0.3, 0.01).unwrap();
+    assert_eq!(est.p.pending_heading, Some((0.3, 0.01)));
+}
+
+#[test]
+fn warm_start_takes_the_saved_state_fuses_a_fresh_rest_and_refuses_bad_states() {
+    let bias = [0.004, -0.002, 0.006];
+    let saved = WarmStart {
+        gyro_bias_rad_s: [0.001, 0.002, 0.003],
+        gyro_bias_cov: [[1e-8, 0.0, 0.0], [0.0, 2e-8, 1e-9], [0.0, 1e-9, 3e-8]],
+    };
+    let mut est = Estimator::new(Config::default(), HeadingAid::None);
+    let mut bad = saved;
+    bad.gyro_bias_cov[0][0] = -1.0;
+    assert!(est.set_warm_start(bad).is_err());
+    bad = saved;
+    bad.gyro_bias_rad_s[2] = f64::NAN;
+    assert!(est.set_warm_start(bad).is_err());
+    assert!(est.bias_state().is_none(), "no state before alignment");
+    est.set_warm_start(saved).unwrap();
+    rest_then_move(&mut est, bias);
+    let state = est.bias_state().unwrap();
+    // The fresh rest is fused into the saved state: each axis between the two (nearer the
+    // saved one, whose σ, 1e-4, is below the rest's floor of 5e-4), its variance below the
+    // saved one.
+    for (k, &r) in bias.iter().enumerate() {
+        let (s, got) = (saved.gyro_bias_rad_s[k], state.gyro_bias_rad_s[k]);
+        assert!(
+            (got - s) * (r - s) > 0.0 && (got - s).abs() < 0.5 * (r - s).abs(),
+            "axis {k}: {got}"
+        );
+        assert!(state.gyro_bias_cov[k][k] < saved.gyro_bias_cov[k][k]);
+    }
+    // Without a rest prior the saved state is taken as it is (one step of noise later).
+    let mut cfg = Config::default();
+    cfg.alignment.gyro_bias_prior = BiasPrior::None;
+    let mut est = Estimator::new(cfg, HeadingAid::None);
+    est.set_warm_start(saved).unwrap();
+    rest_then_move(&mut est, bias);
+    let state = est.bias_state().unwrap();
+    assert_eq!(state.gyro_bias_rad_s, saved.gyro_bias_rad_s);
+    assert!((state.gyro_bias_cov[1][2] - 1e-9).abs() < 1e-15);
+    assert!(state.gyro_bias_cov[0][0] >= 1e-8 && state.gyro_bias_cov[0][0] < 1.01e-8);
+}
+
+#[test]
+fn bad_samples_are_refused_counted_and_change_nothing() {
+    let mut est = Estimator::new(Config::default(), HeadingAid::None);
+    est.step(&level_rest(0.0)).unwrap();
+    est.step(&level_rest(0.005)).unwrap();
+    let mut nan = level_rest(0.01);
+    nan.gyro_rad_s[1] = f64::NAN;
+    let err = est.step(&nan).unwrap_err();
+    assert!(err.to_string().contains("gy_rad_s"), "{err}");
+    let err = est.step(&level_rest(0.005)).unwrap_err();
+    assert!(matches!(err, SampleError::TimeNotIncreasing { prev_t_s, .. } if prev_t_s == 0.005));
+    est.step(&level_rest(0.01)).unwrap();
+    let c = est.counters();
+    assert_eq!(
+        (c.samples, c.rejected_non_finite, c.rejected_time),
+        (3, 1, 1)
+    );
+}
