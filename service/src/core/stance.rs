@@ -4,7 +4,9 @@
 //!
 //! The window is causal (the last `window` samples), so the decision for a sample never waits
 //! for later samples. A stance only counts once it has lasted `min_stance_s`; shorter dips of the
-//! statistic are ignored.
+//! statistic are ignored. [`StanceEvents`] joins the stances of one footfall that a short pause
+//! of the detector splits (heel strike, then foot flat): the zero-velocity updates stay per
+//! sample, the once-per-stance work (stride observation, rest test) happens once.
 
 use corridor_shared::config::{DetectorConfig, DetectorKind};
 use nalgebra::Vector3;
@@ -214,6 +216,68 @@ impl StanceDetector {
     }
 }
 
+/// What one sample does to the current stance event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StanceEdge {
+    /// Nothing changes.
+    None,
+    /// A new stance (footfall) begins on this sample.
+    Began,
+    /// The stance goes on after a pause of at most the merge gap.
+    Resumed,
+    /// The stance ended (its last stance sample lies more than the merge gap back).
+    Ended,
+}
+
+/// Stances separated by pauses of at most `merge_gap_s` form one event. The end of an event is
+/// known `merge_gap_s` after its last stance sample: that is the latency this adds to the
+/// end-of-stance work (the rest test), not to the zero-velocity updates.
+#[derive(Debug, Clone, Copy)]
+pub struct StanceEvents {
+    merge_gap_s: f64,
+    open: bool,
+    was_stance: bool,
+    last_stance_s: f64,
+}
+
+impl StanceEvents {
+    /// Events that bridge pauses of up to `merge_gap_s` (0: every stance is its own event).
+    pub fn new(merge_gap_s: f64) -> Self {
+        Self {
+            merge_gap_s,
+            open: false,
+            was_stance: false,
+            last_stance_s: f64::NEG_INFINITY,
+        }
+    }
+
+    /// Whether a stance event is open (in a stance or inside a pause that may still be bridged).
+    pub fn is_open(&self) -> bool {
+        self.open
+    }
+
+    /// The detector's stance flag of the sample at `t_s`.
+    pub fn push(&mut self, t_s: f64, stance: bool) -> StanceEdge {
+        let was = std::mem::replace(&mut self.was_stance, stance);
+        if stance {
+            self.last_stance_s = t_s;
+            if !self.open {
+                self.open = true;
+                StanceEdge::Began
+            } else if !was {
+                StanceEdge::Resumed
+            } else {
+                StanceEdge::None
+            }
+        } else if self.open && t_s - self.last_stance_s > self.merge_gap_s {
+            self.open = false;
+            StanceEdge::Ended
+        } else {
+            StanceEdge::None
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -303,6 +367,32 @@ mod tests {
         assert_eq!(count(false), 0);
         // 10 cycles; the first needs one stride of history.
         assert!((9..=10).contains(&count(true)), "{}", count(true));
+    }
+
+    #[test]
+    fn a_short_pause_does_not_split_a_stance_and_a_swing_ends_it() {
+        let mut e = StanceEvents::new(0.302);
+        // stance 0–0.1 s, pause 0.1–0.3 s, stance 0.3–0.4 s, swing from 0.4 s
+        let stance_at = |t: f64| t < 0.1 || (0.3..0.4).contains(&t);
+        let edges: Vec<(usize, StanceEdge)> = (0..200)
+            .map(|i| (i, e.push(i as f64 * 0.005, stance_at(i as f64 * 0.005))))
+            .filter(|(_, x)| *x != StanceEdge::None)
+            .collect();
+        // Ended more than 0.302 s after the last stance sample (0.395 s): at 0.7 s.
+        assert_eq!(
+            edges,
+            vec![
+                (0, StanceEdge::Began),
+                (60, StanceEdge::Resumed),
+                (140, StanceEdge::Ended)
+            ]
+        );
+        // Without merging the pause splits it.
+        let mut e = StanceEvents::new(0.0);
+        let began = (0..200)
+            .filter(|&i| e.push(i as f64 * 0.005, stance_at(i as f64 * 0.005)) == StanceEdge::Began)
+            .count();
+        assert_eq!(began, 2);
     }
 
     #[test]

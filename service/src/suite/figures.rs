@@ -217,23 +217,18 @@ pub(super) struct NisSeries {
     heading: Vec<f64>,
     in_stance: bool,
     pub(super) stances: Vec<StanceUse>,
-    /// Detected stance intervals (start, end), s.
-    pub(super) intervals: Vec<(f64, f64)>,
-    detector_stance: Option<f64>,
-    last_t_s: f64,
+    /// Stances found (start, last stance sample), s; the last one is still open.
+    intervals: Vec<(f64, f64)>,
 }
 
 impl NisSeries {
     pub(super) fn push(&mut self, e: &crate::core::Estimate) {
-        match (e.stance, self.detector_stance) {
-            (true, None) => self.detector_stance = Some(e.t_s),
-            (false, Some(start)) => {
-                self.intervals.push((start, self.last_t_s));
-                self.detector_stance = None;
-            }
-            _ => {}
+        if e.stance_began {
+            self.intervals.push((e.t_s, e.t_s));
         }
-        self.last_t_s = e.t_s;
+        if let (true, Some(last)) = (e.stance, self.intervals.last_mut()) {
+            last.1 = e.t_s;
+        }
         match &e.zupt {
             Some(z) if !self.in_stance => {
                 self.zupt_first.push(z.nis);
@@ -262,6 +257,11 @@ impl NisSeries {
                 foot_axis: used[1],
             });
         }
+    }
+
+    /// The stances the estimator found: (first, last stance sample), s.
+    pub(super) fn intervals(&self) -> &[(f64, f64)] {
+        &self.intervals
     }
 
     pub(super) fn figures(&self) -> [Option<NisFigure>; 3] {

@@ -4,7 +4,7 @@
 
 use super::figures::StanceMatch;
 use super::{Footprint, SuiteRow};
-use crate::core::stance::StanceDetector;
+use crate::core::stance::{StanceDetector, StanceEdge, StanceEvents};
 use corridor_shared::config::{Config, DetectorConfig, DetectorKind, Positive};
 use corridor_shared::imu_csv::ImuRow;
 use corridor_shared::truth_csv::TruthPoint;
@@ -57,27 +57,22 @@ pub struct FrontEnd {
     pub detectors: Option<Vec<StanceMatch>>,
 }
 
-/// The stance intervals (start, end of the last stance sample) the detector `cfg` finds.
+/// The stances (first, last stance sample) the detector `cfg` finds, pauses of up to its
+/// `merge_gap_s` bridged as the estimator does; a stance still open at the end of the log counts.
 pub fn stance_intervals(rows: &[ImuRow], cfg: &DetectorConfig) -> Vec<(f64, f64)> {
     let mut d = StanceDetector::new(cfg, 9.80665);
-    let mut out = Vec::new();
-    let (mut start, mut last_t) = (None, f64::NAN);
+    let mut events = StanceEvents::new(cfg.merge_gap_s);
+    let mut out: Vec<(f64, f64)> = Vec::new();
     for r in rows {
         let w = Vector3::from(r.gyro_rad_s);
         let f = Vector3::from(r.accel_m_s2);
         let stance = d.push(r.t_s, &w, &f).stance;
-        match (stance, start) {
-            (true, None) => start = Some(r.t_s),
-            (false, Some(s)) => {
-                out.push((s, last_t));
-                start = None;
-            }
-            _ => {}
+        if events.push(r.t_s, stance) == StanceEdge::Began {
+            out.push((r.t_s, r.t_s));
         }
-        last_t = r.t_s;
-    }
-    if let Some(s) = start {
-        out.push((s, last_t)); // a stance still open at the end of the log
+        if let (true, Some(last)) = (stance, out.last_mut()) {
+            last.1 = r.t_s;
+        }
     }
     out
 }

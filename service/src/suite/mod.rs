@@ -306,7 +306,7 @@ impl Ctx<'_> {
         );
         Ok(DefaultFigures {
             nis: nis.figures(),
-            stances_found: stride_use.map(|_| StanceMatch::of(&self.truth, &nis.intervals)),
+            stances_found: stride_use.map(|_| StanceMatch::of(&self.truth, nis.intervals())),
             stride_use,
             stride_ratio: stride_ratio(&out.trace, &self.truth),
         })

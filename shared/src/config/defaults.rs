@@ -87,6 +87,11 @@ pub const DETECTOR_SIGMA_GYRO_RAD_S: f64 = 0.1 * (std::f64::consts::PI / 180.0);
 /// `detector.min_stance_s`.
 pub const DETECTOR_MIN_STANCE_S: f64 = 0.04;
 
+/// `detector.merge_gap_s`: stances split by a shorter pause of the detector are one footfall,
+/// s. Between footfalls the foot swings for at least 0.65 s even in fast gait (the gaps between
+/// detected stances over the 16 gdins walks fall below 0.3 s or above 0.65 s, nothing between).
+pub const DETECTOR_MERGE_GAP_S: f64 = 0.3;
+
 /// `detector.adaptive_window_s`: about one stride cycle, s.
 pub const DETECTOR_ADAPTIVE_WINDOW_S: f64 = 1.5;
 

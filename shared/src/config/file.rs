@@ -131,6 +131,9 @@ pub struct DetectorFile {
     pub sigma_gyro_rad_s: Option<f64>,
     /// Shortest stance kept (default 0.04 s).
     pub min_stance_s: Option<f64>,
+    /// Stances split by a pause shorter than this are one stance (one footfall: one stride
+    /// observation, one rest test) (default 0.3 s; 0 = off).
+    pub merge_gap_s: Option<f64>,
     /// Adaptive threshold: a sample is stance when its statistic is below `threshold` or below
     /// this factor times the quietest statistic of the last `adaptive_window_s` (absent: off).
     pub adaptive_factor: Option<f64>,

@@ -100,6 +100,8 @@ pub struct DetectorConfig {
     pub sigma_gyro_rad_s: Positive,
     /// Shortest stance.
     pub min_stance_s: f64,
+    /// Longest pause inside one stance.
+    pub merge_gap_s: f64,
     /// Adaptive factor (off when `None`).
     pub adaptive_factor: Option<Positive>,
     /// Adaptive look-back.

@@ -254,6 +254,10 @@ impl ConfigFile {
                     "detector.min_stance_s",
                     d.min_stance_s.unwrap_or(DETECTOR_MIN_STANCE_S),
                 )?,
+                merge_gap_s: non_negative(
+                    "detector.merge_gap_s",
+                    d.merge_gap_s.unwrap_or(DETECTOR_MERGE_GAP_S),
+                )?,
                 adaptive_factor: d
                     .adaptive_factor
                     .map(|v| Positive::new("detector.adaptive_factor", v))

@@ -46,7 +46,7 @@ use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rolling_velocity, rot_z, tilt_from_specific_force,
     wrap_pi, yaw,
 };
-use super::stance::StanceDetector;
+use super::stance::{StanceDetector, StanceEdge, StanceEvents};
 use corridor_shared::config::{BiasPrior, Config, Mode};
 use corridor_shared::sensor::CLIP_FRACTION;
 
@@ -123,7 +123,9 @@ struct Pipeline {
     last_footprint: Option<([f64; 2], Option<f64>)>,
     straight: StraightWalk,
     line: Option<FootprintLine>,
-    in_stance: bool,
+    stance_events: StanceEvents,
+    /// The stance that just ended is tested for a rest (zero-rate update) at the next sample.
+    zero_rate_pending: bool,
     clock: SampleClock,
     /// The current stance's sums, for the zero-rate update when it turns out to be a rest.
     stance_rest: RestSums,
@@ -171,7 +173,8 @@ impl Estimator {
             forward_body: Vector3::x(),
             mount_sum: (0.0, 0.0, 0),
             last_footprint: None,
-            in_stance: false,
+            stance_events: StanceEvents::new(cfg.detector.merge_gap_s),
+            zero_rate_pending: false,
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
             stance_rest: RestSums::new(cfg.alignment.rest_tail_s),
@@ -283,6 +286,7 @@ impl Estimator {
         let out = &mut p.out;
         out.t_s = s.t_s;
         out.stance = decision.stance;
+        out.stance_began = false;
         out.clipped = clipped;
         out.health_fault = None;
         out.gap_s = None;
@@ -408,7 +412,7 @@ impl Pipeline {
             // The update was undone: the next step integrates from the previous sample (and a
             // zero-rate update made with it is made again at the next sample).
             self.last = prev;
-            self.in_stance |= applied;
+            self.zero_rate_pending |= applied;
         } else if applied {
             self.counters.zero_rate_updates += 1;
         }
@@ -723,13 +727,28 @@ impl Pipeline {
                 eskf.zupt_with_sd(sd)
             });
             self.counters.zupts += 1;
-            if !self.in_stance {
-                self.in_stance = true;
+        }
+        match self.stance_events.push(t_s, stance) {
+            StanceEdge::Began => {
                 self.stance_rest.clear();
                 self.stance_obs_done = false;
                 self.stance_f_sum = (Vector3::zeros(), 0);
                 self.counters.stances += 1;
+                self.out.stance_began = true;
             }
+            // A rest is one uninterrupted stance. The heading is observed again once the foot
+            // has settled after the pause (heel strike, pause, foot flat): observing only in the
+            // first part was measured worse (exp40 1.67 -> 3.71 %, 3.2-4.1 % under six
+            // perturbations of the noise figures against 1.6-1.8 %; the other walks within
+            // 0.03 %). The stride direction of that second look is a shuffle and is refused.
+            StanceEdge::Resumed => {
+                self.stance_rest.clear();
+                self.stance_obs_done = false;
+            }
+            StanceEdge::Ended => self.zero_rate_pending = self.cfg.eskf.zero_rate_updates,
+            StanceEdge::None => {}
+        }
+        if stance {
             self.stance_f_sum.0 += f_now;
             self.stance_f_sum.1 += 1;
             if !self.stance_obs_done && stance_age_s >= self.cfg.heading.obs_delay_s {
@@ -739,11 +758,8 @@ impl Pipeline {
             if self.cfg.eskf.zero_rate_updates {
                 self.stance_rest.push(t_s, f_avg, w_avg);
             }
-        } else {
-            if self.in_stance && self.cfg.eskf.zero_rate_updates {
-                self.zero_rate_applied = self.zero_rate_update(eskf);
-            }
-            self.in_stance = false;
+        } else if std::mem::take(&mut self.zero_rate_pending) {
+            self.zero_rate_applied = self.zero_rate_update(eskf);
         }
     }
 

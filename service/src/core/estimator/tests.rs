@@ -122,11 +122,19 @@ fn a_later_rest_observes_the_bias_with_a_zero_rate_update() {
         cfg.alignment.gyro_bias_prior = BiasPrior::None;
         cfg.eskf.zero_rate_updates = zero_rate_updates;
         let mut est = Estimator::new(cfg, HeadingAid::None);
-        // Aligned on a 1 s rest without prior, a push, a 2 s rest, a push (the rest ends).
+        // Aligned on a 1 s rest without prior, a push, a 2 s rest, a push longer than the
+        // merge gap (the stance has ended: its rest test runs).
         let t = feed(&mut est, 0.0, 200, bias, level);
         let t = feed(&mut est, t, 10, bias, pushed);
         let t = feed(&mut est, t, 400, bias, level);
-        feed(&mut est, t, 1, bias, pushed);
+        let gap_samples = (est.config().detector.merge_gap_s / 0.005) as usize;
+        let t = feed(&mut est, t, gap_samples - 5, bias, pushed);
+        assert_eq!(
+            est.counters().zero_rate_updates,
+            0,
+            "the stance may still resume"
+        );
+        let t = feed(&mut est, t, 10, bias, pushed);
         let e = *est
             .step(&ImuInput {
                 t_s: t + 0.005,

@@ -218,8 +218,11 @@ pub struct Estimate {
     pub gyro_bias_rad_s: [f64; 3],
     /// Its σ, rad/s.
     pub gyro_bias_sd_rad_s: [f64; 3],
-    /// Stance flag.
+    /// Stance flag: this sample is taken as zero velocity.
     pub stance: bool,
+    /// A new stance (footfall) begins on this sample; the stance flags until the next one belong
+    /// to it (a short pause inside it does not split it: `detector.merge_gap_s`).
+    pub stance_began: bool,
     /// An axis of this sample is at the rail of its range (probably clipped).
     pub clipped: bool,
     /// Length of the gap before this sample, s, when the step was longer than
@@ -255,6 +258,7 @@ impl Default for Estimate {
             gyro_bias_rad_s: [0.0; 3],
             gyro_bias_sd_rad_s: [f64::NAN; 3],
             stance: false,
+            stance_began: false,
             clipped: false,
             health_fault: None,
             gap_s: None,
