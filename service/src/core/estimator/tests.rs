@@ -279,3 +279,41 @@ fn bad_samples_are_refused_counted_and_change_nothing() {
         (3, 1, 1)
     );
 }
+
+/// A stance that the detector splits (foot flat, a 0.1 s wobble, foot flat again) is one
+/// stance: one `stance_began`, one count (one NavSample for the daemon's consumers). Without
+/// merging it is two.
+#[test]
+fn a_stance_split_by_a_short_pause_is_one_stance() {
+    let (level, spin) = ([0.0, 0.0, 9.81], [0.0, 2.0, 0.0]);
+    for (merge_gap_s, want) in [(0.3, 1), (0.0, 2)] {
+        let mut cfg = Config::default();
+        cfg.detector.merge_gap_s = merge_gap_s;
+        let mut est = Estimator::new(cfg, HeadingAid::None);
+        let t = feed(&mut est, 0.0, 200, [0.0; 3], level); // aligning rest
+        let t = feed(&mut est, t, 100, spin, level); // swing
+        let before = est.counters().stances;
+        let mut began = 0;
+        let mut t_s = t;
+        // stance 0.2 s, wobble 0.1 s, stance 0.2 s, swing 0.5 s
+        for (n, gyro) in [(40, [0.0; 3]), (20, spin), (40, [0.0; 3]), (100, spin)] {
+            for _ in 0..n {
+                let e = est
+                    .step(&ImuInput {
+                        t_s,
+                        gyro_rad_s: gyro,
+                        accel_m_s2: level,
+                    })
+                    .unwrap();
+                began += u64::from(e.stance_began);
+                t_s += 0.005;
+            }
+        }
+        assert_eq!(began, want, "merge gap {merge_gap_s}");
+        assert_eq!(
+            est.counters().stances - before,
+            want,
+            "merge gap {merge_gap_s}"
+        );
+    }
+}
