@@ -103,7 +103,13 @@ impl SampleClock {
             let ticks = if self.jittery {
                 1.0
             } else {
-                (dt / self.period_s).round().max(1.0)
+                // Nearly always one tick: `round` (a libm call here) only for a longer step.
+                let periods = dt / self.period_s;
+                if periods < 1.5 {
+                    1.0
+                } else {
+                    periods.round().max(1.0)
+                }
             };
             let predicted = self.smoothed_s + ticks * self.period_s;
             let error = t_s - predicted;

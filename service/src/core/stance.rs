@@ -168,7 +168,7 @@ impl StanceDetector {
         self.sum_a += accel_m_s2;
         self.sum_a2 += accel_m_s2.norm_squared();
         self.sum_w2 += gyro_rad_s.norm_squared();
-        self.next = (self.next + 1) % w;
+        self.next = if self.next + 1 == w { 0 } else { self.next + 1 };
         self.filled = (self.filled + 1).min(w);
         self.since_resum += 1;
         if self.since_resum >= RESUM_EVERY {

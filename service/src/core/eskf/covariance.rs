@@ -12,6 +12,15 @@ fn propagate_base(
     dt: f64,
 ) {
     let dot3 = |m: &[f64; 3], v: &[f64; 3]| m[0] * v[0] + m[1] * v[1] + m[2] * v[2];
+    // Row i of `fvt` = −[f]×·dt times v: the skew matrix's zero diagonal term is left out.
+    let skew_dot = |i: usize, v: &[f64; 3]| {
+        let m = &fvt[i];
+        match i {
+            0 => m[1] * v[1] + m[2] * v[2],
+            1 => m[0] * v[0] + m[2] * v[2],
+            _ => m[0] * v[0] + m[1] * v[1],
+        }
+    };
     for col in 0..n {
         let c = &mut a[col * MAX_N..col * MAX_N + BASE_N];
         let v = [c[V0], c[V0 + 1], c[V0 + 2]];
@@ -19,7 +28,7 @@ fn propagate_base(
         let b = [c[BG], c[BG + 1], c[BG + 2]];
         for i in 0..3 {
             c[P0 + i] += dt * v[i];
-            c[V0 + i] += dot3(&fvt[i], &th);
+            c[V0 + i] += skew_dot(i, &th);
             c[TH + i] += dot3(&ftb[i], &b);
         }
     }
@@ -29,7 +38,7 @@ fn propagate_base(
         let b = [a[ix(row, BG)], a[ix(row, BG + 1)], a[ix(row, BG + 2)]];
         for i in 0..3 {
             a[ix(row, P0 + i)] += dt * v[i];
-            a[ix(row, V0 + i)] += dot3(&fvt[i], &th);
+            a[ix(row, V0 + i)] += skew_dot(i, &th);
             a[ix(row, TH + i)] += dot3(&ftb[i], &b);
         }
     }

@@ -272,6 +272,15 @@ impl Eskf {
         }
     }
 
+    /// Copies the upper triangle of the covariance onto the lower one.
+    fn mirror_upper(&mut self) {
+        for j in 0..self.layout.n {
+            for i in 0..j {
+                self.p[ix(j, i)] = self.p[ix(i, j)];
+            }
+        }
+    }
+
     /// Error-state dimension in use.
     pub fn dim(&self) -> usize {
         self.layout.n

@@ -101,18 +101,22 @@ impl Eskf {
         let Some(s_inv) = s.try_inverse() else {
             return Innovation::default();
         };
-        let mut k = [[0.0; 3]; MAX_N];
-        for (ki, pi) in k.iter_mut().zip(&pht).take(n) {
+        // K = PHᵀ·S⁻¹ by columns (one per velocity axis), so that the update below runs down
+        // the contiguous columns of P.
+        let mut k = [[0.0; MAX_N]; 3];
+        for (i, pi) in pht.iter().enumerate().take(n) {
             let v = s_inv.transpose() * Vector3::from(*pi);
-            *ki = [v.x, v.y, v.z];
+            (k[0][i], k[1][i], k[2][i]) = (v.x, v.y, v.z);
         }
+        // P ← P − K·(PHᵀ)ᵀ on the upper triangle, then mirrored.
+        let [k0, k1, k2] = &k;
         for (j, pj) in pht.iter().enumerate().take(n) {
-            for (i, ki) in k.iter().enumerate().take(j + 1) {
-                let v = self.p[ix(i, j)] - (ki[0] * pj[0] + ki[1] * pj[1] + ki[2] * pj[2]);
-                self.p[ix(i, j)] = v;
-                self.p[ix(j, i)] = v;
+            let col = &mut self.p[j * MAX_N..j * MAX_N + j + 1];
+            for (((c, a), b), d) in col.iter_mut().zip(k0).zip(k1).zip(k2) {
+                *c -= a * pj[0] + b * pj[1] + d * pj[2];
             }
         }
+        self.mirror_upper();
         let s_inv_r = s_inv * r;
         let mut dx = [0.0; MAX_N];
         for (d, pi) in dx.iter_mut().zip(&pht).take(n) {
