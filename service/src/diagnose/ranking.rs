@@ -287,6 +287,24 @@ fn split_timing_from_scale(effects: &mut [Finding], candidates: &[Candidate]) {
     let mean = sf.iter().zip(&w).map(|([s, _], w)| s * w).sum::<f64>() / wsum;
     let mean_sd = (1.0 / wsum).sqrt();
     let agree = sf.iter().all(|[s, sd]| (s - mean).abs() <= 2.0 * sd);
+    // Agreement within 2σ is no evidence where two axes hardly see their scale factor (σ of a
+    // percent or more on a walk whose feet roll and pitch little): the common factor must also
+    // fit better than one axis alone, the one that shows the most, with the others at zero
+    // (both one parameter).
+    let chi2 = |m: &dyn Fn(usize) -> f64| -> f64 {
+        sf.iter()
+            .enumerate()
+            .map(|(k, [s, sd])| ((s - m(k)) / sd).powi(2))
+            .sum()
+    };
+    let lead = (0..3)
+        .max_by(|&a, &b| {
+            (sf[a][0] / sf[a][1])
+                .abs()
+                .total_cmp(&(sf[b][0] / sf[b][1]).abs())
+        })
+        .unwrap_or(2);
+    let common_fits_better = chi2(&|_| mean) < chi2(&|k| if k == lead { sf[lead][0] } else { 0.0 });
     let Some(i) = effects
         .iter()
         .position(|e| e.name == Effect::GyroScaleFactor)
@@ -297,7 +315,7 @@ fn split_timing_from_scale(effects: &mut [Finding], candidates: &[Candidate]) {
         "scale factors of the fitted model ({:+.4} ± {:.4}, {:+.4} ± {:.4}, {:+.4} ± {:.4})",
         sf[0][0], sf[0][1], sf[1][0], sf[1][1], sf[2][0], sf[2][1]
     );
-    if agree && mean.abs() > 3.0 * mean_sd {
+    if agree && common_fits_better && mean.abs() > 3.0 * mean_sd {
         let sc = effects[i].score;
         effects[i].evidence = format!("{}; {detail}: the same on every axis", effects[i].evidence);
         effects[i].score = 0.5 * sc;
