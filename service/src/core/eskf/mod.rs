@@ -301,6 +301,11 @@ impl Eskf {
         self.p[ix(r, c)]
     }
 
+    /// The diagonal of the covariance in use (`n` elements).
+    pub fn cov_diagonal(&self) -> impl Iterator<Item = &f64> {
+        self.p.iter().step_by(MAX_N + 1).take(self.layout.n)
+    }
+
     /// The body rate corrected for the filter's own error model (scale factor and
     /// g-sensitivity) and for `bias_rad_s` (the filter's own bias, or an external one).
     pub fn corrected_rate(
