@@ -405,7 +405,12 @@ impl Pipeline {
         let f_avg = (f + f_prev) * 0.5;
         // The state before the sample: the bias filter is copied; the filter's buffer is the
         // one `navigate` propagates into and then swaps with the running one (allocated once).
-        self.before_bias.save(&self.bias);
+        match (&self.bias, self.before_bias.get()) {
+            // Nothing to copy when the filter owns the bias (and the copy of the whole enum was
+            // measurable at every sample).
+            (BiasFilter::InEskf, Some(BiasFilter::InEskf)) => {}
+            _ => self.before_bias.save(&self.bias),
+        }
         let mut before = self.before.take().unwrap_or_else(|| eskf.clone());
         self.navigate(
             eskf,
