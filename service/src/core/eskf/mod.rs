@@ -333,8 +333,8 @@ impl Eskf {
         before.propagate_into(self, omega_rad_s, f_m_s2, dt_s);
     }
 
-    /// [`Eskf::propagate`] written into `next` (a filter of the same configuration, whatever
-    /// state it holds), leaving `self` as it was: the estimator keeps the state before each
+    /// [`Eskf::propagate`] written into `next` (a copy of this filter, whatever state it holds
+    /// now: the configuration must be the same), leaving `self` as it was: the estimator keeps the state before each
     /// sample for its health check this way, without copying it (the copy of the covariance is
     /// part of the propagation's first pass).
     pub fn propagate_into(
@@ -344,7 +344,13 @@ impl Eskf {
         f_m_s2: &Vector3<f64>,
         dt_s: f64,
     ) {
-        next.copy_nominal_from(self);
+        // `next` has this filter's configuration (it is a copy of it; nothing changes the
+        // configuration after `new`): only the state is copied, what the step changes is
+        // written below.
+        debug_assert!(next.layout == self.layout && next.ext_cfg == self.ext_cfg);
+        next.gyro_bias_rad_s = self.gyro_bias_rad_s;
+        next.ext = self.ext;
+        next.footprint_xy_m = self.footprint_xy_m;
         let step_half = exp_rotvec(&(omega_rad_s * (0.5 * dt_s)));
         let half = self.nav_from_body * step_half;
         let f_nav = half * f_m_s2;
