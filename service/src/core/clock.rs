@@ -119,7 +119,9 @@ impl SampleClock {
                 self.smoothed_s = t_s;
             } else {
                 self.smoothed_s = predicted + PHASE_GAIN * error;
-                self.period_s += FREQUENCY_GAIN * error / ticks;
+                let step = FREQUENCY_GAIN * error;
+                // (x / 1 is x: the division only for a lost tick.)
+                self.period_s += if ticks == 1.0 { step } else { step / ticks };
             }
         }
         // A step of about two periods is a lost sample, not jitter: left out of the deviation

@@ -63,10 +63,12 @@ pub fn check(e: &Eskf, bias_rad_s: &Vector3<f64>, l: &HealthLimits) -> Result<()
     if bias_rad_s.iter().any(|b| b.abs() > l.max_gyro_bias_rad_s) {
         return Err(HealthFault::Bias);
     }
-    if (0..e.dim()).any(|i| {
-        let v = e.cov(i, i);
-        !(v.is_finite() && v >= 0.0)
-    }) {
+    // Every diagonal element in [0, ∞) (NaN fails both comparisons): folded without a branch
+    // or a bounds check per element, as this runs on every sample.
+    let diagonal_ok = e
+        .cov_diagonal()
+        .fold(true, |ok, v| ok & (0.0..f64::INFINITY).contains(v));
+    if !diagonal_ok {
         return Err(HealthFault::Covariance);
     }
     Ok(())
@@ -107,6 +109,65 @@ impl<T: Clone> LastGood<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::core::eskf::{BiasStates, EskfInit, EskfNoise, Extensions};
+    use nalgebra::UnitQuaternion;
+
+    #[test]
+    fn the_covariance_check_equals_the_plain_formula() {
+        let mut e = Eskf::new(
+            EskfInit {
+                nav_from_body: UnitQuaternion::identity(),
+                gyro_bias_rad_s: Vector3::zeros(),
+                tilt_sd_rad: 0.01,
+                bias_sd_rad_s: 0.01,
+                gravity_m_s2: 9.81,
+                bias: BiasStates::Estimated,
+            },
+            EskfNoise {
+                accel_m_s2: 0.03,
+                gyro_rad_s: 0.01,
+                gyro_bias_rw: 7e-4,
+                zupt_m_s: 0.01,
+            },
+            Extensions {
+                heading_offset_sd: Some(0.1),
+                footprint_clone: true,
+                ..Default::default()
+            },
+        );
+        let limits = HealthLimits {
+            max_speed_m_s: 10.0,
+            max_gyro_bias_rad_s: 0.2,
+        };
+        let n = e.dim();
+        assert_eq!(e.cov_diagonal().count(), n);
+        for var in [
+            1e-4,
+            0.0,
+            -0.0,
+            -1e-300,
+            -1.0,
+            f64::NAN,
+            f64::INFINITY,
+            1e300,
+        ] {
+            e.set_heading_variance(var);
+            assert!(
+                e.cov_diagonal()
+                    .zip(0..n)
+                    .all(|(&v, i)| v.to_bits() == e.cov(i, i).to_bits())
+            );
+            let bad = (0..n).any(|i| {
+                let v = e.cov(i, i);
+                !(v.is_finite() && v >= 0.0)
+            });
+            let got = check(&e, &Vector3::zeros(), &limits);
+            assert_eq!(got.is_err(), bad, "{var}");
+            if bad {
+                assert_eq!(got, Err(HealthFault::Covariance));
+            }
+        }
+    }
 
     #[test]
     fn last_good_keeps_the_latest_copy() {

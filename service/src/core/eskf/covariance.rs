@@ -2,9 +2,11 @@
 
 use super::*;
 
-/// `P ← F P Fᵀ` (without Q) for the base 12-state filter plus extension states that are
-/// constant between updates (their rows of F are the identity): the common case.
+/// `P ← F P₀ Fᵀ` (without Q) for the base 12-state filter plus extension states that are
+/// constant between updates (their rows of F are the identity): the common case. The first
+/// pass (`F P₀`) reads `p0` and writes every used element of `a`, so `a` need not hold `P₀`.
 fn propagate_base(
+    p0: &[f64; MAX_N * MAX_N],
     a: &mut [f64; MAX_N * MAX_N],
     n: usize,
     fvt: &[[f64; 3]; 3],
@@ -22,15 +24,20 @@ fn propagate_base(
         }
     };
     for col in 0..n {
-        let c = &mut a[col * MAX_N..col * MAX_N + BASE_N];
-        let v = [c[V0], c[V0 + 1], c[V0 + 2]];
-        let th = [c[TH], c[TH + 1], c[TH + 2]];
-        let b = [c[BG], c[BG + 1], c[BG + 2]];
+        let (s, c) = (&p0[col * MAX_N..][..MAX_N], &mut a[col * MAX_N..][..MAX_N]);
+        let p = [s[P0], s[P0 + 1], s[P0 + 2]];
+        let v = [s[V0], s[V0 + 1], s[V0 + 2]];
+        let th = [s[TH], s[TH + 1], s[TH + 2]];
+        let b = [s[BG], s[BG + 1], s[BG + 2]];
         for i in 0..3 {
-            c[P0 + i] += dt * v[i];
-            c[V0 + i] += skew_dot(i, &th);
-            c[TH + i] += dot3(&ftb[i], &b);
+            c[P0 + i] = p[i] + dt * v[i];
+            c[V0 + i] = v[i] + skew_dot(i, &th);
+            c[TH + i] = th[i] + dot3(&ftb[i], &b);
+            c[BG + i] = b[i];
         }
+        // The extension rows, and the unused ones below them (zero in both): a fixed-size
+        // copy, which compiles to a few vector moves.
+        c[BASE_N..].copy_from_slice(&s[BASE_N..]);
     }
     for row in 0..n {
         let v = [a[ix(row, V0)], a[ix(row, V0 + 1)], a[ix(row, V0 + 2)]];
@@ -49,8 +56,10 @@ impl Eskf {
     /// p←v: dt·I, v←θ: −[f]×dt, θ←b: −C·dt, θ←s: −C·diag(ω)·dt, θ←k: −C·diag(f)·dt, b←d: dt·I.
     /// Written out on the column-major storage: about 500 multiply-adds for the base filter
     /// instead of the 3,500 of a dense product (the hot path of the core).
-    pub(super) fn propagate_covariance(
+    /// `p0` is the covariance before the step; `self`'s is overwritten.
+    pub(super) fn propagate_covariance_from(
         &mut self,
+        p0: &[f64; MAX_N * MAX_N],
         f_vth: &Matrix3<f64>,
         minus_c_dt: &Matrix3<f64>,
         omega: &Vector3<f64>,
@@ -72,8 +81,11 @@ impl Eskf {
         let a = &mut self.p;
         let dot3 = |m: &[f64; 3], v: [f64; 3]| m[0] * v[0] + m[1] * v[1] + m[2] * v[2];
         if lay.static_extensions_only() {
-            propagate_base(a, n, &fvt, &ftb, dt);
+            propagate_base(p0, a, n, &fvt, &ftb, dt);
         } else {
+            for c in 0..n {
+                a[c * MAX_N..][..n].copy_from_slice(&p0[c * MAX_N..][..n]);
+            }
             // θ←s and θ←k blocks: −C·diag(ω)·dt and −C·diag(f)·dt.
             let fts = m3(&(minus_c_dt * Matrix3::from_diagonal(omega)));
             let ftk = m3(&(minus_c_dt * Matrix3::from_diagonal(f_body)));

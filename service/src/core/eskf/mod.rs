@@ -251,9 +251,19 @@ impl Eskf {
     }
 
     /// Copies `src`'s state into `self` (same configuration): the nominal state and the
-    /// leading `n × n` of the covariance only, a fraction of a full clone. For the copy of the
-    /// state before every sample that the health check can return to.
+    /// leading `n × n` of the covariance only, a fraction of a full clone. For the restores of
+    /// the health check.
     pub fn copy_state_from(&mut self, src: &Eskf) {
+        self.copy_nominal_from(src);
+        let n = src.layout.n;
+        for c in 0..n {
+            let col = c * MAX_N;
+            self.p[col..col + n].copy_from_slice(&src.p[col..col + n]);
+        }
+    }
+
+    /// Copies everything of `src` but the covariance.
+    fn copy_nominal_from(&mut self, src: &Eskf) {
         self.p_m = src.p_m;
         self.v_m_s = src.v_m_s;
         self.nav_from_body = src.nav_from_body;
@@ -265,11 +275,6 @@ impl Eskf {
         self.noise = src.noise;
         self.ext_cfg = src.ext_cfg;
         self.estimate_bias = src.estimate_bias;
-        let n = src.layout.n;
-        for c in 0..n {
-            let col = c * MAX_N;
-            self.p[col..col + n].copy_from_slice(&src.p[col..col + n]);
-        }
     }
 
     /// Copies the upper triangle of the covariance onto the lower one.
@@ -296,6 +301,11 @@ impl Eskf {
         self.p[ix(r, c)]
     }
 
+    /// The diagonal of the covariance in use (`n` elements).
+    pub fn cov_diagonal(&self) -> impl Iterator<Item = &f64> {
+        self.p.iter().step_by(MAX_N + 1).take(self.layout.n)
+    }
+
     /// The body rate corrected for the filter's own error model (scale factor and
     /// g-sensitivity) and for `bias_rad_s` (the filter's own bias, or an external one).
     pub fn corrected_rate(
@@ -316,20 +326,44 @@ impl Eskf {
 
     /// Strapdown step over `dt_s` with the corrected body rate `omega_rad_s` (see
     /// [`Eskf::corrected_rate`], already averaged over the step) and the specific force
-    /// `f_m_s2`, then covariance propagation.
+    /// `f_m_s2`, then covariance propagation. In place, through a copy of the filter: the
+    /// per-sample path uses [`Eskf::propagate_into`].
     pub fn propagate(&mut self, omega_rad_s: &Vector3<f64>, f_m_s2: &Vector3<f64>, dt_s: f64) {
+        let before = self.clone();
+        before.propagate_into(self, omega_rad_s, f_m_s2, dt_s);
+    }
+
+    /// [`Eskf::propagate`] written into `next` (a copy of this filter, whatever state it holds
+    /// now: the configuration must be the same), leaving `self` as it was: the estimator keeps the state before each
+    /// sample for its health check this way, without copying it (the copy of the covariance is
+    /// part of the propagation's first pass).
+    pub fn propagate_into(
+        &self,
+        next: &mut Eskf,
+        omega_rad_s: &Vector3<f64>,
+        f_m_s2: &Vector3<f64>,
+        dt_s: f64,
+    ) {
+        // `next` has this filter's configuration (it is a copy of it; nothing changes the
+        // configuration after `new`): only the state is copied, what the step changes is
+        // written below.
+        debug_assert!(next.layout == self.layout && next.ext_cfg == self.ext_cfg);
+        next.gyro_bias_rad_s = self.gyro_bias_rad_s;
+        next.ext = self.ext;
+        next.footprint_xy_m = self.footprint_xy_m;
         let step_half = exp_rotvec(&(omega_rad_s * (0.5 * dt_s)));
         let half = self.nav_from_body * step_half;
         let f_nav = half * f_m_s2;
         let a = f_nav - Vector3::new(0.0, 0.0, self.gravity_m_s2);
-        self.p_m += self.v_m_s * dt_s + a * (0.5 * dt_s * dt_s);
-        self.v_m_s += a * dt_s;
-        self.nav_from_body = half * step_half;
+        next.p_m = self.p_m + (self.v_m_s * dt_s + a * (0.5 * dt_s * dt_s));
+        next.v_m_s = self.v_m_s + a * dt_s;
+        next.nav_from_body = half * step_half;
         if self.layout.rate.is_some() {
-            self.gyro_bias_rad_s += self.ext.bias_rate_rad_s2 * dt_s;
+            next.gyro_bias_rad_s = self.gyro_bias_rad_s + self.ext.bias_rate_rad_s2 * dt_s;
         }
         let c = half.to_rotation_matrix().into_inner();
-        self.propagate_covariance(
+        next.propagate_covariance_from(
+            &self.p,
             &(-skew(&f_nav) * dt_s),
             &(-c * dt_s),
             omega_rad_s,
@@ -576,6 +610,69 @@ mod tests {
         }
         assert_eq!(dense(&a), dense(&b));
         assert_eq!(n, b.dim());
+    }
+
+    #[test]
+    fn propagating_into_a_spare_equals_propagating_in_place() {
+        let static_only = Extensions {
+            heading_offset_sd: Some(0.05),
+            footprint_clone: true,
+            ..Default::default()
+        };
+        for ext in [Extensions::default(), static_only, all_ext()] {
+            let mut a = filter(
+                from_euler_zyx(0.1, 0.2, 0.3),
+                Vector3::new(0.01, 0.0, -0.01),
+                0.01,
+                0.01,
+                ext,
+            );
+            // The spare holds another state of the same configuration (as the estimator's
+            // does: the state of two samples ago).
+            let mut spare = a.clone();
+            for k in 0..4 {
+                a.propagate(
+                    &Vector3::new(1.0, -2.0, 0.5),
+                    &Vector3::new(1.0, 2.0, 9.0),
+                    0.005,
+                );
+                a.zupt();
+                a.heading_update(0.3, 0.05, &Vector3::x());
+                a.clone_footprint();
+                if k == 1 {
+                    spare.copy_state_from(&a);
+                }
+            }
+            let before = a.clone();
+            let (omega, acc) = (Vector3::new(0.5, 3.0, -1.0), Vector3::new(2.0, -1.0, 10.0));
+            a.propagate_into(&mut spare, &omega, &acc, 0.005);
+            let mut in_place = a.clone();
+            in_place.propagate(&omega, &acc, 0.005);
+            // `a` is left as it was; the spare is the in-place result, to the bit (the footprint
+            // compared by its bits: NaN before the first clone).
+            assert_eq!(dense(&a), dense(&before));
+            assert_eq!(
+                (a.p_m, a.v_m_s, a.nav_from_body),
+                (before.p_m, before.v_m_s, before.nav_from_body)
+            );
+            assert_eq!(dense(&spare), dense(&in_place));
+            assert_eq!(
+                (spare.p_m, spare.v_m_s, spare.nav_from_body),
+                (in_place.p_m, in_place.v_m_s, in_place.nav_from_body)
+            );
+            assert_eq!(
+                (
+                    spare.gyro_bias_rad_s,
+                    spare.ext,
+                    spare.footprint_xy_m.map(f64::to_bits)
+                ),
+                (
+                    in_place.gyro_bias_rad_s,
+                    in_place.ext,
+                    in_place.footprint_xy_m.map(f64::to_bits)
+                )
+            );
+        }
     }
 
     #[test]

@@ -108,8 +108,12 @@ struct Pipeline {
     /// Filter and bias filter at the last healthy stance (or at alignment).
     good: LastGood<(Eskf, BiasFilter)>,
     good_saved_this_stance: bool,
-    /// Filter and bias filter before the current update (undone when it fails the check).
-    before: LastGood<(Eskf, BiasFilter)>,
+    /// The filter before the current update (undone when it fails the check). Its buffer and
+    /// the running filter's swap at every sample: `navigate` propagates into this one, so the
+    /// state before the sample is kept without a copy.
+    before: Option<Box<Eskf>>,
+    /// The bias filter before the current update.
+    before_bias: LastGood<BiasFilter>,
     consecutive_faults: u32,
     /// Tilt of the sensor on the flat foot: `R_y(pitch)·R_x(roll)` of the initial rest.
     tilt0: UnitQuaternion<f64>,
@@ -166,7 +170,8 @@ impl Estimator {
             bias: BiasFilter::InEskf,
             good: LastGood::default(),
             good_saved_this_stance: false,
-            before: LastGood::default(),
+            before: None,
+            before_bias: LastGood::default(),
             consecutive_faults: 0,
             tilt0: UnitQuaternion::identity(),
             mount_yaw_rad: 0.0,
@@ -365,7 +370,7 @@ impl Pipeline {
     #[allow(clippy::too_many_arguments)]
     fn step_running(
         &mut self,
-        eskf: &mut Eskf,
+        eskf: &mut Box<Eskf>,
         t_s: f64,
         prev: Option<(f64, Vector3<f64>, Vector3<f64>)>,
         w: &Vector3<f64>,
@@ -374,19 +379,11 @@ impl Pipeline {
         stance_age_s: f64,
     ) {
         if self.good.get().is_none() {
-            self.good.save(&(eskf.clone(), self.bias.clone()));
+            self.good.save(&((**eskf).clone(), self.bias.clone()));
         }
         let Some((t_prev, w_prev, f_prev)) = prev else {
             return;
         };
-        // Every sample: copy in place, the used block of the covariance only.
-        match self.before.get_mut() {
-            Some((e0, b0)) => {
-                e0.copy_state_from(eskf);
-                b0.clone_from(&self.bias);
-            }
-            None => self.before.save(&(eskf.clone(), self.bias.clone())),
-        }
         // `prev` and `last` hold the sample clock's times (see `step`).
         let t_clock = self.last.map_or(t_s, |l| l.0);
         let dt = t_clock - t_prev;
@@ -406,9 +403,30 @@ impl Pipeline {
         }
         let w_avg = (w + w_prev) * 0.5;
         let f_avg = (f + f_prev) * 0.5;
-        self.navigate(eskf, t_s, dt, &w_avg, &f_avg, f, stance, stance_age_s);
+        // The state before the sample: the bias filter is copied; the filter's buffer is the
+        // one `navigate` propagates into and then swaps with the running one (allocated once).
+        match (&self.bias, self.before_bias.get()) {
+            // Nothing to copy when the filter owns the bias (and the copy of the whole enum was
+            // measurable at every sample).
+            (BiasFilter::InEskf, Some(BiasFilter::InEskf)) => {}
+            _ => self.before_bias.save(&self.bias),
+        }
+        let mut before = self.before.take().unwrap_or_else(|| eskf.clone());
+        self.navigate(
+            eskf,
+            &mut before,
+            t_s,
+            dt,
+            &w_avg,
+            &f_avg,
+            f,
+            stance,
+            stance_age_s,
+        );
         let applied = std::mem::take(&mut self.zero_rate_applied);
-        if self.guard_health(eskf, stance) {
+        let failed = self.guard_health(eskf, &before, stance);
+        self.before = Some(before);
+        if failed {
             // The update was undone: the next step integrates from the previous sample (and a
             // zero-rate update made with it is made again at the next sample).
             self.last = prev;
@@ -424,7 +442,7 @@ impl Pipeline {
     /// healthy, and unlike the stance copy it holds the foot's rotation since the stance);
     /// further ones restore the state of the last healthy stance. Keeps a copy of the state at
     /// the first sample of each healthy stance.
-    fn guard_health(&mut self, eskf: &mut Eskf, stance: bool) -> bool {
+    fn guard_health(&mut self, eskf: &mut Eskf, before: &Eskf, stance: bool) -> bool {
         let bias = self.bias_only(eskf);
         let limits = HealthLimits {
             max_speed_m_s: self.cfg.max_speed_m_s.get(),
@@ -441,12 +459,12 @@ impl Pipeline {
             }
             Err(fault) => {
                 self.consecutive_faults += 1;
-                let slot = if self.consecutive_faults <= MAX_UNDONE_UPDATES {
-                    &self.before
-                } else {
-                    &self.good
-                };
-                if let Some((e, b)) = slot.get() {
+                if self.consecutive_faults <= MAX_UNDONE_UPDATES {
+                    eskf.copy_state_from(before);
+                    if let Some(b) = self.before_bias.get() {
+                        self.bias.clone_from(b);
+                    }
+                } else if let Some((e, b)) = self.good.get() {
                     eskf.copy_state_from(e);
                     self.bias.clone_from(b);
                 }
@@ -675,7 +693,8 @@ impl Pipeline {
     #[allow(clippy::too_many_arguments)]
     fn navigate(
         &mut self,
-        eskf: &mut Eskf,
+        eskf: &mut Box<Eskf>,
+        spare: &mut Box<Eskf>,
         t_s: f64,
         dt: f64,
         w_avg: &Vector3<f64>,
@@ -699,7 +718,10 @@ impl Pipeline {
             }
         }
         let omega = eskf.corrected_rate(w_avg, f_avg, &bias);
-        eskf.propagate(&omega, f_avg, dt);
+        // Propagated into the spare buffer, which becomes the running filter: `spare` is left
+        // with the state before the sample.
+        eskf.propagate_into(spare, &omega, f_avg, dt);
+        std::mem::swap(eskf, spare);
         let clip_var = (self.cfg.eskf.clipped_rate_sd_rad_s * dt).powi(2);
         for (k, &c) in self.clipped_gyro_axes.iter().enumerate() {
             if c && clip_var > 0.0 {
