@@ -113,8 +113,20 @@ fn a_state_broken_by_a_sample_the_limits_let_through_falls_back_to_the_last_good
         let aid = heading_aid(&cfg, None).unwrap();
         let mut faults = 0;
         let mut worst_speed: f64 = 0.0;
+        let mut prev: Option<([f64; 3], [f64; 3], [f64; 4])> = None;
+        let mut undone_exactly = 0;
         let out = run_log(&bad, &cfg, &aid, &BiasInjection::default(), |_, e| {
             faults += usize::from(e.health_fault.is_some());
+            // The first failed sample of a run is undone: the estimate is the state before it,
+            // bit for bit (the filter propagates into a spare buffer that keeps that state).
+            if let (Some(_), Some((p, v, q))) = (e.health_fault, prev) {
+                assert_eq!((e.p_m, e.v_m_s, e.nav_from_body), (p, v, q));
+                undone_exactly += 1;
+            }
+            prev = e
+                .health_fault
+                .is_none()
+                .then_some((e.p_m, e.v_m_s, e.nav_from_body));
             let v = e.v_m_s;
             worst_speed = worst_speed.max((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt());
             assert!(
@@ -125,6 +137,7 @@ fn a_state_broken_by_a_sample_the_limits_let_through_falls_back_to_the_last_good
             );
         });
         let c = out.counters;
+        assert!(undone_exactly >= 2, "{undone_exactly}");
         assert_eq!(c.rejected_implausible, 0);
         assert!(
             c.health_restores >= 2 && faults as u64 == c.health_restores,

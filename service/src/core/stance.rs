@@ -6,7 +6,7 @@
 //! for later samples. A stance only counts once it has lasted `min_stance_s`; shorter dips of the
 //! statistic are ignored. [`StanceEvents`] joins the stances of one footfall that a short pause
 //! of the detector splits (heel strike, then foot flat): the zero-velocity updates stay per
-//! sample, the once-per-stance work (stride observation, rest test) happens once.
+//! sample, the footfall counts once.
 
 use corridor_shared::config::{DetectorConfig, DetectorKind};
 use nalgebra::Vector3;
@@ -219,62 +219,64 @@ impl StanceDetector {
 /// What one sample does to the current stance event.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StanceEdge {
-    /// Nothing changes.
+    /// Nothing new: not a stance sample, or a stance sample right after another.
     None,
     /// A new stance (footfall) begins on this sample.
     Began,
     /// The stance goes on after a pause of at most the merge gap.
     Resumed,
-    /// The stance ended (its last stance sample lies more than the merge gap back).
-    Ended,
 }
 
-/// Stances separated by pauses of at most `merge_gap_s` form one event. The end of an event is
-/// known `merge_gap_s` after its last stance sample: that is the latency this adds to the
-/// end-of-stance work (the rest test), not to the zero-velocity updates.
+/// Stances separated by pauses of at most `merge_gap_s` form one event: after a pause (or a gap
+/// in the data: a step longer than `max_step_s`), a stance sample begins a new event when the
+/// last stance sample lies more than `merge_gap_s` back, else it continues the current one.
+/// Decided on each stance sample, so it adds no latency.
 #[derive(Debug, Clone, Copy)]
 pub struct StanceEvents {
     merge_gap_s: f64,
-    open: bool,
+    max_step_s: f64,
     was_stance: bool,
+    last_s: f64,
     last_stance_s: f64,
+    count: u64,
 }
 
 impl StanceEvents {
-    /// Events that bridge pauses of up to `merge_gap_s` (0: every stance is its own event).
-    pub fn new(merge_gap_s: f64) -> Self {
+    /// Events that bridge pauses of up to `merge_gap_s` (0: every stance is its own event);
+    /// a step longer than `max_step_s` is a gap in the data, not a continuing stance.
+    pub fn new(merge_gap_s: f64, max_step_s: f64) -> Self {
         Self {
             merge_gap_s,
-            open: false,
+            max_step_s,
             was_stance: false,
+            last_s: f64::NEG_INFINITY,
             last_stance_s: f64::NEG_INFINITY,
+            count: 0,
         }
     }
 
-    /// Whether a stance event is open (in a stance or inside a pause that may still be bridged).
-    pub fn is_open(&self) -> bool {
-        self.open
+    /// Events begun so far.
+    pub fn count(&self) -> u64 {
+        self.count
     }
 
     /// The detector's stance flag of the sample at `t_s`.
     pub fn push(&mut self, t_s: f64, stance: bool) -> StanceEdge {
-        let was = std::mem::replace(&mut self.was_stance, stance);
-        if stance {
-            self.last_stance_s = t_s;
-            if !self.open {
-                self.open = true;
-                StanceEdge::Began
-            } else if !was {
-                StanceEdge::Resumed
-            } else {
-                StanceEdge::None
-            }
-        } else if self.open && t_s - self.last_stance_s > self.merge_gap_s {
-            self.open = false;
-            StanceEdge::Ended
-        } else {
-            StanceEdge::None
+        let gap_in_data = t_s - std::mem::replace(&mut self.last_s, t_s) > self.max_step_s;
+        let was = std::mem::replace(&mut self.was_stance, stance) && !gap_in_data;
+        if !stance {
+            return StanceEdge::None;
         }
+        let edge = if was {
+            StanceEdge::None
+        } else if t_s - self.last_stance_s > self.merge_gap_s {
+            self.count += 1;
+            StanceEdge::Began
+        } else {
+            StanceEdge::Resumed
+        };
+        self.last_stance_s = t_s;
+        edge
     }
 }
 
@@ -370,29 +372,35 @@ mod tests {
     }
 
     #[test]
-    fn a_short_pause_does_not_split_a_stance_and_a_swing_ends_it() {
-        let mut e = StanceEvents::new(0.302);
-        // stance 0–0.1 s, pause 0.1–0.3 s, stance 0.3–0.4 s, swing from 0.4 s
-        let stance_at = |t: f64| t < 0.1 || (0.3..0.4).contains(&t);
+    fn a_short_pause_does_not_split_a_stance_but_a_swing_or_a_gap_does() {
+        let mut e = StanceEvents::new(0.3, 0.05);
+        // stance 0–0.1 s, pause 0.1–0.3 s, stance 0.3–0.4 s, swing 0.4–0.8 s, stance from 0.8 s
+        let stance_at = |t: f64| t < 0.1 || (0.3..0.4).contains(&t) || t >= 0.8;
         let edges: Vec<(usize, StanceEdge)> = (0..200)
             .map(|i| (i, e.push(i as f64 * 0.005, stance_at(i as f64 * 0.005))))
             .filter(|(_, x)| *x != StanceEdge::None)
             .collect();
-        // Ended more than 0.302 s after the last stance sample (0.395 s): at 0.7 s.
         assert_eq!(
             edges,
             vec![
                 (0, StanceEdge::Began),
                 (60, StanceEdge::Resumed),
-                (140, StanceEdge::Ended)
+                (160, StanceEdge::Began)
             ]
         );
+        assert_eq!(e.count(), 2);
+        // After a gap in the data longer than the merge gap a stance sample begins a new
+        // stance, whether the sample before the gap was stance or not.
+        assert_eq!(e.push(0.995, true), StanceEdge::None);
+        assert_eq!(e.push(1.5, true), StanceEdge::Began);
+        assert_eq!(e.push(1.505, false), StanceEdge::None);
+        assert_eq!(e.push(3.0, true), StanceEdge::Began);
         // Without merging the pause splits it.
-        let mut e = StanceEvents::new(0.0);
+        let mut e = StanceEvents::new(0.0, 0.05);
         let began = (0..200)
             .filter(|&i| e.push(i as f64 * 0.005, stance_at(i as f64 * 0.005)) == StanceEdge::Began)
             .count();
-        assert_eq!(began, 2);
+        assert_eq!(began, 3);
     }
 
     #[test]

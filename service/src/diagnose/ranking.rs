@@ -267,6 +267,22 @@ fn add_unexplained(effects: &mut Vec<Finding>, c: &Consistency) {
     }
 }
 
+/// Agreement within 2σ is no evidence where two axes hardly see their scale factor (σ of a
+/// percent or more on a walk whose feet roll and pitch little): the common factor `mean` must
+/// also fit the per-axis factors `[value, σ]` better (χ²) than one axis alone, the one that
+/// shows the most, with the others at zero (both one parameter).
+fn common_factor_fits_better(sf: &[[f64; 2]; 3], mean: f64) -> bool {
+    let chi2 = |m: &dyn Fn(usize) -> f64| -> f64 {
+        sf.iter()
+            .enumerate()
+            .map(|(k, [s, sd])| ((s - m(k)) / sd.max(1e-300)).powi(2))
+            .sum()
+    };
+    let z = |k: usize| (sf[k][0] / sf[k][1].max(1e-300)).abs();
+    let lead = (0..3).max_by(|&a, &b| z(a).total_cmp(&z(b))).unwrap_or(2);
+    chi2(&|_| mean) < chi2(&|k| if k == lead { sf[lead][0] } else { 0.0 })
+}
+
 /// A clock running at the wrong rate scales every integrated angle alike: when the scale-factor
 /// model that explains the residuals finds the same factor on all three axes (within 2σ, and
 /// different from zero by 3σ), the effect is `timing` (a clock-rate error), not the gyro's
@@ -287,24 +303,7 @@ fn split_timing_from_scale(effects: &mut [Finding], candidates: &[Candidate]) {
     let mean = sf.iter().zip(&w).map(|([s, _], w)| s * w).sum::<f64>() / wsum;
     let mean_sd = (1.0 / wsum).sqrt();
     let agree = sf.iter().all(|[s, sd]| (s - mean).abs() <= 2.0 * sd);
-    // Agreement within 2σ is no evidence where two axes hardly see their scale factor (σ of a
-    // percent or more on a walk whose feet roll and pitch little): the common factor must also
-    // fit better than one axis alone, the one that shows the most, with the others at zero
-    // (both one parameter).
-    let chi2 = |m: &dyn Fn(usize) -> f64| -> f64 {
-        sf.iter()
-            .enumerate()
-            .map(|(k, [s, sd])| ((s - m(k)) / sd).powi(2))
-            .sum()
-    };
-    let lead = (0..3)
-        .max_by(|&a, &b| {
-            (sf[a][0] / sf[a][1])
-                .abs()
-                .total_cmp(&(sf[b][0] / sf[b][1]).abs())
-        })
-        .unwrap_or(2);
-    let common_fits_better = chi2(&|_| mean) < chi2(&|k| if k == lead { sf[lead][0] } else { 0.0 });
+    let common_fits_better = common_factor_fits_better(&sf, mean);
     let Some(i) = effects
         .iter()
         .position(|e| e.name == Effect::GyroScaleFactor)
@@ -429,4 +428,28 @@ pub fn score_by_likelihood(
     base.effects.sort_by(|a, b| b.score.total_cmp(&a.score));
     add_unexplained(&mut base.effects, &base.consistency);
     Ok(candidates)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::common_factor_fits_better;
+
+    fn weighted_mean(sf: &[[f64; 2]; 3]) -> f64 {
+        let w: Vec<f64> = sf.iter().map(|[_, sd]| 1.0 / (sd * sd)).collect();
+        sf.iter().zip(&w).map(|([s, _], w)| s * w).sum::<f64>() / w.iter().sum::<f64>()
+    }
+
+    #[test]
+    fn a_factor_on_one_axis_is_not_a_clock_error_even_when_the_others_hardly_see_it() {
+        // exp24 with a +5 % z scale factor: x and y within 2σ of the mean only because they are
+        // barely measured (%, ± σ). χ² 5.2 for the common factor against 1.2 for z alone.
+        let sf = [[1.49, 1.48], [0.60, 1.39], [4.30, 1.06]];
+        assert!(!common_factor_fits_better(&sf, weighted_mean(&sf)));
+        // A clock error: the same factor on every well-measured axis.
+        let clock = [[3.1, 0.5], [2.8, 0.6], [3.0, 0.4]];
+        assert!(common_factor_fits_better(&clock, weighted_mean(&clock)));
+        // A σ of zero does not make a NaN that silently says "no".
+        let exact = [[3.0, 0.0], [3.0, 0.5], [3.0, 0.5]];
+        assert!(common_factor_fits_better(&exact, 3.0));
+    }
 }

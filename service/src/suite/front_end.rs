@@ -58,10 +58,11 @@ pub struct FrontEnd {
 }
 
 /// The stances (first, last stance sample) the detector `cfg` finds, pauses of up to its
-/// `merge_gap_s` bridged as the estimator does; a stance still open at the end of the log counts.
-pub fn stance_intervals(rows: &[ImuRow], cfg: &DetectorConfig) -> Vec<(f64, f64)> {
+/// `merge_gap_s` bridged as the estimator does (steps longer than `max_step_s` are gaps); a
+/// stance still open at the end of the log counts.
+pub fn stance_intervals(rows: &[ImuRow], cfg: &DetectorConfig, max_step_s: f64) -> Vec<(f64, f64)> {
     let mut d = StanceDetector::new(cfg, 9.80665);
-    let mut events = StanceEvents::new(cfg.merge_gap_s);
+    let mut events = StanceEvents::new(cfg.merge_gap_s, max_step_s);
     let mut out: Vec<(f64, f64)> = Vec::new();
     for r in rows {
         let w = Vector3::from(r.gyro_rad_s);
@@ -89,11 +90,11 @@ pub fn compare_detectors(rows: &[ImuRow], truth: &[TruthPoint], cfg: &Config) ->
             if !adaptive {
                 d.adaptive_factor = None;
             }
-            StanceMatch::of(truth, &stance_intervals(rows, &d))
+            StanceMatch::of(truth, &stance_intervals(rows, &d, cfg.max_dt_s.get()))
         })
         .chain(std::iter::once(StanceMatch::of(
             truth,
-            &stance_intervals(rows, &cfg.detector),
+            &stance_intervals(rows, &cfg.detector, cfg.max_dt_s.get()),
         )))
         .collect()
 }

@@ -34,7 +34,7 @@ pub use types::{
     WarmStartError,
 };
 
-use rest::RestSums;
+use rest::{RestMeans, RestSums};
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::clock::SampleClock;
@@ -128,13 +128,21 @@ struct Pipeline {
     straight: StraightWalk,
     line: Option<FootprintLine>,
     stance_events: StanceEvents,
-    /// The stance that just ended is tested for a rest (zero-rate update) at the next sample.
-    zero_rate_pending: bool,
+    /// This sample's stance edge (see `step`).
+    stance_edge: StanceEdge,
+    /// Stance events seen by the running stage (the per-stance bookkeeping runs once per event).
+    stances_seen: u64,
+    /// The current stance's look at the heading is its second, after a pause (see `navigate`).
+    resumed_look: bool,
+    /// The previous navigated sample was a stance sample.
+    was_stance: bool,
+    /// A rest whose zero-rate update the health check undid: made again at the next sample.
+    rest_to_fuse: Option<RestMeans>,
     clock: SampleClock,
     /// The current stance's sums, for the zero-rate update when it turns out to be a rest.
     stance_rest: RestSums,
-    /// A zero-rate update was made with the current sample (see `step_running`).
-    zero_rate_applied: bool,
+    /// The rest fused by a zero-rate update with the current sample (see `step_running`).
+    zero_rate_applied: Option<RestMeans>,
     /// Gyro axes of the current sample at their rail.
     clipped_gyro_axes: [bool; 3],
     stance_obs_done: bool,
@@ -178,12 +186,16 @@ impl Estimator {
             forward_body: Vector3::x(),
             mount_sum: (0.0, 0.0, 0),
             last_footprint: None,
-            stance_events: StanceEvents::new(cfg.detector.merge_gap_s),
-            zero_rate_pending: false,
+            stance_events: StanceEvents::new(cfg.detector.merge_gap_s, cfg.max_dt_s.get()),
+            stance_edge: StanceEdge::None,
+            stances_seen: 0,
+            resumed_look: false,
+            was_stance: false,
+            rest_to_fuse: None,
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
             stance_rest: RestSums::new(cfg.alignment.rest_tail_s),
-            zero_rate_applied: false,
+            zero_rate_applied: None,
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
             pending_heading: None,
@@ -288,10 +300,11 @@ impl Estimator {
         p.counters.jittery_clock_samples += u64::from(p.clock.jittery());
         p.last = Some((t_clock, w, f));
         let decision = p.detector.push(s.t_s, &w, &f);
+        p.stance_edge = p.stance_events.push(t_clock, decision.stance);
         let out = &mut p.out;
         out.t_s = s.t_s;
         out.stance = decision.stance;
-        out.stance_began = false;
+        out.stance_began = p.stance_edge == StanceEdge::Began;
         out.clipped = clipped;
         out.health_fault = None;
         out.gap_s = None;
@@ -423,15 +436,15 @@ impl Pipeline {
             stance,
             stance_age_s,
         );
-        let applied = std::mem::take(&mut self.zero_rate_applied);
+        let applied = self.zero_rate_applied.take();
         let failed = self.guard_health(eskf, &before, stance);
         self.before = Some(before);
         if failed {
             // The update was undone: the next step integrates from the previous sample (and a
             // zero-rate update made with it is made again at the next sample).
             self.last = prev;
-            self.zero_rate_pending |= applied;
-        } else if applied {
+            self.rest_to_fuse = applied;
+        } else if applied.is_some() {
             self.counters.zero_rate_updates += 1;
         }
         self.fill_output(eskf);
@@ -750,25 +763,26 @@ impl Pipeline {
             });
             self.counters.zupts += 1;
         }
-        match self.stance_events.push(t_s, stance) {
-            StanceEdge::Began => {
-                self.stance_rest.clear();
-                self.stance_obs_done = false;
-                self.stance_f_sum = (Vector3::zeros(), 0);
-                self.counters.stances += 1;
-                self.out.stance_began = true;
-            }
-            // A rest is one uninterrupted stance. The heading is observed again once the foot
-            // has settled after the pause (heel strike, pause, foot flat): observing only in the
-            // first part was measured worse (exp40 1.67 -> 3.71 %, 3.2-4.1 % under six
-            // perturbations of the noise figures against 1.6-1.8 %; the other walks within
-            // 0.03 %). The stride direction of that second look is a shuffle and is refused.
-            StanceEdge::Resumed => {
-                self.stance_rest.clear();
-                self.stance_obs_done = false;
-            }
-            StanceEdge::Ended => self.zero_rate_pending = self.cfg.eskf.zero_rate_updates,
-            StanceEdge::None => {}
+        if let Some(rest) = self.rest_to_fuse.take() {
+            self.fuse_rest(eskf, rest);
+        }
+        // Once per stance (footfall): a stance event that began since the last one seen here
+        // (it may have begun while aligning).
+        if stance && self.stances_seen != self.stance_events.count() {
+            self.stances_seen = self.stance_events.count();
+            self.stance_rest.clear();
+            self.stance_obs_done = false;
+            self.resumed_look = false;
+            self.stance_f_sum = (Vector3::zeros(), 0);
+            self.counters.stances += 1;
+        } else if self.stance_edge == StanceEdge::Resumed {
+            // The heading is observed again once the foot has settled after the pause (heel
+            // strike, pause, foot flat): observing only in the first part was measured worse
+            // (exp40 1.67 -> 3.71 %, 3.2-4.1 % under six perturbations of the noise figures
+            // against 1.6-1.8 %; the other walks within 0.03 %). The stride is not observed
+            // again (it was, since the previous footfall).
+            self.stance_obs_done = false;
+            self.resumed_look = true;
         }
         if stance {
             self.stance_f_sum.0 += f_now;
@@ -780,26 +794,32 @@ impl Pipeline {
             if self.cfg.eskf.zero_rate_updates {
                 self.stance_rest.push(t_s, f_avg, w_avg);
             }
-        } else if std::mem::take(&mut self.zero_rate_pending) {
-            self.zero_rate_applied = self.zero_rate_update(eskf);
+        } else if self.was_stance {
+            // The end of an uninterrupted stance: a rest must be uninterrupted, so each part of
+            // a merged stance is tested on its own, at its first pause sample.
+            let min_rest_s = self.cfg.alignment.min_rest_s.get();
+            if let (true, Some(rest)) = (
+                self.cfg.eskf.zero_rate_updates,
+                self.stance_rest.settled_means(min_rest_s),
+            ) {
+                self.fuse_rest(eskf, rest);
+            }
+            self.stance_rest.clear();
         }
+        self.was_stance = stance;
     }
 
-    /// At the end of a stance: when it was a rest (its part before the last
-    /// `alignment.rest_tail_s` lasts `alignment.min_rest_s`), the mean rate over that part
-    /// observes the gyro bias with the σ of the rest-mean prior (√(floor² + spread²), see
-    /// `rest.rs`), as the initial rest does.
-    /// Whether the update was made (counted once the health check has passed).
-    fn zero_rate_update(&mut self, eskf: &mut Eskf) -> bool {
-        let Some((mean_f, mean_w, sem)) = self
-            .stance_rest
-            .settled_means(self.cfg.alignment.min_rest_s.get())
-        else {
-            return false;
-        };
+    /// At the end of a stance that was a rest (its part before the last `alignment.rest_tail_s`
+    /// lasts `alignment.min_rest_s`): the mean rate over that part observes the gyro bias with
+    /// the σ of the rest-mean prior (√(floor² + spread²), see `rest.rs`), as the initial rest
+    /// does. Counted once the health check has passed (`step_running`).
+    fn fuse_rest(&mut self, eskf: &mut Eskf, rest: RestMeans) {
+        let (mean_f, mean_w, sem) = rest;
         let floor = self.cfg.eskf.gyro_bias_prior_sd_rad_s.get();
         let sd = sem.map(|v| v.hypot(floor));
-        eskf.zero_rate_update(&mean_w, &mean_f, &sd).is_some()
+        if eskf.zero_rate_update(&mean_w, &mean_f, &sd).is_some() {
+            self.zero_rate_applied = Some(rest);
+        }
     }
 
     fn fill_output(&mut self, e: &Eskf) {

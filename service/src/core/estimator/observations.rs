@@ -144,7 +144,7 @@ impl Pipeline {
     fn eskf_observations(&mut self, eskf: &mut Eskf, forward: &Vector3<f64>) {
         let h = &self.cfg.heading;
         let xy = [eskf.p_m.x, eskf.p_m.y];
-        if h.observations.stride() {
+        if h.observations.stride() && !self.resumed_look {
             let event = match eskf.stride_prediction() {
                 Some((len, dir, var)) if len >= h.min_stride_m.get() => {
                     let sd = h.stride_sigma_rad.get();

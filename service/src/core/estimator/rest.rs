@@ -24,6 +24,10 @@ impl Sums {
     }
 }
 
+/// A rest's mean specific force (m/s²) and mean rate (rad/s), and the standard error of the mean
+/// rate (rad/s), sensor axes.
+pub(super) type RestMeans = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
+
 /// The initial rest, in blocks, so that its last `tail_s` (the foot already starting to move
 /// while the detector still says "stance") can be left out of the means. Fixed capacity.
 #[derive(Debug, Clone)]
@@ -87,10 +91,7 @@ impl RestSums {
     /// Means of specific force and rate over the settled part (the rest without its tail), when
     /// that part lasts at least `min_s`.
     /// With the standard error of the mean rate ([`RestSums::rate_sd_of_mean`]).
-    pub(super) fn settled_means(
-        &self,
-        min_s: f64,
-    ) -> Option<(Vector3<f64>, Vector3<f64>, Vector3<f64>)> {
+    pub(super) fn settled_means(&self, min_s: f64) -> Option<RestMeans> {
         let s = &self.settled;
         (s.n > 0 && s.blocks as f64 * REST_BLOCK_S >= min_s)
             .then(|| (s.f / s.n as f64, s.w / s.n as f64, self.rate_sd_of_mean()))
