@@ -544,6 +544,16 @@ mod tests {
         }
     }
 
+    /// No extension; only the static ones (the base block propagation's fast path); all.
+    fn extension_sets() -> [Extensions; 3] {
+        let static_only = Extensions {
+            heading_offset_sd: Some(0.05),
+            footprint_clone: true,
+            ..Default::default()
+        };
+        [Extensions::default(), static_only, all_ext()]
+    }
+
     /// A filter estimating its bias, with the test noise and 9.81 m/s² of gravity.
     fn filter(
         nav_from_body: UnitQuaternion<f64>,
@@ -614,12 +624,7 @@ mod tests {
 
     #[test]
     fn propagating_into_a_spare_equals_propagating_in_place() {
-        let static_only = Extensions {
-            heading_offset_sd: Some(0.05),
-            footprint_clone: true,
-            ..Default::default()
-        };
-        for ext in [Extensions::default(), static_only, all_ext()] {
+        for ext in extension_sets() {
             let mut a = filter(
                 from_euler_zyx(0.1, 0.2, 0.3),
                 Vector3::new(0.01, 0.0, -0.01),
@@ -677,12 +682,7 @@ mod tests {
 
     #[test]
     fn block_propagation_equals_dense_formula_with_every_extension() {
-        let static_only = Extensions {
-            heading_offset_sd: Some(0.05),
-            footprint_clone: true,
-            ..Default::default()
-        };
-        for ext in [Extensions::default(), static_only, all_ext()] {
+        for ext in extension_sets() {
             let mut f = filter(
                 from_euler_zyx(0.2, -0.3, 1.0),
                 Vector3::zeros(),
