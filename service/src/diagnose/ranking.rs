@@ -267,6 +267,14 @@ fn add_unexplained(effects: &mut Vec<Finding>, c: &Consistency) {
     }
 }
 
+/// The inverse-variance weighted mean of the per-axis factors `[value, σ]`, and its σ.
+fn weighted_mean(sf: &[[f64; 2]; 3]) -> (f64, f64) {
+    let w = sf.map(|[_, sd]| 1.0 / (sd * sd).max(1e-300));
+    let wsum: f64 = w.iter().sum();
+    let mean = sf.iter().zip(&w).map(|([s, _], w)| s * w).sum::<f64>() / wsum;
+    (mean, (1.0 / wsum).sqrt())
+}
+
 /// Agreement within 2σ is no evidence where two axes hardly see their scale factor (σ of a
 /// percent or more on a walk whose feet roll and pitch little): the common factor `mean` must
 /// also fit the per-axis factors `[value, σ]` better (χ²) than one axis alone, the one that
@@ -295,13 +303,7 @@ fn split_timing_from_scale(effects: &mut [Finding], candidates: &[Candidate]) {
     else {
         return;
     };
-    let w: Vec<f64> = sf
-        .iter()
-        .map(|[_, sd]| 1.0 / (sd * sd).max(1e-300))
-        .collect();
-    let wsum: f64 = w.iter().sum();
-    let mean = sf.iter().zip(&w).map(|([s, _], w)| s * w).sum::<f64>() / wsum;
-    let mean_sd = (1.0 / wsum).sqrt();
+    let (mean, mean_sd) = weighted_mean(&sf);
     let agree = sf.iter().all(|[s, sd]| (s - mean).abs() <= 2.0 * sd);
     let common_fits_better = common_factor_fits_better(&sf, mean);
     let Some(i) = effects
@@ -432,22 +434,17 @@ pub fn score_by_likelihood(
 
 #[cfg(test)]
 mod tests {
-    use super::common_factor_fits_better;
-
-    fn weighted_mean(sf: &[[f64; 2]; 3]) -> f64 {
-        let w: Vec<f64> = sf.iter().map(|[_, sd]| 1.0 / (sd * sd)).collect();
-        sf.iter().zip(&w).map(|([s, _], w)| s * w).sum::<f64>() / w.iter().sum::<f64>()
-    }
+    use super::{common_factor_fits_better, weighted_mean};
 
     #[test]
     fn a_factor_on_one_axis_is_not_a_clock_error_even_when_the_others_hardly_see_it() {
         // exp24 with a +5 % z scale factor: x and y within 2σ of the mean only because they are
         // barely measured (%, ± σ). χ² 5.2 for the common factor against 1.2 for z alone.
         let sf = [[1.49, 1.48], [0.60, 1.39], [4.30, 1.06]];
-        assert!(!common_factor_fits_better(&sf, weighted_mean(&sf)));
+        assert!(!common_factor_fits_better(&sf, weighted_mean(&sf).0));
         // A clock error: the same factor on every well-measured axis.
         let clock = [[3.1, 0.5], [2.8, 0.6], [3.0, 0.4]];
-        assert!(common_factor_fits_better(&clock, weighted_mean(&clock)));
+        assert!(common_factor_fits_better(&clock, weighted_mean(&clock).0));
         // A σ of zero does not make a NaN that silently says "no".
         let exact = [[3.0, 0.0], [3.0, 0.5], [3.0, 0.5]];
         assert!(common_factor_fits_better(&exact, 3.0));

@@ -60,6 +60,26 @@ impl StanceMatch {
     }
 }
 
+/// Stances as (first, last stance sample) intervals, s, from each sample's "a new stance
+/// begins" and "stance" flags; the last one may still be open.
+#[derive(Debug, Default)]
+pub(super) struct StanceIntervals(Vec<(f64, f64)>);
+
+impl StanceIntervals {
+    pub(super) fn push(&mut self, t_s: f64, began: bool, stance: bool) {
+        if began {
+            self.0.push((t_s, t_s));
+        }
+        if let (true, Some(last)) = (stance, self.0.last_mut()) {
+            last.1 = t_s;
+        }
+    }
+
+    pub(super) fn get(&self) -> &[(f64, f64)] {
+        &self.0
+    }
+}
+
 /// Summed distances between the run's positions at the truth footprints over the surveyed
 /// distances.
 pub(super) fn stride_ratio(trace: &runner::Trace, truth: &[TruthPoint]) -> f64 {
@@ -217,18 +237,13 @@ pub(super) struct NisSeries {
     heading: Vec<f64>,
     in_stance: bool,
     pub(super) stances: Vec<StanceUse>,
-    /// Stances found (start, last stance sample), s; the last one is still open.
-    intervals: Vec<(f64, f64)>,
+    /// The stances the estimator found.
+    intervals: StanceIntervals,
 }
 
 impl NisSeries {
     pub(super) fn push(&mut self, e: &crate::core::Estimate) {
-        if e.stance_began {
-            self.intervals.push((e.t_s, e.t_s));
-        }
-        if let (true, Some(last)) = (e.stance, self.intervals.last_mut()) {
-            last.1 = e.t_s;
-        }
+        self.intervals.push(e.t_s, e.stance_began, e.stance);
         match &e.zupt {
             Some(z) if !self.in_stance => {
                 self.zupt_first.push(z.nis);
@@ -261,7 +276,7 @@ impl NisSeries {
 
     /// The stances the estimator found: (first, last stance sample), s.
     pub(super) fn intervals(&self) -> &[(f64, f64)] {
-        &self.intervals
+        self.intervals.get()
     }
 
     pub(super) fn figures(&self) -> [Option<NisFigure>; 3] {

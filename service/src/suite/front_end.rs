@@ -2,7 +2,7 @@
 //! the adaptive one (stances found against the footprint list), a start without the initial rest,
 //! and the clipping model on and off.
 
-use super::figures::StanceMatch;
+use super::figures::{StanceIntervals, StanceMatch};
 use super::{Footprint, SuiteRow};
 use crate::core::stance::{StanceDetector, StanceEdge, StanceEvents};
 use corridor_shared::config::{Config, DetectorConfig, DetectorKind, Positive};
@@ -63,19 +63,15 @@ pub struct FrontEnd {
 pub fn stance_intervals(rows: &[ImuRow], cfg: &DetectorConfig, max_step_s: f64) -> Vec<(f64, f64)> {
     let mut d = StanceDetector::new(cfg, 9.80665);
     let mut events = StanceEvents::new(cfg.merge_gap_s, max_step_s);
-    let mut out: Vec<(f64, f64)> = Vec::new();
+    let mut out = StanceIntervals::default();
     for r in rows {
         let w = Vector3::from(r.gyro_rad_s);
         let f = Vector3::from(r.accel_m_s2);
         let stance = d.push(r.t_s, &w, &f).stance;
-        if events.push(r.t_s, stance) == StanceEdge::Began {
-            out.push((r.t_s, r.t_s));
-        }
-        if let (true, Some(last)) = (stance, out.last_mut()) {
-            last.1 = r.t_s;
-        }
+        let began = events.push(r.t_s, stance) == StanceEdge::Began;
+        out.push(r.t_s, began, stance);
     }
-    out
+    out.get().to_vec()
 }
 
 /// [`DETECTORS`] on one log, with the window, σ and minimum stance of `cfg`.
