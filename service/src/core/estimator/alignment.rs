@@ -1,0 +1,172 @@
+//! The alignment: the initial rest (or, without one, the first stance) that gives roll, pitch,
+//! gravity and the bias prior and starts the filter; a saved bias state for a warm start.
+
+use super::*;
+
+impl Pipeline {
+    /// One sample of the initial rest; the filter when the alignment ends with it.
+    pub(super) fn align_step(
+        &mut self,
+        rest: &mut RestSums,
+        t_s: f64,
+        w: &Vector3<f64>,
+        f: &Vector3<f64>,
+        stance: bool,
+    ) -> Option<Eskf> {
+        if stance {
+            rest.push(t_s, f, w);
+            let (mean_f, _) = rest.means();
+            let (roll, pitch) = tilt_from_specific_force(&mean_f);
+            let q = from_euler_zyx(roll, pitch, 0.0);
+            self.out.nav_from_body = [q.w, q.i, q.j, q.k];
+            self.out.roll_rad = roll;
+            self.out.pitch_rad = pitch;
+            return None;
+        }
+        let rest_s = if rest.is_empty() {
+            0.0
+        } else {
+            t_s - rest.t_first_s
+        };
+        let a = &self.cfg.alignment;
+        // Without a rest, the first stance of at least `min_start_stance_s` aligns: roll and
+        // pitch from its mean specific force (the ZUPTs refine them), no bias prior (the later
+        // rests' zero-rate updates and the heading observations give the bias).
+        let short_start = rest_s < a.min_rest_s.get();
+        if short_start && (a.min_start_stance_s <= 0.0 || rest_s < a.min_start_stance_s) {
+            if !rest.is_empty() {
+                self.counters.alignment_restarts += 1;
+            }
+            rest.clear();
+            return None;
+        }
+        self.counters.started_without_rest = short_start;
+        let (mean_f, mean_w) = rest.means();
+        // The prior's σ: √(floor² + spread²), the bias instability floor and the rest's rate
+        // spread over √(number of 50 ms blocks) (a rest during which the foot still sways).
+        let prior_sd = rest
+            .rate_sd_of_mean()
+            .map(|v| v.hypot(self.cfg.eskf.gyro_bias_prior_sd_rad_s.get()));
+        // Gravity from the rest's mean specific force, but not from a walking stance (its
+        // push-off would bias it): standard gravity then, unless configured.
+        let g = self.cfg.alignment.gravity_m_s2.map_or(
+            if short_start {
+                STANDARD_GRAVITY_M_S2
+            } else {
+                mean_f.norm()
+            },
+            |g| g.get(),
+        );
+        self.detector.set_gravity(g);
+        let (roll, pitch) = tilt_from_specific_force(&mean_f);
+        self.tilt0 = from_euler_zyx(roll, pitch, 0.0);
+        self.update_forward_body();
+        let (b0, sd0) = match self.cfg.alignment.gyro_bias_prior {
+            BiasPrior::RestMean if !short_start => {
+                (mean_w, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
+            }
+            BiasPrior::RestMean | BiasPrior::None => (
+                Vector3::zeros(),
+                self.cfg.eskf.gyro_bias_initial_sd_rad_s.get(),
+            ),
+        };
+        let e = &self.cfg.eskf;
+        let own_bias = matches!(self.cfg.mode, Mode::Zupt | Mode::Eskf);
+        let noise = EskfNoise {
+            accel_m_s2: e.accel_noise_m_s2.get(),
+            gyro_rad_s: e.gyro_noise_rad_s.get(),
+            gyro_bias_rw: e.gyro_bias_rw_rad_s_sqrt_s,
+            zupt_m_s: e.zupt_sd_m_s.get(),
+        };
+        let m = &self.cfg.model;
+        let ext = if own_bias {
+            Extensions {
+                bias_rate_rw: m.bias_rate_rw_rad_s2_sqrt_s.map(|v| v.get()),
+                bias_rate_sd: m.bias_rate_initial_sd_rad_s2.get(),
+                scale_factor_sd: m.scale_factor_sd.map(|v| v.get()),
+                heading_offset_sd: m.heading_offset_sd_rad.map(|v| v.get()),
+                g_sensitivity_sd: m.g_sensitivity_sd.map(|v| v.get()),
+                footprint_clone: self.cfg.mode == Mode::Eskf
+                    && self.cfg.heading.observations.stride(),
+            }
+        } else {
+            // The extensions are observed through the filter's own heading updates, which the
+            // bias-filter modes do not make.
+            Extensions::default()
+        };
+        let mut eskf = Eskf::new(
+            EskfInit {
+                nav_from_body: self.tilt0,
+                gyro_bias_rad_s: if own_bias { b0 } else { Vector3::zeros() },
+                tilt_sd_rad: e.initial_tilt_sd_rad.get(),
+                bias_sd_rad_s: sd0,
+                gravity_m_s2: g,
+                bias: if own_bias {
+                    BiasStates::Estimated
+                } else {
+                    BiasStates::Frozen
+                },
+            },
+            noise,
+            ext,
+        );
+        let rw = self.cfg.bias_kf.bias_rw_rad_s_sqrt_s;
+        self.bias = match self.cfg.mode {
+            Mode::Zupt | Mode::Eskf => BiasFilter::InEskf,
+            // The paper's filter works on a foot-frame bias; the foot frame is the sensor frame
+            // rotated by the mounting, fixed later. Start from the prior expressed in the foot
+            // frame with the tilt only (the mounting yaw is applied when known).
+            Mode::Paper => BiasFilter::Paper {
+                kf: BiasKf::new(self.tilt0 * b0, sd0, rw, t_s),
+                obs: None,
+            },
+            Mode::RotationAware => BiasFilter::RotationAware {
+                kf: BiasKf::new(b0, sd0, rw, t_s),
+                obs: None,
+            },
+        };
+        let rest_prior = self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean && !short_start;
+        // The prior's covariance per axis (floor and the rest's own spread), in each filter's
+        // axes.
+        let prior_cov = Matrix3::from_diagonal(&prior_sd.map(|v| v * v));
+        match &mut self.bias {
+            BiasFilter::Paper { kf, .. } if rest_prior => {
+                let c = self.tilt0.to_rotation_matrix().into_inner();
+                kf.p = c * prior_cov * c.transpose();
+            }
+            BiasFilter::RotationAware { kf, .. } if rest_prior => kf.p = prior_cov,
+            _ => {}
+        }
+        if own_bias && rest_prior {
+            eskf.set_gyro_bias(b0, &prior_cov);
+        }
+        if let Some(ws) = self.warm_start {
+            self.apply_warm_start(&mut eskf, &ws);
+            // A saved state (hours old, perhaps) and a fresh rest are two observations of the
+            // same bias: the rest is fused into the saved state rather than thrown away.
+            if own_bias && rest_prior {
+                eskf.zero_rate_update(&mean_w, &mean_f, &prior_sd);
+            }
+        }
+        self.phase = Phase::Calibrating;
+        Some(eskf)
+    }
+
+    /// Replaces the bias prior by a saved state (bias and covariance in sensor axes).
+    pub(super) fn apply_warm_start(&mut self, eskf: &mut Eskf, ws: &WarmStart) {
+        let b = Vector3::from(ws.gyro_bias_rad_s);
+        let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
+        let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
+        match &mut self.bias {
+            BiasFilter::InEskf => eskf.set_gyro_bias(b, &p),
+            BiasFilter::Paper { kf, .. } => {
+                kf.b_rad_s = c * b;
+                kf.p = c * p * c.transpose();
+            }
+            BiasFilter::RotationAware { kf, .. } => {
+                kf.b_rad_s = b;
+                kf.p = p;
+            }
+        }
+    }
+}
