@@ -18,6 +18,15 @@ pub struct StanceMatch {
     pub detected: usize,
     /// Of them, matching a listed footprint.
     pub matching: usize,
+    /// Listed footprints not found whose footfall was still detected: a detected stance ends
+    /// more than [`STANCE_MATCH_S`] from it but nearer than half the way to a neighbouring
+    /// footprint (the end placed differently, not a missed footfall).
+    pub timing: usize,
+    /// Detected stances that are no listed footprint's nearest (within the same limits): extra
+    /// stances, not a footfall's stance with its end placed differently.
+    pub extra: usize,
+    /// Median of (detected − listed) stance end over the found footprints, s (NaN: none).
+    pub median_end_offset_s: f64,
 }
 
 /// Largest distance between a detected and a listed stance end, s.
@@ -35,18 +44,59 @@ impl StanceMatch {
             .map(|s| s.1)
             .filter(|&e| e >= t0 && e <= t1)
             .collect();
+        // Each listed footprint takes the detected stance end nearest to it, if that lies
+        // closer than half the way to a neighbouring footprint (the same footfall).
+        let assigned: Vec<Option<(usize, f64)>> = truth
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let half_gap = [i.checked_sub(1), Some(i + 1)]
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|j| truth.get(j))
+                    .map(|q| 0.5 * (q.t_s - p.t_s).abs())
+                    .fold(f64::INFINITY, f64::min);
+                detected
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &e)| (k, e - p.t_s))
+                    .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+                    .filter(|&(_, d)| d.abs() < half_gap || d.abs() <= STANCE_MATCH_S)
+            })
+            .collect();
+        let mut offsets: Vec<f64> = assigned
+            .iter()
+            .flatten()
+            .map(|&(_, d)| d)
+            .filter(|d| d.abs() <= STANCE_MATCH_S)
+            .collect();
+        offsets.sort_by(f64::total_cmp);
+        let timing = assigned.iter().flatten().count() - offsets.len();
+        let mut owners: Vec<usize> = assigned.iter().flatten().map(|&(k, _)| k).collect();
+        owners.sort_unstable();
+        owners.dedup();
         Self {
             listed: truth.len(),
-            found: truth
-                .iter()
-                .filter(|p| detected.iter().any(|&e| near(e, p.t_s)))
-                .count(),
+            found: offsets.len(),
             detected: detected.len(),
             matching: detected
                 .iter()
                 .filter(|&&e| truth.iter().any(|p| near(e, p.t_s)))
                 .count(),
+            timing,
+            extra: detected.len() - owners.len(),
+            median_end_offset_s: match offsets.len() {
+                0 => f64::NAN,
+                n if n % 2 == 1 => offsets[n / 2],
+                n => 0.5 * (offsets[n / 2 - 1] + offsets[n / 2]),
+            },
         }
+    }
+
+    /// Listed footprints with no detected stance ending nearer than half the way to a
+    /// neighbouring footprint: footfalls missed.
+    pub fn missed(&self) -> usize {
+        self.listed - self.found - self.timing
     }
 
     /// Found / listed.
@@ -285,5 +335,43 @@ impl NisSeries {
             NisFigure::of(&self.stride, 1),
             NisFigure::of(&self.heading, 1),
         ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn footprints(times: &[f64]) -> Vec<TruthPoint> {
+        times
+            .iter()
+            .map(|&t_s| TruthPoint {
+                t_s,
+                x_m: 0.0,
+                y_m: 0.0,
+                z_m: 0.0,
+                stride: None,
+                sample_index: None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn misses_are_told_apart_from_late_stance_ends() {
+        // Footprints at 1, 2, 3, 4 s. Stances: ending 20 ms late at 1 s, 30 ms early at 2 s,
+        // one around 3 s that ends 200 ms late (its footfall found, its end not), none near
+        // 4 s (missed), and an extra one ending at 3.45 s.
+        let truth = footprints(&[1.0, 2.0, 3.0, 4.0]);
+        let stances = [(0.7, 1.02), (1.6, 1.97), (2.8, 3.2), (3.4, 3.45)];
+        let m = StanceMatch::of(&truth, &stances);
+        assert_eq!((m.listed, m.found, m.timing, m.missed()), (4, 2, 1, 1));
+        assert_eq!((m.detected, m.matching, m.extra), (4, 2, 1));
+        // Median of +20 and −30 ms.
+        assert!(
+            (m.median_end_offset_s + 0.005).abs() < 1e-12,
+            "{}",
+            m.median_end_offset_s
+        );
+        assert!((m.recall() - 0.5).abs() < 1e-12 && (m.precision() - 0.5).abs() < 1e-12);
     }
 }

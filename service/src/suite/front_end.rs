@@ -155,5 +155,36 @@ pub fn front_end_markdown(rows: &[SuiteRow]) -> String {
         }
         s.push('\n');
     }
+    s.push_str(&stance_misses_markdown(rows));
+    s
+}
+
+/// Where the default run's stances miss the footprint list: a footfall found with its end
+/// more than ±50 ms from the listed one is a timing difference, not a missed footfall.
+fn stance_misses_markdown(rows: &[SuiteRow]) -> String {
+    let mut s = String::from(
+        "\nThe default run's stances against the footprint list, the misses taken apart: a listed footprint \
+         is found (a stance ends within ±50 ms of it), found with its end further off (the nearest stance end \
+         lies beyond ±50 ms but nearer than half the way to a neighbouring footprint: the footfall was \
+         detected, its end placed differently), or missed; a detected stance that is no listed \
+         footprint's nearest by those limits is extra.\n\n\
+         | recording | listed | found | end further off | missed | extra stances | \
+         median end offset (detected − listed) |\n|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let Some(m) = r.stances_found else {
+            continue;
+        };
+        s.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} | {:+.0} ms |\n",
+            r.recording,
+            m.listed,
+            m.found,
+            m.timing,
+            m.missed(),
+            m.extra,
+            1000.0 * m.median_end_offset_s
+        ));
+    }
     s
 }
