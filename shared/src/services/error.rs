@@ -1,0 +1,149 @@
+//! The error of a service that could not be opened or used.
+
+use super::{DAEMON_SERVICE, Delivery, Domain};
+use std::fmt::Debug;
+
+/// A service that could not be opened or used. Every variant names the service and the domain.
+#[derive(Debug, thiserror::Error)]
+pub enum ServiceError {
+    /// The domain name is not usable.
+    #[error("domain {name:?}: {rule}")]
+    InvalidDomain {
+        /// The name given.
+        name: String,
+        /// What a domain name must satisfy.
+        rule: &'static str,
+    },
+    /// The iceoryx2 node could not be created.
+    #[error("domain {domain:?}: cannot create iceoryx2 node {node:?}: {detail}")]
+    Node {
+        /// Domain.
+        domain: String,
+        /// Node name.
+        node: String,
+        /// The iceoryx2 error.
+        detail: String,
+    },
+    /// The service exists with the other delivery policy.
+    #[error(
+        "service {service:?} in domain {domain:?} exists with the other delivery policy; \
+         this process asked for {requested:?} (use the same --delivery on every process)"
+    )]
+    DeliveryMismatch {
+        /// Service name.
+        service: &'static str,
+        /// Domain.
+        domain: String,
+        /// Policy asked for.
+        requested: Delivery,
+    },
+    /// The service exists with another delivery policy than the one this process asserted.
+    #[error(
+        "service {service:?} in domain {domain:?} uses {} delivery, but {} was asked for \
+         (leave --delivery out to take the daemon's policy)", actual.name(), requested.name()
+    )]
+    DeliveryAssertion {
+        /// Service name.
+        service: &'static str,
+        /// Domain.
+        domain: String,
+        /// Policy asked for.
+        requested: Delivery,
+        /// Policy of the existing service.
+        actual: Delivery,
+    },
+    /// The service does not exist (yet): the daemon is not running on this domain.
+    #[error(
+        "service {service:?} does not exist in domain {domain:?} (is `corridor serve --domain {domain}` running?)"
+    )]
+    NotFound {
+        /// Service name.
+        service: &'static str,
+        /// Domain.
+        domain: String,
+    },
+    /// The runtime directory of a secured domain is unusable, or this user may not use it.
+    #[error("domain {domain:?}: {detail}")]
+    RuntimeDir {
+        /// Domain.
+        domain: String,
+        /// The path and what is wrong.
+        detail: String,
+    },
+    /// Another daemon already serves this domain.
+    #[error(
+        "another corridor daemon already serves domain {domain:?} (service {DAEMON_SERVICE:?} exists)"
+    )]
+    DaemonAlreadyRunning {
+        /// Domain.
+        domain: String,
+    },
+    /// Opening or creating the service failed.
+    #[error("service {service:?} ({pattern}) in domain {domain:?}: cannot open: {detail}")]
+    Open {
+        /// Service name.
+        service: &'static str,
+        /// `publish-subscribe` or `event`.
+        pattern: &'static str,
+        /// Domain.
+        domain: String,
+        /// The iceoryx2 error.
+        detail: String,
+    },
+    /// Creating a port (publisher, subscriber, notifier, listener) failed.
+    #[error("service {service:?} in domain {domain:?}: cannot create {port}: {detail}")]
+    Port {
+        /// Service name.
+        service: &'static str,
+        /// Port kind.
+        port: &'static str,
+        /// Domain.
+        domain: String,
+        /// The iceoryx2 error.
+        detail: String,
+    },
+    /// Sending, receiving, notifying or waiting failed.
+    #[error("service {service:?} in domain {domain:?}: {operation} failed: {detail}")]
+    Io {
+        /// Service name.
+        service: &'static str,
+        /// What was attempted.
+        operation: &'static str,
+        /// Domain.
+        domain: String,
+        /// The iceoryx2 error.
+        detail: String,
+    },
+}
+
+impl ServiceError {
+    /// A failed send, receive, notify or wait ([`ServiceError::Io`]) on `service` in `domain`.
+    pub fn io(
+        domain: &Domain,
+        service: &'static str,
+        operation: &'static str,
+        detail: impl Debug,
+    ) -> Self {
+        ServiceError::Io {
+            service,
+            operation,
+            domain: domain.name().to_owned(),
+            detail: format!("{detail:?}"),
+        }
+    }
+
+    /// A port of `service` in `domain` that could not be created ([`ServiceError::Port`]).
+    pub fn port(
+        domain: &Domain,
+        service: &'static str,
+        port: &'static str,
+        detail: impl Debug,
+    ) -> Self {
+        ServiceError::Port {
+            service,
+            port,
+            domain: domain.name().to_owned(),
+            detail: format!("{detail:?}"),
+        }
+    }
+}

@@ -1,0 +1,104 @@
+//! The iceoryx2 services of corridor: names, quality of service, and the one place both sides
+//! open them.
+//!
+//! Every service is opened through a function of this module by the daemon and by the clients
+//! alike, so the QoS (buffer sizes, history, port counts, overflow behaviour) is identical on both
+//! sides: iceoryx2 refuses an opener whose requirements exceed the creator's, so a mismatch would
+//! otherwise depend on which process started first.
+//!
+//! | service | payload | publisher | paired event |
+//! | --- | --- | --- | --- |
+//! | [`IMU_SERVICE`] | [`ImuSample`](crate::wire::ImuSample) | producers | yes (daemon waits on it) |
+//! | [`ANGLES_SERVICE`] | [`AngleObservation`](crate::wire::AngleObservation) | producers | yes |
+//! | [`ATTITUDE_SERVICE`] | [`AttitudeSample`](crate::wire::AttitudeSample) | daemon | yes |
+//! | [`BIAS_SERVICE`] | [`BiasSample`](crate::wire::BiasSample) | daemon | yes |
+//! | [`NAV_SERVICE`] | [`NavSample`](crate::wire::NavSample) | daemon | yes |
+//! | [`DIAGNOSTICS_SERVICE`] | [`Diagnostics`](crate::wire::Diagnostics) | daemon | yes |
+//! | [`DAEMON_SERVICE`] | (event only) | daemon, created exclusively | lock only |
+//!
+//! A blocking wait on a publish-subscribe port is not possible in iceoryx2; each pub-sub service
+//! has an event service of the same name: the publisher notifies after sending, the reader waits
+//! on a listener.
+//!
+//! [`Domain`] gives every independent set of processes (a sensor, a test) its own iceoryx2
+//! namespace (`global.prefix`), so they never see each other's services.
+//!
+//! Files: this one holds the service names; `error.rs` [`ServiceError`]; `qos.rs` the delivery
+//! policy, the quality of service and the [`Topic`] of each wire type; `domain.rs` the
+//! [`Domain`] namespace and the functions that open the services.
+
+mod domain;
+mod error;
+mod qos;
+
+pub use domain::*;
+pub use error::ServiceError;
+pub use qos::{Delivery, Qos, Topic};
+
+/// Version of the wire layout; part of every service name. Bump it with any change to
+/// [`crate::wire`].
+pub const SERVICE_VERSION: &str = "v2";
+/// IMU samples, producers → daemon.
+pub const IMU_SERVICE: &str = "corridor/v2/imu";
+/// External angle observations, producers → daemon.
+pub const ANGLES_SERVICE: &str = "corridor/v2/angles";
+/// Attitude after every IMU sample, daemon → clients.
+pub const ATTITUDE_SERVICE: &str = "corridor/v2/attitude";
+/// Gyro-bias estimates, daemon → clients.
+pub const BIAS_SERVICE: &str = "corridor/v2/bias";
+/// Position and velocity at each stance, daemon → clients.
+pub const NAV_SERVICE: &str = "corridor/v2/nav";
+/// Daemon counters, daemon → clients.
+pub const DIAGNOSTICS_SERVICE: &str = "corridor/v2/diagnostics";
+/// Event service created exclusively by the running daemon: a second daemon on the same domain
+/// fails to create it. Clients must not open it (an open handle would keep it alive after the
+/// daemon exits).
+pub const DAEMON_SERVICE: &str = "corridor/v2/daemon";
+
+/// The default domain name.
+pub const DEFAULT_DOMAIN: &str = "default";
+
+/// Longest domain name, characters.
+pub const MAX_DOMAIN_LEN: usize = 48;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::wire::{
+        AngleObservation, AttitudeSample, BiasSample, Diagnostics, ImuSample, NavSample,
+    };
+
+    #[test]
+    fn domain_names_are_validated() {
+        assert!(Domain::new("lab-1_a").is_ok());
+        assert!(Domain::new(&"x".repeat(MAX_DOMAIN_LEN)).is_ok());
+        for bad in ["", "a/b", "a b", &"x".repeat(MAX_DOMAIN_LEN + 1)] {
+            let e = Domain::new(bad).unwrap_err();
+            assert!(matches!(e, ServiceError::InvalidDomain { .. }), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn delivery_parses() {
+        assert_eq!("live".parse::<Delivery>(), Ok(Delivery::Live));
+        assert_eq!("lossless".parse::<Delivery>(), Ok(Delivery::Lossless));
+        assert!("fast".parse::<Delivery>().is_err());
+        assert!(Delivery::Live.safe_overflow());
+        assert!(!Delivery::Lossless.safe_overflow());
+    }
+
+    #[test]
+    fn lossless_history_fits_the_buffer() {
+        // iceoryx2 refuses history > buffer without safe overflow.
+        for q in [
+            ImuSample::QOS,
+            AngleObservation::QOS,
+            AttitudeSample::QOS,
+            BiasSample::QOS,
+            NavSample::QOS,
+            Diagnostics::QOS,
+        ] {
+            assert!(q.history_size <= q.buffer_size);
+        }
+    }
+}
