@@ -293,3 +293,61 @@ fn bad_config_names_the_key() {
         "{err}"
     );
 }
+
+#[test]
+fn run_starts_from_a_checkpoint_as_the_daemon_does_and_names_a_missing_one() {
+    use corridor_service::checkpoint::{Checkpoint, save};
+    let dir = tmp("ckpt");
+    let file = dir.join("bias.ckpt");
+    // A tight saved bias far from exp36's rest mean: the rest is fused into it, so the run
+    // starts near the saved value.
+    let saved = [0.02, -0.01, 0.015];
+    save(
+        &file,
+        &Checkpoint {
+            mode: "eskf".into(),
+            t_s: 0.0,
+            saved_unix_ms: 0,
+            gyro_bias_rad_s: saved,
+            gyro_bias_cov: [[1e-10, 0.0, 0.0], [0.0, 1e-10, 0.0], [0.0, 0.0, 1e-10]],
+            nav_from_body_wxyz: [1.0, 0.0, 0.0, 0.0],
+        },
+    )
+    .unwrap();
+    let imu = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let config = root().join("configs/gdins.toml");
+    let run = |ckpt: &Path, out: &str| {
+        corridor(&[
+            "run",
+            "--imu",
+            imu.to_str().unwrap(),
+            "--config",
+            config.to_str().unwrap(),
+            "--checkpoint",
+            ckpt.to_str().unwrap(),
+            "--out",
+            dir.join(out).to_str().unwrap(),
+        ])
+    };
+    let o = run(&file, "warm");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let est = std::fs::read_to_string(dir.join("warm/estimates.csv")).unwrap();
+    let mut lines = est.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name| header.iter().position(|h| *h == name).unwrap();
+    let (phase, bx) = (col("phase"), col("bias_x_rad_s"));
+    let first = lines
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .find(|f| f[phase] != "aligning")
+        .expect("the walk aligns");
+    let b: f64 = first[bx].parse().unwrap();
+    assert!((b - saved[0]).abs() < 1e-3, "bias x at the start: {b}");
+    // A missing file is an error that names it, said once.
+    let o = run(&dir.join("none.ckpt"), "missing");
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("none.ckpt") && err.matches("none.ckpt").count() == 1,
+        "{err}"
+    );
+}

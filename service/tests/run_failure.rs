@@ -32,6 +32,7 @@ fn options(imu: &Path, truth: Option<PathBuf>, out: &Path) -> RunOptions {
         plots: true,
         out_dir: out.to_owned(),
         csv: ImuCsvOptions::default(),
+        warm_start: None,
     }
 }
 

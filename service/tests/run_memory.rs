@@ -85,6 +85,7 @@ fn peak_of_run(imu: &Path, out: &Path, plots: bool) -> usize {
         plots,
         out_dir: out.to_owned(),
         csv: ImuCsvOptions::default(),
+        warm_start: None,
     };
     let start = NOW.load(Ordering::Relaxed);
     PEAK.store(start, Ordering::Relaxed);

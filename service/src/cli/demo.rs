@@ -54,6 +54,7 @@ pub(super) fn demo(a: &DemoArgs) -> Result<()> {
         plots: true,
         out_dir: run_dir.clone(),
         csv: ImuCsvOptions::default(),
+        warm_start: None,
     };
     let s = runner::run(&opts)?;
     println!(
@@ -76,6 +77,7 @@ pub(super) fn demo(a: &DemoArgs) -> Result<()> {
         plots: false,
         out_dir: a.out.join("xio"),
         csv: ImuCsvOptions::default(),
+        warm_start: None,
     };
     let s = runner::run(&opts)?;
     let e = s.eval.as_ref();

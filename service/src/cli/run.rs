@@ -3,6 +3,7 @@
 use super::model::ModelArgs;
 use anyhow::Result;
 use clap::Args;
+use corridor_service::checkpoint;
 use corridor_service::runner::{self, RunOptions};
 use corridor_shared::imu_csv::ImuCsvOptions;
 use corridor_shared::injection::{BiasInjection, parse_time_s, parse_vec3};
@@ -32,6 +33,10 @@ pub(super) struct RunArgs {
         value_parser = parse_time_s
     )]
     pub(super) inject_after_s: f64,
+    /// Start from the bias state of a daemon's checkpoint file, as the daemon does after a
+    /// restart.
+    #[arg(long)]
+    pub(super) checkpoint: Option<PathBuf>,
     /// Write the figures (SVG).
     #[arg(long)]
     pub(super) plots: bool,
@@ -55,6 +60,12 @@ pub(super) fn run(a: &RunArgs) -> Result<()> {
         plots: a.plots,
         out_dir: a.out.clone(),
         csv: ImuCsvOptions::default(),
+        warm_start: a
+            .checkpoint
+            .as_deref()
+            .map(checkpoint::load)
+            .transpose()?
+            .map(|cp| cp.warm_start()),
     };
     let s = runner::run(&opts)?;
     println!("{}", serde_json::to_string_pretty(&brief(&s))?);

@@ -15,7 +15,7 @@
 //! suite, the diagnosis and the tests use it on the bundled recordings.
 
 use crate::core::heading::HeadingAid;
-use crate::core::{Counters, Estimate, Estimator, ImuInput};
+use crate::core::{Counters, Estimate, Estimator, ImuInput, WarmStart, WarmStartError};
 use crate::eval::{self, EvalOptions, EvalReport, GcpSampler, TruthGcp};
 use crate::map_file::{MapError, read_corridor_map};
 use corridor_shared::config::{Config, HeadingSource};
@@ -69,6 +69,9 @@ pub enum RunError {
     /// The configuration is unreadable or invalid.
     #[error(transparent)]
     Config(#[from] corridor_shared::config::ConfigError),
+    /// A saved bias state to start from was refused.
+    #[error(transparent)]
+    WarmStart(#[from] WarmStartError),
     /// The log never left the alignment phase.
     #[error("{path}: no initial rest of at least {min_rest_s} s followed by motion was found")]
     NeverAligned {
@@ -208,9 +211,33 @@ pub fn run_log(
     cfg: &Config,
     aid: &HeadingAid,
     injection: &BiasInjection,
+    sink: impl FnMut(&ImuInput, &Estimate),
+) -> RunOutcome {
+    run_feed(Feed::new(cfg, aid, injection, &log.path), log, sink)
+}
+
+/// [`run_log`] from a saved bias state, as the daemon starts from its checkpoint.
+///
+/// # Errors
+/// [`WarmStartError`] when the state is not usable (see [`Estimator::set_warm_start`]).
+pub fn run_log_warm(
+    log: &ImuLog,
+    cfg: &Config,
+    aid: &HeadingAid,
+    injection: &BiasInjection,
+    warm: WarmStart,
+    sink: impl FnMut(&ImuInput, &Estimate),
+) -> Result<RunOutcome, WarmStartError> {
+    let mut feed = Feed::new(cfg, aid, injection, &log.path);
+    feed.est.set_warm_start(warm)?;
+    Ok(run_feed(feed, log, sink))
+}
+
+fn run_feed(
+    mut feed: Feed,
+    log: &ImuLog,
     mut sink: impl FnMut(&ImuInput, &Estimate),
 ) -> RunOutcome {
-    let mut feed = Feed::new(cfg, aid, injection, &log.path);
     let mut trace = Trace::default();
     for row in &log.rows {
         if let Some((input, e, _)) = feed.step(row) {
@@ -292,5 +319,72 @@ pub fn to_gcp(p: &TruthPoint) -> TruthGcp {
         x_m: p.x_m,
         y_m: p.y_m,
         stride: p.stride,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::Phase;
+    use corridor_shared::config::ConfigFile;
+    use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
+
+    /// exp36 cut to the last 0.2 s of its initial rest: a start without rest.
+    fn walk_without_rest() -> (ImuLog, Config) {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let mut log = read_imu_csv(
+            &root.join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
+            &ImuCsvOptions::default(),
+        )
+        .expect("bundled recording");
+        // Its rest ends at about 2.3 s.
+        log.rows.retain(|r| r.t_s >= 2.1);
+        let path = root.join("configs/gdins.toml");
+        let cfg = ConfigFile::read(&path)
+            .expect("config")
+            .validate()
+            .expect("valid");
+        (log, cfg)
+    }
+
+    #[test]
+    fn a_run_from_a_checkpoint_starts_from_its_bias_and_refuses_a_bad_one() {
+        let (log, cfg) = walk_without_rest();
+        let aid = heading_aid(&cfg, None).expect("aid");
+        let saved = WarmStart {
+            gyro_bias_rad_s: [0.002, -0.002, 0.005],
+            gyro_bias_cov: [[1e-8, 0.0, 0.0], [0.0, 1e-8, 0.0], [0.0, 0.0, 1e-8]],
+        };
+        let mut first = None;
+        let out = run_log_warm(
+            &log,
+            &cfg,
+            &aid,
+            &BiasInjection::default(),
+            saved,
+            |_, e| {
+                if first.is_none() && e.phase != Phase::Aligning {
+                    first = Some(e.gyro_bias_rad_s);
+                }
+            },
+        )
+        .expect("a valid state");
+        assert!(out.counters.started_without_rest);
+        // No rest to fuse: the filter starts from the saved bias (one step of noise later).
+        let b = first.expect("the walk aligns");
+        for (k, v) in b.iter().enumerate() {
+            assert!((v - saved.gyro_bias_rad_s[k]).abs() < 1e-6, "axis {k}: {v}");
+        }
+        // A cold start does not.
+        let mut cold = None;
+        run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+            if cold.is_none() && e.phase != Phase::Aligning {
+                cold = Some(e.gyro_bias_rad_s);
+            }
+        });
+        assert!((cold.expect("aligns")[2] - 0.005).abs() > 1e-3);
+        let mut bad = saved;
+        bad.gyro_bias_rad_s[0] = f64::NAN;
+        assert!(run_log_warm(&log, &cfg, &aid, &BiasInjection::default(), bad, |_, _| {}).is_err());
     }
 }

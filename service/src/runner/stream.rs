@@ -233,6 +233,8 @@ pub struct RunOptions {
     pub out_dir: PathBuf,
     /// Reader options.
     pub csv: corridor_shared::imu_csv::ImuCsvOptions,
+    /// A saved bias state to start from, as the daemon starts from its checkpoint.
+    pub warm_start: Option<crate::core::WarmStart>,
 }
 
 /// How many rejected input rows are logged as warnings (all are counted in `summary.json`).
@@ -263,6 +265,9 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     writeln!(inn_w, "{INNOVATIONS_HEADER}").map_err(io_at(&inn_path))?;
 
     let mut feed = Feed::new(&opts.config, &aid, &opts.injection, &opts.imu);
+    if let Some(ws) = opts.warm_start {
+        feed.est.set_warm_start(ws)?;
+    }
     let mut kept = Kept::new(gcps.as_deref(), opts.plots);
     // "Before" for the figures: the same rows through the ZUPT filter alone, without any bias
     // correction, in the same pass.

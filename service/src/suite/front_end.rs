@@ -4,6 +4,7 @@
 
 use super::figures::{StanceIntervals, StanceMatch};
 use super::{Footprint, SuiteRow};
+use crate::core::WarmStart;
 use crate::core::stance::{StanceDetector, StanceEdge, StanceEvents};
 use corridor_shared::config::{Config, DetectorConfig, DetectorKind, Positive};
 use corridor_shared::imu_csv::ImuRow;
@@ -52,6 +53,9 @@ pub struct FrontEnd {
     pub clipping_off: Footprint,
     /// The default run on the log cut to its last [`KEPT_REST_S`] of initial rest.
     pub without_rest: Option<Footprint>,
+    /// The same cut log started from a checkpoint, as a daemon restarted without a rest: the
+    /// bias the other walks of the same sensor configuration ended with ([`checkpoint_from`]).
+    pub without_rest_checkpoint: Option<Footprint>,
     /// Each of [`DETECTORS`], then the configured detector, against the footprint list (walks
     /// surveyed at every stride).
     pub detectors: Option<Vec<StanceMatch>>,
@@ -95,6 +99,36 @@ pub fn compare_detectors(rows: &[ImuRow], truth: &[TruthPoint], cfg: &Config) ->
         .collect()
 }
 
+/// The checkpoint a walk's restart would find, from the final biases (sensor axes) of the
+/// other walks of the same sensor: per axis their median, with σ their spread (1.4826 × the
+/// median absolute deviation, at least `floor_sd_rad_s`), as a daemon's checkpoint carries a
+/// bias and its covariance. `None` with fewer than three walks to take it from.
+pub fn checkpoint_from(others: &[[f64; 3]], floor_sd_rad_s: f64) -> Option<WarmStart> {
+    if others.len() < 3 {
+        return None;
+    }
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            0.5 * (v[n / 2 - 1] + v[n / 2])
+        }
+    };
+    let mut ws = WarmStart {
+        gyro_bias_rad_s: [0.0; 3],
+        gyro_bias_cov: [[0.0; 3]; 3],
+    };
+    for k in 0..3 {
+        let m = median(others.iter().map(|b| b[k]).collect());
+        let mad = median(others.iter().map(|b| (b[k] - m).abs()).collect());
+        ws.gyro_bias_rad_s[k] = m;
+        ws.gyro_bias_cov[k][k] = (1.4826 * mad).max(floor_sd_rad_s).powi(2);
+    }
+    Some(ws)
+}
+
 /// The rows of `rows` from [`KEPT_REST_S`] before the first footprint on.
 pub fn without_rest<'a>(rows: &'a [ImuRow], truth: &[TruthPoint]) -> Option<&'a [ImuRow]> {
     let t0 = truth.first()?.t_s - KEPT_REST_S;
@@ -106,25 +140,34 @@ pub fn without_rest<'a>(rows: &'a [ImuRow], truth: &[TruthPoint]) -> Option<&'a 
 pub fn front_end_markdown(rows: &[SuiteRow]) -> String {
     let mut s = format!(
         "Start without rest (the log cut to its last {KEPT_REST_S} s of initial rest: alignment on that short \
-         stance, no rest-mean prior) and the clipping model (attitude variance about a clipped gyro axis), \
-         footprint RMS, % of path.\n\n\
-         | recording | default | without rest | difference | clipped samples | clipping model off |\n\
-         |---|---|---|---|---|---|\n"
+         stance, no rest-mean prior), the same start from a checkpoint (a daemon restarted while the wearer \
+         walks: the bias the other walks of the sensor ended with, per axis their median with their spread \
+         as σ, none of this walk's own), and the clipping model (attitude variance about a clipped gyro \
+         axis), footprint RMS, % of path.\n\n\
+         | recording | default | without rest | difference | from a checkpoint | difference | clipped samples | clipping model off |\n\
+         |---|---|---|---|---|---|---|---|\n"
     );
     for r in rows {
         let fe = &r.front_end;
         let cut = fe
             .without_rest
             .map_or("—".into(), |f| format!("{:.2} %", f.rms_pct));
-        let diff = fe.without_rest.map_or("—".into(), |f| {
-            format!("{:+.2}", f.rms_pct - r.best_rest.rms_pct)
-        });
+        let diff = |f: Option<Footprint>| {
+            f.map_or("—".into(), |f| {
+                format!("{:+.2}", f.rms_pct - r.best_rest.rms_pct)
+            })
+        };
+        let warm = fe
+            .without_rest_checkpoint
+            .map_or("—".into(), |f| format!("{:.2} %", f.rms_pct));
         s.push_str(&format!(
-            "| {} | {:.2} % | {} | {} | {} | {:.2} % |\n",
+            "| {} | {:.2} % | {} | {} | {} | {} | {} | {:.2} % |\n",
             r.recording,
             r.best_rest.rms_pct,
             cut,
-            diff,
+            diff(fe.without_rest),
+            warm,
+            diff(fe.without_rest_checkpoint),
             fe.clipped_samples,
             fe.clipping_off.rms_pct
         ));
@@ -187,4 +230,30 @@ fn stance_misses_markdown(rows: &[SuiteRow]) -> String {
         ));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::checkpoint_from;
+
+    #[test]
+    fn a_checkpoint_is_the_median_of_the_other_walks_with_their_spread() {
+        let others = [
+            [1.0e-3, -2.0e-3, 5.0e-3],
+            [2.0e-3, -1.0e-3, 4.0e-3],
+            [3.0e-3, -3.0e-3, 4.5e-3],
+            [9.0e-3, -2.5e-3, 5.0e-3],
+        ];
+        let ws = checkpoint_from(&others, 5e-4).expect("four walks");
+        // Medians: x between 2 and 3 (the outlier 9 does not pull it), y −2.25, z 4.75 mrad/s.
+        let b = ws.gyro_bias_rad_s;
+        assert!((b[0] - 2.5e-3).abs() < 1e-12 && (b[1] + 2.25e-3).abs() < 1e-12);
+        assert!((b[2] - 4.75e-3).abs() < 1e-12);
+        // x: deviations 1.5, 0.5, 0.5, 6.5 → MAD 1.0 mrad/s; z: 0.25 each → MAD 0.25, below the
+        // floor of 0.5 mrad/s.
+        assert!((ws.gyro_bias_cov[0][0].sqrt() - 1.4826e-3).abs() < 1e-12);
+        assert!((ws.gyro_bias_cov[2][2].sqrt() - 5e-4).abs() < 1e-12);
+        assert_eq!(ws.gyro_bias_cov[0][1], 0.0);
+        assert!(checkpoint_from(&others[..2], 5e-4).is_none());
+    }
 }

@@ -192,6 +192,8 @@ pub struct SuiteRow {
     pub stances_found: Option<StanceMatch>,
     /// Front end: detectors compared, start without rest, clipping model off.
     pub front_end: FrontEnd,
+    /// The bias the default run ended with, sensor axes, rad/s.
+    pub final_bias_rad_s: [f64; 3],
 }
 
 /// Reads a suite file.
@@ -214,16 +216,62 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
         .inject_gyro_bias_rad_s
         .unwrap_or([0.001, 0.001, 0.005]);
     let best_mode = suite.best_mode.unwrap_or(Mode::Eskf);
-    suite
+    fn wrap(r: &SuiteRecording) -> impl FnOnce(RunError) -> SuiteError + '_ {
+        move |source| SuiteError::Run {
+            name: r.name.clone(),
+            source: Box::new(source),
+        }
+    }
+    let mut rows = suite
         .recordings
         .iter()
-        .map(|r| {
-            run_recording(base, r, inj, best_mode).map_err(|source| SuiteError::Run {
-                name: r.name.clone(),
-                source: Box::new(source),
+        .map(|r| run_recording(base, r, inj, best_mode).map_err(wrap(r)))
+        .collect::<Result<Vec<_>, _>>()?;
+    // A restart without rest from a checkpoint needs the other walks' final biases.
+    for (i, r) in suite.recordings.iter().enumerate() {
+        let others: Vec<[f64; 3]> = suite
+            .recordings
+            .iter()
+            .zip(&rows)
+            .enumerate()
+            .filter(|(j, (o, row))| {
+                *j != i
+                    && o.config == r.config
+                    && row.final_bias_rad_s.iter().all(|v| v.is_finite())
             })
-        })
-        .collect()
+            .map(|(_, (_, row))| row.final_bias_rad_s)
+            .collect();
+        rows[i].front_end.without_rest_checkpoint =
+            without_rest_from_checkpoint(base, r, best_mode, &others).map_err(wrap(r))?;
+    }
+    Ok(rows)
+}
+
+/// The default run on the log cut to its last [`KEPT_REST_S`] of rest, started from the
+/// checkpoint the other walks give ([`front_end::checkpoint_from`]).
+fn without_rest_from_checkpoint(
+    base: &Path,
+    r: &SuiteRecording,
+    best: Mode,
+    others: &[[f64; 3]],
+) -> Result<Option<Footprint>, RunError> {
+    let ctx = Ctx::open(base, r)?;
+    let cfg = ctx.default_config(best)?;
+    let Some(ws) = front_end::checkpoint_from(others, cfg.eskf.gyro_bias_prior_sd_rad_s.get())
+    else {
+        return Ok(None);
+    };
+    let Some(rows) = front_end::without_rest(&ctx.log.rows, &ctx.truth) else {
+        return Ok(None);
+    };
+    let log = ImuLog {
+        rows: rows.to_vec(),
+        rejected: Vec::new(),
+        ..ctx.log.clone()
+    };
+    let aid = heading_aid(&cfg, None)?;
+    let out = runner::run_log_warm(&log, &cfg, &aid, &BiasInjection::default(), ws, |_, _| {})?;
+    ctx.footprint(&out).map(Some)
 }
 
 impl SuiteRecording {
@@ -258,7 +306,37 @@ struct Ctx<'a> {
     truth: Vec<TruthPoint>,
 }
 
-impl Ctx<'_> {
+impl<'a> Ctx<'a> {
+    /// Reads a recording's log, truth and configurations.
+    fn open(base: &'a Path, r: &'a SuiteRecording) -> Result<Self, RunError> {
+        Ok(Ctx {
+            base,
+            rec: r,
+            config: ConfigFile::read(&base.join(&r.config))?,
+            baseline: ConfigFile::read(
+                &base.join(r.baseline_config.as_ref().unwrap_or(&r.config)),
+            )?,
+            log: read_imu_csv(&base.join(&r.imu), &ImuCsvOptions::default())?,
+            truth: read_truth_csv(&base.join(&r.truth))?,
+        })
+    }
+
+    /// The footprint figures of a run against the recording's truth.
+    fn footprint(&self, out: &RunOutcome) -> Result<Footprint, RunError> {
+        let rep = out
+            .trace
+            .evaluate(&self.truth, &EvalOptions::default())
+            .map_err(|source| RunError::Eval {
+                truth: self.base.join(&self.rec.truth),
+                source,
+            })?;
+        Ok(Footprint {
+            rms_m: rep.rms_error_m.unwrap_or(f64::NAN),
+            rms_pct: rep.rms_error_pct_of_path.unwrap_or(f64::NAN),
+            final_m: rep.final_gcp_error_m.unwrap_or(f64::NAN),
+        })
+    }
+
     fn run(
         &self,
         mode: Mode,
@@ -349,6 +427,7 @@ impl Ctx<'_> {
             clipped_samples,
             clipping_off,
             without_rest,
+            without_rest_checkpoint: None,
             detectors: every_stride
                 .then(|| front_end::compare_detectors(&self.log.rows, &self.truth, &cfg)),
         })
@@ -370,18 +449,7 @@ impl Ctx<'_> {
         )?;
         let aid = heading_aid(&cfg, None)?;
         let out = runner::run_log(&self.log, &cfg, &aid, &inj, |_, _| {});
-        let rep = out
-            .trace
-            .evaluate(&self.truth, &EvalOptions::default())
-            .map_err(|source| RunError::Eval {
-                truth: self.base.join(&self.rec.truth),
-                source,
-            })?;
-        let fp = Footprint {
-            rms_m: rep.rms_error_m.unwrap_or(f64::NAN),
-            rms_pct: rep.rms_error_pct_of_path.unwrap_or(f64::NAN),
-            final_m: rep.final_gcp_error_m.unwrap_or(f64::NAN),
-        };
+        let fp = self.footprint(&out)?;
         Ok((out, fp))
     }
 }
@@ -392,20 +460,12 @@ fn run_recording(
     inj: [f64; 3],
     best: Mode,
 ) -> Result<SuiteRow, RunError> {
-    let log = read_imu_csv(&base.join(&r.imu), &ImuCsvOptions::default())?;
-    let truth = read_truth_csv(&base.join(&r.truth))?;
-    let path_m = truth
+    let ctx = Ctx::open(base, r)?;
+    let path_m = ctx
+        .truth
         .windows(2)
         .map(|w| (w[1].x_m - w[0].x_m).hypot(w[1].y_m - w[0].y_m))
         .sum();
-    let ctx = Ctx {
-        base,
-        rec: r,
-        config: ConfigFile::read(&base.join(&r.config))?,
-        baseline: ConfigFile::read(&base.join(r.baseline_config.as_ref().unwrap_or(&r.config)))?,
-        log,
-        truth,
-    };
     let none = BiasInjection::default();
     let injected = BiasInjection {
         constant_rad_s: inj,
@@ -468,6 +528,12 @@ fn run_recording(
         stride_ratio: fig.stride_ratio,
         stances_found: fig.stances_found,
         front_end,
+        final_bias_rad_s: best_r0
+            .trace
+            .bias_rad_s
+            .last()
+            .copied()
+            .unwrap_or([f64::NAN; 3]),
     })
 }
 
