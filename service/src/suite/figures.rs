@@ -70,7 +70,6 @@ impl StanceMatch {
             .map(|&(_, d)| d)
             .filter(|d| d.abs() <= STANCE_MATCH_S)
             .collect();
-        offsets.sort_by(f64::total_cmp);
         let timing = assigned.iter().flatten().count() - offsets.len();
         let mut owners: Vec<usize> = assigned.iter().flatten().map(|&(k, _)| k).collect();
         owners.sort_unstable();
@@ -85,11 +84,7 @@ impl StanceMatch {
                 .count(),
             timing,
             extra: detected.len() - owners.len(),
-            median_end_offset_s: match offsets.len() {
-                0 => f64::NAN,
-                n if n % 2 == 1 => offsets[n / 2],
-                n => 0.5 * (offsets[n / 2 - 1] + offsets[n / 2]),
-            },
+            median_end_offset_s: super::tables::median(&mut offsets),
         }
     }
 

@@ -3,6 +3,7 @@
 //! and the clipping model on and off.
 
 use super::figures::{StanceIntervals, StanceMatch};
+use super::tables::median;
 use super::{Footprint, SuiteRow};
 use crate::core::WarmStart;
 use crate::core::stance::{StanceDetector, StanceEdge, StanceEvents};
@@ -107,22 +108,13 @@ pub fn checkpoint_from(others: &[[f64; 3]], floor_sd_rad_s: f64) -> Option<WarmS
     if others.len() < 3 {
         return None;
     }
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        if n % 2 == 1 {
-            v[n / 2]
-        } else {
-            0.5 * (v[n / 2 - 1] + v[n / 2])
-        }
-    };
     let mut ws = WarmStart {
         gyro_bias_rad_s: [0.0; 3],
         gyro_bias_cov: [[0.0; 3]; 3],
     };
     for k in 0..3 {
-        let m = median(others.iter().map(|b| b[k]).collect());
-        let mad = median(others.iter().map(|b| (b[k] - m).abs()).collect());
+        let m = median(&mut others.iter().map(|b| b[k]).collect::<Vec<_>>());
+        let mad = median(&mut others.iter().map(|b| (b[k] - m).abs()).collect::<Vec<_>>());
         ws.gyro_bias_rad_s[k] = m;
         ws.gyro_bias_cov[k][k] = (1.4826 * mad).max(floor_sd_rad_s).powi(2);
     }

@@ -227,7 +227,8 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
         .iter()
         .map(|r| run_recording(base, r, inj, best_mode).map_err(wrap(r)))
         .collect::<Result<Vec<_>, _>>()?;
-    // A restart without rest from a checkpoint needs the other walks' final biases.
+    // A restart without rest from a checkpoint needs the other walks' final biases: a second
+    // pass, which reads each log again rather than keeping every log in memory.
     for (i, r) in suite.recordings.iter().enumerate() {
         let others: Vec<[f64; 3]> = suite
             .recordings
@@ -261,17 +262,19 @@ fn without_rest_from_checkpoint(
     else {
         return Ok(None);
     };
-    let Some(rows) = front_end::without_rest(&ctx.log.rows, &ctx.truth) else {
+    let Some(cut) = ctx.without_rest() else {
         return Ok(None);
     };
-    let log = ImuLog {
-        rows: rows.to_vec(),
-        rejected: Vec::new(),
-        ..ctx.log.clone()
-    };
     let aid = heading_aid(&cfg, None)?;
-    let out = runner::run_log_warm(&log, &cfg, &aid, &BiasInjection::default(), ws, |_, _| {})?;
-    ctx.footprint(&out).map(Some)
+    let out = runner::run_log_warm(
+        &cut.log,
+        &cfg,
+        &aid,
+        &BiasInjection::default(),
+        ws,
+        |_, _| {},
+    )?;
+    cut.footprint(&out).map(Some)
 }
 
 impl SuiteRecording {
@@ -318,6 +321,24 @@ impl<'a> Ctx<'a> {
             )?,
             log: read_imu_csv(&base.join(&r.imu), &ImuCsvOptions::default())?,
             truth: read_truth_csv(&base.join(&r.truth))?,
+        })
+    }
+
+    /// The recording cut to its last [`KEPT_REST_S`] of initial rest ([`front_end::without_rest`]).
+    fn without_rest(&self) -> Option<Ctx<'a>> {
+        let rows = front_end::without_rest(&self.log.rows, &self.truth)?;
+        Some(Ctx {
+            log: ImuLog {
+                path: self.log.path.clone(),
+                rows: rows.to_vec(),
+                rejected: Vec::new(),
+                has_temperature: self.log.has_temperature,
+                extra_columns: self.log.extra_columns.clone(),
+            },
+            config: self.config.clone(),
+            baseline: self.baseline.clone(),
+            truth: self.truth.clone(),
+            ..*self
         })
     }
 
@@ -402,24 +423,11 @@ impl<'a> Ctx<'a> {
         off.eskf.clipped_rate_sd_rad_s = Some(0.0);
         let (_, clipping_off) =
             self.run_with(&off, mode, BiasPrior::RestMean, BiasInjection::default())?;
-        let without_rest = match front_end::without_rest(&self.log.rows, &self.truth) {
-            Some(rows) => {
-                let cut = Ctx {
-                    log: ImuLog {
-                        rows: rows.to_vec(),
-                        rejected: Vec::new(),
-                        ..self.log.clone()
-                    },
-                    config: self.config.clone(),
-                    baseline: self.baseline.clone(),
-                    truth: self.truth.clone(),
-                    ..*self
-                };
-                Some(
-                    cut.run(mode, BiasPrior::RestMean, BiasInjection::default())?
-                        .1,
-                )
-            }
+        let without_rest = match self.without_rest() {
+            Some(cut) => Some(
+                cut.run(mode, BiasPrior::RestMean, BiasInjection::default())?
+                    .1,
+            ),
             None => None,
         };
         let cfg = self.default_config(mode)?;

@@ -27,7 +27,8 @@ pub struct Summary {
     pub default_worse: usize,
 }
 
-fn median(v: &mut [f64]) -> f64 {
+/// The median (the mean of the middle two for an even count; NaN for none); sorts `v`.
+pub(super) fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     match v.len() {
         0 => f64::NAN,
