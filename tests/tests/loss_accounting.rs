@@ -337,6 +337,7 @@ fn daemon_restart_mid_stream(name: &'static str, kill: bool) {
     let daemon = Daemon::start(domain.name(), Delivery::Live, &dir.join("daemon-1.log"));
     // The logger stays attached across the restart.
     let logger = start_logger(&domain, &dir, "log");
+    let watch = Subscriber::<AttitudeSample>::open(&domain, "test-loss-watch", WAIT).unwrap();
     let (producer, paused, go) = start_producer(
         &domain,
         vec![
@@ -352,6 +353,14 @@ fn daemon_restart_mid_stream(name: &'static str, kill: bool) {
         ],
     );
     paused.recv().unwrap();
+    // The first life has received part of the stream before it goes: on a loaded machine the
+    // producer can send all 4000 before the daemon is scheduled, and a daemon killed before
+    // its first sample rightly counts the whole head as missing (no first life to continue).
+    watch
+        .recv_timeout(WAIT)
+        .unwrap()
+        .expect("an attitude of the first life");
+    drop(watch);
     let first_life = if kill {
         daemon.kill();
         None
