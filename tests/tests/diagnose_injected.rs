@@ -3,7 +3,7 @@
 //! must have a lower footprint error than the one it started from. On the clean recordings it
 //! must not invent an effect beyond the real one it documents (a heading offset on exp25).
 
-use corridor_service::diagnose::{Effect, Report, SIGNIFICANT, apply_fix, run_diagnosis};
+use corridor_service::diagnose::{Effect, Fix, Report, SIGNIFICANT, apply_fix, run_diagnosis};
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::{ConfigFile, ConfigOverrides, HeadingObservations};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
@@ -205,6 +205,27 @@ fn injected_mounting_slip_is_a_heading_offset() {
     let mut cfg = config(0.0, false);
     cfg.heading.calibration_strides = Some(1);
     assert_found_and_fixed(&run(&log, &truth, &cfg), "heading_offset");
+}
+
+#[test]
+fn a_gyro_that_clips_below_its_configured_range_is_named_and_fixed() {
+    // Every axis cut at ±5 rad/s, with the configuration still saying 8.727: the lost pitch
+    // rotation at each toe-off makes tilt and heading jumps that the bias soaks up.
+    let (log, truth) = load("gdins_exp26_narrow_out_and_back");
+    let mut log = log;
+    LogInjection::Clipping { range_rad_s: 5.0 }.apply(&mut log.rows);
+    let r = run(&log, &truth, &config(0.0, false));
+    assert_found_and_fixed(&r, "gyro_clipping");
+    assert_eq!(r.iterations[0].fix, Fix::GyroRail { milli_rad_s: 5000 });
+    // The clean walk reaches only its real rail, at the configured range: not named.
+    let (clean, truth) = load("gdins_exp26_narrow_out_and_back");
+    let r = run(&clean, &truth, &config(0.0, false));
+    let clip = r
+        .effects
+        .iter()
+        .find(|e| e.name == Effect::GyroClipping)
+        .expect("the real rail is reported");
+    assert!(clip.score < SIGNIFICANT, "{clip:?}");
 }
 
 #[test]

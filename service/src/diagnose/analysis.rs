@@ -140,6 +140,9 @@ pub struct Analysis {
     pub stances: Vec<StanceResidual>,
     /// The power of this walk for the catalogue's effects.
     pub power: Vec<super::power::Power>,
+    /// The test of the filter's bias estimate against its random walk (error-state modes
+    /// without bias-rate states).
+    pub bias_change: Option<super::bias_change::BiasChange>,
 }
 
 /// Runs the model of `file` on `log` and analyses its residuals, with the power of the walk
@@ -173,6 +176,7 @@ pub fn analyse(
     let mut rest_n = 0u32;
     // yaw error built up by a unit amount of each effect since the filter last removed it
     let mut yaw_error = [0.0; super::power::N_REFERENCES];
+    let mut tracking_from_s: Option<f64> = None;
     let outcome = run_log(log, &cfg, &aid, &BiasInjection::default(), |input, e| {
         sample += 1;
         let w = Vector3::from(input.gyro_rad_s);
@@ -194,6 +198,7 @@ pub fn analyse(
             e.nav_from_body[3],
         ));
         if e.phase == crate::core::Phase::Tracking {
+            tracking_from_s.get_or_insert(e.t_s);
             let f_rest = rest_sum / f64::from(rest_n.max(1));
             for (k, r) in super::power::REFERENCES.iter().enumerate() {
                 yaw_error[k] += (q * (r.rate_error)(&w, &f, &f_rest)).z * dt;
@@ -346,6 +351,33 @@ pub fn analyse(
         bias_sd_rad_s: bias_sd,
     };
     let mut effects = rank_effects(&used, cfg.mode);
+    // The bias is a pure random walk in the error-state filter unless bias-rate states drive it.
+    let bias_change = tracking_from_s
+        .filter(|_| {
+            matches!(cfg.mode, Mode::Eskf | Mode::Zupt)
+                && file.model.bias_rate_rw_rad_s2_sqrt_s.is_none()
+        })
+        .and_then(|from_s| {
+            super::bias_change::bias_change(
+                &outcome.trace.t_s,
+                &outcome.trace.bias_rad_s,
+                &outcome.trace.bias_sd_rad_s,
+                cfg.eskf.gyro_bias_rw_rad_s_sqrt_s,
+                from_s,
+            )
+        });
+    if let Some(c) = &bias_change {
+        super::bias_change::apply_bias_change(&mut effects, c);
+    }
+    // First among equals: a rail explains the bias changes it causes.
+    if let Some(f) = super::clipping::clipping_finding(
+        &super::clipping::find_rails(&log.rows),
+        cfg.sensor.gyro_range_rad_s(),
+        // the error-state filter widens its attitude at a clipped sample; the paper's does not
+        cfg.eskf.clipped_rate_sd_rad_s > 0.0 && matches!(cfg.mode, Mode::Eskf | Mode::Zupt),
+    ) {
+        effects.insert(0, f);
+    }
     let power = super::power::walk_power(&stances);
     super::power::apply_power(
         &mut effects,
@@ -363,6 +395,7 @@ pub fn analyse(
         residuals: res,
         stances,
         power,
+        bias_change,
     })
 }
 

@@ -25,13 +25,15 @@ pub enum Effect {
     Timing,
     /// The foot is not flat at stance (the paper's model only).
     MountingTilt,
+    /// The gyro clips below its configured range (a rail in the data, see `clipping`).
+    GyroClipping,
     /// The residuals are inconsistent and nothing in the catalogue explains them.
     Unexplained,
 }
 
 impl Effect {
     /// Every effect, in the catalogue's order.
-    pub const ALL: [Effect; 8] = [
+    pub const ALL: [Effect; 9] = [
         Effect::HeadingOffset,
         Effect::BiasDrift,
         Effect::GyroScaleFactor,
@@ -39,6 +41,7 @@ impl Effect {
         Effect::AxisMisalignment,
         Effect::Timing,
         Effect::MountingTilt,
+        Effect::GyroClipping,
         Effect::Unexplained,
     ];
 
@@ -52,12 +55,14 @@ impl Effect {
             Effect::AxisMisalignment => "axis_misalignment",
             Effect::Timing => "timing",
             Effect::MountingTilt => "mounting_tilt",
+            Effect::GyroClipping => "gyro_clipping",
             Effect::Unexplained => "unexplained",
         }
     }
 
     /// The fixes tried for this effect, with the number of parameters each adds; empty when
-    /// corridor has no model change for it.
+    /// corridor has no model change for it, or when the fix depends on the data (the clipping
+    /// finding carries its own, [`Fix::GyroRail`]).
     pub fn fixes(self) -> &'static [(Fix, usize)] {
         match self {
             Effect::HeadingOffset => &[(Fix::HeadingOffset, 1)],
@@ -65,7 +70,7 @@ impl Effect {
             Effect::GyroScaleFactor | Effect::Timing => &[(Fix::ScaleFactor, 3)],
             Effect::GSensitivity => &[(Fix::GSensitivity, 3)],
             Effect::MountingTilt => &[(Fix::RotationAware, 3)],
-            Effect::AxisMisalignment | Effect::Unexplained => &[],
+            Effect::AxisMisalignment | Effect::GyroClipping | Effect::Unexplained => &[],
         }
     }
 }
@@ -97,20 +102,33 @@ pub enum Fix {
     GSensitivity,
     /// The rotation-aware variant of the paper's filter (`estimator.mode = rotation_aware`).
     RotationAware,
+    /// The gyro range at the rail found in the data, so that its samples are flagged as
+    /// clipped, with the clipping model on (`sensor.gyro_range_rad_s = rail / 0.99`,
+    /// `eskf.clipped_rate_sd_rad_s` at its default when it was 0).
+    GyroRail {
+        /// The rail, mrad/s.
+        milli_rad_s: u32,
+    },
 }
 
+/// The gyro range the clipping fix sets: the rail is this fraction of it (inside
+/// [`CLIP_FRACTION`](corridor_shared::sensor::CLIP_FRACTION), so the rail's samples count as
+/// clipped).
+pub const RAIL_OF_RANGE: f64 = 0.99;
+
 impl Fix {
-    /// Every fix.
-    pub const ALL: [Fix; 6] = [
+    /// Every fix (the clipping fix at a 5 rad/s rail).
+    pub const ALL: [Fix; 7] = [
         Fix::HeadingOffset,
         Fix::BiasRate,
         Fix::BiasRandomWalkTimes10,
         Fix::ScaleFactor,
         Fix::GSensitivity,
         Fix::RotationAware,
+        Fix::GyroRail { milli_rad_s: 5000 },
     ];
 
-    /// The configuration change in words (in the reports).
+    /// The configuration change in words, without the data's figures (see `Display`).
     pub fn label(self) -> &'static str {
         match self {
             Fix::HeadingOffset => "model.heading_offset_sd_deg = 5",
@@ -119,6 +137,7 @@ impl Fix {
             Fix::ScaleFactor => "model.scale_factor_sd = 0.02",
             Fix::GSensitivity => "model.g_sensitivity_sd = 1e-3",
             Fix::RotationAware => "estimator.mode = rotation_aware",
+            Fix::GyroRail { .. } => "sensor.gyro_range_rad_s = the rail / 0.99",
         }
     }
 
@@ -133,13 +152,21 @@ impl Fix {
 
 impl fmt::Display for Fix {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.label())
+        match self {
+            Fix::GyroRail { milli_rad_s } => write!(
+                f,
+                "sensor.gyro_range_rad_s = {:.3} (the rail {:.3} / {RAIL_OF_RANGE})",
+                f64::from(*milli_rad_s) / 1000.0 / RAIL_OF_RANGE,
+                f64::from(*milli_rad_s) / 1000.0
+            ),
+            _ => f.write_str(self.label()),
+        }
     }
 }
 
 impl Serialize for Fix {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(self.label())
+        s.serialize_str(&self.to_string())
     }
 }
 
@@ -178,6 +205,20 @@ pub fn apply_fix(fix: Fix, file: &mut ConfigFile) -> bool {
         Fix::RotationAware if file.estimator.mode == Some(Mode::Paper) => {
             file.estimator.mode = Some(Mode::RotationAware)
         }
+        Fix::GyroRail { milli_rad_s } => {
+            let range = f64::from(milli_rad_s) / 1000.0 / RAIL_OF_RANGE;
+            if file
+                .sensor
+                .gyro_range_rad_s
+                .is_some_and(|r| r <= range * (1.0 + 1e-9))
+            {
+                return false;
+            }
+            file.sensor.gyro_range_rad_s = Some(range);
+            if file.eskf.clipped_rate_sd_rad_s == Some(0.0) {
+                file.eskf.clipped_rate_sd_rad_s = None; // the default
+            }
+        }
         _ => return false,
     }
     true
@@ -200,6 +241,7 @@ mod tests {
                 "axis_misalignment",
                 "timing",
                 "mounting_tilt",
+                "gyro_clipping",
                 "unexplained"
             ]
         );
@@ -208,8 +250,15 @@ mod tests {
             assert_eq!(serde_json::to_value(e).unwrap(), e.name());
         }
         for f in Fix::ALL {
-            assert_eq!(f.to_string(), f.label());
-            assert_eq!(serde_json::to_value(f).unwrap(), f.label());
+            if let Fix::GyroRail { .. } = f {
+                assert_eq!(
+                    f.to_string(),
+                    "sensor.gyro_range_rad_s = 5.051 (the rail 5.000 / 0.99)"
+                );
+            } else {
+                assert_eq!(f.to_string(), f.label());
+            }
+            assert_eq!(serde_json::to_value(f).unwrap(), f.to_string());
             // The extension states are exactly the `model.` keys.
             assert_eq!(f.is_model_extension(), f.label().starts_with("model."));
         }
@@ -229,6 +278,8 @@ mod tests {
         assert_eq!(fixes(Effect::MountingTilt), [Fix::RotationAware]);
         assert!(Effect::AxisMisalignment.fixes().is_empty());
         assert!(Effect::Unexplained.fixes().is_empty());
+        // The clipping finding carries its fix (the rail is the data's).
+        assert!(Effect::GyroClipping.fixes().is_empty());
         // Parameters added: one offset, one random-walk scale, three states otherwise.
         for e in Effect::ALL {
             for &(f, k) in e.fixes() {
@@ -236,8 +287,11 @@ mod tests {
                 assert_eq!(k, if one { 1 } else { 3 }, "{e} {f}");
             }
         }
-        // Every fix is reachable from some effect.
-        for f in Fix::ALL {
+        // Every fix but the data's is reachable from some effect.
+        for f in Fix::ALL
+            .into_iter()
+            .filter(|f| !matches!(f, Fix::GyroRail { .. }))
+        {
             assert!(
                 Effect::ALL
                     .iter()
@@ -268,6 +322,30 @@ mod tests {
         assert!(apply_fix(Fix::BiasRandomWalkTimes10, &mut file));
         assert_eq!(file.eskf.gyro_bias_rw_rad_s_sqrt_s, Some(1e-3));
         assert!(!apply_fix(Fix::BiasRandomWalkTimes10, &mut file));
+    }
+
+    #[test]
+    fn the_rail_fix_flags_the_rail_and_turns_the_clipping_model_on() {
+        let rail = Fix::GyroRail { milli_rad_s: 5000 };
+        let mut file = ConfigFile::default();
+        file.sensor.gyro_range_rad_s = Some(8.727);
+        file.eskf.clipped_rate_sd_rad_s = Some(0.0);
+        assert!(apply_fix(rail, &mut file));
+        let range = file.sensor.gyro_range_rad_s.unwrap();
+        assert!((range - 5.0 / RAIL_OF_RANGE).abs() < 1e-12);
+        assert!(
+            5.0 >= corridor_shared::sensor::CLIP_FRACTION * range,
+            "the rail is flagged"
+        );
+        assert_eq!(file.eskf.clipped_rate_sd_rad_s, None, "the default σ");
+        assert!(file.validate().is_ok());
+        // A range at or below the rail already: nothing to do.
+        assert!(!apply_fix(rail, &mut file));
+        // A configured σ stays.
+        let mut file = ConfigFile::default();
+        file.eskf.clipped_rate_sd_rad_s = Some(0.3);
+        assert!(apply_fix(rail, &mut file));
+        assert_eq!(file.eskf.clipped_rate_sd_rad_s, Some(0.3));
     }
 
     #[test]

@@ -28,11 +28,16 @@
 //!   direction by a constant with the same sign on every direction (t test, and the one-way
 //!   ANOVA across directions must not reject equal means);
 //! - `bias_drift`: a trend of `r` in time (regression) or a drift/step in its cumulative sum
-//!   (CUSUM); the fix is bias-rate states for a ramp, a faster bias random walk for a step;
+//!   (CUSUM), or the filter's bias estimate moving faster than its random walk allows
+//!   (`bias_change`: a bias the filter followed leaves no trend in the residuals); the fix is
+//!   bias-rate states for a ramp, a faster bias random walk for a step;
 //! - `gyro_scale_factor`: `r` proportional to the signed turn since the last used observation;
 //! - `g_sensitivity`: `r` proportional to ∫| |f| − g |;
 //! - `axis_misalignment`: `r` proportional to the total rotation ∫|ω| (cadence), not to the turn;
 //! - `timing`: `r` proportional to the time-step deviations (jitter, gaps);
+//! - `gyro_clipping`: the gyro runs into a rail below its configured range (flat tops in the
+//!   data, `clipping`); the fix sets the range at the rail so its samples are flagged and the
+//!   rotation lost there modelled;
 //! - `mounting_tilt`: the accelerometer's tilt at stance differs from the tilt at the initial
 //!   rest (only an effect for the paper's model, which takes the foot as flat);
 //! - `unexplained`: the residuals are inconsistent (NIS above its χ² band or not white) and no
@@ -45,13 +50,18 @@
 //!   [`Consistency`], [`HeadingResidual`]);
 //! - `ranking`: the evidence for each effect ([`Finding`]), the residual tests and the
 //!   nested-model F test ([`score_by_likelihood`]);
+//! - `bias_change`: whether the filter's own bias estimate moved more than its random walk
+//!   allows ([`BiasChange`]), a second test of `bias_drift`;
+//! - `clipping`: rails in the data below the configured gyro range ([`Rail`]);
 //! - `power`: the power of the walk for each effect: every stance's residual fitted on the
 //!   effect's signature ([`Power`]);
 //! - `report`: `report.md`, `report.json` and `residuals.svg` ([`write_report`]);
 //! - this file: the loop ([`run_diagnosis`] → [`Diagnosis`]).
 
 mod analysis;
+mod bias_change;
 mod catalogue;
+mod clipping;
 mod power;
 mod ranking;
 mod report;
@@ -60,7 +70,9 @@ pub use analysis::{
     Analysis, Consistency, DIAGNOSIS_ALIGNED_PRIOR, HeadingResidual, ResidualKind, StanceResidual,
     analyse,
 };
-pub use catalogue::{Effect, Fix, apply_fix};
+pub use bias_change::{BLOCK_S, BiasChange, bias_change};
+pub use catalogue::{Effect, Fix, RAIL_OF_RANGE, apply_fix};
+pub use clipping::{Rail, find_rails};
 pub use power::{
     HAC_LAGS, MDE_Z, MIN_RESPONSE, N_REFERENCES, Power, REFERENCES, Reference, Row, SignatureFit,
     calibrate_by_injection, fit_signature, quarter_turns,

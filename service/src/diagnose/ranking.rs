@@ -28,6 +28,9 @@ pub struct Finding {
     pub mde: Option<f64>,
 }
 
+/// The largest score (p = 10⁻³⁰).
+pub const MAX_SCORE: f64 = 30.0;
+
 fn score(p: f64) -> f64 {
     if p.is_nan() {
         0.0
@@ -367,7 +370,16 @@ pub fn score_by_likelihood(
     let mut candidates = Vec::new();
     for e in &mut base.effects {
         let mut best: Option<(f64, usize, Candidate)> = None;
-        for &(fix, k) in e.name.fixes() {
+        // A fix that carries the data's figures comes with the finding.
+        let own;
+        let fixes = match e.fix {
+            Some(f @ Fix::GyroRail { .. }) => {
+                own = [(f, 1)];
+                &own[..]
+            }
+            _ => e.name.fixes(),
+        };
+        for &(fix, k) in fixes {
             let mut f = file.clone();
             if !apply_fix(fix, &mut f) {
                 continue;
@@ -418,7 +430,7 @@ pub fn score_by_likelihood(
                 );
                 candidates.push(cand);
             }
-            None if !e.name.fixes().is_empty() => {
+            None if !fixes.is_empty() => {
                 e.score = 0.0;
                 e.evidence = format!("{}; already in the model", e.evidence);
                 e.fix = None;

@@ -85,7 +85,9 @@ impl MatrixCase {
 /// slip sizes are those of the bundled tests; they start at a fixed fraction of each walk.
 pub fn matrix_cases() -> Vec<MatrixCase> {
     use CaseInjection::{Clean, Log};
-    use Effect::{AxisMisalignment, BiasDrift, GyroScaleFactor, HeadingOffset, Timing};
+    use Effect::{
+        AxisMisalignment, BiasDrift, GyroClipping, GyroScaleFactor, HeadingOffset, Timing,
+    };
     use LogInjection::*;
     let deg = f64::to_radians;
     let scale = |label, f: f64| MatrixCase {
@@ -182,9 +184,9 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
             variant: Some("g-sensitivity"),
         },
         MatrixCase {
-            // Outside the catalogue: at most `unexplained` can name it.
+            // A rail below the configured range (8.727 rad/s): `gyro_clipping`.
             label: "clipping at ±5 rad/s",
-            expected: None,
+            expected: Some(GyroClipping),
             injection: Log(Clipping { range_rad_s: 5.0 }),
             size: 5.0,
             variant: None,
@@ -492,7 +494,7 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
         md.push('\n');
     }
     md.push_str(&prediction_markdown(m));
-    md.push_str("\nAbbreviations: sf gyro_scale_factor, mis axis_misalignment, drift bias_drift, off heading_offset, time timing, gs g_sensitivity, tilt mounting_tilt, unexp unexplained.\n");
+    md.push_str("\nAbbreviations: sf gyro_scale_factor, mis axis_misalignment, drift bias_drift, off heading_offset, time timing, gs g_sensitivity, tilt mounting_tilt, clip gyro_clipping, unexp unexplained.\n");
     md
 }
 
@@ -505,6 +507,7 @@ fn short(name: &str) -> &str {
         "timing" => "time",
         "g_sensitivity" => "gs",
         "mounting_tilt" => "tilt",
+        "gyro_clipping" => "clip",
         "unexplained" => "unexp",
         other => other,
     }
