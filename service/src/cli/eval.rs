@@ -16,10 +16,25 @@ pub(super) struct EvalArgs {
     /// table is appended; with --out its reports go under OUT/diagnose).
     #[arg(long)]
     pub(super) loops: bool,
+    /// Instead of the table: the leave-one-walk-out check of the parameters listed in this
+    /// sweep file (TOML with [[parameter]] tables: key = "section.key", values = [...]); with
+    /// --out it is written to OUT/sweep.md.
+    #[arg(long, conflicts_with = "loops")]
+    pub(super) sweep: Option<PathBuf>,
 }
 
 /// Runs the suite, prints the table and writes it when asked.
 pub(super) fn eval(a: EvalArgs) -> Result<()> {
+    if let Some(sweep) = &a.sweep {
+        let results = corridor_service::suite::run_sweep(&a.suite, sweep)?;
+        let md = corridor_service::suite::sweep_markdown(&results);
+        print!("{md}");
+        if let Some(dir) = a.out {
+            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+            std::fs::write(dir.join("sweep.md"), &md)?;
+        }
+        return Ok(());
+    }
     let rows = corridor_service::suite::run_suite(&a.suite)?;
     let mut md = corridor_service::suite::markdown(&rows);
     if a.loops {

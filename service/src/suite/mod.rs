@@ -19,13 +19,15 @@
 //! - [`recovery`]: injected-bias recovery and its hindsight settling time;
 //! - [`tables`]: the summary and the Markdown tables;
 //! - [`loops`]: the residual-diagnosis loop on every recording;
-//! - [`detection`]: the diagnosis's detection matrix (injected sensor errors × recordings).
+//! - [`detection`]: the diagnosis's detection matrix (injected sensor errors × recordings);
+//! - [`sweep`]: the leave-one-walk-out check of the configuration's choices.
 
 mod detection;
 mod figures;
 mod front_end;
 mod loops;
 mod recovery;
+mod sweep;
 mod tables;
 
 pub use detection::{
@@ -37,6 +39,9 @@ pub use figures::{NisFigure, STANCE_MATCH_S, STRAIGHT_DEG, StanceMatch, StrideUs
 pub use front_end::{DETECTORS, FrontEnd, KEPT_REST_S, detector_label, front_end_markdown};
 pub use loops::run_loops;
 pub use recovery::{recovery, settled_at};
+pub use sweep::{
+    HeldOut, SweepFile, SweepParameter, SweepResult, held_out, run_sweep, sweep_markdown,
+};
 pub use tables::{
     NOT_WORSE_TOLERANCE_PCT, Summary, headline_markdown, markdown, nis_markdown, summary,
 };

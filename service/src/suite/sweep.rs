@@ -1,0 +1,262 @@
+//! Does a choice of the configuration generalise? A leave-one-walk-out check
+//! (`corridor eval --suite FILE --sweep SWEEP`).
+//!
+//! For each parameter of the sweep file, the default run (best mode, rest-mean prior) of every
+//! normal-gait recording is repeated at each listed value, the other parameters as configured.
+//! Then, for each walk in turn, the value a suite without that walk would have chosen (the
+//! lowest mean footprint RMS over the other walks) is applied to it: the walk's *held-out*
+//! error. Held-out figures close to the configured ones say the choice does not depend on any
+//! one walk; a value whose median is as good but whose worst case jumps says the choice is
+//! fragile there. The mean is the criterion because it sees the worst walks, which the median
+//! ignores (over this suite the medians of every swept value lie within 0.05 % of each other).
+
+use super::{Ctx, Gait, SuiteError, SuiteRecording, config_for, read_suite};
+use crate::runner::{self, RunError, heading_aid};
+use corridor_shared::config::{BiasPrior, ConfigFile, Mode};
+use corridor_shared::injection::BiasInjection;
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The sweep file: `[[parameter]]` tables.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepFile {
+    /// Parameters, each swept alone.
+    #[serde(rename = "parameter")]
+    pub parameters: Vec<SweepParameter>,
+}
+
+/// One parameter and the values it takes.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepParameter {
+    /// `section.key` of the configuration file (`heading.stride_sigma_deg`).
+    pub key: String,
+    /// Values, in the key's type.
+    pub values: Vec<toml::Value>,
+}
+
+/// The footprint RMS of every normal-gait walk at every value of one parameter.
+#[derive(Debug, Clone, Serialize)]
+pub struct SweepResult {
+    /// `section.key`.
+    pub key: String,
+    /// The configured value (`default` when the file leaves it to the built-in default).
+    pub configured: String,
+    /// The values, as written.
+    pub values: Vec<String>,
+    /// Walk names.
+    pub walks: Vec<String>,
+    /// Footprint RMS, % of path, `[value][walk]`.
+    pub rms_pct: Vec<Vec<f64>>,
+}
+
+/// What the leave-one-walk-out check finds for one parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldOut {
+    /// Per walk, the index of the value chosen without it.
+    pub picks: Vec<usize>,
+    /// Per walk, its error at that value.
+    pub rms_pct: Vec<f64>,
+}
+
+/// The value each fold picks (lowest mean over the other walks; the first of equals) and the
+/// held-out walk's error there.
+pub fn held_out(r: &SweepResult) -> HeldOut {
+    let n = r.walks.len();
+    let mean_without = |v: usize, w: usize| {
+        let s: f64 = (0..n).filter(|&k| k != w).map(|k| r.rms_pct[v][k]).sum();
+        s / (n - 1).max(1) as f64
+    };
+    let picks: Vec<usize> = (0..n)
+        .map(|w| {
+            (0..r.values.len())
+                .min_by(|&a, &b| mean_without(a, w).total_cmp(&mean_without(b, w)))
+                .unwrap_or(0)
+        })
+        .collect();
+    let rms_pct = picks
+        .iter()
+        .enumerate()
+        .map(|(w, &v)| r.rms_pct[v][w])
+        .collect();
+    HeldOut { picks, rms_pct }
+}
+
+/// Reads the sweep file and runs it on the suite's normal-gait recordings.
+pub fn run_sweep(suite_path: &Path, sweep_path: &Path) -> Result<Vec<SweepResult>, SuiteError> {
+    let suite = read_suite(suite_path)?;
+    let base = suite_path.parent().unwrap_or(Path::new("."));
+    let file_err = |message: String| SuiteError::File {
+        path: sweep_path.to_owned(),
+        message,
+    };
+    let text = std::fs::read_to_string(sweep_path).map_err(|e| file_err(e.to_string()))?;
+    let sweep: SweepFile = toml::from_str(&text).map_err(|e| file_err(e.to_string()))?;
+    let best = suite.best_mode.unwrap_or(Mode::Eskf);
+    let recs: Vec<&SuiteRecording> = suite
+        .recordings
+        .iter()
+        .filter(|r| r.gait == Gait::Normal)
+        .collect();
+    let mut out: Vec<SweepResult> = sweep
+        .parameters
+        .iter()
+        .map(|p| SweepResult {
+            key: p.key.clone(),
+            configured: String::new(),
+            values: p.values.iter().map(|v| v.to_string()).collect(),
+            walks: recs.iter().map(|r| r.name.clone()).collect(),
+            rms_pct: vec![Vec::new(); p.values.len()],
+        })
+        .collect();
+    for r in &recs {
+        let wrap = |source: RunError| SuiteError::Run {
+            name: r.name.clone(),
+            source: Box::new(source),
+        };
+        let ctx = Ctx::open(base, r).map_err(wrap)?;
+        for (p, res) in sweep.parameters.iter().zip(&mut out) {
+            res.configured = configured(&ctx.config, &p.key).map_err(&file_err)?;
+            for (v, value) in p.values.iter().enumerate() {
+                let file = with_value(&ctx.config, &p.key, value).map_err(&file_err)?;
+                let path = base.join(&r.config);
+                let cfg = config_for(&file, &path, r, best, BiasPrior::RestMean).map_err(wrap)?;
+                let aid = heading_aid(&cfg, None).map_err(wrap)?;
+                let run =
+                    runner::run_log(&ctx.log, &cfg, &aid, &BiasInjection::default(), |_, _| {});
+                res.rms_pct[v].push(ctx.footprint(&run).map_err(wrap)?.rms_pct);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// `file` with `section.key` set to `value`; an unknown key or a value of the wrong type is an
+/// error naming both.
+fn with_value(file: &ConfigFile, key: &str, value: &toml::Value) -> Result<ConfigFile, String> {
+    let (section, name) = key
+        .split_once('.')
+        .ok_or_else(|| format!("parameter key {key:?}: expected section.key"))?;
+    let mut doc = toml::Value::try_from(file).map_err(|e| e.to_string())?;
+    let table = doc
+        .as_table_mut()
+        .and_then(|t| {
+            t.entry(section)
+                .or_insert_with(|| toml::Value::Table(Default::default()))
+                .as_table_mut()
+        })
+        .ok_or_else(|| format!("parameter key {key:?}: [{section}] is not a table"))?;
+    table.insert(name.to_owned(), value.clone());
+    doc.try_into()
+        .map_err(|e| format!("parameter {key} = {value}: {e}"))
+}
+
+/// The configured value of `section.key`, as written.
+fn configured(file: &ConfigFile, key: &str) -> Result<String, String> {
+    let doc = toml::Value::try_from(file).map_err(|e| e.to_string())?;
+    let (section, name) = key
+        .split_once('.')
+        .ok_or_else(|| format!("parameter key {key:?}: expected section.key"))?;
+    Ok(doc
+        .get(section)
+        .and_then(|s| s.get(name))
+        .map_or_else(|| "default".to_owned(), |v| v.to_string()))
+}
+
+/// The sweep as Markdown: per parameter, the mean / median / worst at each value, and the
+/// held-out figures against the configured value's.
+pub fn sweep_markdown(results: &[SweepResult]) -> String {
+    let mut md = String::from(
+        "Leave-one-walk-out check of the configuration (normal-gait walks, footprint RMS % of \
+         path): each parameter swept alone; for each walk, the value the other walks choose \
+         (lowest mean) applied to it.\n\n| parameter | configured | mean / median / worst at \
+         each value | values chosen by the folds | held-out mean / median / worst | configured: \
+         mean / median / worst |\n|---|---|---|---|---|---|\n",
+    );
+    for r in results {
+        let stats = |x: &[f64]| {
+            let mut s = x.to_vec();
+            let med = super::tables::median(&mut s);
+            let mean = s.iter().sum::<f64>() / s.len().max(1) as f64;
+            let worst = s.last().copied().unwrap_or(f64::NAN);
+            format!("{mean:.2} / {med:.2} / {worst:.2}")
+        };
+        let per_value: Vec<String> = r
+            .values
+            .iter()
+            .zip(&r.rms_pct)
+            .map(|(v, x)| format!("{v}: {}", stats(x)))
+            .collect();
+        let h = held_out(r);
+        let mut chosen: Vec<usize> = h.picks.clone();
+        chosen.sort_unstable();
+        chosen.dedup();
+        let chosen: Vec<String> = chosen
+            .iter()
+            .map(|&v| {
+                let n = h.picks.iter().filter(|&&p| p == v).count();
+                format!("{} ({n})", r.values[v])
+            })
+            .collect();
+        let configured = r
+            .values
+            .iter()
+            .position(|v| *v == r.configured)
+            .map_or_else(|| "not swept".to_owned(), |v| stats(&r.rms_pct[v]));
+        let _ = writeln!(
+            md,
+            "| `{}` | {} | {} | {} | {} | {} |",
+            r.key,
+            r.configured,
+            per_value.join("; "),
+            chosen.join(", "),
+            stats(&h.rms_pct),
+            configured
+        );
+    }
+    md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn result(rms: Vec<Vec<f64>>) -> SweepResult {
+        SweepResult {
+            key: "heading.sigma_deg".into(),
+            configured: "3.0".into(),
+            values: vec!["2.0".into(), "3.0".into()],
+            walks: (0..rms[0].len()).map(|k| format!("w{k}")).collect(),
+            rms_pct: rms,
+        }
+    }
+
+    #[test]
+    fn each_fold_picks_without_its_walk() {
+        // Value 0 is better on every walk but the last, where it is far worse: the folds that
+        // keep the last walk pick value 1, the fold without it picks value 0.
+        let r = result(vec![vec![0.2, 0.2, 0.2, 3.0], vec![0.3, 0.3, 0.3, 0.5]]);
+        let h = held_out(&r);
+        assert_eq!(h.picks, [1, 1, 1, 0]);
+        assert_eq!(h.rms_pct, [0.3, 0.3, 0.3, 3.0]);
+        let md = sweep_markdown(&[r]);
+        assert!(md.contains("2.0 (1), 3.0 (3)"), "{md}");
+    }
+
+    #[test]
+    fn a_value_is_set_by_section_and_key_and_a_wrong_key_is_named() {
+        let file = ConfigFile::default();
+        let f = with_value(&file, "heading.sigma_deg", &toml::Value::Float(2.5)).unwrap();
+        assert_eq!(f.heading.sigma_deg, Some(2.5));
+        assert_eq!(configured(&f, "heading.sigma_deg").unwrap(), "2.5");
+        assert_eq!(configured(&file, "heading.sigma_deg").unwrap(), "default");
+        let e = with_value(&file, "heading.sigma", &toml::Value::Float(2.5)).unwrap_err();
+        assert!(e.contains("heading.sigma"), "{e}");
+        let e =
+            with_value(&file, "heading.sigma_deg", &toml::Value::String("x".into())).unwrap_err();
+        assert!(e.contains("heading.sigma_deg"), "{e}");
+        assert!(with_value(&file, "sigma_deg", &toml::Value::Float(1.0)).is_err());
+    }
+}
