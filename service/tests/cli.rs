@@ -351,3 +351,80 @@ fn run_starts_from_a_checkpoint_as_the_daemon_does_and_names_a_missing_one() {
         "{err}"
     );
 }
+
+#[test]
+fn eval_sweep_reports_each_value_and_names_a_bad_key() {
+    // A two-walk suite (paths absolute, so the suite can live in a temporary directory) and a
+    // sweep of one parameter over two values.
+    let out = tmp("sweep");
+    std::fs::create_dir_all(&*out).unwrap();
+    let mut suite = String::new();
+    for walk in ["gdins_exp17_rect_loop_small", "gdins_exp18_rect_loop"] {
+        let d = root().join("tests/data").join(walk);
+        suite += &format!(
+            "[[recording]]\nname = \"{walk}\"\nimu = {:?}\ntruth = {:?}\nconfig = {:?}\n\
+             start_heading_deg = 0.0\n\n",
+            d.join("imu.csv"),
+            d.join("ground_truth.csv"),
+            root().join("configs/gdins.toml"),
+        );
+    }
+    let suite_path = out.join("suite.toml");
+    std::fs::write(&suite_path, suite).unwrap();
+    let sweep = out.join("sweep.toml");
+    std::fs::write(
+        &sweep,
+        "[[parameter]]\nkey = \"heading.sigma_deg\"\nvalues = [2.0, 3.0]\n",
+    )
+    .unwrap();
+    let o = corridor(&[
+        "eval",
+        "--suite",
+        suite_path.to_str().unwrap(),
+        "--sweep",
+        sweep.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let md = std::fs::read_to_string(out.join("sweep.md")).unwrap();
+    let row = md
+        .lines()
+        .find(|l| l.starts_with("| `heading.sigma_deg`"))
+        .unwrap_or_else(|| panic!("{md}"));
+    // The configured value (3.0) and both swept values with their figures; two folds.
+    assert!(
+        row.contains("| 3.0 |") && row.contains("2.0: ") && row.contains("3.0: "),
+        "{row}"
+    );
+    let folds: usize = row
+        .split('|')
+        .nth(4)
+        .unwrap()
+        .split(['(', ')'])
+        .skip(1)
+        .step_by(2)
+        .map(|n| n.trim().parse::<usize>().unwrap())
+        .sum();
+    assert_eq!(folds, 2, "{row}");
+    // A key that is not in the configuration is named once, with the file.
+    std::fs::write(
+        &sweep,
+        "[[parameter]]\nkey = \"heading.sigma\"\nvalues = [2.0]\n",
+    )
+    .unwrap();
+    let o = corridor(&[
+        "eval",
+        "--suite",
+        suite_path.to_str().unwrap(),
+        "--sweep",
+        sweep.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("sweep.toml") && err.contains("heading.sigma"),
+        "{err}"
+    );
+    assert_eq!(err.matches("heading.sigma").count(), 1, "{err}");
+}
