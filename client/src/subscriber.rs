@@ -2,7 +2,7 @@
 
 use crate::ClientError;
 use corridor_shared::services::{Access, Domain, PubSub, ServiceError, Topic};
-use iceoryx2::port::listener::Listener;
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::prelude::*;
 use std::cell::Cell;
 use std::time::{Duration, Instant};
@@ -135,12 +135,12 @@ impl<T: Topic> Subscriber<T> {
             if now >= deadline {
                 return Ok(None);
             }
-            if let Err(e) = self.listener.timed_wait(|_| {}, deadline - now) {
-                return Err(if self.termination_requested() {
-                    ClientError::Interrupted
-                } else {
-                    ServiceError::io(&self.domain, T::SERVICE, "wait", e).into()
-                });
+            match self.listener.timed_wait(|_| {}, deadline - now) {
+                Ok(_) => {}
+                Err(_) if self.termination_requested() => return Err(ClientError::Interrupted),
+                // Another signal interrupted the wait (SIGCONT after Ctrl-Z): wait on.
+                Err(ListenerWaitError::InterruptSignal) => {}
+                Err(e) => return Err(ServiceError::io(&self.domain, T::SERVICE, "wait", e).into()),
             }
             if self.termination_requested() {
                 return Err(ClientError::Interrupted);

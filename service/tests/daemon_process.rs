@@ -324,3 +324,43 @@ fn second_daemon_on_the_same_domain_is_refused() {
     assert!(status.success());
     cleanup_domain(name);
 }
+
+#[test]
+fn stop_and_continue_leave_the_daemon_running() {
+    // Ctrl-Z then `fg` (SIGSTOP, SIGCONT): the interrupted wait of the receive thread is not
+    // an error; the daemon goes on receiving and stops cleanly on SIGTERM.
+    let name = "test_daemon_stop_cont";
+    cleanup_domain(name);
+    let dir = TempDir::new("test-daemon-stop-cont");
+    let config = write_config(&dir);
+    let domain = Domain::new(name).unwrap();
+    let child = serve(&config, name, &dir.join("c.bin"), &dir.join("daemon.log"));
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    assert!(diag.recv_timeout(WAIT).unwrap().is_some(), "daemon up");
+    let pid = i32::try_from(child.id()).unwrap();
+    for _ in 0..5 {
+        // SAFETY: plain kill(2) on our own child.
+        assert_eq!(unsafe { libc::kill(pid, libc::SIGSTOP) }, 0);
+        std::thread::sleep(Duration::from_millis(200));
+        // SAFETY: as above.
+        assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    let att = Subscriber::<AttitudeSample>::open(&domain, "test-att", WAIT).unwrap();
+    let mut p = Producer::open(&domain, "test-producer", Some(Delivery::Live)).unwrap();
+    p.wait_for_daemon(WAIT).unwrap();
+    let log = exp36();
+    for r in &log.rows[..2000] {
+        p.send_imu(ImuSample::from(r)).unwrap();
+    }
+    assert!(
+        att.recv_timeout(WAIT).unwrap().is_some(),
+        "the daemon estimates after the stops: {}",
+        std::fs::read_to_string(dir.join("daemon.log")).unwrap_or_default()
+    );
+    drop((att, diag));
+    let (status, out) = terminate(child);
+    assert!(status.success(), "{status:?} {out}");
+    drop(p);
+    cleanup_domain(name);
+}

@@ -6,6 +6,7 @@ use super::{DaemonConfig, DaemonError};
 use corridor_shared::services::{Access, Delivery, ServiceError, Topic};
 use corridor_shared::wire::{ANGLE_HEADING, ANGLE_PITCH, ANGLE_ROLL, AngleObservation, ImuSample};
 use crossbeam_channel::TrySendError;
+use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -84,9 +85,12 @@ pub(super) fn rx_thread(
     // earlier life was receiving, is counted in `missing_at_restart`.
     let mut first_of_life = true;
     while !stopping() {
-        listener
-            .timed_wait(|_| {}, cfg.poll_timeout)
-            .map_err(|e| ServiceError::io(d, ImuSample::SERVICE, "wait", e))?;
+        match listener.timed_wait(|_| {}, cfg.poll_timeout) {
+            // A signal interrupted the wait (SIGCONT after a SIGSTOP, Ctrl-Z then `fg`): a
+            // stop request is in `stopping()`, anything else just continues.
+            Ok(_) | Err(ListenerWaitError::InterruptSignal) => {}
+            Err(e) => return Err(ServiceError::io(d, ImuSample::SERVICE, "wait", e).into()),
+        }
         while let Some(obs) = angles
             .receive()
             .map_err(|e| ServiceError::io(d, AngleObservation::SERVICE, "receive", e))?
