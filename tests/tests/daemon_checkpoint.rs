@@ -35,7 +35,7 @@ fn restart_warm_starts_from_the_saved_bias() {
         true,
     );
     let got = until_end(&bias, |b| b.flags);
-    producer.join().unwrap();
+    producer.join();
     drop(bias);
     let report = daemon.stop();
     assert!(report.warm_started_from.is_none(), "first start is cold");

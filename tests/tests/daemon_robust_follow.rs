@@ -7,7 +7,8 @@
 mod daemon_common;
 
 use corridor_client::record::{RecordOptions, Recorder};
-use corridor_client::{Delivery, Domain};
+use corridor_client::{Delivery, Domain, Subscriber};
+use corridor_shared::wire::AttitudeSample;
 use daemon_common::*;
 use std::sync::atomic::AtomicBool;
 
@@ -24,7 +25,9 @@ fn a_logger_follows_the_new_stream_of_a_restarted_producer() {
     let opts = RecordOptions {
         node_name: "test-robust-log".into(),
         wait: WAIT,
-        idle_timeout: std::time::Duration::from_secs(2),
+        // The recording ends on this idle time after the second stream (2 s was short for a new
+        // stream's first attitude on a loaded machine).
+        idle_timeout: std::time::Duration::from_secs(5),
         idle_before_first: true,
         poll: std::time::Duration::from_millis(50),
     };
@@ -41,6 +44,7 @@ fn a_logger_follows_the_new_stream_of_a_restarted_producer() {
         })
     };
     ready.recv().unwrap();
+    let watch = Subscriber::<AttitudeSample>::open(&domain, "test-robust-watch", WAIT).unwrap();
     let rows = exp36_rows();
     // Two lives of a producer: each sends its part and its end-of-stream marker.
     let first = produce(
@@ -50,7 +54,9 @@ fn a_logger_follows_the_new_stream_of_a_restarted_producer() {
         rows[..3000].to_vec(),
         true,
     );
-    let s1 = first.join().unwrap();
+    // Each producer stays alive until the daemon has taken its stream (see `Produced`).
+    until_end(&watch, |a| a.flags);
+    let s1 = first.join();
     let second = produce(
         &domain,
         "test-replay",
@@ -58,7 +64,8 @@ fn a_logger_follows_the_new_stream_of_a_restarted_producer() {
         rows[3000..6000].to_vec(),
         true,
     );
-    let s2 = second.join().unwrap();
+    until_end(&watch, |a| a.flags);
+    let s2 = second.join();
     let got = logger.join().unwrap();
     daemon.stop();
     assert_eq!((s1.imu_sent, s2.imu_sent), (3001, 3001));

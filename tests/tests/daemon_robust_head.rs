@@ -22,6 +22,8 @@ fn samples_missing_at_the_head_of_a_stream_are_counted() {
     let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
     let attitude = Subscriber::<AttitudeSample>::open(&domain, "test-robust-att", WAIT).unwrap();
     let rows = exp36_rows();
+    // The producer stays alive until both streams were taken (see `Produced`).
+    let (release, released) = std::sync::mpsc::channel::<()>();
     let producer = {
         let (domain, rows) = (domain.clone(), rows[..2000].to_vec());
         std::thread::spawn(move || {
@@ -41,11 +43,13 @@ fn samples_missing_at_the_head_of_a_stream_are_counted() {
                 seq += 1;
             }
             p.finish().unwrap();
+            let _ = released.recv_timeout(WAIT);
             p.stats()
         })
     };
     let _ = until_end(&attitude, |a| a.flags);
     let _ = until_end(&attitude, |a| a.flags);
+    let _ = release.send(());
     let stats = producer.join().unwrap();
     let report = daemon.stop();
     let d = report.diagnostics;

@@ -20,7 +20,9 @@ fn a_consumer_that_stops_reading_does_not_stall_the_others() {
     cleanup_domain(name);
     let domain = Domain::new(name).unwrap();
     let mut dcfg = daemon_config(&domain, Delivery::Lossless);
-    dcfg.stall_timeout = std::time::Duration::from_millis(200);
+    // Long enough that the reading consumer (this thread) is never taken for stalled when the
+    // machine is loaded; the stuck one costs this wait once.
+    dcfg.stall_timeout = std::time::Duration::from_secs(3);
     let daemon = Running::start(dcfg);
     let reader = Subscriber::<AttitudeSample>::open(&domain, "test-robust-reader", WAIT).unwrap();
     let stuck = Subscriber::<AttitudeSample>::open(&domain, "test-robust-stuck", WAIT).unwrap();
@@ -30,7 +32,7 @@ fn a_consumer_that_stops_reading_does_not_stall_the_others() {
     let sent = rows.len();
     let producer = produce(&domain, "test-replay", Delivery::Lossless, rows, true);
     let got = until_end(&reader, |a| a.flags);
-    let stats = producer.join().unwrap();
+    let stats = producer.join();
     let mut drained = 0u64;
     while stuck.try_recv().unwrap().is_some() {
         drained += 1;

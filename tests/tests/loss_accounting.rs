@@ -53,10 +53,16 @@ struct Daemon {
 
 impl Daemon {
     fn start(domain: &str, delivery: Delivery, log: &Path) -> Self {
+        // The sensor configuration with a stall timeout a loaded machine cannot reach with a
+        // reading logger (the default 1 s could drop one, and its loss would be counted).
+        let mut config = std::fs::read_to_string(manifest().join("../configs/gdins.toml")).unwrap();
+        config.push_str("\n[daemon]\nstall_timeout_s = 10.0\n");
+        let config_path = log.with_extension("toml");
+        std::fs::write(&config_path, config).unwrap();
         let child = Command::new(corridor_bin())
             .args(["serve", "--domain", domain, "--delivery", delivery.name()])
             .arg("--config")
-            .arg(manifest().join("../configs/gdins.toml"))
+            .arg(&config_path)
             .env("RUST_LOG", "info")
             .env_remove("CORRIDOR_RUNTIME_DIR")
             .stdin(Stdio::null())
@@ -308,6 +314,7 @@ fn samples_sent_before_the_daemon_are_counted_at_its_head() {
             Step::WaitForDaemon,
             Step::Send(rows[early..].to_vec()),
             Step::Finish,
+            Step::Pause,
         ],
     );
     paused.recv().unwrap();
@@ -315,8 +322,12 @@ fn samples_sent_before_the_daemon_are_counted_at_its_head() {
     let daemon = Daemon::start(domain.name(), Delivery::Live, &dir.join("daemon.log"));
     let logger = start_logger(&domain, &dir, "log");
     go.send(()).unwrap();
-    let stats = producer.join().unwrap();
+    // The producer stays until the logger saw the end of stream (a live publisher dropped before
+    // the daemon attached its side of the connection takes its queued samples with it).
+    paused.recv().unwrap();
     let got = logger.join().unwrap();
+    go.send(()).unwrap();
+    let stats = producer.join().unwrap();
     let r = daemon.terminate();
     check_sums(
         "head loss",
@@ -350,16 +361,21 @@ fn daemon_restart_mid_stream(name: &'static str, kill: bool) {
             Step::Pause,
             Step::Send(rows[5000..].to_vec()),
             Step::Finish,
+            Step::Pause,
         ],
     );
     paused.recv().unwrap();
-    // The first life has received part of the stream before it goes: on a loaded machine the
+    // The first life has taken the first part before it goes: on a loaded machine the
     // producer can send all 4000 before the daemon is scheduled, and a daemon killed before
-    // its first sample rightly counts the whole head as missing (no first life to continue).
-    watch
+    // its first sample rightly counts the whole head as missing (no first life to continue);
+    // killed while still receiving, it can misplace the one sample between two stores.
+    while watch
         .recv_timeout(WAIT)
         .unwrap()
-        .expect("an attitude of the first life");
+        .expect("an attitude of the first life")
+        .imu_seq
+        < 3999
+    {}
     drop(watch);
     let first_life = if kill {
         daemon.kill();
@@ -371,8 +387,11 @@ fn daemon_restart_mid_stream(name: &'static str, kill: bool) {
     paused.recv().unwrap();
     let daemon = Daemon::start(domain.name(), Delivery::Live, &dir.join("daemon-2.log"));
     go.send(()).unwrap();
-    let stats = producer.join().unwrap();
+    // The producer stays until the logger saw the end of stream (see the head-loss test).
+    paused.recv().unwrap();
     let got = logger.join().unwrap();
+    go.send(()).unwrap();
+    let stats = producer.join().unwrap();
     let r = daemon.terminate();
     let scenario = if kill {
         "daemon SIGKILL + restart"
@@ -416,10 +435,21 @@ fn a_restarted_producer_starts_a_new_numbering_and_nothing_is_lost() {
     let rows = exp36_rows();
     let daemon = Daemon::start(domain.name(), Delivery::Lossless, &dir.join("daemon.log"));
     let logger = start_logger(&domain, &dir, "log");
-    let (first, _, _) = start_producer(
+    let watch = Subscriber::<AttitudeSample>::open(&domain, "test-loss-watch", WAIT).unwrap();
+    let (first, paused, go) = start_producer(
         &domain,
-        vec![Step::WaitForDaemon, Step::Send(rows[..3000].to_vec())],
+        vec![
+            Step::WaitForDaemon,
+            Step::Send(rows[..3000].to_vec()),
+            Step::Pause,
+        ],
     );
+    // The first producer goes only once the daemon has taken its samples: a publisher dropped
+    // before the daemon attached its side of the connection takes its queued samples with it.
+    paused.recv().unwrap();
+    while watch.recv_timeout(WAIT).unwrap().expect("attitude").imu_seq < 2999 {}
+    drop(watch);
+    go.send(()).unwrap();
     let s1 = first.join().unwrap();
     let (second, _, _) = start_producer(
         &domain,

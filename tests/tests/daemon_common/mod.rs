@@ -46,6 +46,9 @@ pub fn daemon_config(domain: &Domain, delivery: Delivery) -> DaemonConfig {
     let aid = heading_aid(&cfg, None).unwrap();
     let mut d = DaemonConfig::new(domain.clone(), cfg, aid);
     d.delivery = delivery;
+    // A lossless consumer counts as stalled after this long without reading: the default 1 s
+    // can pass for a reading test thread on a loaded machine. Tests of stalls set their own.
+    d.stall_timeout = std::time::Duration::from_secs(10);
     d
 }
 
@@ -131,17 +134,36 @@ pub fn temp_dir(tag: &str) -> TempDir {
     TempDir(d)
 }
 
+/// A producer on its own thread (from [`produce`]). It stays alive after its last send until
+/// [`Produced::join`]: iceoryx2 0.10 attaches the daemon's side of a new connection only when the
+/// daemon's receive thread next runs, and a publisher dropped before that takes every sample still
+/// queued with it (the sends had reported a receiver). Join once the daemon has taken the stream
+/// (its end-of-stream outputs arrived).
+pub struct Produced {
+    handle: JoinHandle<corridor_client::ProducerStats>,
+    release: std::sync::mpsc::Sender<()>,
+}
+
+impl Produced {
+    /// Lets the producer go and returns its stats.
+    pub fn join(self) -> corridor_client::ProducerStats {
+        let _ = self.release.send(());
+        self.handle.join().unwrap()
+    }
+}
+
 /// Sends `rows` (then, if `finish`, the end-of-stream marker) from a producer created on a new
-/// thread (iceoryx2 ports are `!Send`); returns the producer's stats.
+/// thread (iceoryx2 ports are `!Send`); [`Produced::join`] returns the producer's stats.
 pub fn produce(
     domain: &Domain,
     node: &'static str,
     delivery: Delivery,
     rows: Vec<ImuRow>,
     finish: bool,
-) -> JoinHandle<corridor_client::ProducerStats> {
+) -> Produced {
     let domain = domain.clone();
-    std::thread::Builder::new()
+    let (release, released) = std::sync::mpsc::channel::<()>();
+    let handle = std::thread::Builder::new()
         .name(node.into())
         .spawn(move || {
             let mut p = Producer::new(&domain, node, delivery).unwrap();
@@ -152,9 +174,11 @@ pub fn produce(
             if finish {
                 p.finish().unwrap();
             }
+            let _ = released.recv_timeout(WAIT);
             p.stats()
         })
-        .unwrap()
+        .unwrap();
+    Produced { handle, release }
 }
 
 /// Receives until a message carrying [`FLAG_END_OF_STREAM`] (included in the result).
@@ -238,7 +262,7 @@ pub fn first_aligned_bias(
     let rows = exp36_rows()[..n].to_vec();
     let producer = produce(domain, "test-replay", Delivery::Lossless, rows, true);
     let got = until_end(&bias, |b| b.flags);
-    producer.join().unwrap();
+    producer.join();
     let report = daemon.stop();
     let first = *got
         .iter()
