@@ -40,7 +40,7 @@ pub mod subscriber;
 pub mod track;
 
 pub use corridor_shared::services::{Delivery, Domain, ServiceError};
-pub use producer::{Producer, ProducerStats};
+pub use producer::{END_ACK_WAIT, Producer, ProducerStats};
 pub use record::Recorder;
 pub use replay::replay;
 pub use subscriber::Subscriber;

@@ -2,9 +2,10 @@
 
 use crate::ClientError;
 use corridor_shared::services::{
-    ANGLES_SERVICE, Delivery, Domain, IMU_SERVICE, PubSub, ServiceError,
+    ANGLES_SERVICE, Delivery, Domain, IMU_ACK_SERVICE, IMU_SERVICE, PubSub, ServiceError,
 };
 use corridor_shared::wire::{AngleObservation, FLAG_END_OF_STREAM, ImuSample, monotonic_ns};
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::update_connections::UpdateConnections;
@@ -21,6 +22,9 @@ const LOSSLESS_RETRY: Duration = Duration::from_secs(2);
 /// in place, cause not found; a delay in the first send made it disappear).
 pub const SETTLE: Duration = Duration::from_millis(100);
 
+/// How long [`Producer::finish`] waits for the daemon to acknowledge the end of the stream.
+pub const END_ACK_WAIT: Duration = Duration::from_secs(5);
+
 /// What a [`Producer`] has sent so far.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ProducerStats {
@@ -34,6 +38,10 @@ pub struct ProducerStats {
     pub angles_undelivered: u64,
     /// Sends repeated because a connected subscriber was not attached yet (lossless only).
     pub retries: u64,
+    /// End-of-stream markers the daemon did not acknowledge within [`END_ACK_WAIT`] of
+    /// [`Producer::close`] although a subscriber received them: that stream may not have been
+    /// taken.
+    pub ends_unacknowledged: u64,
 }
 
 /// Publishes IMU samples and angle observations to the daemon of a domain and notifies it.
@@ -48,6 +56,10 @@ pub struct Producer {
     imu_notifier: Notifier<ipc::Service>,
     angles: Publisher<ipc::Service, AngleObservation, ()>,
     angles_notifier: Notifier<ipc::Service>,
+    /// The daemon's acknowledgements of end-of-stream markers.
+    ack: Listener<ipc::Service>,
+    /// A marker was received by a subscriber and its acknowledgement not yet seen.
+    awaiting_ack: bool,
     next_imu_seq: u64,
     next_angles_seq: u64,
     stats: ProducerStats,
@@ -107,6 +119,11 @@ impl Producer {
             .notifier_builder()
             .create()
             .map_err(|e| ServiceError::port(domain, ANGLES_SERVICE, "notifier", e))?;
+        let ack = domain
+            .open_event(&node, IMU_ACK_SERVICE, true)?
+            .listener_builder()
+            .create()
+            .map_err(|e| ServiceError::port(domain, IMU_ACK_SERVICE, "listener", e))?;
         Ok(Self {
             domain: domain.clone(),
             delivery,
@@ -115,6 +132,8 @@ impl Producer {
             imu_notifier,
             angles,
             angles_notifier,
+            ack,
+            awaiting_ack: false,
             next_imu_seq: 0,
             next_angles_seq: 0,
             stats: ProducerStats::default(),
@@ -187,14 +206,62 @@ impl Producer {
     }
 
     /// Sends the end-of-stream marker (a data-less [`ImuSample`] with [`FLAG_END_OF_STREAM`]):
-    /// the daemon answers with end-of-stream outputs and resets its estimator.
+    /// the daemon answers with end-of-stream outputs, resets its estimator and acknowledges the
+    /// marker on [`IMU_ACK_SERVICE`]. [`Producer::close`] (or dropping the producer) waits for
+    /// that acknowledgement.
     pub fn finish(&mut self) -> Result<usize, ClientError> {
-        self.send_imu(ImuSample {
+        // Acknowledgements of earlier markers (of this producer or another one) are stale.
+        self.ack
+            .try_wait(|_| {})
+            .map_err(|e| ServiceError::io(&self.domain, IMU_ACK_SERVICE, "wait", e))?;
+        let n = self.send_imu(ImuSample {
             t_s: f64::NAN,
             temp_c: f64::NAN,
             flags: FLAG_END_OF_STREAM,
             ..ImuSample::default()
-        })
+        })?;
+        self.awaiting_ack |= n > 0;
+        Ok(n)
+    }
+
+    /// Lets the producer go once the daemon has taken the stream: after [`Producer::finish`],
+    /// waits up to [`END_ACK_WAIT`] for the daemon's acknowledgement, and returns the final
+    /// stats (no acknowledgement in time: [`ProducerStats::ends_unacknowledged`]). iceoryx2 0.10
+    /// attaches the daemon's side of a connection only when the daemon next receives, and a
+    /// publisher dropped before that takes the samples still queued with it. Dropping the
+    /// producer waits the same way, and logs a missing acknowledgement.
+    pub fn close(mut self) -> Result<ProducerStats, ClientError> {
+        self.settle_end()?;
+        Ok(self.stats)
+    }
+
+    /// The wait of [`Producer::close`].
+    fn settle_end(&mut self) -> Result<(), ClientError> {
+        if std::mem::take(&mut self.awaiting_ack) && !self.wait_for_ack(END_ACK_WAIT)? {
+            self.stats.ends_unacknowledged += 1;
+        }
+        Ok(())
+    }
+
+    /// Waits up to `timeout` for the daemon's end-of-stream acknowledgement.
+    fn wait_for_ack(&self, timeout: Duration) -> Result<bool, ClientError> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let now = Instant::now();
+            if now >= deadline {
+                return Ok(false);
+            }
+            match self.ack.timed_wait(|_| {}, deadline - now) {
+                Ok(n) if n > 0 => return Ok(true),
+                Ok(_) => {}
+                Err(_) if self.termination_requested() => return Err(ClientError::Interrupted),
+                // Another signal interrupted the wait (SIGCONT after Ctrl-Z): wait on.
+                Err(ListenerWaitError::InterruptSignal) => {}
+                Err(e) => {
+                    return Err(ServiceError::io(&self.domain, IMU_ACK_SERVICE, "wait", e).into());
+                }
+            }
+        }
     }
 
     /// Sends one angle observation with the next sequence number.
@@ -228,6 +295,21 @@ impl Producer {
     /// True once SIGINT or SIGTERM was received by this process.
     pub fn termination_requested(&self) -> bool {
         self.node.wait(Duration::ZERO).is_err()
+    }
+}
+
+impl Drop for Producer {
+    fn drop(&mut self) {
+        let before = self.stats.ends_unacknowledged;
+        match self.settle_end() {
+            Ok(()) if self.stats.ends_unacknowledged > before => tracing::warn!(
+                domain = self.domain.name(),
+                "the daemon did not acknowledge the end of the stream within {END_ACK_WAIT:?}: \
+                 samples still queued may be lost"
+            ),
+            Ok(()) => {}
+            Err(e) => tracing::warn!(domain = self.domain.name(), "closing the producer: {e}"),
+        }
     }
 }
 

@@ -114,9 +114,11 @@ pub fn replay(
         }
     }
     p.finish()?;
-    let stats = p.stats();
+    let delivery = p.delivery();
+    // Waits until the daemon has taken the stream (see `Producer::close`).
+    let stats = p.close()?;
     Ok(Replayed {
-        delivery: p.delivery(),
+        delivery,
         samples: stats.imu_sent.saturating_sub(1),
         stats,
         interrupted,

@@ -1,7 +1,7 @@
 //! [`Subscriber<T>`]: one output stream of the daemon.
 
 use crate::ClientError;
-use corridor_shared::services::{Access, Domain, PubSub, ServiceError, Topic};
+use corridor_shared::services::{Access, Domain, PubSub, ServiceError, Topic, node_sleep};
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::prelude::*;
 use std::cell::Cell;
@@ -66,7 +66,7 @@ impl<T: Topic> Subscriber<T> {
             match attempt {
                 Ok(x) => break x,
                 Err(ServiceError::NotFound { .. }) if start.elapsed() < timeout => {
-                    if node.wait(Duration::from_millis(10)).is_err() {
+                    if !node_sleep(&node, Duration::from_millis(10)) {
                         return Err(ClientError::Interrupted);
                     }
                 }
@@ -88,7 +88,7 @@ impl<T: Topic> Subscriber<T> {
             if start.elapsed() >= timeout {
                 return Err(no_peer());
             }
-            if node.wait(Duration::from_millis(5)).is_err() {
+            if !node_sleep(&node, Duration::from_millis(5)) {
                 return Err(ClientError::Interrupted);
             }
         }

@@ -346,7 +346,12 @@ fn stop_and_continue_leave_the_daemon_running() {
         assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
         std::thread::sleep(Duration::from_millis(200));
     }
-    let att = Subscriber::<AttitudeSample>::open(&domain, "test-att", WAIT).unwrap();
+    let att = Subscriber::<AttitudeSample>::open(&domain, "test-att", WAIT).unwrap_or_else(|e| {
+        panic!(
+            "{e}; daemon log: {}",
+            std::fs::read_to_string(dir.join("daemon.log")).unwrap_or_default()
+        )
+    });
     let mut p = Producer::open(&domain, "test-producer", Some(Delivery::Live)).unwrap();
     p.wait_for_daemon(WAIT).unwrap();
     let log = exp36();
@@ -362,5 +367,49 @@ fn stop_and_continue_leave_the_daemon_running() {
     let (status, out) = terminate(child);
     assert!(status.success(), "{status:?} {out}");
     drop(p);
+    cleanup_domain(name);
+}
+
+#[test]
+fn a_short_stream_sent_while_the_daemon_is_held_is_not_lost() {
+    // A producer that sends a short stream and goes while the daemon has not yet received
+    // anything from it (here: the daemon stopped with SIGSTOP; in the field: a busy machine).
+    // iceoryx2 0.10 attaches the daemon's side of the connection only when the daemon next
+    // receives, and a publisher dropped before that took its queued samples with it: before
+    // `finish` waited for the daemon's acknowledgement, the daemon received 0 of these 501.
+    let name = "test_daemon_held";
+    cleanup_domain(name);
+    let dir = TempDir::new("test-daemon-held");
+    let config = write_config(&dir);
+    let domain = Domain::new(name).unwrap();
+    let child = serve(&config, name, &dir.join("h.bin"), &dir.join("daemon.log"));
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    assert!(diag.recv_timeout(WAIT).unwrap().is_some(), "daemon up");
+    drop(diag);
+    let pid = i32::try_from(child.id()).unwrap();
+    // SAFETY: plain kill(2) on our own child.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGSTOP) }, 0);
+    let resume = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(500));
+        // SAFETY: as above.
+        assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
+    });
+    let log = exp36();
+    let stats = {
+        let mut p = Producer::open(&domain, "test-short", None).unwrap();
+        p.wait_for_daemon(WAIT).unwrap();
+        for r in &log.rows[..500] {
+            p.send_imu(ImuSample::from(r)).unwrap();
+        }
+        p.finish().unwrap();
+        p.close().unwrap()
+    }; // the producer is gone here
+    resume.join().unwrap();
+    assert_eq!((stats.imu_sent, stats.imu_undelivered), (501, 0));
+    assert_eq!(stats.ends_unacknowledged, 0, "{stats:?}");
+    let (status, out) = terminate(child);
+    assert!(status.success(), "{status:?}");
+    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(report["received"], 501, "{out}");
     cleanup_domain(name);
 }

@@ -14,6 +14,13 @@ from .wire import FLAG_END_OF_STREAM, AngleObservation, ImuSample
 #: connected (its receive side not attached yet), s.
 LOSSLESS_RETRY_S = 2.0
 
+#: Event service on which the daemon acknowledges an end-of-stream marker (the Rust
+#: `IMU_ACK_SERVICE`).
+IMU_ACK_SERVICE = "corridor/v2/imu_ack"
+
+#: How long `finish` waits for that acknowledgement, s (the Rust `END_ACK_WAIT`).
+END_ACK_WAIT_S = 5.0
+
 
 class Producer:
     """Publishes `ImuSample`s (and `AngleObservation`s) to the daemon of a domain.
@@ -63,10 +70,13 @@ class Producer:
         self._angles_notifier = (
             domain.event(self.node, AngleObservation.SERVICE).notifier_builder().create()
         )
+        self._ack = domain.event(self.node, IMU_ACK_SERVICE).listener_builder().create()
         self.next_seq = 0
         self.next_angles_seq = 0
         self.sent = 0
         self.undelivered = 0
+        self.ends_unacknowledged = 0
+        self._awaiting_ack = False
 
     def wait_for_daemon(self, timeout_s: float = 10.0) -> None:
         """Waits until the daemon reads the IMU service."""
@@ -126,16 +136,39 @@ class Producer:
         return n
 
     def finish(self) -> int:
-        """Sends the end-of-stream marker: the daemon answers and resets for the next stream."""
+        """Sends the end-of-stream marker: the daemon answers, resets for the next stream and
+        acknowledges the marker; `close` waits for that acknowledgement."""
+        self._ack.try_wait()  # stale acknowledgements of earlier markers
         s = ImuSample()
         s.t_s = math.nan
         s.temp_c = math.nan
         s.flags = FLAG_END_OF_STREAM
-        return self.send_sample(s)
+        n = self.send_sample(s)
+        self._awaiting_ack = self._awaiting_ack or n > 0
+        return n
 
     def close(self) -> None:
-        """Releases the ports and the node."""
-        for port in (self._imu, self._imu_notifier, self._angles, self._angles_notifier):
+        """Waits up to `END_ACK_WAIT_S` for the daemon to acknowledge a marker sent by `finish`
+        (no acknowledgement in time: `ends_unacknowledged`), then releases the ports and the
+        node. iceoryx2 0.10 attaches the daemon's side of a connection only when the daemon next
+        receives; a publisher closed before that takes its queued samples with it."""
+        if self._awaiting_ack:
+            self._awaiting_ack = False
+            deadline = time.monotonic() + END_ACK_WAIT_S
+            while True:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    self.ends_unacknowledged += 1
+                    break
+                if self._ack.timed_wait(iox2.Duration.from_secs_f64(left)):
+                    break
+        for port in (
+            self._imu,
+            self._imu_notifier,
+            self._angles,
+            self._angles_notifier,
+            self._ack,
+        ):
             port.delete()
         self._imu_service = self._angles_service = None
         self.node = None

@@ -114,7 +114,9 @@ class Daemon(unittest.TestCase):
         final = list(biases[-1].gyro_bias_rad_s)
         self.assertEqual(final, self.offline_final_bias())
         self.assertEqual(list(attitudes[-2].gyro_bias_rad_s), final)
-        for c in (producer, attitude, bias):
+        producer.close()
+        self.assertEqual(producer.ends_unacknowledged, 0, "the daemon took the stream's end")
+        for c in (attitude, bias):
             c.close()
 
     def test_the_driver_example_feeds_the_daemon(self) -> None:

@@ -103,6 +103,14 @@ fn run() -> Result<()> {
         s.imu_undelivered
     );
     println!("lossless retries: {}", s.retries);
+    println!(
+        "end of stream acknowledged by the daemon: {}",
+        if s.ends_unacknowledged == 0 {
+            "yes"
+        } else {
+            "no"
+        }
+    );
     println!("rows rejected by the CSV reader: {}", log.rejected.len());
     println!("elapsed: {:.3} s ({rate:.0} samples/s)", r.elapsed_s);
     if s.imu_undelivered > 0 {
@@ -111,6 +119,13 @@ fn run() -> Result<()> {
             s.imu_undelivered,
             s.imu_sent,
             domain.name()
+        );
+    }
+    if s.ends_unacknowledged > 0 {
+        eprintln!(
+            "warning: the daemon did not acknowledge the end of the stream within {} s: the \
+             samples still queued when this replay ended may be lost",
+            corridor_client::END_ACK_WAIT.as_secs()
         );
     }
     Ok(())

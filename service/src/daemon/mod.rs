@@ -423,7 +423,7 @@ pub fn shutdown_on_signal(
             }
         };
         while !shutdown.load(Ordering::Relaxed) {
-            if node.wait(Duration::from_millis(100)).is_err() {
+            if !corridor_shared::services::node_sleep(&node, Duration::from_millis(100)) {
                 tracing::info!("termination requested");
                 shutdown.store(true, Ordering::Relaxed);
             }

@@ -3,7 +3,7 @@
 
 use super::state::{load_opt, store_opt};
 use super::{DaemonConfig, DaemonError};
-use corridor_shared::services::{Access, Delivery, ServiceError, Topic};
+use corridor_shared::services::{Access, Delivery, IMU_ACK_SERVICE, ServiceError, Topic};
 use corridor_shared::wire::{ANGLE_HEADING, ANGLE_PITCH, ANGLE_ROLL, AngleObservation, ImuSample};
 use crossbeam_channel::TrySendError;
 use iceoryx2::port::listener::ListenerWaitError;
@@ -58,9 +58,14 @@ pub(super) fn rx_thread(
             .map_err(|e| ServiceError::port(d, AngleObservation::SERVICE, "subscriber", e))?;
         // The producers notify this one too; creating it lets them open it before we wait.
         let _angles_event = d.open_event(&node, AngleObservation::SERVICE, true)?;
-        Ok((imu, listener, angles, _angles_event, node))
+        let ack = d
+            .open_event(&node, IMU_ACK_SERVICE, true)?
+            .notifier_builder()
+            .create()
+            .map_err(|e| ServiceError::port(d, IMU_ACK_SERVICE, "notifier", e))?;
+        Ok((imu, listener, angles, _angles_event, ack, node))
     };
-    let (imu, listener, angles, _angles_event, _node) = match setup() {
+    let (imu, listener, angles, _angles_event, ack, _node) = match setup() {
         Ok(x) => {
             let _ = ready.send(Ok(()));
             x
@@ -182,6 +187,11 @@ pub(super) fn rx_thread(
                 // The marker is never dropped, whatever the policy.
                 if !forward(Delivery::Lossless, &tx, Msg::Imu(s), counters, &stopping) {
                     return Ok(());
+                }
+                // The stream is taken: its producer may go (`Producer::finish` waits for this;
+                // without the notification it waits its timeout and says so).
+                if let Err(e) = ack.notify() {
+                    tracing::warn!("{}", ServiceError::io(d, IMU_ACK_SERVICE, "notify", e));
                 }
                 continue;
             }

@@ -396,3 +396,18 @@ impl Domain {
         })
     }
 }
+
+/// Sleeps `d` on `node` (iceoryx2's `Node::wait`); `false` once SIGINT or SIGTERM was received.
+/// A sleep that another signal cut short is not a stop request: after SIGSTOP and SIGCONT
+/// (Ctrl-Z, `fg`) Linux ends a `nanosleep` with EINTR even without a handler, and `Node::wait`
+/// then reports an interrupt although nobody asked to stop; a zero-length wait tells the two
+/// apart (it checks the termination request first).
+pub fn node_sleep(node: &Node<ipc::Service>, d: std::time::Duration) -> bool {
+    match node.wait(d) {
+        Ok(()) => true,
+        Err(iceoryx2::node::NodeWaitFailure::TerminationRequest) => false,
+        Err(iceoryx2::node::NodeWaitFailure::Interrupt) => {
+            node.wait(std::time::Duration::ZERO).is_ok()
+        }
+    }
+}

@@ -50,6 +50,11 @@ pub const BIAS_SERVICE: &str = "corridor/v2/bias";
 pub const NAV_SERVICE: &str = "corridor/v2/nav";
 /// Daemon counters, daemon → clients.
 pub const DIAGNOSTICS_SERVICE: &str = "corridor/v2/diagnostics";
+/// Event, daemon → producers: notified when the daemon has taken an end-of-stream marker.
+/// A producer's `finish` waits for it before it lets its publisher go: iceoryx2 0.10 attaches
+/// the daemon's side of a new connection only when the daemon next receives, and a publisher
+/// dropped before that takes the samples still queued with it.
+pub const IMU_ACK_SERVICE: &str = "corridor/v2/imu_ack";
 /// Event service created exclusively by the running daemon: a second daemon on the same domain
 /// fails to create it. Clients must not open it (an open handle would keep it alive after the
 /// daemon exits).
