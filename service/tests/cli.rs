@@ -371,21 +371,21 @@ fn eval_sweep_reports_each_value_and_names_a_bad_key() {
     }
     let suite_path = out.join("suite.toml");
     std::fs::write(&suite_path, suite).unwrap();
-    let sweep = out.join("sweep.toml");
-    std::fs::write(
-        &sweep,
-        "[[parameter]]\nkey = \"heading.sigma_deg\"\nvalues = [2.0, 3.0]\n",
-    )
-    .unwrap();
-    let o = corridor(&[
-        "eval",
-        "--suite",
-        suite_path.to_str().unwrap(),
-        "--sweep",
-        sweep.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    // `corridor eval --sweep` with this sweep file, the table written to `out`.
+    let eval_sweep = |sweep_text: &str| {
+        let sweep = out.join("sweep.toml");
+        std::fs::write(&sweep, sweep_text).unwrap();
+        corridor(&[
+            "eval",
+            "--suite",
+            suite_path.to_str().unwrap(),
+            "--sweep",
+            sweep.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = eval_sweep("[[parameter]]\nkey = \"heading.sigma_deg\"\nvalues = [2.0, 3.0]\n");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let md = std::fs::read_to_string(out.join("sweep.md")).unwrap();
     let row = md
@@ -408,18 +408,7 @@ fn eval_sweep_reports_each_value_and_names_a_bad_key() {
         .sum();
     assert_eq!(folds, 2, "{row}");
     // A key that is not in the configuration is named once, with the file.
-    std::fs::write(
-        &sweep,
-        "[[parameter]]\nkey = \"heading.sigma\"\nvalues = [2.0]\n",
-    )
-    .unwrap();
-    let o = corridor(&[
-        "eval",
-        "--suite",
-        suite_path.to_str().unwrap(),
-        "--sweep",
-        sweep.to_str().unwrap(),
-    ]);
+    let o = eval_sweep("[[parameter]]\nkey = \"heading.sigma\"\nvalues = [2.0]\n");
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

@@ -118,6 +118,26 @@ fn terminate(mut child: Child) -> (std::process::ExitStatus, String) {
     }
 }
 
+/// A fresh domain `name` with `corridor serve` on it (log in `daemon.log` of the returned
+/// directory), once it publishes.
+fn serve_fresh(name: &str) -> (TempDir, Domain, Child) {
+    cleanup_domain(name);
+    let dir = TempDir::new(&name.replace('_', "-"));
+    let config = write_config(&dir);
+    let domain = Domain::new(name).unwrap();
+    let child = serve(&config, name, &dir.join("c.bin"), &dir.join("daemon.log"));
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    assert!(diag.recv_timeout(WAIT).unwrap().is_some(), "daemon up");
+    (dir, domain, child)
+}
+
+/// Sends `sig` to the child.
+fn signal(child: &Child, sig: i32) {
+    let pid = i32::try_from(child.id()).unwrap();
+    // SAFETY: plain kill(2) on our own child.
+    assert_eq!(unsafe { libc::kill(pid, sig) }, 0);
+}
+
 fn offline(log: &ImuLog) -> (Vec<Estimate>, usize) {
     let cfg = ConfigFile::read(&root().join("configs/gdins.toml"))
         .unwrap()
@@ -330,20 +350,11 @@ fn stop_and_continue_leave_the_daemon_running() {
     // Ctrl-Z then `fg` (SIGSTOP, SIGCONT): the interrupted wait of the receive thread is not
     // an error; the daemon goes on receiving and stops cleanly on SIGTERM.
     let name = "test_daemon_stop_cont";
-    cleanup_domain(name);
-    let dir = TempDir::new("test-daemon-stop-cont");
-    let config = write_config(&dir);
-    let domain = Domain::new(name).unwrap();
-    let child = serve(&config, name, &dir.join("c.bin"), &dir.join("daemon.log"));
-    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
-    assert!(diag.recv_timeout(WAIT).unwrap().is_some(), "daemon up");
-    let pid = i32::try_from(child.id()).unwrap();
+    let (dir, domain, child) = serve_fresh(name);
     for _ in 0..5 {
-        // SAFETY: plain kill(2) on our own child.
-        assert_eq!(unsafe { libc::kill(pid, libc::SIGSTOP) }, 0);
+        signal(&child, libc::SIGSTOP);
         std::thread::sleep(Duration::from_millis(200));
-        // SAFETY: as above.
-        assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
+        signal(&child, libc::SIGCONT);
         std::thread::sleep(Duration::from_millis(200));
     }
     let att = Subscriber::<AttitudeSample>::open(&domain, "test-att", WAIT).unwrap_or_else(|e| {
@@ -363,7 +374,7 @@ fn stop_and_continue_leave_the_daemon_running() {
         "the daemon estimates after the stops: {}",
         std::fs::read_to_string(dir.join("daemon.log")).unwrap_or_default()
     );
-    drop((att, diag));
+    drop(att);
     let (status, out) = terminate(child);
     assert!(status.success(), "{status:?} {out}");
     drop(p);
@@ -378,20 +389,12 @@ fn a_short_stream_sent_while_the_daemon_is_held_is_not_lost() {
     // receives, and a publisher dropped before that took its queued samples with it: before
     // `finish` waited for the daemon's acknowledgement, the daemon received 0 of these 501.
     let name = "test_daemon_held";
-    cleanup_domain(name);
-    let dir = TempDir::new("test-daemon-held");
-    let config = write_config(&dir);
-    let domain = Domain::new(name).unwrap();
-    let child = serve(&config, name, &dir.join("h.bin"), &dir.join("daemon.log"));
-    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
-    assert!(diag.recv_timeout(WAIT).unwrap().is_some(), "daemon up");
-    drop(diag);
+    let (_dir, domain, child) = serve_fresh(name);
+    signal(&child, libc::SIGSTOP);
     let pid = i32::try_from(child.id()).unwrap();
-    // SAFETY: plain kill(2) on our own child.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGSTOP) }, 0);
     let resume = std::thread::spawn(move || {
         std::thread::sleep(Duration::from_millis(500));
-        // SAFETY: as above.
+        // SAFETY: plain kill(2) on our own child.
         assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
     });
     let log = exp36();
