@@ -213,6 +213,13 @@ pub fn c_header() -> String {
     for (k, v) in constants() {
         let _ = writeln!(h, "#define CORRIDOR_{k} {v}u");
     }
+    let _ = writeln!(
+        h,
+        "/* Event (no payload) the daemon notifies when it has taken an end-of-stream marker: a\n \
+         * producer waits for it before it drops its publisher (see client/src/producer.rs). */\n\
+         #define CORRIDOR_IMU_ACK_EVENT \"{}\"",
+        crate::services::IMU_ACK_SERVICE
+    );
     for t in layouts() {
         let upper = screaming_snake(t.name);
         let _ = writeln!(h, "\n/* {} */", t.doc);
