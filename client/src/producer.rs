@@ -3,6 +3,7 @@
 use crate::ClientError;
 use corridor_shared::services::{
     ANGLES_SERVICE, Delivery, Domain, IMU_ACK_SERVICE, IMU_SERVICE, PubSub, ServiceError,
+    ack_event_id,
 };
 use corridor_shared::wire::{AngleObservation, FLAG_END_OF_STREAM, ImuSample, monotonic_ns};
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
@@ -22,7 +23,7 @@ const LOSSLESS_RETRY: Duration = Duration::from_secs(2);
 /// in place, cause not found; a delay in the first send made it disappear).
 pub const SETTLE: Duration = Duration::from_millis(100);
 
-/// How long [`Producer::finish`] waits for the daemon to acknowledge the end of the stream.
+/// How long [`Producer::close`] waits for the daemon to acknowledge this producer's samples.
 pub const END_ACK_WAIT: Duration = Duration::from_secs(5);
 
 /// What a [`Producer`] has sent so far.
@@ -38,10 +39,10 @@ pub struct ProducerStats {
     pub angles_undelivered: u64,
     /// Sends repeated because a connected subscriber was not attached yet (lossless only).
     pub retries: u64,
-    /// End-of-stream markers the daemon did not acknowledge within [`END_ACK_WAIT`] of
-    /// [`Producer::close`] although a subscriber received them: that stream may not have been
-    /// taken.
-    pub ends_unacknowledged: u64,
+    /// Closes at which the daemon had not confirmed within [`END_ACK_WAIT`] that it took this
+    /// producer's samples although a subscriber received some: what was still queued may be
+    /// lost.
+    pub closes_unconfirmed: u64,
 }
 
 /// Publishes IMU samples and angle observations to the daemon of a domain and notifies it.
@@ -58,8 +59,10 @@ pub struct Producer {
     angles_notifier: Notifier<ipc::Service>,
     /// The daemon's acknowledgements of end-of-stream markers.
     ack: Listener<ipc::Service>,
-    /// A marker was received by a subscriber and its acknowledgement not yet seen.
-    awaiting_ack: bool,
+    /// This producer's event id on [`IMU_ACK_SERVICE`].
+    ack_id: usize,
+    /// The daemon acknowledged this producer (or it was closed already).
+    taken: bool,
     next_imu_seq: u64,
     next_angles_seq: u64,
     stats: ProducerStats,
@@ -119,6 +122,7 @@ impl Producer {
             .notifier_builder()
             .create()
             .map_err(|e| ServiceError::port(domain, ANGLES_SERVICE, "notifier", e))?;
+        let ack_id = ack_event_id(imu.id().value());
         let ack = domain
             .open_event(&node, IMU_ACK_SERVICE, true)?
             .listener_builder()
@@ -133,7 +137,8 @@ impl Producer {
             angles,
             angles_notifier,
             ack,
-            awaiting_ack: false,
+            ack_id,
+            taken: false,
             next_imu_seq: 0,
             next_angles_seq: 0,
             stats: ProducerStats::default(),
@@ -206,53 +211,71 @@ impl Producer {
     }
 
     /// Sends the end-of-stream marker (a data-less [`ImuSample`] with [`FLAG_END_OF_STREAM`]):
-    /// the daemon answers with end-of-stream outputs, resets its estimator and acknowledges the
-    /// marker on [`IMU_ACK_SERVICE`]. [`Producer::close`] (or dropping the producer) waits for
-    /// that acknowledgement.
+    /// the daemon answers with end-of-stream outputs and resets its estimator.
     pub fn finish(&mut self) -> Result<usize, ClientError> {
-        // Acknowledgements of earlier markers (of this producer or another one) are stale.
-        self.ack
-            .try_wait(|_| {})
-            .map_err(|e| ServiceError::io(&self.domain, IMU_ACK_SERVICE, "wait", e))?;
-        let n = self.send_imu(ImuSample {
+        self.send_imu(ImuSample {
             t_s: f64::NAN,
             temp_c: f64::NAN,
             flags: FLAG_END_OF_STREAM,
             ..ImuSample::default()
-        })?;
-        self.awaiting_ack |= n > 0;
-        Ok(n)
+        })
     }
 
-    /// Lets the producer go once the daemon has taken the stream: after [`Producer::finish`],
-    /// waits up to [`END_ACK_WAIT`] for the daemon's acknowledgement, and returns the final
-    /// stats (no acknowledgement in time: [`ProducerStats::ends_unacknowledged`]). iceoryx2 0.10
-    /// attaches the daemon's side of a connection only when the daemon next receives, and a
-    /// publisher dropped before that takes the samples still queued with it. Dropping the
+    /// Lets the producer go once the daemon has taken its samples, and returns the final stats.
+    /// iceoryx2 0.10 attaches the daemon's side of a connection only when the daemon next
+    /// receives, and a publisher dropped before that takes the samples still queued with it; so
+    /// when a sample reached a subscriber and the daemon has not yet acknowledged this producer
+    /// on [`IMU_ACK_SERVICE`] (it does at the first sample it takes from it), this waits up to
+    /// [`END_ACK_WAIT`] for that (none in time: [`ProducerStats::closes_unconfirmed`]).
+    /// Usually the acknowledgement came long before and this returns at once. Dropping the
     /// producer waits the same way, and logs a missing acknowledgement.
     pub fn close(mut self) -> Result<ProducerStats, ClientError> {
-        self.settle_end()?;
+        self.settle()?;
         Ok(self.stats)
     }
 
     /// The wait of [`Producer::close`].
-    fn settle_end(&mut self) -> Result<(), ClientError> {
-        if std::mem::take(&mut self.awaiting_ack) && !self.wait_for_ack(END_ACK_WAIT)? {
-            self.stats.ends_unacknowledged += 1;
+    fn settle(&mut self) -> Result<(), ClientError> {
+        if self.stats.imu_sent > self.stats.imu_undelivered
+            && !self.acknowledged()?
+            && !self.wait_for_ack(END_ACK_WAIT)?
+        {
+            self.stats.closes_unconfirmed += 1;
         }
+        // Once per producer: a second close (the drop after `close`) does not wait again.
+        self.taken = true;
         Ok(())
     }
 
-    /// Waits up to `timeout` for the daemon's end-of-stream acknowledgement.
-    fn wait_for_ack(&self, timeout: Duration) -> Result<bool, ClientError> {
+    /// Collects the acknowledgements that arrived; true once one was this producer's.
+    fn acknowledged(&mut self) -> Result<bool, ClientError> {
+        let mine = EventId::new(self.ack_id);
+        let mut seen = false;
+        self.ack
+            .try_wait(|a| seen |= a.id == mine)
+            .map_err(|e| ServiceError::io(&self.domain, IMU_ACK_SERVICE, "wait", e))?;
+        self.taken |= seen;
+        Ok(self.taken)
+    }
+
+    /// Waits up to `timeout` for this producer's acknowledgement.
+    fn wait_for_ack(&mut self, timeout: Duration) -> Result<bool, ClientError> {
+        let mine = EventId::new(self.ack_id);
         let deadline = Instant::now() + timeout;
         loop {
             let now = Instant::now();
             if now >= deadline {
                 return Ok(false);
             }
-            match self.ack.timed_wait(|_| {}, deadline - now) {
-                Ok(n) if n > 0 => return Ok(true),
+            let mut seen = false;
+            match self
+                .ack
+                .timed_wait(|a| seen |= a.id == mine, deadline - now)
+            {
+                Ok(_) if seen => {
+                    self.taken = true;
+                    return Ok(true);
+                }
                 Ok(_) => {}
                 Err(_) if self.termination_requested() => return Err(ClientError::Interrupted),
                 // Another signal interrupted the wait (SIGCONT after Ctrl-Z): wait on.
@@ -300,12 +323,12 @@ impl Producer {
 
 impl Drop for Producer {
     fn drop(&mut self) {
-        let before = self.stats.ends_unacknowledged;
-        match self.settle_end() {
-            Ok(()) if self.stats.ends_unacknowledged > before => tracing::warn!(
+        let before = self.stats.closes_unconfirmed;
+        match self.settle() {
+            Ok(()) if self.stats.closes_unconfirmed > before => tracing::warn!(
                 domain = self.domain.name(),
-                "the daemon did not acknowledge the end of the stream within {END_ACK_WAIT:?}: \
-                 samples still queued may be lost"
+                "the daemon did not confirm within {END_ACK_WAIT:?} that it took this \
+                 producer's samples: samples still queued may be lost"
             ),
             Ok(()) => {}
             Err(e) => tracing::warn!(domain = self.domain.name(), "closing the producer: {e}"),

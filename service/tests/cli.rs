@@ -416,4 +416,9 @@ fn eval_sweep_reports_each_value_and_names_a_bad_key() {
         "{err}"
     );
     assert_eq!(err.matches("heading.sigma").count(), 1, "{err}");
+    // A key the suite sets on every run would sweep nothing: refused.
+    let o = eval_sweep("[[parameter]]\nkey = \"heading.grid_deg\"\nvalues = [0.0, 5.0]\n");
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("set by the suite"), "{err}");
 }

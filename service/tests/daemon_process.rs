@@ -387,29 +387,29 @@ fn a_short_stream_sent_while_the_daemon_is_held_is_not_lost() {
     // anything from it (here: the daemon stopped with SIGSTOP; in the field: a busy machine).
     // iceoryx2 0.10 attaches the daemon's side of the connection only when the daemon next
     // receives, and a publisher dropped before that took its queued samples with it: before
-    // `finish` waited for the daemon's acknowledgement, the daemon received 0 of these 501.
+    // `close` waited for the daemon's acknowledgement, the daemon received 0 of these 501.
     let name = "test_daemon_held";
     let (_dir, domain, child) = serve_fresh(name);
     signal(&child, libc::SIGSTOP);
+    let log = exp36();
+    let mut p = Producer::open(&domain, "test-short", None).unwrap();
+    p.wait_for_daemon(WAIT).unwrap();
+    for r in &log.rows[..500] {
+        p.send_imu(ImuSample::from(r)).unwrap();
+    }
+    p.finish().unwrap();
+    // Everything is sent and the daemon has taken nothing; it goes on only while the
+    // producer closes.
     let pid = i32::try_from(child.id()).unwrap();
     let resume = std::thread::spawn(move || {
-        std::thread::sleep(Duration::from_millis(500));
+        std::thread::sleep(Duration::from_millis(300));
         // SAFETY: plain kill(2) on our own child.
         assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
     });
-    let log = exp36();
-    let stats = {
-        let mut p = Producer::open(&domain, "test-short", None).unwrap();
-        p.wait_for_daemon(WAIT).unwrap();
-        for r in &log.rows[..500] {
-            p.send_imu(ImuSample::from(r)).unwrap();
-        }
-        p.finish().unwrap();
-        p.close().unwrap()
-    }; // the producer is gone here
+    let stats = p.close().unwrap();
     resume.join().unwrap();
     assert_eq!((stats.imu_sent, stats.imu_undelivered), (501, 0));
-    assert_eq!(stats.ends_unacknowledged, 0, "{stats:?}");
+    assert_eq!(stats.closes_unconfirmed, 0, "{stats:?}");
     let (status, out) = terminate(child);
     assert!(status.success(), "{status:?}");
     let report: serde_json::Value = serde_json::from_str(&out).unwrap();

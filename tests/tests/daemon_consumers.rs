@@ -120,7 +120,6 @@ fn consumers_come_and_go_and_a_stalled_one_does_not_stall_the_estimator() {
     // its buffer to turn over: then the ones before are counted as missed at its start), then
     // nothing until the end.
     let first = stalled.recv_timeout(WAIT).unwrap().expect("first attitude");
-    assert_eq!(stalled.missed_at_start(), first.seq);
     let stats = producer.join().unwrap();
     let (got_a, missed_a) = a.join().unwrap();
     let elapsed = start.elapsed();

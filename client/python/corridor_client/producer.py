@@ -14,12 +14,17 @@ from .wire import FLAG_END_OF_STREAM, AngleObservation, ImuSample
 #: connected (its receive side not attached yet), s.
 LOSSLESS_RETRY_S = 2.0
 
-#: Event service on which the daemon acknowledges an end-of-stream marker (the Rust
-#: `IMU_ACK_SERVICE`).
+#: Event service on which the daemon acknowledges a producer when it has taken its first
+#: sample, with the producer's event id (the Rust `IMU_ACK_SERVICE` and `ack_event_id`).
 IMU_ACK_SERVICE = "corridor/v2/imu_ack"
 
-#: How long `finish` waits for that acknowledgement, s (the Rust `END_ACK_WAIT`).
+#: How long `close` waits for that acknowledgement, s (the Rust `END_ACK_WAIT`).
 END_ACK_WAIT_S = 5.0
+
+
+def ack_event_id(publisher_id: int) -> int:
+    """The acknowledgement event id of an IMU publisher (`UniquePublisherId.value`)."""
+    return publisher_id % 256
 
 
 class Producer:
@@ -71,12 +76,13 @@ class Producer:
             domain.event(self.node, AngleObservation.SERVICE).notifier_builder().create()
         )
         self._ack = domain.event(self.node, IMU_ACK_SERVICE).listener_builder().create()
+        self._ack_id = ack_event_id(self._imu.id.value)
+        self._taken = False
         self.next_seq = 0
         self.next_angles_seq = 0
         self.sent = 0
         self.undelivered = 0
-        self.ends_unacknowledged = 0
-        self._awaiting_ack = False
+        self.closes_unconfirmed = 0
 
     def wait_for_daemon(self, timeout_s: float = 10.0) -> None:
         """Waits until the daemon reads the IMU service."""
@@ -136,42 +142,52 @@ class Producer:
         return n
 
     def finish(self) -> int:
-        """Sends the end-of-stream marker: the daemon answers, resets for the next stream and
-        acknowledges the marker; `close` waits for that acknowledgement."""
-        self._ack.try_wait()  # stale acknowledgements of earlier markers
+        """Sends the end-of-stream marker: the daemon answers and resets for the next stream."""
         s = ImuSample()
         s.t_s = math.nan
         s.temp_c = math.nan
         s.flags = FLAG_END_OF_STREAM
-        n = self.send_sample(s)
-        self._awaiting_ack = self._awaiting_ack or n > 0
-        return n
+        return self.send_sample(s)
+
+    def _mine(self, activations: Any) -> bool:
+        return any(a.id.as_value == self._ack_id for a in activations)
 
     def close(self) -> None:
-        """Waits up to `END_ACK_WAIT_S` for the daemon to acknowledge a marker sent by `finish`
-        (no acknowledgement in time: `ends_unacknowledged`), then releases the ports and the
-        node. iceoryx2 0.10 attaches the daemon's side of a connection only when the daemon next
-        receives; a publisher closed before that takes its queued samples with it."""
-        if self._awaiting_ack:
-            self._awaiting_ack = False
-            deadline = time.monotonic() + END_ACK_WAIT_S
-            while True:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    self.ends_unacknowledged += 1
-                    break
-                if self._ack.timed_wait(iox2.Duration.from_secs_f64(left)):
-                    break
-        for port in (
-            self._imu,
-            self._imu_notifier,
-            self._angles,
-            self._angles_notifier,
-            self._ack,
-        ):
-            port.delete()
-        self._imu_service = self._angles_service = None
-        self.node = None
+        """Releases the ports and the node, once the daemon has taken this producer's samples.
+
+        iceoryx2 0.10 attaches the daemon's side of a connection only when the daemon next
+        receives; a publisher closed before that takes its queued samples with it. So when a
+        sample reached a subscriber and the daemon has not yet acknowledged this producer (it
+        does at the first sample it takes), this waits up to `END_ACK_WAIT_S` for that (none in
+        time: `closes_unconfirmed`).
+        """
+        try:
+            if self.sent > self.undelivered and not self._taken:
+                self._taken = self._mine(self._ack.try_wait())
+                deadline = time.monotonic() + END_ACK_WAIT_S
+                while not self._taken:
+                    left = deadline - time.monotonic()
+                    if left <= 0:
+                        self.closes_unconfirmed += 1
+                        break
+                    try:
+                        self._taken = self._mine(
+                            self._ack.timed_wait(iox2.Duration.from_secs_f64(left))
+                        )
+                    except iox2.ListenerWaitError:
+                        pass  # a signal cut the wait short (SIGCONT after Ctrl-Z): wait on
+            self._taken = True
+        finally:
+            for port in (
+                self._imu,
+                self._imu_notifier,
+                self._angles,
+                self._angles_notifier,
+                self._ack,
+            ):
+                port.delete()
+            self._imu_service = self._angles_service = None
+            self.node = None
 
     def __enter__(self) -> "Producer":
         return self

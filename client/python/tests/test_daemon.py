@@ -115,7 +115,7 @@ class Daemon(unittest.TestCase):
         self.assertEqual(final, self.offline_final_bias())
         self.assertEqual(list(attitudes[-2].gyro_bias_rad_s), final)
         producer.close()
-        self.assertEqual(producer.ends_unacknowledged, 0, "the daemon took the stream's end")
+        self.assertEqual(producer.closes_unconfirmed, 0, "the daemon took the samples")
         for c in (attitude, bias):
             c.close()
 

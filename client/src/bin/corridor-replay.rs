@@ -104,8 +104,8 @@ fn run() -> Result<()> {
     );
     println!("lossless retries: {}", s.retries);
     println!(
-        "end of stream acknowledged by the daemon: {}",
-        if s.ends_unacknowledged == 0 {
+        "daemon confirmed it took the samples: {}",
+        if s.closes_unconfirmed == 0 {
             "yes"
         } else {
             "no"
@@ -121,10 +121,10 @@ fn run() -> Result<()> {
             domain.name()
         );
     }
-    if s.ends_unacknowledged > 0 {
+    if s.closes_unconfirmed > 0 {
         eprintln!(
-            "warning: the daemon did not acknowledge the end of the stream within {} s: the \
-             samples still queued when this replay ended may be lost",
+            "warning: the daemon did not confirm within {} s that it took this replay's \
+             samples: the samples still queued when it ended may be lost",
             corridor_client::END_ACK_WAIT.as_secs()
         );
     }

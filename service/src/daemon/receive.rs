@@ -3,7 +3,9 @@
 
 use super::state::{load_opt, store_opt};
 use super::{DaemonConfig, DaemonError};
-use corridor_shared::services::{Access, Delivery, IMU_ACK_SERVICE, ServiceError, Topic};
+use corridor_shared::services::{
+    Access, Delivery, IMU_ACK_SERVICE, ServiceError, Topic, ack_event_id,
+};
 use corridor_shared::wire::{ANGLE_HEADING, ANGLE_PITCH, ANGLE_ROLL, AngleObservation, ImuSample};
 use crossbeam_channel::TrySendError;
 use iceoryx2::port::listener::ListenerWaitError;
@@ -89,6 +91,13 @@ pub(super) fn rx_thread(
     // True until this life's first sample: a gap before it, in the numbering of the producer an
     // earlier life was receiving, is counted in `missing_at_restart`.
     let mut first_of_life = true;
+    // Tells a producer that its samples were taken (see `IMU_ACK_SERVICE`); a producer that
+    // misses it waits its timeout and counts it.
+    let acknowledge = |producer: u128| {
+        if let Err(e) = ack.notify_with_custom_event_id(EventId::new(ack_event_id(producer))) {
+            tracing::warn!("{}", ServiceError::io(d, IMU_ACK_SERVICE, "notify", e));
+        }
+    };
     while !stopping() {
         match listener.timed_wait(|_| {}, cfg.poll_timeout) {
             // A signal interrupted the wait (SIGCONT after a SIGSTOP, Ctrl-Z then `fg`): a
@@ -134,6 +143,11 @@ pub(super) fn rx_thread(
             // `received` is counted next to the store of the position (`last_seq_plus1`), so a
             // SIGKILL can misplace at most the one sample between the two stores.
             let new_producer = last_producer != Some(producer);
+            if new_producer || first_of_life {
+                // The daemon's side of this producer's connection is attached now: its queued
+                // samples survive the producer (`Producer::close` waits for this).
+                acknowledge(producer);
+            }
             // Gaps in the numbering of the producer an earlier daemon life was receiving, up to
             // this life's first sample of it, are the restart's.
             let gaps = if std::mem::take(&mut first_of_life) && !new_producer {
@@ -188,11 +202,7 @@ pub(super) fn rx_thread(
                 if !forward(Delivery::Lossless, &tx, Msg::Imu(s), counters, &stopping) {
                     return Ok(());
                 }
-                // The stream is taken: its producer may go (`Producer::finish` waits for this;
-                // without the notification it waits its timeout and says so).
-                if let Err(e) = ack.notify() {
-                    tracing::warn!("{}", ServiceError::io(d, IMU_ACK_SERVICE, "notify", e));
-                }
+                acknowledge(producer);
                 continue;
             }
             if !mid_stream {

@@ -28,6 +28,10 @@ pub const RAIL_TOLERANCE: f64 = 0.005;
 /// Flat tops (runs of ≥ 2 samples at the extreme) that make a rail.
 pub const MIN_FLAT_TOPS: usize = 5;
 
+/// No gyro's full scale is below this, rad/s (≈ 57 °/s): a lower "rail" is an axis that hardly
+/// moves (quantised around its largest value), not a clipping sensor.
+pub const MIN_RAIL_RAD_S: f64 = 1.0;
+
 /// A rail found on one gyro axis.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Rail {
@@ -66,7 +70,7 @@ pub fn find_rails(rows: &[ImuRow]) -> Vec<Rail> {
                     run = 0;
                 }
             }
-            if flat_tops < MIN_FLAT_TOPS {
+            if flat_tops < MIN_FLAT_TOPS || peak < MIN_RAIL_RAD_S {
                 return None;
             }
             levels.sort_by(f64::total_cmp);
@@ -170,6 +174,9 @@ mod tests {
     fn a_smooth_peak_is_no_rail() {
         // The highest swings touch their maximum with a sample or two each: not a rail.
         let rows = swings(8.0, f64::INFINITY);
+        assert!(find_rails(&rows).is_empty(), "{:?}", find_rails(&rows));
+        // An axis that hardly moves, its top quantised into flat runs, is not a clipping gyro.
+        let rows = swings(0.5, 0.3);
         assert!(find_rails(&rows).is_empty(), "{:?}", find_rails(&rows));
         // The same swings all cut at one level are.
         let rows = swings(8.0, 7.0);

@@ -18,6 +18,14 @@ use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// Keys the suite sets on every run ([`SuiteRecording::overrides`]): not sweepable.
+const FIXED_BY_THE_SUITE: [&str; 4] = [
+    "estimator.mode",
+    "alignment.gyro_bias_prior",
+    "heading.start_heading_deg",
+    "heading.grid_deg",
+];
+
 /// The sweep file: `[[parameter]]` tables.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -100,6 +108,24 @@ pub fn run_sweep(suite_path: &Path, sweep_path: &Path) -> Result<Vec<SweepResult
         .iter()
         .filter(|r| r.gait == Gait::Normal)
         .collect();
+    if recs.len() < 2 {
+        return Err(file_err(format!(
+            "a leave-one-walk-out check needs at least 2 normal-gait recordings, the suite has {}",
+            recs.len()
+        )));
+    }
+    for p in &sweep.parameters {
+        if p.values.is_empty() {
+            return Err(file_err(format!("parameter {}: no values", p.key)));
+        }
+        if FIXED_BY_THE_SUITE.contains(&p.key.as_str()) {
+            return Err(file_err(format!(
+                "parameter {}: set by the suite for every run (its mode, prior and map \
+                 knowledge), so sweeping it would change nothing",
+                p.key
+            )));
+        }
+    }
     let mut out: Vec<SweepResult> = sweep
         .parameters
         .iter()

@@ -50,11 +50,19 @@ pub const BIAS_SERVICE: &str = "corridor/v2/bias";
 pub const NAV_SERVICE: &str = "corridor/v2/nav";
 /// Daemon counters, daemon → clients.
 pub const DIAGNOSTICS_SERVICE: &str = "corridor/v2/diagnostics";
-/// Event, daemon → producers: notified when the daemon has taken an end-of-stream marker.
-/// A producer's `finish` waits for it before it lets its publisher go: iceoryx2 0.10 attaches
-/// the daemon's side of a new connection only when the daemon next receives, and a publisher
-/// dropped before that takes the samples still queued with it.
+/// Event, daemon → producers: notified with [`ack_event_id`] of a producer's IMU publisher when
+/// the daemon has taken that producer's first sample (in this daemon life) and each of its
+/// end-of-stream markers. A producer waits for it before it lets its publisher go: iceoryx2 0.10
+/// attaches the daemon's side of a new connection only when the daemon next receives, and a
+/// publisher dropped before that takes the samples still queued with it.
 pub const IMU_ACK_SERVICE: &str = "corridor/v2/imu_ack";
+
+/// The event id of [`IMU_ACK_SERVICE`] that acknowledges the IMU publisher with this port id
+/// (`UniquePublisherId::value`): one of 256, iceoryx2's default id range (0–255). Two producers
+/// of one domain share an id with probability 1/256.
+pub fn ack_event_id(publisher_id: u128) -> usize {
+    (publisher_id % 256) as usize
+}
 /// Event service created exclusively by the running daemon: a second daemon on the same domain
 /// fails to create it. Clients must not open it (an open handle would keep it alive after the
 /// daemon exits).
