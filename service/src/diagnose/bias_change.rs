@@ -72,7 +72,7 @@ pub fn bias_change(
     let mut best: Option<BiasChange> = None;
     for axis in 0..3 {
         let mut chi2 = 0.0;
-        let mut largest = (0.0_f64, f64::NAN);
+        let mut largest = (0.0_f64, t_s[edges[1]]);
         let mut largest_sq = 0.0;
         let mut blocks = 0;
         for w in edges.windows(2) {
