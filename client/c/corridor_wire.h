@@ -33,8 +33,8 @@
 #define CORRIDOR_PHASE_CALIBRATING 1u
 #define CORRIDOR_PHASE_TRACKING 2u
 /* Event (no payload) the daemon notifies, with event id = the producer's publisher id
- * modulo 256, when it has taken that producer's first sample and each end-of-stream
- * marker: a producer waits for it before it drops its publisher (client/src/producer.rs). */
+ * modulo 256, when it has taken that producer's first sample: a producer waits for it
+ * before it drops its publisher (client/src/producer.rs). */
 #define CORRIDOR_IMU_ACK_EVENT "corridor/v2/imu_ack"
 
 /* One IMU sample, producer -> daemon. */

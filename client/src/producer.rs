@@ -57,7 +57,7 @@ pub struct Producer {
     imu_notifier: Notifier<ipc::Service>,
     angles: Publisher<ipc::Service, AngleObservation, ()>,
     angles_notifier: Notifier<ipc::Service>,
-    /// The daemon's acknowledgements of end-of-stream markers.
+    /// The daemon's acknowledgements (see [`IMU_ACK_SERVICE`]).
     ack: Listener<ipc::Service>,
     /// This producer's event id on [`IMU_ACK_SERVICE`].
     ack_id: usize,
@@ -237,7 +237,7 @@ impl Producer {
     /// The wait of [`Producer::close`].
     fn settle(&mut self) -> Result<(), ClientError> {
         if self.stats.imu_sent > self.stats.imu_undelivered
-            && !self.acknowledged()?
+            && !self.taken
             && !self.wait_for_ack(END_ACK_WAIT)?
         {
             self.stats.closes_unconfirmed += 1;
@@ -247,18 +247,7 @@ impl Producer {
         Ok(())
     }
 
-    /// Collects the acknowledgements that arrived; true once one was this producer's.
-    fn acknowledged(&mut self) -> Result<bool, ClientError> {
-        let mine = EventId::new(self.ack_id);
-        let mut seen = false;
-        self.ack
-            .try_wait(|a| seen |= a.id == mine)
-            .map_err(|e| ServiceError::io(&self.domain, IMU_ACK_SERVICE, "wait", e))?;
-        self.taken |= seen;
-        Ok(self.taken)
-    }
-
-    /// Waits up to `timeout` for this producer's acknowledgement.
+    /// Waits up to `timeout` for this producer's acknowledgement (at once when it is pending).
     fn wait_for_ack(&mut self, timeout: Duration) -> Result<bool, ClientError> {
         let mine = EventId::new(self.ack_id);
         let deadline = Instant::now() + timeout;

@@ -216,8 +216,8 @@ pub fn c_header() -> String {
     let _ = writeln!(
         h,
         "/* Event (no payload) the daemon notifies, with event id = the producer's publisher id\n \
-         * modulo 256, when it has taken that producer's first sample and each end-of-stream\n \
-         * marker: a producer waits for it before it drops its publisher (client/src/producer.rs). */\n\
+         * modulo 256, when it has taken that producer's first sample: a producer waits for it\n \
+         * before it drops its publisher (client/src/producer.rs). */\n\
          #define CORRIDOR_IMU_ACK_EVENT \"{}\"",
         crate::services::IMU_ACK_SERVICE
     );

@@ -162,8 +162,7 @@ class Producer:
         time: `closes_unconfirmed`).
         """
         try:
-            if self.sent > self.undelivered and not self._taken:
-                self._taken = self._mine(self._ack.try_wait())
+            if self.sent > self.undelivered:
                 deadline = time.monotonic() + END_ACK_WAIT_S
                 while not self._taken:
                     left = deadline - time.monotonic()

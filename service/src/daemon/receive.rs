@@ -202,7 +202,6 @@ pub(super) fn rx_thread(
                 if !forward(Delivery::Lossless, &tx, Msg::Imu(s), counters, &stopping) {
                     return Ok(());
                 }
-                acknowledge(producer);
                 continue;
             }
             if !mid_stream {

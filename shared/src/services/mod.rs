@@ -51,8 +51,7 @@ pub const NAV_SERVICE: &str = "corridor/v2/nav";
 /// Daemon counters, daemon → clients.
 pub const DIAGNOSTICS_SERVICE: &str = "corridor/v2/diagnostics";
 /// Event, daemon → producers: notified with [`ack_event_id`] of a producer's IMU publisher when
-/// the daemon has taken that producer's first sample (in this daemon life) and each of its
-/// end-of-stream markers. A producer waits for it before it lets its publisher go: iceoryx2 0.10
+/// the daemon has taken that producer's first sample (in this daemon life). A producer waits for it before it lets its publisher go: iceoryx2 0.10
 /// attaches the daemon's side of a new connection only when the daemon next receives, and a
 /// publisher dropped before that takes the samples still queued with it.
 pub const IMU_ACK_SERVICE: &str = "corridor/v2/imu_ack";
