@@ -1,0 +1,42 @@
+//! One pass of the default (eskf) estimator over a bundled walk, nothing else: the program to
+//! count the core's instructions per sample with callgrind, a figure that does not depend on
+//! the machine's load the way `core_throughput`'s timings do:
+//!
+//! ```text
+//! cargo build --release -p corridor-service --example core_once
+//! valgrind --tool=callgrind --callgrind-out-file=/tmp/cg target/release/examples/core_once
+//! ```
+//!
+//! It prints the number of samples and a checksum of the positions (so that the work cannot be
+//! optimised away, and two builds can be checked to give the same numbers).
+
+use corridor_service::core::{Estimator, ImuInput};
+use corridor_service::runner::heading_aid;
+use corridor_shared::config::{ConfigFile, ConfigOverrides};
+use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
+use std::path::Path;
+
+fn main() -> anyhow::Result<()> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let log = read_imu_csv(
+        &root.join("tests/data/gdins_exp29_corridor_circuit/imu.csv"),
+        &ImuCsvOptions::default(),
+    )?;
+    let inputs: Vec<ImuInput> = log.rows.iter().map(ImuInput::from).collect();
+    let path = root.join("configs/gdins.toml");
+    let cfg = ConfigOverrides {
+        start_heading_deg: Some(90.0),
+        ..Default::default()
+    }
+    .validate(&ConfigFile::read(&path)?, &path)?;
+    let aid = heading_aid(&cfg, None)?;
+    let mut est = Estimator::new(cfg, aid);
+    let mut checksum = 0.0;
+    for s in &inputs {
+        if let Ok(e) = est.step(s) {
+            checksum += e.p_m[0] + e.p_m[1];
+        }
+    }
+    println!("{} samples, checksum {checksum:.17e}", inputs.len());
+    Ok(())
+}
