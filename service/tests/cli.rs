@@ -353,6 +353,77 @@ fn run_starts_from_a_checkpoint_as_the_daemon_does_and_names_a_missing_one() {
 }
 
 #[test]
+fn eval_ensemble_runs_every_walk_at_every_start_offset() {
+    // A two-walk suite, one of them marked fast (reported, not summarised).
+    let out = tmp("ensemble");
+    std::fs::create_dir_all(&*out).unwrap();
+    let mut suite = String::new();
+    for (walk, gait) in [
+        ("gdins_exp17_rect_loop_small", "normal"),
+        ("gdins_exp18_rect_loop", "fast"),
+    ] {
+        let d = root().join("tests/data").join(walk);
+        suite += &format!(
+            "[[recording]]\nname = \"{walk}\"\nimu = {:?}\ntruth = {:?}\nconfig = {:?}\n\
+             start_heading_deg = 0.0\ngait = \"{gait}\"\n\n",
+            d.join("imu.csv"),
+            d.join("ground_truth.csv"),
+            root().join("configs/gdins.toml"),
+        );
+    }
+    let suite_path = out.join("suite.toml");
+    std::fs::write(&suite_path, suite).unwrap();
+    let o = corridor(&[
+        "eval",
+        "--suite",
+        suite_path.to_str().unwrap(),
+        "--ensemble",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let md = std::fs::read_to_string(out.join("ensemble.md")).unwrap();
+    // Per walk: five runs, their mean and half range, all finite footprint figures.
+    let cells = |walk: &str| -> Vec<f64> {
+        let row = md
+            .lines()
+            .find(|l| l.starts_with(&format!("| {walk} |")))
+            .unwrap_or_else(|| panic!("{walk} missing: {md}"));
+        row.split('|')
+            .skip(3)
+            .filter(|c| !c.trim().is_empty())
+            .map(|c| c.trim().parse::<f64>().unwrap())
+            .collect()
+    };
+    for walk in ["gdins_exp17_rect_loop_small", "gdins_exp18_rect_loop"] {
+        let c = cells(walk);
+        assert_eq!(c.len(), 7, "{walk}: {c:?}");
+        let runs = &c[..5];
+        assert!(
+            runs.iter().all(|v| v.is_finite() && *v > 0.0 && *v < 5.0),
+            "{c:?}"
+        );
+        let mean = runs.iter().sum::<f64>() / 5.0;
+        // (each printed to 0.01: the mean of the printed runs and the printed mean differ by
+        // at most 0.01)
+        assert!((c[5] - mean).abs() <= 0.0101, "{c:?}");
+    }
+    // The offsets reach the filter: exp17's start heading matters (0.22-0.37 % over ±1°).
+    let c = cells("gdins_exp17_rect_loop_small");
+    let (lo, hi) = c[..5]
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+    assert!(hi - lo > 0.05, "{c:?}");
+    // The summary is the normal-gait walk alone: its mean is the median, mean and largest.
+    let m = cells("gdins_exp17_rect_loop_small")[5];
+    let summary = md.lines().find(|l| l.starts_with("Normal gait:")).unwrap();
+    assert!(
+        summary.contains(&format!("median {m:.2} %, mean {m:.2} %, largest {m:.2} %")),
+        "{summary}"
+    );
+}
+
+#[test]
 fn eval_sweep_reports_each_value_and_names_a_bad_key() {
     // A two-walk suite (paths absolute, so the suite can live in a temporary directory) and a
     // sweep of one parameter over two values.

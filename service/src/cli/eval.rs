@@ -21,6 +21,11 @@ pub(super) struct EvalArgs {
     /// --out it is written to OUT/sweep.md.
     #[arg(long, conflicts_with = "loops")]
     pub(super) sweep: Option<PathBuf>,
+    /// Instead of the table: every recording's default run with its start heading moved by
+    /// -1, -0.5, 0, +0.5 and +1° (how much each walk's figure owes to luck); with --out it is
+    /// written to OUT/ensemble.md.
+    #[arg(long, conflicts_with_all = ["loops", "sweep"])]
+    pub(super) ensemble: bool,
 }
 
 /// Runs the suite, prints the table and writes it when asked.
@@ -32,6 +37,16 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
         if let Some(dir) = a.out {
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
             std::fs::write(dir.join("sweep.md"), &md)?;
+        }
+        return Ok(());
+    }
+    if a.ensemble {
+        let rows = corridor_service::suite::run_ensemble(&a.suite)?;
+        let md = corridor_service::suite::ensemble_markdown(&rows);
+        print!("{md}");
+        if let Some(dir) = a.out {
+            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+            std::fs::write(dir.join("ensemble.md"), &md)?;
         }
         return Ok(());
     }

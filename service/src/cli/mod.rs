@@ -43,7 +43,8 @@ const RUN_EXAMPLES: &str = "Examples:
   corridor run --imu imu.csv --inject-gyro-bias 0.001,-0.001,0.005 --truth ground_truth.csv --out out/injected";
 const EVAL_EXAMPLES: &str = "Examples:
   corridor eval --suite configs/eval/gdins.toml
-  corridor eval --suite configs/eval/gdins.toml --out out/eval";
+  corridor eval --suite configs/eval/gdins.toml --out out/eval
+  corridor eval --suite configs/eval/gdins.toml --ensemble --out out/eval";
 const DEMO_EXAMPLES: &str = "Examples:
   corridor demo
   corridor demo --root /path/to/corridor --out /tmp/demo";

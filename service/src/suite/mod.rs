@@ -20,9 +20,12 @@
 //! - [`tables`]: the summary and the Markdown tables;
 //! - [`loops`]: the residual-diagnosis loop on every recording;
 //! - [`detection`]: the diagnosis's detection matrix (injected sensor errors × recordings);
-//! - [`sweep`]: the leave-one-walk-out check of the configuration's choices.
+//! - [`sweep`]: the leave-one-walk-out check of the configuration's choices;
+//! - [`ensemble`]: every walk's default run under small start-heading offsets (how stable
+//!   each figure is).
 
 mod detection;
+mod ensemble;
 mod figures;
 mod front_end;
 mod loops;
@@ -33,6 +36,10 @@ mod tables;
 pub use detection::{
     CaseInjection, DetectionMatrix, MatrixCase, MatrixCell, detection_matrix, diagnosis_model,
     matrix_cases, matrix_markdown, prediction_markdown,
+};
+pub use ensemble::{
+    EnsembleRow, EnsembleSummary, START_OFFSETS_DEG, ensemble_markdown, ensemble_summary,
+    run_ensemble,
 };
 use figures::{DefaultFigures, NisSeries, stride_ratio};
 pub use figures::{NisFigure, STANCE_MATCH_S, STRAIGHT_DEG, StanceMatch, StrideUse, WEAVE_DEG};
