@@ -17,6 +17,25 @@ fn corridor(args: &[&str]) -> std::process::Output {
         .expect("corridor runs")
 }
 
+/// A suite file of bundled walks with their gaits (paths absolute, so that it can live in a
+/// temporary directory), written to `dir/suite.toml`.
+fn suite_of(dir: &Path, walks: &[(&str, &str)]) -> PathBuf {
+    let mut suite = String::new();
+    for (walk, gait) in walks {
+        let d = root().join("tests/data").join(walk);
+        suite += &format!(
+            "[[recording]]\nname = \"{walk}\"\nimu = {:?}\ntruth = {:?}\nconfig = {:?}\n\
+             start_heading_deg = 0.0\ngait = \"{gait}\"\n\n",
+            d.join("imu.csv"),
+            d.join("ground_truth.csv"),
+            root().join("configs/gdins.toml"),
+        );
+    }
+    let path = dir.join("suite.toml");
+    std::fs::write(&path, suite).unwrap();
+    path
+}
+
 fn tmp(name: &str) -> TempDir {
     TempDir::new(&format!("cli-{}-{name}", std::process::id()))
 }
@@ -357,22 +376,13 @@ fn eval_ensemble_runs_every_walk_at_every_start_offset() {
     // A two-walk suite, one of them marked fast (reported, not summarised).
     let out = tmp("ensemble");
     std::fs::create_dir_all(&*out).unwrap();
-    let mut suite = String::new();
-    for (walk, gait) in [
-        ("gdins_exp17_rect_loop_small", "normal"),
-        ("gdins_exp18_rect_loop", "fast"),
-    ] {
-        let d = root().join("tests/data").join(walk);
-        suite += &format!(
-            "[[recording]]\nname = \"{walk}\"\nimu = {:?}\ntruth = {:?}\nconfig = {:?}\n\
-             start_heading_deg = 0.0\ngait = \"{gait}\"\n\n",
-            d.join("imu.csv"),
-            d.join("ground_truth.csv"),
-            root().join("configs/gdins.toml"),
-        );
-    }
-    let suite_path = out.join("suite.toml");
-    std::fs::write(&suite_path, suite).unwrap();
+    let suite_path = suite_of(
+        &out,
+        &[
+            ("gdins_exp17_rect_loop_small", "normal"),
+            ("gdins_exp18_rect_loop", "fast"),
+        ],
+    );
     let o = corridor(&[
         "eval",
         "--suite",
@@ -429,19 +439,13 @@ fn eval_sweep_reports_each_value_and_names_a_bad_key() {
     // sweep of one parameter over two values.
     let out = tmp("sweep");
     std::fs::create_dir_all(&*out).unwrap();
-    let mut suite = String::new();
-    for walk in ["gdins_exp17_rect_loop_small", "gdins_exp18_rect_loop"] {
-        let d = root().join("tests/data").join(walk);
-        suite += &format!(
-            "[[recording]]\nname = \"{walk}\"\nimu = {:?}\ntruth = {:?}\nconfig = {:?}\n\
-             start_heading_deg = 0.0\n\n",
-            d.join("imu.csv"),
-            d.join("ground_truth.csv"),
-            root().join("configs/gdins.toml"),
-        );
-    }
-    let suite_path = out.join("suite.toml");
-    std::fs::write(&suite_path, suite).unwrap();
+    let suite_path = suite_of(
+        &out,
+        &[
+            ("gdins_exp17_rect_loop_small", "normal"),
+            ("gdins_exp18_rect_loop", "normal"),
+        ],
+    );
     // `corridor eval --sweep` with this sweep file, the table written to `out`.
     let eval_sweep = |sweep_text: &str| {
         let sweep = out.join("sweep.toml");

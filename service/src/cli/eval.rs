@@ -2,7 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub(super) struct EvalArgs {
@@ -33,22 +33,12 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
     if let Some(sweep) = &a.sweep {
         let results = corridor_service::suite::run_sweep(&a.suite, sweep)?;
         let md = corridor_service::suite::sweep_markdown(&results);
-        print!("{md}");
-        if let Some(dir) = a.out {
-            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-            std::fs::write(dir.join("sweep.md"), &md)?;
-        }
-        return Ok(());
+        return print_and_write(&md, a.out.as_deref(), "sweep.md");
     }
     if a.ensemble {
         let rows = corridor_service::suite::run_ensemble(&a.suite)?;
         let md = corridor_service::suite::ensemble_markdown(&rows);
-        print!("{md}");
-        if let Some(dir) = a.out {
-            std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-            std::fs::write(dir.join("ensemble.md"), &md)?;
-        }
-        return Ok(());
+        return print_and_write(&md, a.out.as_deref(), "ensemble.md");
     }
     let rows = corridor_service::suite::run_suite(&a.suite)?;
     let mut md = corridor_service::suite::markdown(&rows);
@@ -74,6 +64,16 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
             dir.join("results.json"),
             serde_json::to_string_pretty(&rows)? + "\n",
         )?;
+    }
+    Ok(())
+}
+
+/// Prints a table and, with an output directory, writes it there as `name`.
+fn print_and_write(md: &str, out: Option<&Path>, name: &str) -> Result<()> {
+    print!("{md}");
+    if let Some(dir) = out {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        std::fs::write(dir.join(name), md)?;
     }
     Ok(())
 }
