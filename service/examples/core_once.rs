@@ -4,8 +4,10 @@
 //!
 //! ```text
 //! cargo build --release -p corridor-service --example core_once
-//! valgrind --tool=callgrind --callgrind-out-file=/tmp/cg target/release/examples/core_once
+//! valgrind --tool=callgrind --toggle-collect='*Estimator*step*' target/release/examples/core_once
 //! ```
+//!
+//! (`--toggle-collect` counts the estimator's steps only, not the reading of the CSV file.)
 //!
 //! It prints the number of samples and a checksum of the positions (so that the work cannot be
 //! optimised away, and two builds can be checked to give the same numbers).

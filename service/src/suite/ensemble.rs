@@ -3,7 +3,7 @@
 //! (`corridor eval --suite FILE --ensemble`).
 //!
 //! Every walk runs once per start-heading offset in [`START_OFFSETS_DEG`] (the corridor
-//! direction a user reads off a map is known to about 1°, the configuration's
+//! direction a user reads off a map is known to about 1°, the σ `configs/gdins.toml` gives
 //! `heading.start_heading_sd_deg`). Two things move a walk's figure then: the start heading
 //! itself (a steady trend across the offsets, on walks with few heading observations early on),
 //! and the chain of yes/no decisions (stance found, stride on a line, observation associated or
@@ -11,11 +11,10 @@
 //! result (a jump). Either way a walk whose runs spread widely is one whose single figure says
 //! little, and the mean over the offsets is the fairer figure to compare two builds with.
 
-use super::{Ctx, Gait, SuiteError, config_for, read_suite, tables::median};
+use super::{Ctx, Gait, SuiteError, read_suite, tables::median};
 use crate::runner::{self, RunError, heading_aid};
-use corridor_shared::config::{BiasPrior, Mode};
+use corridor_shared::config::Mode;
 use corridor_shared::injection::BiasInjection;
-use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -23,7 +22,7 @@ use std::path::Path;
 pub const START_OFFSETS_DEG: [f64; 5] = [-1.0, -0.5, 0.0, 0.5, 1.0];
 
 /// One recording's default run at every offset.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone)]
 pub struct EnsembleRow {
     /// Recording name.
     pub name: String,
@@ -34,18 +33,36 @@ pub struct EnsembleRow {
 }
 
 impl EnsembleRow {
-    /// Mean over the offsets.
-    pub fn mean(&self) -> f64 {
+    /// Mean over the offsets, % of path.
+    pub fn mean_pct(&self) -> f64 {
         self.rms_pct.iter().sum::<f64>() / self.rms_pct.len().max(1) as f64
     }
 
-    /// Smallest and largest run.
-    pub fn range(&self) -> (f64, f64) {
+    /// Smallest and largest run, % of path (NaN when a run has no figure).
+    pub fn range_pct(&self) -> (f64, f64) {
         self.rms_pct
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                (lo.min(v), hi.max(v))
+                (min_or_nan(lo, v), max_or_nan(hi, v))
             })
+    }
+}
+
+/// `a.max(b)`, but NaN when either is (a run without a figure is not skipped).
+fn max_or_nan(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
+/// `a.min(b)`, but NaN when either is.
+fn min_or_nan(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.min(b)
     }
 }
 
@@ -63,16 +80,7 @@ pub fn run_ensemble(suite_path: &Path) -> Result<Vec<EnsembleRow>, SuiteError> {
         let ctx = Ctx::open(base, r).map_err(wrap)?;
         let mut rms_pct = Vec::with_capacity(START_OFFSETS_DEG.len());
         for offset in START_OFFSETS_DEG {
-            let mut moved = r.clone();
-            moved.start_heading_deg += offset;
-            let cfg = config_for(
-                &ctx.config,
-                &base.join(&r.config),
-                &moved,
-                best,
-                BiasPrior::RestMean,
-            )
-            .map_err(wrap)?;
+            let cfg = ctx.default_config_turned(best, offset).map_err(wrap)?;
             let aid = heading_aid(&cfg, None).map_err(wrap)?;
             let run = runner::run_log(&ctx.log, &cfg, &aid, &BiasInjection::default(), |_, _| {});
             rms_pct.push(ctx.footprint(&run).map_err(wrap)?.rms_pct);
@@ -91,13 +99,13 @@ pub fn run_ensemble(suite_path: &Path) -> Result<Vec<EnsembleRow>, SuiteError> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EnsembleSummary {
     /// Median over the walks of each walk's mean, % of path.
-    pub median_of_means: f64,
-    /// Mean of the walks' means.
-    pub mean_of_means: f64,
-    /// Largest walk mean.
-    pub worst_mean: f64,
-    /// Largest single run.
-    pub worst_run: f64,
+    pub median_of_means_pct: f64,
+    /// Mean of the walks' means, % of path.
+    pub mean_of_means_pct: f64,
+    /// Largest walk mean, % of path.
+    pub worst_mean_pct: f64,
+    /// Largest single run, % of path.
+    pub worst_run_pct: f64,
 }
 
 /// [`EnsembleSummary`] of the normal-gait rows (`None` without any).
@@ -106,15 +114,16 @@ pub fn ensemble_summary(rows: &[EnsembleRow]) -> Option<EnsembleSummary> {
     if normal.is_empty() {
         return None;
     }
-    let mut means: Vec<f64> = normal.iter().map(|r| r.mean()).collect();
+    let mut means: Vec<f64> = normal.iter().map(|r| r.mean_pct()).collect();
+    let nan = means.iter().any(|m| m.is_nan());
     Some(EnsembleSummary {
-        mean_of_means: means.iter().sum::<f64>() / means.len() as f64,
-        worst_mean: means.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        median_of_means: median(&mut means),
-        worst_run: normal
+        mean_of_means_pct: means.iter().sum::<f64>() / means.len() as f64,
+        worst_mean_pct: means.iter().copied().fold(f64::NEG_INFINITY, max_or_nan),
+        median_of_means_pct: if nan { f64::NAN } else { median(&mut means) },
+        worst_run_pct: normal
             .iter()
-            .map(|r| r.range().1)
-            .fold(f64::NEG_INFINITY, f64::max),
+            .map(|r| r.range_pct().1)
+            .fold(f64::NEG_INFINITY, max_or_nan),
     })
 }
 
@@ -122,7 +131,13 @@ pub fn ensemble_summary(rows: &[EnsembleRow]) -> Option<EnsembleSummary> {
 pub fn ensemble_markdown(rows: &[EnsembleRow]) -> String {
     let offsets: Vec<String> = START_OFFSETS_DEG
         .iter()
-        .map(|o| format!("{o:+}°"))
+        .map(|&o| {
+            if o == 0.0 {
+                "0°".to_owned()
+            } else {
+                format!("{o:+}°")
+            }
+        })
         .collect();
     let mut md = format!(
         "The default run (best mode, rest-mean prior) with the start heading moved by {} (a map \
@@ -133,7 +148,7 @@ pub fn ensemble_markdown(rows: &[EnsembleRow]) -> String {
         "---|".repeat(offsets.len()),
     );
     for r in rows {
-        let (lo, hi) = r.range();
+        let (lo, hi) = r.range_pct();
         let runs: Vec<String> = r.rms_pct.iter().map(|v| format!("{v:.2}")).collect();
         let gait = match r.gait {
             Gait::Normal => "normal",
@@ -144,7 +159,7 @@ pub fn ensemble_markdown(rows: &[EnsembleRow]) -> String {
             "| {} | {gait} | {} | {:.2} | {:.2} |",
             r.name,
             runs.join(" | "),
-            r.mean(),
+            r.mean_pct(),
             0.5 * (hi - lo)
         );
     }
@@ -153,7 +168,7 @@ pub fn ensemble_markdown(rows: &[EnsembleRow]) -> String {
             md,
             "\nNormal gait: the walks' means have median {:.2} %, mean {:.2} %, largest {:.2} %; \
              the largest single run is {:.2} %.\n",
-            s.median_of_means, s.mean_of_means, s.worst_mean, s.worst_run
+            s.median_of_means_pct, s.mean_of_means_pct, s.worst_mean_pct, s.worst_run_pct
         );
     }
     md
@@ -181,19 +196,31 @@ mod tests {
             row("d", Gait::Fast, &[9.0, 9.0, 9.0, 9.0, 9.0]),
         ];
         let s = ensemble_summary(&rows).unwrap();
-        assert!((s.median_of_means - 0.4).abs() < 1e-12, "{s:?}");
+        assert!((s.median_of_means_pct - 0.4).abs() < 1e-12, "{s:?}");
         assert!(
-            (s.mean_of_means - (0.2 + 0.4 + 2.0) / 3.0).abs() < 1e-12,
+            (s.mean_of_means_pct - (0.2 + 0.4 + 2.0) / 3.0).abs() < 1e-12,
             "{s:?}"
         );
-        assert!((s.worst_mean - 2.0).abs() < 1e-12 && (s.worst_run - 3.0).abs() < 1e-12);
-        assert_eq!(rows[2].range(), (1.0, 3.0));
+        assert!((s.worst_mean_pct - 2.0).abs() < 1e-12 && (s.worst_run_pct - 3.0).abs() < 1e-12);
+        assert_eq!(rows[2].range_pct(), (1.0, 3.0));
         let md = ensemble_markdown(&rows);
         assert!(
-            md.contains("| c | normal | 1.00 | 3.00 | 2.00 | 2.00 | 2.00 | 2.00 | 1.00 |"),
+            md.contains(
+                "| recording | gait | -1° | -0.5° | 0° | +0.5° | +1° | mean | half range |"
+            ) && md.contains("| c | normal | 1.00 | 3.00 | 2.00 | 2.00 | 2.00 | 2.00 | 1.00 |"),
             "{md}"
         );
         assert!(md.contains("largest single run is 3.00 %"), "{md}");
         assert_eq!(ensemble_summary(&rows[3..]), None);
+        // A run without a figure is not skipped: the walk and the summary say NaN.
+        let with_nan = [
+            rows[0].clone(),
+            row("e", Gait::Normal, &[0.1, f64::NAN, 0.1, 0.1, 0.1]),
+        ];
+        assert!(with_nan[1].range_pct().1.is_nan() && with_nan[1].mean_pct().is_nan());
+        let s = ensemble_summary(&with_nan).unwrap();
+        assert!(
+            s.median_of_means_pct.is_nan() && s.worst_mean_pct.is_nan() && s.worst_run_pct.is_nan()
+        );
     }
 }

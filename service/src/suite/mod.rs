@@ -390,10 +390,17 @@ impl<'a> Ctx<'a> {
 
     /// The default run's configuration: `mode` with the rest-mean prior.
     fn default_config(&self, mode: Mode) -> Result<Config, RunError> {
+        self.default_config_turned(mode, 0.0)
+    }
+
+    /// [`Ctx::default_config`] with the start heading moved by `offset_deg`.
+    fn default_config_turned(&self, mode: Mode, offset_deg: f64) -> Result<Config, RunError> {
+        let mut rec = self.rec.clone();
+        rec.start_heading_deg += offset_deg;
         config_for(
             &self.config,
             &self.base.join(&self.rec.config),
-            self.rec,
+            &rec,
             mode,
             BiasPrior::RestMean,
         )
