@@ -12,9 +12,8 @@
 //! little, and the mean over the offsets is the fairer figure to compare two builds with.
 
 use super::{Ctx, Gait, SuiteError, read_suite, tables::median};
-use crate::runner::{self, RunError, heading_aid};
+use crate::runner::RunError;
 use corridor_shared::config::Mode;
-use corridor_shared::injection::BiasInjection;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -38,31 +37,19 @@ impl EnsembleRow {
         self.rms_pct.iter().sum::<f64>() / self.rms_pct.len().max(1) as f64
     }
 
-    /// Smallest and largest run, % of path (NaN when a run has no figure).
+    /// Smallest and largest run, % of path (both NaN when a run has no figure: it is not
+    /// skipped).
     pub fn range_pct(&self) -> (f64, f64) {
-        self.rms_pct
+        if self.rms_pct.iter().any(|v| v.is_nan()) {
+            return (f64::NAN, f64::NAN);
+        }
+        let lo = self.rms_pct.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = self
+            .rms_pct
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                (min_or_nan(lo, v), max_or_nan(hi, v))
-            })
-    }
-}
-
-/// `a.max(b)`, but NaN when either is (a run without a figure is not skipped).
-fn max_or_nan(a: f64, b: f64) -> f64 {
-    if a.is_nan() || b.is_nan() {
-        f64::NAN
-    } else {
-        a.max(b)
-    }
-}
-
-/// `a.min(b)`, but NaN when either is.
-fn min_or_nan(a: f64, b: f64) -> f64 {
-    if a.is_nan() || b.is_nan() {
-        f64::NAN
-    } else {
-        a.min(b)
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max);
+        (lo, hi)
     }
 }
 
@@ -81,9 +68,7 @@ pub fn run_ensemble(suite_path: &Path) -> Result<Vec<EnsembleRow>, SuiteError> {
         let mut rms_pct = Vec::with_capacity(START_OFFSETS_DEG.len());
         for offset in START_OFFSETS_DEG {
             let cfg = ctx.default_config_turned(best, offset).map_err(wrap)?;
-            let aid = heading_aid(&cfg, None).map_err(wrap)?;
-            let run = runner::run_log(&ctx.log, &cfg, &aid, &BiasInjection::default(), |_, _| {});
-            rms_pct.push(ctx.footprint(&run).map_err(wrap)?.rms_pct);
+            rms_pct.push(ctx.footprint_at(&cfg).map_err(wrap)?.rms_pct);
         }
         rows.push(EnsembleRow {
             name: r.name.clone(),
@@ -115,15 +100,23 @@ pub fn ensemble_summary(rows: &[EnsembleRow]) -> Option<EnsembleSummary> {
         return None;
     }
     let mut means: Vec<f64> = normal.iter().map(|r| r.mean_pct()).collect();
-    let nan = means.iter().any(|m| m.is_nan());
+    if means.iter().any(|m| m.is_nan()) {
+        // A walk without a figure: no summary figure either, rather than one without it.
+        return Some(EnsembleSummary {
+            median_of_means_pct: f64::NAN,
+            mean_of_means_pct: f64::NAN,
+            worst_mean_pct: f64::NAN,
+            worst_run_pct: f64::NAN,
+        });
+    }
     Some(EnsembleSummary {
         mean_of_means_pct: means.iter().sum::<f64>() / means.len() as f64,
-        worst_mean_pct: means.iter().copied().fold(f64::NEG_INFINITY, max_or_nan),
-        median_of_means_pct: if nan { f64::NAN } else { median(&mut means) },
+        worst_mean_pct: means.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        median_of_means_pct: median(&mut means),
         worst_run_pct: normal
             .iter()
             .map(|r| r.range_pct().1)
-            .fold(f64::NEG_INFINITY, max_or_nan),
+            .fold(f64::NEG_INFINITY, f64::max),
     })
 }
 
@@ -150,10 +143,7 @@ pub fn ensemble_markdown(rows: &[EnsembleRow]) -> String {
     for r in rows {
         let (lo, hi) = r.range_pct();
         let runs: Vec<String> = r.rms_pct.iter().map(|v| format!("{v:.2}")).collect();
-        let gait = match r.gait {
-            Gait::Normal => "normal",
-            Gait::Fast => "fast",
-        };
+        let gait = r.gait.name();
         let _ = writeln!(
             md,
             "| {} | {gait} | {} | {:.2} | {:.2} |",

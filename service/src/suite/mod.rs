@@ -115,6 +115,16 @@ pub enum Gait {
     Fast,
 }
 
+impl Gait {
+    /// The name in the tables (as in the suite file).
+    pub fn name(self) -> &'static str {
+        match self {
+            Gait::Normal => "normal",
+            Gait::Fast => "fast",
+        }
+    }
+}
+
 /// Errors of the suite.
 #[derive(Debug, thiserror::Error)]
 pub enum SuiteError {
@@ -352,6 +362,13 @@ impl<'a> Ctx<'a> {
             truth: self.truth.clone(),
             ..*self
         })
+    }
+
+    /// The footprint figures of a run without injection at configuration `cfg`.
+    fn footprint_at(&self, cfg: &Config) -> Result<Footprint, RunError> {
+        let aid = heading_aid(cfg, None)?;
+        let run = runner::run_log(&self.log, cfg, &aid, &BiasInjection::default(), |_, _| {});
+        self.footprint(&run)
     }
 
     /// The footprint figures of a run against the recording's truth.

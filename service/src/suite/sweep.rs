@@ -11,9 +11,8 @@
 //! ignores (over this suite the medians of every swept value lie within 0.05 % of each other).
 
 use super::{Ctx, Gait, SuiteError, SuiteRecording, config_for, read_suite};
-use crate::runner::{self, RunError, heading_aid};
+use crate::runner::RunError;
 use corridor_shared::config::{BiasPrior, ConfigFile, Mode};
-use corridor_shared::injection::BiasInjection;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -149,10 +148,7 @@ pub fn run_sweep(suite_path: &Path, sweep_path: &Path) -> Result<Vec<SweepResult
                 let file = with_value(&ctx.config, &p.key, value).map_err(&file_err)?;
                 let path = base.join(&r.config);
                 let cfg = config_for(&file, &path, r, best, BiasPrior::RestMean).map_err(wrap)?;
-                let aid = heading_aid(&cfg, None).map_err(wrap)?;
-                let run =
-                    runner::run_log(&ctx.log, &cfg, &aid, &BiasInjection::default(), |_, _| {});
-                res.rms_pct[v].push(ctx.footprint(&run).map_err(wrap)?.rms_pct);
+                res.rms_pct[v].push(ctx.footprint_at(&cfg).map_err(wrap)?.rms_pct);
             }
         }
     }

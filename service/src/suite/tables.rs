@@ -71,10 +71,7 @@ pub fn headline_markdown(rows: &[SuiteRow]) -> String {
         s.push_str(&format!(
             "| {} | {} | {:.1} m | {:.2} % | {:.2} % | {:+.2} | {} / {} / {} | {:.3} | {} |\n",
             r.recording,
-            match r.gait {
-                Gait::Normal => "normal",
-                Gait::Fast => "fast",
-            },
+            r.gait.name(),
             r.path_m,
             r.zupt_rest.rms_pct,
             r.best_rest.rms_pct,
