@@ -371,6 +371,90 @@ fn run_starts_from_a_checkpoint_as_the_daemon_does_and_names_a_missing_one() {
     );
 }
 
+/// The footprints before the first truth leg the data set flags are scored on their own: the
+/// suite's figure equals `corridor run`'s evaluation of the same default run against the truth
+/// cut before that leg, and a leg the truth does not have is refused, naming the key.
+#[test]
+fn eval_scores_the_footprints_before_a_flagged_truth_leg() {
+    let dir = tmp("suspect");
+    let data = root().join("tests/data/gdins_exp31_corridor_back_and_forth");
+    let write_suite = |legs: &str| {
+        let path = dir.join("suite.toml");
+        std::fs::write(
+            &path,
+            format!(
+                "[[recording]]\nname = \"exp31\"\nimu = {:?}\ntruth = {:?}\nconfig = {:?}\n\
+                 start_heading_deg = 0.0\nsuspect_legs = {legs}\n",
+                data.join("imu.csv"),
+                data.join("ground_truth.csv"),
+                root().join("configs/gdins.toml"),
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let out = dir.join("eval");
+    let suite = write_suite("[31, 30]");
+    let o = corridor(&[
+        "eval",
+        "--suite",
+        suite.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let before = &rows[0]["before_suspect"];
+    assert_eq!(before["first_leg"], 30, "{before}");
+    assert_eq!(before["footprints"], 34, "{before}");
+    // The same default run through `corridor run`, against the first 30 footprints.
+    let truth: Vec<String> = std::fs::read_to_string(data.join("ground_truth.csv"))
+        .unwrap()
+        .lines()
+        .take(31) // the header and footprints 0-29
+        .map(String::from)
+        .collect();
+    let cut = dir.join("truth_before_leg_30.csv");
+    std::fs::write(&cut, truth.join("\n") + "\n").unwrap();
+    let run = dir.join("run");
+    let o = corridor(&[
+        "run",
+        "--imu",
+        data.join("imu.csv").to_str().unwrap(),
+        "--config",
+        root().join("configs/gdins.toml").to_str().unwrap(),
+        "--start-heading-deg",
+        "0",
+        "--grid-deg",
+        "0",
+        "--truth",
+        cut.to_str().unwrap(),
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+    let expected = summary["eval"]["rms_error_pct_of_path"].as_f64().unwrap();
+    let got = before["default"]["rms_pct"].as_f64().unwrap();
+    assert!((got - expected).abs() < 1e-9, "suite {got}, run {expected}");
+    // Scored on fewer footprints than the whole walk: a different figure.
+    let all = rows[0]["best_rest"]["rms_pct"].as_f64().unwrap();
+    assert!((got - all).abs() > 1e-6, "{got} {all}");
+    let md = std::fs::read_to_string(out.join("results.md")).unwrap();
+    assert!(md.contains("| exp31 | 30 | 30 of 34 |"), "{md}");
+
+    // A leg the truth does not have (34 footprints: legs 1-33).
+    let o = corridor(&["eval", "--suite", write_suite("[34]").to_str().unwrap()]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("exp31") && err.contains("suspect_legs") && err.contains("34"),
+        "{err}"
+    );
+}
+
 #[test]
 fn eval_ensemble_runs_every_walk_at_every_start_offset() {
     // A two-walk suite, one of them marked fast (reported, not summarised).

@@ -71,3 +71,33 @@ fn a_layered_file_takes_its_base_and_replaces_only_the_keys_it_sets() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The results suite's `suspect_legs` are the truth legs each recording's `meta.json` flags
+/// (its `legs_ratio_outside_0.85_1.15`), and a recording without a `meta.json` flags none.
+#[test]
+fn the_suites_suspect_legs_are_the_data_sets_own() {
+    let path = configs().join("eval/gdins.toml");
+    let suite = corridor_service::suite::read_suite(&path).unwrap();
+    assert!(!suite.recordings.is_empty());
+    let mut flagged = 0;
+    for r in &suite.recordings {
+        let meta = path
+            .parent()
+            .unwrap()
+            .join(&r.truth)
+            .with_file_name("meta.json");
+        let expected: Vec<usize> = match std::fs::read_to_string(&meta) {
+            Ok(text) => {
+                let m: serde_json::Value = serde_json::from_str(&text).unwrap();
+                let legs =
+                    &m["truth"]["imu_consistency"]["crude_ins_fit"]["legs_ratio_outside_0.85_1.15"];
+                serde_json::from_value(legs.clone())
+                    .unwrap_or_else(|e| panic!("{}: {e}", meta.display()))
+            }
+            Err(_) => Vec::new(),
+        };
+        assert_eq!(r.suspect_legs, expected, "{}", r.name);
+        flagged += usize::from(!expected.is_empty());
+    }
+    assert!(flagged > 0, "no recording of the suite has a flagged leg");
+}

@@ -102,6 +102,13 @@ pub struct SuiteRecording {
     /// summary.
     #[serde(default)]
     pub gait: Gait,
+    /// Legs of the truth (leg k: footprint k − 1 → k) that the data set's own consistency check
+    /// flags: a plain dead reckoning fitted to the footprints gives the leg a length outside
+    /// 0.85–1.15 of the surveyed one (`legs_ratio_outside_0.85_1.15` in the recording's
+    /// `meta.json`). The reference figure keeps every footprint; the default and the baseline
+    /// are also scored on the footprints before the first of these legs.
+    #[serde(default)]
+    pub suspect_legs: Vec<usize>,
 }
 
 /// The gait of a suite recording, as its data set documents it.
@@ -155,6 +162,20 @@ pub struct Footprint {
     pub rms_pct: f64,
     /// Error at the last GCP, m.
     pub final_m: f64,
+}
+
+/// The default and the baseline scored on the footprints before the first leg the data set's
+/// own check flags ([`SuiteRecording::suspect_legs`]).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct BeforeSuspect {
+    /// The first flagged leg: footprints 0 to `first_leg − 1` are scored.
+    pub first_leg: usize,
+    /// The recording's footprints.
+    pub footprints: usize,
+    /// The ZUPT + rest-mean baseline.
+    pub baseline: Footprint,
+    /// The default (best mode, rest-mean prior).
+    pub default: Footprint,
 }
 
 /// One row of the results table.
@@ -216,6 +237,8 @@ pub struct SuiteRow {
     pub front_end: FrontEnd,
     /// The bias the default run ended with, sensor axes, rad/s.
     pub final_bias_rad_s: [f64; 3],
+    /// The footprint figures before the first leg the data set flags (recordings with one).
+    pub before_suspect: Option<BeforeSuspect>,
 }
 
 /// Reads a suite file.
@@ -238,6 +261,12 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
         .inject_gyro_bias_rad_s
         .unwrap_or([0.001, 0.001, 0.005]);
     let best_mode = suite.best_mode.unwrap_or(Mode::Eskf);
+    for r in &suite.recordings {
+        check_suspect_legs(base, r).map_err(|message| SuiteError::File {
+            path: path.to_owned(),
+            message,
+        })?;
+    }
     fn wrap(r: &SuiteRecording) -> impl FnOnce(RunError) -> SuiteError + '_ {
         move |source| SuiteError::Run {
             name: r.name.clone(),
@@ -268,6 +297,35 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
             without_rest_from_checkpoint(base, r, best_mode, &others).map_err(wrap(r))?;
     }
     Ok(rows)
+}
+
+/// A recording's `suspect_legs` name legs of its truth, and leave the first-leg alignment
+/// footprint (the first one 5 m from the start) before the first of them.
+fn check_suspect_legs(base: &Path, r: &SuiteRecording) -> Result<(), String> {
+    let Some(&first) = r.suspect_legs.iter().min() else {
+        return Ok(());
+    };
+    let truth = read_truth_csv(&base.join(&r.truth)).map_err(|e| e.to_string())?;
+    if let Some(&leg) = r.suspect_legs.iter().find(|&&k| k == 0 || k >= truth.len()) {
+        return Err(format!(
+            "recording {}: suspect_legs: {leg} is not a leg of its {} footprints (legs 1 to {})",
+            r.name,
+            truth.len(),
+            truth.len().saturating_sub(1)
+        ));
+    }
+    let heading_gcp = truth.iter().position(|g| {
+        (g.x_m - truth[0].x_m).hypot(g.y_m - truth[0].y_m)
+            >= EvalOptions::default().heading_min_dist_m
+    });
+    match heading_gcp {
+        Some(k) if k < first => Ok(()),
+        _ => Err(format!(
+            "recording {}: suspect_legs: leg {first} comes before the footprint 5 m from the start \
+             (nothing would be left to score before it)",
+            r.name
+        )),
+    }
 }
 
 /// The default run on the log cut to its last [`KEPT_REST_S`] of rest, started from the
@@ -373,9 +431,22 @@ impl<'a> Ctx<'a> {
 
     /// The footprint figures of a run against the recording's truth.
     fn footprint(&self, out: &RunOutcome) -> Result<Footprint, RunError> {
+        self.footprint_against(out, &self.truth)
+    }
+
+    /// The footprint figures of a run against the recording's footprints before leg `leg`.
+    fn footprint_before_leg(&self, out: &RunOutcome, leg: usize) -> Result<Footprint, RunError> {
+        self.footprint_against(out, &self.truth[..leg.min(self.truth.len())])
+    }
+
+    fn footprint_against(
+        &self,
+        out: &RunOutcome,
+        truth: &[TruthPoint],
+    ) -> Result<Footprint, RunError> {
         let rep = out
             .trace
-            .evaluate(&self.truth, &EvalOptions::default())
+            .evaluate(truth, &EvalOptions::default())
             .map_err(|source| RunError::Eval {
                 truth: self.base.join(&self.rec.truth),
                 source,
@@ -516,7 +587,7 @@ fn run_recording(
         ..Default::default()
     };
     let (_, zupt) = ctx.run_baseline(BiasPrior::None, none)?;
-    let (_, zupt_rest) = ctx.run_baseline(BiasPrior::RestMean, none)?;
+    let (zupt_rest_run, zupt_rest) = ctx.run_baseline(BiasPrior::RestMean, none)?;
     let (_, zupt_inj) = ctx.run_baseline(BiasPrior::None, injected)?;
     let (paper0, _) = ctx.run(Mode::Paper, BiasPrior::None, none)?;
     let (paper1, paper_inj) = ctx.run(Mode::Paper, BiasPrior::None, injected)?;
@@ -540,6 +611,15 @@ fn run_recording(
         ..Default::default()
     };
     let (best_r1, _) = ctx.run(best, BiasPrior::RestMean, late)?;
+    let before_suspect = match r.suspect_legs.iter().min() {
+        Some(&leg) => Some(BeforeSuspect {
+            first_leg: leg,
+            footprints: ctx.truth.len(),
+            baseline: ctx.footprint_before_leg(&zupt_rest_run, leg)?,
+            default: ctx.footprint_before_leg(&best_r0, leg)?,
+        }),
+        None => None,
+    };
     let front_end = ctx.front_end(
         best,
         best_r0.counters.clipped_samples,
@@ -578,6 +658,7 @@ fn run_recording(
             .last()
             .copied()
             .unwrap_or([f64::NAN; 3]),
+        before_suspect,
     })
 }
 

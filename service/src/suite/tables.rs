@@ -25,6 +25,9 @@ pub struct Summary {
     /// Recordings on which the default is worse than the baseline by more than
     /// [`NOT_WORSE_TOLERANCE_PCT`].
     pub default_worse: usize,
+    /// The same count with the recordings whose truth has legs the data set's own check flags
+    /// scored on their footprints before the first such leg ([`super::BeforeSuspect`]).
+    pub default_worse_before_suspect: usize,
 }
 
 /// The median (the mean of the middle two for an even count; NaN for none); sorts `v`.
@@ -56,6 +59,15 @@ pub fn summary(rows: &[SuiteRow]) -> Summary {
         default_worse: normal
             .iter()
             .filter(|r| r.best_rest.rms_pct > r.zupt_rest.rms_pct + NOT_WORSE_TOLERANCE_PCT)
+            .count(),
+        default_worse_before_suspect: normal
+            .iter()
+            .filter(|r| {
+                let (d, b) = r
+                    .before_suspect
+                    .map_or((r.best_rest, r.zupt_rest), |x| (x.default, x.baseline));
+                d.rms_pct > b.rms_pct + NOT_WORSE_TOLERANCE_PCT
+            })
             .count(),
     }
 }
@@ -105,7 +117,48 @@ pub fn headline_markdown(rows: &[SuiteRow]) -> String {
         NOT_WORSE_TOLERANCE_PCT,
         m.default_worse
     ));
+    s.push_str(&suspect_markdown(rows, &m));
     s
+}
+
+/// The recordings whose truth has legs the data set's own check flags, scored also on the
+/// footprints before the first of them.
+fn suspect_markdown(rows: &[SuiteRow], m: &Summary) -> String {
+    let flagged: Vec<String> = rows
+        .iter()
+        .filter_map(|r| {
+            let x = r.before_suspect?;
+            Some(format!(
+                "| {} | {} | {} of {} | {:.2} % | {:.2} % | {:+.2} | {:.2} % | {:.2} % | {:+.2} |\n",
+                r.recording,
+                x.first_leg,
+                x.first_leg,
+                x.footprints,
+                r.zupt_rest.rms_pct,
+                r.best_rest.rms_pct,
+                r.best_rest.rms_pct - r.zupt_rest.rms_pct,
+                x.baseline.rms_pct,
+                x.default.rms_pct,
+                x.default.rms_pct - x.baseline.rms_pct,
+            ))
+        })
+        .collect();
+    if flagged.is_empty() {
+        return String::new();
+    }
+    format!(
+        "\nTruth legs that the data set's own consistency check flags (a plain dead reckoning fitted to the \
+         footprints gives the leg a length outside 0.85–1.15 of the surveyed one; `meta.json` of each recording): \
+         the footprints before the first flagged leg scored alone, % of their own path.\n\n\
+         | recording | first flagged leg | footprints before it | baseline, all | default, all | default − baseline | baseline, before it | default, before it | default − baseline |\n\
+         |---|---|---|---|---|---|---|---|---|\n{}\n\
+         Normal gait, scored before the flagged legs where there are any: default worse than the baseline by more \
+         than {:.2} % of path on {} of {}.\n",
+        flagged.concat(),
+        NOT_WORSE_TOLERANCE_PCT,
+        m.default_worse_before_suspect,
+        m.n
+    )
 }
 
 /// The NIS table: mean per degree of freedom of each update type of the default run, and its
