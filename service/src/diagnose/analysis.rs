@@ -132,6 +132,9 @@ pub struct Analysis {
     pub effects: Vec<Finding>,
     /// Final gyro scale factors per sensor axis with their σ, when the model estimates them.
     pub scale_factor: Option<[[f64; 2]; 3]>,
+    /// Final cross-couplings into the sensor z axis (from x, from y), rad, with their σ, when
+    /// the model estimates them.
+    pub coupling_z_rad: Option<[[f64; 2]; 2]>,
     /// The residuals (for plots and the report).
     #[serde(skip)]
     pub residuals: Vec<HeadingResidual>,
@@ -384,19 +387,51 @@ pub fn analyse(
         &power,
         matches!(cfg.mode, Mode::Eskf | Mode::Zupt),
     );
-    let scale_factor = outcome
-        .extensions
-        .and_then(|(x, sd)| sd.map(|sd| std::array::from_fn(|k| [x.scale_factor[k], sd[k]])));
+    let scale_factor = outcome.extensions.and_then(|(x, sd)| {
+        sd.scale_factor
+            .map(|sd| std::array::from_fn(|k| [x.scale_factor[k], sd[k]]))
+    });
+    let coupling_z_rad = outcome.extensions.and_then(|(x, sd)| {
+        sd.coupling_z_rad
+            .map(|sd| std::array::from_fn(|k| [x.coupling_z_rad[k], sd[k]]))
+    });
     Ok(Analysis {
         model: model_keys(file),
         consistency,
         effects,
         scale_factor,
+        coupling_z_rad,
         residuals: res,
         stances,
         power,
         bias_change,
     })
+}
+
+impl Analysis {
+    /// The sensor-error states' final estimates with their σ, in words.
+    pub fn estimates_in_words(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if let Some(sf) = self.scale_factor {
+            for (axis, [s, sd]) in ["x", "y", "z"].iter().zip(sf) {
+                v.push(format!(
+                    "{axis} scale factor {:+.2} % ± {:.2} %",
+                    100.0 * s,
+                    100.0 * sd
+                ));
+            }
+        }
+        if let Some(m) = self.coupling_z_rad {
+            for (from, [c, sd]) in ["x", "y"].iter().zip(m) {
+                v.push(format!(
+                    "z←{from} coupling {:+.2}° ± {:.2}°",
+                    c.to_degrees(),
+                    sd.to_degrees()
+                ));
+            }
+        }
+        v
+    }
 }
 
 #[derive(Debug, Clone, Copy, Default)]
@@ -432,6 +467,9 @@ fn model_keys(file: &ConfigFile) -> Vec<String> {
     }
     if m.g_sensitivity_sd.is_some() {
         v.push("g_sensitivity".into());
+    }
+    if m.gyro_coupling_z_sd_deg.is_some() {
+        v.push("gyro_coupling_z".into());
     }
     if let Some(rw) = file.eskf.gyro_bias_rw_rad_s_sqrt_s {
         v.push(format!("gyro_bias_rw = {rw:e}"));

@@ -70,7 +70,8 @@ impl Effect {
             Effect::GyroScaleFactor | Effect::Timing => &[(Fix::ScaleFactor, 3)],
             Effect::GSensitivity => &[(Fix::GSensitivity, 3)],
             Effect::MountingTilt => &[(Fix::RotationAware, 3)],
-            Effect::AxisMisalignment | Effect::GyroClipping | Effect::Unexplained => &[],
+            Effect::AxisMisalignment => &[(Fix::GyroCouplingZ, 2)],
+            Effect::GyroClipping | Effect::Unexplained => &[],
         }
     }
 }
@@ -100,6 +101,8 @@ pub enum Fix {
     ScaleFactor,
     /// Gyro g-sensitivity states (`model.g_sensitivity_sd = 1e-3`).
     GSensitivity,
+    /// Gyro cross-coupling states into the sensor z axis (`model.gyro_coupling_z_sd_deg = 3`).
+    GyroCouplingZ,
     /// The rotation-aware variant of the paper's filter (`estimator.mode = rotation_aware`).
     RotationAware,
     /// The gyro range at the rail found in the data, so that its samples are flagged as
@@ -118,12 +121,13 @@ pub const RAIL_OF_RANGE: f64 = 0.99;
 
 impl Fix {
     /// Every fix (the clipping fix at a 5 rad/s rail).
-    pub const ALL: [Fix; 7] = [
+    pub const ALL: [Fix; 8] = [
         Fix::HeadingOffset,
         Fix::BiasRate,
         Fix::BiasRandomWalkTimes10,
         Fix::ScaleFactor,
         Fix::GSensitivity,
+        Fix::GyroCouplingZ,
         Fix::RotationAware,
         Fix::GyroRail { milli_rad_s: 5000 },
     ];
@@ -136,6 +140,7 @@ impl Fix {
             Fix::BiasRandomWalkTimes10 => "eskf.gyro_bias_rw_rad_s_sqrt_s × 10",
             Fix::ScaleFactor => "model.scale_factor_sd = 0.02",
             Fix::GSensitivity => "model.g_sensitivity_sd = 1e-3",
+            Fix::GyroCouplingZ => "model.gyro_coupling_z_sd_deg = 3",
             Fix::RotationAware => "estimator.mode = rotation_aware",
             Fix::GyroRail { .. } => "sensor.gyro_range_rad_s = the rail / 0.99",
         }
@@ -145,7 +150,11 @@ impl Fix {
     pub fn is_model_extension(self) -> bool {
         matches!(
             self,
-            Fix::HeadingOffset | Fix::BiasRate | Fix::ScaleFactor | Fix::GSensitivity
+            Fix::HeadingOffset
+                | Fix::BiasRate
+                | Fix::ScaleFactor
+                | Fix::GSensitivity
+                | Fix::GyroCouplingZ
         )
     }
 }
@@ -195,6 +204,9 @@ pub fn apply_fix(fix: Fix, file: &mut ConfigFile) -> bool {
         }
         Fix::ScaleFactor if m.scale_factor_sd.is_none() => m.scale_factor_sd = Some(0.02),
         Fix::GSensitivity if m.g_sensitivity_sd.is_none() => m.g_sensitivity_sd = Some(1e-3),
+        Fix::GyroCouplingZ if m.gyro_coupling_z_sd_deg.is_none() => {
+            m.gyro_coupling_z_sd_deg = Some(3.0)
+        }
         Fix::BiasRandomWalkTimes10 => {
             let rw = file.eskf.gyro_bias_rw_rad_s_sqrt_s.unwrap_or(1e-4);
             if rw >= 1e-3 {
@@ -276,15 +288,20 @@ mod tests {
         assert_eq!(fixes(Effect::Timing), [Fix::ScaleFactor]);
         assert_eq!(fixes(Effect::GSensitivity), [Fix::GSensitivity]);
         assert_eq!(fixes(Effect::MountingTilt), [Fix::RotationAware]);
-        assert!(Effect::AxisMisalignment.fixes().is_empty());
+        assert_eq!(fixes(Effect::AxisMisalignment), [Fix::GyroCouplingZ]);
         assert!(Effect::Unexplained.fixes().is_empty());
         // The clipping finding carries its fix (the rail is the data's).
         assert!(Effect::GyroClipping.fixes().is_empty());
-        // Parameters added: one offset, one random-walk scale, three states otherwise.
+        // Parameters added: one offset, one random-walk scale, two couplings, three states
+        // otherwise.
         for e in Effect::ALL {
             for &(f, k) in e.fixes() {
-                let one = matches!(f, Fix::HeadingOffset | Fix::BiasRandomWalkTimes10);
-                assert_eq!(k, if one { 1 } else { 3 }, "{e} {f}");
+                let want = match f {
+                    Fix::HeadingOffset | Fix::BiasRandomWalkTimes10 => 1,
+                    Fix::GyroCouplingZ => 2,
+                    _ => 3,
+                };
+                assert_eq!(k, want, "{e} {f}");
             }
         }
         // Every fix but the data's is reachable from some effect.

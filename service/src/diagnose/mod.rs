@@ -33,7 +33,9 @@
 //!   bias-rate states for a ramp, a faster bias random walk for a step;
 //! - `gyro_scale_factor`: `r` proportional to the signed turn since the last used observation;
 //! - `g_sensitivity`: `r` proportional to ∫| |f| − g |;
-//! - `axis_misalignment`: `r` proportional to the total rotation ∫|ω| (cadence), not to the turn;
+//! - `axis_misalignment`: `r` proportional to the total rotation ∫|ω| (cadence), not to the turn,
+//!   or the y→z / x→z coupling signatures; the fix is cross-coupling states into the sensor z
+//!   axis (`model.gyro_coupling_z_sd_deg`);
 //! - `timing`: `r` proportional to the time-step deviations (jitter, gaps);
 //! - `gyro_clipping`: the gyro runs into a rail below its configured range (flat tops in the
 //!   data, `clipping`); the fix sets the range at the rail so its samples are flagged and the
@@ -133,6 +135,9 @@ pub struct Report {
     pub final_effects: Vec<Finding>,
     /// The final model's extensions.
     pub final_model: Vec<String>,
+    /// What the final model's sensor-error states estimated, in words (the size of the effect
+    /// the loop added), e.g. `z←x coupling +1.93° ± 0.41°`.
+    pub final_estimates: Vec<String>,
 }
 
 /// What a diagnosis found: the report, the analyses of the starting and the final model, and
@@ -217,6 +222,7 @@ pub fn run_diagnosis(
         iterations,
         final_effects: current.effects.clone(),
         final_model: current.model.clone(),
+        final_estimates: current.estimates_in_words(),
     };
     Ok(Diagnosis {
         report,

@@ -99,11 +99,18 @@ pub fn write_report(
         ));
     }
     md.push_str(&format!(
-        "\nBefore: {} ; after: {} ; final model: {}.\n\n![residuals](residuals.svg)\n",
+        "\nBefore: {} ; after: {} ; final model: {}.\n",
         describe(&report.before),
         describe(&report.after),
         report.final_model.join(", ")
     ));
+    if !report.final_estimates.is_empty() {
+        md.push_str(&format!(
+            "\nThe final model's sensor-error estimates: {}.\n",
+            report.final_estimates.join(", ")
+        ));
+    }
+    md.push_str("\n![residuals](residuals.svg)\n");
     let f = dir.join("report.md");
     std::fs::write(&f, md).map_err(io_at(&f))?;
     let f = dir.join("report.json");

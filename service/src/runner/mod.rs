@@ -123,10 +123,10 @@ pub struct RunOutcome {
     /// The first [`MAX_REFUSED_EXAMPLES`] samples refused by the estimator, with file, line and
     /// reason (the counts are in `counters`).
     pub refused: Vec<String>,
-    /// Final extension estimates and the scale factors' σ (see `Estimator::extensions`).
+    /// Final extension estimates and the σ of the reported ones (see `Estimator::extensions`).
     pub extensions: Option<(
         crate::core::eskf::ExtensionEstimates,
-        Option<nalgebra::Vector3<f64>>,
+        crate::core::eskf::ExtensionSd,
     )>,
 }
 

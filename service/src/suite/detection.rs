@@ -413,6 +413,7 @@ fn model_keys(f: &ConfigFile) -> Vec<String> {
         (m.bias_rate_rw_rad_s2_sqrt_s.is_some(), "bias_rate"),
         (m.scale_factor_sd.is_some(), "scale_factor"),
         (m.g_sensitivity_sd.is_some(), "g_sensitivity"),
+        (m.gyro_coupling_z_sd_deg.is_some(), "gyro_coupling_z"),
     ]
     .iter()
     .filter(|(on, _)| *on)

@@ -52,6 +52,10 @@ pub struct ModelFile {
     pub heading_offset_sd_deg: Option<f64>,
     /// Diagonal g-sensitivity states: initial σ, rad/s per m/s².
     pub g_sensitivity_sd: Option<f64>,
+    /// Gyro cross-coupling states into the sensor z axis (from x and from y, an axis
+    /// misalignment as it reaches the heading when z is the axis nearest the vertical):
+    /// initial σ, degrees.
+    pub gyro_coupling_z_sd_deg: Option<f64>,
 }
 
 /// `[daemon]` section: the estimator service.

@@ -43,6 +43,8 @@ pub struct ModelSettings {
     pub heading_offset_sd_rad: Option<Positive>,
     /// g-sensitivity initial σ.
     pub g_sensitivity_sd: Option<Positive>,
+    /// Cross-coupling (into the sensor z axis) initial σ, rad.
+    pub gyro_coupling_z_sd_rad: Option<Positive>,
 }
 
 /// Validated `[daemon]`.

@@ -195,6 +195,10 @@ impl ConfigFile {
                 md.heading_offset_sd_deg.map(f64::to_radians),
             )?,
             g_sensitivity_sd: opt("model.g_sensitivity_sd", md.g_sensitivity_sd)?,
+            gyro_coupling_z_sd_rad: opt(
+                "model.gyro_coupling_z_sd_deg",
+                md.gyro_coupling_z_sd_deg.map(f64::to_radians),
+            )?,
         };
         Ok(Config {
             model,

@@ -53,7 +53,8 @@ fn propagate_base(
 
 impl Eskf {
     /// P ← F P Fᵀ + Q for the sparse F = I + G with the blocks
-    /// p←v: dt·I, v←θ: −[f]×dt, θ←b: −C·dt, θ←s: −C·diag(ω)·dt, θ←k: −C·diag(f)·dt, b←d: dt·I.
+    /// p←v: dt·I, v←θ: −[f]×dt, θ←b: −C·dt, θ←s: −C·diag(ω)·dt, θ←k: −C·diag(f)·dt,
+    /// θ←m: −C·[0 0; 0 0; ω_x ω_y]·dt (the third column of −C·dt times ω_x, ω_y), b←d: dt·I.
     /// Written out on the column-major storage: about 500 multiply-adds for the base filter
     /// instead of the 3,500 of a dense product (the hot path of the core).
     /// `p0` is the covariance before the step; `self`'s is overwritten.
@@ -89,6 +90,11 @@ impl Eskf {
             // θ←s and θ←k blocks: −C·diag(ω)·dt and −C·diag(f)·dt.
             let fts = m3(&(minus_c_dt * Matrix3::from_diagonal(omega)));
             let ftk = m3(&(minus_c_dt * Matrix3::from_diagonal(f_body)));
+            // θ←m rows: (−C·dt)[i, z] · (ω_x, ω_y).
+            let ftm: [[f64; 2]; 3] = std::array::from_fn(|i| {
+                [minus_c_dt[(i, 2)] * omega.x, minus_c_dt[(i, 2)] * omega.y]
+            });
+            let dot2 = |m: &[f64; 2], v: [f64; 2]| m[0] * v[0] + m[1] * v[1];
             // M = F P: rows p, v, θ, b read the old rows v, θ, b/s/k, d.
             for col in 0..n {
                 let c = &mut a[col * MAX_N..col * MAX_N + n];
@@ -97,6 +103,7 @@ impl Eskf {
                 let b = [c[BG], c[BG + 1], c[BG + 2]];
                 let s = lay.scale.map(|i| [c[i], c[i + 1], c[i + 2]]);
                 let k = lay.gsens.map(|i| [c[i], c[i + 1], c[i + 2]]);
+                let m = lay.coupling.map(|i| [c[i], c[i + 1]]);
                 let d = b_rate.map(|i| [c[i], c[i + 1], c[i + 2]]);
                 for i in 0..3 {
                     c[P0 + i] += dt * v[i];
@@ -107,6 +114,9 @@ impl Eskf {
                     }
                     if let Some(k) = k {
                         dth += dot3(&ftk[i], k);
+                    }
+                    if let Some(m) = m {
+                        dth += dot2(&ftm[i], m);
                     }
                     c[TH + i] += dth;
                     if let Some(d) = d {
@@ -124,6 +134,7 @@ impl Eskf {
                 let b = col(a, row, BG);
                 let s = lay.scale.map(|i| col(a, row, i));
                 let k = lay.gsens.map(|i| col(a, row, i));
+                let m = lay.coupling.map(|i| [a[ix(row, i)], a[ix(row, i + 1)]]);
                 let d = b_rate.map(|i| col(a, row, i));
                 for i in 0..3 {
                     a[ix(row, P0 + i)] += dt * v[i];
@@ -134,6 +145,9 @@ impl Eskf {
                     }
                     if let Some(k) = k {
                         dth += dot3(&ftk[i], k);
+                    }
+                    if let Some(m) = m {
+                        dth += dot2(&ftm[i], m);
                     }
                     a[ix(row, TH + i)] += dth;
                     if let Some(d) = d {

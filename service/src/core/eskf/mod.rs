@@ -8,6 +8,9 @@
 //! - foot-heading offset (1 state: the foot points `offset` away from the walking direction
 //!   the map gives, e.g. a toe-out that differs from the one calibrated at the start);
 //! - g-sensitivity, diagonal (3 states: `ω_meas = ω + b + k∘f`);
+//! - gyro cross-coupling into the body z axis (2 states: the z gyro also reads
+//!   `m_zx·ω_x + m_zy·ω_y`; an axis misalignment as it reaches the heading when z is the axis
+//!   nearest the vertical);
 //! - the previous footprint (2 states: a stochastic clone of the horizontal position at the
 //!   last stance, so that the direction of the stride since then can be observed).
 //!
@@ -22,8 +25,8 @@
 use super::rotation::{exp_rotvec, heading_jacobian, heading_of_axis, skew, wrap_pi};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
-/// Largest error-state dimension (12 base states and 12 extension states).
-pub const MAX_N: usize = 24;
+/// Largest error-state dimension (12 base states and 14 extension states).
+pub const MAX_N: usize = 26;
 const P0: usize = 0;
 const V0: usize = 3;
 const TH: usize = 6;
@@ -81,6 +84,9 @@ pub struct Extensions {
     pub heading_offset_sd: Option<f64>,
     /// g-sensitivity states: initial σ, rad/s per m/s² (`None`: off).
     pub g_sensitivity_sd: Option<f64>,
+    /// Cross-coupling states into the body z axis (from x and from y): initial σ, rad
+    /// (`None`: off).
+    pub coupling_sd: Option<f64>,
     /// Footprint-clone states for stride-direction observations.
     pub footprint_clone: bool,
 }
@@ -93,6 +99,7 @@ struct Layout {
     scale: Option<usize>,
     offset: Option<usize>,
     gsens: Option<usize>,
+    coupling: Option<usize>,
     clone: Option<usize>,
 }
 
@@ -109,6 +116,7 @@ impl Layout {
         let scale = take(ext.scale_factor_sd.is_some(), 3);
         let offset = take(ext.heading_offset_sd.is_some(), 1);
         let gsens = take(ext.g_sensitivity_sd.is_some(), 3);
+        let coupling = take(ext.coupling_sd.is_some(), 2);
         let clone = take(ext.footprint_clone, 2);
         Self {
             n,
@@ -116,6 +124,7 @@ impl Layout {
             scale,
             offset,
             gsens,
+            coupling,
             clone,
         }
     }
@@ -123,7 +132,10 @@ impl Layout {
     /// Whether every extension state is constant between updates (F = I, no noise): the
     /// heading offset and the footprint clone. Then the base block propagation serves.
     fn static_extensions_only(&self) -> bool {
-        self.rate.is_none() && self.scale.is_none() && self.gsens.is_none()
+        self.rate.is_none()
+            && self.scale.is_none()
+            && self.gsens.is_none()
+            && self.coupling.is_none()
     }
 }
 
@@ -151,6 +163,18 @@ pub struct ExtensionEstimates {
     pub heading_offset_rad: f64,
     /// g-sensitivity, rad/s per m/s², body axes.
     pub g_sensitivity: Vector3<f64>,
+    /// Cross-coupling into the body z axis, rad: `[m_zx, m_zy]` (the z gyro reads
+    /// `m_zx·ω_x + m_zy·ω_y` too much).
+    pub coupling_z_rad: [f64; 2],
+}
+
+/// σ of the extension estimates that are reported, when their states are on.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ExtensionSd {
+    /// Gyro scale factor per body axis.
+    pub scale_factor: Option<Vector3<f64>>,
+    /// Cross-coupling into the body z axis `[m_zx, m_zy]`, rad.
+    pub coupling_z_rad: Option<[f64; 2]>,
 }
 
 /// The filter.
@@ -247,6 +271,11 @@ impl Eskf {
                 set(i + k, sd * sd);
             }
         }
+        if let (Some(i), Some(sd)) = (layout.coupling, ext.coupling_sd) {
+            for k in 0..2 {
+                set(i + k, sd * sd);
+            }
+        }
         f
     }
 
@@ -308,8 +337,9 @@ impl Eskf {
         (0..self.layout.n).map(move |i| &self.p[i * (MAX_N + 1)])
     }
 
-    /// The body rate corrected for the filter's own error model (scale factor and
-    /// g-sensitivity) and for `bias_rad_s` (the filter's own bias, or an external one).
+    /// The body rate corrected for the filter's own error model (scale factor, g-sensitivity
+    /// and the cross-coupling into z) and for `bias_rad_s` (the filter's own bias, or an
+    /// external one).
     pub fn corrected_rate(
         &self,
         omega_meas_rad_s: &Vector3<f64>,
@@ -322,6 +352,11 @@ impl Eskf {
         }
         if self.layout.scale.is_some() {
             w = w.component_div(&(Vector3::repeat(1.0) + self.ext.scale_factor));
+        }
+        if self.layout.coupling.is_some() {
+            // x and y are already the true rates; z read (1 + s_z)·ω_z + m_zx·ω_x + m_zy·ω_y.
+            let [mx, my] = self.ext.coupling_z_rad;
+            w.z -= (mx * w.x + my * w.y) / (1.0 + self.ext.scale_factor.z);
         }
         w
     }
@@ -393,6 +428,10 @@ impl Eskf {
         }
         if let Some(i) = self.layout.gsens {
             self.ext.g_sensitivity += v3(i);
+        }
+        if let Some(i) = self.layout.coupling {
+            self.ext.coupling_z_rad[0] += dx[i];
+            self.ext.coupling_z_rad[1] += dx[i + 1];
         }
         if let Some(i) = self.layout.clone {
             self.footprint_xy_m[0] += dx[i];
@@ -511,6 +550,21 @@ impl Eskf {
     /// σ of the heading-offset state, when enabled.
     pub fn heading_offset_sd(&self) -> Option<f64> {
         self.layout.offset.map(|i| self.p[ix(i, i)].max(0.0).sqrt())
+    }
+
+    /// σ of the reported extension estimates.
+    pub fn extension_sd(&self) -> ExtensionSd {
+        ExtensionSd {
+            scale_factor: self.scale_factor_sd(),
+            coupling_z_rad: self.coupling_z_sd(),
+        }
+    }
+
+    /// σ of the cross-coupling states `[m_zx, m_zy]`, rad, when enabled.
+    pub fn coupling_z_sd(&self) -> Option<[f64; 2]> {
+        self.layout
+            .coupling
+            .map(|i| std::array::from_fn(|k| self.p[ix(i + k, i + k)].max(0.0).sqrt()))
     }
 
     /// σ of the scale-factor states, when enabled.

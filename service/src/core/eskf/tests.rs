@@ -17,6 +17,7 @@ fn all_ext() -> Extensions {
         scale_factor_sd: Some(0.01),
         heading_offset_sd: Some(0.05),
         g_sensitivity_sd: Some(1e-3),
+        coupling_sd: Some(0.02),
         footprint_clone: true,
     }
 }
@@ -203,6 +204,13 @@ fn block_propagation_equals_dense_formula_with_every_extension() {
         if let Some(i) = lay.rate {
             put(BG, i, &(Matrix3::identity() * dt));
         }
+        if let Some(i) = lay.coupling {
+            // ∂(rate error)/∂(m_zx, m_zy) = e_z·(ω_x, ω_y)
+            let mut g = nalgebra::Matrix3x2::<f64>::zeros();
+            g[(2, 0)] = omega.x;
+            g[(2, 1)] = omega.y;
+            big_f.view_mut((TH, i), (3, 2)).copy_from(&(-c * g * dt));
+        }
         let mut q = nalgebra::DMatrix::<f64>::zeros(n, n);
         for i in 0..3 {
             q[(V0 + i, V0 + i)] = 0.25 * dt;
@@ -332,6 +340,56 @@ fn scale_factor_state_converges_on_a_turning_body() {
         "{}",
         f.ext.scale_factor.z
     );
+}
+
+#[test]
+fn coupling_states_converge_on_a_body_that_pitches_and_turns() {
+    // The z gyro also reads 3 % of the x rate and −2 % of the y rate; the body turns about z and
+    // rocks about x and y (a foot's swing), and the heading is observed every second.
+    let ext = Extensions {
+        coupling_sd: Some(0.05),
+        ..Default::default()
+    };
+    let mut f = filter(
+        UnitQuaternion::identity(),
+        Vector3::zeros(),
+        0.01,
+        1e-4,
+        ext,
+    );
+    let (m_zx, m_zy) = (0.03, -0.02);
+    let dt = 0.005;
+    let mut truth = UnitQuaternion::identity();
+    for k in 0..40_000 {
+        let t = k as f64 * dt;
+        let w = Vector3::new(
+            3.0 * (2.0 * t).sin(),
+            2.0 * (3.1 * t).cos(),
+            if (k / 400) % 2 == 0 { 1.0 } else { -0.5 },
+        );
+        truth *= exp_rotvec(&(w * dt));
+        let g_body = truth.inverse() * Vector3::new(0.0, 0.0, 9.81);
+        let meas = Vector3::new(w.x, w.y, w.z + m_zx * w.x + m_zy * w.y);
+        let omega = f.corrected_rate(&meas, &g_body, &f.gyro_bias_rad_s.clone());
+        f.propagate(&omega, &g_body, dt);
+        f.zupt();
+        if k % 200 == 199 {
+            let yaw = heading_of_axis(&truth, &Vector3::x());
+            f.heading_update(yaw, 0.005, &Vector3::x());
+        }
+    }
+    let [mx, my] = f.ext.coupling_z_rad;
+    assert!(
+        (mx - m_zx).abs() < 3e-3 && (my - m_zy).abs() < 3e-3,
+        "{mx} {my}"
+    );
+    let sd = f.coupling_z_sd().unwrap();
+    assert!(sd[0] < 0.01 && sd[1] < 0.01, "{sd:?}");
+    // The corrected rate takes the coupling out of z.
+    let w = Vector3::new(1.0, -2.0, 0.5);
+    let meas = Vector3::new(w.x, w.y, w.z + mx * w.x + my * w.y);
+    let back = f.corrected_rate(&meas, &Vector3::zeros(), &Vector3::zeros());
+    assert!((back - w).norm() < 1e-12, "{back}");
 }
 
 #[test]

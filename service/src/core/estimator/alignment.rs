@@ -86,6 +86,7 @@ impl Pipeline {
                 scale_factor_sd: m.scale_factor_sd.map(|v| v.get()),
                 heading_offset_sd: m.heading_offset_sd_rad.map(|v| v.get()),
                 g_sensitivity_sd: m.g_sensitivity_sd.map(|v| v.get()),
+                coupling_sd: m.gyro_coupling_z_sd_rad.map(|v| v.get()),
                 footprint_clone: self.cfg.mode == Mode::Eskf
                     && self.cfg.heading.observations.stride(),
             }

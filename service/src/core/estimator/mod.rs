@@ -40,7 +40,9 @@ use rest::{RestMeans, RestSums};
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::clock::SampleClock;
-use super::eskf::{BiasStates, Eskf, EskfInit, EskfNoise, ExtensionEstimates, Extensions};
+use super::eskf::{
+    BiasStates, Eskf, EskfInit, EskfNoise, ExtensionEstimates, ExtensionSd, Extensions,
+};
 use super::heading::{FootprintLine, HeadingAid, Rejection, StraightWalk};
 use super::health::{self, HealthLimits, LastGood};
 use super::plausibility::Plausibility;
@@ -238,11 +240,11 @@ impl Estimator {
     }
 
     /// The error-state filter's extension estimates (zero for the extensions that are off),
-    /// with the σ of the scale factors when they are on.
-    pub fn extensions(&self) -> Option<(ExtensionEstimates, Option<Vector3<f64>>)> {
+    /// with the σ of the reported ones that are on.
+    pub fn extensions(&self) -> Option<(ExtensionEstimates, ExtensionSd)> {
         match &self.stage {
             Stage::Aligning(_) => None,
-            Stage::Running(e) => Some((e.ext, e.scale_factor_sd())),
+            Stage::Running(e) => Some((e.ext, e.extension_sd())),
         }
     }
 
