@@ -36,6 +36,11 @@ fn suite_of(dir: &Path, walks: &[(&str, &str)]) -> PathBuf {
     path
 }
 
+fn read_json(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
 fn tmp(name: &str) -> TempDir {
     TempDir::new(&format!("cli-{}-{name}", std::process::id()))
 }
@@ -84,8 +89,7 @@ fn run_writes_estimates_innovations_and_summary() {
         14_001,
         "one row per sample plus the header"
     );
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary = read_json(&out.join("summary.json"));
     for key in [
         "bias_rad_s",
         "bias_mean_converged_rad_s",
@@ -144,8 +148,7 @@ fn malformed_rows_are_counted_and_reported_with_line_column_and_value() {
         err.contains("imu.csv:52") && err.contains("gy_rad_s") && err.contains("abc"),
         "{err}"
     );
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary = read_json(&out.join("summary.json"));
     assert_eq!(summary["input_rows_rejected"]["malformed"], 1);
     assert_eq!(summary["input_rows_rejected"]["non_finite"], 1);
     assert_eq!(summary["input_rows_rejected"]["time_not_increasing"], 1);
@@ -190,8 +193,7 @@ fn absurd_values_and_times_are_refused_counted_and_named_in_the_summary() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary = read_json(&out.join("summary.json"));
     assert_eq!(summary["input_rows_rejected"]["time_jump"], 2);
     assert_eq!(summary["samples_refused_counts"]["implausible"], 1);
     assert_eq!(summary["samples"], 14_000 - 3);
@@ -403,8 +405,7 @@ fn eval_scores_the_footprints_before_a_flagged_truth_leg() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let rows: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let rows = read_json(&out.join("results.json"));
     let before = &rows[0]["before_suspect"];
     assert_eq!(before["first_leg"], 30, "{before}");
     assert_eq!(before["footprints"], 34, "{before}");
@@ -434,8 +435,7 @@ fn eval_scores_the_footprints_before_a_flagged_truth_leg() {
         run.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+    let summary = read_json(&run.join("summary.json"));
     let expected = summary["eval"]["rms_error_pct_of_path"].as_f64().unwrap();
     let got = before["default"]["rms_pct"].as_f64().unwrap();
     assert!((got - expected).abs() < 1e-9, "suite {got}, run {expected}");

@@ -54,6 +54,17 @@ fn filter(
     )
 }
 
+/// A level filter at the origin with no bias, tilt σ 0.01 rad and bias σ `bias_sd_rad_s`.
+fn level_filter(bias_sd_rad_s: f64, ext: Extensions) -> Eskf {
+    filter(
+        UnitQuaternion::identity(),
+        Vector3::zeros(),
+        0.01,
+        bias_sd_rad_s,
+        ext,
+    )
+}
+
 fn dense(f: &Eskf) -> nalgebra::DMatrix<f64> {
     let n = f.dim();
     nalgebra::DMatrix::from_fn(n, n, |r, c| f.cov(r, c))
@@ -277,13 +288,7 @@ fn update_matches_the_textbook_kalman_formulas() {
 #[test]
 fn heading_updates_make_z_bias_observable() {
     // Static sensor, level, with a z bias of 0.01 rad/s the filter does not know.
-    let mut f = filter(
-        UnitQuaternion::identity(),
-        Vector3::zeros(),
-        0.01,
-        0.02,
-        Extensions::default(),
-    );
+    let mut f = level_filter(0.02, Extensions::default());
     let true_bias = Vector3::new(0.0, 0.0, 0.01);
     let g = Vector3::new(0.0, 0.0, 9.81);
     let dt = 0.005;
@@ -314,13 +319,7 @@ fn scale_factor_state_converges_on_a_turning_body() {
         scale_factor_sd: Some(0.05),
         ..Default::default()
     };
-    let mut f = filter(
-        UnitQuaternion::identity(),
-        Vector3::zeros(),
-        0.01,
-        1e-4,
-        ext,
-    );
+    let mut f = level_filter(1e-4, ext);
     let g = Vector3::new(0.0, 0.0, 9.81);
     let dt = 0.005;
     let mut true_yaw: f64 = 0.0;
@@ -350,13 +349,7 @@ fn coupling_states_converge_on_a_body_that_pitches_and_turns() {
         coupling_sd: Some(0.05),
         ..Default::default()
     };
-    let mut f = filter(
-        UnitQuaternion::identity(),
-        Vector3::zeros(),
-        0.01,
-        1e-4,
-        ext,
-    );
+    let mut f = level_filter(1e-4, ext);
     let (m_zx, m_zy) = (0.03, -0.02);
     let dt = 0.005;
     let mut truth = UnitQuaternion::identity();
@@ -448,13 +441,7 @@ fn g_sensitivity_state_converges_on_a_tumbling_body() {
         g_sensitivity_sd: Some(5e-3),
         ..Default::default()
     };
-    let mut f = filter(
-        UnitQuaternion::identity(),
-        Vector3::zeros(),
-        0.01,
-        1e-4,
-        ext,
-    );
+    let mut f = level_filter(1e-4, ext);
     let dt = 0.005;
     let w_true = Vector3::new(0.5, 0.0, 0.0);
     let mut q_true = UnitQuaternion::identity();
@@ -478,13 +465,7 @@ fn g_sensitivity_state_converges_on_a_tumbling_body() {
 
 #[test]
 fn a_stance_velocity_update_pulls_the_velocity_to_the_expected_one() {
-    let mut f = filter(
-        UnitQuaternion::identity(),
-        Vector3::zeros(),
-        0.01,
-        0.01,
-        Extensions::default(),
-    );
+    let mut f = level_filter(0.01, Extensions::default());
     f.v_m_s = Vector3::new(0.3, 0.0, 0.0);
     f.widen_after_gap(0.0, 1.0); // the velocity is unknown to 1 m/s
     let expected = Vector3::new(0.1, 0.0, 0.0);
@@ -521,13 +502,7 @@ fn heading_offset_state_absorbs_a_constant_offset() {
         heading_offset_sd: Some(0.1),
         ..Default::default()
     };
-    let mut f = filter(
-        UnitQuaternion::identity(),
-        Vector3::zeros(),
-        0.01,
-        1e-5,
-        ext,
-    );
+    let mut f = level_filter(1e-5, ext);
     let g = Vector3::new(0.0, 0.0, 9.81);
     for _ in 0..20 {
         f.propagate(&Vector3::zeros(), &g, 0.005);
