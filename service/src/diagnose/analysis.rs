@@ -135,6 +135,8 @@ pub struct Analysis {
     /// Final cross-couplings into the sensor z axis (from x, from y), rad, with their σ, when
     /// the model estimates them.
     pub coupling_z_rad: Option<[[f64; 2]; 2]>,
+    /// The stride scale against the footprints (with truth only).
+    pub stride_length: Option<super::StrideLength>,
     /// The residuals (for plots and the report).
     #[serde(skip)]
     pub residuals: Vec<HeadingResidual>,
@@ -401,6 +403,7 @@ pub fn analyse(
         effects,
         scale_factor,
         coupling_z_rad,
+        stride_length: truth.and_then(|t| super::stride_length(&outcome.trace, t)),
         residuals: res,
         stances,
         power,
@@ -409,6 +412,14 @@ pub fn analyse(
 }
 
 impl Analysis {
+    /// The stride-length finding of this analysis of the model `file` (with truth only).
+    pub fn stride_length_finding(&self, file: &ConfigFile) -> Option<Finding> {
+        let rolling = file.eskf.zupt_rolling_height_m.unwrap_or(0.0) > 0.0;
+        self.stride_length
+            .as_ref()
+            .map(|s| super::stride_length::stride_length_finding(s, rolling))
+    }
+
     /// The sensor-error states' final estimates with their σ, in words.
     pub fn estimates_in_words(&self) -> Vec<String> {
         let mut v = Vec::new();

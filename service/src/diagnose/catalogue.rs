@@ -27,13 +27,16 @@ pub enum Effect {
     MountingTilt,
     /// The gyro clips below its configured range (a rail in the data, see `clipping`).
     GyroClipping,
+    /// The strides come out longer or shorter than the footprints say (position information
+    /// only, see `stride_length`).
+    StrideLength,
     /// The residuals are inconsistent and nothing in the catalogue explains them.
     Unexplained,
 }
 
 impl Effect {
     /// Every effect, in the catalogue's order.
-    pub const ALL: [Effect; 9] = [
+    pub const ALL: [Effect; 10] = [
         Effect::HeadingOffset,
         Effect::BiasDrift,
         Effect::GyroScaleFactor,
@@ -42,6 +45,7 @@ impl Effect {
         Effect::Timing,
         Effect::MountingTilt,
         Effect::GyroClipping,
+        Effect::StrideLength,
         Effect::Unexplained,
     ];
 
@@ -56,6 +60,7 @@ impl Effect {
             Effect::Timing => "timing",
             Effect::MountingTilt => "mounting_tilt",
             Effect::GyroClipping => "gyro_clipping",
+            Effect::StrideLength => "stride_length",
             Effect::Unexplained => "unexplained",
         }
     }
@@ -71,6 +76,7 @@ impl Effect {
             Effect::GSensitivity => &[(Fix::GSensitivity, 3)],
             Effect::MountingTilt => &[(Fix::RotationAware, 3)],
             Effect::AxisMisalignment => &[(Fix::GyroCouplingZ, 2)],
+            Effect::StrideLength => &[(Fix::RollingStance, 1)],
             Effect::GyroClipping | Effect::Unexplained => &[],
         }
     }
@@ -105,6 +111,9 @@ pub enum Fix {
     GyroCouplingZ,
     /// The rotation-aware variant of the paper's filter (`estimator.mode = rotation_aware`).
     RotationAware,
+    /// The rolling-foot stance update (`eskf.zupt_rolling_height_m = 0.08`, the sensor's
+    /// height on the instep).
+    RollingStance,
     /// The gyro range at the rail found in the data, so that its samples are flagged as
     /// clipped, with the clipping model on (`sensor.gyro_range_rad_s = rail / 0.99`,
     /// `eskf.clipped_rate_sd_rad_s` at its default when it was 0).
@@ -114,6 +123,10 @@ pub enum Fix {
     },
 }
 
+/// The rolling height the stance-length fix sets, m: the sensor's height on the instep above
+/// the sole (the configuration's own figure, chosen from the ZUPT NIS without footprints).
+pub const ROLLING_HEIGHT_M: f64 = 0.08;
+
 /// The gyro range the clipping fix sets: the rail is this fraction of it (inside
 /// [`CLIP_FRACTION`](corridor_shared::sensor::CLIP_FRACTION), so the rail's samples count as
 /// clipped).
@@ -121,7 +134,7 @@ pub const RAIL_OF_RANGE: f64 = 0.99;
 
 impl Fix {
     /// Every fix (the clipping fix at a 5 rad/s rail).
-    pub const ALL: [Fix; 8] = [
+    pub const ALL: [Fix; 9] = [
         Fix::HeadingOffset,
         Fix::BiasRate,
         Fix::BiasRandomWalkTimes10,
@@ -129,6 +142,7 @@ impl Fix {
         Fix::GSensitivity,
         Fix::GyroCouplingZ,
         Fix::RotationAware,
+        Fix::RollingStance,
         Fix::GyroRail { milli_rad_s: 5000 },
     ];
 
@@ -142,6 +156,7 @@ impl Fix {
             Fix::GSensitivity => "model.g_sensitivity_sd = 1e-3",
             Fix::GyroCouplingZ => "model.gyro_coupling_z_sd_deg = 3",
             Fix::RotationAware => "estimator.mode = rotation_aware",
+            Fix::RollingStance => "eskf.zupt_rolling_height_m = 0.08",
             Fix::GyroRail { .. } => "sensor.gyro_range_rad_s = the rail / 0.99",
         }
     }
@@ -217,6 +232,9 @@ pub fn apply_fix(fix: Fix, file: &mut ConfigFile) -> bool {
         Fix::RotationAware if file.estimator.mode == Some(Mode::Paper) => {
             file.estimator.mode = Some(Mode::RotationAware)
         }
+        Fix::RollingStance if file.eskf.zupt_rolling_height_m.unwrap_or(0.0) == 0.0 => {
+            file.eskf.zupt_rolling_height_m = Some(ROLLING_HEIGHT_M)
+        }
         Fix::GyroRail { milli_rad_s } => {
             let range = f64::from(milli_rad_s) / 1000.0 / RAIL_OF_RANGE;
             if file
@@ -254,6 +272,7 @@ mod tests {
                 "timing",
                 "mounting_tilt",
                 "gyro_clipping",
+                "stride_length",
                 "unexplained"
             ]
         );
@@ -290,6 +309,7 @@ mod tests {
         assert_eq!(fixes(Effect::MountingTilt), [Fix::RotationAware]);
         assert_eq!(fixes(Effect::AxisMisalignment), [Fix::GyroCouplingZ]);
         assert!(Effect::Unexplained.fixes().is_empty());
+        assert_eq!(fixes(Effect::StrideLength), [Fix::RollingStance]);
         // The clipping finding carries its fix (the rail is the data's).
         assert!(Effect::GyroClipping.fixes().is_empty());
         // Parameters added: one offset, one random-walk scale, two couplings, three states
@@ -297,7 +317,7 @@ mod tests {
         for e in Effect::ALL {
             for &(f, k) in e.fixes() {
                 let want = match f {
-                    Fix::HeadingOffset | Fix::BiasRandomWalkTimes10 => 1,
+                    Fix::HeadingOffset | Fix::BiasRandomWalkTimes10 | Fix::RollingStance => 1,
                     Fix::GyroCouplingZ => 2,
                     _ => 3,
                 };

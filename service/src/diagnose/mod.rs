@@ -57,6 +57,9 @@
 //! - `clipping`: rails in the data below the configured gyro range ([`Rail`]);
 //! - `power`: the power of the walk for each effect: every stance's residual fitted on the
 //!   effect's signature ([`Power`]);
+//! - `stride_length`: the stride scale against the footprints, when they are given
+//!   ([`StrideLength`]): an effect only position information shows, tried after the heading
+//!   effects (its fix, the rolling-foot stance update, changes the navigation filter);
 //! - `report`: `report.md`, `report.json` and `residuals.svg` ([`write_report`]);
 //! - this file: the loop ([`run_diagnosis`] → [`Diagnosis`]).
 
@@ -67,6 +70,7 @@ mod clipping;
 mod power;
 mod ranking;
 mod report;
+mod stride_length;
 
 pub use analysis::{
     Analysis, Consistency, DIAGNOSIS_ALIGNED_PRIOR, HeadingResidual, ResidualKind, StanceResidual,
@@ -81,6 +85,7 @@ pub use power::{
 };
 pub use ranking::{Candidate, Finding, score_by_likelihood};
 pub use report::write_report;
+pub use stride_length::{MAX_LEG_M, MIN_LEG_M, MIN_LEGS, OUTLIER_SD, StrideLength, stride_length};
 
 use crate::runner::RunError;
 use corridor_shared::config::ConfigFile;
@@ -125,6 +130,8 @@ pub struct Report {
     pub verdict: String,
     /// The power of the walk on the starting model, per effect variant.
     pub power: Vec<Power>,
+    /// The stride length against the footprints on the starting model (with truth only).
+    pub stride_length: Option<Finding>,
     /// The starting model.
     pub before: Consistency,
     /// The final model.
@@ -208,6 +215,31 @@ pub fn run_diagnosis(
         current = cand.analysis;
         candidates = score_by_likelihood(log, &file, &mut current, truth, map)?;
     }
+    // Then the stride length, which only the footprints show: its fix changes the navigation
+    // filter, so it comes after the heading effects were judged on the model they were built on.
+    if let Some(top) = current
+        .stride_length_finding(&file)
+        .filter(|f| f.score >= SIGNIFICANT)
+    {
+        let mut f = file.clone();
+        if let Some(fix) = top.fix.filter(|&fix| apply_fix(fix, &mut f)) {
+            let mut a = analyse(log, &f, truth, map)?;
+            let kept = improved(&current.consistency, &a.consistency);
+            iterations.push(Iteration {
+                effect: top.name,
+                score: top.score,
+                fix,
+                before: current.consistency.clone(),
+                after: a.consistency.clone(),
+                kept,
+            });
+            if kept {
+                score_by_likelihood(log, &f, &mut a, truth, map)?;
+                file = f;
+                current = a;
+            }
+        }
+    }
     let top = first.effects.first().filter(|e| e.score >= SIGNIFICANT);
     let report = Report {
         top_effect: top.map_or("none".to_string(), |e| e.name.to_string()),
@@ -216,6 +248,7 @@ pub fn run_diagnosis(
             |e| format!("{} (score {:.1})", e.name, e.score),
         ),
         power: first.power.clone(),
+        stride_length: first.stride_length_finding(start),
         effects: first.effects.clone(),
         before: first.consistency.clone(),
         after: current.consistency.clone(),

@@ -81,6 +81,22 @@ pub fn write_report(
             e.fix.map_or("—", Fix::label)
         ));
     }
+    md.push_str(&match &report.stride_length {
+        Some(f) => format!(
+            "\nStride length against the footprints (position information, tried after the heading \
+             effects): score {:.1}, detectable from a {:.2} % scale; {}{}.\n",
+            f.score,
+            100.0 * f.mde.unwrap_or(f64::NAN),
+            f.evidence,
+            f.fix
+                .filter(|_| f.score >= super::SIGNIFICANT)
+                .map_or(String::new(), |x| format!("; fix `{}`", x.label()))
+        ),
+        None => format!(
+            "\nStride length: not tested (no footprints, or fewer than {} surveyed single strides).\n",
+            super::MIN_LEGS
+        ),
+    });
     md.push_str("\n## Loop\n\n| step | effect added | fix | RMS before | RMS after | NIS before | NIS after | whiteness p before | after | kept |\n|---|---|---|---|---|---|---|---|---|---|\n");
     let rms = |c: &Consistency| c.gcp_rms_m.map_or("—".into(), |v| format!("{v:.2} m"));
     for (i, it) in report.iterations.iter().enumerate() {

@@ -49,6 +49,16 @@ pub use regression::{
 };
 pub use whiteness::{Whiteness, autocorrelation, whiteness};
 
+/// The median (the mean of the middle two for an even count; NaN for none); sorts `v`.
+pub fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
 /// Why a residual statistic could not be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum StatsError {

@@ -268,6 +268,19 @@ pub struct MatrixCell {
     pub rms_after_m: Option<f64>,
     /// Effects the loop added and kept.
     pub added: Vec<String>,
+    /// The stride-length finding on the cell's starting model (walks with at least
+    /// [`crate::diagnose::MIN_LEGS`] surveyed single strides): estimated / surveyed length, its
+    /// score.
+    pub stride_length: Option<StrideFigure>,
+}
+
+/// The stride-length finding of a cell.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct StrideFigure {
+    /// Estimated / surveyed leg length.
+    pub ratio: f64,
+    /// −log₁₀ p of its difference from 1.
+    pub score: f64,
 }
 
 /// The whole matrix.
@@ -343,12 +356,18 @@ fn run_cell(
         }
         CaseInjection::GridOffsetDeg(d) => model.heading.grid_deg = Some(r.grid_deg + d),
     }
-    let report = run_diagnosis(&log, &model, Some(&truth), None)?.report;
+    let diagnosis = run_diagnosis(&log, &model, Some(&truth), None)?;
+    let report = &diagnosis.report;
     let expected = case
         .expected
         .and_then(|e| report.effects.iter().find(|f| f.name == e));
     let mut with_fixes = model.clone();
-    for f in report.effects.iter().filter(|f| f.score >= SIGNIFICANT) {
+    for f in report
+        .effects
+        .iter()
+        .chain(&report.stride_length)
+        .filter(|f| f.score >= SIGNIFICANT)
+    {
         if let Some(fix) = f.fix {
             crate::diagnose::apply_fix(fix, &mut with_fixes);
         }
@@ -394,6 +413,10 @@ fn run_cell(
             .collect(),
         rms_before_m: report.before.gcp_rms_m,
         rms_after_m: report.after.gcp_rms_m,
+        stride_length: diagnosis.before.stride_length.map(|s| StrideFigure {
+            ratio: s.ratio,
+            score: s.score,
+        }),
         added: report
             .iterations
             .iter()
@@ -419,6 +442,47 @@ fn model_keys(f: &ConfigFile) -> Vec<String> {
     .filter(|(on, _)| *on)
     .map(|(_, k)| k.to_string())
     .collect()
+}
+
+/// The short strides of the clean walks (an effect only the footprints show, tested after the
+/// heading effects): on how many walks it could be tested, named, and fixed.
+fn stride_markdown(m: &DetectionMatrix) -> String {
+    let clean: Vec<&MatrixCell> = m
+        .cells
+        .iter()
+        .filter(|c| c.expected.is_none() && c.case == m.cases[0])
+        .collect();
+    let tested: Vec<(&MatrixCell, StrideFigure)> = clean
+        .iter()
+        .filter_map(|c| c.stride_length.map(|s| (*c, s)))
+        .collect();
+    let named: Vec<String> = tested
+        .iter()
+        .filter(|(_, s)| s.score >= SIGNIFICANT)
+        .map(|(c, s)| {
+            let kept = c.added.iter().any(|a| a == "stride_length");
+            format!(
+                "{} {:.3}{}",
+                c.recording.split(' ').next().unwrap_or(&c.recording),
+                s.ratio,
+                if kept { "" } else { " (fix not kept)" }
+            )
+        })
+        .collect();
+    format!(
+        "\nStride length on the clean walks (estimated / surveyed leg length; position information, \
+         tried after the heading effects, with the rolling-foot stance update as its fix): tested on {} of {} \
+         walks (the others have fewer than {} surveyed single strides), named on {}: {}.\n",
+        tested.len(),
+        clean.len(),
+        crate::diagnose::MIN_LEGS,
+        named.len(),
+        if named.is_empty() {
+            "—".to_string()
+        } else {
+            named.join(", ")
+        }
+    )
 }
 
 /// `detection.md`: per column the counts over the recordings, then the matrix of the effect
@@ -462,6 +526,7 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
             format_args!("{size:.3e}"),
         ));
     }
+    md.push_str(&stride_markdown(m));
     md.push_str("\nThe effect named first on each walk (`·` nothing significant; **bold** = the injected effect; in parentheses: the starting model already had the injected effect's state):\n\n| recording |");
     for case in &m.cases {
         md.push_str(&format!(" {case} |"));

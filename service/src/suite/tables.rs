@@ -30,15 +30,7 @@ pub struct Summary {
     pub default_worse_before_suspect: usize,
 }
 
-/// The median (the mean of the middle two for an even count; NaN for none); sorts `v`.
-pub(super) fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    match v.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
-    }
-}
+pub(super) use crate::stats::median;
 
 /// The summary over the normal-gait rows.
 pub fn summary(rows: &[SuiteRow]) -> Summary {
