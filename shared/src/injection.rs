@@ -87,6 +87,13 @@ pub enum LogInjection {
         /// Sensitivity, rad/s per m/s².
         k_rad_s_per_m_s2: f64,
     },
+    /// An accelerometer scale-factor error, the same on every axis: `f[k] *= 1 + fraction`
+    /// (gravity too: a filter that takes gravity from the rest sees only the horizontal part,
+    /// strides `fraction` too long).
+    AccelScale {
+        /// Scale error (0.02 = +2 %).
+        fraction: f64,
+    },
     /// A gyro with a smaller range: every axis clamped to `±range_rad_s`.
     Clipping {
         /// Range, rad/s.
@@ -141,6 +148,11 @@ impl LogInjection {
             LogInjection::GSensitivity { k_rad_s_per_m_s2 } => rows.iter_mut().for_each(|r| {
                 for (g, a) in r.gyro_rad_s.iter_mut().zip(r.accel_m_s2) {
                     *g += k_rad_s_per_m_s2 * a;
+                }
+            }),
+            LogInjection::AccelScale { fraction } => rows.iter_mut().for_each(|r| {
+                for a in &mut r.accel_m_s2 {
+                    *a *= 1.0 + fraction;
                 }
             }),
             LogInjection::Clipping { range_rad_s } => rows.iter_mut().for_each(|r| {
@@ -291,6 +303,9 @@ mod tests {
             k_rad_s_per_m_s2: 0.001,
         });
         assert!((r[0].gyro_rad_s[2] - (3.0 + 0.0098)).abs() < 1e-12);
+        let r = run(LogInjection::AccelScale { fraction: 0.02 });
+        assert_eq!(r[0].accel_m_s2, [0.0, 0.0, 9.8 * 1.02]);
+        assert_eq!(r[0].gyro_rad_s, [1.0, 2.0, 3.0]);
         let r = run(LogInjection::Clipping { range_rad_s: 1.5 });
         assert_eq!(r[0].gyro_rad_s, [1.0, 1.5, 1.5]);
         // A slip about the vertical (up = z here) turns x into y and leaves z and gravity.

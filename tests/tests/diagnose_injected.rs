@@ -386,3 +386,50 @@ fn the_coupling_states_measure_an_injected_axis_misalignment() {
         with[0][1].to_degrees()
     );
 }
+
+/// An accelerometer scale error (+2 % on every axis) makes the strides 2 % long: an effect only
+/// the footprints show, named on the stride-length line at about its size. The model already has
+/// the rolling-foot stance update, so there is no fix to try: a stride scale needs position
+/// observations.
+#[test]
+fn an_accelerometer_scale_error_is_named_on_the_stride_length_line() {
+    let (log, truth) = load("gdins_exp36_corridor_out_and_back");
+    let mut cfg = config(0.0, false);
+    cfg.eskf.zupt_rolling_height_m = Some(0.08);
+    let mut injected = log.clone();
+    LogInjection::AccelScale { fraction: 0.02 }.apply(&mut injected.rows);
+    let clean = run(&log, &truth, &cfg);
+    let r = run(&injected, &truth, &cfg);
+    let ratio = |r: &Report| {
+        let f = r
+            .stride_length
+            .as_ref()
+            .expect("footprints at every stride");
+        eprintln!("{}", f.evidence);
+        (f.score, f.fix, f.mde.unwrap())
+    };
+    let (clean_score, _, _) = ratio(&clean);
+    assert!(clean_score < SIGNIFICANT);
+    let (score, fix, mde) = ratio(&r);
+    assert!(score >= SIGNIFICANT, "score {score}");
+    assert_eq!(fix, None, "the model has the rolling update already");
+    assert!(mde < 0.02, "detectable from {mde}");
+    assert!(
+        r.iterations
+            .iter()
+            .all(|i| i.effect != Effect::StrideLength)
+    );
+    let fit = |log: &ImuLog| {
+        run_diagnosis(log, &cfg, Some(&truth), None)
+            .unwrap()
+            .before
+            .stride_length
+            .unwrap()
+            .ratio
+    };
+    let moved = fit(&injected) - fit(&log);
+    assert!(
+        (moved - 0.02).abs() < 0.003,
+        "the stride scale moved by {moved}"
+    );
+}

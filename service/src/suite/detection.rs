@@ -81,8 +81,9 @@ impl MatrixCase {
 
 /// The columns: the clean recording and the list of injections (z scale 1/2/5 %, 1° and
 /// 2° y→z and x→z couplings, bias ramp and step, heading offset, clock 1 % and 3 %,
-/// g-sensitivity, clipping at a smaller range than the sensor's, mounting slip). Ramp, step and
-/// slip sizes are those of the bundled tests; they start at a fixed fraction of each walk.
+/// g-sensitivity, clipping at a smaller range than the sensor's, mounting slip), and an
+/// accelerometer scale error (strides too long: an effect only the footprints show). Ramp, step
+/// and slip sizes are those of the bundled tests; they start at a fixed fraction of each walk.
 pub fn matrix_cases() -> Vec<MatrixCase> {
     use CaseInjection::{Clean, Log};
     use Effect::{
@@ -189,6 +190,15 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
             expected: Some(GyroClipping),
             injection: Log(Clipping { range_rad_s: 5.0 }),
             size: 5.0,
+            variant: None,
+        },
+        MatrixCase {
+            // Strides 2 % long: named on the stride-length line, which only walks with
+            // footprints at single strides can show.
+            label: "accel scale +2 %",
+            expected: Some(Effect::StrideLength),
+            injection: Log(AccelScale { fraction: 0.02 }),
+            size: 0.02,
             variant: None,
         },
         MatrixCase {
@@ -358,9 +368,15 @@ fn run_cell(
     }
     let diagnosis = run_diagnosis(&log, &model, Some(&truth), None)?;
     let report = &diagnosis.report;
-    let expected = case
-        .expected
-        .and_then(|e| report.effects.iter().find(|f| f.name == e));
+    // The stride length has its own line (position information): it is "named first" there.
+    let on_own_line = case.expected == Some(Effect::StrideLength);
+    let expected = case.expected.and_then(|e| {
+        if on_own_line {
+            report.stride_length.as_ref()
+        } else {
+            report.effects.iter().find(|f| f.name == e)
+        }
+    });
     let mut with_fixes = model.clone();
     for f in report
         .effects
@@ -375,18 +391,24 @@ fn run_cell(
     let power = case
         .variant
         .and_then(|v| report.power.iter().find(|p| p.variant == v));
-    let already_modelled = case.expected.is_some_and(|e| {
-        !e.fixes().is_empty()
-            && e.fixes()
-                .iter()
-                .all(|&(fix, _)| !crate::diagnose::apply_fix(fix, &mut model.clone()))
-    });
+    // (The stride-length fix, the rolling stance update, is no state for a stride scale.)
+    let already_modelled = !on_own_line
+        && case.expected.is_some_and(|e| {
+            !e.fixes().is_empty()
+                && e.fixes()
+                    .iter()
+                    .all(|&(fix, _)| !crate::diagnose::apply_fix(fix, &mut model.clone()))
+        });
     let cell = MatrixCell {
         recording: r.name.clone(),
         case: case.label.to_string(),
         expected: case.expected.map(|e| e.to_string()),
         size: case.size,
-        named_first: case.expected.is_some_and(|e| report.top_effect == e.name()),
+        named_first: if on_own_line {
+            expected.is_some_and(|f| f.score >= SIGNIFICANT)
+        } else {
+            case.expected.is_some_and(|e| report.top_effect == e.name())
+        },
         named_at_all: expected.is_some_and(|f| f.score >= SIGNIFICANT),
         already_modelled,
         expected_score: expected.map(|f| f.score),
@@ -542,7 +564,10 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
                 .iter()
                 .find(|c| &c.recording == rec && &c.case == case);
             let text = c.map_or("?".to_string(), |c| {
-                let name = if c.top_effect == "none" {
+                let stride = c.expected.as_deref() == Some(Effect::StrideLength.name());
+                let name = if stride && c.named_first {
+                    "stride".to_string() // on its own line, not the heading effects'
+                } else if c.top_effect == "none" {
                     "·".to_string()
                 } else {
                     short(&c.top_effect).to_string()
@@ -560,7 +585,7 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
         md.push('\n');
     }
     md.push_str(&prediction_markdown(m));
-    md.push_str("\nAbbreviations: sf gyro_scale_factor, mis axis_misalignment, drift bias_drift, off heading_offset, time timing, gs g_sensitivity, tilt mounting_tilt, clip gyro_clipping, unexp unexplained.\n");
+    md.push_str("\nAbbreviations: sf gyro_scale_factor, mis axis_misalignment, drift bias_drift, off heading_offset, time timing, gs g_sensitivity, tilt mounting_tilt, clip gyro_clipping, unexp unexplained, stride stride_length (its own line: the cell shows it when named there, else the heading effect named first).\n");
     md
 }
 
