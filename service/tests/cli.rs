@@ -446,11 +446,19 @@ fn eval_scores_the_footprints_before_a_flagged_truth_leg() {
     assert!(md.contains("| exp31 | 30 | 30 of 34 |"), "{md}");
 
     // A leg the truth does not have (34 footprints: legs 1-33).
-    let o = corridor(&["eval", "--suite", write_suite("[34]").to_str().unwrap()]);
+    let o = corridor(&["eval", "--suite", write_suite("[40]").to_str().unwrap()]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("exp31") && err.contains("suspect_legs") && err.contains("34"),
+        err.contains("exp31") && err.contains("suspect_legs") && err.contains("40"),
+        "{err}"
+    );
+    // A leg before the footprint the first-leg alignment needs leaves nothing to score.
+    let o = corridor(&["eval", "--suite", write_suite("[2]").to_str().unwrap()]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("suspect_legs") && err.contains("leg 2") && err.contains("5 m"),
         "{err}"
     );
 }

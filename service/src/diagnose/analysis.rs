@@ -412,12 +412,13 @@ pub fn analyse(
 }
 
 impl Analysis {
-    /// The stride-length finding of this analysis of the model `file` (with truth only).
-    pub fn stride_length_finding(&self, file: &ConfigFile) -> Option<Finding> {
+    /// The stride-length line of this analysis of the model `file` (with truth only).
+    pub fn stride_line(&self, file: &ConfigFile) -> Option<super::StrideLine> {
         let rolling = file.eskf.zupt_rolling_height_m.unwrap_or(0.0) > 0.0;
-        self.stride_length
-            .as_ref()
-            .map(|s| super::stride_length::stride_length_finding(s, rolling))
+        self.stride_length.map(|fit| super::StrideLine {
+            fit,
+            finding: super::stride_length::stride_length_finding(&fit, rolling),
+        })
     }
 
     /// The sensor-error states' final estimates with their σ, in words.
@@ -481,6 +482,9 @@ fn model_keys(file: &ConfigFile) -> Vec<String> {
     }
     if m.gyro_coupling_z_sd_deg.is_some() {
         v.push("gyro_coupling_z".into());
+    }
+    if let Some(h) = file.eskf.zupt_rolling_height_m.filter(|&h| h > 0.0) {
+        v.push(format!("zupt_rolling_height = {h} m"));
     }
     if let Some(rw) = file.eskf.gyro_bias_rw_rad_s_sqrt_s {
         v.push(format!("gyro_bias_rw = {rw:e}"));

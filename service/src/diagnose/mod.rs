@@ -85,7 +85,9 @@ pub use power::{
 };
 pub use ranking::{Candidate, Finding, score_by_likelihood};
 pub use report::write_report;
-pub use stride_length::{MAX_LEG_M, MIN_LEG_M, MIN_LEGS, OUTLIER_SD, StrideLength, stride_length};
+pub use stride_length::{
+    MAX_LEG_M, MIN_LEG_M, MIN_LEGS, OUTLIER_SD, StrideLength, StrideLine, stride_length,
+};
 
 use crate::runner::RunError;
 use corridor_shared::config::ConfigFile;
@@ -130,8 +132,9 @@ pub struct Report {
     pub verdict: String,
     /// The power of the walk on the starting model, per effect variant.
     pub power: Vec<Power>,
-    /// The stride length against the footprints on the starting model (with truth only).
-    pub stride_length: Option<Finding>,
+    /// The stride length against the footprints (with truth only), on the model the heading
+    /// effects left: the line the loop's last step acted on.
+    pub stride_length: Option<StrideLine>,
     /// The starting model.
     pub before: Consistency,
     /// The final model.
@@ -174,7 +177,8 @@ fn improved(before: &Consistency, after: &Consistency) -> bool {
 }
 
 /// The whole loop: analyse `start`, add the top significant effect while one has a fix and
-/// the model improves (at most [`MAX_ITERATIONS`] times).
+/// the model improves (at most [`MAX_ITERATIONS`] times); then, with footprints, the stride
+/// length's fix when it is significant (kept when the footprint error falls).
 pub fn run_diagnosis(
     log: &ImuLog,
     start: &ConfigFile,
@@ -216,10 +220,14 @@ pub fn run_diagnosis(
         candidates = score_by_likelihood(log, &file, &mut current, truth, map)?;
     }
     // Then the stride length, which only the footprints show: its fix changes the navigation
-    // filter, so it comes after the heading effects were judged on the model they were built on.
-    if let Some(top) = current
-        .stride_length_finding(&file)
+    // filter, so it comes after the heading effects were judged on the model they were built on
+    // (and last: the heading effects are not tried again on the fixed model).
+    let stride_line = current.stride_line(&file);
+    if let Some(top) = stride_line
+        .as_ref()
+        .map(|l| &l.finding)
         .filter(|f| f.score >= SIGNIFICANT)
+        .cloned()
     {
         let mut f = file.clone();
         if let Some(fix) = top.fix.filter(|&fix| apply_fix(fix, &mut f)) {
@@ -248,7 +256,7 @@ pub fn run_diagnosis(
             |e| format!("{} (score {:.1})", e.name, e.score),
         ),
         power: first.power.clone(),
-        stride_length: first.stride_length_finding(start),
+        stride_length: stride_line,
         effects: first.effects.clone(),
         before: first.consistency.clone(),
         after: current.consistency.clone(),

@@ -81,10 +81,10 @@ pub fn write_report(
             e.fix.map_or("—", Fix::label)
         ));
     }
-    md.push_str(&match &report.stride_length {
+    md.push_str(&match report.stride_length.as_ref().map(|l| &l.finding) {
         Some(f) => format!(
-            "\nStride length against the footprints (position information, tried after the heading \
-             effects): score {:.1}, detectable from a {:.2} % scale; {}{}.\n",
+            "\nStride length against the footprints (position information, on the model the heading \
+             effects left): score {:.1}, detectable from a {:.2} % scale; {}{}.\n",
             f.score,
             100.0 * f.mde.unwrap_or(f64::NAN),
             f.evidence,

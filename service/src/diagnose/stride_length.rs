@@ -3,9 +3,9 @@
 //! When footprints are given, every surveyed leg (footprint i − 1 → i) has a length the run
 //! estimates (its positions at the two footprint times) and one the survey measured. A stride
 //! scale `k` makes `L̂ = k·L`: the least-squares `k̂ = Σ L̂·L / Σ L²` over the legs, its standard
-//! error from the scatter about that line, `−log₁₀` of the two-sided normal p of `(k̂ − 1)/se`
-//! as the score and `z·se` (`z` = [`MDE_Z`], p = 10⁻³ half the time) as the detectable size,
-//! as for the other effects. Consecutive legs share a footprint, so a position error at one
+//! error from the scatter about that line (n − 1 degrees of freedom), `−log₁₀` of the two-sided
+//! Student-t p of `(k̂ − 1)/se` as the score and `t·se` as the detectable size, `t` the quantile
+//! of p = 10⁻³ (3.29, [`MDE_Z`], for many legs; 5.4 for eight), as for the other effects. Consecutive legs share a footprint, so a position error at one
 //! shortens one leg and lengthens the next: the plain standard error overstates the scatter of
 //! `k̂`, which errs on the side of naming less.
 //!
@@ -27,6 +27,7 @@ use super::catalogue::{Effect, Fix};
 use super::power::MDE_Z;
 use super::ranking::Finding;
 use crate::runner::Trace;
+use crate::stats::student_t_two_sided_p;
 use corridor_shared::truth_csv::TruthPoint;
 use serde::Serialize;
 
@@ -60,15 +61,29 @@ pub struct StrideLength {
     pub mde: f64,
 }
 
+/// The stride-length line of a report: the fit and its finding on one model.
+#[derive(Debug, Clone, Serialize)]
+pub struct StrideLine {
+    /// The fit.
+    pub fit: StrideLength,
+    /// Its finding (score, evidence, fix).
+    pub finding: Finding,
+}
+
 /// Fits the stride scale of `trace` against the footprints; `None` with fewer than
 /// [`MIN_LEGS`] usable legs.
 pub fn stride_length(trace: &Trace, truth: &[TruthPoint]) -> Option<StrideLength> {
+    // The run's position at a footprint time (the first sample at or after it); none for a
+    // footprint outside the run (during the alignment, or after the log's end).
+    let (first, last) = (trace.t_s.first()?, trace.t_s.last()?);
     let at = |t: f64| {
-        let i = trace
-            .t_s
-            .partition_point(|&x| x < t)
-            .min(trace.t_s.len().checked_sub(1)?);
-        trace.xy_m.get(i).copied()
+        if t < *first || t > *last {
+            return None;
+        }
+        trace
+            .xy_m
+            .get(trace.t_s.partition_point(|&x| x < t))
+            .copied()
     };
     let legs: Vec<(f64, f64)> = truth
         .windows(2)
@@ -106,8 +121,8 @@ fn fit(legs: &[(f64, f64)]) -> Option<StrideLength> {
     let ratio = kept.iter().map(|(e, s)| e * s).sum::<f64>() / sxx;
     let rss: f64 = kept.iter().map(|(e, s)| (e - ratio * s).powi(2)).sum();
     let std_err = (rss / (n - 1) as f64 / sxx).sqrt();
-    let z = (ratio - 1.0) / std_err;
-    let p = 2.0 * (1.0 - crate::stats::normal_cdf(z.abs()));
+    let df = (n - 1) as f64;
+    let p = student_t_two_sided_p((ratio - 1.0) / std_err, df);
     Some(StrideLength {
         ratio,
         std_err,
@@ -118,8 +133,23 @@ fn fit(legs: &[(f64, f64)]) -> Option<StrideLength> {
         } else {
             (-p.max(1e-30).log10()).max(0.0)
         },
-        mde: MDE_Z * std_err,
+        mde: t_critical(df) * std_err,
     })
+}
+
+/// The two-sided Student-t quantile of p = 10⁻³ with `df` degrees of freedom (bisection; the
+/// normal's [`MDE_Z`] is its limit).
+fn t_critical(df: f64) -> f64 {
+    let (mut lo, mut hi) = (MDE_Z, 1e3);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if student_t_two_sided_p(mid, df) > 1e-3 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// The finding of the fit, with the rolling-foot stance update as its fix when the model has
@@ -174,6 +204,16 @@ mod tests {
         // Fewer legs, a larger detectable size.
         assert!(fit(&legs(1.0, 15)).unwrap().mde > right.mde);
         assert!(fit(&legs(1.0, MIN_LEGS - 1)).is_none());
+    }
+
+    #[test]
+    fn the_t_quantile_takes_the_degrees_of_freedom() {
+        assert!(
+            (t_critical(7.0) - 5.408).abs() < 1e-3,
+            "{}",
+            t_critical(7.0)
+        );
+        assert!((t_critical(1e6) - MDE_Z).abs() < 1e-3);
     }
 
     #[test]

@@ -291,6 +291,8 @@ pub struct StrideFigure {
     pub ratio: f64,
     /// −log₁₀ p of its difference from 1.
     pub score: f64,
+    /// The loop had a fix to try (the model had no rolling-foot stance update).
+    pub fixable: bool,
 }
 
 /// The whole matrix.
@@ -372,7 +374,7 @@ fn run_cell(
     let on_own_line = case.expected == Some(Effect::StrideLength);
     let expected = case.expected.and_then(|e| {
         if on_own_line {
-            report.stride_length.as_ref()
+            report.stride_length.as_ref().map(|l| &l.finding)
         } else {
             report.effects.iter().find(|f| f.name == e)
         }
@@ -381,7 +383,7 @@ fn run_cell(
     for f in report
         .effects
         .iter()
-        .chain(&report.stride_length)
+        .chain(report.stride_length.as_ref().map(|l| &l.finding))
         .filter(|f| f.score >= SIGNIFICANT)
     {
         if let Some(fix) = f.fix {
@@ -435,9 +437,10 @@ fn run_cell(
             .collect(),
         rms_before_m: report.before.gcp_rms_m,
         rms_after_m: report.after.gcp_rms_m,
-        stride_length: diagnosis.before.stride_length.map(|s| StrideFigure {
-            ratio: s.ratio,
-            score: s.score,
+        stride_length: report.stride_length.as_ref().map(|l| StrideFigure {
+            ratio: l.fit.ratio,
+            score: l.fit.score,
+            fixable: l.finding.fix.is_some(),
         }),
         added: report
             .iterations
@@ -459,6 +462,10 @@ fn model_keys(f: &ConfigFile) -> Vec<String> {
         (m.scale_factor_sd.is_some(), "scale_factor"),
         (m.g_sensitivity_sd.is_some(), "g_sensitivity"),
         (m.gyro_coupling_z_sd_deg.is_some(), "gyro_coupling_z"),
+        (
+            f.eskf.zupt_rolling_height_m.unwrap_or(0.0) > 0.0,
+            "rolling_stance",
+        ),
     ]
     .iter()
     .filter(|(on, _)| *on)
@@ -487,7 +494,11 @@ fn stride_markdown(m: &DetectionMatrix) -> String {
                 "{} {:.3}{}",
                 c.recording.split(' ').next().unwrap_or(&c.recording),
                 s.ratio,
-                if kept { "" } else { " (fix not kept)" }
+                match (s.fixable, kept) {
+                    (true, true) => "",
+                    (true, false) => " (fix not kept)",
+                    (false, _) => " (no fix: the model has the rolling update)",
+                }
             )
         })
         .collect();

@@ -300,7 +300,7 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
 }
 
 /// A recording's `suspect_legs` name legs of its truth, and leave the first-leg alignment
-/// footprint (the first one 5 m from the start) before the first of them.
+/// footprint (the first one `heading_min_dist_m` from the start) before the first of them.
 fn check_suspect_legs(base: &Path, r: &SuiteRecording) -> Result<(), String> {
     let Some(&first) = r.suspect_legs.iter().min() else {
         return Ok(());
@@ -314,15 +314,15 @@ fn check_suspect_legs(base: &Path, r: &SuiteRecording) -> Result<(), String> {
             truth.len().saturating_sub(1)
         ));
     }
-    let heading_gcp = truth.iter().position(|g| {
-        (g.x_m - truth[0].x_m).hypot(g.y_m - truth[0].y_m)
-            >= EvalOptions::default().heading_min_dist_m
-    });
+    let min_dist_m = EvalOptions::default().heading_min_dist_m;
+    let heading_gcp = truth
+        .iter()
+        .position(|g| (g.x_m - truth[0].x_m).hypot(g.y_m - truth[0].y_m) >= min_dist_m);
     match heading_gcp {
         Some(k) if k < first => Ok(()),
         _ => Err(format!(
-            "recording {}: suspect_legs: leg {first} comes before the footprint 5 m from the start \
-             (nothing would be left to score before it)",
+            "recording {}: suspect_legs: leg {first} comes before the footprint {min_dist_m} m \
+             from the start that the first-leg alignment needs (nothing would be left to score)",
             r.name
         )),
     }

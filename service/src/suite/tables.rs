@@ -113,11 +113,12 @@ pub fn headline_markdown(rows: &[SuiteRow]) -> String {
     s
 }
 
-/// The recordings whose truth has legs the data set's own check flags, scored also on the
-/// footprints before the first of them.
+/// The normal-gait recordings whose truth has legs the data set's own check flags, scored also
+/// on the footprints before the first of them.
 fn suspect_markdown(rows: &[SuiteRow], m: &Summary) -> String {
     let flagged: Vec<String> = rows
         .iter()
+        .filter(|r| r.gait == Gait::Normal)
         .filter_map(|r| {
             let x = r.before_suspect?;
             Some(format!(

@@ -71,6 +71,11 @@ impl Positive {
             Err(invalid(key, value, "must be a finite number > 0"))
         }
     }
+    /// Checks an angle given in degrees under `key` (the error shows the degrees as written)
+    /// and keeps it in radians.
+    pub fn from_degrees(key: &str, degrees: f64) -> Result<Self, ConfigError> {
+        Self::new(key, degrees).map(|p| Self(p.0.to_radians()))
+    }
     /// The value.
     pub fn get(self) -> f64 {
         self.0
@@ -260,6 +265,20 @@ mod tests {
                 .to_string()
                 .contains("grid_step_deg")
         );
+
+        // An angle key shows the degrees as written, not the radians it is kept in.
+        for (section, key) in [
+            ("heading", "sigma_deg"),
+            ("heading", "stride_sigma_deg"),
+            ("model", "heading_offset_sd_deg"),
+            ("model", "gyro_coupling_z_sd_deg"),
+        ] {
+            let f = ConfigFile::parse(&format!("[{section}]\n{key} = -3.0\n"), Path::new("a.toml"))
+                .unwrap();
+            let err = f.validate().unwrap_err().to_string();
+            assert!(err.contains(&format!("{section}.{key}")), "{err}");
+            assert!(err.contains("-3") && !err.contains("-0.05"), "{err}");
+        }
 
         let f = ConfigFile::parse("[detector]\nwindow = 0\n", Path::new("a.toml")).unwrap();
         assert!(

@@ -179,6 +179,8 @@ impl ConfigFile {
         self.validate_daemon()?;
         let md = &self.model;
         let opt = |key: &str, v: Option<f64>| v.map(|v| Positive::new(key, v)).transpose();
+        let opt_deg =
+            |key: &str, v: Option<f64>| v.map(|v| Positive::from_degrees(key, v)).transpose();
         let model = ModelSettings {
             bias_rate_rw_rad_s2_sqrt_s: opt(
                 "model.bias_rate_rw_rad_s2_sqrt_s",
@@ -190,14 +192,14 @@ impl ConfigFile {
                     .unwrap_or(MODEL_BIAS_RATE_INITIAL_SD_RAD_S2),
             )?,
             scale_factor_sd: opt("model.scale_factor_sd", md.scale_factor_sd)?,
-            heading_offset_sd_rad: opt(
+            heading_offset_sd_rad: opt_deg(
                 "model.heading_offset_sd_deg",
-                md.heading_offset_sd_deg.map(f64::to_radians),
+                md.heading_offset_sd_deg,
             )?,
             g_sensitivity_sd: opt("model.g_sensitivity_sd", md.g_sensitivity_sd)?,
-            gyro_coupling_z_sd_rad: opt(
+            gyro_coupling_z_sd_rad: opt_deg(
                 "model.gyro_coupling_z_sd_deg",
-                md.gyro_coupling_z_sd_deg.map(f64::to_radians),
+                md.gyro_coupling_z_sd_deg,
             )?,
         };
         Ok(Config {
@@ -338,9 +340,9 @@ impl ConfigFile {
             },
             heading: HeadingConfig {
                 source: h.source.unwrap_or(HEADING_SOURCE),
-                sigma_rad: Positive::new(
+                sigma_rad: Positive::from_degrees(
                     "heading.sigma_deg",
-                    deg(h.sigma_deg.unwrap_or(HEADING_SIGMA_DEG)),
+                    h.sigma_deg.unwrap_or(HEADING_SIGMA_DEG),
                 )?,
                 grid_rad: deg(finite(
                     "heading.grid_deg",
@@ -355,21 +357,20 @@ impl ConfigFile {
                             "must divide 360 and lie in [1, 360]",
                         ));
                     }
-                    Positive::new("heading.grid_step_deg", deg(step))?
+                    Positive::from_degrees("heading.grid_step_deg", step)?
                 },
                 start_heading_rad: deg(finite(
                     "heading.start_heading_deg",
                     h.start_heading_deg.unwrap_or(HEADING_START_HEADING_DEG),
                 )?),
-                gate_rad: Positive::new(
+                gate_rad: Positive::from_degrees(
                     "heading.gate_deg",
-                    deg(h.gate_deg.unwrap_or(HEADING_GATE_DEG)),
+                    h.gate_deg.unwrap_or(HEADING_GATE_DEG),
                 )?,
-                straight_max_change_rad: Positive::new(
+                straight_max_change_rad: Positive::from_degrees(
                     "heading.straight_max_change_deg",
-                    deg(h
-                        .straight_max_change_deg
-                        .unwrap_or(HEADING_STRAIGHT_MAX_CHANGE_DEG)),
+                    h.straight_max_change_deg
+                        .unwrap_or(HEADING_STRAIGHT_MAX_CHANGE_DEG),
                 )?,
                 straight_strides,
                 calibration_strides,
@@ -377,16 +378,15 @@ impl ConfigFile {
                     "heading.obs_delay_s",
                     h.obs_delay_s.unwrap_or(HEADING_OBS_DELAY_S),
                 )?,
-                start_heading_sd_rad: Positive::new(
+                start_heading_sd_rad: Positive::from_degrees(
                     "heading.start_heading_sd_deg",
-                    deg(h
-                        .start_heading_sd_deg
-                        .unwrap_or(HEADING_START_HEADING_SD_DEG)),
+                    h.start_heading_sd_deg
+                        .unwrap_or(HEADING_START_HEADING_SD_DEG),
                 )?,
                 observations: h.observations.unwrap_or(HEADING_OBSERVATIONS),
-                stride_sigma_rad: Positive::new(
+                stride_sigma_rad: Positive::from_degrees(
                     "heading.stride_sigma_deg",
-                    deg(h.stride_sigma_deg.unwrap_or(HEADING_STRIDE_SIGMA_DEG)),
+                    h.stride_sigma_deg.unwrap_or(HEADING_STRIDE_SIGMA_DEG),
                 )?,
                 min_stride_m: Positive::new(
                     "heading.min_stride_m",

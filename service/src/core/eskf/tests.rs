@@ -342,6 +342,24 @@ fn scale_factor_state_converges_on_a_turning_body() {
 }
 
 #[test]
+fn the_corrected_rate_inverts_the_whole_rate_model() {
+    // ω_meas = (1 + s)∘ω + M·ω + b + k∘f, with the coupling M = e_z·(m_zx, m_zy, 0)
+    let mut f = level_filter(1e-4, all_ext());
+    f.ext.scale_factor = Vector3::new(0.01, -0.02, 0.03);
+    f.ext.coupling_z_rad = [0.02, -0.015];
+    f.ext.g_sensitivity = Vector3::new(1e-3, -2e-3, 5e-4);
+    let b = Vector3::new(0.004, -0.002, 0.006);
+    let (w, force) = (Vector3::new(1.5, -3.0, 0.7), Vector3::new(0.5, 2.0, 9.5));
+    let [mx, my] = f.ext.coupling_z_rad;
+    let mut meas = (Vector3::repeat(1.0) + f.ext.scale_factor).component_mul(&w)
+        + b
+        + f.ext.g_sensitivity.component_mul(&force);
+    meas.z += mx * w.x + my * w.y;
+    let back = f.corrected_rate(&meas, &force, &b);
+    assert!((back - w).norm() < 1e-12, "{back} against {w}");
+}
+
+#[test]
 fn coupling_states_converge_on_a_body_that_pitches_and_turns() {
     // The z gyro also reads 3 % of the x rate and −2 % of the y rate; the body turns about z and
     // rocks about x and y (a foot's swing), and the heading is observed every second.
