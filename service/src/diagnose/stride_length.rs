@@ -5,9 +5,10 @@
 //! scale `k` makes `L̂ = k·L`: the least-squares `k̂ = Σ L̂·L / Σ L²` over the legs, its standard
 //! error from the scatter about that line (n − 1 degrees of freedom), `−log₁₀` of the two-sided
 //! Student-t p of `(k̂ − 1)/se` as the score and `t·se` as the detectable size, `t` the quantile
-//! of p = 10⁻³ (3.29, [`MDE_Z`], for many legs; 5.4 for eight), as for the other effects. Consecutive legs share a footprint, so a position error at one
-//! shortens one leg and lengthens the next: the plain standard error overstates the scatter of
-//! `k̂`, which errs on the side of naming less.
+//! of p = 10⁻³ (3.29, [`MDE_Z`], for many legs; 5.4 for eight), as for the other effects.
+//! Consecutive legs share a footprint, so a position error at one shortens one leg and
+//! lengthens the next: the plain standard error overstates the scatter of `k̂`, which errs on
+//! the side of naming less.
 //!
 //! Only single strides count: legs shorter than [`MIN_LEG_M`] (a shuffle, a turn on the spot) or
 //! longer than [`MAX_LEG_M`] (several strides between surveyed corners, whose chord also
