@@ -20,11 +20,13 @@
 //! - [`tables`]: the summary and the Markdown tables;
 //! - [`loops`]: the residual-diagnosis loop on every recording;
 //! - [`detection`]: the diagnosis's detection matrix (injected sensor errors × recordings);
+//! - [`detection_tables`]: its Markdown tables;
 //! - [`sweep`]: the leave-one-walk-out check of the configuration's choices;
 //! - [`ensemble`]: every walk's default run under small start-heading offsets (how stable
 //!   each figure is).
 
 mod detection;
+mod detection_tables;
 mod ensemble;
 mod figures;
 mod front_end;
@@ -34,9 +36,10 @@ mod sweep;
 mod tables;
 
 pub use detection::{
-    CaseInjection, DetectionMatrix, MatrixCase, MatrixCell, detection_matrix, diagnosis_model,
-    matrix_cases, matrix_markdown, prediction_markdown,
+    CaseInjection, DetectionMatrix, MatrixCase, MatrixCell, StrideFigure, detection_matrix,
+    diagnosis_model, matrix_cases,
 };
+pub use detection_tables::{matrix_markdown, prediction_markdown};
 pub use ensemble::{
     EnsembleRow, EnsembleSummary, START_OFFSETS_DEG, ensemble_markdown, ensemble_summary,
     run_ensemble,
