@@ -81,15 +81,15 @@ pub fn write_report(
             e.fix.map_or("—", Fix::label)
         ));
     }
-    md.push_str(&match report.stride_length.as_ref().map(|l| &l.finding) {
-        Some(f) => format!(
+    md.push_str(&match &report.stride_length {
+        Some(super::StrideLine { fit, finding: f }) => format!(
             "\nStride length against the footprints (position information, on the model the heading \
              effects left): score {:.1}, detectable from a {:.2} % scale; {}{}.\n",
-            f.score,
-            100.0 * f.mde.unwrap_or(f64::NAN),
+            fit.score,
+            100.0 * fit.mde,
             f.evidence,
             f.fix
-                .filter(|_| f.score >= super::SIGNIFICANT)
+                .filter(|_| fit.score >= super::SIGNIFICANT)
                 .map_or(String::new(), |x| format!("; fix `{}`", x.label()))
         ),
         None => format!(
