@@ -31,7 +31,8 @@ pub const FLAG_BIAS_CORRECTED: u32 = 1 << 1;
 /// Output `flags`: the foot is at rest (stance) on this sample.
 pub const FLAG_STANCE: u32 = 1 << 2;
 
-/// Output `flags`: every bias σ is below the configured convergence bound (and tracking).
+/// Output `flags`: the bias has converged (tracking, and less than the configured
+/// `estimator.converged_unabsorbed` of a bias error present when it was set is left).
 pub const FLAG_CONVERGED: u32 = 1 << 3;
 
 /// [`Diagnostics::flags`]: published because the daemon is shutting down.
@@ -158,7 +159,7 @@ pub struct BiasSample {
     pub gyro_bias_rad_s: [f64; 3],
     /// Its σ, rad/s (NaN before alignment).
     pub gyro_bias_sd_rad_s: [f64; 3],
-    /// 1 when every σ is below the convergence bound (and tracking), else 0.
+    /// 1 when the bias has converged (as [`FLAG_CONVERGED`]), else 0.
     pub converged: u32,
     /// Bit set of `FLAG_*` ([`FLAG_END_OF_STREAM`], [`FLAG_CONVERGED`]).
     pub flags: u32,

@@ -21,6 +21,9 @@ pub struct BiasKf {
     pub b_rad_s: Vector3<f64>,
     /// Covariance, (rad/s)².
     pub p: Matrix3<f64>,
+    /// The part of a bias error present at the start that the estimate still carries:
+    /// `Π (I − K·H)` over the updates (F = I), as the full filter's response (`eskf/response.rs`).
+    pub unabsorbed: Matrix3<f64>,
     rw_rad_s_sqrt_s: f64,
     last_t_s: f64,
 }
@@ -31,6 +34,7 @@ impl BiasKf {
         Self {
             b_rad_s: b0,
             p: Matrix3::identity() * (sd0 * sd0),
+            unabsorbed: Matrix3::identity(),
             rw_rad_s_sqrt_s,
             last_t_s: t_s,
         }
@@ -58,6 +62,7 @@ impl BiasKf {
         let k = self.p * h.transpose() * s_inv;
         self.b_rad_s += k * r;
         let ikh = Matrix3::identity() - k * h;
+        self.unabsorbed = ikh * self.unabsorbed;
         // Joseph form: stays symmetric and positive with the tiny R of long baselines.
         self.p =
             ikh * self.p * ikh.transpose() + k * Matrix3::from_diagonal(r_diag) * k.transpose();

@@ -3,7 +3,7 @@
 use super::*;
 
 /// CSV header of `estimates.csv`.
-pub const ESTIMATES_HEADER: &str = "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,roll_rad,pitch_rad,yaw_rad,qw,qx,qy,qz,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,stance,stance_began,converged,phase";
+pub const ESTIMATES_HEADER: &str = "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,roll_rad,pitch_rad,yaw_rad,qw,qx,qy,qz,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,bias_unabsorbed,stance,stance_began,converged,phase";
 
 /// CSV header of `innovations.csv`.
 pub const INNOVATIONS_HEADER: &str = "t_s,kind,accepted,reason,r0,r1,r2,s0,s1,s2,nis,foot_heading_deg,direction_deg,baseline_s,gyro_norm_rad_s,accel_norm_m_s2,gz_rad_s";
@@ -15,7 +15,7 @@ pub fn write_estimate_row(w: &mut impl Write, e: &Estimate) -> std::io::Result<(
     let q = e.nav_from_body;
     writeln!(
         w,
-        "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         e.t_s,
         e.p_m[0],
         e.p_m[1],
@@ -36,6 +36,7 @@ pub fn write_estimate_row(w: &mut impl Write, e: &Estimate) -> std::io::Result<(
         s[0],
         s[1],
         s[2],
+        e.bias_unabsorbed,
         u8::from(e.stance),
         u8::from(e.stance_began),
         u8::from(e.converged),

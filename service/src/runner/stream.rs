@@ -15,7 +15,8 @@ pub struct Summary {
     pub bias_sd_rad_s: [f64; 3],
     /// Mean bias over the converged phase (from `converged_at_s` on), or null.
     pub bias_mean_converged_rad_s: Option<[f64; 3]>,
-    /// First time every bias σ was below `estimator.converged_sd_rad_s` (a real-time criterion).
+    /// First time the estimate carried less than `estimator.converged_unabsorbed` of a bias
+    /// error present when the bias was set (a real-time criterion).
     pub converged_at_s: Option<f64>,
     /// Sensor yaw on the foot found by the calibration, degrees.
     pub mount_yaw_deg: Option<f64>,

@@ -48,7 +48,7 @@ use figures::{DefaultFigures, NisSeries, stride_ratio};
 pub use figures::{NisFigure, STANCE_MATCH_S, STRAIGHT_DEG, StanceMatch, StrideUse, WEAVE_DEG};
 pub use front_end::{DETECTORS, FrontEnd, KEPT_REST_S, detector_label, front_end_markdown};
 pub use loops::run_loops;
-pub use recovery::{recovery, settled_at};
+pub use recovery::{Convergence, SETTLED_TOLERANCE, convergence, recovery, settled_at};
 pub use sweep::{
     HeldOut, SweepFile, SweepParameter, SweepResult, held_out, run_sweep, sweep_markdown,
 };
@@ -210,14 +210,12 @@ pub struct SuiteRow {
     pub best_recovery: [f64; 3],
     /// Recovery of the best mode with the prior and the injection after the first rest.
     pub best_recovery_prior_late: [f64; 3],
-    /// Convergence time of the best mode with injection (s after the start of the log).
-    pub best_converged_at_s: Option<f64>,
     /// Convergence time of the paper mode with injection.
     pub paper_converged_at_s: Option<f64>,
-    /// Hindsight: when the best mode's recovered bias settles within ±5 % (no prior).
-    pub best_settled_at_s: Option<f64>,
-    /// Hindsight: the same with the prior and the injection after the rest.
-    pub best_settled_prior_late_at_s: Option<f64>,
+    /// The best mode's convergence flag against hindsight, no prior, injection from the start.
+    pub best_convergence: Convergence,
+    /// The same with the prior and the injection after the rest.
+    pub best_convergence_prior_late: Convergence,
     /// Error reduction of the best mode over the uncorrected injected run, %.
     pub best_reduction_pct: f64,
     /// Stances of the default run (best mode, rest-mean prior).
@@ -642,10 +640,9 @@ fn run_recording(
         paper_recovery: recovery(&paper1, &paper0, inj),
         best_recovery: recovery(&best1, &best0, inj),
         best_recovery_prior_late: recovery(&best_r1, &best_r0, inj),
-        best_converged_at_s: best1.converged_at_s,
         paper_converged_at_s: paper1.converged_at_s,
-        best_settled_at_s: settled_at(&best1, &best0, inj),
-        best_settled_prior_late_at_s: settled_at(&best_r1, &best_r0, inj),
+        best_convergence: convergence(&best1, &best0, inj, rest_end),
+        best_convergence_prior_late: convergence(&best_r1, &best_r0, inj, rest_end),
         best_reduction_pct: 100.0 * (1.0 - best_inj.rms_m / zupt_inj.rms_m),
         stances,
         heading_used,

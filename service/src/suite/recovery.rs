@@ -1,6 +1,61 @@
-//! Injected-bias recovery and the hindsight time it settles.
+//! Injected-bias recovery, the hindsight time it settles, and how the real-time convergence
+//! flag compares with that hindsight.
 
 use crate::runner::RunOutcome;
+use serde::Serialize;
+
+/// How much of the injection the estimate has recovered at one instant, per axis, when the
+/// relative error stays within this.
+pub const SETTLED_TOLERANCE: f64 = 0.05;
+
+/// The convergence flag of one injected run against hindsight.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Convergence {
+    /// When the walk started (the end of the initial rest, where the late injection starts), s.
+    pub walking_from_s: f64,
+    /// When the run's flag first rose, s (`None`: never).
+    pub flag_at_s: Option<f64>,
+    /// The recovered part of the injection per axis at that instant (fraction).
+    pub recovered_at_flag: Option<[f64; 3]>,
+    /// Hindsight: from when on the recovery stays within ±5 % on every axis.
+    pub settled_at_s: Option<f64>,
+}
+
+impl Convergence {
+    /// The flag rose and the recovery was within ±5 % on every axis at that instant.
+    pub fn agrees(&self) -> bool {
+        self.recovered_at_flag
+            .is_some_and(|r| r.iter().all(|v| (v - 1.0).abs() <= SETTLED_TOLERANCE))
+    }
+
+    /// Seconds of walking before the flag rose.
+    pub fn flag_after_walking_s(&self) -> Option<f64> {
+        self.flag_at_s.map(|t| t - self.walking_from_s)
+    }
+}
+
+/// The flag of `with` (the injected run) against the recovery `with − without`.
+pub fn convergence(
+    with: &RunOutcome,
+    without: &RunOutcome,
+    inj: [f64; 3],
+    walking_from_s: f64,
+) -> Convergence {
+    let flag_at_s = with.converged_at_s;
+    let recovered_at_flag = flag_at_s.and_then(|tf| {
+        let n = with.trace.t_s.len().min(without.trace.t_s.len());
+        let i = with.trace.t_s[..n].iter().position(|&t| t >= tf)?;
+        Some(std::array::from_fn(|k| {
+            (with.trace.bias_rad_s[i][k] - without.trace.bias_rad_s[i][k]) / inj[k]
+        }))
+    });
+    Convergence {
+        walking_from_s,
+        flag_at_s,
+        recovered_at_flag,
+        settled_at_s: settled_at(with, without, inj),
+    }
+}
 
 /// Hindsight, not a real-time criterion: the time after which the recovered bias
 /// (with − without injection) stays within ±5 % of the injected value on every axis, or `None`
@@ -13,7 +68,7 @@ pub fn settled_at(with: &RunOutcome, without: &RunOutcome, inj: [f64; 3]) -> Opt
             inj[k] != 0.0
                 && ((with.trace.bias_rad_s[i][k] - without.trace.bias_rad_s[i][k]) / inj[k] - 1.0)
                     .abs()
-                    > 0.05
+                    > SETTLED_TOLERANCE
         });
         if outside {
             last_outside = Some(i);

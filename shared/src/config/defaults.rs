@@ -57,8 +57,8 @@ pub const MODEL_BIAS_RATE_INITIAL_SD_RAD_S2: f64 = 1e-4;
 /// `estimator.mode`.
 pub const ESTIMATOR_MODE: Mode = Mode::Eskf;
 
-/// `estimator.converged_sd_rad_s`.
-pub const ESTIMATOR_CONVERGED_SD_RAD_S: f64 = 2e-4;
+/// `estimator.converged_unabsorbed`: 95 % of a start bias error absorbed.
+pub const ESTIMATOR_CONVERGED_UNABSORBED: f64 = 0.05;
 
 /// `estimator.max_dt_s`: a longer step starts a new segment, s.
 pub const ESTIMATOR_MAX_DT_S: f64 = 0.05;

@@ -93,8 +93,10 @@ pub struct DaemonFile {
 pub struct EstimatorFile {
     /// Bias estimation mode (default `eskf`).
     pub mode: Option<Mode>,
-    /// Bias σ on every axis below which the estimate counts as converged (default 2e-4 rad/s).
-    pub converged_sd_rad_s: Option<f64>,
+    /// The bias counts as converged once the estimate carries less than this fraction of a
+    /// bias error present when the bias was set (the same size on every axis; the filter's
+    /// closed-loop response, not its σ; default 0.05).
+    pub converged_unabsorbed: Option<f64>,
     /// Largest regular time step; a longer one is a gap: a new segment, counted (default 0.05 s).
     pub max_dt_s: Option<f64>,
     /// Largest plausible foot speed, m/s; a faster estimate fails the health check (default 15).

@@ -8,8 +8,8 @@ use serde::Serialize;
 pub struct Config {
     /// Bias estimation mode.
     pub mode: Mode,
-    /// Convergence bound on the bias σ.
-    pub converged_sd_rad_s: Positive,
+    /// Convergence bound on the part of a start bias error the estimate still carries.
+    pub converged_unabsorbed: Fraction,
     /// Largest regular time step.
     pub max_dt_s: Positive,
     /// Largest plausible foot speed (health check).

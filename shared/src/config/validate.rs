@@ -205,9 +205,10 @@ impl ConfigFile {
         Ok(Config {
             model,
             mode: e.mode.unwrap_or(ESTIMATOR_MODE),
-            converged_sd_rad_s: Positive::new(
-                "estimator.converged_sd_rad_s",
-                e.converged_sd_rad_s.unwrap_or(ESTIMATOR_CONVERGED_SD_RAD_S),
+            converged_unabsorbed: Fraction::new(
+                "estimator.converged_unabsorbed",
+                e.converged_unabsorbed
+                    .unwrap_or(ESTIMATOR_CONVERGED_UNABSORBED),
             )?,
             max_dt_s: Positive::new(
                 "estimator.max_dt_s",

@@ -2,9 +2,57 @@
 
 use super::*;
 
+/// Row i of `fvt` (−[f]×·dt) times `v`: the skew matrix's zero diagonal term is left out.
+#[inline]
+fn skew_dot(fvt: &[[f64; 3]; 3], i: usize, v: &[f64; 3]) -> f64 {
+    let m = &fvt[i];
+    match i {
+        0 => m[1] * v[1] + m[2] * v[2],
+        1 => m[0] * v[0] + m[2] * v[2],
+        _ => m[0] * v[0] + m[1] * v[1],
+    }
+}
+
+#[inline]
+fn dot3(m: &[f64; 3], v: &[f64; 3]) -> f64 {
+    m[0] * v[0] + m[1] * v[1] + m[2] * v[2]
+}
+
+/// `dst ← F·src` for the first `cols` columns (column-major, stride `MAX_N`) when every
+/// extension state is constant between updates (their rows of F are the identity): writes
+/// every element of those columns, so `dst` need not hold `src`.
+fn f_times_base(
+    src: &[f64],
+    dst: &mut [f64],
+    cols: usize,
+    fvt: &[[f64; 3]; 3],
+    ftb: &[[f64; 3]; 3],
+    dt: f64,
+) {
+    for col in 0..cols {
+        let (s, c) = (
+            &src[col * MAX_N..][..MAX_N],
+            &mut dst[col * MAX_N..][..MAX_N],
+        );
+        let p = [s[P0], s[P0 + 1], s[P0 + 2]];
+        let v = [s[V0], s[V0 + 1], s[V0 + 2]];
+        let th = [s[TH], s[TH + 1], s[TH + 2]];
+        let b = [s[BG], s[BG + 1], s[BG + 2]];
+        for i in 0..3 {
+            c[P0 + i] = p[i] + dt * v[i];
+            c[V0 + i] = v[i] + skew_dot(fvt, i, &th);
+            c[TH + i] = th[i] + dot3(&ftb[i], &b);
+            c[BG + i] = b[i];
+        }
+        // The extension rows, and the unused ones below them (zero in both): a fixed-size
+        // copy, which compiles to a few vector moves.
+        c[BASE_N..].copy_from_slice(&s[BASE_N..]);
+    }
+}
+
 /// `P ← F P₀ Fᵀ` (without Q) for the base 12-state filter plus extension states that are
-/// constant between updates (their rows of F are the identity): the common case. The first
-/// pass (`F P₀`) reads `p0` and writes every used element of `a`, so `a` need not hold `P₀`.
+/// constant between updates: the common case. The first pass (`F P₀`) reads `p0` and writes
+/// every used element of `a`, so `a` need not hold `P₀`.
 fn propagate_base(
     p0: &[f64; MAX_N * MAX_N],
     a: &mut [f64; MAX_N * MAX_N],
@@ -13,40 +61,70 @@ fn propagate_base(
     ftb: &[[f64; 3]; 3],
     dt: f64,
 ) {
-    let dot3 = |m: &[f64; 3], v: &[f64; 3]| m[0] * v[0] + m[1] * v[1] + m[2] * v[2];
-    // Row i of `fvt` = −[f]×·dt times v: the skew matrix's zero diagonal term is left out.
-    let skew_dot = |i: usize, v: &[f64; 3]| {
-        let m = &fvt[i];
-        match i {
-            0 => m[1] * v[1] + m[2] * v[2],
-            1 => m[0] * v[0] + m[2] * v[2],
-            _ => m[0] * v[0] + m[1] * v[1],
-        }
-    };
-    for col in 0..n {
-        let (s, c) = (&p0[col * MAX_N..][..MAX_N], &mut a[col * MAX_N..][..MAX_N]);
-        let p = [s[P0], s[P0 + 1], s[P0 + 2]];
-        let v = [s[V0], s[V0 + 1], s[V0 + 2]];
-        let th = [s[TH], s[TH + 1], s[TH + 2]];
-        let b = [s[BG], s[BG + 1], s[BG + 2]];
-        for i in 0..3 {
-            c[P0 + i] = p[i] + dt * v[i];
-            c[V0 + i] = v[i] + skew_dot(i, &th);
-            c[TH + i] = th[i] + dot3(&ftb[i], &b);
-            c[BG + i] = b[i];
-        }
-        // The extension rows, and the unused ones below them (zero in both): a fixed-size
-        // copy, which compiles to a few vector moves.
-        c[BASE_N..].copy_from_slice(&s[BASE_N..]);
-    }
+    f_times_base(p0, a, n, fvt, ftb, dt);
     for row in 0..n {
         let v = [a[ix(row, V0)], a[ix(row, V0 + 1)], a[ix(row, V0 + 2)]];
         let th = [a[ix(row, TH)], a[ix(row, TH + 1)], a[ix(row, TH + 2)]];
         let b = [a[ix(row, BG)], a[ix(row, BG + 1)], a[ix(row, BG + 2)]];
         for i in 0..3 {
             a[ix(row, P0 + i)] += dt * v[i];
-            a[ix(row, V0 + i)] += skew_dot(i, &th);
+            a[ix(row, V0 + i)] += skew_dot(fvt, i, &th);
             a[ix(row, TH + i)] += dot3(&ftb[i], &b);
+        }
+    }
+}
+
+/// The blocks of one step's transition `F = I + G` (see
+/// [`Eskf::propagate_covariance_from`]).
+struct Transition {
+    dt: f64,
+    /// v←θ: −[f]×·dt.
+    fvt: [[f64; 3]; 3],
+    /// θ←b: −C·dt (zero when the bias is frozen).
+    ftb: [[f64; 3]; 3],
+    /// θ←s: −C·diag(ω)·dt.
+    fts: [[f64; 3]; 3],
+    /// θ←k: −C·diag(f)·dt.
+    ftk: [[f64; 3]; 3],
+    /// θ←m: the z column of −C·dt times ω_x, ω_y.
+    ftm: [[f64; 2]; 3],
+    lay: Layout,
+    /// The bias-rate states, when the bias is estimated.
+    b_rate: Option<usize>,
+}
+
+impl Transition {
+    /// `c ← F·c` for one column `c` (the leading `n` elements of a column of P, or of the
+    /// bias-error response): rows p, v, θ, b read the old rows v, θ, b/s/k/m, d.
+    #[inline]
+    fn apply(&self, c: &mut [f64]) {
+        let dot3 = |m: &[f64; 3], v: [f64; 3]| dot3(m, &v);
+        let dot2 = |m: &[f64; 2], v: [f64; 2]| m[0] * v[0] + m[1] * v[1];
+        let lay = &self.lay;
+        let v = [c[V0], c[V0 + 1], c[V0 + 2]];
+        let th = [c[TH], c[TH + 1], c[TH + 2]];
+        let b = [c[BG], c[BG + 1], c[BG + 2]];
+        let s = lay.scale.map(|i| [c[i], c[i + 1], c[i + 2]]);
+        let k = lay.gsens.map(|i| [c[i], c[i + 1], c[i + 2]]);
+        let m = lay.coupling.map(|i| [c[i], c[i + 1]]);
+        let d = self.b_rate.map(|i| [c[i], c[i + 1], c[i + 2]]);
+        for i in 0..3 {
+            c[P0 + i] += self.dt * v[i];
+            c[V0 + i] += dot3(&self.fvt[i], th);
+            let mut dth = dot3(&self.ftb[i], b);
+            if let Some(s) = s {
+                dth += dot3(&self.fts[i], s);
+            }
+            if let Some(k) = k {
+                dth += dot3(&self.ftk[i], k);
+            }
+            if let Some(m) = m {
+                dth += dot2(&self.ftm[i], m);
+            }
+            c[TH + i] += dth;
+            if let Some(d) = d {
+                c[BG + i] += self.dt * d[i];
+            }
         }
     }
 }
@@ -59,18 +137,21 @@ impl Eskf {
     /// to the others (θ←b through `(1 + s)⁻¹` and `m`, a few % of the direct ones) are left out.
     /// Written out on the column-major storage: about 500 multiply-adds for the base filter
     /// instead of the 3,500 of a dense product (the hot path of the core).
-    /// `p0` is the covariance before the step; `self`'s is overwritten.
+    /// `before` is the filter before the step: its covariance and bias-error response
+    /// (`response.rs`) are read, `self`'s overwritten.
     pub(super) fn propagate_covariance_from(
         &mut self,
-        p0: &[f64; MAX_N * MAX_N],
+        before: &Eskf,
         f_vth: &Matrix3<f64>,
         minus_c_dt: &Matrix3<f64>,
         omega: &Vector3<f64>,
         f_body: &Vector3<f64>,
         dt: f64,
     ) {
+        let (p0, response0) = (&before.p, &before.response);
         let lay = self.layout;
         let n = lay.n;
+        let b_rate = lay.rate.filter(|_| self.estimate_bias);
         let m3 = |m: &Matrix3<f64>| -> [[f64; 3]; 3] {
             std::array::from_fn(|i| std::array::from_fn(|k| m[(i, k)]))
         };
@@ -80,51 +161,39 @@ impl Eskf {
         } else {
             [[0.0; 3]; 3]
         };
-        let b_rate = lay.rate.filter(|_| self.estimate_bias);
         let a = &mut self.p;
-        let dot3 = |m: &[f64; 3], v: [f64; 3]| m[0] * v[0] + m[1] * v[1] + m[2] * v[2];
         if lay.static_extensions_only() {
             propagate_base(p0, a, n, &fvt, &ftb, dt);
+            // The bias-error response (`response.rs`) goes through F alone.
+            f_times_base(response0, &mut self.response, 3, &fvt, &ftb, dt);
         } else {
+            let tr = Transition {
+                dt,
+                fvt,
+                ftb,
+                // θ←s and θ←k blocks: −C·diag(ω)·dt and −C·diag(f)·dt.
+                fts: m3(&(minus_c_dt * Matrix3::from_diagonal(omega))),
+                ftk: m3(&(minus_c_dt * Matrix3::from_diagonal(f_body))),
+                // θ←m rows: (−C·dt)[i, z] · (ω_x, ω_y).
+                ftm: std::array::from_fn(|i| {
+                    [minus_c_dt[(i, 2)] * omega.x, minus_c_dt[(i, 2)] * omega.y]
+                }),
+                lay,
+                b_rate,
+            };
+            self.response = *response0;
+            for c in 0..3 {
+                tr.apply(&mut self.response[c * MAX_N..][..MAX_N]);
+            }
+            let Transition { fts, ftk, ftm, .. } = tr;
+            let dot3 = |m: &[f64; 3], v: [f64; 3]| dot3(m, &v);
             for c in 0..n {
                 a[c * MAX_N..][..n].copy_from_slice(&p0[c * MAX_N..][..n]);
             }
-            // θ←s and θ←k blocks: −C·diag(ω)·dt and −C·diag(f)·dt.
-            let fts = m3(&(minus_c_dt * Matrix3::from_diagonal(omega)));
-            let ftk = m3(&(minus_c_dt * Matrix3::from_diagonal(f_body)));
-            // θ←m rows: (−C·dt)[i, z] · (ω_x, ω_y).
-            let ftm: [[f64; 2]; 3] = std::array::from_fn(|i| {
-                [minus_c_dt[(i, 2)] * omega.x, minus_c_dt[(i, 2)] * omega.y]
-            });
             let dot2 = |m: &[f64; 2], v: [f64; 2]| m[0] * v[0] + m[1] * v[1];
             // M = F P: rows p, v, θ, b read the old rows v, θ, b/s/k, d.
             for col in 0..n {
-                let c = &mut a[col * MAX_N..col * MAX_N + n];
-                let v = [c[V0], c[V0 + 1], c[V0 + 2]];
-                let th = [c[TH], c[TH + 1], c[TH + 2]];
-                let b = [c[BG], c[BG + 1], c[BG + 2]];
-                let s = lay.scale.map(|i| [c[i], c[i + 1], c[i + 2]]);
-                let k = lay.gsens.map(|i| [c[i], c[i + 1], c[i + 2]]);
-                let m = lay.coupling.map(|i| [c[i], c[i + 1]]);
-                let d = b_rate.map(|i| [c[i], c[i + 1], c[i + 2]]);
-                for i in 0..3 {
-                    c[P0 + i] += dt * v[i];
-                    c[V0 + i] += dot3(&fvt[i], th);
-                    let mut dth = dot3(&ftb[i], b);
-                    if let Some(s) = s {
-                        dth += dot3(&fts[i], s);
-                    }
-                    if let Some(k) = k {
-                        dth += dot3(&ftk[i], k);
-                    }
-                    if let Some(m) = m {
-                        dth += dot2(&ftm[i], m);
-                    }
-                    c[TH + i] += dth;
-                    if let Some(d) = d {
-                        c[BG + i] += dt * d[i];
-                    }
-                }
+                tr.apply(&mut a[col * MAX_N..col * MAX_N + n]);
             }
             // P' = M Fᵀ: columns p, v, θ, b read the old columns.
             let col = |a: &[f64; MAX_N * MAX_N], row: usize, c0: usize| {

@@ -194,6 +194,9 @@ pub struct Eskf {
     pub footprint_xy_m: [f64; 2],
     /// Error covariance, column-major with stride `MAX_N`; only the leading `n × n` is used.
     p: [f64; MAX_N * MAX_N],
+    /// The closed-loop response to a bias error present when the bias was set
+    /// (`response.rs`).
+    response: response::Response,
     layout: Layout,
     gravity_m_s2: f64,
     noise: EskfNoise,
@@ -213,7 +216,10 @@ fn ix(r: usize, c: usize) -> usize {
 const BASE_N: usize = 12;
 
 mod covariance;
+mod response;
 mod updates;
+
+pub use response::max_row_sum;
 
 impl Eskf {
     /// A filter at rest at the origin with the given attitude, bias and initial σ.
@@ -236,12 +242,14 @@ impl Eskf {
             ext: ExtensionEstimates::default(),
             footprint_xy_m: [f64::NAN; 2],
             p: [0.0; MAX_N * MAX_N],
+            response: [0.0; MAX_N * 3],
             layout,
             gravity_m_s2,
             noise,
             ext_cfg: ext,
             estimate_bias,
         };
+        f.reset_bias_response();
         let mut set = |i: usize, var: f64| f.p[ix(i, i)] = var;
         for i in 0..3 {
             set(P0 + i, 1e-6);
@@ -289,6 +297,7 @@ impl Eskf {
             let col = c * MAX_N;
             self.p[col..col + n].copy_from_slice(&src.p[col..col + n]);
         }
+        self.response = src.response;
     }
 
     /// Copies everything of `src` but the covariance.
@@ -400,7 +409,7 @@ impl Eskf {
         }
         let c = half.to_rotation_matrix().into_inner();
         next.propagate_covariance_from(
-            &self.p,
+            self,
             &(-skew(&f_nav) * dt_s),
             &(-c * dt_s),
             omega_rad_s,
@@ -483,6 +492,7 @@ impl Eskf {
                 }
             }
         }
+        self.rotate_bias_response(&m);
     }
 
     /// After a gap in the data of `gap_s`: nothing is integrated over it; the velocity variance
@@ -512,16 +522,21 @@ impl Eskf {
         self.clear_state(TH + 2, var_rad2);
     }
 
+    /// Makes state `i`'s error independent of everything before: variance `var`, no
+    /// correlations, no part of the bias-error response.
     fn clear_state(&mut self, i: usize, var: f64) {
         for j in 0..self.layout.n {
             self.p[ix(i, j)] = 0.0;
             self.p[ix(j, i)] = 0.0;
         }
         self.p[ix(i, i)] = var;
+        for c in 0..3 {
+            self.response[response::rx(i, c)] = 0.0;
+        }
     }
 
     /// Sets the gyro bias and its covariance block (clearing its correlations), when the filter
-    /// owns the bias.
+    /// owns the bias. The bias-error response starts again from here.
     pub fn set_gyro_bias(&mut self, bias_rad_s: Vector3<f64>, cov: &Matrix3<f64>) {
         if !self.estimate_bias {
             return;
@@ -535,6 +550,12 @@ impl Eskf {
                 self.p[ix(BG + i, BG + j)] = cov[(i, j)];
             }
         }
+        self.reset_bias_response();
+    }
+
+    /// Whether the filter estimates the gyro bias (else another estimator owns it).
+    pub fn estimates_bias(&self) -> bool {
+        self.estimate_bias
     }
 
     /// Covariance block of the gyro bias.

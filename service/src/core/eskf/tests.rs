@@ -1,5 +1,5 @@
 use super::*;
-use crate::core::rotation::from_euler_zyx;
+use crate::core::rotation::{from_euler_zyx, log_rotvec};
 
 fn noise() -> EskfNoise {
     EskfNoise {
@@ -531,4 +531,96 @@ fn heading_offset_state_absorbs_a_constant_offset() {
         "{}",
         f.ext.heading_offset_rad.to_degrees()
     );
+}
+
+#[test]
+fn the_bias_error_response_is_what_a_start_error_becomes() {
+    // Two filters see the same turning, rocking body (in place) with ZUPTs, foot-axis headings,
+    // footprint clones and a frame fix; one starts with its bias estimate off by δ on one axis.
+    // The other is exact (its innovations are zero, so the gains' own dependence on the state
+    // adds nothing at first order), and the difference of their bias estimates over δ is the
+    // response's column.
+    let delta = 1e-6;
+    for ext in extension_sets() {
+        for axis in 0..3 {
+            let mut a = level_filter(0.01, ext);
+            let mut b = level_filter(0.01, ext);
+            b.gyro_bias_rad_s[axis] += delta;
+            let dt = 0.005;
+            let mut truth = UnitQuaternion::identity();
+            let mut fraction_mid = f64::NAN;
+            for k in 0..6_000 {
+                let t = k as f64 * dt;
+                let w = Vector3::new(
+                    3.0 * (2.0 * t).sin(),
+                    2.0 * (3.1 * t).cos(),
+                    if (k / 400) % 2 == 0 { 1.0 } else { -0.5 },
+                );
+                // The specific force at the middle of the step, where the filter takes it.
+                let mid = truth * exp_rotvec(&(w * (0.5 * dt)));
+                let g_body = mid.inverse() * Vector3::new(0.0, 0.0, 9.81);
+                truth *= exp_rotvec(&(w * dt));
+                let yaw = heading_of_axis(&truth, &Vector3::x());
+                for f in [&mut a, &mut b] {
+                    let omega = f.corrected_rate(&w, &g_body, &f.gyro_bias_rad_s.clone());
+                    f.propagate(&omega, &g_body, dt);
+                    f.zupt();
+                    if k == 1_000 {
+                        // The frame fixed so that the filter's own navigation-frame heading
+                        // error vanishes (as the map frame is fixed from a stride direction).
+                        let err = log_rotvec(&(truth * f.nav_from_body.inverse()));
+                        f.rotate_frame(err.z);
+                        f.set_heading_variance(1e-4);
+                    }
+                    if k % 200 == 199 {
+                        f.heading_update(yaw, 0.005, &Vector3::x());
+                        f.clone_footprint();
+                    }
+                }
+                if k == 3_000 {
+                    fraction_mid = max_row_sum(&a.unabsorbed_bias_error());
+                }
+            }
+            let want = (b.gyro_bias_rad_s - a.gyro_bias_rad_s) / delta;
+            let got = a.unabsorbed_bias_error().column(axis).into_owned();
+            assert!(
+                (want - got).abs().max() < 1e-4,
+                "{ext:?} axis {axis}: finite difference {want} against response {got}"
+            );
+            // The walk observes the bias: most of the start error is gone, and more of it by the
+            // end than half-way.
+            let end = max_row_sum(&a.unabsorbed_bias_error());
+            assert!(end < 0.5 && end <= fraction_mid, "{end} {fraction_mid}");
+        }
+    }
+}
+
+#[test]
+fn setting_the_bias_starts_the_response_again() {
+    let mut f = level_filter(0.01, Extensions::default());
+    let g = Vector3::new(0.0, 0.0, 9.81);
+    for k in 0..2_000 {
+        f.propagate(&Vector3::new(0.0, 0.0, 0.5), &g, 0.005);
+        f.zupt();
+        if k % 200 == 199 {
+            f.heading_update(0.0, 0.005, &Vector3::x());
+        }
+    }
+    assert!(f.unabsorbed_bias_error()[(2, 2)] < 0.9);
+    f.set_gyro_bias(Vector3::zeros(), &(Matrix3::identity() * 1e-6));
+    assert_eq!(f.unabsorbed_bias_error(), Matrix3::identity());
+    // A filter that does not own the bias has no response.
+    let frozen = Eskf::new(
+        EskfInit {
+            nav_from_body: UnitQuaternion::identity(),
+            gyro_bias_rad_s: Vector3::zeros(),
+            tilt_sd_rad: 0.01,
+            bias_sd_rad_s: 0.01,
+            gravity_m_s2: 9.81,
+            bias: BiasStates::Frozen,
+        },
+        noise(),
+        Extensions::default(),
+    );
+    assert_eq!(frozen.unabsorbed_bias_error(), Matrix3::zeros());
 }

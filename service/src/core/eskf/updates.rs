@@ -40,6 +40,7 @@ impl Eskf {
                 *kb = (0..M).map(|a| pi[a] * s_inv[(a, b)]).sum();
             }
         }
+        self.update_bias_response(h, &k);
         for (j, pj) in pht.iter().enumerate().take(n) {
             for (i, ki) in k.iter().enumerate().take(j + 1) {
                 let d: f64 = (0..M).map(|a| ki[a] * pj[a]).sum();
@@ -108,6 +109,7 @@ impl Eskf {
             let v = s_inv.transpose() * Vector3::from(*pi);
             (k[0][i], k[1][i], k[2][i]) = (v.x, v.y, v.z);
         }
+        self.update_bias_response_velocity(&k);
         // P ← P − K·(PHᵀ)ᵀ on the upper triangle, then mirrored.
         let [k0, k1, k2] = &k;
         for (j, pj) in pht.iter().enumerate().take(n) {
@@ -227,6 +229,7 @@ impl Eskf {
                 self.p[ix(c + a, c + b)] = self.p[ix(P0 + a, P0 + b)];
             }
         }
+        self.clone_bias_response(c);
     }
 
     /// The stride since the cloned footprint: its horizontal length (m), direction (rad) and

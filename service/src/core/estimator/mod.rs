@@ -41,7 +41,7 @@ use rest::{RestMeans, RestSums};
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::clock::SampleClock;
 use super::eskf::{
-    BiasStates, Eskf, EskfInit, EskfNoise, ExtensionEstimates, ExtensionSd, Extensions,
+    BiasStates, Eskf, EskfInit, EskfNoise, ExtensionEstimates, ExtensionSd, Extensions, max_row_sum,
 };
 use super::heading::{FootprintLine, HeadingAid, Rejection, StraightWalk};
 use super::health::{self, HealthLimits, LastGood};
@@ -365,7 +365,7 @@ impl Estimator {
         let Stage::Running(eskf) = &self.stage else {
             return None;
         };
-        let (b, _) = self.p.bias_sensor(eskf);
+        let (b, _, _) = self.p.bias_sensor(eskf);
         let p = match &self.p.bias {
             BiasFilter::InEskf => eskf.gyro_bias_cov(),
             BiasFilter::Paper { kf, .. } => {
@@ -526,18 +526,25 @@ impl Pipeline {
         }
     }
 
-    fn bias_sensor(&self, eskf: &Eskf) -> (Vector3<f64>, Vector3<f64>) {
+    /// The bias, its σ and the part of a bias error present when it was set that it still
+    /// carries (`None` when no filter estimates it), in sensor axes.
+    fn bias_sensor(&self, eskf: &Eskf) -> (Vector3<f64>, Vector3<f64>, Option<Matrix3<f64>>) {
         match &self.bias {
-            BiasFilter::InEskf => (eskf.gyro_bias_rad_s, eskf.gyro_bias_sd()),
+            BiasFilter::InEskf => (
+                eskf.gyro_bias_rad_s,
+                eskf.gyro_bias_sd(),
+                eskf.estimates_bias().then(|| eskf.unabsorbed_bias_error()),
+            ),
             BiasFilter::Paper { kf, .. } => {
                 let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
                 let p = c.transpose() * kf.p * c;
                 (
                     c.transpose() * kf.b_rad_s,
                     p.diagonal().map(|v| v.max(0.0).sqrt()),
+                    Some(c.transpose() * kf.unabsorbed * c),
                 )
             }
-            BiasFilter::RotationAware { kf, .. } => (kf.b_rad_s, kf.sd()),
+            BiasFilter::RotationAware { kf, .. } => (kf.b_rad_s, kf.sd(), Some(kf.unabsorbed)),
         }
     }
 
@@ -661,7 +668,7 @@ impl Pipeline {
     }
 
     fn fill_output(&mut self, e: &Eskf) {
-        let (b, sd) = self.bias_sensor(e);
+        let (b, sd, unabsorbed) = self.bias_sensor(e);
         let q = e.nav_from_body;
         let (roll, pitch, yaw) = euler_zyx(&q);
         let out = &mut self.out;
@@ -674,8 +681,9 @@ impl Pipeline {
         out.yaw_rad = yaw;
         out.gyro_bias_rad_s = b.into();
         out.gyro_bias_sd_rad_s = sd.into();
+        out.bias_unabsorbed = unabsorbed.map_or(f64::NAN, |m| max_row_sum(&m));
         out.converged = self.phase == Phase::Tracking
-            && sd.iter().all(|&s| s < self.cfg.converged_sd_rad_s.get());
+            && out.bias_unabsorbed <= self.cfg.converged_unabsorbed.get();
         if out.converged && self.converged_at_s.is_none() {
             self.converged_at_s = Some(out.t_s);
         }

@@ -218,6 +218,12 @@ pub struct Estimate {
     pub gyro_bias_rad_s: [f64; 3],
     /// Its σ, rad/s.
     pub gyro_bias_sd_rad_s: [f64; 3],
+    /// The largest fraction, on one axis, of a bias error present when the bias was set (the
+    /// rest-mean prior, a saved state or the initial guess; the same size on every axis) that
+    /// the estimate still carries: 1 at the start, towards 0 as the walk observes the bias (the
+    /// filter's closed-loop response, see `eskf/response.rs`). NaN when this mode's bias is
+    /// not estimated.
+    pub bias_unabsorbed: f64,
     /// Stance flag: this sample is taken as zero velocity.
     pub stance: bool,
     /// A new stance (footfall) begins on this sample; the stance flags until the next one belong
@@ -233,7 +239,8 @@ pub struct Estimate {
     pub health_fault: Option<HealthFault>,
     /// Zero-velocity detector statistic.
     pub detector_statistic: f64,
-    /// Bias σ below the configured bound on every axis (and tracking).
+    /// Tracking, and less than `estimator.converged_unabsorbed` of a bias error present when the
+    /// bias was set is left in the estimate (`bias_unabsorbed`).
     pub converged: bool,
     /// ZUPT innovation, when one was applied on this sample.
     pub zupt: Option<Innovation>,
@@ -257,6 +264,7 @@ impl Default for Estimate {
             yaw_rad: 0.0,
             gyro_bias_rad_s: [0.0; 3],
             gyro_bias_sd_rad_s: [f64::NAN; 3],
+            bias_unabsorbed: f64::NAN,
             stance: false,
             stance_began: false,
             clipped: false,
