@@ -610,17 +610,8 @@ fn setting_the_bias_starts_the_response_again() {
     f.set_gyro_bias(Vector3::zeros(), &(Matrix3::identity() * 1e-6));
     assert_eq!(f.unabsorbed_bias_error(), Matrix3::identity());
     // A filter that does not own the bias has no response.
-    let frozen = Eskf::new(
-        EskfInit {
-            nav_from_body: UnitQuaternion::identity(),
-            gyro_bias_rad_s: Vector3::zeros(),
-            tilt_sd_rad: 0.01,
-            bias_sd_rad_s: 0.01,
-            gravity_m_s2: 9.81,
-            bias: BiasStates::Frozen,
-        },
-        noise(),
-        Extensions::default(),
-    );
+    let mut frozen = level_filter(0.01, Extensions::default());
+    frozen.estimate_bias = false;
+    frozen.reset_bias_response();
     assert_eq!(frozen.unabsorbed_bias_error(), Matrix3::zeros());
 }
