@@ -17,7 +17,9 @@ use corridor_shared::config::{Config, ConfigFile};
 use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::services::ServiceError;
-use corridor_shared::wire::{AttitudeSample, Diagnostics, FLAG_END_OF_STREAM, ImuSample};
+use corridor_shared::wire::{
+    AttitudeSample, Diagnostics, FLAG_CONVERGED, FLAG_END_OF_STREAM, ImuSample,
+};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -162,7 +164,15 @@ fn replay_matches_offline_run_sample_by_sample() {
         assert!(close(a.roll_rad, e.roll_rad), "roll at {i}");
         assert!(close(a.pitch_rad, e.pitch_rad), "pitch at {i}");
         assert!(close(a.yaw_rad, e.yaw_rad), "yaw at {i}");
+        assert_eq!(
+            a.flags & FLAG_CONVERGED != 0,
+            e.converged,
+            "convergence flag at sample {i}"
+        );
     }
+    // The walk is long enough for the flag to rise (the estimate has absorbed 95 % of an error
+    // in the rest-mean bias): the comparison above covered both states.
+    assert!(offline.iter().any(|e| e.converged) && !offline[0].converged);
 
     let d = diagnostics_at_end(&diagnostics);
     assert_eq!(d.received, offline.len() as u64 + 1);
