@@ -80,7 +80,10 @@ fn run_writes_estimates_innovations_and_summary() {
         "bias_sd_x_rad_s",
         "bias_sd_y_rad_s",
         "bias_sd_z_rad_s",
+        "bias_unabsorbed",
         "stance",
+        "converged",
+        "phase",
     ] {
         assert!(header.split(',').any(|c| c == col), "missing column {col}");
     }
@@ -89,7 +92,33 @@ fn run_writes_estimates_innovations_and_summary() {
         14_001,
         "one row per sample plus the header"
     );
+    // The convergence flag is the unabsorbed part of a start bias error below 5 % while
+    // tracking, and the summary's time is its first rise.
+    let cols: Vec<&str> = header.split(',').collect();
+    let at = |name: &str| cols.iter().position(|c| *c == name).unwrap();
+    let (t, u, conv, phase) = (
+        at("t_s"),
+        at("bias_unabsorbed"),
+        at("converged"),
+        at("phase"),
+    );
+    let mut first_rise = None;
+    for line in est.lines().skip(1) {
+        let v: Vec<&str> = line.split(',').collect();
+        let unabsorbed: f64 = v[u].parse().unwrap();
+        let converged = v[conv] == "1";
+        assert_eq!(
+            converged,
+            v[phase] == "tracking" && unabsorbed < 0.05,
+            "{line}"
+        );
+        if converged && first_rise.is_none() {
+            first_rise = Some(v[t].parse::<f64>().unwrap());
+        }
+    }
     let summary = read_json(&out.join("summary.json"));
+    assert_eq!(summary["converged_at_s"].as_f64(), first_rise);
+    assert!(first_rise.is_some(), "the flag never rose on exp36");
     for key in [
         "bias_rad_s",
         "bias_mean_converged_rad_s",

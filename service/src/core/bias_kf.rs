@@ -40,6 +40,20 @@ impl BiasKf {
         }
     }
 
+    /// Sets the bias and its covariance (a prior, a saved state): the unabsorbed part starts again.
+    pub fn set(&mut self, b_rad_s: Vector3<f64>, p: Matrix3<f64>) {
+        self.b_rad_s = b_rad_s;
+        self.p = p;
+        self.unabsorbed = Matrix3::identity();
+    }
+
+    /// Re-expresses the filter in axes turned by `r` (new = r·old).
+    pub fn rotate(&mut self, r: &Matrix3<f64>) {
+        self.b_rad_s = r * self.b_rad_s;
+        self.p = r * self.p * r.transpose();
+        self.unabsorbed = r * self.unabsorbed * r.transpose();
+    }
+
     /// Time update to `t_s` (F = I).
     pub fn predict(&mut self, t_s: f64) {
         let dt = (t_s - self.last_t_s).max(0.0);

@@ -317,7 +317,7 @@ pub fn markdown(rows: &[SuiteRow]) -> String {
          response, `estimator.converged_unabsorbed`); against hindsight: when it rose (s of walking), the recovery at \
          that instant, and from when on the recovery stays within ±5 % (hindsight, s of the log).\n\n",
     );
-    s.push_str("| recording | paper, no prior | best, no prior | best, prior + injection after the rest | paper flag at | best, no prior: flag / recovery then / settled | best, prior + late: flag / recovery then / settled | best vs uncorrected |\n");
+    s.push_str("| recording | paper, no prior | best, no prior | best, prior + injection after the rest | paper, no prior: flag rose (recovery then), settled | best, no prior: flag rose (recovery then), settled | best, prior + late: flag rose (recovery then), settled | best vs uncorrected |\n");
     s.push_str("|---|---|---|---|---|---|---|---|\n");
     let p = |v: &[f64; 3]| {
         format!(
@@ -329,15 +329,18 @@ pub fn markdown(rows: &[SuiteRow]) -> String {
     };
     let t = |v: Option<f64>| v.map_or("never".to_string(), |v| format!("{v:.1} s"));
     let flag = |c: &super::Convergence| {
+        let then = c.recovered_at_flag.map_or(String::new(), |r| {
+            format!(
+                " ({:.0}, {:.0}, {:.0} %{})",
+                100.0 * r[0],
+                100.0 * r[1],
+                100.0 * r[2],
+                if c.agrees() { "" } else { " ✗" }
+            )
+        });
         format!(
-            "{} / {}{} / {}",
+            "{}{then}, {}",
             t(c.flag_after_walking_s()),
-            c.recovered_at_flag.map_or("—".to_string(), |r| p(&r)),
-            if c.flag_at_s.is_some() && !c.agrees() {
-                " ✗"
-            } else {
-                ""
-            },
             t(c.settled_at_s)
         )
     };
@@ -348,7 +351,7 @@ pub fn markdown(rows: &[SuiteRow]) -> String {
             p(&r.paper_recovery),
             p(&r.best_recovery),
             p(&r.best_recovery_prior_late),
-            t(r.paper_converged_at_s),
+            flag(&r.paper_convergence),
             flag(&r.best_convergence),
             flag(&r.best_convergence_prior_late),
             -r.best_reduction_pct
@@ -356,10 +359,15 @@ pub fn markdown(rows: &[SuiteRow]) -> String {
     }
     let m = summary(rows);
     let line = |f: &FlagSummary| {
+        let median = if f.rose == 0 {
+            "—".to_string()
+        } else {
+            format!("{:.1} s", f.median_walking_s)
+        };
         format!(
-            "rose on {} of {}, within ±5 % on every axis when it rose on {} of those, after a median of {:.1} s of walking \
+            "rose on {} of {}, within ±5 % on every axis when it rose on {} of those, after a median of {median} of walking \
              (risen and within ±5 % by 15 s of walking: {})",
-            f.rose, m.n, f.agrees, f.median_walking_s, f.agrees_within_15_s
+            f.rose, m.n, f.agrees, f.agrees_within_15_s
         )
     };
     s.push_str(&format!(

@@ -97,6 +97,10 @@ pub struct EstimatorFile {
     /// bias error present when the bias was set (the same size on every axis; the filter's
     /// closed-loop response, not its σ; default 0.05).
     pub converged_unabsorbed: Option<f64>,
+    /// Removed (the bias σ the flag used to need could never fall low enough): refused with an
+    /// error that names `converged_unabsorbed`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub converged_sd_rad_s: Option<f64>,
     /// Largest regular time step; a longer one is a gap: a new segment, counted (default 0.05 s).
     pub max_dt_s: Option<f64>,
     /// Largest plausible foot speed, m/s; a faster estimate fails the health check (default 15).

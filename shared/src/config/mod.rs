@@ -250,6 +250,28 @@ mod tests {
     }
 
     #[test]
+    fn the_removed_convergence_key_names_its_replacement() {
+        let f = ConfigFile::parse(
+            "[estimator]\nconverged_sd_rad_s = 5e-4\n",
+            Path::new("a.toml"),
+        )
+        .unwrap();
+        let err = f.validate().unwrap_err().to_string();
+        assert!(err.contains("estimator.converged_sd_rad_s"), "{err}");
+        assert!(err.contains("estimator.converged_unabsorbed"), "{err}");
+        let f = ConfigFile::parse(
+            "[estimator]\nconverged_unabsorbed = 1.5\n",
+            Path::new("a.toml"),
+        )
+        .unwrap();
+        let err = f.validate().unwrap_err().to_string();
+        assert!(
+            err.contains("estimator.converged_unabsorbed") && err.contains("1.5"),
+            "{err}"
+        );
+    }
+
+    #[test]
     fn bad_values_name_key_and_value() {
         let f = ConfigFile::parse("[eskf]\nzupt_sd_m_s = -1.0\n", Path::new("a.toml")).unwrap();
         let err = with_path(f.validate().unwrap_err(), Path::new("a.toml")).to_string();

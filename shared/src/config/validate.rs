@@ -202,6 +202,13 @@ impl ConfigFile {
                 md.gyro_coupling_z_sd_deg,
             )?,
         };
+        if let Some(v) = e.converged_sd_rad_s {
+            return Err(invalid(
+                "estimator.converged_sd_rad_s",
+                v,
+                "was removed: the convergence flag is now estimator.converged_unabsorbed (the bias σ never fell that low)",
+            ));
+        }
         Ok(Config {
             model,
             mode: e.mode.unwrap_or(ESTIMATOR_MODE),

@@ -98,7 +98,6 @@ impl Transition {
     /// bias-error response): rows p, v, θ, b read the old rows v, θ, b/s/k/m, d.
     #[inline]
     fn apply(&self, c: &mut [f64]) {
-        let dot3 = |m: &[f64; 3], v: [f64; 3]| dot3(m, &v);
         let dot2 = |m: &[f64; 2], v: [f64; 2]| m[0] * v[0] + m[1] * v[1];
         let lay = &self.lay;
         let v = [c[V0], c[V0 + 1], c[V0 + 2]];
@@ -110,13 +109,13 @@ impl Transition {
         let d = self.b_rate.map(|i| [c[i], c[i + 1], c[i + 2]]);
         for i in 0..3 {
             c[P0 + i] += self.dt * v[i];
-            c[V0 + i] += dot3(&self.fvt[i], th);
-            let mut dth = dot3(&self.ftb[i], b);
+            c[V0 + i] += dot3(&self.fvt[i], &th);
+            let mut dth = dot3(&self.ftb[i], &b);
             if let Some(s) = s {
-                dth += dot3(&self.fts[i], s);
+                dth += dot3(&self.fts[i], &s);
             }
             if let Some(k) = k {
-                dth += dot3(&self.ftk[i], k);
+                dth += dot3(&self.ftk[i], &k);
             }
             if let Some(m) = m {
                 dth += dot2(&self.ftm[i], m);
@@ -186,7 +185,6 @@ impl Eskf {
                 tr.apply(&mut self.response[c * MAX_N..][..MAX_N]);
             }
             let Transition { fts, ftk, ftm, .. } = tr;
-            let dot3 = |m: &[f64; 3], v: [f64; 3]| dot3(m, &v);
             for c in 0..n {
                 a[c * MAX_N..][..n].copy_from_slice(&p0[c * MAX_N..][..n]);
             }
@@ -209,13 +207,13 @@ impl Eskf {
                 let d = b_rate.map(|i| col(a, row, i));
                 for i in 0..3 {
                     a[ix(row, P0 + i)] += dt * v[i];
-                    a[ix(row, V0 + i)] += dot3(&fvt[i], th);
-                    let mut dth = dot3(&ftb[i], b);
+                    a[ix(row, V0 + i)] += dot3(&fvt[i], &th);
+                    let mut dth = dot3(&ftb[i], &b);
                     if let Some(s) = s {
-                        dth += dot3(&fts[i], s);
+                        dth += dot3(&fts[i], &s);
                     }
                     if let Some(k) = k {
-                        dth += dot3(&ftk[i], k);
+                        dth += dot3(&ftk[i], &k);
                     }
                     if let Some(m) = m {
                         dth += dot2(&ftm[i], m);

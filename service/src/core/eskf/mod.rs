@@ -20,7 +20,8 @@
 //!
 //! Files: this one holds the filter's state and its strapdown step; `covariance.rs` the block
 //! propagation of the covariance; `updates.rs` the measurement updates (ZUPT, foot-axis heading,
-//! stride direction with its footprint clone); `tests.rs` its unit tests.
+//! stride direction with its footprint clone); `response.rs` the closed-loop response to a bias
+//! error, on which the convergence flag rises; `tests.rs` its unit tests.
 
 use super::rotation::{exp_rotvec, heading_jacobian, heading_of_axis, skew, wrap_pi};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
@@ -455,40 +456,34 @@ impl Eskf {
         self.p_m = m * self.p_m;
         self.v_m_s = m * self.v_m_s;
         self.nav_from_body = UnitQuaternion::from_rotation_matrix(&r) * self.nav_from_body;
-        // P ← T P Tᵀ with T = blockdiag(R, R, R, I, …): rows then columns of the p, v, θ blocks.
         let n = self.layout.n;
-        if let Some(c) = self.layout.clone {
+        let clone = self.layout.clone;
+        if clone.is_some() {
             let [x, y] = self.footprint_xy_m;
             self.footprint_xy_m = [m[(0, 0)] * x + m[(0, 1)] * y, m[(1, 0)] * x + m[(1, 1)] * y];
-            // The clone is horizontal: T acts on it with the upper-left 2 × 2 of R.
-            for c2 in 0..n {
-                let x = [self.p[ix(c, c2)], self.p[ix(c + 1, c2)]];
-                for i in 0..2 {
-                    self.p[ix(c + i, c2)] = m[(i, 0)] * x[0] + m[(i, 1)] * x[1];
-                }
-            }
-            for rr in 0..n {
-                let x = [self.p[ix(rr, c)], self.p[ix(rr, c + 1)]];
-                for i in 0..2 {
-                    self.p[ix(rr, c + i)] = m[(i, 0)] * x[0] + m[(i, 1)] * x[1];
-                }
-            }
         }
-        for b in [P0, V0, TH] {
-            for c in 0..n {
-                let x = [self.p[ix(b, c)], self.p[ix(b + 1, c)], self.p[ix(b + 2, c)]];
-                for i in 0..3 {
-                    self.p[ix(b + i, c)] = m[(i, 0)] * x[0] + m[(i, 1)] * x[1] + m[(i, 2)] * x[2];
+        // P ← T P Tᵀ with T = blockdiag(R, R, R, I, …, R₂ₓ₂ for the clone), block by block:
+        // its rows in every column, then its columns in every row.
+        let blocks = clone
+            .map(|k| (k, true))
+            .into_iter()
+            .chain([P0, V0, TH].map(|b| (b, false)));
+        for (b, horizontal) in blocks {
+            let rotate = |x: &mut [f64]| {
+                if horizontal {
+                    response::rotate_horizontal(x, b, &m);
+                } else {
+                    response::rotate_block(x, b, &m);
                 }
+            };
+            for c in 0..n {
+                rotate(&mut self.p[c * MAX_N..][..MAX_N]);
             }
             for rr in 0..n {
-                let x = [
-                    self.p[ix(rr, b)],
-                    self.p[ix(rr, b + 1)],
-                    self.p[ix(rr, b + 2)],
-                ];
-                for i in 0..3 {
-                    self.p[ix(rr, b + i)] = m[(i, 0)] * x[0] + m[(i, 1)] * x[1] + m[(i, 2)] * x[2];
+                let mut row: [f64; MAX_N] = std::array::from_fn(|c| self.p[ix(rr, c)]);
+                rotate(&mut row);
+                for (c, v) in row.iter().enumerate().take(n) {
+                    self.p[ix(rr, c)] = *v;
                 }
             }
         }
@@ -531,7 +526,7 @@ impl Eskf {
         }
         self.p[ix(i, i)] = var;
         for c in 0..3 {
-            self.response[response::rx(i, c)] = 0.0;
+            self.response[ix(i, c)] = 0.0;
         }
     }
 

@@ -160,14 +160,8 @@ impl Pipeline {
         let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
         match &mut self.bias {
             BiasFilter::InEskf => eskf.set_gyro_bias(b, &p),
-            BiasFilter::Paper { kf, .. } => {
-                kf.b_rad_s = c * b;
-                kf.p = c * p * c.transpose();
-            }
-            BiasFilter::RotationAware { kf, .. } => {
-                kf.b_rad_s = b;
-                kf.p = p;
-            }
+            BiasFilter::Paper { kf, .. } => kf.set(c * b, c * p * c.transpose()),
+            BiasFilter::RotationAware { kf, .. } => kf.set(b, p),
         }
     }
 }

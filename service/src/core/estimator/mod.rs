@@ -683,7 +683,7 @@ impl Pipeline {
         out.gyro_bias_sd_rad_s = sd.into();
         out.bias_unabsorbed = unabsorbed.map_or(f64::NAN, |m| max_row_sum(&m));
         out.converged = self.phase == Phase::Tracking
-            && out.bias_unabsorbed <= self.cfg.converged_unabsorbed.get();
+            && out.bias_unabsorbed < self.cfg.converged_unabsorbed.get();
         if out.converged && self.converged_at_s.is_none() {
             self.converged_at_s = Some(out.t_s);
         }

@@ -58,9 +58,7 @@ impl Pipeline {
                     BiasFilter::InEskf => {}
                     BiasFilter::Paper { kf, obs } => {
                         // Re-express the prior with the now known mounting yaw.
-                        let r = rot_z(self.mount_yaw_rad).to_rotation_matrix().into_inner();
-                        kf.b_rad_s = r * kf.b_rad_s;
-                        kf.p = r * kf.p * r.transpose();
+                        kf.rotate(&rot_z(self.mount_yaw_rad).to_rotation_matrix().into_inner());
                         *obs = Some(PaperObserver::new(q, t_s));
                     }
                     BiasFilter::RotationAware { obs, .. } => {
