@@ -11,6 +11,12 @@
 //! injection), so this is the filter's own, real-time prediction of that hindsight figure, and
 //! the convergence flag rises on it.
 //!
+//! Where the filter redefines a state (`clear_state`: the heading when the map frame is fixed,
+//! the bias when it is set) the response treats it as P does: that state's error no longer
+//! depends on the start error. The map-frame fix turns the frame by an angle computed from the
+//! first stride, so to first order it also moves the positions by the heading error it removes;
+//! neither P nor the response carries that term.
+//!
 //! Unlike the bias σ it does not contain the random walk: a bias model that lets the bias
 //! move 7e-4 rad/s/√s keeps σ near 3e-3 rad/s for ever, though an error of the start is long
 //! gone. Cost: three more columns through `F` and through each update (11 % more instructions per
