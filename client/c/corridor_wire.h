@@ -20,7 +20,7 @@
 #define CORRIDOR_ALIGNOF(t) _Alignof(t)
 #endif
 
-#define CORRIDOR_SERVICE_VERSION "v2"
+#define CORRIDOR_SERVICE_VERSION "v3"
 #define CORRIDOR_FLAG_END_OF_STREAM 1u
 #define CORRIDOR_FLAG_BIAS_CORRECTED 2u
 #define CORRIDOR_FLAG_STANCE 4u
@@ -35,11 +35,11 @@
 /* Event (no payload) the daemon notifies, with event id = the producer's publisher id
  * modulo 256, when it has taken that producer's first sample: a producer waits for it
  * before it drops its publisher (client/src/producer.rs). */
-#define CORRIDOR_IMU_ACK_EVENT "corridor/v2/imu_ack"
+#define CORRIDOR_IMU_ACK_EVENT "corridor/v3/imu_ack"
 
 /* One IMU sample, producer -> daemon. */
-#define CORRIDOR_IMU_SAMPLE_SERVICE "corridor/v2/imu"
-#define CORRIDOR_IMU_SAMPLE_TYPE_NAME "corridor_v2_ImuSample"
+#define CORRIDOR_IMU_SAMPLE_SERVICE "corridor/v3/imu"
+#define CORRIDOR_IMU_SAMPLE_TYPE_NAME "corridor_v3_ImuSample"
 typedef struct corridor_ImuSample {
     uint64_t seq;
     double t_s;
@@ -62,8 +62,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_ImuSample, reserved) == 76, "corridor_I
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_ImuSample, sent_ns) == 80, "corridor_ImuSample.sent_ns: offset");
 
 /* An external attitude observation, producer -> daemon. */
-#define CORRIDOR_ANGLE_OBSERVATION_SERVICE "corridor/v2/angles"
-#define CORRIDOR_ANGLE_OBSERVATION_TYPE_NAME "corridor_v2_AngleObservation"
+#define CORRIDOR_ANGLE_OBSERVATION_SERVICE "corridor/v3/angles"
+#define CORRIDOR_ANGLE_OBSERVATION_TYPE_NAME "corridor_v3_AngleObservation"
 typedef struct corridor_AngleObservation {
     uint64_t seq;
     double t_s;
@@ -90,30 +90,32 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_AngleObservation, valid) == 64, "corrid
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_AngleObservation, reserved) == 68, "corridor_AngleObservation.reserved: offset");
 
 /* The gyro-bias estimate, daemon -> clients. */
-#define CORRIDOR_BIAS_SAMPLE_SERVICE "corridor/v2/bias"
-#define CORRIDOR_BIAS_SAMPLE_TYPE_NAME "corridor_v2_BiasSample"
+#define CORRIDOR_BIAS_SAMPLE_SERVICE "corridor/v3/bias"
+#define CORRIDOR_BIAS_SAMPLE_TYPE_NAME "corridor_v3_BiasSample"
 typedef struct corridor_BiasSample {
     uint64_t seq;
     double t_s;
     uint64_t imu_seq;
     double gyro_bias_rad_s[3];
     double gyro_bias_sd_rad_s[3];
+    double bias_unabsorbed;
     uint32_t converged;
     uint32_t flags;
 } corridor_BiasSample;
-CORRIDOR_STATIC_ASSERT(sizeof(corridor_BiasSample) == 80, "corridor_BiasSample: size");
+CORRIDOR_STATIC_ASSERT(sizeof(corridor_BiasSample) == 88, "corridor_BiasSample: size");
 CORRIDOR_STATIC_ASSERT(CORRIDOR_ALIGNOF(corridor_BiasSample) == 8, "corridor_BiasSample: alignment");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, seq) == 0, "corridor_BiasSample.seq: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, t_s) == 8, "corridor_BiasSample.t_s: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, imu_seq) == 16, "corridor_BiasSample.imu_seq: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, gyro_bias_rad_s) == 24, "corridor_BiasSample.gyro_bias_rad_s: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, gyro_bias_sd_rad_s) == 48, "corridor_BiasSample.gyro_bias_sd_rad_s: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, converged) == 72, "corridor_BiasSample.converged: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, flags) == 76, "corridor_BiasSample.flags: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, bias_unabsorbed) == 72, "corridor_BiasSample.bias_unabsorbed: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, converged) == 80, "corridor_BiasSample.converged: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, flags) == 84, "corridor_BiasSample.flags: offset");
 
 /* The attitude after one IMU sample, daemon -> clients. */
-#define CORRIDOR_ATTITUDE_SAMPLE_SERVICE "corridor/v2/attitude"
-#define CORRIDOR_ATTITUDE_SAMPLE_TYPE_NAME "corridor_v2_AttitudeSample"
+#define CORRIDOR_ATTITUDE_SAMPLE_SERVICE "corridor/v3/attitude"
+#define CORRIDOR_ATTITUDE_SAMPLE_TYPE_NAME "corridor_v3_AttitudeSample"
 typedef struct corridor_AttitudeSample {
     uint64_t seq;
     double t_s;
@@ -144,8 +146,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_AttitudeSample, flags) == 132, "corrido
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_AttitudeSample, imu_sent_ns) == 136, "corridor_AttitudeSample.imu_sent_ns: offset");
 
 /* Position and velocity at a footfall, daemon -> clients. */
-#define CORRIDOR_NAV_SAMPLE_SERVICE "corridor/v2/nav"
-#define CORRIDOR_NAV_SAMPLE_TYPE_NAME "corridor_v2_NavSample"
+#define CORRIDOR_NAV_SAMPLE_SERVICE "corridor/v3/nav"
+#define CORRIDOR_NAV_SAMPLE_TYPE_NAME "corridor_v3_NavSample"
 typedef struct corridor_NavSample {
     uint64_t seq;
     double t_s;
@@ -170,8 +172,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_NavSample, flags) == 88, "corridor_NavS
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_NavSample, reserved) == 92, "corridor_NavSample.reserved: offset");
 
 /* Counters of the daemon, daemon -> clients. */
-#define CORRIDOR_DIAGNOSTICS_SERVICE "corridor/v2/diagnostics"
-#define CORRIDOR_DIAGNOSTICS_TYPE_NAME "corridor_v2_Diagnostics"
+#define CORRIDOR_DIAGNOSTICS_SERVICE "corridor/v3/diagnostics"
+#define CORRIDOR_DIAGNOSTICS_TYPE_NAME "corridor_v3_Diagnostics"
 typedef struct corridor_Diagnostics {
     uint64_t seq;
     double t_s;

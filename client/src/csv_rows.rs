@@ -10,7 +10,7 @@ use std::io::Write;
 pub const ATTITUDE_HEADER: &str = "seq,imu_seq,t_s,roll_rad,pitch_rad,yaw_rad,qw,qx,qy,qz,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,stance,converged,phase";
 
 /// Header of `bias.csv`.
-pub const BIAS_HEADER: &str = "seq,imu_seq,t_s,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,converged";
+pub const BIAS_HEADER: &str = "seq,imu_seq,t_s,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,bias_unabsorbed,converged";
 
 /// Writes one `attitude.csv` row.
 pub fn write_attitude_row(w: &mut impl Write, x: &AttitudeSample) -> std::io::Result<()> {
@@ -49,8 +49,8 @@ pub fn write_bias_row(w: &mut impl Write, b: &BiasSample) -> std::io::Result<()>
     let (v, s) = (b.gyro_bias_rad_s, b.gyro_bias_sd_rad_s);
     writeln!(
         w,
-        "{},{},{},{},{},{},{},{},{},{}",
-        b.seq, b.imu_seq, b.t_s, v[0], v[1], v[2], s[0], s[1], s[2], b.converged
+        "{},{},{},{},{},{},{},{},{},{},{}",
+        b.seq, b.imu_seq, b.t_s, v[0], v[1], v[2], s[0], s[1], s[2], b.bias_unabsorbed, b.converged
     )
 }
 

@@ -96,8 +96,13 @@ impl Status {
                 let _ = writeln!(s, "bias σ:           {} rad/s", v(b.gyro_bias_sd_rad_s));
                 let _ = writeln!(
                     s,
-                    "converged:        {}",
-                    if b.converged != 0 { "yes" } else { "no" }
+                    "converged:        {} ({})",
+                    if b.converged != 0 { "yes" } else { "no" },
+                    if b.bias_unabsorbed.is_finite() {
+                        format!("{:.0} % of a start error left", 100.0 * b.bias_unabsorbed)
+                    } else {
+                        "not aligned yet".to_string()
+                    }
                 );
             }
             None => {

@@ -68,9 +68,9 @@ pub mod phase {
     }
 }
 
-/// One IMU sample, producer → daemon (`corridor/v2/imu`).
+/// One IMU sample, producer → daemon (`corridor/v3/imu`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v2_ImuSample")]
+#[type_name("corridor_v3_ImuSample")]
 #[repr(C)]
 pub struct ImuSample {
     /// Sequence number of the producer, +1 per sample (end-of-stream markers included).
@@ -114,11 +114,11 @@ impl From<&ImuRow> for ImuSample {
     }
 }
 
-/// An external attitude observation, producer → daemon (`corridor/v2/angles`), e.g. a heading
+/// An external attitude observation, producer → daemon (`corridor/v3/angles`), e.g. a heading
 /// from a map matcher or a camera. The heading is used when its bit is set in `valid` (at the
 /// next stance, instead of the map); roll and pitch are not fused (see [`ANGLE_ROLL`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v2_AngleObservation")]
+#[type_name("corridor_v3_AngleObservation")]
 #[repr(C)]
 pub struct AngleObservation {
     /// Sequence number of the producer.
@@ -143,10 +143,10 @@ pub struct AngleObservation {
     pub reserved: u32,
 }
 
-/// The gyro-bias estimate, daemon → clients (`corridor/v2/bias`): at each heading observation,
+/// The gyro-bias estimate, daemon → clients (`corridor/v3/bias`): at each heading observation,
 /// at the configured rate and at end of stream.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v2_BiasSample")]
+#[type_name("corridor_v3_BiasSample")]
 #[repr(C)]
 pub struct BiasSample {
     /// Sequence number of the daemon's bias stream.
@@ -159,16 +159,21 @@ pub struct BiasSample {
     pub gyro_bias_rad_s: [f64; 3],
     /// Its σ, rad/s (NaN before alignment).
     pub gyro_bias_sd_rad_s: [f64; 3],
+    /// The largest fraction, on one axis, of a bias error present when the bias was set (the
+    /// rest-mean prior or a saved state; the same size on every axis) that the estimate still
+    /// carries: 1 at the start, towards 0 as the walk observes the bias; the flag rises below
+    /// `estimator.converged_unabsorbed`. NaN before alignment.
+    pub bias_unabsorbed: f64,
     /// 1 when the bias has converged (as [`FLAG_CONVERGED`]), else 0.
     pub converged: u32,
     /// Bit set of `FLAG_*` ([`FLAG_END_OF_STREAM`], [`FLAG_CONVERGED`]).
     pub flags: u32,
 }
 
-/// The attitude after one IMU sample, daemon → clients (`corridor/v2/attitude`): one per
+/// The attitude after one IMU sample, daemon → clients (`corridor/v3/attitude`): one per
 /// accepted IMU sample, plus one end-of-stream marker.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v2_AttitudeSample")]
+#[type_name("corridor_v3_AttitudeSample")]
 #[repr(C)]
 pub struct AttitudeSample {
     /// Sequence number of the daemon's attitude stream.
@@ -199,10 +204,10 @@ pub struct AttitudeSample {
     pub imu_sent_ns: u64,
 }
 
-/// Position and velocity at a footfall, daemon → clients (`corridor/v2/nav`): one per stance
+/// Position and velocity at a footfall, daemon → clients (`corridor/v3/nav`): one per stance
 /// (first sample of the stance), after alignment.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v2_NavSample")]
+#[type_name("corridor_v3_NavSample")]
 #[repr(C)]
 pub struct NavSample {
     /// Sequence number of the daemon's nav stream.
@@ -225,14 +230,14 @@ pub struct NavSample {
     pub reserved: u32,
 }
 
-/// Counters of the daemon, daemon → clients (`corridor/v2/diagnostics`): periodically (wall
+/// Counters of the daemon, daemon → clients (`corridor/v3/diagnostics`): periodically (wall
 /// clock), at end of stream and at shutdown. The input counters (`received`, `seq_gaps`,
 /// `rejected_duplicate_seq`, `late`, `dropped_overflow`, `producer_changes`) and `undelivered`
 /// are cumulative over every life of the domain's daemon (they live in its accounting file, so a
 /// restarted daemon continues them); the estimator's counts (`accepted`, `rejected_non_finite`,
 /// `rejected_time`, `stances`, `heading_used`) over the current life.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v2_Diagnostics")]
+#[type_name("corridor_v3_Diagnostics")]
 #[repr(C)]
 pub struct Diagnostics {
     /// Sequence number of the daemon's diagnostics stream.
@@ -319,7 +324,7 @@ mod tests {
     fn sizes_are_fixed_and_padding_free() {
         assert_eq!(size_of::<ImuSample>(), 8 + 8 + 24 + 24 + 8 + 8 + 8);
         assert_eq!(size_of::<AngleObservation>(), 8 * 8 + 8);
-        assert_eq!(size_of::<BiasSample>(), 8 * 3 + 48 + 8);
+        assert_eq!(size_of::<BiasSample>(), 8 * 3 + 48 + 8 + 8);
         assert_eq!(size_of::<AttitudeSample>(), 8 * 3 + 32 + 24 + 48 + 8 + 8);
         assert_eq!(size_of::<NavSample>(), 8 * 4 + 48 + 8 + 8);
         assert_eq!(size_of::<Diagnostics>(), 8 * 17 + 8);

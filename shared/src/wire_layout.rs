@@ -136,7 +136,7 @@ pub fn layouts() -> Vec<TypeLayout> {
             roll_sd_rad: f64, pitch_sd_rad: f64, heading_sd_rad: f64, valid: u32, reserved: u32),
         layout!(BiasSample, "The gyro-bias estimate, daemon -> clients.",
             seq: u64, t_s: f64, imu_seq: u64, gyro_bias_rad_s: [f64; 3],
-            gyro_bias_sd_rad_s: [f64; 3], converged: u32, flags: u32),
+            gyro_bias_sd_rad_s: [f64; 3], bias_unabsorbed: f64, converged: u32, flags: u32),
         layout!(AttitudeSample, "The attitude after one IMU sample, daemon -> clients.",
             seq: u64, t_s: f64, imu_seq: u64, nav_from_body_wxyz: [f64; 4], roll_rad: f64,
             pitch_rad: f64, yaw_rad: f64, gyro_bias_rad_s: [f64; 3],
@@ -284,7 +284,7 @@ mod tests {
         assert_eq!(all.len(), 6);
         for t in &all {
             t.check().unwrap();
-            assert!(t.type_name.starts_with("corridor_v2_"), "{}", t.type_name);
+            assert!(t.type_name.starts_with("corridor_v3_"), "{}", t.type_name);
         }
     }
 

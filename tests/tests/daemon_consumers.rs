@@ -160,6 +160,20 @@ fn consumers_come_and_go_and_a_stalled_one_does_not_stall_the_estimator() {
     let biases = until_end(&bias, |b| b.flags);
     assert!(biases.len() > 60, "{}", biases.len());
     assert_eq!(bias.missed(), 0);
+    // Each bias sample says how much of a start error it still carries: it falls as the walk
+    // goes on, and the flag is set only below the configured 5 %.
+    let carried: Vec<f64> = biases
+        .iter()
+        .map(|b| b.bias_unabsorbed)
+        .filter(|u| u.is_finite())
+        .collect();
+    assert!(
+        carried.len() > 60 && carried[carried.len() - 1] < 0.5 * carried[0],
+        "{carried:?}"
+    );
+    for b in &biases {
+        assert!(b.converged == 0 || b.bias_unabsorbed < 0.05, "{b:?}");
+    }
     let all = until_end(&diag, |d| d.flags);
     let d = all.last().unwrap();
     assert_eq!(d.accepted, n as u64);

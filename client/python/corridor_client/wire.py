@@ -8,7 +8,7 @@ tests/test_wire_layout.py checks them against the layout the Rust code measures
 import ctypes
 from typing import List, Tuple, Type
 
-SERVICE_VERSION = "v2"
+SERVICE_VERSION = "v3"
 
 FLAG_END_OF_STREAM = 1 << 0
 FLAG_BIAS_CORRECTED = 1 << 1
@@ -52,8 +52,8 @@ class _Wire(ctypes.Structure):
 class ImuSample(_Wire):
     """One IMU sample, producer -> daemon."""
 
-    TYPE_NAME = "corridor_v2_ImuSample"
-    SERVICE = "corridor/v2/imu"
+    TYPE_NAME = "corridor_v3_ImuSample"
+    SERVICE = "corridor/v3/imu"
     _fields_: List[Tuple[str, Type]] = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -69,8 +69,8 @@ class ImuSample(_Wire):
 class AngleObservation(_Wire):
     """An external attitude observation, producer -> daemon."""
 
-    TYPE_NAME = "corridor_v2_AngleObservation"
-    SERVICE = "corridor/v2/angles"
+    TYPE_NAME = "corridor_v3_AngleObservation"
+    SERVICE = "corridor/v3/angles"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -88,14 +88,15 @@ class AngleObservation(_Wire):
 class BiasSample(_Wire):
     """The gyro-bias estimate, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v2_BiasSample"
-    SERVICE = "corridor/v2/bias"
+    TYPE_NAME = "corridor_v3_BiasSample"
+    SERVICE = "corridor/v3/bias"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
         ("imu_seq", _u64),
         ("gyro_bias_rad_s", _v3),
         ("gyro_bias_sd_rad_s", _v3),
+        ("bias_unabsorbed", _f64),
         ("converged", _u32),
         ("flags", _u32),
     ]
@@ -104,8 +105,8 @@ class BiasSample(_Wire):
 class AttitudeSample(_Wire):
     """The attitude after one IMU sample, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v2_AttitudeSample"
-    SERVICE = "corridor/v2/attitude"
+    TYPE_NAME = "corridor_v3_AttitudeSample"
+    SERVICE = "corridor/v3/attitude"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -125,8 +126,8 @@ class AttitudeSample(_Wire):
 class NavSample(_Wire):
     """Position and velocity at a footfall, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v2_NavSample"
-    SERVICE = "corridor/v2/nav"
+    TYPE_NAME = "corridor_v3_NavSample"
+    SERVICE = "corridor/v3/nav"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -143,8 +144,8 @@ class NavSample(_Wire):
 class Diagnostics(_Wire):
     """Counters of the daemon, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v2_Diagnostics"
-    SERVICE = "corridor/v2/diagnostics"
+    TYPE_NAME = "corridor_v3_Diagnostics"
+    SERVICE = "corridor/v3/diagnostics"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),

@@ -156,6 +156,7 @@ pub(super) fn bias_of(e: &Estimate, imu_seq: u64) -> BiasSample {
         imu_seq,
         gyro_bias_rad_s: e.gyro_bias_rad_s,
         gyro_bias_sd_rad_s: e.gyro_bias_sd_rad_s,
+        bias_unabsorbed: e.bias_unabsorbed,
         converged: u32::from(e.converged),
         flags: flags_of(e) & FLAG_CONVERGED,
     }
