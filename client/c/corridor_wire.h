@@ -192,10 +192,15 @@ typedef struct corridor_Diagnostics {
     uint64_t producer_changes;
     double latency_p50_s;
     double latency_p99_s;
+    uint64_t head_missing;
+    uint64_t missing_at_restart;
+    uint64_t lost_in_daemon;
+    uint64_t angles_dropped;
+    uint64_t lives;
     uint32_t phase;
     uint32_t flags;
 } corridor_Diagnostics;
-CORRIDOR_STATIC_ASSERT(sizeof(corridor_Diagnostics) == 144, "corridor_Diagnostics: size");
+CORRIDOR_STATIC_ASSERT(sizeof(corridor_Diagnostics) == 184, "corridor_Diagnostics: size");
 CORRIDOR_STATIC_ASSERT(CORRIDOR_ALIGNOF(corridor_Diagnostics) == 8, "corridor_Diagnostics: alignment");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, seq) == 0, "corridor_Diagnostics.seq: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, t_s) == 8, "corridor_Diagnostics.t_s: offset");
@@ -214,7 +219,12 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, last_nis) == 104, "corrido
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, producer_changes) == 112, "corridor_Diagnostics.producer_changes: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, latency_p50_s) == 120, "corridor_Diagnostics.latency_p50_s: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, latency_p99_s) == 128, "corridor_Diagnostics.latency_p99_s: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, phase) == 136, "corridor_Diagnostics.phase: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, flags) == 140, "corridor_Diagnostics.flags: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, head_missing) == 136, "corridor_Diagnostics.head_missing: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, missing_at_restart) == 144, "corridor_Diagnostics.missing_at_restart: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, lost_in_daemon) == 152, "corridor_Diagnostics.lost_in_daemon: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, angles_dropped) == 160, "corridor_Diagnostics.angles_dropped: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, lives) == 168, "corridor_Diagnostics.lives: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, phase) == 176, "corridor_Diagnostics.phase: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, flags) == 180, "corridor_Diagnostics.flags: offset");
 
 #endif /* CORRIDOR_WIRE_H */

@@ -75,7 +75,16 @@ impl Status {
             "rejected:         non-finite {}, time not increasing {}, duplicate seq {}, late {}",
             d.rejected_non_finite, d.rejected_time, d.rejected_duplicate_seq, d.late
         );
-        let _ = writeln!(s, "producer changes: {}", d.producer_changes);
+        let _ = writeln!(
+            s,
+            "not received:     before the daemon's first message {}, sent between lives {}, lost in a killed life {}",
+            d.head_missing, d.missing_at_restart, d.lost_in_daemon
+        );
+        let _ = writeln!(
+            s,
+            "producer changes: {}, angle observations dropped {}, daemon life {}",
+            d.producer_changes, d.angles_dropped, d.lives
+        );
         let _ = writeln!(
             s,
             "latency:          p50 {}, p99 {}",

@@ -140,6 +140,8 @@ fn status_shows_the_daemons_counters_and_final_bias() {
         "domain \"eco_status\": running",
         "received 14001, accepted 14000",
         "seq gaps 0, overflow drops 0",
+        "not received:     before the daemon's first message 0, sent between lives 0, lost in a killed life 0",
+        "angle observations dropped 0, daemon life 1",
         "latency:",
         &format!("gyro bias:        {bias} rad/s"),
         "bias σ:",

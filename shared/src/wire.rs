@@ -277,6 +277,18 @@ pub struct Diagnostics {
     pub latency_p50_s: f64,
     /// 99th percentile of the same latency, s (NaN when unknown).
     pub latency_p99_s: f64,
+    /// IMU samples a producer sent before the daemon's first message from it (its first `seq`).
+    pub head_missing: u64,
+    /// IMU samples sent while no daemon received (between two daemon lives).
+    pub missing_at_restart: u64,
+    /// Samples a killed earlier daemon life had received but not yet estimated (counted by the
+    /// next life).
+    pub lost_in_daemon: u64,
+    /// Angle observations dropped (channel full).
+    pub angles_dropped: u64,
+    /// Daemon lives that used the domain's accounting file, this one included (the counters
+    /// above and `received` … `dropped_overflow` continue across them).
+    pub lives: u64,
     /// Estimator phase ([`phase`]).
     pub phase: u32,
     /// Bit set of `FLAG_*` ([`FLAG_END_OF_STREAM`], [`FLAG_SHUTDOWN`]).
@@ -327,7 +339,7 @@ mod tests {
         assert_eq!(size_of::<BiasSample>(), 8 * 3 + 48 + 8 + 8);
         assert_eq!(size_of::<AttitudeSample>(), 8 * 3 + 32 + 24 + 48 + 8 + 8);
         assert_eq!(size_of::<NavSample>(), 8 * 4 + 48 + 8 + 8);
-        assert_eq!(size_of::<Diagnostics>(), 8 * 17 + 8);
+        assert_eq!(size_of::<Diagnostics>(), 8 * 22 + 8);
     }
 
     #[test]

@@ -148,8 +148,9 @@ pub fn layouts() -> Vec<TypeLayout> {
             seq: u64, t_s: f64, received: u64, seq_gaps: u64, rejected_duplicate_seq: u64,
             late: u64, rejected_non_finite: u64, rejected_time: u64, dropped_overflow: u64,
             accepted: u64, undelivered: u64, stances: u64, heading_used: u64, last_nis: f64,
-            producer_changes: u64, latency_p50_s: f64, latency_p99_s: f64, phase: u32,
-            flags: u32),
+            producer_changes: u64, latency_p50_s: f64, latency_p99_s: f64, head_missing: u64,
+            missing_at_restart: u64, lost_in_daemon: u64, angles_dropped: u64, lives: u64,
+            phase: u32, flags: u32),
     ]
 }
 

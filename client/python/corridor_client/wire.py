@@ -164,6 +164,11 @@ class Diagnostics(_Wire):
         ("producer_changes", _u64),
         ("latency_p50_s", _f64),
         ("latency_p99_s", _f64),
+        ("head_missing", _u64),
+        ("missing_at_restart", _u64),
+        ("lost_in_daemon", _u64),
+        ("angles_dropped", _u64),
+        ("lives", _u64),
         ("phase", _u32),
         ("flags", _u32),
     ]

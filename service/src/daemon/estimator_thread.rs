@@ -144,6 +144,11 @@ impl<'a> EstState<'a> {
             producer_changes: rx.producer_changes.load(Ordering::Relaxed),
             latency_p50_s: self.latency_diag.quantile_s(0.5),
             latency_p99_s: self.latency_diag.quantile_s(0.99),
+            head_missing: rx.head_missing.load(Ordering::Relaxed),
+            missing_at_restart: rx.missing_at_restart.load(Ordering::Relaxed),
+            lost_in_daemon: rx.lost_in_daemon.load(Ordering::Relaxed),
+            angles_dropped: rx.angles_dropped.load(Ordering::Relaxed),
+            lives: rx.lives.load(Ordering::Relaxed),
             phase: phase_code(self.est.phase()),
             flags,
         }
