@@ -4,7 +4,7 @@
  * _rad_s, _m_s2, _m, _ns); see shared/src/wire.rs for the meaning of each field.
  * Publish or subscribe with iceoryx2's C/C++ bindings on the service named below, inside
  * the domain's prefix "corridor_<domain>_", announcing the iceoryx2 type name below
- * (size and alignment as asserted) and the same QoS as shared/src/services.rs.
+ * (size and alignment as asserted) and the same QoS as shared/src/services/qos.rs.
  * C11 or C++11; the static assertions refuse a compiler that lays the structs out otherwise. */
 #ifndef CORRIDOR_WIRE_H
 #define CORRIDOR_WIRE_H

@@ -77,7 +77,7 @@ impl Status {
         );
         let _ = writeln!(
             s,
-            "not received:     before the daemon's first message {}, sent between lives {}, lost in a killed life {}",
+            "not received:     before the daemon's first message {}, missing at a restart {}, lost in a killed life {}",
             d.head_missing, d.missing_at_restart, d.lost_in_daemon
         );
         let _ = writeln!(

@@ -145,7 +145,7 @@ pub struct AngleObservation {
 
 /// The gyro-bias estimate, daemon → clients (`corridor/v3/bias`): at each heading observation,
 /// at the configured rate and at end of stream.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
 #[type_name("corridor_v3_BiasSample")]
 #[repr(C)]
 pub struct BiasSample {
@@ -162,12 +162,28 @@ pub struct BiasSample {
     /// The largest fraction, on one axis, of a bias error present when the bias was set (the
     /// rest-mean prior or a saved state; the same size on every axis) that the estimate still
     /// carries: 1 at the start, towards 0 as the walk observes the bias; the flag rises below
-    /// `estimator.converged_unabsorbed`. NaN before alignment.
+    /// `estimator.converged_unabsorbed`. NaN before alignment (and in [`Default`]).
     pub bias_unabsorbed: f64,
     /// 1 when the bias has converged (as [`FLAG_CONVERGED`]), else 0.
     pub converged: u32,
     /// Bit set of `FLAG_*` ([`FLAG_END_OF_STREAM`], [`FLAG_CONVERGED`]).
     pub flags: u32,
+}
+
+impl Default for BiasSample {
+    /// Nothing known yet: zero bias, NaN σ and NaN unabsorbed part (as before alignment).
+    fn default() -> Self {
+        Self {
+            seq: 0,
+            t_s: 0.0,
+            imu_seq: 0,
+            gyro_bias_rad_s: [0.0; 3],
+            gyro_bias_sd_rad_s: [f64::NAN; 3],
+            bias_unabsorbed: f64::NAN,
+            converged: 0,
+            flags: 0,
+        }
+    }
 }
 
 /// The attitude after one IMU sample, daemon → clients (`corridor/v3/attitude`): one per
@@ -234,8 +250,9 @@ pub struct NavSample {
 /// clock), at end of stream and at shutdown. The input counters (`received`, `seq_gaps`,
 /// `rejected_duplicate_seq`, `late`, `dropped_overflow`, `producer_changes`) and `undelivered`
 /// are cumulative over every life of the domain's daemon (they live in its accounting file, so a
-/// restarted daemon continues them); the estimator's counts (`accepted`, `rejected_non_finite`,
-/// `rejected_time`, `stances`, `heading_used`) over the current life.
+/// restarted daemon continues them), as are `head_missing`, `missing_at_restart`,
+/// `lost_in_daemon` and `angles_dropped`; the estimator's counts (`accepted`,
+/// `rejected_non_finite`, `rejected_time`, `stances`, `heading_used`) over the current life.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
 #[type_name("corridor_v3_Diagnostics")]
 #[repr(C)]
@@ -279,7 +296,9 @@ pub struct Diagnostics {
     pub latency_p99_s: f64,
     /// IMU samples a producer sent before the daemon's first message from it (its first `seq`).
     pub head_missing: u64,
-    /// IMU samples sent while no daemon received (between two daemon lives).
+    /// IMU samples of the current producer's numbering between the last one an earlier daemon
+    /// life received and the first one the next life received: sent while no daemon was
+    /// there, or left unread in the input buffer of a daemon that stopped or was killed.
     pub missing_at_restart: u64,
     /// Samples a killed earlier daemon life had received but not yet estimated (counted by the
     /// next life).

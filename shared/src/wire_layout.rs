@@ -198,7 +198,7 @@ pub fn c_header() -> String {
          * _rad_s, _m_s2, _m, _ns); see shared/src/wire.rs for the meaning of each field.\n \
          * Publish or subscribe with iceoryx2's C/C++ bindings on the service named below, inside\n \
          * the domain's prefix \"corridor_<domain>_\", announcing the iceoryx2 type name below\n \
-         * (size and alignment as asserted) and the same QoS as shared/src/services.rs.
+         * (size and alignment as asserted) and the same QoS as shared/src/services/qos.rs.
  * C11 or C++11; the static assertions refuse a compiler that lays the structs out otherwise. */\n\
          #ifndef CORRIDOR_WIRE_H\n#define CORRIDOR_WIRE_H\n\n#include <stddef.h>\n#include <stdint.h>\n\n\
          #ifdef __cplusplus\n#define CORRIDOR_STATIC_ASSERT(c, m) static_assert(c, m)\n\
@@ -285,7 +285,8 @@ mod tests {
         assert_eq!(all.len(), 6);
         for t in &all {
             t.check().unwrap();
-            assert!(t.type_name.starts_with("corridor_v3_"), "{}", t.type_name);
+            let prefix = format!("corridor_{}_", crate::services::SERVICE_VERSION);
+            assert!(t.type_name.starts_with(&prefix), "{}", t.type_name);
         }
     }
 

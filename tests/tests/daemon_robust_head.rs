@@ -54,6 +54,8 @@ fn samples_missing_at_the_head_of_a_stream_are_counted() {
     let report = daemon.stop();
     let d = report.diagnostics;
     assert_eq!(report.head_missing, 300);
+    // The diagnostics on the wire carry the same count.
+    assert_eq!(d.head_missing, 300);
     assert_eq!(d.seq_gaps, 100);
     // What the producer numbered = what the daemon received + what it counts as missing.
     let numbered = 2000 + 2 + 300 + 100;

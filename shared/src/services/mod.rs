@@ -91,6 +91,23 @@ mod tests {
     }
 
     #[test]
+    fn every_service_name_carries_the_wire_version() {
+        let prefix = format!("corridor/{SERVICE_VERSION}/");
+        for name in [
+            IMU_SERVICE,
+            ANGLES_SERVICE,
+            ATTITUDE_SERVICE,
+            BIAS_SERVICE,
+            NAV_SERVICE,
+            DIAGNOSTICS_SERVICE,
+            IMU_ACK_SERVICE,
+            DAEMON_SERVICE,
+        ] {
+            assert!(name.starts_with(&prefix), "{name}");
+        }
+    }
+
+    #[test]
     fn delivery_parses() {
         assert_eq!("live".parse::<Delivery>(), Ok(Delivery::Live));
         assert_eq!("lossless".parse::<Delivery>(), Ok(Delivery::Lossless));

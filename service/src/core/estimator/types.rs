@@ -221,8 +221,8 @@ pub struct Estimate {
     /// The largest fraction, on one axis, of a bias error present when the bias was set (the
     /// rest-mean prior, a saved state or the initial guess; the same size on every axis) that
     /// the estimate still carries: 1 at the start, towards 0 as the walk observes the bias (the
-    /// filter's closed-loop response, see `eskf/response.rs`). NaN when this mode's bias is
-    /// not estimated.
+    /// filter's closed-loop response, see `eskf/response.rs`). NaN before alignment (and for a
+    /// filter whose bias states are frozen, which no mode uses).
     pub bias_unabsorbed: f64,
     /// Stance flag: this sample is taken as zero velocity.
     pub stance: bool,
