@@ -184,44 +184,19 @@ impl Eskf {
             for c in 0..3 {
                 tr.apply(&mut self.response[c * MAX_N..][..MAX_N]);
             }
-            let Transition { fts, ftk, ftm, .. } = tr;
             for c in 0..n {
                 a[c * MAX_N..][..n].copy_from_slice(&p0[c * MAX_N..][..n]);
             }
-            let dot2 = |m: &[f64; 2], v: [f64; 2]| m[0] * v[0] + m[1] * v[1];
             // M = F P: rows p, v, θ, b read the old rows v, θ, b/s/k, d.
             for col in 0..n {
                 tr.apply(&mut a[col * MAX_N..col * MAX_N + n]);
             }
-            // P' = M Fᵀ: columns p, v, θ, b read the old columns.
-            let col = |a: &[f64; MAX_N * MAX_N], row: usize, c0: usize| {
-                [a[ix(row, c0)], a[ix(row, c0 + 1)], a[ix(row, c0 + 2)]]
-            };
+            // P' = M Fᵀ: each row of M goes through F the same way (Fᵀ on the right).
             for row in 0..n {
-                let v = col(a, row, V0);
-                let th = col(a, row, TH);
-                let b = col(a, row, BG);
-                let s = lay.scale.map(|i| col(a, row, i));
-                let k = lay.gsens.map(|i| col(a, row, i));
-                let m = lay.coupling.map(|i| [a[ix(row, i)], a[ix(row, i + 1)]]);
-                let d = b_rate.map(|i| col(a, row, i));
-                for i in 0..3 {
-                    a[ix(row, P0 + i)] += dt * v[i];
-                    a[ix(row, V0 + i)] += dot3(&fvt[i], &th);
-                    let mut dth = dot3(&ftb[i], &b);
-                    if let Some(s) = s {
-                        dth += dot3(&fts[i], &s);
-                    }
-                    if let Some(k) = k {
-                        dth += dot3(&ftk[i], &k);
-                    }
-                    if let Some(m) = m {
-                        dth += dot2(&ftm[i], m);
-                    }
-                    a[ix(row, TH + i)] += dth;
-                    if let Some(d) = d {
-                        a[ix(row, BG + i)] += dt * d[i];
-                    }
+                let mut x: [f64; MAX_N] = std::array::from_fn(|c| a[ix(row, c)]);
+                tr.apply(&mut x[..n]);
+                for (c, v) in x.iter().enumerate().take(n) {
+                    a[ix(row, c)] = *v;
                 }
             }
         }
