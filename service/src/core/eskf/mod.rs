@@ -21,7 +21,7 @@
 //! Files: this one holds the filter's state and its strapdown step; `covariance.rs` the block
 //! propagation of the covariance; `updates.rs` the measurement updates (ZUPT, foot-axis heading,
 //! stride direction with its footprint clone); `response.rs` the closed-loop response to a bias
-//! error, on which the convergence flag rises; `tests.rs` its unit tests.
+//! error, on which the convergence flag rises; `tests.rs` and `response_tests.rs` the unit tests.
 
 use super::rotation::{exp_rotvec, heading_jacobian, heading_of_axis, skew, wrap_pi};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
@@ -591,5 +591,7 @@ impl Eskf {
     }
 }
 
+#[cfg(test)]
+mod response_tests;
 #[cfg(test)]
 mod tests;
