@@ -138,6 +138,10 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
         couple("y→z 2°", 1, 2.0),
         couple("x→z 1°", 0, 1.0),
         couple("x→z 2°", 0, 2.0),
+        // Above the detectable sizes the diagnosis predicts on most walks (median 5–8°): do
+        // the predictions hold when an effect is large enough to be seen?
+        couple("y→z 8°", 1, 8.0),
+        couple("x→z 8°", 0, 8.0),
         MatrixCase {
             label: "bias ramp 2e-4 rad/s²",
             expected: Some(BiasDrift),
@@ -182,6 +186,16 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
                 k_rad_s_per_m_s2: 2e-3,
             }),
             size: 2e-3,
+            variant: Some("g-sensitivity"),
+        },
+        MatrixCase {
+            // Above the predicted detectable size (median 1.3e-2).
+            label: "g-sensitivity 2e-2 rad/s per m/s²",
+            expected: Some(Effect::GSensitivity),
+            injection: Log(GSensitivity {
+                k_rad_s_per_m_s2: 2e-2,
+            }),
+            size: 2e-2,
             variant: Some("g-sensitivity"),
         },
         MatrixCase {
