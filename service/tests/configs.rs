@@ -101,3 +101,25 @@ fn the_suites_suspect_legs_are_the_data_sets_own() {
     }
     assert!(flagged > 0, "no recording of the suite has a flagged leg");
 }
+
+/// Every start heading the results suite gives is the rule a suite file without one gets:
+/// the first surveyed stride's direction on the building grid (so a recording added without
+/// it is scored the way these were).
+#[test]
+fn the_suites_start_headings_are_the_first_stride_on_the_grid() {
+    use corridor_service::suite::{StartHeading, read_suite, start_heading_from_truth};
+    use corridor_shared::truth_csv::read_truth_csv;
+    let path = configs().join("eval/gdins.toml");
+    let suite = read_suite(&path).unwrap();
+    assert_eq!(suite.recordings.len(), 16);
+    for r in &suite.recordings {
+        assert_eq!(r.start_heading, StartHeading::Given, "{}", r.name);
+        let truth = read_truth_csv(&path.parent().unwrap().join(&r.truth)).unwrap();
+        assert_eq!(
+            start_heading_from_truth(&truth, r.grid_deg),
+            Some(r.start_heading_deg),
+            "{}",
+            r.name
+        );
+    }
+}

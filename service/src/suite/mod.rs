@@ -15,7 +15,8 @@
 //! settles within ±5 % (`recovery.rs`).
 //!
 //! Map of the module:
-//! - this file: the suite file, the rows, and running them;
+//! - this file: the rows, and running them;
+//! - [`file`]: the suite file, read and checked (start headings, suspect legs);
 //! - [`figures`]: what is measured on the default run besides the footprint error (NIS by
 //!   update type, heading use on straight and weave strides, stances found, stride lengths);
 //! - [`recovery`]: injected-bias recovery and its hindsight settling time;
@@ -31,6 +32,7 @@ mod detection;
 mod detection_tables;
 mod ensemble;
 mod figures;
+mod file;
 mod front_end;
 mod loops;
 mod recovery;
@@ -48,6 +50,10 @@ pub use ensemble::{
 };
 use figures::{DefaultFigures, NisSeries, stride_ratio};
 pub use figures::{NisFigure, STANCE_MATCH_S, STRAIGHT_DEG, StanceMatch, StrideUse, WEAVE_DEG};
+pub use file::{
+    FIRST_STRIDE_MIN_M, Gait, StartHeading, SuiteFile, SuiteRecording, read_suite,
+    start_heading_from_truth,
+};
 pub use front_end::{DETECTORS, FrontEnd, KEPT_REST_S, detector_label, front_end_markdown};
 pub use loops::run_loops;
 pub use recovery::{Convergence, SETTLED_TOLERANCE, convergence, recovery, settled_at};
@@ -60,82 +66,12 @@ pub use tables::{
 
 use crate::eval::EvalOptions;
 use crate::runner::{self, RunError, RunOutcome, heading_aid};
-use corridor_shared::config::{BiasPrior, Config, ConfigFile, ConfigOverrides, Mode};
+use corridor_shared::config::{BiasPrior, Config, ConfigFile, Mode};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use std::path::{Path, PathBuf};
-
-/// The suite file.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SuiteFile {
-    /// Injected bias for the recovery rows, rad/s (default the paper's [0.001, 0.001, 0.005]).
-    #[serde(default)]
-    pub inject_gyro_bias_rad_s: Option<[f64; 3]>,
-    /// The mode reported as "best" (default `eskf`).
-    #[serde(default)]
-    pub best_mode: Option<Mode>,
-    /// Recordings.
-    #[serde(rename = "recording")]
-    pub recordings: Vec<SuiteRecording>,
-}
-
-/// One recording of the suite; paths are relative to the suite file.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SuiteRecording {
-    /// Short name.
-    pub name: String,
-    /// IMU log.
-    pub imu: PathBuf,
-    /// Footprint truth.
-    pub truth: PathBuf,
-    /// Sensor configuration (one per sensor).
-    pub config: PathBuf,
-    /// Configuration of the ZUPT baselines (rows 1, 1b, 2), when their noise set differs from
-    /// the default's (one per sensor; default: `config`).
-    #[serde(default)]
-    pub baseline_config: Option<PathBuf>,
-    /// Walking direction of the first leg in the map frame, degrees (map knowledge).
-    pub start_heading_deg: f64,
-    /// Grid orientation, degrees.
-    #[serde(default)]
-    pub grid_deg: f64,
-    /// Gait of the walk: fast or varying gait is reported but kept out of the normal-gait
-    /// summary.
-    #[serde(default)]
-    pub gait: Gait,
-    /// Legs of the truth (leg k: footprint k − 1 → k) that the data set's own consistency check
-    /// flags: a plain dead reckoning fitted to the footprints gives the leg a length outside
-    /// 0.85–1.15 of the surveyed one (`legs_ratio_outside_0.85_1.15` in the recording's
-    /// `meta.json`). The reference figure keeps every footprint; the default and the baseline
-    /// are also scored on the footprints before the first of these legs.
-    #[serde(default)]
-    pub suspect_legs: Vec<usize>,
-}
-
-/// The gait of a suite recording, as its data set documents it.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Gait {
-    /// Normal walking.
-    #[default]
-    Normal,
-    /// Fast or varying gait.
-    Fast,
-}
-
-impl Gait {
-    /// The name in the tables (as in the suite file).
-    pub fn name(self) -> &'static str {
-        match self {
-            Gait::Normal => "normal",
-            Gait::Fast => "fast",
-        }
-    }
-}
 
 /// Errors of the suite.
 #[derive(Debug, thiserror::Error)]
@@ -190,6 +126,10 @@ pub struct SuiteRow {
     pub recording: String,
     /// Its gait.
     pub gait: Gait,
+    /// The start heading it was run with, degrees, and where that came from.
+    pub start_heading_deg: f64,
+    /// Given in the suite file or taken from the first surveyed stride.
+    pub start_heading: StartHeading,
     /// Truth path length, m.
     pub path_m: f64,
     /// 1. ZUPT filter alone.
@@ -244,18 +184,6 @@ pub struct SuiteRow {
     pub before_suspect: Option<BeforeSuspect>,
 }
 
-/// Reads a suite file.
-pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
-    let text = std::fs::read_to_string(path).map_err(|e| SuiteError::File {
-        path: path.to_owned(),
-        message: e.to_string(),
-    })?;
-    toml::from_str(&text).map_err(|e| SuiteError::File {
-        path: path.to_owned(),
-        message: e.to_string(),
-    })
-}
-
 /// Runs the suite (the table's rows).
 pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
     let suite = read_suite(path)?;
@@ -264,12 +192,6 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
         .inject_gyro_bias_rad_s
         .unwrap_or([0.001, 0.001, 0.005]);
     let best_mode = suite.best_mode.unwrap_or(Mode::Eskf);
-    for r in &suite.recordings {
-        check_suspect_legs(base, r).map_err(|message| SuiteError::File {
-            path: path.to_owned(),
-            message,
-        })?;
-    }
     fn wrap(r: &SuiteRecording) -> impl FnOnce(RunError) -> SuiteError + '_ {
         move |source| SuiteError::Run {
             name: r.name.clone(),
@@ -302,35 +224,6 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
     Ok(rows)
 }
 
-/// A recording's `suspect_legs` name legs of its truth, and leave the first-leg alignment
-/// footprint (the first one `heading_min_dist_m` from the start) before the first of them.
-fn check_suspect_legs(base: &Path, r: &SuiteRecording) -> Result<(), String> {
-    let Some(&first) = r.suspect_legs.iter().min() else {
-        return Ok(());
-    };
-    let truth = read_truth_csv(&base.join(&r.truth)).map_err(|e| e.to_string())?;
-    if let Some(&leg) = r.suspect_legs.iter().find(|&&k| k == 0 || k >= truth.len()) {
-        return Err(format!(
-            "recording {}: suspect_legs: {leg} is not a leg of its {} footprints (legs 1 to {})",
-            r.name,
-            truth.len(),
-            truth.len().saturating_sub(1)
-        ));
-    }
-    let min_dist_m = EvalOptions::default().heading_min_dist_m;
-    let heading_gcp = truth
-        .iter()
-        .position(|g| (g.x_m - truth[0].x_m).hypot(g.y_m - truth[0].y_m) >= min_dist_m);
-    match heading_gcp {
-        Some(k) if k < first => Ok(()),
-        _ => Err(format!(
-            "recording {}: suspect_legs: leg {first} comes before the footprint {min_dist_m} m \
-             from the start that the first-leg alignment needs (nothing would be left to score)",
-            r.name
-        )),
-    }
-}
-
 /// The default run on the log cut to its last [`KEPT_REST_S`] of rest, started from the
 /// checkpoint the other walks give ([`front_end::checkpoint_from`]).
 fn without_rest_from_checkpoint(
@@ -358,18 +251,6 @@ fn without_rest_from_checkpoint(
         |_, _| {},
     )?;
     cut.footprint(&out).map(Some)
-}
-
-impl SuiteRecording {
-    /// The recording's map knowledge with the mode and prior of one suite row.
-    pub fn overrides(&self, mode: Mode, prior: Option<BiasPrior>) -> ConfigOverrides {
-        ConfigOverrides {
-            mode: Some(mode),
-            gyro_bias_prior: prior,
-            start_heading_deg: Some(self.start_heading_deg),
-            grid_deg: Some(self.grid_deg),
-        }
-    }
 }
 
 /// The recording's configuration with the mode, prior and map knowledge of one suite row.
@@ -631,6 +512,8 @@ fn run_recording(
     Ok(SuiteRow {
         recording: r.name.clone(),
         gait: r.gait,
+        start_heading_deg: r.start_heading_deg,
+        start_heading: r.start_heading,
         path_m,
         zupt,
         zupt_rest,

@@ -1,6 +1,8 @@
 //! The suite's summary over the normal-gait recordings and its Markdown tables.
 
-use super::{Footprint, Gait, NisFigure, STRAIGHT_DEG, StrideUse, SuiteRow, WEAVE_DEG};
+use super::{
+    Footprint, Gait, NisFigure, STRAIGHT_DEG, StartHeading, StrideUse, SuiteRow, WEAVE_DEG,
+};
 use serde::Serialize;
 
 /// How far the default may be worse than the baseline and still count as "not worse", % of path.
@@ -156,6 +158,17 @@ pub fn headline_markdown(rows: &[SuiteRow]) -> String {
         NOT_WORSE_TOLERANCE_PCT,
         m.default_worse
     ));
+    let derived: Vec<String> = rows
+        .iter()
+        .filter(|r| r.start_heading == StartHeading::FirstStride)
+        .map(|r| format!("{} ({:.0}°)", r.recording, r.start_heading_deg))
+        .collect();
+    if !derived.is_empty() {
+        s.push_str(&format!(
+            "\nStart heading not in the suite file, taken from the first surveyed stride on the grid: {}.\n",
+            derived.join(", ")
+        ));
+    }
     s.push_str(&suspect_markdown(rows, &m));
     s
 }

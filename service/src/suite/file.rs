@@ -1,0 +1,319 @@
+//! The suite file (`configs/eval/*.toml`): its recordings, read and checked in one pass.
+//!
+//! What a recording needs is its IMU log, its footprint truth and its sensor configuration; the
+//! map knowledge a user has of the walk is its start heading (the corridor it starts in) and the
+//! building's grid. A recording that leaves `start_heading_deg` out gets it from the truth the
+//! way this suite's own were chosen: the direction of the first surveyed stride, on the grid
+//! ([`start_heading_from_truth`]). The check of `suspect_legs` reads the truth as well.
+
+use super::SuiteError;
+use crate::eval::EvalOptions;
+use corridor_shared::config::{BiasPrior, ConfigOverrides, Mode};
+use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// A surveyed stride shorter than this does not give a start heading (a shuffle, a foot set
+/// down again): the first footprint at least this far from the first one does.
+pub const FIRST_STRIDE_MIN_M: f64 = 0.5;
+
+/// The suite file, read and checked.
+#[derive(Debug, Clone)]
+pub struct SuiteFile {
+    /// Injected bias for the recovery rows, rad/s (default the paper's [0.001, 0.001, 0.005]).
+    pub inject_gyro_bias_rad_s: Option<[f64; 3]>,
+    /// The mode reported as "best" (default `eskf`).
+    pub best_mode: Option<Mode>,
+    /// Recordings.
+    pub recordings: Vec<SuiteRecording>,
+}
+
+/// One recording of the suite; paths are relative to the suite file.
+#[derive(Debug, Clone)]
+pub struct SuiteRecording {
+    /// Short name.
+    pub name: String,
+    /// IMU log.
+    pub imu: PathBuf,
+    /// Footprint truth.
+    pub truth: PathBuf,
+    /// Sensor configuration (one per sensor).
+    pub config: PathBuf,
+    /// Configuration of the ZUPT baselines (rows 1, 1b, 2), when their noise set differs from
+    /// the default's (one per sensor; default: `config`).
+    pub baseline_config: Option<PathBuf>,
+    /// Walking direction of the first leg in the map frame, degrees (map knowledge).
+    pub start_heading_deg: f64,
+    /// Where `start_heading_deg` came from.
+    pub start_heading: StartHeading,
+    /// Grid orientation, degrees.
+    pub grid_deg: f64,
+    /// Gait of the walk: fast or varying gait is reported but kept out of the normal-gait
+    /// summary.
+    pub gait: Gait,
+    /// Legs of the truth (leg k: footprint k − 1 → k) that the data set's own consistency check
+    /// flags: a plain dead reckoning fitted to the footprints gives the leg a length outside
+    /// 0.85–1.15 of the surveyed one (`legs_ratio_outside_0.85_1.15` in the recording's
+    /// `meta.json`). The reference figure keeps every footprint; the default and the baseline
+    /// are also scored on the footprints before the first of these legs.
+    pub suspect_legs: Vec<usize>,
+}
+
+/// Where a recording's start heading came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StartHeading {
+    /// `start_heading_deg` in the suite file.
+    Given,
+    /// Left out: the first surveyed stride's direction on the grid.
+    FirstStride,
+}
+
+/// The gait of a suite recording, as its data set documents it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Gait {
+    /// Normal walking.
+    #[default]
+    Normal,
+    /// Fast or varying gait.
+    Fast,
+}
+
+impl Gait {
+    /// The name in the tables (as in the suite file).
+    pub fn name(self) -> &'static str {
+        match self {
+            Gait::Normal => "normal",
+            Gait::Fast => "fast",
+        }
+    }
+}
+
+impl SuiteRecording {
+    /// The recording's map knowledge with the mode and prior of one suite row.
+    pub fn overrides(&self, mode: Mode, prior: Option<BiasPrior>) -> ConfigOverrides {
+        ConfigOverrides {
+            mode: Some(mode),
+            gyro_bias_prior: prior,
+            start_heading_deg: Some(self.start_heading_deg),
+            grid_deg: Some(self.grid_deg),
+        }
+    }
+}
+
+/// The suite file as written.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileToml {
+    #[serde(default)]
+    inject_gyro_bias_rad_s: Option<[f64; 3]>,
+    #[serde(default)]
+    best_mode: Option<Mode>,
+    #[serde(rename = "recording")]
+    recordings: Vec<RecordingToml>,
+}
+
+/// One `[[recording]]` as written.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RecordingToml {
+    name: String,
+    imu: PathBuf,
+    truth: PathBuf,
+    config: PathBuf,
+    #[serde(default)]
+    baseline_config: Option<PathBuf>,
+    #[serde(default)]
+    start_heading_deg: Option<f64>,
+    #[serde(default)]
+    grid_deg: f64,
+    #[serde(default)]
+    gait: Gait,
+    #[serde(default)]
+    suspect_legs: Vec<usize>,
+}
+
+/// Reads a suite file: every recording's start heading given or derived from its truth, its
+/// `suspect_legs` checked against its truth. Errors name the file, the recording and the key.
+pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
+    let error = |message: String| SuiteError::File {
+        path: path.to_owned(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
+    let file: FileToml = toml::from_str(&text).map_err(|e| error(e.to_string()))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let recordings = file
+        .recordings
+        .into_iter()
+        .map(|r| resolve(base, r))
+        .collect::<Result<Vec<_>, String>>()
+        .map_err(error)?;
+    Ok(SuiteFile {
+        inject_gyro_bias_rad_s: file.inject_gyro_bias_rad_s,
+        best_mode: file.best_mode,
+        recordings,
+    })
+}
+
+/// One recording as written → checked, with its start heading.
+fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
+    let needs_truth = r.start_heading_deg.is_none() || !r.suspect_legs.is_empty();
+    let truth = if needs_truth {
+        read_truth_csv(&base.join(&r.truth))
+            .map_err(|e| format!("recording {}: truth: {e}", r.name))?
+    } else {
+        Vec::new()
+    };
+    let (start_heading_deg, start_heading) = match r.start_heading_deg {
+        Some(deg) => (deg, StartHeading::Given),
+        None => {
+            let deg = start_heading_from_truth(&truth, r.grid_deg).ok_or_else(|| {
+                format!(
+                    "recording {}: start_heading_deg: not given, and no surveyed footprint lies \
+                     {FIRST_STRIDE_MIN_M} m or more from the first one to take it from",
+                    r.name
+                )
+            })?;
+            (deg, StartHeading::FirstStride)
+        }
+    };
+    check_suspect_legs(&r.name, &r.suspect_legs, &truth)?;
+    Ok(SuiteRecording {
+        name: r.name,
+        imu: r.imu,
+        truth: r.truth,
+        config: r.config,
+        baseline_config: r.baseline_config,
+        start_heading_deg,
+        start_heading,
+        grid_deg: r.grid_deg,
+        gait: r.gait,
+        suspect_legs: r.suspect_legs,
+    })
+}
+
+/// The start heading a user of the map gives a walk, taken from its truth: the direction from
+/// the first footprint to the first one at least [`FIRST_STRIDE_MIN_M`] away, turned to the
+/// nearest of the grid's four directions (degrees, in (−180, 180]). `None` when no footprint
+/// is that far from the first.
+pub fn start_heading_from_truth(truth: &[TruthPoint], grid_deg: f64) -> Option<f64> {
+    let first = truth.first()?;
+    let next = truth
+        .iter()
+        .find(|g| (g.x_m - first.x_m).hypot(g.y_m - first.y_m) >= FIRST_STRIDE_MIN_M)?;
+    let stride_deg = (next.y_m - first.y_m)
+        .atan2(next.x_m - first.x_m)
+        .to_degrees();
+    let on_grid = grid_deg + ((stride_deg - grid_deg) / 90.0).round() * 90.0;
+    let wrapped = on_grid.rem_euclid(360.0);
+    Some(if wrapped > 180.0 {
+        wrapped - 360.0
+    } else {
+        wrapped
+    })
+}
+
+/// A recording's `suspect_legs` name legs of its truth, and leave the first-leg alignment
+/// footprint (the first one `heading_min_dist_m` from the start) before the first of them.
+fn check_suspect_legs(name: &str, legs: &[usize], truth: &[TruthPoint]) -> Result<(), String> {
+    let Some(&first) = legs.iter().min() else {
+        return Ok(());
+    };
+    if let Some(&leg) = legs.iter().find(|&&k| k == 0 || k >= truth.len()) {
+        return Err(format!(
+            "recording {name}: suspect_legs: {leg} is not a leg of its {} footprints (legs 1 to {})",
+            truth.len(),
+            truth.len().saturating_sub(1)
+        ));
+    }
+    let min_dist_m = EvalOptions::default().heading_min_dist_m;
+    let heading_gcp = truth
+        .iter()
+        .position(|g| (g.x_m - truth[0].x_m).hypot(g.y_m - truth[0].y_m) >= min_dist_m);
+    match heading_gcp {
+        Some(k) if k < first => Ok(()),
+        _ => Err(format!(
+            "recording {name}: suspect_legs: leg {first} comes before the footprint {min_dist_m} m \
+             from the start that the first-leg alignment needs (nothing would be left to score)"
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn footprints(xy: &[(f64, f64)]) -> Vec<TruthPoint> {
+        xy.iter()
+            .enumerate()
+            .map(|(i, &(x_m, y_m))| TruthPoint {
+                t_s: i as f64,
+                x_m,
+                y_m,
+                z_m: 0.0,
+                stride: None,
+                sample_index: None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_start_heading_is_the_first_real_stride_on_the_grid() {
+        // A shuffle of 0.2 m first, then a stride 20° off the grid's 90° direction.
+        let a = 110f64.to_radians();
+        let t = footprints(&[(0.0, 0.0), (0.2, 0.0), (0.8 * a.cos(), 0.8 * a.sin())]);
+        assert_eq!(start_heading_from_truth(&t, 0.0), Some(90.0));
+        // A grid turned by 30°: the nearest of 30, 120, 210, 300° is 120°.
+        assert_eq!(start_heading_from_truth(&t, 30.0), Some(120.0));
+        // Walking along −x: 180°, not −180°.
+        let back = footprints(&[(0.0, 0.0), (-1.0, 0.01)]);
+        assert_eq!(start_heading_from_truth(&back, 0.0), Some(180.0));
+        let back_low = footprints(&[(0.0, 0.0), (-1.0, -0.01)]);
+        assert_eq!(start_heading_from_truth(&back_low, 0.0), Some(180.0));
+        // No footprint 0.5 m away: nothing to take it from.
+        assert_eq!(
+            start_heading_from_truth(&footprints(&[(0.0, 0.0), (0.3, 0.1)]), 0.0),
+            None
+        );
+        assert_eq!(start_heading_from_truth(&[], 0.0), None);
+    }
+
+    fn write_suite(dir: &Path, truth: &str, recording_extra: &str) -> PathBuf {
+        std::fs::create_dir_all(dir).unwrap();
+        std::fs::write(dir.join("truth.csv"), truth).unwrap();
+        let suite = dir.join("suite.toml");
+        std::fs::write(
+            &suite,
+            format!(
+                "[[recording]]\nname = \"walk\"\nimu = \"imu.csv\"\ntruth = \"truth.csv\"\n\
+                 config = \"c.toml\"\n{recording_extra}"
+            ),
+        )
+        .unwrap();
+        suite
+    }
+
+    #[test]
+    fn a_recording_without_start_heading_takes_it_from_its_truth() {
+        let dir = std::env::temp_dir().join(format!("corridor-suite-file-{}", std::process::id()));
+        let truth = "t_s,x_m,y_m,z_m\n0.0,0.0,0.0,0.0\n1.0,0.1,0.9,0.0\n2.0,0.2,2.3,0.0\n";
+        let given = read_suite(&write_suite(&dir, truth, "start_heading_deg = 0.0\n")).unwrap();
+        assert_eq!(given.recordings[0].start_heading, StartHeading::Given);
+        assert_eq!(given.recordings[0].start_heading_deg, 0.0);
+        let derived = read_suite(&write_suite(&dir, truth, "")).unwrap();
+        assert_eq!(
+            derived.recordings[0].start_heading,
+            StartHeading::FirstStride
+        );
+        assert_eq!(derived.recordings[0].start_heading_deg, 90.0);
+        // A truth without a stride: the error names the recording and the key.
+        let short = "t_s,x_m,y_m,z_m\n0.0,0.0,0.0,0.0\n1.0,0.1,0.1,0.0\n";
+        let e = read_suite(&write_suite(&dir, short, ""))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("recording walk: start_heading_deg"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
