@@ -4,7 +4,9 @@
 //! map knowledge a user has of the walk is its start heading (the corridor it starts in) and the
 //! building's grid. A recording that leaves `start_heading_deg` out gets it from the truth the
 //! way this suite's own were chosen: the direction of the first surveyed stride, on the grid
-//! ([`start_heading_from_truth`]). The check of `suspect_legs` reads the truth as well.
+//! ([`start_heading_from_truth`]). One that leaves `suspect_legs` out gets the legs the data
+//! set's `meta.json` beside its truth flags, when there is one. The check of `suspect_legs`
+//! reads the truth as well.
 
 use super::SuiteError;
 use crate::eval::EvalOptions;
@@ -16,6 +18,9 @@ use std::path::{Path, PathBuf};
 /// A surveyed stride shorter than this does not give a start heading (a shuffle, a foot set
 /// down again): the first footprint at least this far from the first one does.
 pub const FIRST_STRIDE_MIN_M: f64 = 0.5;
+
+/// The entry of a gdins `meta.json` that lists the truth legs its consistency check flags.
+pub const FLAGGED_LEGS_KEY: &str = "legs_ratio_outside_0.85_1.15";
 
 /// The suite file, read and checked.
 #[derive(Debug, Clone)]
@@ -54,8 +59,9 @@ pub struct SuiteRecording {
     /// Legs of the truth (leg k: footprint k − 1 → k) that the data set's own consistency check
     /// flags: a plain dead reckoning fitted to the footprints gives the leg a length outside
     /// 0.85–1.15 of the surveyed one (`legs_ratio_outside_0.85_1.15` in the recording's
-    /// `meta.json`). The reference figure keeps every footprint; the default and the baseline
-    /// are also scored on the footprints before the first of these legs.
+    /// `meta.json`; read from the `meta.json` beside the truth when the suite file leaves the
+    /// key out). The reference figure keeps every footprint; the default and the baseline are
+    /// also scored on the footprints before the first of these legs.
     pub suspect_legs: Vec<usize>,
 }
 
@@ -131,7 +137,7 @@ struct RecordingToml {
     #[serde(default)]
     gait: Gait,
     #[serde(default)]
-    suspect_legs: Vec<usize>,
+    suspect_legs: Option<Vec<usize>>,
 }
 
 /// Reads a suite file: every recording's start heading given or derived from its truth, its
@@ -159,7 +165,12 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
 
 /// One recording as written → checked, with its start heading.
 fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
-    let needs_truth = r.start_heading_deg.is_none() || !r.suspect_legs.is_empty();
+    let suspect_legs = match r.suspect_legs {
+        Some(legs) => legs,
+        None => flagged_legs_beside(&base.join(&r.truth))
+            .map_err(|e| format!("recording {}: suspect_legs: {e}", r.name))?,
+    };
+    let needs_truth = r.start_heading_deg.is_none() || !suspect_legs.is_empty();
     let truth = if needs_truth {
         read_truth_csv(&base.join(&r.truth))
             .map_err(|e| format!("recording {}: truth: {e}", r.name))?
@@ -179,7 +190,7 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
             (deg, StartHeading::FirstStride)
         }
     };
-    check_suspect_legs(&r.name, &r.suspect_legs, &truth)?;
+    check_suspect_legs(&r.name, &suspect_legs, &truth)?;
     Ok(SuiteRecording {
         name: r.name,
         imu: r.imu,
@@ -190,8 +201,28 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
         start_heading,
         grid_deg: r.grid_deg,
         gait: r.gait,
-        suspect_legs: r.suspect_legs,
+        suspect_legs,
     })
+}
+
+/// The legs the data set's own consistency check flags, from the `meta.json` beside a truth
+/// file (the gdins recordings' `truth.imu_consistency.crude_ins_fit` entry
+/// `legs_ratio_outside_0.85_1.15`); none without that file or that entry.
+fn flagged_legs_beside(truth: &Path) -> Result<Vec<usize>, String> {
+    let meta = truth.with_file_name("meta.json");
+    let text = match std::fs::read_to_string(&meta) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(format!("{}: {e}", meta.display())),
+    };
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", meta.display()))?;
+    let legs = &value["truth"]["imu_consistency"]["crude_ins_fit"][FLAGGED_LEGS_KEY];
+    if legs.is_null() {
+        return Ok(Vec::new());
+    }
+    serde_json::from_value(legs.clone())
+        .map_err(|e| format!("{}: {FLAGGED_LEGS_KEY}: {e}", meta.display()))
 }
 
 /// The start heading a user of the map gives a walk, taken from its truth: the direction from
@@ -308,6 +339,41 @@ mod tests {
             StartHeading::FirstStride
         );
         assert_eq!(derived.recordings[0].start_heading_deg, 90.0);
+        // suspect_legs left out: the legs the meta.json beside the truth flags.
+        let line =
+            "t_s,x_m,y_m,z_m\n0,0,0,0\n1,1.4,0,0\n2,2.8,0,0\n3,4.2,0,0\n4,5.6,0,0\n5,7.0,0,0\n";
+        let suite = write_suite(&dir, line, "");
+        assert!(
+            read_suite(&suite).unwrap().recordings[0]
+                .suspect_legs
+                .is_empty()
+        );
+        let meta = |legs: &str| {
+            let json = format!(
+                r#"{{"truth": {{"imu_consistency": {{"crude_ins_fit": {{"{FLAGGED_LEGS_KEY}": {legs}}}}}}}}}"#
+            );
+            std::fs::write(dir.join("meta.json"), json).unwrap();
+        };
+        meta("[5]");
+        assert_eq!(
+            read_suite(&suite).unwrap().recordings[0].suspect_legs,
+            vec![5]
+        );
+        let given = write_suite(&dir, line, "suspect_legs = []\n");
+        assert!(
+            read_suite(&given).unwrap().recordings[0]
+                .suspect_legs
+                .is_empty()
+        );
+        meta("\"five\"");
+        let e = read_suite(&write_suite(&dir, line, ""))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("recording walk: suspect_legs") && e.contains("meta.json"),
+            "{e}"
+        );
+        std::fs::remove_file(dir.join("meta.json")).unwrap();
         // A truth without a stride: the error names the recording and the key.
         let short = "t_s,x_m,y_m,z_m\n0.0,0.0,0.0,0.0\n1.0,0.1,0.1,0.0\n";
         let e = read_suite(&write_suite(&dir, short, ""))
