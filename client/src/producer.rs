@@ -3,7 +3,7 @@
 use crate::ClientError;
 use corridor_shared::services::{
     ANGLES_SERVICE, Delivery, Domain, IMU_ACK_SERVICE, IMU_SERVICE, PubSub, ServiceError,
-    ack_event_id,
+    ack_event_id, event_wait_slice,
 };
 use corridor_shared::wire::{AngleObservation, FLAG_END_OF_STREAM, ImuSample, monotonic_ns};
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
@@ -252,15 +252,13 @@ impl Producer {
         let mine = EventId::new(self.ack_id);
         let deadline = Instant::now() + timeout;
         loop {
-            let now = Instant::now();
-            if now >= deadline {
+            // In slices (see `EVENT_WAIT_SLICE`): a timed-out slice still drains the event ids
+            // that were set, so an acknowledgement whose wake-up was lost is seen at its end.
+            let Some(slice) = event_wait_slice(Instant::now(), deadline) else {
                 return Ok(false);
-            }
+            };
             let mut seen = false;
-            match self
-                .ack
-                .timed_wait(|a| seen |= a.id == mine, deadline - now)
-            {
+            match self.ack.timed_wait(|a| seen |= a.id == mine, slice) {
                 Ok(_) if seen => {
                     self.taken = true;
                     return Ok(true);

@@ -1,7 +1,9 @@
 //! [`Subscriber<T>`]: one output stream of the daemon.
 
 use crate::ClientError;
-use corridor_shared::services::{Access, Domain, PubSub, ServiceError, Topic, node_sleep};
+use corridor_shared::services::{
+    Access, Domain, PubSub, ServiceError, Topic, event_wait_slice, node_sleep,
+};
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::prelude::*;
 use std::cell::Cell;
@@ -131,11 +133,11 @@ impl<T: Topic> Subscriber<T> {
             if let Some(x) = self.try_recv()? {
                 return Ok(Some(x));
             }
-            let now = Instant::now();
-            if now >= deadline {
+            // In slices: a wake-up the event loses costs one slice, not the whole timeout.
+            let Some(slice) = event_wait_slice(Instant::now(), deadline) else {
                 return Ok(None);
-            }
-            match self.listener.timed_wait(|_| {}, deadline - now) {
+            };
+            match self.listener.timed_wait(|_| {}, slice) {
                 Ok(_) => {}
                 Err(_) if self.termination_requested() => return Err(ClientError::Interrupted),
                 // Another signal interrupted the wait (SIGCONT after Ctrl-Z): wait on.

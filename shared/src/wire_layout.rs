@@ -181,6 +181,11 @@ pub fn layout_json() -> String {
     let v = serde_json::json!({
         "service_version": crate::services::SERVICE_VERSION,
         "constants": consts,
+        // What the Python client's `services.py` mirrors beyond the wire.
+        "service_constants": {
+            "MAX_DOMAIN_LEN": crate::services::MAX_DOMAIN_LEN,
+            "EVENT_WAIT_SLICE_S": crate::services::EVENT_WAIT_SLICE.as_secs_f64(),
+        },
         "types": layouts(),
     });
     serde_json::to_string_pretty(&v).expect("serialisable") + "\n"

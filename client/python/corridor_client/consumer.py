@@ -6,7 +6,7 @@ from typing import Generic, Optional, Type, TypeVar
 
 import iceoryx2 as iox2
 
-from .services import QOS, CorridorError, Domain
+from .services import EVENT_WAIT_SLICE_S, QOS, CorridorError, Domain
 
 T = TypeVar("T", bound=ctypes.Structure)
 
@@ -71,7 +71,8 @@ class Consumer(Generic[T]):
             left = deadline - time.monotonic()
             if left <= 0:
                 return None
-            self._listener.timed_wait(iox2.Duration.from_secs_f64(left))
+            # In slices: a wake-up the event loses costs one slice, not the whole timeout.
+            self._listener.timed_wait(iox2.Duration.from_secs_f64(min(left, EVENT_WAIT_SLICE_S)))
 
     def close(self) -> None:
         """Releases the ports and the node."""

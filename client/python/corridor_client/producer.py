@@ -7,7 +7,7 @@ from typing import Any, Iterable, Optional, Sequence
 
 import iceoryx2 as iox2
 
-from .services import CorridorError, Domain
+from .services import EVENT_WAIT_SLICE_S, CorridorError, Domain
 from .wire import FLAG_END_OF_STREAM, AngleObservation, ImuSample
 
 #: How long a lossless send retries a sample that reached no subscriber although one is
@@ -171,7 +171,9 @@ class Producer:
                         break
                     try:
                         self._taken = self._mine(
-                            self._ack.timed_wait(iox2.Duration.from_secs_f64(left))
+                            self._ack.timed_wait(
+                                iox2.Duration.from_secs_f64(min(left, EVENT_WAIT_SLICE_S))
+                            )
                         )
                     except iox2.ListenerWaitError:
                         pass  # a signal cut the wait short (SIGCONT after Ctrl-Z): wait on

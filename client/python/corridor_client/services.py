@@ -17,6 +17,10 @@ DEFAULT_DOMAIN = "default"
 MAX_DOMAIN_LEN = 48
 EVENT_MAX_NOTIFIERS = 4
 EVENT_MAX_LISTENERS = 8
+# Longest single wait on an event listener (EVENT_WAIT_SLICE in Rust): iceoryx2 0.10's event
+# can lose a wake-up, and only the wait's timeout ends that sleep, so long waits are cut into
+# slices with a look at the data after each.
+EVENT_WAIT_SLICE_S = 0.05
 
 
 @dataclass(frozen=True)

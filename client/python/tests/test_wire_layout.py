@@ -7,7 +7,7 @@ import json
 import os
 import unittest
 
-from corridor_client import wire
+from corridor_client import services, wire
 from corridor_client.services import QOS
 
 CTYPE = {"u32": ctypes.c_uint32, "u64": ctypes.c_uint64, "f64": ctypes.c_double}
@@ -50,6 +50,10 @@ class WireLayout(unittest.TestCase):
     def test_constants_match(self) -> None:
         for name, value in rust_layout()["constants"].items():
             self.assertEqual(getattr(wire, name), value, name)
+
+    def test_service_constants_match(self) -> None:
+        for name, value in rust_layout()["service_constants"].items():
+            self.assertEqual(getattr(services, name), value, name)
 
 
 if __name__ == "__main__":

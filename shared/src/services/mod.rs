@@ -67,6 +67,26 @@ pub fn ack_event_id(publisher_id: u128) -> usize {
 /// daemon exits).
 pub const DAEMON_SERVICE: &str = "corridor/v3/daemon";
 
+/// Longest single wait on an event listener. iceoryx2 0.10's event can lose a wake-up: a
+/// listener that has just reset its state to idle empties its socket, swallowing the datagram
+/// of a notifier that set the state to pending and was then preempted before marking it
+/// notified; the listener's next wait finds "pending", blocks on the empty socket, and once the
+/// notifier marks "notified" every later `notify` sends nothing (it sees "notified"). Only the
+/// listener's timeout ends that sleep (`iceoryx2-cal` 0.10 `event/common.rs`, `notify` and
+/// `drain_events`; reproduced with two delays added at those points,
+/// `docs/experiments/iceoryx2-lost-wakeup/`). So a long wait is made of waits of at most this
+/// length, each followed by a look at the data: a lost wake-up costs at most this much.
+pub const EVENT_WAIT_SLICE: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// The next single listener wait of a wait that ends at `deadline`: at most
+/// [`EVENT_WAIT_SLICE`], `None` once the deadline is reached.
+pub fn event_wait_slice(
+    now: std::time::Instant,
+    deadline: std::time::Instant,
+) -> Option<std::time::Duration> {
+    (now < deadline).then(|| (deadline - now).min(EVENT_WAIT_SLICE))
+}
+
 /// The default domain name.
 pub const DEFAULT_DOMAIN: &str = "default";
 
@@ -76,6 +96,36 @@ pub const MAX_DOMAIN_LEN: usize = 48;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_long_wait_is_cut_into_slices_that_end_at_the_deadline() {
+        use std::time::{Duration, Instant};
+        let t0 = Instant::now();
+        let deadline = t0 + Duration::from_secs(60);
+        // Far from the deadline: one slice, not the remaining minute.
+        assert_eq!(event_wait_slice(t0, deadline), Some(EVENT_WAIT_SLICE));
+        // Close to it: what is left.
+        let near = deadline - Duration::from_millis(7);
+        assert_eq!(
+            event_wait_slice(near, deadline),
+            Some(Duration::from_millis(7))
+        );
+        // At or past it: no wait.
+        assert_eq!(event_wait_slice(deadline, deadline), None);
+        assert_eq!(
+            event_wait_slice(deadline + Duration::from_millis(1), deadline),
+            None
+        );
+        // Walking the slices covers the whole wait, each at most a slice long.
+        let (mut now, mut n) = (t0, 0);
+        while let Some(d) = event_wait_slice(now, deadline) {
+            assert!(d <= EVENT_WAIT_SLICE && d > Duration::ZERO);
+            now += d;
+            n += 1;
+        }
+        assert_eq!(now, deadline);
+        assert_eq!(n, 1200);
+    }
     use crate::wire::{
         AngleObservation, AttitudeSample, BiasSample, Diagnostics, ImuSample, NavSample,
     };
