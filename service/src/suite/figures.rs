@@ -150,48 +150,6 @@ pub(super) struct DefaultFigures {
     pub(super) stride_use: Option<StrideUse>,
     pub(super) stride_ratio: f64,
     pub(super) stances_found: Option<StanceMatch>,
-    /// The stances with their use of heading information.
-    pub(super) uses: Vec<StanceUse>,
-    /// The configured σ of a stride direction and of a foot axis, rad.
-    pub(super) heading_sd_rad: (f64, f64),
-}
-
-impl DefaultFigures {
-    /// See [`step_bound_rad_s`].
-    pub(super) fn step_bound_rad_s(&self, after_s: f64) -> Option<f64> {
-        step_bound_rad_s(&self.uses, after_s, self.heading_sd_rad)
-    }
-}
-
-/// The standard error of the best estimate of a constant vertical-bias error that starts at
-/// `after_s` which the heading observations the default run used after it allow, rad/s: the
-/// least-squares slope of a heading error through them (stride direction σ `sd_rad.0`, foot axis
-/// σ `sd_rad.1`, each stance's observations at its time), `1/√(Σ (t − t̄)²/σ²)`. Nothing else
-/// is counted (no prior, no random walk, no stance update), so a filter can only approach it: a
-/// walk whose bound is above the recovery target cannot be expected to meet it. `None` with
-/// fewer than two observation times.
-pub(super) fn step_bound_rad_s(
-    uses: &[StanceUse],
-    after_s: f64,
-    sd_rad: (f64, f64),
-) -> Option<f64> {
-    let obs: Vec<(f64, f64)> = uses
-        .iter()
-        .filter(|u| u.t_s > after_s)
-        .flat_map(|u| {
-            [(u.stride, sd_rad.0), (u.foot_axis, sd_rad.1)]
-                .into_iter()
-                .filter(|&(used, _)| used)
-                .map(move |(_, sd)| (u.t_s, 1.0 / (sd * sd)))
-        })
-        .collect();
-    let w: f64 = obs.iter().map(|o| o.1).sum();
-    if w <= 0.0 {
-        return None;
-    }
-    let mean = obs.iter().map(|(t, wi)| t * wi).sum::<f64>() / w;
-    let spread: f64 = obs.iter().map(|(t, wi)| wi * (t - mean).powi(2)).sum();
-    (spread > 0.0).then(|| 1.0 / spread.sqrt())
 }
 
 /// The mean NIS of one update type against its two-sided 95 % χ² band.
@@ -309,7 +267,6 @@ impl StrideUse {
 }
 
 /// One stance's use of heading information.
-/// One stance of the default run and the heading information it gave.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct StanceUse {
     t_s: f64,
@@ -379,43 +336,6 @@ impl NisSeries {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_step_bound_is_the_standard_error_of_a_least_squares_slope() {
-        let sd = (0.02, 0.06);
-        // Strides only, one a second from t = 1 to 20 s: σ·√(12 / (n (n² − 1))) for n = 20.
-        let uses: Vec<StanceUse> = (1..=20)
-            .map(|k| StanceUse {
-                t_s: k as f64,
-                stride: true,
-                foot_axis: false,
-            })
-            .collect();
-        let n = 20.0_f64;
-        let expected = 0.02 * (12.0 / (n * (n * n - 1.0))).sqrt();
-        let got = step_bound_rad_s(&uses, 0.0, sd).unwrap();
-        assert!(
-            (got - expected).abs() < 1e-12 * expected,
-            "{got} {expected}"
-        );
-        // Stances before the start do not count: the bound grows.
-        let later = step_bound_rad_s(&uses, 10.5, sd).unwrap();
-        assert!(later > 2.0 * got, "{later} {got}");
-        // A foot axis as well adds information, weighted by its σ.
-        let both: Vec<StanceUse> = uses
-            .iter()
-            .map(|u| StanceUse {
-                foot_axis: true,
-                ..*u
-            })
-            .collect();
-        let with_feet = step_bound_rad_s(&both, 0.0, sd).unwrap();
-        let w = 1.0 / 0.02f64.powi(2) + 1.0 / 0.06f64.powi(2);
-        assert!((with_feet - got * (1.0 / 0.02f64.powi(2) / w).sqrt()).abs() < 1e-12);
-        // One observation time, or none: no slope.
-        assert_eq!(step_bound_rad_s(&uses, 19.5, sd), None);
-        assert_eq!(step_bound_rad_s(&[], 0.0, sd), None);
-    }
 
     fn footprints(times: &[f64]) -> Vec<TruthPoint> {
         times

@@ -152,10 +152,6 @@ pub struct SuiteRow {
     pub best_recovery: [f64; 3],
     /// Recovery of the best mode with the prior and the injection after the first rest.
     pub best_recovery_prior_late: [f64; 3],
-    /// The standard error of an ideal estimate of the late injection's z part from the heading
-    /// observations after the rest, as a fraction of it (`figures::step_bound_rad_s`; `None`:
-    /// fewer than two observation times).
-    pub late_z_bound: Option<f64>,
     /// The paper mode's convergence flag against hindsight, no prior, injection from the start.
     pub paper_convergence: Convergence,
     /// The best mode's convergence flag against hindsight, no prior, injection from the start.
@@ -403,8 +399,6 @@ impl<'a> Ctx<'a> {
             stances_found: stride_use.map(|_| StanceMatch::of(&self.truth, nis.intervals())),
             stride_use,
             stride_ratio: stride_ratio(&out.trace, &self.truth),
-            heading_sd_rad: (grid.stride_sigma_rad.get(), grid.sigma_rad.get()),
-            uses: nis.stances,
         })
     }
 
@@ -531,7 +525,6 @@ fn run_recording(
         paper_recovery: recovery(&paper1, &paper0, inj),
         best_recovery: recovery(&best1, &best0, inj),
         best_recovery_prior_late: recovery(&best_r1, &best_r0, inj),
-        late_z_bound: fig.step_bound_rad_s(rest_end).map(|b| b / inj[2].abs()),
         paper_convergence: convergence(&paper1, &paper0, inj, rest_end),
         best_convergence: convergence(&best1, &best0, inj, rest_end),
         best_convergence_prior_late: convergence(&best_r1, &best_r0, inj, rest_end),

@@ -328,13 +328,10 @@ pub fn markdown(rows: &[SuiteRow]) -> String {
          (mean from the convergence flag's rise on, else over the last quarter of the log). The flag rises once the \
          estimate carries less than 5 % of a bias error present when the bias was set (the filter's own closed-loop \
          response, `estimator.converged_unabsorbed`); against hindsight: when it rose (s of walking), the recovery at \
-         that instant, and from when on the recovery stays within ±5 % (hindsight, s of the log). \
-         \"z bound\": the standard error, % of the injected z, of the best estimate of the late z step that the \
-         heading observations the default used after the rest allow (a least-squares slope through them, nothing \
-         else counted): above 5 % the walk cannot be expected to show the step within ±5 %.\n\n",
+         that instant, and from when on the recovery stays within ±5 % (hindsight, s of the log).\n\n",
     );
-    s.push_str("| recording | paper, no prior | best, no prior | best, prior + injection after the rest | z bound | paper, no prior: flag rose (recovery then), settled | best, no prior: flag rose (recovery then), settled | best, prior + late: flag rose (recovery then), settled | best vs uncorrected |\n");
-    s.push_str("|---|---|---|---|---|---|---|---|---|\n");
+    s.push_str("| recording | paper, no prior | best, no prior | best, prior + injection after the rest | paper, no prior: flag rose (recovery then), settled | best, no prior: flag rose (recovery then), settled | best, prior + late: flag rose (recovery then), settled | best vs uncorrected |\n");
+    s.push_str("|---|---|---|---|---|---|---|---|\n");
     let p = |v: &[f64; 3]| {
         format!(
             "{:.0} / {:.0} / {:.0}",
@@ -362,13 +359,11 @@ pub fn markdown(rows: &[SuiteRow]) -> String {
     };
     for r in rows {
         s.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {:+.0} % |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {:+.0} % |\n",
             r.recording,
             p(&r.paper_recovery),
             p(&r.best_recovery),
             p(&r.best_recovery_prior_late),
-            r.late_z_bound
-                .map_or("—".to_string(), |b| format!("{:.1} %", 100.0 * b)),
             flag(&r.paper_convergence),
             flag(&r.best_convergence),
             flag(&r.best_convergence_prior_late),
@@ -392,23 +387,6 @@ pub fn markdown(rows: &[SuiteRow]) -> String {
         "\nConvergence flag, normal gait: without a prior (injection from the start) it {}; with the prior and the injection after the rest it {}.\n",
         line(&m.flag[0]),
         line(&m.flag[1])
-    ));
-    // The late z step against what each walk's observations allow.
-    let (mut able, mut able_ok, mut unable, mut unable_ok) = (0, 0, 0, 0);
-    for r in rows.iter().filter(|r| r.gait == Gait::Normal) {
-        let Some(b) = r.late_z_bound else { continue };
-        let ok = (r.best_recovery_prior_late[2] - 1.0).abs() <= 0.05;
-        if b <= 0.05 {
-            able += 1;
-            able_ok += usize::from(ok);
-        } else {
-            unable += 1;
-            unable_ok += usize::from(ok);
-        }
-    }
-    s.push_str(&format!(
-        "\nLate z step within ±5 %, normal gait: on {able_ok} of the {able} walks whose z bound is 5 % or less, \
-         on {unable_ok} of the {unable} whose bound is above it.\n"
     ));
     s
 }
