@@ -73,14 +73,19 @@ fn a_layered_file_takes_its_base_and_replaces_only_the_keys_it_sets() {
 }
 
 /// The results suite's `suspect_legs` are the truth legs each recording's `meta.json` flags
-/// (its `legs_ratio_outside_0.85_1.15`), and a recording without a `meta.json` flags none.
+/// (its `legs_ratio_outside_0.85_1.15`), whether written in the suite file (checked here against
+/// the `meta.json` itself) or left out (read from it), and a recording without a `meta.json`
+/// flags none.
 #[test]
 fn the_suites_suspect_legs_are_the_data_sets_own() {
+    use corridor_service::suite::FLAGGED_LEGS_KEY;
     let path = configs().join("eval/gdins.toml");
     let suite = corridor_service::suite::read_suite(&path).unwrap();
-    assert!(!suite.recordings.is_empty());
-    let mut flagged = 0;
-    for r in &suite.recordings {
+    let raw: toml::Value = toml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let raw = raw["recording"].as_array().unwrap();
+    assert_eq!(raw.len(), suite.recordings.len());
+    let (mut flagged, mut written) = (0, 0);
+    for (r, entry) in suite.recordings.iter().zip(raw) {
         let meta = path
             .parent()
             .unwrap()
@@ -89,17 +94,23 @@ fn the_suites_suspect_legs_are_the_data_sets_own() {
         let expected: Vec<usize> = match std::fs::read_to_string(&meta) {
             Ok(text) => {
                 let m: serde_json::Value = serde_json::from_str(&text).unwrap();
-                let legs =
-                    &m["truth"]["imu_consistency"]["crude_ins_fit"]["legs_ratio_outside_0.85_1.15"];
+                let legs = &m["truth"]["imu_consistency"]["crude_ins_fit"][FLAGGED_LEGS_KEY];
                 serde_json::from_value(legs.clone())
                     .unwrap_or_else(|e| panic!("{}: {e}", meta.display()))
             }
-            Err(_) => Vec::new(),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+            Err(e) => panic!("{}: {e}", meta.display()),
         };
+        if let Some(legs) = entry.get("suspect_legs") {
+            let legs: Vec<usize> = legs.clone().try_into().unwrap();
+            assert_eq!(legs, expected, "{}: the suite file's suspect_legs", r.name);
+            written += 1;
+        }
         assert_eq!(r.suspect_legs, expected, "{}", r.name);
         flagged += usize::from(!expected.is_empty());
     }
     assert!(flagged > 0, "no recording of the suite has a flagged leg");
+    assert!(written > 0, "no recording writes its suspect_legs");
 }
 
 /// Every start heading the results suite gives is the rule a suite file without one gets:

@@ -183,7 +183,10 @@ pub fn layout_json() -> String {
         "constants": consts,
         // What the Python client's `services.py` mirrors beyond the wire.
         "service_constants": {
+            "DEFAULT_DOMAIN": crate::services::DEFAULT_DOMAIN,
             "MAX_DOMAIN_LEN": crate::services::MAX_DOMAIN_LEN,
+            "EVENT_MAX_NOTIFIERS": crate::services::EVENT_MAX_NOTIFIERS,
+            "EVENT_MAX_LISTENERS": crate::services::EVENT_MAX_LISTENERS,
             "EVENT_WAIT_SLICE_S": crate::services::EVENT_WAIT_SLICE.as_secs_f64(),
         },
         "types": layouts(),

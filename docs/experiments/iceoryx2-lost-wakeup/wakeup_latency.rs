@@ -40,7 +40,10 @@ fn pct(v: &[u64], p: f64) -> u64 {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     set_log_level(LogLevel::Error);
     let args: Vec<String> = std::env::args().collect();
-    let domain_name = args.get(1).cloned().expect("usage: wakeup_latency DOMAIN [SECS] [WORK_US]");
+    let domain_name = args
+        .get(1)
+        .cloned()
+        .expect("usage: wakeup_latency DOMAIN [SECS] [WORK_US]");
     let secs: u64 = args.get(2).map(|s| s.parse().unwrap()).unwrap_or(15);
     let work_us: u64 = args.get(3).map(|s| s.parse().unwrap()).unwrap_or(20);
     let domain = Domain::unsecured(&domain_name)?;
@@ -63,8 +66,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let sub_thread = {
         let (domain, ready) = (domain.clone(), ready.clone());
         std::thread::spawn(move || -> SubStats {
-            let sub = Subscriber::<AttitudeSample>::open(&domain, "wakeup-sub", Duration::from_secs(10))
-                .expect("subscriber");
+            let sub =
+                Subscriber::<AttitudeSample>::open(&domain, "wakeup-sub", Duration::from_secs(10))
+                    .expect("subscriber");
             ready.store(true, Ordering::SeqCst);
             let mut st = SubStats {
                 received: 0,
@@ -116,7 +120,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let end = Instant::now() + Duration::from_secs(secs);
     let mut seq = 0u64;
     let publish = |seq: u64, flags: u32| {
-        let v = AttitudeSample { seq, flags, imu_sent_ns: monotonic_ns(), ..Default::default() };
+        let v = AttitudeSample {
+            seq,
+            flags,
+            imu_sent_ns: monotonic_ns(),
+            ..Default::default()
+        };
         if let Ok(slot) = publisher.loan_uninit() {
             let _ = slot.write_payload(v).send();
         }

@@ -5,8 +5,10 @@
 //! building's grid. A recording that leaves `start_heading_deg` out gets it from the truth the
 //! way this suite's own were chosen: the direction of the first surveyed stride, on the grid
 //! ([`start_heading_from_truth`]). One that leaves `suspect_legs` out gets the legs the data
-//! set's `meta.json` beside its truth flags, when there is one. The check of `suspect_legs`
-//! reads the truth as well.
+//! set's `meta.json` beside its truth flags, when there is one (a `meta.json` that is there but
+//! unreadable is an error naming it; `suspect_legs = []` opts out). `suspect_legs` are checked
+//! against the truth here, for every command that reads a suite (eval, its ensemble and sweep,
+//! the detection matrix).
 
 use super::SuiteError;
 use crate::eval::EvalOptions;
@@ -165,10 +167,24 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
 
 /// One recording as written → checked, with its start heading.
 fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
-    let suspect_legs = match r.suspect_legs {
-        Some(legs) => legs,
-        None => flagged_legs_beside(&base.join(&r.truth))
-            .map_err(|e| format!("recording {}: suspect_legs: {e}", r.name))?,
+    // Where the legs came from, for an error about them.
+    let meta = base.join(&r.truth).with_file_name("meta.json");
+    let (suspect_legs, source) = match r.suspect_legs {
+        Some(legs) => (legs, String::new()),
+        None => (
+            flagged_legs_beside(&meta).map_err(|e| {
+                format!(
+                    "recording {}: suspect_legs (left out, so read from {}): {e}; write \
+                     `suspect_legs = []` to score every footprint",
+                    r.name,
+                    meta.display()
+                )
+            })?,
+            format!(
+                " (left out, so read from {}; write `suspect_legs = []` to score every footprint)",
+                meta.display()
+            ),
+        ),
     };
     let needs_truth = r.start_heading_deg.is_none() || !suspect_legs.is_empty();
     let truth = if needs_truth {
@@ -190,7 +206,7 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
             (deg, StartHeading::FirstStride)
         }
     };
-    check_suspect_legs(&r.name, &suspect_legs, &truth)?;
+    check_suspect_legs(&r.name, &suspect_legs, &truth).map_err(|e| e + &source)?;
     Ok(SuiteRecording {
         name: r.name,
         imu: r.imu,
@@ -207,22 +223,20 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
 
 /// The legs the data set's own consistency check flags, from the `meta.json` beside a truth
 /// file (the gdins recordings' `truth.imu_consistency.crude_ins_fit` entry
-/// `legs_ratio_outside_0.85_1.15`); none without that file or that entry.
-fn flagged_legs_beside(truth: &Path) -> Result<Vec<usize>, String> {
-    let meta = truth.with_file_name("meta.json");
-    let text = match std::fs::read_to_string(&meta) {
+/// `legs_ratio_outside_0.85_1.15`); none without that file or that entry. A file that is there
+/// but cannot be read or parsed is an error (it names the file), not an empty list.
+fn flagged_legs_beside(meta: &Path) -> Result<Vec<usize>, String> {
+    let text = match std::fs::read_to_string(meta) {
         Ok(text) => text,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
-        Err(e) => return Err(format!("{}: {e}", meta.display())),
+        Err(e) => return Err(e.to_string()),
     };
-    let value: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", meta.display()))?;
+    let value: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
     let legs = &value["truth"]["imu_consistency"]["crude_ins_fit"][FLAGGED_LEGS_KEY];
     if legs.is_null() {
         return Ok(Vec::new());
     }
-    serde_json::from_value(legs.clone())
-        .map_err(|e| format!("{}: {FLAGGED_LEGS_KEY}: {e}", meta.display()))
+    serde_json::from_value(legs.clone()).map_err(|e| format!("{FLAGGED_LEGS_KEY}: {e}"))
 }
 
 /// The start heading a user of the map gives a walk, taken from its truth: the direction from
@@ -371,6 +385,28 @@ mod tests {
             .to_string();
         assert!(
             e.contains("recording walk: suspect_legs") && e.contains("meta.json"),
+            "{e}"
+        );
+        // ... not JSON at all: an error naming the file, not an empty list.
+        std::fs::write(dir.join("meta.json"), "{ not json").unwrap();
+        let e = read_suite(&write_suite(&dir, line, ""))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("meta.json") && e.contains("suspect_legs = []"),
+            "{e}"
+        );
+        // ... without the entry: none.
+        std::fs::write(dir.join("meta.json"), r#"{"truth": {}}"#).unwrap();
+        let none = read_suite(&write_suite(&dir, line, "")).unwrap();
+        assert!(none.recordings[0].suspect_legs.is_empty());
+        // ... flagging a leg the truth does not have: the error says where the leg came from.
+        meta("[9]");
+        let e = read_suite(&write_suite(&dir, line, ""))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("9 is not a leg") && e.contains("read from") && e.contains("meta.json"),
             "{e}"
         );
         std::fs::remove_file(dir.join("meta.json")).unwrap();

@@ -51,8 +51,8 @@ pub use ensemble::{
 use figures::{DefaultFigures, NisSeries, stride_ratio};
 pub use figures::{NisFigure, STANCE_MATCH_S, STRAIGHT_DEG, StanceMatch, StrideUse, WEAVE_DEG};
 pub use file::{
-    FIRST_STRIDE_MIN_M, Gait, StartHeading, SuiteFile, SuiteRecording, read_suite,
-    start_heading_from_truth,
+    FIRST_STRIDE_MIN_M, FLAGGED_LEGS_KEY, Gait, StartHeading, SuiteFile, SuiteRecording,
+    read_suite, start_heading_from_truth,
 };
 pub use front_end::{DETECTORS, FrontEnd, KEPT_REST_S, detector_label, front_end_markdown};
 pub use loops::run_loops;
@@ -126,7 +126,7 @@ pub struct SuiteRow {
     pub recording: String,
     /// Its gait.
     pub gait: Gait,
-    /// The start heading it was run with, degrees, and where that came from.
+    /// The start heading it was run with, degrees.
     pub start_heading_deg: f64,
     /// Given in the suite file or taken from the first surveyed stride.
     pub start_heading: StartHeading,

@@ -96,6 +96,9 @@ pub const MAX_DOMAIN_LEN: usize = 48;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::wire::{
+        AngleObservation, AttitudeSample, BiasSample, Diagnostics, ImuSample, NavSample,
+    };
 
     #[test]
     fn a_long_wait_is_cut_into_slices_that_end_at_the_deadline() {
@@ -126,9 +129,6 @@ mod tests {
         assert_eq!(now, deadline);
         assert_eq!(n, 1200);
     }
-    use crate::wire::{
-        AngleObservation, AttitudeSample, BiasSample, Diagnostics, ImuSample, NavSample,
-    };
 
     #[test]
     fn domain_names_are_validated() {

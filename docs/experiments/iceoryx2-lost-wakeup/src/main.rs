@@ -9,9 +9,15 @@ use std::time::{Duration, Instant};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     set_log_level(LogLevel::Error);
-    let secs: u64 = std::env::args().nth(1).map(|s| s.parse().unwrap()).unwrap_or(20);
+    let secs: u64 = std::env::args()
+        .nth(1)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(20);
     let timeout = Duration::from_millis(
-        std::env::args().nth(2).map(|s| s.parse().unwrap()).unwrap_or(1000),
+        std::env::args()
+            .nth(2)
+            .map(|s| s.parse().unwrap())
+            .unwrap_or(1000),
     );
     let name = format!("evrace_{}", std::process::id());
     let produced = Arc::new(AtomicU64::new(0));
@@ -20,8 +26,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ready = Arc::new(AtomicBool::new(false));
 
     let l = {
-        let (name, produced, consumed, stop, ready) =
-            (name.clone(), produced.clone(), consumed.clone(), stop.clone(), ready.clone());
+        let (name, produced, consumed, stop, ready) = (
+            name.clone(),
+            produced.clone(),
+            consumed.clone(),
+            stop.clone(),
+            ready.clone(),
+        );
         std::thread::spawn(move || -> (u64, u64) {
             let node = NodeBuilder::new()
                 .signal_handling_mode(SignalHandlingMode::Disabled)
@@ -43,7 +54,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 listener.timed_wait(|_| {}, timeout).unwrap();
                 waits += 1;
                 let el = t.elapsed();
-                if el >= timeout * 9 / 10 && produced.load(Ordering::SeqCst) > p && !stop.load(Ordering::SeqCst) {
+                if el >= timeout * 9 / 10
+                    && produced.load(Ordering::SeqCst) > p
+                    && !stop.load(Ordering::SeqCst)
+                {
                     lost += 1;
                     eprintln!(
                         "LOST WAKE-UP: waited {el:?} while {} notifications were sent",
@@ -73,7 +87,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         notifies += 1;
         // a little work between samples, as the estimator does
         let t = Instant::now();
-        let w = std::env::var("WORK_US").ok().and_then(|v| v.parse().ok()).unwrap_or(20); while t.elapsed() < Duration::from_micros(w) {}
+        let w = std::env::var("WORK_US")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(20);
+        while t.elapsed() < Duration::from_micros(w) {}
     }
     stop.store(true, Ordering::SeqCst);
     let _ = notifier.notify();
