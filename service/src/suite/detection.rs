@@ -125,6 +125,15 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
         size: f,
         variant: Some("clock rate"),
     };
+    let gsens = |label, k: f64| MatrixCase {
+        label,
+        expected: Some(Effect::GSensitivity),
+        injection: Log(GSensitivity {
+            k_rad_s_per_m_s2: k,
+        }),
+        size: k,
+        variant: Some("g-sensitivity"),
+    };
     vec![
         MatrixCase {
             label: "clean",
@@ -181,25 +190,9 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
         },
         clock("clock +1 %", 0.01),
         clock("clock +3 %", 0.03),
-        MatrixCase {
-            label: "g-sensitivity 2e-3 rad/s per m/s²",
-            expected: Some(Effect::GSensitivity),
-            injection: Log(GSensitivity {
-                k_rad_s_per_m_s2: 2e-3,
-            }),
-            size: 2e-3,
-            variant: Some("g-sensitivity"),
-        },
-        MatrixCase {
-            // Above the clean walks' predicted detectable size (median 1.3e-2 rad/s per m/s²).
-            label: "g-sensitivity 2e-2 rad/s per m/s²",
-            expected: Some(Effect::GSensitivity),
-            injection: Log(GSensitivity {
-                k_rad_s_per_m_s2: 2e-2,
-            }),
-            size: 2e-2,
-            variant: Some("g-sensitivity"),
-        },
+        gsens("g-sensitivity 2e-3 rad/s per m/s²", 2e-3),
+        // Above the clean walks' predicted detectable size (median 1.3e-2 rad/s per m/s²).
+        gsens("g-sensitivity 2e-2 rad/s per m/s²", 2e-2),
         MatrixCase {
             // A rail below the configured range (8.727 rad/s): `gyro_clipping`.
             label: "clipping at ±5 rad/s",

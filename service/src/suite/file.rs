@@ -340,28 +340,28 @@ mod tests {
         suite
     }
 
+    /// The suite of [`write_suite`], read: its one recording, or the error's text.
+    fn read_one(dir: &Path, truth: &str, extra: &str) -> Result<SuiteRecording, String> {
+        read_suite(&write_suite(dir, truth, extra))
+            .map(|f| f.recordings[0].clone())
+            .map_err(|e| e.to_string())
+    }
+
     #[test]
     fn a_recording_without_start_heading_takes_it_from_its_truth() {
         let dir = std::env::temp_dir().join(format!("corridor-suite-file-{}", std::process::id()));
         let truth = "t_s,x_m,y_m,z_m\n0.0,0.0,0.0,0.0\n1.0,0.1,0.9,0.0\n2.0,0.2,2.3,0.0\n";
-        let given = read_suite(&write_suite(&dir, truth, "start_heading_deg = 0.0\n")).unwrap();
-        assert_eq!(given.recordings[0].start_heading, StartHeading::Given);
-        assert_eq!(given.recordings[0].start_heading_deg, 0.0);
-        let derived = read_suite(&write_suite(&dir, truth, "")).unwrap();
-        assert_eq!(
-            derived.recordings[0].start_heading,
-            StartHeading::FirstStride
-        );
-        assert_eq!(derived.recordings[0].start_heading_deg, 90.0);
+        let given = read_one(&dir, truth, "start_heading_deg = 0.0\n").unwrap();
+        assert_eq!(given.start_heading, StartHeading::Given);
+        assert_eq!(given.start_heading_deg, 0.0);
+        let derived = read_one(&dir, truth, "").unwrap();
+        assert_eq!(derived.start_heading, StartHeading::FirstStride);
+        assert_eq!(derived.start_heading_deg, 90.0);
         // suspect_legs left out: the legs the meta.json beside the truth flags.
         let line =
             "t_s,x_m,y_m,z_m\n0,0,0,0\n1,1.4,0,0\n2,2.8,0,0\n3,4.2,0,0\n4,5.6,0,0\n5,7.0,0,0\n";
-        let suite = write_suite(&dir, line, "");
-        assert!(
-            read_suite(&suite).unwrap().recordings[0]
-                .suspect_legs
-                .is_empty()
-        );
+        let legs = |extra: &str| read_one(&dir, line, extra).unwrap().suspect_legs;
+        assert!(legs("").is_empty());
         let meta = |legs: &str| {
             let json = format!(
                 r#"{{"truth": {{"imu_consistency": {{"crude_ins_fit": {{"{FLAGGED_LEGS_KEY}": {legs}}}}}}}}}"#
@@ -369,42 +369,27 @@ mod tests {
             std::fs::write(dir.join("meta.json"), json).unwrap();
         };
         meta("[5]");
-        assert_eq!(
-            read_suite(&suite).unwrap().recordings[0].suspect_legs,
-            vec![5]
-        );
-        let given = write_suite(&dir, line, "suspect_legs = []\n");
-        assert!(
-            read_suite(&given).unwrap().recordings[0]
-                .suspect_legs
-                .is_empty()
-        );
+        assert_eq!(legs(""), vec![5]);
+        assert!(legs("suspect_legs = []\n").is_empty());
         meta("\"five\"");
-        let e = read_suite(&write_suite(&dir, line, ""))
-            .unwrap_err()
-            .to_string();
+        let e = read_one(&dir, line, "").unwrap_err();
         assert!(
             e.contains("recording walk: suspect_legs") && e.contains("meta.json"),
             "{e}"
         );
         // ... not JSON at all: an error naming the file, not an empty list.
         std::fs::write(dir.join("meta.json"), "{ not json").unwrap();
-        let e = read_suite(&write_suite(&dir, line, ""))
-            .unwrap_err()
-            .to_string();
+        let e = read_one(&dir, line, "").unwrap_err();
         assert!(
             e.contains("meta.json") && e.contains("suspect_legs = []"),
             "{e}"
         );
         // ... without the entry: none.
         std::fs::write(dir.join("meta.json"), r#"{"truth": {}}"#).unwrap();
-        let none = read_suite(&write_suite(&dir, line, "")).unwrap();
-        assert!(none.recordings[0].suspect_legs.is_empty());
+        assert!(legs("").is_empty());
         // ... flagging a leg the truth does not have: the error says where the leg came from.
         meta("[9]");
-        let e = read_suite(&write_suite(&dir, line, ""))
-            .unwrap_err()
-            .to_string();
+        let e = read_one(&dir, line, "").unwrap_err();
         assert!(
             e.contains("9 is not a leg") && e.contains("read from") && e.contains("meta.json"),
             "{e}"
@@ -412,9 +397,7 @@ mod tests {
         std::fs::remove_file(dir.join("meta.json")).unwrap();
         // A truth without a stride: the error names the recording and the key.
         let short = "t_s,x_m,y_m,z_m\n0.0,0.0,0.0,0.0\n1.0,0.1,0.1,0.0\n";
-        let e = read_suite(&write_suite(&dir, short, ""))
-            .unwrap_err()
-            .to_string();
+        let e = read_one(&dir, short, "").unwrap_err();
         assert!(e.contains("recording walk: start_heading_deg"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
     }

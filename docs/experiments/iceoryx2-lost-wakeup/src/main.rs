@@ -79,19 +79,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .event()
         .open_or_create()?;
     let notifier = ev.notifier_builder().create()?;
+    // A little work between samples, as the estimator does (WORK_US, default 20 µs).
+    let work = Duration::from_micros(
+        std::env::var("WORK_US")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(20),
+    );
     let end = Instant::now() + Duration::from_secs(secs);
     let mut notifies = 0u64;
     while Instant::now() < end {
         produced.fetch_add(1, Ordering::SeqCst);
         let _ = notifier.notify();
         notifies += 1;
-        // a little work between samples, as the estimator does
         let t = Instant::now();
-        let w = std::env::var("WORK_US")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(20);
-        while t.elapsed() < Duration::from_micros(w) {}
+        while t.elapsed() < work {}
     }
     stop.store(true, Ordering::SeqCst);
     let _ = notifier.notify();
