@@ -18,9 +18,30 @@ pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }
 
-/// The rotation by the rotation vector `rotvec_rad` (axis × angle).
+/// Below this squared angle (rad², an angle of 0.1 rad) [`exp_rotvec`] uses its series: their
+/// first left-out terms are then below 3e-19 of the result's (the gyro's step rotations are
+/// at most 0.05 rad: 8.7 rad/s over a 5 ms half step at 100 Hz).
+const EXP_SERIES_MAX_ANGLE2: f64 = 0.01;
+
+/// The rotation by the rotation vector `rotvec_rad` (axis × angle). Small rotations (every
+/// per-sample step) through the series of cos(θ/2) and sin(θ/2)/θ in θ², with no square root
+/// and no sine or cosine: the strapdown step's largest cost before, about 200 instructions.
 pub fn exp_rotvec(rotvec_rad: &Vector3<f64>) -> UnitQuaternion<f64> {
-    UnitQuaternion::from_scaled_axis(*rotvec_rad)
+    let x = rotvec_rad.norm_squared();
+    if x >= EXP_SERIES_MAX_ANGLE2 {
+        return UnitQuaternion::from_scaled_axis(*rotvec_rad);
+    }
+    // cos(θ/2) = Σ (−x/4)ᵏ/(2k)!, sin(θ/2)/θ = ½·Σ (−x/4)ᵏ/(2k+1)!, x = θ², to k = 4.
+    let y = -0.25 * x;
+    let w = 1.0 + y * (1.0 / 2.0 + y * (1.0 / 24.0 + y * (1.0 / 720.0 + y * (1.0 / 40320.0))));
+    let s = 0.5
+        * (1.0 + y * (1.0 / 6.0 + y * (1.0 / 120.0 + y * (1.0 / 5040.0 + y * (1.0 / 362880.0)))));
+    UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
+        w,
+        s * rotvec_rad.x,
+        s * rotvec_rad.y,
+        s * rotvec_rad.z,
+    ))
 }
 
 /// Closed-form logarithm: the half-angle vector `x` with `q = exp(x)`, taking the
@@ -186,6 +207,31 @@ pub fn tilt_from_specific_force(f_body: &Vector3<f64>) -> (f64, f64) {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn the_small_angle_series_is_the_exponential_to_rounding() {
+        // Angles from 1e-12 rad to just past the series' limit, about axes in every octant:
+        // the series and nalgebra's closed form agree to a few units in the last place, and
+        // the result is a unit quaternion to rounding.
+        let mut worst: f64 = 0.0;
+        for k in 0..=400 {
+            let angle = 1e-12 * (0.11f64 / 1e-12).powf(f64::from(k) / 400.0);
+            for axis in [
+                Vector3::new(1.0, 0.0, 0.0),
+                Vector3::new(0.3, -0.8, 0.52),
+                Vector3::new(-0.6, -0.6, -0.53),
+            ] {
+                let v = axis.normalize() * angle;
+                let got = exp_rotvec(&v);
+                let want = UnitQuaternion::from_scaled_axis(v);
+                let d = (got.coords - want.coords).amax();
+                worst = worst.max(d);
+                assert!(d < 4.0 * f64::EPSILON, "angle {angle}: {d:e}");
+                assert!((got.coords.norm() - 1.0).abs() < 4.0 * f64::EPSILON);
+            }
+        }
+        assert!(worst > 0.0, "the series was not used");
+    }
 
     #[test]
     fn a_foot_rolling_nose_down_moves_a_sensor_above_the_floor_forward() {
