@@ -51,8 +51,18 @@ fn f_times_base(
 }
 
 /// `P ← F P₀ Fᵀ` (without Q) for the base 12-state filter plus extension states that are
-/// constant between updates: the common case. The first pass (`F P₀`) reads `p0` and writes
-/// every used element of `a`, so `a` need not hold `P₀`.
+/// constant between updates: the common case. `F = I + G` changes only the rows and columns of
+/// p, v and θ (the first 9 states, "D"); the bias and the extensions ("S") keep their block.
+/// Computed on one triangle and mirrored, so `P` stays exactly symmetric:
+/// - the columns of S are final after one pass: `P'[:, j] = F·P₀[:, j]` (F's row j is the
+///   identity's), rows D computed and rows S copied;
+/// - the D×D block is `N = M + M·Gᵀ` with `M = (F P₀)[D, D]` and the bias columns of `F P₀`
+///   from the first pass; its upper triangle is kept and mirrored;
+/// - the S rows of the D columns are the mirror of the first pass.
+///
+/// 216 computed elements for the 15-state default filter (54 in the S columns, 81 each of M
+/// and N), against 270 for the two full passes of `F·P₀·Fᵀ` this replaced, and no asymmetry
+/// from rounding. `a` need not hold `P₀`: every used element is written.
 fn propagate_base(
     p0: &[f64; MAX_N * MAX_N],
     a: &mut [f64; MAX_N * MAX_N],
@@ -61,15 +71,59 @@ fn propagate_base(
     ftb: &[[f64; 3]; 3],
     dt: f64,
 ) {
-    f_times_base(p0, a, n, fvt, ftb, dt);
-    for row in 0..n {
-        let v = [a[ix(row, V0)], a[ix(row, V0 + 1)], a[ix(row, V0 + 2)]];
-        let th = [a[ix(row, TH)], a[ix(row, TH + 1)], a[ix(row, TH + 2)]];
-        let b = [a[ix(row, BG)], a[ix(row, BG + 1)], a[ix(row, BG + 2)]];
+    const D: usize = BG;
+    // Columns of S (the bias and the extensions): F·P₀, every row.
+    f_times_base(
+        &p0[BG * MAX_N..],
+        &mut a[BG * MAX_N..],
+        n - BG,
+        fvt,
+        ftb,
+        dt,
+    );
+    // M = (F P₀)[D, D], column by column.
+    let m: [[f64; D]; D] = std::array::from_fn(|col| {
+        let s = &p0[col * MAX_N..][..BASE_N];
+        let v = [s[V0], s[V0 + 1], s[V0 + 2]];
+        let th = [s[TH], s[TH + 1], s[TH + 2]];
+        let b = [s[BG], s[BG + 1], s[BG + 2]];
+        let mut mc = [0.0; D];
         for i in 0..3 {
-            a[ix(row, P0 + i)] += dt * v[i];
-            a[ix(row, V0 + i)] += skew_dot(fvt, i, &th);
-            a[ix(row, TH + i)] += dot3(&ftb[i], &b);
+            mc[P0 + i] = s[P0 + i] + dt * v[i];
+            mc[V0 + i] = v[i] + skew_dot(fvt, i, &th);
+            mc[TH + i] = th[i] + dot3(&ftb[i], &b);
+        }
+        mc
+    });
+    // The bias columns of F P₀ on the rows of D, from the first pass.
+    let fb: [[f64; D]; 3] = std::array::from_fn(|k| std::array::from_fn(|i| a[ix(i, BG + k)]));
+    // N = M·Fᵀ = M + M·Gᵀ: column j of N is column j of M plus G's row j applied to the
+    // columns of F P₀ (p ← v: dt; v ← θ: −[f]×dt; θ ← b: −C·dt).
+    let mut nn = m;
+    for k in 0..3 {
+        let [f0, f1, f2] = fvt[k];
+        let [b0, b1, b2] = ftb[k];
+        for i in 0..D {
+            nn[P0 + k][i] += dt * m[V0 + k][i];
+            nn[V0 + k][i] += match k {
+                0 => f1 * m[TH + 1][i] + f2 * m[TH + 2][i],
+                1 => f0 * m[TH][i] + f2 * m[TH + 2][i],
+                _ => f0 * m[TH][i] + f1 * m[TH + 1][i],
+            };
+            nn[TH + k][i] += b0 * fb[0][i] + b1 * fb[1][i] + b2 * fb[2][i];
+        }
+    }
+    // P'[D, D]: N's upper triangle, mirrored.
+    for j in 0..D {
+        let col = &mut a[j * MAX_N..][..D];
+        for (i, c) in col.iter_mut().enumerate() {
+            *c = if i <= j { nn[j][i] } else { nn[i][j] };
+        }
+    }
+    // Rows S of the D columns: the mirror of the first pass.
+    for i in 0..D {
+        for j in BG..n {
+            a[ix(j, i)] = a[ix(i, j)];
         }
     }
 }
