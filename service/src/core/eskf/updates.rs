@@ -110,12 +110,15 @@ impl Eskf {
             (k[0][i], k[1][i], k[2][i]) = (v.x, v.y, v.z);
         }
         self.update_bias_response_velocity(&k);
-        // P ← P − K·(PHᵀ)ᵀ on the upper triangle, then mirrored.
+        // P ← P − K·(PHᵀ)ᵀ on the upper triangle, then mirrored. Each column's part as slices
+        // of one length, so that the loop has no bounds checks.
         let [k0, k1, k2] = &k;
         for (j, pj) in pht.iter().enumerate().take(n) {
-            let col = &mut self.p[j * MAX_N..j * MAX_N + j + 1];
-            for (((c, a), b), d) in col.iter_mut().zip(k0).zip(k1).zip(k2) {
-                *c -= a * pj[0] + b * pj[1] + d * pj[2];
+            let len = j + 1;
+            let col = &mut self.p[j * MAX_N..][..len];
+            let (k0, k1, k2) = (&k0[..len], &k1[..len], &k2[..len]);
+            for i in 0..len {
+                col[i] -= k0[i] * pj[0] + k1[i] * pj[1] + k2[i] * pj[2];
             }
         }
         self.mirror_upper();
