@@ -82,19 +82,18 @@ fn propagate_base(
         dt,
     );
     // M = (F P₀)[D, D], column by column.
-    let m: [[f64; D]; D] = std::array::from_fn(|col| {
+    let mut m = [[0.0; D]; D];
+    for (col, mc) in m.iter_mut().enumerate() {
         let s = &p0[col * MAX_N..][..BASE_N];
         let v = [s[V0], s[V0 + 1], s[V0 + 2]];
         let th = [s[TH], s[TH + 1], s[TH + 2]];
         let b = [s[BG], s[BG + 1], s[BG + 2]];
-        let mut mc = [0.0; D];
         for i in 0..3 {
             mc[P0 + i] = s[P0 + i] + dt * v[i];
             mc[V0 + i] = v[i] + skew_dot(fvt, i, &th);
             mc[TH + i] = th[i] + dot3(&ftb[i], &b);
         }
-        mc
-    });
+    }
     // The bias columns of F P₀ on the rows of D, from the first pass.
     let fb: [[f64; D]; 3] = std::array::from_fn(|k| std::array::from_fn(|i| a[ix(i, BG + k)]));
     // N = M·Fᵀ = M + M·Gᵀ: column j of N is column j of M plus G's row j applied to the
