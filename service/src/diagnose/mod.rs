@@ -176,6 +176,21 @@ fn improved(before: &Consistency, after: &Consistency) -> bool {
     }
 }
 
+/// The first step of the loop: `start` analysed, the power of each effect with its response
+/// measured by injection, every fixable effect scored (and its candidate model). What the
+/// loop starts from, and all that a check of what is named, and of the detectable sizes, needs.
+pub fn judge(
+    log: &ImuLog,
+    start: &ConfigFile,
+    truth: Option<&[TruthPoint]>,
+    map: Option<&Path>,
+) -> Result<(Analysis, Vec<Candidate>), RunError> {
+    let mut first = analyse(log, start, truth, map)?;
+    power::calibrate_by_injection(log, start, map, &mut first)?;
+    let candidates = score_by_likelihood(log, start, &mut first, truth, map)?;
+    Ok((first, candidates))
+}
+
 /// The whole loop: analyse `start`, add the top significant effect while one has a fix and
 /// the model improves (at most [`MAX_ITERATIONS`] times); then, with footprints, the stride
 /// length's fix when it is significant (kept when the footprint error falls).
@@ -185,9 +200,7 @@ pub fn run_diagnosis(
     truth: Option<&[TruthPoint]>,
     map: Option<&Path>,
 ) -> Result<Diagnosis, RunError> {
-    let mut first = analyse(log, start, truth, map)?;
-    power::calibrate_by_injection(log, start, map, &mut first)?;
-    let mut candidates = score_by_likelihood(log, start, &mut first, truth, map)?;
+    let (first, mut candidates) = judge(log, start, truth, map)?;
     let mut current = first.clone();
     let mut file = start.clone();
     let mut iterations = Vec::new();
