@@ -58,19 +58,35 @@ pub(super) fn diagnose(a: &DiagnoseArgs) -> Result<()> {
 /// `out/detection.md`, the cells in `out/detection.json`.
 fn detection_matrix(suite: &std::path::Path, out: &std::path::Path) -> Result<()> {
     use corridor_service::suite;
-    let m = suite::detection_matrix(suite, |c| {
-        eprintln!(
-            "{} | {}: top {} (expected {}: score {}, detectable {}) | rms {} -> {}",
-            c.recording,
-            c.case,
-            c.top_effect,
-            c.expected.as_deref().unwrap_or("-"),
-            c.expected_score.map_or("-".into(), |v| format!("{v:.1}")),
-            c.expected_mde.map_or("-".into(), |v| format!("{v:.2e}")),
-            c.rms_before_m.map_or("-".into(), |v| format!("{v:.2}")),
-            c.rms_after_m.map_or("-".into(), |v| format!("{v:.2}")),
-        )
-    })?;
+    let m = suite::detection_matrix(
+        suite,
+        |c| {
+            eprintln!(
+                "{} | {}: top {} (expected {}: score {}, detectable {}) | rms {} -> {}",
+                c.recording,
+                c.case,
+                c.top_effect,
+                c.expected.as_deref().unwrap_or("-"),
+                c.expected_score.map_or("-".into(), |v| format!("{v:.1}")),
+                c.expected_mde.map_or("-".into(), |v| format!("{v:.2e}")),
+                c.rms_before_m.map_or("-".into(), |v| format!("{v:.2}")),
+                c.rms_after_m.map_or("-".into(), |v| format!("{v:.2}")),
+            )
+        },
+        |r| {
+            eprintln!(
+                "{} | {} scan: predicted {}, power from {}, named from {}{}",
+                r.recording,
+                r.variant,
+                r.predicted.map_or("-".into(), |v| format!("{v:.2e}")),
+                r.power_from.map_or("-".into(), |v| format!("{v:.2}x")),
+                r.named_from.map_or("-".into(), |v| format!("{v:.2}x")),
+                r.skipped
+                    .as_deref()
+                    .map_or(String::new(), |s| format!(" ({s})")),
+            )
+        },
+    )?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let md = suite::matrix_markdown(&m);
     let f = out.join("detection.md");

@@ -4,8 +4,10 @@
 //! diagnosis was built on ([`diagnosis_model`]). Per cell: the effect named first, whether the
 //! injected one is named first and named at all (score ≥ 3), the footprint error before and
 //! after the loop, the detectable size the diagnosis predicts for the injected effect and its
-//! score. Slow (a few minutes): a bench-style command, not a test.
+//! score; then, per walk, the predicted detectable sizes checked at multiples of themselves
+//! ([`super::mde_scan`]). Slow (about 2 minutes): a bench-style command, not a test.
 
+use super::mde_scan::{ScanRow, already_modelled, scan_walk};
 use super::{Gait, SuiteError, SuiteRecording, read_suite};
 use crate::diagnose::{Effect, SIGNIFICANT, run_diagnosis};
 use crate::runner::RunError;
@@ -313,13 +315,17 @@ pub struct DetectionMatrix {
     pub cases: Vec<String>,
     /// Cells, recording-major.
     pub cells: Vec<MatrixCell>,
+    /// The detectable sizes checked by injection, recording-major ([`ScanRow`]).
+    pub mde_scan: Vec<ScanRow>,
 }
 
-/// Runs the matrix over the normal-gait recordings of the suite at `path`; `progress` sees each
-/// cell as it is done.
+/// Runs the matrix over the normal-gait recordings of the suite at `path`, and on each walk the
+/// scan of the detectable sizes; `progress` sees each cell and `scan_progress` each scan row as
+/// it is done.
 pub fn detection_matrix(
     path: &Path,
     mut progress: impl FnMut(&MatrixCell),
+    mut scan_progress: impl FnMut(&ScanRow),
 ) -> Result<DetectionMatrix, SuiteError> {
     let suite = read_suite(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
@@ -328,6 +334,7 @@ pub fn detection_matrix(
         recordings: Vec::new(),
         cases: cases.iter().map(|c| c.label.to_string()).collect(),
         cells: Vec::new(),
+        mde_scan: Vec::new(),
     };
     for r in suite.recordings.iter().filter(|r| r.gait == Gait::Normal) {
         let wrap = |source: RunError| SuiteError::Run {
@@ -349,6 +356,8 @@ pub fn detection_matrix(
             progress(&cell);
             out.cells.push(cell);
         }
+        let scan = scan_walk(r, &log, &truth, &documented, &mut scan_progress).map_err(wrap)?;
+        out.mde_scan.extend(scan);
     }
     Ok(out)
 }
@@ -403,13 +412,8 @@ fn run_cell(
         .variant
         .and_then(|v| report.power.iter().find(|p| p.variant == v));
     // (The stride-length fix, the rolling stance update, is no state for a stride scale.)
-    let already_modelled = !on_own_line
-        && case.expected.is_some_and(|e| {
-            !e.fixes().is_empty()
-                && e.fixes()
-                    .iter()
-                    .all(|&(fix, _)| !crate::diagnose::apply_fix(fix, &mut model.clone()))
-        });
+    let already_modelled =
+        !on_own_line && case.expected.is_some_and(|e| already_modelled(e, &model));
     let cell = MatrixCell {
         recording: r.name.clone(),
         case: case.label.to_string(),

@@ -24,6 +24,8 @@
 //! - [`loops`]: the residual-diagnosis loop on every recording;
 //! - [`detection`]: the diagnosis's detection matrix (injected sensor errors × recordings);
 //! - [`detection_tables`]: its Markdown tables;
+//! - [`mde_scan`]: the diagnosis's predicted detectable sizes checked by injection at multiples
+//!   of them;
 //! - [`sweep`]: the leave-one-walk-out check of the configuration's choices;
 //! - [`ensemble`]: every walk's default run under small start-heading offsets (how stable
 //!   each figure is).
@@ -35,6 +37,7 @@ mod figures;
 mod file;
 mod front_end;
 mod loops;
+mod mde_scan;
 mod recovery;
 mod sweep;
 mod tables;
@@ -56,6 +59,7 @@ pub use file::{
 };
 pub use front_end::{DETECTORS, FrontEnd, KEPT_REST_S, detector_label, front_end_markdown};
 pub use loops::run_loops;
+pub use mde_scan::{MDE_FACTORS, ScanPoint, ScanRow, already_modelled, detected_from, scan_walk};
 pub use recovery::{Convergence, SETTLED_TOLERANCE, convergence, recovery, settled_at};
 pub use sweep::{
     HeldOut, SweepFile, SweepParameter, SweepResult, held_out, run_sweep, sweep_markdown,
