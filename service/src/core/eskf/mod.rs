@@ -344,7 +344,8 @@ impl Eskf {
     pub fn cov_diagonal(&self) -> impl Iterator<Item = &f64> {
         // Indexed rather than `step_by`: this runs on every sample (the health check), and
         // `StepBy`'s fold did not inline (6 % of the eskf mode's time in a profile). The bound
-        // `n ≤ MAX_N`, said to the compiler, removes the bounds check of every element.
+        // `n ≤ MAX_N`, said to the compiler, drops a compare per element (0.4 % of the core's
+        // instructions).
         let n = self.layout.n.min(MAX_N);
         (0..n).map(move |i| &self.p[i * (MAX_N + 1)])
     }
