@@ -2,8 +2,10 @@
 //! --suite`): on each normal-gait walk, for each effect whose power the diagnosis measures
 //! ([`REFERENCES`]: z scale, the two couplings into z, clock rate, g-sensitivity), the size the
 //! diagnosis predicts it can detect on the clean walk, then that effect injected at
-//! [`MDE_FACTORS`] times the prediction, each judged afresh: its power score (the matched
-//! filter's `β̂/se`, the figure the prediction is about) and whether the ranking names it at all.
+//! [`MDE_FACTORS`] times the prediction (up to the largest size plausible for a working sensor,
+//! [`Reference::plausible_max`](crate::diagnose::Reference)), each judged afresh: its power
+//! score (the matched filter's `β̂/se`, the figure the prediction is about) and whether the
+//! ranking names it at all.
 //!
 //! A prediction is right when the walk shows the effect from about the predicted size on: at
 //! that size the score reaches the threshold half the time, at twice it almost always (an
@@ -78,7 +80,7 @@ pub struct ScanRow {
     /// The injected sizes, smallest first.
     pub points: Vec<ScanPoint>,
     /// The smallest factor from which the power score reaches [`SIGNIFICANT`] at every larger
-    /// one (`None`: not at the largest).
+    /// one (`None`: not at the largest injected).
     pub power_from: Option<f64>,
     /// The same for the ranking's naming of the effect.
     pub named_from: Option<f64>,
