@@ -80,8 +80,8 @@ pub use bias_change::{BLOCK_S, BiasChange, bias_change};
 pub use catalogue::{Effect, Fix, RAIL_OF_RANGE, apply_fix};
 pub use clipping::{Rail, find_rails};
 pub use power::{
-    HAC_LAGS, MDE_Z, MIN_RESPONSE, N_REFERENCES, Power, REFERENCES, Reference, Row, SignatureFit,
-    calibrate_by_injection, fit_signature, quarter_turns,
+    HAC_LAGS, MDE_Z, MIN_RESPONSE, N_REFERENCES, PLACEBO_SHIFTS, Power, REFERENCES, Reference, Row,
+    SignatureFit, calibrate_by_injection, fit_signature, placebo_z, quarter_turns,
 };
 pub use ranking::{Candidate, Finding, score_by_likelihood};
 pub use report::write_report;

@@ -183,6 +183,78 @@ pub const REFERENCES: [Reference; 5] = [
 /// Number of [`REFERENCES`] (the length of [`StanceResidual::signature`]).
 pub const N_REFERENCES: usize = REFERENCES.len();
 
+/// The fit of the residuals on one signature (`pairs`: each stance with its signature value),
+/// refitted [`REWEIGHTS`] times with the association weight of the residual the fit leaves.
+fn reweighted_fit(pairs: &[(&StanceResidual, f64)]) -> (Vec<Row>, Option<SignatureFit>) {
+    let rows_for = |fit: Option<&SignatureFit>| -> Vec<Row> {
+        pairs
+            .iter()
+            .map(|&(s, g)| {
+                let group = usize::from(s.kind == ResidualKind::Stride);
+                // The probability of walking along the direction is that of the residual the
+                // hypothesis leaves: weights from the raw residual would discount the very
+                // stances that carry a large effect.
+                let weight = match fit {
+                    None => s.weight,
+                    Some(f) => crate::core::estimator::association_weight(
+                        s.r_rad - f.intercepts[group] - f.beta * g,
+                        s.sd_rad * s.sd_rad,
+                        super::analysis::DIAGNOSIS_ALIGNED_PRIOR,
+                        s.spacing_rad,
+                    ),
+                };
+                Row {
+                    group,
+                    weight,
+                    y: s.r_rad,
+                    x: g,
+                }
+            })
+            .collect()
+    };
+    let mut rows = rows_for(None);
+    let mut fit = fit_signature(&rows, HAC_LAGS);
+    for _ in 0..REWEIGHTS {
+        if fit.is_none() {
+            break;
+        }
+        rows = rows_for(fit.as_ref());
+        fit = fit_signature(&rows, HAC_LAGS);
+    }
+    (rows, fit)
+}
+
+/// Placebo fits per walk and effect (see [`placebo_z`]).
+pub const PLACEBO_SHIFTS: usize = 19;
+
+/// Placebo fits of reference `k`: its signature moved along the walk by `shifts` circular
+/// offsets spread over the middle half of the walk (from a quarter to three quarters of the
+/// residuals, far beyond the Newey–West window), so that it lines up with nothing the walk
+/// does, fitted as the real one (marginally, with the same reweighting). Where the standard
+/// error is right their `β̂/se` are standard normal; an RMS well above 1 says it is too small.
+pub fn placebo_z(base: &[StanceResidual], k: usize, shifts: usize) -> Vec<f64> {
+    let pairs: Vec<(&StanceResidual, f64)> = base
+        .iter()
+        .filter(|s| s.signature[k].is_finite())
+        .map(|s| (s, s.signature[k]))
+        .collect();
+    let n = pairs.len();
+    if n < 8 || shifts == 0 {
+        return Vec::new();
+    }
+    (0..shifts)
+        .filter_map(|j| {
+            let frac = 0.25 + 0.5 * j as f64 / (shifts.max(2) - 1) as f64;
+            let offset = ((frac * n as f64).round() as usize).clamp(1, n - 1);
+            let shifted: Vec<(&StanceResidual, f64)> = (0..n)
+                .map(|i| (pairs[i].0, pairs[(i + offset) % n].1))
+                .collect();
+            let (_, fit) = reweighted_fit(&shifted);
+            fit.map(|f| f.beta / f.std_err).filter(|z| z.is_finite())
+        })
+        .collect()
+}
+
 /// Fits the residuals of every stance on each effect's signature.
 pub fn walk_power(base: &[StanceResidual]) -> Vec<Power> {
     let turns = quarter_turns(base);
@@ -202,41 +274,7 @@ pub fn walk_power(base: &[StanceResidual]) -> Vec<Power> {
             .zip(&signatures[i])
             .filter_map(|(s, g)| g.map(|g| (s, g)))
             .collect();
-        let rows_for = |fit: Option<&SignatureFit>| -> Vec<Row> {
-            pairs
-                .iter()
-                .map(|&(s, g)| {
-                    let group = usize::from(s.kind == ResidualKind::Stride);
-                    // The probability of walking along the direction is that of the residual
-                    // the hypothesis leaves: weights from the raw residual would discount the
-                    // very stances that carry a large effect.
-                    let weight = match fit {
-                        None => s.weight,
-                        Some(f) => crate::core::estimator::association_weight(
-                            s.r_rad - f.intercepts[group] - f.beta * g,
-                            s.sd_rad * s.sd_rad,
-                            super::analysis::DIAGNOSIS_ALIGNED_PRIOR,
-                            s.spacing_rad,
-                        ),
-                    };
-                    Row {
-                        group,
-                        weight,
-                        y: s.r_rad,
-                        x: g,
-                    }
-                })
-                .collect()
-        };
-        let mut rows = rows_for(None);
-        let mut fit = fit_signature(&rows, HAC_LAGS);
-        for _ in 0..REWEIGHTS {
-            if fit.is_none() {
-                break;
-            }
-            rows = rows_for(fit.as_ref());
-            fit = fit_signature(&rows, HAC_LAGS);
-        }
+        let (mut rows, mut fit) = reweighted_fit(&pairs);
         if let (Some((w0, f0)), true) = (&primary, partial) {
             // Frisch–Waugh: both the residual and this signature with the first reference's
             // signature (its fit, its weights) taken out; what is left is what this effect

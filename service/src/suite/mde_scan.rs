@@ -14,7 +14,9 @@
 //! prediction agrees within a factor of 2 when that factor lies in [½, 2].
 
 use super::SuiteRecording;
-use crate::diagnose::{Effect, MDE_Z, REFERENCES, SIGNIFICANT, apply_fix, judge};
+use crate::diagnose::{
+    Effect, MDE_Z, PLACEBO_SHIFTS, REFERENCES, SIGNIFICANT, apply_fix, judge, placebo_z,
+};
 use crate::runner::RunError;
 use crate::stats::normal_cdf;
 use corridor_shared::config::ConfigFile;
@@ -71,6 +73,9 @@ pub struct ScanRow {
     pub clean_score: Option<f64>,
     /// The clean walk's fitted size `β̂` and its standard error (the effect's unit).
     pub clean_estimate: Option<(f64, f64)>,
+    /// The RMS of [`PLACEBO_SHIFTS`] placebo z-scores on the clean walk (the signature moved
+    /// along the walk, [`placebo_z`]): about 1 where the standard error is right.
+    pub placebo_z_rms: Option<f64>,
     /// The response the prediction assumed: the part of the signature a probe injection moved
     /// the clean walk's residuals by (the prediction is `MDE_Z·se/response`).
     pub response: Option<f64>,
@@ -162,8 +167,9 @@ pub fn scan_walk(
     let (clean, _) = judge(log, model, Some(truth), None)?;
     let t0 = log.rows.first().map_or(0.0, |x| x.t_s);
     let mut rows = Vec::new();
-    for reference in &REFERENCES {
+    for (k, reference) in REFERENCES.iter().enumerate() {
         let power = clean.power.iter().find(|p| p.variant == reference.variant);
+        let placebo = placebo_z(&clean.stances, k, PLACEBO_SHIFTS);
         let mut row = ScanRow {
             recording: r.name.clone(),
             variant: reference.variant.to_string(),
@@ -172,6 +178,9 @@ pub fn scan_walk(
             clean_score: power.map(|p| p.score),
             clean_estimate: power.map(|p| (p.estimate, p.std_err)),
             response: power.and_then(|p| p.response),
+            placebo_z_rms: (!placebo.is_empty()).then(|| {
+                (placebo.iter().map(|z| z * z).sum::<f64>() / placebo.len() as f64).sqrt()
+            }),
             skipped: None,
             points: Vec::new(),
             power_from: None,
@@ -313,18 +322,21 @@ Predicted detectable sizes checked by injection: each effect injected into the c
         }
         md.push('\n');
     }
-    md.push_str("\nPer effect, over the walks scanned: on how many the power score reaches the threshold (and the ranking names the effect) at each factor (`of m`: injected on m walks, the others' sizes being beyond the plausible), and on how many the prediction agrees within a factor of 2.\n\n| effect | walks |");
+    md.push_str("\nPer effect, over the walks scanned: on how many the power score reaches the threshold (and the ranking names the effect) at each factor (`of m`: injected on m walks, the others' sizes being beyond the plausible), and on how many the prediction agrees within a factor of 2. The placebo z RMS: the clean walk's power fit with the signature moved along the walk (19 circular shifts over its middle half), whose z-scores are standard normal where the standard error is right.\n\n| effect | walks |");
     for f in MDE_FACTORS {
         md.push_str(&format!(" {f:.2}× |"));
     }
-    md.push_str(" power agrees (walks not significant clean) | named agrees | significant clean |\n|---|---|");
-    md.push_str(&"---|".repeat(MDE_FACTORS.len() + 3));
+    md.push_str(" power agrees (walks not significant clean) | named agrees | significant clean | placebo z RMS, median (range) over every walk |\n|---|---|");
+    md.push_str(&"---|".repeat(MDE_FACTORS.len() + 4));
     md.push('\n');
     md.push_str("| *expected where the predictions are right* | |");
     for f in MDE_FACTORS {
         md.push_str(&format!(" {:.1} % |", 100.0 * expected_detection(f)));
     }
-    md.push_str(&format!(" {:.0} % | | |\n", 100.0 * expected_agreement()));
+    md.push_str(&format!(
+        " {:.0} % | | | 1 |\n",
+        100.0 * expected_agreement()
+    ));
     for v in &variants {
         let scanned: Vec<&ScanRow> = rows
             .iter()
@@ -359,8 +371,18 @@ Predicted detectable sizes checked by injection: each effect injected into the c
             |f: fn(&ScanRow) -> Option<bool>| scanned.iter().filter(|r| f(r) == Some(true)).count();
         let clean = scanned.iter().filter(|r| r.shows_clean()).count();
         let checkable = scanned.iter().filter(|r| !r.shows_clean());
+        let mut placebo: Vec<f64> = rows
+            .iter()
+            .filter(|r| r.variant == *v)
+            .filter_map(|r| r.placebo_z_rms)
+            .collect();
+        placebo.sort_by(f64::total_cmp);
+        let placebo = match (placebo.first(), placebo.last()) {
+            (Some(lo), Some(hi)) => format!("{:.1} ({lo:.1}–{hi:.1})", placebo[placebo.len() / 2]),
+            _ => "—".to_string(),
+        };
         md.push_str(&format!(
-            " {} of {} | {} of {n} | {clean} |\n",
+            " {} of {} | {} of {n} | {clean} | {placebo} |\n",
             checkable.filter(|r| r.power_agrees() == Some(true)).count(),
             n - clean,
             count(ScanRow::named_agrees),
@@ -420,6 +442,7 @@ mod tests {
             clean_score: None,
             clean_estimate: None,
             response: None,
+            placebo_z_rms: None,
             skipped: None,
             points: vec![ScanPoint {
                 factor: 1.0,
