@@ -740,6 +740,36 @@ mod tests {
     }
 
     #[test]
+    fn placebo_fits_are_standard_normal_on_white_residuals_and_wide_on_slow_ones() {
+        // A signature that rises and falls over the walk (turns accumulating), and residuals
+        // that are white, then a slow wave of their own (a period of 80 rows, ten times the
+        // Newey–West window of HAC_LAGS rows): structure the window cannot see, which lines up
+        // with the shifted signature now more, now less.
+        let stance = |i: usize, r_rad: f64| StanceResidual {
+            sample: i,
+            t_s: i as f64,
+            kind: ResidualKind::FootAxis,
+            r_rad,
+            direction_rad: 0.0,
+            weight: 1.0,
+            sd_rad: 0.2,
+            spacing_rad: std::f64::consts::FRAC_PI_2,
+            accepted: true,
+            signature: [(i as f64 / 15.0).sin(); N_REFERENCES],
+        };
+        let rms = |z: &[f64]| (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
+        let white: Vec<StanceResidual> = (0..600).map(|i| stance(i, 0.01 * noise(i))).collect();
+        let z = placebo_z(&white, 0, PLACEBO_SHIFTS);
+        assert_eq!(z.len(), PLACEBO_SHIFTS);
+        assert!((0.5..1.6).contains(&rms(&z)), "white: {z:?}");
+        let slow: Vec<StanceResidual> = (0..600)
+            .map(|i| stance(i, 0.02 * (i as f64 / 13.0 + 1.0).sin() + 0.005 * noise(i)))
+            .collect();
+        let z = placebo_z(&slow, 0, PLACEBO_SHIFTS);
+        assert!(rms(&z) > 2.0, "slow wave: {z:?}");
+    }
+
+    #[test]
     fn correlated_residuals_widen_the_standard_error() {
         // The same noise repeated over runs of four rows: four times fewer independent values.
         let rows: Vec<Row> = (0..400)
