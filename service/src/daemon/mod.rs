@@ -120,7 +120,10 @@ pub struct DaemonConfig {
     pub delivery: Delivery,
     /// Capacity of the receive → estimator channel, samples.
     pub channel_capacity: usize,
-    /// Longest blocking wait of the receive thread, so it sees `shutdown`.
+    /// Longest blocking wait of the receive thread, so it sees `shutdown`, and the most a wake-up
+    /// that iceoryx2 0.10 loses can delay the samples behind it (default
+    /// [`EVENT_WAIT_SLICE`](corridor_shared::services::EVENT_WAIT_SLICE), as every other wait on
+    /// an iceoryx2 event in corridor).
     pub poll_timeout: Duration,
     /// Period of [`BiasSample`](corridor_shared::wire::BiasSample)s besides those at heading observations, s of sensor time.
     pub bias_period_s: f64,
@@ -178,7 +181,7 @@ impl DaemonConfig {
                 Delivery::Live
             },
             channel_capacity: d.channel_capacity,
-            poll_timeout: Duration::from_millis(100),
+            poll_timeout: corridor_shared::services::EVENT_WAIT_SLICE,
             bias_period_s: d.bias_period_s.get(),
             diagnostics_period: Duration::from_secs_f64(d.diagnostics_period_s.get()),
             health_period: Duration::from_secs_f64(d.health_period_s.get()),
