@@ -175,17 +175,18 @@ impl StanceDetector {
             self.resum();
         }
         let n = self.filled as f64;
+        let inv_n = 1.0 / n;
         let statistic = match self.kind {
-            DetectorKind::Are => self.sum_w2.max(0.0) * self.inv_var_g / n,
+            DetectorKind::Are => self.sum_w2.max(0.0) * self.inv_var_g * inv_n,
             DetectorKind::Mv => {
                 // Σ|a − ā|² = Σ|a|² − |Σa|²/n
-                (self.sum_a2 - self.sum_a.norm_squared() / n).max(0.0) * self.inv_var_a / n
+                (self.sum_a2 - self.sum_a.norm_squared() * inv_n).max(0.0) * self.inv_var_a * inv_n
             }
             DetectorKind::Shoe => {
                 // Σ|a − g·ā/|ā||² = Σ|a|² − 2g·|Σa| + n·g²
                 let g = self.gravity_m_s2;
                 let sa = (self.sum_a2 - 2.0 * g * self.sum_a.norm() + n * g * g).max(0.0);
-                (sa * self.inv_var_a + self.sum_w2.max(0.0) * self.inv_var_g) / n
+                (sa * self.inv_var_a + self.sum_w2.max(0.0) * self.inv_var_g) * inv_n
             }
         };
         self.last_statistic = statistic;
