@@ -81,7 +81,7 @@ pub use catalogue::{Effect, Fix, RAIL_OF_RANGE, apply_fix};
 pub use clipping::{Rail, find_rails};
 pub use power::{
     HAC_LAGS, MDE_Z, MIN_RESPONSE, N_REFERENCES, PLACEBO_SHIFTS, Power, REFERENCES, Reference, Row,
-    SignatureFit, calibrate_by_injection, fit_signature, placebo_z, quarter_turns,
+    SignatureFit, calibrate_by_injection, fit_signature, format_unit, placebo_z, quarter_turns,
 };
 pub use ranking::{Candidate, Finding, score_by_likelihood};
 pub use report::write_report;

@@ -83,11 +83,7 @@ pub struct Power {
 impl Power {
     /// `size` in words, in the unit people use for it (%, °, rad/s² …).
     pub fn format_size(&self, size: f64) -> String {
-        match self.unit {
-            "fraction" => format!("{:.2} %", 100.0 * size),
-            "rad" => format!("{:.2}°", size.to_degrees()),
-            u => format!("{size:.2e} {u}"),
-        }
+        format_unit(self.unit, size)
     }
 }
 
@@ -457,7 +453,8 @@ pub const REWEIGHTS: usize = 3;
 /// is this many standard errors.
 pub const MDE_Z: f64 = 3.290_526_731_491_926;
 
-fn format_unit(unit: &str, v: f64) -> String {
+/// `v` in words in `unit` (a [`Reference::unit`]): a fraction in %, rad in °, others as they are.
+pub fn format_unit(unit: &str, v: f64) -> String {
     match unit {
         "fraction" => format!("{:.2} %", 100.0 * v),
         "rad" => format!("{:.2}°", v.to_degrees()),

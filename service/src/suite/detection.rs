@@ -362,6 +362,26 @@ pub fn detection_matrix(
     Ok(out)
 }
 
+/// The walk with `injection` applied: its samples changed, and the footprints' times mapped the
+/// same way (a clock error moves them).
+pub(super) fn injected_walk(
+    log: &ImuLog,
+    truth: &[TruthPoint],
+    injection: &LogInjection,
+) -> (ImuLog, Vec<TruthPoint>) {
+    let t0 = log.rows.first().map_or(0.0, |x| x.t_s);
+    let mut log = log.clone();
+    injection.apply(&mut log.rows);
+    let truth = truth
+        .iter()
+        .map(|p| TruthPoint {
+            t_s: injection.map_time(t0, p.t_s),
+            ..*p
+        })
+        .collect();
+    (log, truth)
+}
+
 /// One cell, and the cell's model with the fixes of every significant effect it names added (in
 /// the order named).
 fn run_cell(
@@ -373,19 +393,15 @@ fn run_cell(
 ) -> Result<(MatrixCell, ConfigFile), RunError> {
     let t0 = log.rows.first().map_or(0.0, |x| x.t_s);
     let duration = log.rows.last().map_or(0.0, |x| x.t_s) - t0;
-    let mut log = log.clone();
-    let mut truth = truth.to_vec();
     let mut model = model.clone();
-    match case.resolve(t0, duration) {
-        CaseInjection::Clean => {}
-        CaseInjection::Log(inj) => {
-            inj.apply(&mut log.rows);
-            for p in &mut truth {
-                p.t_s = inj.map_time(t0, p.t_s);
-            }
+    let (log, truth) = match case.resolve(t0, duration) {
+        CaseInjection::Clean => (log.clone(), truth.to_vec()),
+        CaseInjection::Log(inj) => injected_walk(log, truth, &inj),
+        CaseInjection::GridOffsetDeg(d) => {
+            model.heading.grid_deg = Some(r.grid_deg + d);
+            (log.clone(), truth.to_vec())
         }
-        CaseInjection::GridOffsetDeg(d) => model.heading.grid_deg = Some(r.grid_deg + d),
-    }
+    };
     let diagnosis = run_diagnosis(&log, &model, Some(&truth), None)?;
     let report = &diagnosis.report;
     // The stride length has its own line (position information): it is "named first" there.

@@ -14,8 +14,10 @@
 //! prediction agrees within a factor of 2 when that factor lies in [½, 2].
 
 use super::SuiteRecording;
+use super::detection::injected_walk;
 use crate::diagnose::{
-    Effect, MDE_Z, PLACEBO_SHIFTS, REFERENCES, SIGNIFICANT, apply_fix, judge, placebo_z,
+    Effect, MDE_Z, PLACEBO_SHIFTS, REFERENCES, SIGNIFICANT, apply_fix, format_unit, judge,
+    placebo_z,
 };
 use crate::runner::RunError;
 use crate::stats::normal_cdf;
@@ -165,7 +167,6 @@ pub fn scan_walk(
     mut progress: impl FnMut(&ScanRow),
 ) -> Result<Vec<ScanRow>, RunError> {
     let (clean, _) = judge(log, model, Some(truth), None)?;
-    let t0 = log.rows.first().map_or(0.0, |x| x.t_s);
     let mut rows = Vec::new();
     for (k, reference) in REFERENCES.iter().enumerate() {
         let power = clean.power.iter().find(|p| p.variant == reference.variant);
@@ -196,16 +197,7 @@ pub fn scan_walk(
                 .filter(|f| f * predicted <= reference.plausible_max)
             {
                 let size = factor * predicted;
-                let injection = (reference.probe)(size);
-                let mut injected = log.clone();
-                injection.apply(&mut injected.rows);
-                let truth: Vec<TruthPoint> = truth
-                    .iter()
-                    .map(|p| TruthPoint {
-                        t_s: injection.map_time(t0, p.t_s),
-                        ..*p
-                    })
-                    .collect();
+                let (injected, truth) = injected_walk(log, truth, &(reference.probe)(size));
                 let (a, _) = judge(&injected, model, Some(&truth), None)?;
                 let fit = a.power.iter().find(|p| p.variant == reference.variant);
                 row.points.push(ScanPoint {
@@ -219,21 +211,11 @@ pub fn scan_walk(
                         .any(|f| f.name == reference.effect && f.score >= SIGNIFICANT),
                 });
             }
-            let flags = |named: bool| -> Vec<(f64, bool)> {
-                row.points
-                    .iter()
-                    .map(|p| {
-                        let hit = if named {
-                            p.named
-                        } else {
-                            p.power_score >= SIGNIFICANT
-                        };
-                        (p.factor, hit)
-                    })
-                    .collect()
+            let flags = |hit: fn(&ScanPoint) -> bool| -> Vec<(f64, bool)> {
+                row.points.iter().map(|p| (p.factor, hit(p))).collect()
             };
-            row.power_from = detected_from(&flags(false));
-            row.named_from = detected_from(&flags(true));
+            row.power_from = detected_from(&flags(|p| p.power_score >= SIGNIFICANT));
+            row.named_from = detected_from(&flags(|p| p.named));
         } else {
             row.skipped = Some(
                 power
@@ -245,14 +227,6 @@ pub fn scan_walk(
         rows.push(row);
     }
     Ok(rows)
-}
-
-fn format_size(unit: &str, v: f64) -> String {
-    match unit {
-        "fraction" => format!("{:.2} %", 100.0 * v),
-        "rad" => format!("{:.2}°", v.to_degrees()),
-        _ => format!("{v:.1e}"),
-    }
 }
 
 fn format_from(from: Option<f64>, largest: f64) -> String {
@@ -315,7 +289,7 @@ Predicted detectable sizes checked by injection: each effect injected into the c
             md.push_str(&format!(
                 " {}{up_to} | {}{shown_clean} | {} |",
                 row.predicted
-                    .map_or("—".to_string(), |p| format_size(&row.unit, p)),
+                    .map_or("—".to_string(), |p| format_unit(&row.unit, p)),
                 format_from(row.power_from, largest),
                 format_from(row.named_from, largest)
             ));
