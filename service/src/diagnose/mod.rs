@@ -14,10 +14,11 @@
 //!
 //! Every stance also gives a residual, used or not: the foot axis and the stride direction
 //! against the most likely (nearest) map direction, weighted by the association probability.
-//! These feed the power analysis (`power`): each parametric effect's signature (the residual a
-//! unit of it adds, through the model's attitude and updates) is fitted to them, and the
-//! fit scores the scale factor, the axis misalignment and the g-sensitivity and gives every
-//! measured effect its detectable size on this walk (or says the walk cannot show it).
+//! These feed the power analysis (`power`; its regression in `signature_fit`): each
+//! parametric effect's signature (the residual a unit of it adds, through the model's attitude
+//! and updates) is fitted to them, and the fit scores the scale factor, the axis misalignment
+//! and the g-sensitivity and gives every measured effect its detectable size on this walk (or
+//! says the walk cannot show it).
 //!
 //! Each fixable effect is also scored by a nested-model F test: the model with the effect added
 //! against the current one, on the heading innovations (see [`score_by_likelihood`]); its score
@@ -70,6 +71,7 @@ mod clipping;
 mod power;
 mod ranking;
 mod report;
+mod signature_fit;
 mod stride_length;
 
 pub use analysis::{
@@ -80,11 +82,12 @@ pub use bias_change::{BLOCK_S, BiasChange, bias_change};
 pub use catalogue::{Effect, Fix, RAIL_OF_RANGE, apply_fix};
 pub use clipping::{Rail, find_rails};
 pub use power::{
-    HAC_LAGS, MDE_Z, MIN_RESPONSE, N_REFERENCES, PLACEBO_SHIFTS, Power, REFERENCES, Reference, Row,
-    SignatureFit, calibrate_by_injection, fit_signature, format_unit, placebo_z, quarter_turns,
+    MDE_Z, MIN_RESPONSE, N_REFERENCES, PLACEBO_SHIFTS, Power, REFERENCES, Reference,
+    calibrate_by_injection, format_unit, placebo_z, quarter_turns,
 };
 pub use ranking::{Candidate, Finding, score_by_likelihood};
 pub use report::write_report;
+pub use signature_fit::{HAC_LAGS, Row, SignatureFit, fit_signature};
 pub use stride_length::{
     MAX_LEG_M, MIN_LEG_M, MIN_LEGS, OUTLIER_SD, StrideLength, StrideLine, stride_length,
 };
