@@ -62,6 +62,8 @@ pub struct Summary {
     pub started_without_rest: bool,
     /// Zero-rate updates of the bias at rests after the alignment.
     pub zero_rate_updates: u64,
+    /// Rests not fused (see the estimator's counter of the same name).
+    pub zero_rate_refused: u64,
     /// Footprint evaluation (first-leg alignment), when truth was given.
     pub eval: Option<EvalReport>,
 }
@@ -385,6 +387,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         jittery_clock_samples: c.jittery_clock_samples,
         started_without_rest: c.started_without_rest,
         zero_rate_updates: c.zero_rate_updates,
+        zero_rate_refused: c.zero_rate_refused,
         eval,
     };
     let sum_path = staged.stage(opts.out_dir.join("summary.json"));

@@ -28,6 +28,10 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// Largest error-state dimension (12 base states and 14 extension states).
 pub const MAX_N: usize = 26;
+
+/// χ² gate of a zero-rate update (3 degrees of freedom, p = 10⁻³): a rest's mean rate further
+/// from the bias the filter holds is not fused.
+pub const ZERO_RATE_GATE_NIS: f64 = 16.27;
 const P0: usize = 0;
 const V0: usize = 3;
 const TH: usize = 6;

@@ -13,6 +13,19 @@ impl Eskf {
         r: [f64; M],
         r_var: [f64; M],
     ) -> Innovation {
+        self.gated_update(h, r, r_var, f64::INFINITY)
+            .unwrap_or_else(|i| i)
+    }
+
+    /// [`Self::update`], unless the innovation's NIS exceeds `gate_nis`: then nothing changes
+    /// and the innovation comes back as the error.
+    fn gated_update<const M: usize>(
+        &mut self,
+        h: &[[(usize, f64); 4]; M],
+        r: [f64; M],
+        r_var: [f64; M],
+        gate_nis: f64,
+    ) -> Result<Innovation, Innovation> {
         let n = self.layout.n;
         // PHᵀ (n × M)
         let mut pht = [[0.0; M]; MAX_N];
@@ -30,10 +43,22 @@ impl Eskf {
             s[(a, a)] += r_var[a];
         }
         let Some(s_inv) = s.try_inverse() else {
-            return Innovation::default();
+            return Ok(Innovation::default());
         };
         let rv = nalgebra::SVector::<f64, M>::from(r);
         let s_inv_r = s_inv * rv;
+        let mut out = Innovation {
+            nis: rv.dot(&s_inv_r),
+            dim: M as u8,
+            ..Default::default()
+        };
+        for a in 0..M.min(3) {
+            out.r[a] = r[a];
+            out.s_diag[a] = s[(a, a)];
+        }
+        if out.nis.is_nan() || out.nis > gate_nis {
+            return Err(out);
+        }
         let mut k = [[0.0; M]; MAX_N];
         for (ki, pi) in k.iter_mut().zip(&pht).take(n) {
             for (b, kb) in ki.iter_mut().enumerate() {
@@ -54,16 +79,7 @@ impl Eskf {
             *d = (0..M).map(|a| pht[i][a] * s_inv_r[a]).sum();
         }
         self.inject(&dx);
-        let mut out = Innovation {
-            nis: rv.dot(&s_inv_r),
-            dim: M as u8,
-            ..Default::default()
-        };
-        for a in 0..M.min(3) {
-            out.r[a] = r[a];
-            out.s_diag[a] = s[(a, a)];
-        }
-        out
+        Ok(out)
     }
 
     /// Zero-velocity update (H selects the velocity: written out, it runs on every stance
@@ -140,12 +156,15 @@ impl Eskf {
     /// specific force, when that is a state). `mean_rate_rad_s` and `mean_f_m_s2` are the means
     /// over the rest (sensor axes); `sd_rad_s` the σ of the mean rate, per axis. `None` when
     /// the bias is not estimated (the paper's and the rotation-aware modes keep their own).
+    /// `Err` (nothing changed) when the mean rate lies beyond the χ² gate [`ZERO_RATE_GATE_NIS`]
+    /// of the bias the filter holds: a foot that turned slowly and steadily through a "rest"
+    /// passes the stance detector with a small spread, and its mean rate is not the bias.
     pub fn zero_rate_update(
         &mut self,
         mean_rate_rad_s: &Vector3<f64>,
         mean_f_m_s2: &Vector3<f64>,
         sd_rad_s: &Vector3<f64>,
-    ) -> Option<Innovation> {
+    ) -> Option<Result<Innovation, Innovation>> {
         if !self.estimate_bias {
             return None;
         }
@@ -160,7 +179,12 @@ impl Eskf {
         }
         let r = mean_rate_rad_s - predicted;
         let var = sd_rad_s.map(|v| v * v);
-        Some(self.update(&h, [r.x, r.y, r.z], [var.x, var.y, var.z]))
+        Some(self.gated_update(
+            &h,
+            [r.x, r.y, r.z],
+            [var.x, var.y, var.z],
+            ZERO_RATE_GATE_NIS,
+        ))
     }
 
     /// The heading of the body-frame direction `axis_body` (the foot's forward axis) as the

@@ -145,8 +145,14 @@ impl Pipeline {
             self.apply_warm_start(&mut eskf, &ws);
             // A saved state (hours old, perhaps) and a fresh rest are two observations of the
             // same bias: the rest is fused into the saved state rather than thrown away.
-            if own_bias && rest_prior {
-                eskf.zero_rate_update(&mean_w, &mean_f, &prior_sd);
+            // A rest beyond the gate of the saved bias: the bias moved while the estimator was
+            // down (hours, another temperature), and the rest is the measurement of now.
+            if own_bias
+                && rest_prior
+                && let Some(Err(_)) = eskf.zero_rate_update(&mean_w, &mean_f, &prior_sd)
+            {
+                self.counters.zero_rate_refused += 1;
+                eskf.set_gyro_bias(b0, &prior_cov);
             }
         }
         self.phase = Phase::Calibrating;

@@ -141,7 +141,11 @@ struct Pipeline {
     /// The previous navigated sample was a stance sample.
     was_stance: bool,
     /// A rest whose zero-rate update the health check undid: made again at the next sample.
+    /// A rest whose zero-rate update a health fault undid in the same step: made again once,
+    /// at the next sample (never twice: an update that itself breaks the state is dropped).
     rest_to_fuse: Option<RestMeans>,
+    /// The rest of `rest_to_fuse` was already retried once.
+    rest_retried: bool,
     clock: SampleClock,
     /// The current stance's sums, for the zero-rate update when it turns out to be a rest.
     stance_rest: RestSums,
@@ -196,6 +200,7 @@ impl Estimator {
             resumed_look: false,
             was_stance: false,
             rest_to_fuse: None,
+            rest_retried: false,
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
             stance_rest: RestSums::new(cfg.alignment.rest_tail_s),
@@ -444,11 +449,19 @@ impl Pipeline {
         let failed = self.guard_health(eskf, &before, stance);
         self.before = Some(before);
         if failed {
-            // The update was undone: the next step integrates from the previous sample (and a
-            // zero-rate update made with it is made again at the next sample).
+            // The update was undone: the next step integrates from the previous sample, and a
+            // zero-rate update made with it is made again at the next sample, once: when it
+            // fails again it is the rest that breaks the state, and it is refused.
             self.last = prev;
-            self.rest_to_fuse = applied;
+            if applied.is_some() && self.rest_retried {
+                self.counters.zero_rate_refused += 1;
+                self.rest_retried = false;
+            } else {
+                self.rest_retried = applied.is_some();
+                self.rest_to_fuse = applied;
+            }
         } else if applied.is_some() {
+            self.rest_retried = false;
             self.counters.zero_rate_updates += 1;
         }
         self.fill_output(eskf);
@@ -662,8 +675,13 @@ impl Pipeline {
         let (mean_f, mean_w, sem) = rest;
         let floor = self.cfg.eskf.gyro_bias_prior_sd_rad_s.get();
         let sd = sem.map(|v| v.hypot(floor));
-        if eskf.zero_rate_update(&mean_w, &mean_f, &sd).is_some() {
-            self.zero_rate_applied = Some(rest);
+        match eskf.zero_rate_update(&mean_w, &mean_f, &sd) {
+            Some(Ok(_)) => self.zero_rate_applied = Some(rest),
+            Some(Err(_)) => {
+                self.counters.zero_rate_refused += 1;
+                self.rest_retried = false;
+            }
+            None => {}
         }
     }
 

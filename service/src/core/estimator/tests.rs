@@ -157,6 +157,35 @@ fn a_later_rest_observes_the_bias_with_a_zero_rate_update() {
 }
 
 #[test]
+fn a_rest_through_which_the_foot_turns_slowly_is_not_taken_for_the_bias() {
+    // A foot that pivots steadily at 0.3 rad/s passes the stance detector with a small rate
+    // spread, so the rest's σ is small; its mean rate is not the bias. Fused, it pulled the
+    // bias to the turn rate (or, past the bias limit, failed the health check at every sample
+    // and froze the estimator).
+    let bias = [0.004, -0.002, 0.006];
+    let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
+    let turning = [bias[0], bias[1], bias[2] + 0.3];
+    let mut est = Estimator::new(Config::default(), HeadingAid::None);
+    let t = feed(&mut est, 0.0, 200, bias, level);
+    let t = feed(&mut est, t, 10, bias, pushed);
+    let t = feed(&mut est, t, 400, turning, level);
+    let t = feed(&mut est, t, 10, bias, pushed);
+    let t = feed(&mut est, t, 400, bias, level);
+    let e = *est
+        .step(&ImuInput {
+            t_s: t,
+            gyro_rad_s: bias,
+            accel_m_s2: pushed,
+        })
+        .unwrap();
+    let c = est.counters();
+    assert_eq!((c.zero_rate_refused, c.health_restores), (1, 0), "{c:?}");
+    // the quiet rest after it is fused
+    assert_eq!(c.zero_rate_updates, 1, "{c:?}");
+    assert!((e.gyro_bias_rad_s[2] - bias[2]).abs() < 1e-3, "{e:?}");
+}
+
+#[test]
 fn a_clipped_gyro_axis_is_counted_and_widens_the_attitude_only_when_modelled() {
     let bias = [0.0; 3];
     let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
@@ -227,8 +256,9 @@ fn an_absurd_external_heading_is_refused_and_counted() {
 #[test]
 fn warm_start_takes_the_saved_state_fuses_a_fresh_rest_and_refuses_bad_states() {
     let bias = [0.004, -0.002, 0.006];
+    // Within the gate of the fresh rest (σ 5e-4): 1-2σ away on each axis.
     let saved = WarmStart {
-        gyro_bias_rad_s: [0.001, 0.002, 0.003],
+        gyro_bias_rad_s: [0.0035, -0.0015, 0.0052],
         gyro_bias_cov: [[1e-8, 0.0, 0.0], [0.0, 2e-8, 1e-9], [0.0, 1e-9, 3e-8]],
     };
     let mut est = Estimator::new(Config::default(), HeadingAid::None);
@@ -252,6 +282,24 @@ fn warm_start_takes_the_saved_state_fuses_a_fresh_rest_and_refuses_bad_states() 
             "axis {k}: {got}"
         );
         assert!(state.gyro_bias_cov[k][k] < saved.gyro_bias_cov[k][k]);
+    }
+    assert_eq!(est.counters().zero_rate_refused, 0);
+    // A saved state far beyond the rest's gate (the bias moved while the estimator was down):
+    // the rest replaces it.
+    let stale = WarmStart {
+        gyro_bias_rad_s: [0.001, 0.002, 0.003],
+        ..saved
+    };
+    let mut est = Estimator::new(Config::default(), HeadingAid::None);
+    est.set_warm_start(stale).unwrap();
+    rest_then_move(&mut est, bias);
+    let state = est.bias_state().unwrap();
+    assert_eq!(est.counters().zero_rate_refused, 1);
+    for (k, &r) in bias.iter().enumerate() {
+        assert!(
+            (state.gyro_bias_rad_s[k] - r).abs() < 1e-4,
+            "axis {k}: {state:?}"
+        );
     }
     // Without a rest prior the saved state is taken as it is (one step of noise later).
     let mut cfg = Config::default();
