@@ -166,3 +166,46 @@ fn a_clean_recording_never_fails_the_health_check() {
     let (_, _, c) = run(&log, &cfg);
     assert_eq!(c.health_restores, 0);
 }
+
+#[test]
+fn a_burst_of_bad_samples_right_after_the_calibration_does_not_undo_it() {
+    // The paper's and the rotation-aware modes get their heading observer when the mounting
+    // yaw is calibrated, in the middle of a stance. A burst of samples that break the state
+    // right after it made the health check restore the stance copy taken before it (or the
+    // state before the calibrating sample): the phase stayed "tracking", the observer was
+    // gone, and no heading was observed again (reviewer's demo: 0 of 12 on exp17).
+    use corridor_service::core::Phase;
+    use corridor_shared::config::Mode;
+    let (log, mut cfg) = exp36();
+    for mode in [Mode::Paper, Mode::RotationAware] {
+        cfg.mode = mode;
+        let aid = heading_aid(&cfg, None).unwrap();
+        let mut calibrated_at = None;
+        let clean = run_log(&log, &cfg, &aid, &BiasInjection::default(), |i, e| {
+            if e.phase == Phase::Tracking && calibrated_at.is_none() {
+                calibrated_at = Some(i.t_s);
+            }
+        });
+        let t0 = calibrated_at.expect("calibrated") + 0.01;
+        let mut bad = log.clone();
+        for r in bad
+            .rows
+            .iter_mut()
+            .filter(|r| (t0..t0 + 0.15).contains(&r.t_s))
+        {
+            r.accel_m_s2 = [280.0, 0.0, 0.0];
+        }
+        let out = run_log(&bad, &cfg, &aid, &BiasInjection::default(), |_, _| {});
+        let (c, c0) = (out.counters, clean.counters);
+        assert!(
+            c.health_restores > 3,
+            "{mode:?}: the burst must fail the check: {c:?}"
+        );
+        assert!(
+            c.heading_used * 10 >= c0.heading_used * 8,
+            "{mode:?}: {} heading observations against {} on the clean walk",
+            c.heading_used,
+            c0.heading_used
+        );
+    }
+}

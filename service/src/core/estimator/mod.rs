@@ -447,6 +447,9 @@ impl Pipeline {
         );
         let applied = self.zero_rate_applied.take();
         let failed = self.guard_health(eskf, &before, stance);
+        if failed && self.phase == Phase::Tracking {
+            self.calibrate_bias_filter(eskf.nav_from_body, t_s);
+        }
         self.before = Some(before);
         if failed {
             // The update was undone: the next step integrates from the previous sample, and a

@@ -53,18 +53,9 @@ impl Pipeline {
                 self.mount_yaw_rad = self.mount_sum.1.atan2(self.mount_sum.0);
                 self.update_forward_body();
                 self.phase = Phase::Tracking;
-                let q = eskf.nav_from_body;
-                match &mut self.bias {
-                    BiasFilter::InEskf => {}
-                    BiasFilter::Paper { kf, obs } => {
-                        // Re-express the prior with the now known mounting yaw.
-                        kf.rotate(&rot_z(self.mount_yaw_rad).to_rotation_matrix().into_inner());
-                        *obs = Some(PaperObserver::new(q, t_s));
-                    }
-                    BiasFilter::RotationAware { obs, .. } => {
-                        *obs = Some(RotationAwareObserver::new(q));
-                    }
-                }
+                self.calibrate_bias_filter(eskf.nav_from_body, t_s);
+                // The stance copy the health check restores is taken again, now calibrated.
+                self.good_saved_this_stance = false;
             }
             return;
         }
@@ -211,6 +202,27 @@ impl Pipeline {
             }
         }
         self.out.heading = Some(event);
+    }
+
+    /// Once the mounting yaw is known: the paper's filter re-expresses its prior in the foot
+    /// frame and gets its observer, the rotation-aware filter its observer. Also after a health
+    /// fault restored a bias filter from before the calibration (its observer is missing while
+    /// the phase is tracking): without it no heading would be observed again.
+    pub(super) fn calibrate_bias_filter(&mut self, nav_from_body: UnitQuaternion<f64>, t_s: f64) {
+        match &mut self.bias {
+            BiasFilter::InEskf => {}
+            BiasFilter::Paper { kf, obs } => {
+                if obs.is_none() {
+                    kf.rotate(&rot_z(self.mount_yaw_rad).to_rotation_matrix().into_inner());
+                    *obs = Some(PaperObserver::new(nav_from_body, t_s));
+                }
+            }
+            BiasFilter::RotationAware { obs, .. } => {
+                if obs.is_none() {
+                    *obs = Some(RotationAwareObserver::new(nav_from_body));
+                }
+            }
+        }
     }
 
     fn count_rejection(&mut self, r: Rejection) {
