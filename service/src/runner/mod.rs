@@ -162,11 +162,17 @@ impl<'a> Feed<'a> {
             gyro_rad_s: gyro,
             accel_m_s2: row.accel_m_s2,
         };
+        let max_bridge_s = self.est.config().max_bridge_s;
         match self.est.step(&input) {
             Ok(e) => {
                 if let Some(gap_s) = e.gap_s {
+                    let what = if gap_s <= max_bridge_s {
+                        "bridged by one step"
+                    } else {
+                        "a new segment starts here"
+                    };
                     tracing::warn!(
-                        "{}:{}: gap of {gap_s:.3} s in the data; a new segment starts here",
+                        "{}:{}: gap of {gap_s:.3} s in the data; {what}",
                         self.path.display(),
                         row.line
                     );

@@ -36,6 +36,8 @@ pub struct Summary {
     pub zupts: u64,
     /// Gaps (steps above `estimator.max_dt_s`).
     pub gaps: u64,
+    /// Of them, bridged (up to `estimator.max_bridge_s`).
+    pub gaps_bridged: u64,
     /// Heading observations used.
     pub heading_observations_used: u64,
     /// Heading observations rejected, by reason.
@@ -359,6 +361,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         stances: c.stances,
         zupts: c.zupts,
         gaps: c.gaps,
+        gaps_bridged: c.gaps_bridged,
         heading_observations_used: c.heading_used,
         heading_observations_rejected: BTreeMap::from([
             ("not_straight", c.heading_not_straight),

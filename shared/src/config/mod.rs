@@ -302,6 +302,16 @@ mod tests {
             assert!(err.contains("-3") && !err.contains("-0.05"), "{err}");
         }
 
+        for v in ["-0.1", "2.0", "nan"] {
+            let f = ConfigFile::parse(
+                &format!("[estimator]\nmax_bridge_s = {v}\n"),
+                Path::new("a.toml"),
+            )
+            .unwrap();
+            let err = f.validate().unwrap_err().to_string();
+            assert!(err.contains("estimator.max_bridge_s"), "{err}");
+        }
+
         let f = ConfigFile::parse("[detector]\nwindow = 0\n", Path::new("a.toml")).unwrap();
         assert!(
             f.validate()

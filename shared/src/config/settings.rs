@@ -12,6 +12,8 @@ pub struct Config {
     pub converged_unabsorbed: Fraction,
     /// Largest regular time step.
     pub max_dt_s: Positive,
+    /// Longest gap bridged by one step (0: none).
+    pub max_bridge_s: f64,
     /// Largest plausible foot speed (health check).
     pub max_speed_m_s: Positive,
     /// What the sensor can output, and the time-step bounds.

@@ -221,6 +221,13 @@ impl ConfigFile {
                 "estimator.max_dt_s",
                 e.max_dt_s.unwrap_or(ESTIMATOR_MAX_DT_S),
             )?,
+            max_bridge_s: match e.max_bridge_s.unwrap_or(ESTIMATOR_MAX_BRIDGE_S) {
+                // Interpolating across a second of walking is worse than starting anew.
+                v if (0.0..=1.0).contains(&v) => v,
+                v => {
+                    return Err(invalid("estimator.max_bridge_s", v, "must be in [0, 1] s"));
+                }
+            },
             max_speed_m_s: Positive::new(
                 "estimator.max_speed_m_s",
                 e.max_speed_m_s.unwrap_or(ESTIMATOR_MAX_SPEED_M_S),

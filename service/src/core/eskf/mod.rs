@@ -507,6 +507,13 @@ impl Eskf {
         }
     }
 
+    /// The velocity variance grows by `var` on every axis (a bridged gap).
+    pub fn widen_velocity(&mut self, var: f64) {
+        for i in 0..3 {
+            self.p[ix(V0 + i, V0 + i)] += var;
+        }
+    }
+
     /// A rotation of unknown size about the body axis `axis_body` (unit vector) with variance
     /// `var_rad2` happened: the attitude covariance grows along that axis (in the navigation
     /// frame). Used for the rotation a clipped gyro axis did not measure.

@@ -409,13 +409,32 @@ impl Pipeline {
         // `prev` and `last` hold the sample clock's times (see `step`).
         let t_clock = self.last.map_or(t_s, |l| l.0);
         let dt = t_clock - t_prev;
-        if dt > self.cfg.max_dt_s.get() {
+        if dt > self.cfg.max_dt_s.get() && dt <= self.cfg.max_bridge_s {
+            // A short gap (a few lost samples) is bridged: one step on the mean of the rates and
+            // forces on both sides of it, as every step is integrated. What that interpolation
+            // misses is at most half the change of the rate (force) across the gap times its
+            // length: the attitude variance grows by that about the axis of the change, the
+            // velocity variance by its square. Dropping the gap instead lost the rotation of a
+            // swing (0.3 rad in 55 ms) with an attitude σ of a few mrad.
+            self.counters.gaps += 1;
+            self.counters.gaps_bridged += 1;
+            self.out.gap_s = Some(dt);
+            let dw = (w - w_prev) * (0.5 * dt);
+            let dv = ((f - f_prev) * (0.5 * dt)).norm();
+            eskf.widen_velocity(dv * dv);
+            if let Some(axis) = dw.try_normalize(0.0) {
+                eskf.widen_attitude_about(&axis, dw.norm().min(std::f64::consts::PI).powi(2));
+            }
+        } else if dt > self.cfg.max_dt_s.get() {
             // A new segment. Extrapolating two samples over the gap is meaningless (a 10 s gap
             // once gave a vertical velocity of −286 m/s), so nothing is integrated over it. The
             // velocity is kept (the best guess for a short gap; the next ZUPT settles it) but its
             // variance grows by the largest plausible speed, so that ZUPT moves nothing else; the
             // attitude variance grows by the gyro noise over the gap. A reset to zero would be
             // wrong when the gap falls in a swing and the data go on with the same stride.
+            // (Widening the attitude by the rate times the gap as well, about the rate's axis,
+            // made gaps of 0.3–1 s cut out of the suite's walks worse: worst +32 % of path at
+            // 1 s against +21 %.)
             self.counters.gaps += 1;
             self.out.gap_s = Some(dt);
             let v_max = self.cfg.max_speed_m_s.get();

@@ -159,9 +159,12 @@ pub struct Counters {
     /// Updates after which the state failed the health check and the last good state (of the
     /// last healthy stance) was restored.
     pub health_restores: u64,
-    /// Steps longer than `estimator.max_dt_s`: each starts a new segment (nothing integrated over
-    /// the gap, velocity and attitude covariance widened).
+    /// Steps longer than `estimator.max_dt_s`: up to `estimator.max_bridge_s` bridged (one step
+    /// across the gap, covariance widened by what the interpolation misses), longer ones start a
+    /// new segment (nothing integrated over the gap, velocity and attitude covariance widened).
     pub gaps: u64,
+    /// Of the gaps, those bridged.
+    pub gaps_bridged: u64,
     /// Stances since alignment.
     pub stances: u64,
     /// ZUPT updates.
