@@ -222,15 +222,20 @@ pub fn parse_vec3(text: &str) -> Result<[f64; 3], String> {
     Ok(out)
 }
 
-/// Parses a time in seconds that must be finite and ≥ 0, for command-line flags such as
-/// `--inject-after-s` (a NaN there used to run with 0 samples and exit 0).
+/// Parses a time in seconds that must be finite, ≥ 0 and at most [`MAX_TIME_S`], for
+/// command-line flags such as `--inject-after-s` (a NaN there used to run with 0 samples and
+/// exit 0; a wait of 1e300 s panicked converting it to a duration).
 pub fn parse_time_s(text: &str) -> Result<f64, String> {
     text.trim()
         .parse::<f64>()
         .ok()
-        .filter(|v| v.is_finite() && *v >= 0.0)
-        .ok_or_else(|| format!("{text:?} is not a finite number of seconds >= 0"))
+        .filter(|v| (0.0..=MAX_TIME_S).contains(v))
+        .ok_or_else(|| format!("{text:?} is not a number of seconds in [0, {MAX_TIME_S:e}]"))
 }
+
+/// The longest time a flag or a configured period may give, s (about 31 years: any longer
+/// wait is a mistake, and the platform's durations hold it).
+pub const MAX_TIME_S: f64 = 1e9;
 
 #[cfg(test)]
 mod tests {
@@ -334,9 +339,9 @@ mod tests {
     }
 
     #[test]
-    fn time_parsing_refuses_nan_infinity_and_negative() {
+    fn time_parsing_refuses_nan_infinity_negative_and_beyond_any_duration() {
         assert_eq!(parse_time_s(" 2.5").unwrap(), 2.5);
-        for bad in ["nan", "inf", "-1", "1e400", "x"] {
+        for bad in ["nan", "inf", "-1", "1e400", "1e300", "2e9", "x"] {
             assert!(parse_time_s(bad).unwrap_err().contains(bad), "{bad}");
         }
     }

@@ -5,6 +5,7 @@ use anyhow::Result;
 use clap::Parser;
 use corridor_client::Domain;
 use corridor_client::track::{TrackStop, Tracker};
+use corridor_shared::injection::parse_time_s;
 use corridor_shared::services::DEFAULT_DOMAIN;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -21,7 +22,7 @@ struct Args {
     #[arg(long, default_value = DEFAULT_DOMAIN)]
     domain: String,
     /// How long to wait for the daemon, s.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = parse_time_s)]
     wait_s: f64,
     /// Keep going after an end of stream (follow the next producer).
     #[arg(long)]
@@ -36,11 +37,7 @@ fn main() -> std::process::ExitCode {
 fn run() -> Result<()> {
     let a = Args::parse();
     let domain = Domain::new(&a.domain)?;
-    let tracker = Tracker::open(
-        &domain,
-        "corridor-pdr",
-        Duration::from_secs_f64(a.wait_s.max(0.0)),
-    )?;
+    let tracker = Tracker::open(&domain, "corridor-pdr", Duration::from_secs_f64(a.wait_s))?;
     println!(
         "{:>6} {:>10} {:>9} {:>9} {:>9} {:>8} {:>9}",
         "stride", "t_s", "x_m", "y_m", "z_m", "yaw_deg", "step_m"

@@ -5,6 +5,7 @@ use anyhow::Result;
 use clap::Args;
 use corridor_client::status::StatusReader;
 use corridor_client::{ClientError, Domain};
+use corridor_shared::injection::parse_time_s;
 use corridor_shared::services::DEFAULT_DOMAIN;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -20,7 +21,7 @@ pub(super) struct StatusArgs {
     pub(super) domain: String,
     /// How long to wait for the daemon's answer, s (it publishes diagnostics every
     /// `daemon.diagnostics_period_s`, 1 s by default).
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, value_parser = parse_time_s)]
     pub(super) timeout_s: f64,
     /// The daemon's checkpoint file (`daemon.checkpoint_path`, or its `--checkpoint`): shows
     /// when it was last saved (the daemon does not publish its checkpoints).
@@ -34,7 +35,7 @@ pub(super) struct StatusArgs {
 /// Prints the status; exit code 0 when healthy, [`EXIT_NO_DAEMON`] when no daemon answers.
 pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
     let domain = Domain::new(&a.domain)?;
-    let timeout = Duration::from_secs_f64(a.timeout_s.max(0.0));
+    let timeout = Duration::from_secs_f64(a.timeout_s);
     let no_daemon = |why: &str| {
         eprintln!(
             "error: no corridor daemon answers on domain {:?}: {why}",

@@ -384,6 +384,13 @@ mod tests {
         let d = f.validate_daemon().unwrap();
         assert!(d.lossless);
         assert_eq!(d.channel_capacity, 8);
+        // A period no duration can hold is refused here, not where the daemon starts.
+        for key in ["diagnostics_period_s", "stall_timeout_s"] {
+            let f = ConfigFile::parse(&format!("[daemon]\n{key} = 1e300\n"), Path::new("s.toml"))
+                .unwrap();
+            let err = f.validate_daemon().unwrap_err().to_string();
+            assert!(err.contains(&format!("daemon.{key}")), "{err}");
+        }
     }
 
     #[test]

@@ -118,26 +118,26 @@ impl ConfigFile {
             domain,
             lossless,
             channel_capacity,
-            bias_period_s: Positive::new(
+            bias_period_s: period(
                 "daemon.bias_period_s",
                 dm.bias_period_s.unwrap_or(DAEMON_BIAS_PERIOD_S),
             )?,
-            diagnostics_period_s: Positive::new(
+            diagnostics_period_s: period(
                 "daemon.diagnostics_period_s",
                 dm.diagnostics_period_s
                     .unwrap_or(DAEMON_DIAGNOSTICS_PERIOD_S),
             )?,
-            health_period_s: Positive::new(
+            health_period_s: period(
                 "daemon.health_period_s",
                 dm.health_period_s.unwrap_or(DAEMON_HEALTH_PERIOD_S),
             )?,
             checkpoint_path: dm.checkpoint_path.clone(),
             runtime_dir: dm.runtime_dir.clone(),
-            checkpoint_period_s: Positive::new(
+            checkpoint_period_s: period(
                 "daemon.checkpoint_period_s",
                 dm.checkpoint_period_s.unwrap_or(DAEMON_CHECKPOINT_PERIOD_S),
             )?,
-            stall_timeout_s: Positive::new(
+            stall_timeout_s: period(
                 "daemon.stall_timeout_s",
                 dm.stall_timeout_s.unwrap_or(DAEMON_STALL_TIMEOUT_S),
             )?,
@@ -441,4 +441,13 @@ impl Config {
             .validate()
             .map_err(|e| with_path(e, path))
     }
+}
+
+/// A daemon period or timeout: positive and at most [`crate::injection::MAX_TIME_S`] (1e300 s
+/// passed as positive and panicked where the daemon made a duration of it).
+fn period(key: &'static str, v: f64) -> Result<Positive, ConfigError> {
+    if v > crate::injection::MAX_TIME_S {
+        return Err(invalid(key, v, "must be at most 1e9 s"));
+    }
+    Positive::new(key, v)
 }
