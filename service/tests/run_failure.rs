@@ -74,6 +74,19 @@ fn a_run_that_fails_after_writing_leaves_no_output() {
     assert!(matches!(err, RunError::NeverAligned { .. }), "{err}");
     assert_eq!(listing(&out), Vec::<String>::new());
 
+    // Every sample refused (an injection beyond the plausible rate): an error naming the first
+    // refusal, not an exit 0 with an empty summary.
+    let mut opts = options(&exp36().join("imu.csv"), None, &out);
+    opts.injection.constant_rad_s = [100.0, 0.0, 0.0];
+    let err = run(&opts).unwrap_err();
+    match &err {
+        RunError::NothingAccepted { samples, first, .. } => {
+            assert!(*samples > 10_000 && first.contains("imu.csv:2:"), "{err}");
+        }
+        _ => panic!("{err}"),
+    }
+    assert_eq!(listing(&out), Vec::<String>::new());
+
     // Truth that cannot be evaluated (one footprint): found after the outputs were written.
     let truth = dir.join("one_footprint.csv");
     let gt = std::fs::read_to_string(exp36().join("ground_truth.csv")).unwrap();

@@ -72,6 +72,18 @@ pub enum RunError {
     /// A saved bias state to start from was refused.
     #[error(transparent)]
     WarmStart(#[from] WarmStartError),
+    /// The estimator refused every sample the log gave it.
+    #[error(
+        "{path}: the estimator refused all {samples} samples read (see the sensor limits in the configuration); the first: {first}"
+    )]
+    NothingAccepted {
+        /// The log.
+        path: PathBuf,
+        /// Samples read.
+        samples: u64,
+        /// The first refusal, with its line.
+        first: String,
+    },
     /// The log never left the alignment phase.
     #[error("{path}: no initial rest of at least {min_rest_s} s followed by motion was found")]
     NeverAligned {
@@ -130,7 +142,8 @@ pub struct RunOutcome {
     )>,
 }
 
-/// How many refused samples `summary.json` names.
+/// How many refused samples `summary.json` names (and the log prints), and how many gaps and
+/// health faults the log prints one by one (the rest are counted in `summary.json`).
 pub const MAX_REFUSED_EXAMPLES: usize = 10;
 
 /// One estimator fed row by row: the injection, the warnings naming file and line, the first
@@ -140,6 +153,8 @@ struct Feed<'a> {
     injection: &'a BiasInjection,
     path: &'a Path,
     refused: Vec<String>,
+    /// Gap and health-fault warnings printed so far.
+    warned: usize,
 }
 
 impl<'a> Feed<'a> {
@@ -149,6 +164,7 @@ impl<'a> Feed<'a> {
             injection,
             path,
             refused: Vec::new(),
+            warned: 0,
         }
     }
 
@@ -164,32 +180,32 @@ impl<'a> Feed<'a> {
         };
         let max_bridge_s = self.est.config().max_bridge_s;
         match self.est.step(&input) {
-            Ok(e) => {
-                if let Some(gap_s) = e.gap_s {
-                    let what = if gap_s <= max_bridge_s {
-                        "bridged by one step"
-                    } else {
-                        "a new segment starts here"
-                    };
-                    tracing::warn!(
-                        "{}:{}: gap of {gap_s:.3} s in the data; {what}",
-                        self.path.display(),
-                        row.line
-                    );
-                }
-                if let Some(fault) = e.health_fault {
-                    tracing::warn!(
-                        "{}:{}: estimator state failed the health check ({}); last good state restored",
-                        self.path.display(),
-                        row.line,
-                        fault.name()
-                    );
+            Ok(e) if e.gap_s.is_some() || e.health_fault.is_some() => {
+                self.warned += 1;
+                if self.warned <= MAX_REFUSED_EXAMPLES {
+                    let at = format!("{}:{}", self.path.display(), row.line);
+                    if let Some(gap_s) = e.gap_s {
+                        let what = if gap_s <= max_bridge_s {
+                            "bridged by one step"
+                        } else {
+                            "a new segment starts here"
+                        };
+                        tracing::warn!("{at}: gap of {gap_s:.3} s in the data; {what}");
+                    }
+                    if let Some(fault) = e.health_fault {
+                        tracing::warn!(
+                            "{at}: estimator state failed the health check ({}); last good state restored",
+                            fault.name()
+                        );
+                    }
                 }
             }
+            Ok(_) => {}
             Err(err) => {
                 if self.refused.len() < MAX_REFUSED_EXAMPLES {
-                    self.refused
-                        .push(format!("{}:{}: {err}", self.path.display(), row.line));
+                    let at = format!("{}:{}: {err}", self.path.display(), row.line);
+                    tracing::warn!("refused sample: {at}");
+                    self.refused.push(at);
                 }
                 return None;
             }

@@ -321,6 +321,27 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     inn_w.flush().map_err(io_at(&inn_path))?;
     drop((est_w, inn_w));
     let c = *feed.est.counters();
+    let refused =
+        c.rejected_non_finite + c.rejected_time + c.rejected_implausible + c.rejected_time_jump;
+    if refused > MAX_REFUSED_EXAMPLES as u64 {
+        tracing::warn!(
+            "{} more refused samples (counts in summary.json)",
+            refused - MAX_REFUSED_EXAMPLES as u64
+        );
+    }
+    if feed.warned > MAX_REFUSED_EXAMPLES {
+        tracing::warn!(
+            "{} more gaps and health-check failures (counts in summary.json)",
+            feed.warned - MAX_REFUSED_EXAMPLES
+        );
+    }
+    if c.samples == 0 && refused > 0 {
+        return Err(RunError::NothingAccepted {
+            path: opts.imu.clone(),
+            samples: refused,
+            first: feed.refused.first().cloned().unwrap_or_default(),
+        });
+    }
     if c.samples > 0 && feed.est.mount_yaw_rad().is_none() && c.stances == 0 {
         return Err(RunError::NeverAligned {
             path: opts.imu.clone(),
