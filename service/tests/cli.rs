@@ -348,52 +348,81 @@ fn bad_config_names_the_key() {
 fn run_starts_from_a_checkpoint_as_the_daemon_does_and_names_a_missing_one() {
     use corridor_service::checkpoint::{Checkpoint, save};
     let dir = tmp("ckpt");
-    let file = dir.join("bias.ckpt");
-    // A tight saved bias far from exp36's rest mean: the rest is fused into it, so the run
-    // starts near the saved value.
-    let saved = [0.02, -0.01, 0.015];
-    save(
-        &file,
-        &Checkpoint {
-            mode: "eskf".into(),
-            t_s: 0.0,
-            saved_unix_ms: 0,
-            gyro_bias_rad_s: saved,
-            gyro_bias_cov: [[1e-10, 0.0, 0.0], [0.0, 1e-10, 0.0], [0.0, 0.0, 1e-10]],
-            nav_from_body_wxyz: [1.0, 0.0, 0.0, 0.0],
-        },
-    )
-    .unwrap();
     let imu = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
     let config = root().join("configs/gdins.toml");
-    let run = |ckpt: &Path, out: &str| {
-        corridor(&[
+    let run = |ckpt: Option<&Path>, out: &str| {
+        let out = dir.join(out);
+        let mut args = vec![
             "run",
             "--imu",
             imu.to_str().unwrap(),
             "--config",
             config.to_str().unwrap(),
-            "--checkpoint",
-            ckpt.to_str().unwrap(),
             "--out",
-            dir.join(out).to_str().unwrap(),
-        ])
+            out.to_str().unwrap(),
+        ];
+        if let Some(c) = ckpt {
+            args.extend(["--checkpoint", c.to_str().unwrap()]);
+        }
+        corridor(&args)
     };
-    let o = run(&file, "warm");
+    // The bias of the first estimate after the alignment.
+    let start_bias = |out: &str| -> [f64; 3] {
+        let est = std::fs::read_to_string(dir.join(out).join("estimates.csv")).unwrap();
+        let mut lines = est.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = |name| header.iter().position(|h| *h == name).unwrap();
+        let phase = col("phase");
+        let first = lines
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .find(|f| f[phase] != "aligning")
+            .expect("the walk aligns");
+        ["bias_x_rad_s", "bias_y_rad_s", "bias_z_rad_s"].map(|c| first[col(c)].parse().unwrap())
+    };
+    let o = run(None, "cold");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let est = std::fs::read_to_string(dir.join("warm/estimates.csv")).unwrap();
-    let mut lines = est.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name| header.iter().position(|h| *h == name).unwrap();
-    let (phase, bx) = (col("phase"), col("bias_x_rad_s"));
-    let first = lines
-        .map(|l| l.split(',').collect::<Vec<_>>())
-        .find(|f| f[phase] != "aligning")
-        .expect("the walk aligns");
-    let b: f64 = first[bx].parse().unwrap();
-    assert!((b - saved[0]).abs() < 1e-3, "bias x at the start: {b}");
+    let rest = start_bias("cold");
+    let checkpoint = |name: &str, bias: [f64; 3]| {
+        let file = dir.join(name);
+        save(
+            &file,
+            &Checkpoint {
+                mode: "eskf".into(),
+                t_s: 0.0,
+                saved_unix_ms: 0,
+                gyro_bias_rad_s: bias,
+                gyro_bias_cov: [[1e-8, 0.0, 0.0], [0.0, 1e-8, 0.0], [0.0, 0.0, 1e-8]],
+                nav_from_body_wxyz: [1.0, 0.0, 0.0, 0.0],
+            },
+        )
+        .unwrap();
+        file
+    };
+    // A tight saved bias 0.8 mrad/s from exp36's rest mean on each axis (within the χ² gate
+    // of the two): the rest is fused into it, so the run starts near the saved value.
+    let near = rest.map(|b| b + 8e-4);
+    let o = run(Some(&checkpoint("near.ckpt", near)), "warm");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let b = start_bias("warm");
+    for k in 0..3 {
+        assert!(
+            (b[k] - near[k]).abs() < 1e-4,
+            "axis {k}: {b:?}, saved {near:?}"
+        );
+    }
+    // One 20 mrad/s away (the bias moved while the daemon was down): the rest replaces it.
+    let far = rest.map(|b| b + 0.02);
+    let o = run(Some(&checkpoint("far.ckpt", far)), "stale");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let b = start_bias("stale");
+    for k in 0..3 {
+        assert!(
+            (b[k] - rest[k]).abs() < 1e-6,
+            "axis {k}: {b:?}, rest {rest:?}"
+        );
+    }
     // A missing file is an error that names it, said once.
-    let o = run(&dir.join("none.ckpt"), "missing");
+    let o = run(Some(&dir.join("none.ckpt")), "missing");
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

@@ -153,6 +153,15 @@ impl SensorFile {
         if l.min_dt_s >= l.max_dt_s {
             return rule("sensor.min_dt_s", l.min_dt_s, "must be < sensor.max_dt_s");
         }
+        // A limit below any real bias fails the health check at every sample (1e-12 froze the
+        // estimate); one above 10 rad/s checks nothing.
+        if !(1e-3..=10.0).contains(&l.max_gyro_bias_rad_s) {
+            return rule(
+                "sensor.max_gyro_bias_rad_s",
+                l.max_gyro_bias_rad_s,
+                "must be in [0.001, 10] rad/s",
+            );
+        }
         Ok(l)
     }
 }

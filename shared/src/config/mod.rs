@@ -102,10 +102,18 @@ impl Fraction {
 }
 
 pub(crate) fn invalid(key: &str, value: impl std::fmt::Display, rule: &'static str) -> ConfigError {
+    let mut value = value.to_string();
+    // A number written as 1e300 or 1e-12 is shown so, not as its 301 digits or 12 zeros.
+    if let Ok(v) = value.parse::<f64>()
+        && v != 0.0
+        && (v.abs() >= 1e6 || v.abs() < 1e-4)
+    {
+        value = format!("{v:e}");
+    }
     ConfigError::Invalid {
         path: PathBuf::new(),
         key: key.to_owned(),
-        value: value.to_string(),
+        value,
         rule,
     }
 }
@@ -115,6 +123,23 @@ pub(crate) fn finite(key: &str, value: f64) -> Result<f64, ConfigError> {
         Ok(value)
     } else {
         Err(invalid(key, value, "must be finite"))
+    }
+}
+
+/// `value` under `key` must lie in `[lo, hi]`, the range the quantity can physically take
+/// (`rule` says it): a value beyond it used to pass as merely "positive" and broke the run
+/// later without naming the key (`initial_tilt_sd_rad = 1e300` froze the estimate).
+pub(crate) fn in_range(
+    key: &str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+    rule: &'static str,
+) -> Result<f64, ConfigError> {
+    if (lo..=hi).contains(&value) {
+        Ok(value)
+    } else {
+        Err(invalid(key, value, rule))
     }
 }
 
@@ -300,6 +325,22 @@ mod tests {
             let err = f.validate().unwrap_err().to_string();
             assert!(err.contains(&format!("{section}.{key}")), "{err}");
             assert!(err.contains("-3") && !err.contains("-0.05"), "{err}");
+        }
+
+        // Positive but beyond what the quantity can be: refused, the value shown as written.
+        for (section, key, v) in [
+            ("eskf", "initial_tilt_sd_rad", "1e300"),
+            ("estimator", "max_speed_m_s", "1e-9"),
+            ("alignment", "gravity_m_s2", "1e6"),
+            ("sensor", "max_gyro_bias_rad_s", "1e-12"),
+            ("heading", "start_heading_deg", "1e300"),
+            ("model", "heading_offset_sd_deg", "1e300"),
+        ] {
+            let f = ConfigFile::parse(&format!("[{section}]\n{key} = {v}\n"), Path::new("a.toml"))
+                .unwrap();
+            let err = f.validate().unwrap_err().to_string();
+            assert!(err.contains(&format!("{section}.{key}")), "{err}");
+            assert!(err.contains(v) && err.len() < 200, "{err}");
         }
 
         for v in ["-0.1", "2.0", "nan"] {
