@@ -69,22 +69,19 @@ pub enum CheckpointError {
         source: std::io::Error,
     },
     /// The file is not a valid checkpoint; it was moved to `moved_to`.
-    #[error(
-        "{path}: corrupt checkpoint ({reason}); moved to {}",
-        display_opt(moved_to)
-    )]
+    #[error("{path}: corrupt checkpoint ({reason}){}", moved_note(moved_to))]
     Corrupt {
         /// The file.
         path: PathBuf,
         /// What is wrong.
         reason: String,
-        /// Where it was moved (`None` if the rename failed too).
+        /// Where it was moved (`None`: left where it is, by [`read`] or when the rename failed).
         moved_to: Option<PathBuf>,
     },
     /// The file has another format version; it was moved to `moved_to`.
     #[error(
-        "{path}: checkpoint format version {found}, this build reads {expected}; moved to {}",
-        display_opt(moved_to)
+        "{path}: checkpoint format version {found}, this build reads {expected}{}",
+        moved_note(moved_to)
     )]
     Incompatible {
         /// The file.
@@ -115,9 +112,9 @@ impl CheckpointError {
     }
 }
 
-fn display_opt(p: &Option<PathBuf>) -> String {
+fn moved_note(p: &Option<PathBuf>) -> String {
     p.as_ref()
-        .map_or_else(|| "<rename failed>".to_owned(), |p| p.display().to_string())
+        .map_or_else(String::new, |p| format!("; moved to {}", p.display()))
 }
 
 impl Checkpoint {
@@ -279,8 +276,21 @@ pub fn save(path: &Path, cp: &Checkpoint) -> Result<(), CheckpointError> {
     Ok(())
 }
 
-/// Loads a checkpoint. A corrupt or incompatible file is moved aside to `<path>.corrupt-<n>`.
+/// Loads a checkpoint. A corrupt or incompatible file is moved aside to `<path>.corrupt-<n>`
+/// (the daemon owns its checkpoint file and would otherwise fail on it at every start).
 pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
+    load_with(path, true)
+}
+
+/// Reads a checkpoint the caller does not own (`corridor run --checkpoint`): a corrupt or
+/// incompatible file is an error and is left where it is (it used to be renamed: the user's
+/// input file moved to `.corrupt-1`).
+pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
+    load_with(path, false)
+}
+
+fn load_with(path: &Path, move_bad: bool) -> Result<Checkpoint, CheckpointError> {
+    let aside = |path: &Path| if move_bad { move_aside(path) } else { None };
     let bytes = match std::fs::read(path) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -301,13 +311,13 @@ pub fn load(path: &Path) -> Result<Checkpoint, CheckpointError> {
         Err(DecodeError::Corrupt(reason)) => Err(CheckpointError::Corrupt {
             path: path.to_owned(),
             reason,
-            moved_to: move_aside(path),
+            moved_to: aside(path),
         }),
         Err(DecodeError::Version(found)) => Err(CheckpointError::Incompatible {
             path: path.to_owned(),
             found,
             expected: FORMAT_VERSION,
-            moved_to: move_aside(path),
+            moved_to: aside(path),
         }),
     }
 }
@@ -393,6 +403,15 @@ mod tests {
         }
         assert!(d.join("bias.ckpt.corrupt-1").exists());
         assert!(d.join("bias.ckpt.corrupt-3").exists());
+        // Read as someone else's file (`corridor run --checkpoint`): an error, left in place.
+        std::fs::write(&p, &bytes[..12]).unwrap();
+        let e = read(&p).unwrap_err();
+        assert!(
+            matches!(&e, CheckpointError::Corrupt { moved_to: None, .. }),
+            "{e}"
+        );
+        assert!(p.exists() && !e.to_string().contains("moved"), "{e}");
+        assert!(!d.join("bias.ckpt.corrupt-4").exists());
         std::fs::remove_dir_all(&d).unwrap();
     }
 

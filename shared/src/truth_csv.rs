@@ -25,6 +25,9 @@ const MAX_VALUE_CHARS: usize = 64;
 /// Longest header text (in characters) quoted in [`TruthCsvError::Header`].
 const MAX_HEADER_CHARS: usize = 200;
 
+/// Largest footprint coordinate accepted, m: a building's survey spans far less.
+pub const MAX_COORDINATE_M: f64 = 1e6;
+
 /// One surveyed footprint position.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct TruthPoint {
@@ -189,6 +192,16 @@ pub fn parse_truth_csv(text: &str, path: &Path) -> Result<Vec<TruthPoint>, Truth
         let mut xyzt = [0.0f64; 4];
         for (i, v) in xyzt.iter_mut().enumerate() {
             *v = match fields[i].parse::<f64>() {
+                // Positions within 1000 km of the survey's origin (a footprint at 1e300 m made
+                // the evaluation's RMS null, with exit 0).
+                Ok(x) if i > 0 && x.is_finite() && x.abs() > MAX_COORDINATE_M => {
+                    return Err(row_error(
+                        line_no,
+                        COLUMNS[i],
+                        fields[i],
+                        format!("is beyond ±{MAX_COORDINATE_M:e} m of the survey's origin"),
+                    ));
+                }
                 Ok(x) if x.is_finite() => x,
                 Ok(_) => {
                     return Err(row_error(
@@ -369,6 +382,10 @@ mod tests {
             (
                 format!("{h6}0,0,0,inf,0,1\n"),
                 (2, "z_m", "inf", "is not finite"),
+            ),
+            (
+                format!("{h6}0,1e300,0,0,0,1\n"),
+                (2, "x_m", "1e300", "is beyond ±1e6 m of the survey's origin"),
             ),
             (
                 format!("{h6}0,0,0,0,1.5,1\n"),

@@ -1,6 +1,6 @@
 //! [`ModelArgs`]: the configuration flags shared by every command that runs the estimator.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use corridor_shared::config::{
     BiasPrior, Config, ConfigFile, ConfigOverrides, DaemonSettings, Mode,
@@ -67,21 +67,23 @@ impl ModelArgs {
 
     /// The flags that override the config file.
     pub fn overrides(&self) -> Result<ConfigOverrides> {
-        let mode = match &self.mode {
-            Some(m) => Some(
-                toml::Value::String(m.clone())
-                    .try_into::<Mode>()
-                    .with_context(|| {
-                        format!("--mode {m:?}: expected zupt, paper, rotation_aware or eskf")
-                    })?,
-            ),
-            None => None,
-        };
+        // The flag's own message only: serde's "unknown variant" says the same again.
+        let mode =
+            match &self.mode {
+                Some(m) => Some(toml::Value::String(m.clone()).try_into::<Mode>().map_err(
+                    |_| {
+                        anyhow::anyhow!(
+                            "--mode {m:?}: expected zupt, paper, rotation_aware or eskf"
+                        )
+                    },
+                )?),
+                None => None,
+            };
         let gyro_bias_prior = match &self.prior {
             Some(p) => Some(
                 toml::Value::String(p.clone())
                     .try_into::<BiasPrior>()
-                    .with_context(|| format!("--prior {p:?}: expected none or rest_mean"))?,
+                    .map_err(|_| anyhow::anyhow!("--prior {p:?}: expected none or rest_mean"))?,
             ),
             None => None,
         };

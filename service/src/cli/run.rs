@@ -63,7 +63,7 @@ pub(super) fn run(a: &RunArgs) -> Result<()> {
         warm_start: a
             .checkpoint
             .as_deref()
-            .map(checkpoint::load)
+            .map(checkpoint::read)
             .transpose()?
             .map(|cp| cp.warm_start()),
     };

@@ -355,6 +355,13 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         })?),
         _ => None,
     };
+    // What the evaluation had to do (footprints outside the log's time span clamped, as the
+    // reference evaluation does) is said here too, not only in summary.json.
+    if let (Some(e), Some(path)) = (&eval, &opts.truth) {
+        for w in &e.warnings {
+            tracing::warn!("{}: {w}", path.display());
+        }
+    }
     if let (Some((_, b)), Some(after)) = (&before, &kept.plot) {
         let eval_before = b.gcps.as_ref().and_then(|g| g.finish().ok());
         let before_trace = &b.plot.as_ref().expect("the before run keeps a trace").trace;

@@ -265,10 +265,16 @@ pub enum ImuCsvError {
     },
     /// The header (line 1) is missing or does not start with the required columns, or it has an
     /// empty or repeated column name.
-    #[error("{path}:1: header must start with \"{expected}\" but found \"{found}\"")]
+    #[error(
+        "{path}:{line}: header {problem}: it must start with \"{expected}\", found \"{found}\""
+    )]
     Header {
         /// The file.
         path: PathBuf,
+        /// The header's line (after leading blank lines).
+        line: u64,
+        /// What is wrong with it.
+        problem: &'static str,
         /// The header line as found (at most 200 characters).
         found: String,
         /// What the header must look like.

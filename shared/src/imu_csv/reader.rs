@@ -186,29 +186,34 @@ impl<R: BufRead> ImuCsvReader<R> {
         if !self.read_line()? {
             return Err(empty());
         }
-        let header = strip_cr(Self::line_str(&self.line)).to_string();
-        if header.trim().is_empty() {
-            // Blank first line: an empty file if nothing but white space follows.
-            loop {
-                if !self.read_line()? {
-                    return Err(empty());
-                }
-                if !Self::line_str(&self.line).trim().is_empty() {
-                    break;
-                }
+        // Blank lines before the header: an empty file if nothing but white space follows.
+        while Self::line_str(&self.line).trim().is_empty() {
+            if !self.read_line()? {
+                return Err(empty());
             }
         }
+        let header = strip_cr(Self::line_str(&self.line)).to_string();
         let names: Vec<&str> = header.split(',').map(str::trim_ascii).collect();
-        let header_ok = names.len() >= REQUIRED_COLUMNS.len()
-            && names.iter().zip(REQUIRED_COLUMNS).all(|(a, b)| *a == b)
-            && names.iter().all(|n| !n.is_empty())
-            && names
-                .iter()
-                .enumerate()
-                .all(|(i, n)| !names[..i].contains(n));
-        if !header_ok {
+        let problem = if names.len() < REQUIRED_COLUMNS.len()
+            || !names.iter().zip(REQUIRED_COLUMNS).all(|(a, b)| *a == b)
+        {
+            Some("does not start with the required columns")
+        } else if names.iter().any(|n| n.is_empty()) {
+            Some("has an empty column name")
+        } else if names
+            .iter()
+            .enumerate()
+            .any(|(i, n)| names[..i].contains(n))
+        {
+            Some("repeats a column name")
+        } else {
+            None
+        };
+        if let Some(problem) = problem {
             return Err(ImuCsvError::Header {
                 path: self.path.clone(),
+                line: self.line_no,
+                problem,
                 found: truncate_chars(&header, MAX_HEADER_CHARS),
                 expected: IMU_HEADER,
             });

@@ -151,9 +151,26 @@ fn wrong_header_is_an_error_naming_file_line_and_text() {
     let msg = err.to_string();
     assert_eq!(
         msg,
-        "data/imu.csv:1: header must start with \"t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2\" \
-         but found \"time,gx,gy,gz,ax,ay,az\""
+        "data/imu.csv:1: header does not start with the required columns: it must start with \
+         \"t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2\", found \"time,gx,gy,gz,ax,ay,az\""
     );
+    // Blank lines before the header are skipped (the header was checked as the blank line).
+    let text = format!("\n  \n{IMU_HEADER}\n{}\n", row(0.0));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(log.rows.len(), 1);
+    let err = parse_imu_csv("\n\ntime,gx\n", path(), &ImuCsvOptions::default()).unwrap_err();
+    assert!(
+        err.to_string().starts_with("data/imu.csv:3: header"),
+        "{err}"
+    );
+    // A repeated column says so.
+    let err = parse_imu_csv(
+        &format!("{IMU_HEADER},mx_gauss,mx_gauss\n"),
+        path(),
+        &ImuCsvOptions::default(),
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("repeats a column name"), "{err}");
     // A data row instead of a header.
     let err = parse_imu_csv(
         &format!("{}\n", row(0.0)),
