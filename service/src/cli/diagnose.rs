@@ -3,7 +3,6 @@
 use super::model::ModelArgs;
 use anyhow::{Context, Result};
 use clap::Args;
-use corridor_shared::imu_csv::ImuCsvOptions;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -36,7 +35,7 @@ pub(super) fn diagnose(a: &DiagnoseArgs) -> Result<()> {
         .imu
         .as_deref()
         .context("--imu is required without --suite")?;
-    let log = corridor_shared::imu_csv::read_imu_csv(imu, &ImuCsvOptions::default())?;
+    let log = corridor_service::runner::read_log(imu, &file.validate()?.sensor)?;
     let truth = a
         .truth
         .as_deref()

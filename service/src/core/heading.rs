@@ -185,8 +185,9 @@ impl HeadingAid {
     }
 }
 
-/// The straight-walk test: the foot heading at this stance and at the previous `n` stances
-/// all lie within `max_change_rad` of each other. Fixed capacity, no allocation after `new`.
+/// The straight-walk test: the foot heading at each of the previous `n` stances lies within
+/// `max_change_rad` of this stance's (so those earlier headings may spread by up to twice that
+/// among themselves). Fixed capacity, no allocation after `new`.
 #[derive(Debug, Clone)]
 pub struct StraightWalk {
     history: Vec<f64>,

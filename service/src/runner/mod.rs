@@ -226,6 +226,37 @@ impl<'a> Feed<'a> {
     }
 }
 
+/// Rejected input rows printed one by one (the rest are counted).
+pub(crate) const REJECTED_ROWS_LOGGED: usize = 20;
+
+/// Reads a whole log with the time-step limits of `sensor` (as `corridor run` streams one),
+/// and says which rows it rejected: the first [`REJECTED_ROWS_LOGGED`] with their place, then
+/// their number (the in-memory paths, `corridor diagnose` and the suite, used to drop them
+/// without a word).
+pub fn read_log(
+    path: &Path,
+    sensor: &corridor_shared::sensor::SensorLimits,
+) -> Result<ImuLog, ImuCsvError> {
+    let opts = corridor_shared::imu_csv::ImuCsvOptions {
+        min_dt_s: sensor.min_dt_s(),
+        max_dt_s: sensor.max_dt_s(),
+        ..Default::default()
+    };
+    let log = corridor_shared::imu_csv::read_imu_csv(path, &opts)?;
+    for r in log.rejected.iter().take(REJECTED_ROWS_LOGGED) {
+        tracing::warn!("rejected input row: {}", r.located(&log.path));
+    }
+    let total: u64 = log.rejected_counts().values().sum();
+    if total > REJECTED_ROWS_LOGGED as u64 {
+        tracing::warn!(
+            "{}: {} more rejected rows",
+            log.path.display(),
+            total - REJECTED_ROWS_LOGGED as u64
+        );
+    }
+    Ok(log)
+}
+
 /// Runs `log` (in memory) through a new estimator and keeps the whole per-sample trace; `sink`
 /// sees every estimate with the input it came from. For a log of any length, [`run`] streams.
 pub fn run_log(

@@ -242,9 +242,6 @@ pub struct RunOptions {
     pub warm_start: Option<crate::core::WarmStart>,
 }
 
-/// How many rejected input rows are logged as warnings (all are counted in `summary.json`).
-const REJECTED_ROWS_LOGGED: usize = 20;
-
 /// Streams a log through the estimator and writes `estimates.csv`, `innovations.csv`,
 /// `summary.json` (and the figures); see the module's documentation for what is kept and what
 /// a failed run leaves.

@@ -12,7 +12,7 @@ use super::{Gait, SuiteError, SuiteRecording, read_suite};
 use crate::diagnose::{Effect, SIGNIFICANT, run_diagnosis};
 use crate::runner::RunError;
 use corridor_shared::config::{ConfigFile, HeadingObservations};
-use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
+use corridor_shared::imu_csv::ImuLog;
 use corridor_shared::injection::LogInjection;
 use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
 use serde::Serialize;
@@ -341,8 +341,12 @@ pub fn detection_matrix(
             name: r.name.clone(),
             source: Box::new(source),
         };
-        let log = read_imu_csv(&base.join(&r.imu), &ImuCsvOptions::default())
-            .map_err(|e| wrap(e.into()))?;
+        let sensor = ConfigFile::read(&base.join(&r.config))
+            .and_then(|f| f.validate())
+            .map_err(|e| wrap(e.into()))?
+            .sensor;
+        let log =
+            crate::runner::read_log(&base.join(&r.imu), &sensor).map_err(|e| wrap(e.into()))?;
         let truth = read_truth_csv(&base.join(&r.truth)).map_err(|e| wrap(e.into()))?;
         let model = diagnosis_model(base, r).map_err(wrap)?;
         out.recordings.push(r.name.clone());

@@ -110,6 +110,10 @@ impl SuiteRecording {
     }
 }
 
+/// Largest injected bias a suite may ask for, rad/s: a bias the estimator's health check
+/// allows (`sensor.max_gyro_bias_rad_s` of the shipped configurations).
+pub const MAX_INJECTED_BIAS_RAD_S: f64 = 0.2;
+
 /// The suite file as written.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -151,6 +155,20 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
     };
     let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
     let file: FileToml = toml::from_str(&text).map_err(|e| error(e.to_string()))?;
+    if file.recordings.is_empty() {
+        return Err(error(
+            "no [[recording]]: a suite needs at least one (its tables were all NaN)".into(),
+        ));
+    }
+    if let Some(b) = file.inject_gyro_bias_rad_s
+        && let Some(v) = b
+            .iter()
+            .find(|v| !v.is_finite() || v.abs() > MAX_INJECTED_BIAS_RAD_S)
+    {
+        return Err(error(format!(
+            "inject_gyro_bias_rad_s: {v:?} must be a finite number within ±{MAX_INJECTED_BIAS_RAD_S} rad/s"
+        )));
+    }
     let base = path.parent().unwrap_or(Path::new("."));
     let recordings = file
         .recordings
@@ -186,6 +204,17 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
             ),
         ),
     };
+    for (key, v) in [
+        ("start_heading_deg", r.start_heading_deg.unwrap_or(0.0)),
+        ("grid_deg", r.grid_deg),
+    ] {
+        if !(-360.0..=360.0).contains(&v) {
+            return Err(format!(
+                "recording {}: {key}: {v:?} must be in [-360, 360]°",
+                r.name
+            ));
+        }
+    }
     let needs_truth = r.start_heading_deg.is_none() || !suspect_legs.is_empty();
     let truth = if needs_truth {
         read_truth_csv(&base.join(&r.truth))
@@ -399,6 +428,24 @@ mod tests {
         let short = "t_s,x_m,y_m,z_m\n0.0,0.0,0.0,0.0\n1.0,0.1,0.1,0.0\n";
         let e = read_one(&dir, short, "").unwrap_err();
         assert!(e.contains("recording walk: start_heading_deg"), "{e}");
+        // Values no walk can have: named, with the recording.
+        let e = read_one(&dir, truth, "start_heading_deg = nan\n").unwrap_err();
+        assert!(e.contains("recording walk: start_heading_deg: NaN"), "{e}");
+        let e = read_one(&dir, truth, "grid_deg = 1e300\n").unwrap_err();
+        assert!(e.contains("grid_deg: 1e300"), "{e}");
+        // A suite without recordings, or with an injection that is no bias: refused.
+        let suite = dir.join("suite.toml");
+        std::fs::write(&suite, "recording = []\n").unwrap();
+        let e = read_suite(&suite).err().unwrap().to_string();
+        assert!(e.contains("no [[recording]]"), "{e}");
+        let text = std::fs::read_to_string(write_suite(&dir, truth, "")).unwrap();
+        std::fs::write(
+            &suite,
+            format!("inject_gyro_bias_rad_s = [nan, 0.0, 0.0]\n{text}"),
+        )
+        .unwrap();
+        let e = read_suite(&suite).err().unwrap().to_string();
+        assert!(e.contains("inject_gyro_bias_rad_s: NaN"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -3,7 +3,6 @@
 use super::{SuiteError, read_suite};
 use crate::runner::RunError;
 use corridor_shared::config::{ConfigFile, Mode};
-use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
 use corridor_shared::truth_csv::read_truth_csv;
 use std::path::Path;
 
@@ -21,8 +20,12 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<String, SuiteError> {
             name: r.name.clone(),
             source: Box::new(source),
         };
-        let log = read_imu_csv(&base.join(&r.imu), &ImuCsvOptions::default())
-            .map_err(|e| wrap(e.into()))?;
+        let sensor = ConfigFile::read(&base.join(&r.config))
+            .and_then(|f| f.validate())
+            .map_err(|e| wrap(e.into()))?
+            .sensor;
+        let log =
+            crate::runner::read_log(&base.join(&r.imu), &sensor).map_err(|e| wrap(e.into()))?;
         let truth = read_truth_csv(&base.join(&r.truth)).map_err(|e| wrap(e.into()))?;
         let mut file = ConfigFile::read(&base.join(&r.config)).map_err(|e| wrap(e.into()))?;
         // The paper's model: no extension states (a model change, not an override).

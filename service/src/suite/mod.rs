@@ -71,7 +71,7 @@ pub use tables::{
 use crate::eval::EvalOptions;
 use crate::runner::{self, RunError, RunOutcome, heading_aid};
 use corridor_shared::config::{BiasPrior, Config, ConfigFile, Mode};
-use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
+use corridor_shared::imu_csv::ImuLog;
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
 use serde::Serialize;
@@ -280,14 +280,16 @@ struct Ctx<'a> {
 impl<'a> Ctx<'a> {
     /// Reads a recording's log, truth and configurations.
     fn open(base: &'a Path, r: &'a SuiteRecording) -> Result<Self, RunError> {
+        let config = ConfigFile::read(&base.join(&r.config))?;
+        let sensor = config.validate()?.sensor;
         Ok(Ctx {
             base,
             rec: r,
-            config: ConfigFile::read(&base.join(&r.config))?,
+            config,
             baseline: ConfigFile::read(
                 &base.join(r.baseline_config.as_ref().unwrap_or(&r.config)),
             )?,
-            log: read_imu_csv(&base.join(&r.imu), &ImuCsvOptions::default())?,
+            log: crate::runner::read_log(&base.join(&r.imu), &sensor)?,
             truth: read_truth_csv(&base.join(&r.truth))?,
         })
     }

@@ -499,7 +499,10 @@ fn gyro_in_deg_s_is_a_units_error() {
             ..
         } => {
             assert_eq!(*column, "gx_rad_s,gy_rad_s,gz_rad_s");
-            assert_eq!(statistic, "max |ω| (rad/s) at line 51");
+            assert_eq!(
+                statistic,
+                "max |ω| (rad/s, 1 of 100 rows above 40) at line 51"
+            );
             assert_eq!(*value, 600.0);
         }
         other => panic!("{other:?}"),
@@ -507,7 +510,7 @@ fn gyro_in_deg_s_is_a_units_error() {
     let msg = err.to_string();
     assert!(
         msg.starts_with(
-            "data/imu.csv: column gx_rad_s,gy_rad_s,gz_rad_s: max |ω| (rad/s) at line 51 = 600.0000"
+            "data/imu.csv: column gx_rad_s,gy_rad_s,gz_rad_s: max |ω| (rad/s, 1 of 100 rows above 40) at line 51 = 600.0000"
         ),
         "{msg}"
     );
@@ -515,6 +518,16 @@ fn gyro_in_deg_s_is_a_units_error() {
     // 12 rad/s (a brisk foot swing) passes.
     let text = replace_line(&good_file(100), 51, "0.245,0,0,12,0.1,0.2,9.8");
     assert!(parse_imu_csv(&text, path(), &ImuCsvOptions::default()).is_ok());
+    // One corrupt value among 1000 rows is no unit: the file reads (the estimator's
+    // plausibility check refuses that sample and counts it).
+    let text = replace_line(&good_file(1000), 501, "2.495,0,1e300,0,0.1,0.2,9.8");
+    assert_eq!(
+        parse_imu_csv(&text, path(), &ImuCsvOptions::default())
+            .unwrap()
+            .rows
+            .len(),
+        1000
+    );
 }
 
 #[test]

@@ -37,7 +37,14 @@ pub(super) struct UnitsStats {
     pub(super) hist: Vec<u32>,
     /// Largest |ω| and its line (the first on ties).
     pub(super) max_gyro: (f64, u64),
+    /// Rows whose |ω| lies above [`GYRO_MAX_PLAUSIBLE_RAD_S`].
+    pub(super) gyro_over: u64,
 }
+
+/// A gyro in deg/s reads above [`GYRO_MAX_PLAUSIBLE_RAD_S`] on many rows (every swing of a
+/// foot); at least this fraction of them says "units", fewer are single bad values, which the
+/// sensor's plausibility check refuses and counts (one corrupt value refused the whole file).
+pub(super) const GYRO_UNITS_MIN_FRACTION: f64 = 0.01;
 
 impl UnitsStats {
     pub(super) fn hist_index(norm: f64) -> usize {
@@ -71,6 +78,7 @@ impl UnitsStats {
         if w > self.max_gyro.0 {
             self.max_gyro = (w, row.line);
         }
+        self.gyro_over += u64::from(w > GYRO_MAX_PLAUSIBLE_RAD_S);
     }
 
     /// The median |a| (exact while the norms are kept) and the statistic's name.
@@ -141,10 +149,13 @@ impl UnitsStats {
             ));
         }
         let (max_gyro, max_line) = self.max_gyro;
-        if max_gyro > GYRO_MAX_PLAUSIBLE_RAD_S {
+        if self.gyro_over as f64 >= GYRO_UNITS_MIN_FRACTION * n as f64 && self.gyro_over > 0 {
             return Err(units(
                 "gx_rad_s,gy_rad_s,gz_rad_s",
-                &format!("max |ω| (rad/s) at line {max_line}"),
+                &format!(
+                    "max |ω| (rad/s, {} of {n} rows above {GYRO_MAX_PLAUSIBLE_RAD_S}) at line {max_line}",
+                    self.gyro_over
+                ),
                 max_gyro,
                 format!(
                     "above {GYRO_MAX_PLAUSIBLE_RAD_S} rad/s (≈ 2300 °/s, beyond any consumer gyro; a foot peaks near 12 rad/s): \

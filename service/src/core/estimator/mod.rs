@@ -548,7 +548,6 @@ impl Pipeline {
         self.forward_body = self.foot_from_sensor().inverse() * Vector3::x();
     }
 
-    /// Gyro bias in sensor axes and its σ.
     /// The gyro bias in sensor axes, without its σ (the per-sample paths need only this).
     fn bias_only(&self, eskf: &Eskf) -> Vector3<f64> {
         match &self.bias {

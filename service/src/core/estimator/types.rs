@@ -156,8 +156,9 @@ pub struct Counters {
     pub rejected_time_jump: u64,
     /// Accepted samples with an axis at the rail of its range (probably clipped).
     pub clipped_samples: u64,
-    /// Updates after which the state failed the health check and the last good state (of the
-    /// last healthy stance) was restored.
+    /// Samples after which the state failed the health check: the first few in a row undo
+    /// the sample's update (the state before it), further ones restore the state of the last
+    /// healthy stance.
     pub health_restores: u64,
     /// Steps longer than `estimator.max_dt_s`: up to `estimator.max_bridge_s` bridged (one step
     /// across the gap, covariance widened by what the interpolation misses), longer ones start a
