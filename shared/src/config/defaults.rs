@@ -64,13 +64,15 @@ pub const ESTIMATOR_CONVERGED_UNABSORBED: f64 = 0.05;
 pub const ESTIMATOR_MAX_DT_S: f64 = 0.05;
 
 /// `estimator.max_bridge_s`: a gap up to this long is bridged (one step with the rates and
-/// forces on both sides of it). Gaps cut out of the 14 normal-gait gdins walks at three places
-/// each (footprint RMS, % of path, against the walk without the gap; worst, and walks more than
-/// 0.1 worse): 55 ms +5.69 (8 of 42) as a new segment, +0.13 (1) bridged; 0.1 s +9.51 (8) and
-/// +0.90 (3); 0.2 s +15.06 (18) and +12.24 (18), median +0.05 and +0.04; 0.3 s median +0.18
-/// and +0.42 (23 and 29 walks); at 0.5 s median +0.62 and +2.45. No footprints needed to see
-/// it, but they were used: a choice informed by truth, on the whole suite.
-pub const ESTIMATOR_MAX_BRIDGE_S: f64 = 0.25;
+/// forces on both sides of it). Samples cut out of the 14 normal-gait gdins walks at three places
+/// each (`docs/experiments/gap-cuts.py`; footprint RMS change, % of path, median / worst, and
+/// cuts worse by more than 0.1), as a new segment against bridged: 55 ms +0.02 / +4.30 (16 of
+/// 42) against +0.00 / +0.17 (1); 0.1 s +0.06 / +6.54 (20) against +0.00 / +1.82 (7); 0.15 s
+/// +0.16 / +8.59 (23) against +0.00 / +2.11 (13); 0.2 s +0.27 / +10.43 (26) against +0.08 /
+/// +34.21 (19); 0.3 s +0.34 / +13.79 (28) against +0.62 / +29.00 (31). So the 0.15 s cut, the
+/// longest measured at which the bridge is better on all three (it leaves a step of 0.155 s:
+/// 0.16). Chosen on the footprints of the whole suite, said so.
+pub const ESTIMATOR_MAX_BRIDGE_S: f64 = 0.16;
 
 /// `alignment.min_rest_s`, s.
 pub const ALIGNMENT_MIN_REST_S: f64 = 0.5;

@@ -105,7 +105,7 @@ pub struct EstimatorFile {
     pub max_dt_s: Option<f64>,
     /// A gap up to this long is bridged: integrated as one step on the rates and forces on
     /// both sides of it, with the attitude and velocity variance that interpolation leaves; a
-    /// longer one starts a new segment (default 0.25 s; 0: every gap is a new segment).
+    /// longer one starts a new segment (default 0.16 s; 0: every gap is a new segment).
     pub max_bridge_s: Option<f64>,
     /// Largest plausible foot speed, m/s; a faster estimate fails the health check (default 15).
     pub max_speed_m_s: Option<f64>,
