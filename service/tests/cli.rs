@@ -647,3 +647,48 @@ fn eval_sweep_reports_each_value_and_names_a_bad_key() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("set by the suite"), "{err}");
 }
+
+#[test]
+fn a_bad_mode_is_said_once_and_clamped_footprints_are_said_on_the_terminal() {
+    let out = tmp("said");
+    let data = root().join("tests/data/gdins_exp36_corridor_out_and_back");
+    let imu = data.join("imu.csv");
+    let o = corridor(&[
+        "run",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--out",
+        out.join("a").to_str().unwrap(),
+        "--mode",
+        "kalman",
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.matches("kalman").count() == 1 && !err.contains("unknown variant"),
+        "{err}"
+    );
+    // Footprints after the log's end are clamped to it, as the reference evaluation does; the
+    // terminal says so (it used to be only in summary.json).
+    let truth = out.join("truth.csv");
+    let mut text = std::fs::read_to_string(data.join("ground_truth.csv")).unwrap();
+    text.push_str("1000.0,0.0,0.0,0.0,99,1\n");
+    std::fs::write(&truth, text).unwrap();
+    let o = corridor(&[
+        "run",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--config",
+        root().join("configs/gdins.toml").to_str().unwrap(),
+        "--truth",
+        truth.to_str().unwrap(),
+        "--out",
+        out.join("b").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("outside the trajectory span, clamped"),
+        "{err}"
+    );
+}
