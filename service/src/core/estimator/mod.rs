@@ -140,7 +140,6 @@ struct Pipeline {
     resumed_look: bool,
     /// The previous navigated sample was a stance sample.
     was_stance: bool,
-    /// A rest whose zero-rate update the health check undid: made again at the next sample.
     /// A rest whose zero-rate update a health fault undid in the same step: made again once,
     /// at the next sample (never twice: an update that itself breaks the state is dropped).
     rest_to_fuse: Option<RestMeans>,
