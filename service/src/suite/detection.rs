@@ -14,7 +14,7 @@ use crate::runner::RunError;
 use corridor_shared::config::{ConfigFile, HeadingObservations};
 use corridor_shared::imu_csv::ImuLog;
 use corridor_shared::injection::LogInjection;
-use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
+use corridor_shared::truth_csv::TruthPoint;
 use serde::Serialize;
 use std::path::Path;
 
@@ -341,13 +341,7 @@ pub fn detection_matrix(
             name: r.name.clone(),
             source: Box::new(source),
         };
-        let sensor = ConfigFile::read(&base.join(&r.config))
-            .and_then(|f| f.validate())
-            .map_err(|e| wrap(e.into()))?
-            .sensor;
-        let log =
-            crate::runner::read_log(&base.join(&r.imu), &sensor).map_err(|e| wrap(e.into()))?;
-        let truth = read_truth_csv(&base.join(&r.truth)).map_err(|e| wrap(e.into()))?;
+        let (log, truth) = super::read_recording(base, r).map_err(wrap)?;
         let model = diagnosis_model(base, r).map_err(wrap)?;
         out.recordings.push(r.name.clone());
         // The clean column first: the effects it names are the walk's own (documented in that

@@ -3,7 +3,6 @@
 use super::{SuiteError, read_suite};
 use crate::runner::RunError;
 use corridor_shared::config::{ConfigFile, Mode};
-use corridor_shared::truth_csv::read_truth_csv;
 use std::path::Path;
 
 /// The residual-diagnosis loop on every recording of a suite, starting from the paper's model
@@ -20,13 +19,7 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<String, SuiteError> {
             name: r.name.clone(),
             source: Box::new(source),
         };
-        let sensor = ConfigFile::read(&base.join(&r.config))
-            .and_then(|f| f.validate())
-            .map_err(|e| wrap(e.into()))?
-            .sensor;
-        let log =
-            crate::runner::read_log(&base.join(&r.imu), &sensor).map_err(|e| wrap(e.into()))?;
-        let truth = read_truth_csv(&base.join(&r.truth)).map_err(|e| wrap(e.into()))?;
+        let (log, truth) = super::read_recording(base, r).map_err(wrap)?;
         let mut file = ConfigFile::read(&base.join(&r.config)).map_err(|e| wrap(e.into()))?;
         // The paper's model: no extension states (a model change, not an override).
         file.model = Default::default();

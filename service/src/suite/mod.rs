@@ -277,20 +277,32 @@ struct Ctx<'a> {
     truth: Vec<TruthPoint>,
 }
 
+/// A recording's log, read with its configuration's time-step limits (rejected rows said, see
+/// [`crate::runner::read_log`]), and its truth.
+pub(crate) fn read_recording(
+    base: &Path,
+    r: &SuiteRecording,
+) -> Result<(ImuLog, Vec<TruthPoint>), RunError> {
+    let sensor = ConfigFile::read(&base.join(&r.config))?.validate()?.sensor;
+    Ok((
+        crate::runner::read_log(&base.join(&r.imu), &sensor)?,
+        read_truth_csv(&base.join(&r.truth))?,
+    ))
+}
+
 impl<'a> Ctx<'a> {
     /// Reads a recording's log, truth and configurations.
     fn open(base: &'a Path, r: &'a SuiteRecording) -> Result<Self, RunError> {
-        let config = ConfigFile::read(&base.join(&r.config))?;
-        let sensor = config.validate()?.sensor;
+        let (log, truth) = read_recording(base, r)?;
         Ok(Ctx {
             base,
             rec: r,
-            config,
+            config: ConfigFile::read(&base.join(&r.config))?,
             baseline: ConfigFile::read(
                 &base.join(r.baseline_config.as_ref().unwrap_or(&r.config)),
             )?,
-            log: crate::runner::read_log(&base.join(&r.imu), &sensor)?,
-            truth: read_truth_csv(&base.join(&r.truth))?,
+            log,
+            truth,
         })
     }
 
