@@ -76,6 +76,26 @@ impl Positive {
     pub fn from_degrees(key: &str, degrees: f64) -> Result<Self, ConfigError> {
         Self::new(key, degrees).map(|p| Self(p.0.to_radians()))
     }
+    /// [`Positive::new`] within `[lo, hi]` as well (see [`in_range`]).
+    pub fn in_range(
+        key: &str,
+        value: f64,
+        lo: f64,
+        hi: f64,
+        rule: &'static str,
+    ) -> Result<Self, ConfigError> {
+        Self::new(key, in_range(key, value, lo, hi, rule)?)
+    }
+    /// [`Positive::from_degrees`] within `[lo, hi]` degrees as well.
+    pub fn from_degrees_in_range(
+        key: &str,
+        degrees: f64,
+        lo: f64,
+        hi: f64,
+        rule: &'static str,
+    ) -> Result<Self, ConfigError> {
+        Self::from_degrees(key, in_range(key, degrees, lo, hi, rule)?)
+    }
     /// The value.
     pub fn get(self) -> f64 {
         self.0
@@ -118,14 +138,6 @@ pub(crate) fn invalid(key: &str, value: impl std::fmt::Display, rule: &'static s
     }
 }
 
-pub(crate) fn finite(key: &str, value: f64) -> Result<f64, ConfigError> {
-    if value.is_finite() {
-        Ok(value)
-    } else {
-        Err(invalid(key, value, "must be finite"))
-    }
-}
-
 /// `value` under `key` must lie in `[lo, hi]`, the range the quantity can physically take
 /// (`rule` says it): a value beyond it used to pass as merely "positive" and broke the run
 /// later without naming the key (`initial_tilt_sd_rad = 1e300` froze the estimate).
@@ -140,14 +152,6 @@ pub(crate) fn in_range(
         Ok(value)
     } else {
         Err(invalid(key, value, rule))
-    }
-}
-
-pub(crate) fn non_negative(key: &str, value: f64) -> Result<f64, ConfigError> {
-    if value.is_finite() && value >= 0.0 {
-        Ok(value)
-    } else {
-        Err(invalid(key, value, "must be a finite number >= 0"))
     }
 }
 

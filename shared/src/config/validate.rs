@@ -180,11 +180,11 @@ impl ConfigFile {
         let md = &self.model;
         // The extension states' σ (and random walks): positive, and at most `hi`.
         let opt = |key: &str, v: Option<f64>, hi: f64, rule: &'static str| {
-            v.map(|v| Positive::new(key, in_range(key, v, 0.0, hi, rule)?))
+            v.map(|v| Positive::in_range(key, v, 0.0, hi, rule))
                 .transpose()
         };
         let opt_deg = |key: &str, v: Option<f64>, hi: f64, rule: &'static str| {
-            v.map(|v| Positive::from_degrees(key, in_range(key, v, 0.0, hi, rule)?))
+            v.map(|v| Positive::from_degrees_in_range(key, v, 0.0, hi, rule))
                 .transpose()
         };
         let model = ModelSettings {
@@ -194,16 +194,13 @@ impl ConfigFile {
                 1.0,
                 "must be in (0, 1] rad/s²/√s",
             )?,
-            bias_rate_initial_sd_rad_s2: Positive::new(
+            bias_rate_initial_sd_rad_s2: Positive::in_range(
                 "model.bias_rate_initial_sd_rad_s2",
-                in_range(
-                    "model.bias_rate_initial_sd_rad_s2",
-                    md.bias_rate_initial_sd_rad_s2
-                        .unwrap_or(MODEL_BIAS_RATE_INITIAL_SD_RAD_S2),
-                    0.0,
-                    1.0,
-                    "must be in (0, 1] rad/s²",
-                )?,
+                md.bias_rate_initial_sd_rad_s2
+                    .unwrap_or(MODEL_BIAS_RATE_INITIAL_SD_RAD_S2),
+                0.0,
+                1.0,
+                "must be in (0, 1] rad/s²",
             )?,
             scale_factor_sd: opt(
                 "model.scale_factor_sd",
@@ -249,48 +246,40 @@ impl ConfigFile {
                 "estimator.max_dt_s",
                 e.max_dt_s.unwrap_or(ESTIMATOR_MAX_DT_S),
             )?,
-            max_bridge_s: match e.max_bridge_s.unwrap_or(ESTIMATOR_MAX_BRIDGE_S) {
-                // Interpolating across a second of walking is worse than starting anew.
-                v if (0.0..=1.0).contains(&v) => v,
-                v => {
-                    return Err(invalid("estimator.max_bridge_s", v, "must be in [0, 1] s"));
-                }
-            },
-            max_speed_m_s: Positive::new(
+            // Interpolating across a second of walking is worse than starting anew.
+            max_bridge_s: in_range(
+                "estimator.max_bridge_s",
+                e.max_bridge_s.unwrap_or(ESTIMATOR_MAX_BRIDGE_S),
+                0.0,
+                1.0,
+                "must be in [0, 1] s",
+            )?,
+            max_speed_m_s: Positive::in_range(
                 "estimator.max_speed_m_s",
-                in_range(
-                    "estimator.max_speed_m_s",
-                    e.max_speed_m_s.unwrap_or(ESTIMATOR_MAX_SPEED_M_S),
-                    1.0,
-                    100.0,
-                    "must be in [1, 100] m/s",
-                )?,
+                e.max_speed_m_s.unwrap_or(ESTIMATOR_MAX_SPEED_M_S),
+                1.0,
+                100.0,
+                "must be in [1, 100] m/s",
             )?,
             sensor: self
                 .sensor
                 .validate()
                 .map_err(|e| invalid(e.key, e.value, e.rule))?,
             alignment: AlignmentConfig {
-                min_rest_s: Positive::new(
+                min_rest_s: Positive::in_range(
                     "alignment.min_rest_s",
-                    in_range(
-                        "alignment.min_rest_s",
-                        a.min_rest_s.unwrap_or(ALIGNMENT_MIN_REST_S),
-                        0.0,
-                        3600.0,
-                        "must be in (0, 3600] s",
-                    )?,
+                    a.min_rest_s.unwrap_or(ALIGNMENT_MIN_REST_S),
+                    0.0,
+                    3600.0,
+                    "must be in (0, 3600] s",
                 )?,
                 gyro_bias_prior: a.gyro_bias_prior.unwrap_or(ALIGNMENT_GYRO_BIAS_PRIOR),
                 gravity_m_s2: a
                     .gravity_m_s2
+                    // Earth's gravity lies in 9.76–9.84 m/s² anywhere a foot walks.
                     .map(|g| {
-                        let key = "alignment.gravity_m_s2";
-                        // Earth's gravity lies in 9.76–9.84 m/s² anywhere a foot walks.
-                        Positive::new(
-                            key,
-                            in_range(key, g, 9.7, 9.9, "must be in [9.7, 9.9] m/s²")?,
-                        )
+                        let rule = "must be in [9.7, 9.9] m/s²";
+                        Positive::in_range("alignment.gravity_m_s2", g, 9.7, 9.9, rule)
                     })
                     .transpose()?,
                 rest_tail_s: match a.rest_tail_s.unwrap_or(ALIGNMENT_REST_TAIL_S) {
@@ -298,15 +287,12 @@ impl ConfigFile {
                     v if (0.0..=60.0).contains(&v) => v,
                     v => return Err(invalid("alignment.rest_tail_s", v, "must be in [0, 60] s")),
                 },
-                min_start_stance_s: non_negative(
+                min_start_stance_s: in_range(
                     "alignment.min_start_stance_s",
-                    in_range(
-                        "alignment.min_start_stance_s",
-                        a.min_start_stance_s.unwrap_or(ALIGNMENT_MIN_START_STANCE_S),
-                        0.0,
-                        60.0,
-                        "must be in [0, 60] s",
-                    )?,
+                    a.min_start_stance_s.unwrap_or(ALIGNMENT_MIN_START_STANCE_S),
+                    0.0,
+                    60.0,
+                    "must be in [0, 60] s",
                 )?,
             },
             detector: DetectorConfig {
@@ -316,59 +302,44 @@ impl ConfigFile {
                     "detector.threshold",
                     d.threshold.unwrap_or(DETECTOR_THRESHOLD),
                 )?,
-                sigma_accel_m_s2: Positive::new(
+                sigma_accel_m_s2: Positive::in_range(
                     "detector.sigma_accel_m_s2",
-                    in_range(
-                        "detector.sigma_accel_m_s2",
-                        d.sigma_accel_m_s2.unwrap_or(DETECTOR_SIGMA_ACCEL_M_S2),
-                        1e-06,
-                        100.0,
-                        "must be in [1e-6, 100] m/s²",
-                    )?,
+                    d.sigma_accel_m_s2.unwrap_or(DETECTOR_SIGMA_ACCEL_M_S2),
+                    1e-06,
+                    100.0,
+                    "must be in [1e-6, 100] m/s²",
                 )?,
-                sigma_gyro_rad_s: Positive::new(
+                sigma_gyro_rad_s: Positive::in_range(
                     "detector.sigma_gyro_rad_s",
-                    in_range(
-                        "detector.sigma_gyro_rad_s",
-                        d.sigma_gyro_rad_s.unwrap_or(DETECTOR_SIGMA_GYRO_RAD_S),
-                        1e-06,
-                        10.0,
-                        "must be in [1e-6, 10] rad/s",
-                    )?,
+                    d.sigma_gyro_rad_s.unwrap_or(DETECTOR_SIGMA_GYRO_RAD_S),
+                    1e-06,
+                    10.0,
+                    "must be in [1e-6, 10] rad/s",
                 )?,
-                min_stance_s: non_negative(
+                min_stance_s: in_range(
                     "detector.min_stance_s",
-                    in_range(
-                        "detector.min_stance_s",
-                        d.min_stance_s.unwrap_or(DETECTOR_MIN_STANCE_S),
-                        0.0,
-                        10.0,
-                        "must be in [0, 10] s",
-                    )?,
+                    d.min_stance_s.unwrap_or(DETECTOR_MIN_STANCE_S),
+                    0.0,
+                    10.0,
+                    "must be in [0, 10] s",
                 )?,
-                merge_gap_s: non_negative(
+                merge_gap_s: in_range(
                     "detector.merge_gap_s",
-                    in_range(
-                        "detector.merge_gap_s",
-                        d.merge_gap_s.unwrap_or(DETECTOR_MERGE_GAP_S),
-                        0.0,
-                        10.0,
-                        "must be in [0, 10] s",
-                    )?,
+                    d.merge_gap_s.unwrap_or(DETECTOR_MERGE_GAP_S),
+                    0.0,
+                    10.0,
+                    "must be in [0, 10] s",
                 )?,
                 adaptive_factor: d
                     .adaptive_factor
                     .map(|v| Positive::new("detector.adaptive_factor", v))
                     .transpose()?,
-                adaptive_window_s: Positive::new(
+                adaptive_window_s: Positive::in_range(
                     "detector.adaptive_window_s",
-                    in_range(
-                        "detector.adaptive_window_s",
-                        d.adaptive_window_s.unwrap_or(DETECTOR_ADAPTIVE_WINDOW_S),
-                        0.0,
-                        60.0,
-                        "must be in (0, 60] s",
-                    )?,
+                    d.adaptive_window_s.unwrap_or(DETECTOR_ADAPTIVE_WINDOW_S),
+                    0.0,
+                    60.0,
+                    "must be in (0, 60] s",
                 )?,
                 adaptive_max_threshold: Positive::new(
                     "detector.adaptive_max_threshold",
@@ -378,157 +349,115 @@ impl ConfigFile {
                 )?,
             },
             eskf: EskfConfig {
-                accel_noise_m_s2: Positive::new(
+                accel_noise_m_s2: Positive::in_range(
                     "eskf.accel_noise_m_s2",
-                    in_range(
-                        "eskf.accel_noise_m_s2",
-                        k.accel_noise_m_s2.unwrap_or(ESKF_ACCEL_NOISE_M_S2),
-                        0.0,
-                        100.0,
-                        "must be in (0, 100] m/s²",
-                    )?,
+                    k.accel_noise_m_s2.unwrap_or(ESKF_ACCEL_NOISE_M_S2),
+                    0.0,
+                    100.0,
+                    "must be in (0, 100] m/s²",
                 )?,
-                gyro_noise_rad_s: Positive::new(
+                gyro_noise_rad_s: Positive::in_range(
                     "eskf.gyro_noise_rad_s",
-                    in_range(
-                        "eskf.gyro_noise_rad_s",
-                        k.gyro_noise_rad_s.unwrap_or(ESKF_GYRO_NOISE_RAD_S),
-                        0.0,
-                        10.0,
-                        "must be in (0, 10] rad/s",
-                    )?,
+                    k.gyro_noise_rad_s.unwrap_or(ESKF_GYRO_NOISE_RAD_S),
+                    0.0,
+                    10.0,
+                    "must be in (0, 10] rad/s",
                 )?,
-                gyro_bias_rw_rad_s_sqrt_s: non_negative(
+                gyro_bias_rw_rad_s_sqrt_s: in_range(
                     "eskf.gyro_bias_rw_rad_s_sqrt_s",
-                    in_range(
-                        "eskf.gyro_bias_rw_rad_s_sqrt_s",
-                        k.gyro_bias_rw_rad_s_sqrt_s
-                            .unwrap_or(ESKF_GYRO_BIAS_RW_RAD_S_SQRT_S),
-                        0.0,
-                        1.0,
-                        "must be in [0, 1] rad/s/√s",
-                    )?,
+                    k.gyro_bias_rw_rad_s_sqrt_s
+                        .unwrap_or(ESKF_GYRO_BIAS_RW_RAD_S_SQRT_S),
+                    0.0,
+                    1.0,
+                    "must be in [0, 1] rad/s/√s",
                 )?,
-                gyro_bias_initial_sd_rad_s: Positive::new(
+                gyro_bias_initial_sd_rad_s: Positive::in_range(
                     "eskf.gyro_bias_initial_sd_rad_s",
-                    in_range(
-                        "eskf.gyro_bias_initial_sd_rad_s",
-                        k.gyro_bias_initial_sd_rad_s
-                            .unwrap_or(ESKF_GYRO_BIAS_INITIAL_SD_RAD_S),
-                        0.0,
-                        10.0,
-                        "must be in (0, 10] rad/s",
-                    )?,
+                    k.gyro_bias_initial_sd_rad_s
+                        .unwrap_or(ESKF_GYRO_BIAS_INITIAL_SD_RAD_S),
+                    0.0,
+                    10.0,
+                    "must be in (0, 10] rad/s",
                 )?,
-                gyro_bias_prior_sd_rad_s: Positive::new(
+                gyro_bias_prior_sd_rad_s: Positive::in_range(
                     "eskf.gyro_bias_prior_sd_rad_s",
-                    in_range(
-                        "eskf.gyro_bias_prior_sd_rad_s",
-                        k.gyro_bias_prior_sd_rad_s
-                            .unwrap_or(ESKF_GYRO_BIAS_PRIOR_SD_RAD_S),
-                        0.0,
-                        10.0,
-                        "must be in (0, 10] rad/s",
-                    )?,
+                    k.gyro_bias_prior_sd_rad_s
+                        .unwrap_or(ESKF_GYRO_BIAS_PRIOR_SD_RAD_S),
+                    0.0,
+                    10.0,
+                    "must be in (0, 10] rad/s",
                 )?,
-                zupt_sd_m_s: Positive::new(
+                zupt_sd_m_s: Positive::in_range(
                     "eskf.zupt_sd_m_s",
-                    in_range(
-                        "eskf.zupt_sd_m_s",
-                        k.zupt_sd_m_s.unwrap_or(ESKF_ZUPT_SD_M_S),
-                        0.0,
-                        10.0,
-                        "must be in (0, 10] m/s",
-                    )?,
+                    k.zupt_sd_m_s.unwrap_or(ESKF_ZUPT_SD_M_S),
+                    0.0,
+                    10.0,
+                    "must be in (0, 10] m/s",
                 )?,
-                initial_tilt_sd_rad: Positive::new(
+                initial_tilt_sd_rad: Positive::in_range(
                     "eskf.initial_tilt_sd_rad",
-                    in_range(
-                        "eskf.initial_tilt_sd_rad",
-                        k.initial_tilt_sd_rad.unwrap_or(ESKF_INITIAL_TILT_SD_RAD),
-                        0.0,
-                        std::f64::consts::PI,
-                        "must be in (0, π] rad",
-                    )?,
+                    k.initial_tilt_sd_rad.unwrap_or(ESKF_INITIAL_TILT_SD_RAD),
+                    0.0,
+                    std::f64::consts::PI,
+                    "must be in (0, π] rad",
                 )?,
-                zupt_lever_arm_m: non_negative(
+                zupt_lever_arm_m: in_range(
                     "eskf.zupt_lever_arm_m",
-                    in_range(
-                        "eskf.zupt_lever_arm_m",
-                        k.zupt_lever_arm_m.unwrap_or(ESKF_ZUPT_LEVER_ARM_M),
-                        0.0,
-                        1.0,
-                        "must be in [0, 1] m",
-                    )?,
+                    k.zupt_lever_arm_m.unwrap_or(ESKF_ZUPT_LEVER_ARM_M),
+                    0.0,
+                    1.0,
+                    "must be in [0, 1] m",
                 )?,
                 zero_rate_updates: k.zero_rate_updates.unwrap_or(ESKF_ZERO_RATE_UPDATES),
-                zupt_rolling_height_m: non_negative(
+                zupt_rolling_height_m: in_range(
                     "eskf.zupt_rolling_height_m",
-                    in_range(
-                        "eskf.zupt_rolling_height_m",
-                        k.zupt_rolling_height_m
-                            .unwrap_or(ESKF_ZUPT_ROLLING_HEIGHT_M),
-                        0.0,
-                        1.0,
-                        "must be in [0, 1] m",
-                    )?,
+                    k.zupt_rolling_height_m
+                        .unwrap_or(ESKF_ZUPT_ROLLING_HEIGHT_M),
+                    0.0,
+                    1.0,
+                    "must be in [0, 1] m",
                 )?,
-                clipped_rate_sd_rad_s: non_negative(
+                clipped_rate_sd_rad_s: in_range(
                     "eskf.clipped_rate_sd_rad_s",
-                    in_range(
-                        "eskf.clipped_rate_sd_rad_s",
-                        k.clipped_rate_sd_rad_s
-                            .unwrap_or(ESKF_CLIPPED_RATE_SD_RAD_S),
-                        0.0,
-                        100.0,
-                        "must be in [0, 100] rad/s",
-                    )?,
+                    k.clipped_rate_sd_rad_s
+                        .unwrap_or(ESKF_CLIPPED_RATE_SD_RAD_S),
+                    0.0,
+                    100.0,
+                    "must be in [0, 100] rad/s",
                 )?,
             },
             bias_kf: BiasKfConfig {
-                tilt_sd_rad: Positive::new(
+                tilt_sd_rad: Positive::in_range(
                     "bias_kf.tilt_sd_rad",
-                    in_range(
-                        "bias_kf.tilt_sd_rad",
-                        b.tilt_sd_rad.unwrap_or(BIAS_KF_TILT_SD_RAD),
-                        0.0,
-                        std::f64::consts::PI,
-                        "must be in (0, π] rad",
-                    )?,
+                    b.tilt_sd_rad.unwrap_or(BIAS_KF_TILT_SD_RAD),
+                    0.0,
+                    std::f64::consts::PI,
+                    "must be in (0, π] rad",
                 )?,
-                bias_rw_rad_s_sqrt_s: non_negative(
+                bias_rw_rad_s_sqrt_s: in_range(
                     "bias_kf.bias_rw_rad_s_sqrt_s",
-                    in_range(
-                        "bias_kf.bias_rw_rad_s_sqrt_s",
-                        b.bias_rw_rad_s_sqrt_s
-                            .unwrap_or(BIAS_KF_BIAS_RW_RAD_S_SQRT_S),
-                        0.0,
-                        1.0,
-                        "must be in [0, 1] rad/s/√s",
-                    )?,
+                    b.bias_rw_rad_s_sqrt_s
+                        .unwrap_or(BIAS_KF_BIAS_RW_RAD_S_SQRT_S),
+                    0.0,
+                    1.0,
+                    "must be in [0, 1] rad/s/√s",
                 )?,
             },
             heading: HeadingConfig {
                 source: h.source.unwrap_or(HEADING_SOURCE),
-                sigma_rad: Positive::from_degrees(
+                sigma_rad: Positive::from_degrees_in_range(
                     "heading.sigma_deg",
-                    in_range(
-                        "heading.sigma_deg",
-                        h.sigma_deg.unwrap_or(HEADING_SIGMA_DEG),
-                        0.0,
-                        90.0,
-                        "must be in (0, 90]°",
-                    )?,
+                    h.sigma_deg.unwrap_or(HEADING_SIGMA_DEG),
+                    0.0,
+                    90.0,
+                    "must be in (0, 90]°",
                 )?,
-                grid_rad: deg(finite(
+                grid_rad: deg(in_range(
                     "heading.grid_deg",
-                    in_range(
-                        "heading.grid_deg",
-                        h.grid_deg.unwrap_or(HEADING_GRID_DEG),
-                        -360.0,
-                        360.0,
-                        "must be in [-360, 360]°",
-                    )?,
+                    h.grid_deg.unwrap_or(HEADING_GRID_DEG),
+                    -360.0,
+                    360.0,
+                    "must be in [-360, 360]°",
                 )?),
                 grid_step_rad: {
                     let step = h.grid_step_deg.unwrap_or(HEADING_GRID_STEP_DEG);
@@ -541,80 +470,59 @@ impl ConfigFile {
                     }
                     Positive::from_degrees("heading.grid_step_deg", step)?
                 },
-                start_heading_rad: deg(finite(
+                start_heading_rad: deg(in_range(
                     "heading.start_heading_deg",
-                    in_range(
-                        "heading.start_heading_deg",
-                        h.start_heading_deg.unwrap_or(HEADING_START_HEADING_DEG),
-                        -360.0,
-                        360.0,
-                        "must be in [-360, 360]°",
-                    )?,
+                    h.start_heading_deg.unwrap_or(HEADING_START_HEADING_DEG),
+                    -360.0,
+                    360.0,
+                    "must be in [-360, 360]°",
                 )?),
-                gate_rad: Positive::from_degrees(
+                gate_rad: Positive::from_degrees_in_range(
                     "heading.gate_deg",
-                    in_range(
-                        "heading.gate_deg",
-                        h.gate_deg.unwrap_or(HEADING_GATE_DEG),
-                        0.0,
-                        180.0,
-                        "must be in (0, 180]°",
-                    )?,
+                    h.gate_deg.unwrap_or(HEADING_GATE_DEG),
+                    0.0,
+                    180.0,
+                    "must be in (0, 180]°",
                 )?,
-                straight_max_change_rad: Positive::from_degrees(
+                straight_max_change_rad: Positive::from_degrees_in_range(
                     "heading.straight_max_change_deg",
-                    in_range(
-                        "heading.straight_max_change_deg",
-                        h.straight_max_change_deg
-                            .unwrap_or(HEADING_STRAIGHT_MAX_CHANGE_DEG),
-                        0.0,
-                        180.0,
-                        "must be in (0, 180]°",
-                    )?,
+                    h.straight_max_change_deg
+                        .unwrap_or(HEADING_STRAIGHT_MAX_CHANGE_DEG),
+                    0.0,
+                    180.0,
+                    "must be in (0, 180]°",
                 )?,
                 straight_strides,
                 calibration_strides,
-                obs_delay_s: non_negative(
+                obs_delay_s: in_range(
                     "heading.obs_delay_s",
-                    in_range(
-                        "heading.obs_delay_s",
-                        h.obs_delay_s.unwrap_or(HEADING_OBS_DELAY_S),
-                        0.0,
-                        5.0,
-                        "must be in [0, 5] s",
-                    )?,
+                    h.obs_delay_s.unwrap_or(HEADING_OBS_DELAY_S),
+                    0.0,
+                    5.0,
+                    "must be in [0, 5] s",
                 )?,
-                start_heading_sd_rad: Positive::from_degrees(
+                start_heading_sd_rad: Positive::from_degrees_in_range(
                     "heading.start_heading_sd_deg",
-                    in_range(
-                        "heading.start_heading_sd_deg",
-                        h.start_heading_sd_deg
-                            .unwrap_or(HEADING_START_HEADING_SD_DEG),
-                        0.0,
-                        180.0,
-                        "must be in (0, 180]°",
-                    )?,
+                    h.start_heading_sd_deg
+                        .unwrap_or(HEADING_START_HEADING_SD_DEG),
+                    0.0,
+                    180.0,
+                    "must be in (0, 180]°",
                 )?,
                 observations: h.observations.unwrap_or(HEADING_OBSERVATIONS),
-                stride_sigma_rad: Positive::from_degrees(
+                stride_sigma_rad: Positive::from_degrees_in_range(
                     "heading.stride_sigma_deg",
-                    in_range(
-                        "heading.stride_sigma_deg",
-                        h.stride_sigma_deg.unwrap_or(HEADING_STRIDE_SIGMA_DEG),
-                        0.0,
-                        90.0,
-                        "must be in (0, 90]°",
-                    )?,
+                    h.stride_sigma_deg.unwrap_or(HEADING_STRIDE_SIGMA_DEG),
+                    0.0,
+                    90.0,
+                    "must be in (0, 90]°",
                 )?,
-                min_stride_m: Positive::new(
+                min_stride_m: Positive::in_range(
                     "heading.min_stride_m",
-                    in_range(
-                        "heading.min_stride_m",
-                        h.min_stride_m.unwrap_or(HEADING_MIN_STRIDE_M),
-                        0.0,
-                        10.0,
-                        "must be in (0, 10] m",
-                    )?,
+                    h.min_stride_m.unwrap_or(HEADING_MIN_STRIDE_M),
+                    0.0,
+                    10.0,
+                    "must be in (0, 10] m",
                 )?,
                 line_footprints: match h.line_footprints.unwrap_or(HEADING_LINE_FOOTPRINTS) {
                     n @ (0 | 3..=8) => n,
@@ -626,15 +534,12 @@ impl ConfigFile {
                         ));
                     }
                 },
-                line_lateral_m: Positive::new(
+                line_lateral_m: Positive::in_range(
                     "heading.line_lateral_m",
-                    in_range(
-                        "heading.line_lateral_m",
-                        h.line_lateral_m.unwrap_or(HEADING_LINE_LATERAL_M),
-                        0.0,
-                        10.0,
-                        "must be in (0, 10] m",
-                    )?,
+                    h.line_lateral_m.unwrap_or(HEADING_LINE_LATERAL_M),
+                    0.0,
+                    10.0,
+                    "must be in (0, 10] m",
                 )?,
                 aligned_prior: Fraction::new(
                     "heading.aligned_prior",
