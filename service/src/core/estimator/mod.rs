@@ -22,10 +22,12 @@
 //! takes and gives (samples, estimates, counters, warm start); `alignment.rs` the initial rest
 //! (or first stance) that starts the filter, and a warm start; `observations.rs` what happens
 //! once per stance (calibration and heading observations); `association.rs` the weighted
-//! association with the dominant directions; `rest.rs` the rest sums; `tests.rs` its unit tests.
+//! association with the dominant directions; `rest.rs` the rest sums; `gaps.rs` a step longer
+//! than `estimator.max_dt_s` (bridged or a new segment); `tests.rs` its unit tests.
 
 mod alignment;
 mod association;
+mod gaps;
 mod observations;
 mod rest;
 mod types;
@@ -36,6 +38,7 @@ pub use types::{
     WarmStartError,
 };
 
+use gaps::Gap;
 use rest::{RestMeans, RestSums};
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
@@ -140,16 +143,11 @@ struct Pipeline {
     resumed_look: bool,
     /// The previous navigated sample was a stance sample.
     was_stance: bool,
-    /// A rest whose zero-rate update a health fault undid in the same step: made again once,
-    /// at the next sample (never twice: an update that itself breaks the state is dropped).
-    rest_to_fuse: Option<RestMeans>,
-    /// The rest of `rest_to_fuse` was already retried once.
-    rest_retried: bool,
     clock: SampleClock,
     /// The current stance's sums, for the zero-rate update when it turns out to be a rest.
     stance_rest: RestSums,
-    /// The rest fused by a zero-rate update with the current sample (see `step_running`).
-    zero_rate_applied: Option<RestMeans>,
+    /// A rest was fused by a zero-rate update with the current sample (see `step_running`).
+    zero_rate_applied: bool,
     /// Gyro axes of the current sample at their rail.
     clipped_gyro_axes: [bool; 3],
     stance_obs_done: bool,
@@ -198,12 +196,10 @@ impl Estimator {
             stances_seen: 0,
             resumed_look: false,
             was_stance: false,
-            rest_to_fuse: None,
-            rest_retried: false,
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
             stance_rest: RestSums::new(cfg.alignment.rest_tail_s),
-            zero_rate_applied: None,
+            zero_rate_applied: false,
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
             pending_heading: None,
@@ -408,36 +404,7 @@ impl Pipeline {
         // `prev` and `last` hold the sample clock's times (see `step`).
         let t_clock = self.last.map_or(t_s, |l| l.0);
         let dt = t_clock - t_prev;
-        if dt > self.cfg.max_dt_s.get() && dt <= self.cfg.max_bridge_s {
-            // A short gap (a few lost samples) is bridged: one step on the mean of the rates and
-            // forces on both sides of it, as every step is integrated. What that interpolation
-            // misses is at most half the change of the rate (force) across the gap times its
-            // length: the attitude variance grows by that about the axis of the change, the
-            // velocity variance by its square. Dropping the gap instead lost the rotation of a
-            // swing (0.3 rad in 55 ms) with an attitude σ of a few mrad.
-            self.counters.gaps += 1;
-            self.counters.gaps_bridged += 1;
-            self.out.gap_s = Some(dt);
-            let dw = (w - w_prev) * (0.5 * dt);
-            let dv = ((f - f_prev) * (0.5 * dt)).norm();
-            eskf.widen_velocity(dv * dv);
-            if let Some(axis) = dw.try_normalize(0.0) {
-                eskf.widen_attitude_about(&axis, dw.norm().min(std::f64::consts::PI).powi(2));
-            }
-        } else if dt > self.cfg.max_dt_s.get() {
-            // A new segment. Extrapolating two samples over the gap is meaningless (a 10 s gap
-            // once gave a vertical velocity of −286 m/s), so nothing is integrated over it. The
-            // velocity is kept (the best guess for a short gap; the next ZUPT settles it) but its
-            // variance grows by the largest plausible speed, so that ZUPT moves nothing else; the
-            // attitude variance grows by the gyro noise over the gap. A reset to zero would be
-            // wrong when the gap falls in a swing and the data go on with the same stride.
-            // (Widening the attitude by the rate times the gap as well, about the rate's axis,
-            // made gaps of 0.3–1 s cut out of the suite's walks worse: worst +32 % of path at
-            // 1 s against +21 %. Bridging them too: worse from 0.2 s on, see `max_bridge_s`.)
-            self.counters.gaps += 1;
-            self.out.gap_s = Some(dt);
-            let v_max = self.cfg.max_speed_m_s.get();
-            eskf.widen_after_gap(dt, v_max * v_max);
+        if self.cross_gap(eskf, dt, (&w_prev, w), (&f_prev, f)) == Gap::NewSegment {
             self.fill_output(eskf);
             return;
         }
@@ -463,26 +430,17 @@ impl Pipeline {
             stance,
             stance_age_s,
         );
-        let applied = self.zero_rate_applied.take();
-        let failed = self.guard_health(eskf, &before, stance);
-        if failed && self.phase == Phase::Tracking {
-            self.calibrate_bias_filter(eskf.nav_from_body, t_s);
-        }
+        let applied = std::mem::take(&mut self.zero_rate_applied);
+        let failed = self.guard_health(eskf, &before, stance, t_s);
         self.before = Some(before);
         if failed {
-            // The update was undone: the next step integrates from the previous sample, and a
-            // zero-rate update made with it is made again at the next sample, once: when it
-            // fails again it is the rest that breaks the state, and it is refused.
+            // The update was undone: the next step integrates from the previous sample. A
+            // zero-rate update made in it is undone too, and not made again (it used to be, at
+            // every sample, and a rest that itself broke the state froze the estimator): the
+            // rest is refused, the next one observes the bias.
             self.last = prev;
-            if applied.is_some() && self.rest_retried {
-                self.counters.zero_rate_refused += 1;
-                self.rest_retried = false;
-            } else {
-                self.rest_retried = applied.is_some();
-                self.rest_to_fuse = applied;
-            }
-        } else if applied.is_some() {
-            self.rest_retried = false;
+            self.counters.zero_rate_refused += u64::from(applied);
+        } else if applied {
             self.counters.zero_rate_updates += 1;
         }
         self.fill_output(eskf);
@@ -493,7 +451,7 @@ impl Pipeline {
     /// healthy, and unlike the stance copy it holds the foot's rotation since the stance);
     /// further ones restore the state of the last healthy stance. Keeps a copy of the state at
     /// the first sample of each healthy stance.
-    fn guard_health(&mut self, eskf: &mut Eskf, before: &Eskf, stance: bool) -> bool {
+    fn guard_health(&mut self, eskf: &mut Eskf, before: &Eskf, stance: bool, t_s: f64) -> bool {
         let bias = self.bias_only(eskf);
         let limits = HealthLimits {
             max_speed_m_s: self.cfg.max_speed_m_s.get(),
@@ -518,6 +476,11 @@ impl Pipeline {
                 } else if let Some((e, b)) = self.good.get() {
                     eskf.copy_state_from(e);
                     self.bias.clone_from(b);
+                }
+                // Either copy may hold the bias filter from before the mounting-yaw
+                // calibration (without its observer) while the phase stays tracking.
+                if self.phase == Phase::Tracking {
+                    self.calibrate_bias_filter(eskf.nav_from_body, t_s);
                 }
                 self.counters.health_restores += 1;
                 self.out.health_fault = Some(fault);
@@ -641,9 +604,6 @@ impl Pipeline {
             });
             self.counters.zupts += 1;
         }
-        if let Some(rest) = self.rest_to_fuse.take() {
-            self.fuse_rest(eskf, rest);
-        }
         // Once per stance (footfall): a stance event that began since the last one seen here
         // (it may have begun while aligning).
         if stance && self.stances_seen != self.stance_events.count() {
@@ -696,11 +656,8 @@ impl Pipeline {
         let floor = self.cfg.eskf.gyro_bias_prior_sd_rad_s.get();
         let sd = sem.map(|v| v.hypot(floor));
         match eskf.zero_rate_update(&mean_w, &mean_f, &sd) {
-            Some(Ok(_)) => self.zero_rate_applied = Some(rest),
-            Some(Err(_)) => {
-                self.counters.zero_rate_refused += 1;
-                self.rest_retried = false;
-            }
+            Some(Ok(_)) => self.zero_rate_applied = true,
+            Some(Err(_)) => self.counters.zero_rate_refused += 1,
             None => {}
         }
     }
