@@ -193,8 +193,9 @@ pub struct Counters {
     /// Zero-rate updates of the gyro bias at rests after the alignment.
     pub zero_rate_updates: u64,
     /// Rests whose mean rate was not fused: beyond the χ² gate of the bias the filter holds
-    /// (a foot that turned slowly through the "rest"), or undone by a health fault in the same step; at the
-    /// alignment of a warm start, a rest that disagrees so with the saved bias replaces it.
+    /// (a foot that turned slowly through the "rest"), or undone by a health fault in the same
+    /// step; at the alignment of a warm start, a rest that disagrees so with the saved bias
+    /// replaces it.
     pub zero_rate_refused: u64,
     /// Samples integrated on the smoothed clock because the time stamps jitter (host arrival
     /// times; see `core/clock.rs`).
