@@ -566,8 +566,6 @@ impl Config {
 /// A daemon period or timeout: positive and at most [`crate::injection::MAX_TIME_S`] (1e300 s
 /// passed as positive and panicked where the daemon made a duration of it).
 fn period(key: &'static str, v: f64) -> Result<Positive, ConfigError> {
-    if v > crate::injection::MAX_TIME_S {
-        return Err(invalid(key, v, "must be at most 1e9 s"));
-    }
-    Positive::new(key, v)
+    let max = crate::injection::MAX_TIME_S;
+    Positive::in_range(key, v, 0.0, max, "must be in (0, 1e9] s")
 }
