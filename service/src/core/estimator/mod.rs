@@ -132,6 +132,9 @@ struct Pipeline {
     /// The previous footprint (nominal, map frame) and the direction of the stride that ended
     /// there, for the mounting-yaw calibration.
     last_footprint: Option<([f64; 2], Option<f64>)>,
+    /// Yaw of the sensor's levelled x axis at the previous footprint: the foot's turn over a
+    /// stride is measured from it.
+    footprint_yaw_rad: Option<f64>,
     straight: StraightWalk,
     line: Option<FootprintLine>,
     stance_events: StanceEvents,
@@ -191,6 +194,7 @@ impl Estimator {
             forward_body: Vector3::x(),
             mount_sum: (0.0, 0.0, 0),
             last_footprint: None,
+            footprint_yaw_rad: None,
             stance_events: StanceEvents::new(cfg.detector.merge_gap_s, cfg.max_dt_s.get()),
             stance_edge: StanceEdge::None,
             stances_seen: 0,

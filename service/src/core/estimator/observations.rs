@@ -39,12 +39,12 @@ impl Pipeline {
                 });
             self.last_footprint = Some(([eskf.p_m.x, eskf.p_m.y], Some(stride_dir)));
             eskf.clone_footprint();
+            self.footprint_yaw_rad = Some(self.levelled_yaw(eskf));
             if !straight {
                 return;
             }
             // Heading of the sensor's levelled x axis: ≈ walking direction + mounting yaw.
-            let levelled = eskf.nav_from_body * self.tilt0.inverse();
-            let m = wrap_pi(yaw(&levelled) - stride_dir);
+            let m = wrap_pi(self.levelled_yaw(eskf) - stride_dir);
             self.mount_sum.0 += m.cos();
             self.mount_sum.1 += m.sin();
             self.mount_sum.2 += 1;
@@ -133,6 +133,11 @@ impl Pipeline {
     fn eskf_observations(&mut self, eskf: &mut Eskf, forward: &Vector3<f64>) {
         let h = &self.cfg.heading;
         let xy = [eskf.p_m.x, eskf.p_m.y];
+        // How far the foot turned over the stride (the gyro over one stride: a bias error
+        // adds a fraction of a degree).
+        let stride_turn_rad = self
+            .footprint_yaw_rad
+            .map_or(0.0, |prev| wrap_pi(self.levelled_yaw(eskf) - prev).abs());
         if h.observations.stride() && !self.resumed_look {
             let event = match eskf.stride_prediction() {
                 Some((len, dir, var)) if len >= h.min_stride_m.get() => {
@@ -143,8 +148,14 @@ impl Pipeline {
                         outcome: Err(Rejection::NoSource),
                         baseline_s: 0.0,
                     };
-                    let on_line = self.line.as_mut().and_then(|l| l.push(xy));
-                    let assoc = if on_line == Some(false) {
+                    // Straight walking: the footprint line decides once it holds enough
+                    // footprints; until then (the first strides of tracking) a stride over
+                    // which the foot turned is no straight stride.
+                    let straight = match self.line.as_mut().and_then(|l| l.push(xy)) {
+                        Some(on_line) => on_line,
+                        None => stride_turn_rad <= h.straight_max_change_rad.get(),
+                    };
+                    let assoc = if !straight {
                         Err(Rejection::NotStraight)
                     } else {
                         weighted_association(&self.aid, h, xy, dir, var + sd * sd)
@@ -171,6 +182,7 @@ impl Pipeline {
                 None => None,
             };
             eskf.clone_footprint();
+            self.footprint_yaw_rad = Some(self.levelled_yaw(eskf));
             self.out.stride = event;
         }
         let (foot_heading, var) = eskf.heading_prediction(forward);
@@ -223,6 +235,11 @@ impl Pipeline {
                 }
             }
         }
+    }
+
+    /// Yaw of the sensor's levelled x axis (the attitude with the initial tilt taken out).
+    fn levelled_yaw(&self, eskf: &Eskf) -> f64 {
+        yaw(&(eskf.nav_from_body * self.tilt0.inverse()))
     }
 
     fn count_rejection(&mut self, r: Rejection) {
