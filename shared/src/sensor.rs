@@ -206,11 +206,19 @@ pub enum TimeVerdict {
     NotIncreasing,
     /// The time jumps forward by more than `max_dt_s`: refused until a next sample confirms it.
     Jump,
+    /// The time follows the previous (refused) one, and both contradict the first time base,
+    /// which no sample has followed yet: the first time was the outlier. Accept this one as
+    /// the new time base; what was taken with the first one has to be dropped by the caller.
+    Rebase,
 }
 
 /// The time rule of the CSV reader and of the estimator: strictly increasing by more than
 /// `min_dt_s`; a forward jump beyond `max_dt_s` becomes the new time base only when the next
 /// sample follows it within `max_dt_s` (a real gap), otherwise the jumped sample was an outlier.
+/// The very first time has nothing to be judged against: until a sample follows it, a time
+/// that breaks the rule (earlier, or a jump) is a candidate too, and when the next sample
+/// follows that candidate the first time was the outlier ([`TimeVerdict::Rebase`]): one bad
+/// stamp on the first row no longer makes every later row "not increasing".
 /// The caller calls [`TimeGuard::accept`] with every time it accepts.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TimeGuard {
@@ -218,6 +226,8 @@ pub struct TimeGuard {
     max_dt_s: f64,
     last_s: Option<f64>,
     candidate_s: Option<f64>,
+    /// A sample has followed the time base (every accepted time but the very first).
+    confirmed: bool,
 }
 
 impl TimeGuard {
@@ -228,6 +238,7 @@ impl TimeGuard {
             max_dt_s,
             last_s: None,
             candidate_s: None,
+            confirmed: false,
         }
     }
 
@@ -247,18 +258,29 @@ impl TimeGuard {
         let Some(last) = self.last_s else {
             return TimeVerdict::Accept;
         };
-        let dt = t_s - last;
-        if dt.is_nan() || dt <= self.min_dt_s {
-            return TimeVerdict::NotIncreasing;
-        }
-        if dt <= self.max_dt_s {
+        let follows = |from: f64| {
+            let dt = t_s - from;
+            dt > self.min_dt_s && dt <= self.max_dt_s
+        };
+        if follows(last) {
             return TimeVerdict::Accept;
         }
         if let Some(c) = self.candidate_s
-            && t_s - c > self.min_dt_s
-            && t_s - c <= self.max_dt_s
+            && follows(c)
         {
-            return TimeVerdict::Accept;
+            return if self.confirmed {
+                TimeVerdict::Accept
+            } else {
+                TimeVerdict::Rebase
+            };
+        }
+        let dt = t_s - last;
+        if dt.is_nan() || dt <= self.min_dt_s {
+            // Going back is never a new time base once a sample has followed the base.
+            if !self.confirmed {
+                self.candidate_s = Some(t_s);
+            }
+            return TimeVerdict::NotIncreasing;
         }
         self.candidate_s = Some(t_s);
         TimeVerdict::Jump
@@ -266,8 +288,14 @@ impl TimeGuard {
 
     /// Records `t_s` as accepted: the new time base.
     pub fn accept(&mut self, t_s: f64) {
+        self.confirmed = self.last_s.is_some();
         self.last_s = Some(t_s);
         self.candidate_s = None;
+    }
+
+    /// Whether a sample has followed the time base (false for the very first time).
+    pub fn confirmed(&self) -> bool {
+        self.confirmed
     }
 }
 
@@ -281,7 +309,7 @@ mod tests {
             .iter()
             .map(|&t| {
                 let v = g.check(t);
-                if v == TimeVerdict::Accept {
+                if matches!(v, TimeVerdict::Accept | TimeVerdict::Rebase) {
                     g.accept(t);
                 }
                 v
@@ -308,6 +336,29 @@ mod tests {
         );
         assert_eq!(
             run(&[0.0, 0.01, 0.01, 0.005]),
+            [Accept, Accept, NotIncreasing, NotIncreasing]
+        );
+    }
+
+    #[test]
+    fn a_bad_first_time_is_replaced_by_the_two_rows_after_it() {
+        use TimeVerdict::*;
+        // Far in the future: before, every later row was "not increasing".
+        assert_eq!(
+            run(&[1e9, 0.005, 0.010, 0.015]),
+            [Accept, NotIncreasing, Rebase, Accept]
+        );
+        // Far in the past: the two rows after it agree, so it goes (a real gap after a good
+        // first row would need that row followed first).
+        assert_eq!(run(&[-50.0, 0.0, 0.005]), [Accept, Jump, Rebase]);
+        // A good first time followed by an outlier: nothing is replaced.
+        assert_eq!(
+            run(&[0.0, 0.005, -3.0, 0.010]),
+            [Accept, Accept, NotIncreasing, Accept]
+        );
+        // Going back is never confirmed once the base was followed.
+        assert_eq!(
+            run(&[0.0, 0.005, -3.0, -2.995]),
             [Accept, Accept, NotIncreasing, NotIncreasing]
         );
     }

@@ -15,6 +15,17 @@ const FIELDS: [&str; 6] = [
     "gx_rad_s", "gy_rad_s", "gz_rad_s", "ax_m_s2", "ay_m_s2", "az_m_s2",
 ];
 
+/// What [`Plausibility::check`] says about an accepted sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Accepted {
+    /// An axis is at the rail of its range (probably clipped).
+    pub clipped: bool,
+    /// The stream's first time, which this sample and the refused one before it contradict:
+    /// that first sample was the outlier ([`TimeVerdict::Rebase`]), and what was taken with it
+    /// is to be dropped.
+    pub replaced_first_t_s: Option<f64>,
+}
+
 /// The plausibility check of one stream.
 #[derive(Debug, Clone)]
 pub struct Plausibility {
@@ -36,10 +47,9 @@ impl Plausibility {
         self.time.last_s()
     }
 
-    /// Checks `s`; on `Ok` the sample is accepted (its time is the new time base) and the flag
-    /// says whether an axis is at the rail. On `Err` nothing changed except that a time jump is
-    /// remembered as a candidate time base.
-    pub fn check(&mut self, s: &ImuInput) -> Result<bool, SampleError> {
+    /// Checks `s`; on `Ok` the sample is accepted (its time is the new time base). On `Err`
+    /// nothing changed except that a time jump is remembered as a candidate time base.
+    pub fn check(&mut self, s: &ImuInput) -> Result<Accepted, SampleError> {
         if !s.t_s.is_finite() {
             return Err(SampleError::NonFinite {
                 t_s: s.t_s,
@@ -78,8 +88,10 @@ impl Plausibility {
                 });
             }
         }
-        match self.time.check(s.t_s) {
-            TimeVerdict::Accept => {}
+        let first_t_s = self.time.last_s();
+        let replaced_first_t_s = match self.time.check(s.t_s) {
+            TimeVerdict::Accept => None,
+            TimeVerdict::Rebase => first_t_s,
             TimeVerdict::NotIncreasing => {
                 return Err(SampleError::TimeNotIncreasing {
                     t_s: s.t_s,
@@ -93,10 +105,14 @@ impl Plausibility {
                     max_dt_s: l.max_dt_s(),
                 });
             }
-        }
+        };
         self.time.accept(s.t_s);
         let rail = |v: &[f64; 3], range: f64| v.iter().any(|x| x.abs() >= CLIP_FRACTION * range);
-        Ok(rail(&s.gyro_rad_s, l.gyro_range_rad_s()) || rail(&s.accel_m_s2, l.accel_range_m_s2()))
+        Ok(Accepted {
+            clipped: rail(&s.gyro_rad_s, l.gyro_range_rad_s())
+                || rail(&s.accel_m_s2, l.accel_range_m_s2()),
+            replaced_first_t_s,
+        })
     }
 }
 
@@ -127,7 +143,11 @@ mod tests {
     #[test]
     fn absurd_values_are_refused_rails_are_flagged_normal_values_pass() {
         let mut p = gx5();
-        assert_eq!(p.check(&sample(0.0, [0.1; 3], [0.0, 0.0, 9.8])), Ok(false));
+        let clipped = |r: Result<Accepted, SampleError>| r.map(|a| a.clipped);
+        assert_eq!(
+            clipped(p.check(&sample(0.0, [0.1; 3], [0.0, 0.0, 9.8]))),
+            Ok(false)
+        );
         let err = p
             .check(&sample(0.005, [0.1; 3], [0.0, 0.0, 1e30]))
             .unwrap_err();
@@ -151,11 +171,11 @@ mod tests {
         ));
         // At the rail (8.6 ≥ 0.98 × 8.73): accepted and flagged.
         assert_eq!(
-            p.check(&sample(0.005, [0.0, 8.6, 0.0], [0.0, 0.0, 9.8])),
+            clipped(p.check(&sample(0.005, [0.0, 8.6, 0.0], [0.0, 0.0, 9.8]))),
             Ok(true)
         );
         assert_eq!(
-            p.check(&sample(0.010, [0.0; 3], [0.0, 0.0, 78.0])),
+            clipped(p.check(&sample(0.010, [0.0; 3], [0.0, 0.0, 78.0]))),
             Ok(true)
         );
         assert_eq!(p.last_t_s(), Some(0.010));
@@ -170,10 +190,30 @@ mod tests {
             p.check(&rest(1e30)),
             Err(SampleError::TimeJump { prev_t_s: 0.0, .. })
         ));
-        assert_eq!(p.check(&rest(0.005)), Ok(false));
+        assert_eq!(
+            p.check(&rest(0.005)),
+            Ok(Accepted {
+                clipped: false,
+                replaced_first_t_s: None
+            })
+        );
         assert!(matches!(
             p.check(&rest(f64::INFINITY)),
             Err(SampleError::NonFinite { field: "t_s", .. })
         ));
+    }
+
+    #[test]
+    fn a_bad_first_time_is_replaced_when_the_next_two_agree() {
+        let mut p = gx5();
+        let rest = |t| sample(t, [0.0; 3], [0.0, 0.0, 9.8]);
+        p.check(&rest(1e9)).unwrap();
+        assert!(matches!(
+            p.check(&rest(0.0)),
+            Err(SampleError::TimeNotIncreasing { prev_t_s: 1e9, .. })
+        ));
+        let a = p.check(&rest(0.005)).unwrap();
+        assert_eq!(a.replaced_first_t_s, Some(1e9));
+        assert_eq!(p.check(&rest(0.010)).unwrap().replaced_first_t_s, None);
     }
 }

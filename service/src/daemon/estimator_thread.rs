@@ -238,6 +238,12 @@ impl<'a> EstState<'a> {
                 fault.name()
             );
         }
+        if let Some(first) = e.replaced_first_t_s {
+            tracing::warn!(
+                seq = s.seq,
+                "the stream's first sample had time {first} s, which the samples after it do not follow; it was dropped and the estimator starts again here"
+            );
+        }
         self.last = e;
         self.last_imu_seq = s.seq;
         let ok = out

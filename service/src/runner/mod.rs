@@ -180,7 +180,11 @@ impl<'a> Feed<'a> {
         };
         let max_bridge_s = self.est.config().max_bridge_s;
         match self.est.step(&input) {
-            Ok(e) if e.gap_s.is_some() || e.health_fault.is_some() => {
+            Ok(e)
+                if e.gap_s.is_some()
+                    || e.health_fault.is_some()
+                    || e.replaced_first_t_s.is_some() =>
+            {
                 self.warned += 1;
                 if self.warned <= MAX_REFUSED_EXAMPLES {
                     let at = format!("{}:{}", self.path.display(), row.line);
@@ -196,6 +200,11 @@ impl<'a> Feed<'a> {
                         tracing::warn!(
                             "{at}: estimator state failed the health check ({}); last good state restored",
                             fault.name()
+                        );
+                    }
+                    if let Some(first) = e.replaced_first_t_s {
+                        tracing::warn!(
+                            "{at}: the first sample's time {first} s was an outlier (the samples after it do not follow it); it was dropped and the estimator starts again here"
                         );
                     }
                 }

@@ -98,15 +98,20 @@ pub enum RejectReason {
     /// `t_s` jumps forward by more than [`ImuCsvOptions::max_dt_s`] and the next row does not
     /// follow it (an outlier such as `1e30`; the first row after a real gap also lands here).
     TimeJump,
+    /// The first row's `t_s`, which the next two rows contradict while following each other:
+    /// the first stamp was the outlier (found only after the row that exposed it was rejected
+    /// as not increasing or as a jump).
+    TimeOutlier,
 }
 
 impl RejectReason {
     /// All reasons, in the order used by [`ImuLog::rejected_counts`].
-    pub const ALL: [RejectReason; 4] = [
+    pub const ALL: [RejectReason; 5] = [
         RejectReason::Malformed,
         RejectReason::NonFinite,
         RejectReason::TimeNotIncreasing,
         RejectReason::TimeJump,
+        RejectReason::TimeOutlier,
     ];
 
     /// Stable snake_case name of the reason (`malformed`, `non_finite`, `time_not_increasing`,
@@ -117,6 +122,7 @@ impl RejectReason {
             RejectReason::NonFinite => "non_finite",
             RejectReason::TimeNotIncreasing => "time_not_increasing",
             RejectReason::TimeJump => "time_jump",
+            RejectReason::TimeOutlier => "time_outlier",
         }
     }
 }
@@ -130,6 +136,10 @@ impl fmt::Display for RejectReason {
             RejectReason::TimeNotIncreasing => "is not after the previous accepted t_s",
             RejectReason::TimeJump => {
                 "jumps beyond the largest time step after the previous accepted t_s"
+            }
+            RejectReason::TimeOutlier => {
+                "is the first time stamp, and the rows after it do not follow it (they follow \
+                 each other)"
             }
         })
     }

@@ -35,7 +35,12 @@ pub struct ImuCsvReader<R> {
     pub(super) blank: Option<(u64, u64)>,
     /// Data rows (accepted and rejected).
     pub(super) total: u64,
-    pub(super) rejected_counts: [u64; 4],
+    pub(super) rejected_counts: [u64; 5],
+    /// The first accepted row, held back until a row follows its time (a first time stamp that
+    /// the next rows contradict is the outlier: [`TimeVerdict::Rebase`]).
+    pub(super) held: Option<ImuRow>,
+    /// A row to return before reading on (the one that released the held row).
+    pub(super) ready: Option<ImuRow>,
     pub(super) rejected: Vec<RejectedRow>,
     pub(super) keep_rejected: usize,
     pub(super) accepted: u64,
@@ -83,7 +88,9 @@ impl<R: BufRead> ImuCsvReader<R> {
             time: TimeGuard::new(opts.min_dt_s, opts.max_dt_s),
             blank: None,
             total: 0,
-            rejected_counts: [0; 4],
+            rejected_counts: [0; 5],
+            held: None,
+            ready: None,
             rejected: Vec::new(),
             keep_rejected: REJECTED_ROWS_KEPT,
             accepted: 0,
@@ -237,10 +244,14 @@ impl<R: BufRead> ImuCsvReader<R> {
 
     /// The next accepted row, or an error, or `None` at the end of the source.
     pub(super) fn next_row(&mut self) -> Result<Option<ImuRow>, ImuCsvError> {
+        if let Some(row) = self.ready.take() {
+            return Ok(Some(self.emit(row)));
+        }
         let n_fields = self.names.len();
         loop {
             if !self.read_line()? {
-                return Ok(None);
+                // A one-row log: its only time had nothing to contradict it.
+                return Ok(self.held.take().map(|row| self.emit(row)));
             }
             let line_no = self.line_no;
             if self.line.iter().all(u8::is_ascii_whitespace) {
@@ -267,8 +278,18 @@ impl<R: BufRead> ImuCsvReader<R> {
             let text = strip_cr(Self::line_str(&line));
             let verdict = match parse_row(text, line_no, n_fields, self.temp_index) {
                 Ok(row) => match self.time.check(row.t_s) {
-                    TimeVerdict::Accept => {
+                    verdict @ (TimeVerdict::Accept | TimeVerdict::Rebase) => {
                         self.time.accept(row.t_s);
+                        if verdict == TimeVerdict::Rebase
+                            && let Some(first) = self.held.take()
+                        {
+                            self.reject(RejectedRow {
+                                line: first.line,
+                                column: REQUIRED_COLUMNS[0].to_string(),
+                                value: first.t_s.to_string(),
+                                reason: RejectReason::TimeOutlier,
+                            });
+                        }
                         Ok(row)
                     }
                     verdict => Err(RejectedRow {
@@ -304,16 +325,27 @@ impl<R: BufRead> ImuCsvReader<R> {
             };
             self.line = line;
             match verdict {
+                // The very first time: held until a row follows it.
+                Ok(row) if !self.time.confirmed() => self.held = Some(row),
                 Ok(row) => {
-                    self.accepted += 1;
-                    if self.check_units {
-                        self.units.add(&row);
+                    if let Some(first) = self.held.take() {
+                        self.ready = Some(row);
+                        return Ok(Some(self.emit(first)));
                     }
-                    return Ok(Some(row));
+                    return Ok(Some(self.emit(row)));
                 }
                 Err(rejected) => self.reject(rejected),
             }
         }
+    }
+
+    /// Counts an accepted row on its way out.
+    fn emit(&mut self, row: ImuRow) -> ImuRow {
+        self.accepted += 1;
+        if self.check_units {
+            self.units.add(&row);
+        }
+        row
     }
 
     /// The checks over the whole log, in the order of [`parse_imu_csv`].

@@ -218,6 +218,24 @@ impl Estimator {
         }
     }
 
+    /// The stream's first sample carried a time that the next two samples contradict (see
+    /// [`corridor_shared::sensor::TimeVerdict::Rebase`]): it is dropped after the fact, counted
+    /// as a refused time jump, and the estimator starts again from the current sample. Only the
+    /// first sample can be such an outlier (every later time was judged against one that a
+    /// sample had followed), so nothing but that sample is lost. Kept: the counters, the time
+    /// rule's state (which accepted the current time), a warm start and an external heading not
+    /// yet used. Allocates (a new estimator), once at most per stream.
+    fn restart_after_time_outlier(&mut self) {
+        let mut fresh = Estimator::new(self.p.cfg.clone(), self.p.aid.clone());
+        fresh.p.plausibility = self.p.plausibility.clone();
+        fresh.p.counters = self.p.counters;
+        fresh.p.counters.samples = fresh.p.counters.samples.saturating_sub(1);
+        fresh.p.counters.rejected_time_jump += 1;
+        fresh.p.warm_start = self.p.warm_start.take();
+        fresh.p.pending_heading = self.p.pending_heading.take();
+        *self = fresh;
+    }
+
     /// The configuration.
     pub fn config(&self) -> &Config {
         &self.p.cfg
@@ -277,11 +295,10 @@ impl Estimator {
     pub fn step(&mut self, s: &ImuInput) -> Result<&Estimate, SampleError> {
         let w = Vector3::from(s.gyro_rad_s);
         let f = Vector3::from(s.accel_m_s2);
-        let p = &mut self.p;
-        let clipped = match p.plausibility.check(s) {
-            Ok(clipped) => clipped,
+        let accepted = match self.p.plausibility.check(s) {
+            Ok(a) => a,
             Err(e) => {
-                let c = &mut p.counters;
+                let c = &mut self.p.counters;
                 *match e {
                     SampleError::NonFinite { .. } => &mut c.rejected_non_finite,
                     SampleError::TimeNotIncreasing { .. } => &mut c.rejected_time,
@@ -291,6 +308,11 @@ impl Estimator {
                 return Err(e);
             }
         };
+        if accepted.replaced_first_t_s.is_some() {
+            self.restart_after_time_outlier();
+        }
+        let clipped = accepted.clipped;
+        let p = &mut self.p;
         let prev = p.last;
         p.counters.samples += 1;
         p.counters.clipped_samples += u64::from(clipped);
@@ -316,6 +338,7 @@ impl Estimator {
         out.clipped = clipped;
         out.health_fault = None;
         out.gap_s = None;
+        out.replaced_first_t_s = accepted.replaced_first_t_s;
         out.detector_statistic = decision.statistic;
         out.zupt = None;
         out.heading = None;

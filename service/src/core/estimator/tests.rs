@@ -332,6 +332,48 @@ fn bad_samples_are_refused_counted_and_change_nothing() {
     );
 }
 
+/// A bad time stamp on the stream's very first sample (a daemon's producer that sends garbage
+/// first): before, it became the time base and every later sample was refused as "not
+/// increasing", for ever. Now the two samples after it, which follow each other, replace it:
+/// the first sample is dropped after the fact and the estimator runs as on the clean stream.
+#[test]
+fn a_bad_first_time_stamp_is_dropped_once_the_next_samples_agree() {
+    let rest_then_walk = |est: &mut Estimator, t0: usize| {
+        let mut last = None;
+        for k in t0..700 {
+            let mut s = level_rest(k as f64 * 0.005);
+            if k >= 600 {
+                s.gyro_rad_s = [0.0, 3.0, 0.0];
+            }
+            last = Some(*est.step(&s).unwrap());
+        }
+        last.unwrap()
+    };
+    let mut clean = Estimator::new(Config::default(), HeadingAid::None);
+    clean.step(&level_rest(0.005)).unwrap();
+    let clean_last = rest_then_walk(&mut clean, 2);
+
+    let mut est = Estimator::new(Config::default(), HeadingAid::None);
+    est.step(&level_rest(1e9)).unwrap();
+    assert!(matches!(
+        est.step(&level_rest(0.0)),
+        Err(SampleError::TimeNotIncreasing { .. })
+    ));
+    let e = *est.step(&level_rest(0.005)).unwrap();
+    assert_eq!(e.replaced_first_t_s, Some(1e9));
+    let last = rest_then_walk(&mut est, 2);
+    assert_eq!(last.replaced_first_t_s, None);
+    let c = est.counters();
+    // 1e9 dropped (a time jump), 0.0 refused (not increasing), 0.005 … 3.495 s accepted.
+    assert_eq!(
+        (c.samples, c.rejected_time_jump, c.rejected_time),
+        (699, 1, 1)
+    );
+    // The same stream as one that started at 0.005 s: the same estimate.
+    assert_eq!(last.nav_from_body, clean_last.nav_from_body);
+    assert_eq!(last.phase, clean_last.phase);
+}
+
 /// A stance that the detector splits (foot flat, a 0.1 s wobble, foot flat again) is one
 /// stance: one `stance_began`, one count (one NavSample for the daemon's consumers). Without
 /// merging it is two.

@@ -246,6 +246,10 @@ pub struct Estimate {
     /// Set when the state failed the health check on this sample and the last good state was
     /// restored (the estimate shows the restored state).
     pub health_fault: Option<HealthFault>,
+    /// Set on the sample that showed the stream's first time stamp (this value, s) to be an
+    /// outlier: the first sample was dropped after the fact and the estimator started again
+    /// here.
+    pub replaced_first_t_s: Option<f64>,
     /// Zero-velocity detector statistic.
     pub detector_statistic: f64,
     /// Tracking, and less than `estimator.converged_unabsorbed` of a bias error present when the
@@ -278,6 +282,7 @@ impl Default for Estimate {
             stance_began: false,
             clipped: false,
             health_fault: None,
+            replaced_first_t_s: None,
             gap_s: None,
             detector_statistic: f64::NAN,
             converged: false,
