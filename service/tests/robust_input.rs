@@ -209,3 +209,75 @@ fn a_burst_of_bad_samples_right_after_the_calibration_does_not_undo_it() {
         );
     }
 }
+
+/// A 0.1 s burst of garbage vertical force (60 m/s², within the sensor's limits, so accepted)
+/// just after a footfall of exp17 builds a velocity of about 5 m/s that the next stance update
+/// finds. Before, that update turned the attitude and the bias by what only the velocity got
+/// wrong: the bias ended at [−0.013, −0.011, 0.014] rad/s against [0.0004, −0.0027, 0.0043]
+/// clean, and 1 heading observation was used instead of 11. Now the velocity is reset first
+/// (counted), and the bias and the heading aid carry on as on the clean walk; the position
+/// keeps what the burst did to it (nothing tells how long the wrong velocity lasted).
+#[test]
+fn a_burst_of_garbage_force_resets_the_velocity_and_spares_the_bias_and_heading() {
+    let log = read_imu_csv(
+        &root().join("tests/data/gdins_exp17_rect_loop_small/imu.csv"),
+        &ImuCsvOptions::default(),
+    )
+    .unwrap();
+    let cfg = Config::from_file(&root().join("configs/gdins.toml")).unwrap();
+    let (_, bias_clean, c_clean) = run(&log, &cfg);
+    let mut bad = log.clone();
+    for r in bad.rows.iter_mut().filter(|r| (7.5..7.6).contains(&r.t_s)) {
+        r.accel_m_s2[2] = 60.0;
+    }
+    let (_, bias, c) = run(&bad, &cfg);
+    assert_eq!((c_clean.velocity_resets, c.velocity_resets), (0, 1));
+    for k in 0..3 {
+        assert!(
+            (bias[k] - bias_clean[k]).abs() < 5e-4,
+            "{bias:?} vs clean {bias_clean:?}"
+        );
+    }
+    assert!(
+        c.heading_used + 1 >= c_clean.heading_used,
+        "{} heading observations used, {} on the clean walk",
+        c.heading_used,
+        c_clean.heading_used
+    );
+}
+
+/// A burst of impossible force (280 m/s² for 0.1 s) in exp17's first corner fails the health
+/// check until the state of the last healthy stance is restored. That state holds the heading
+/// from before the corner: before, the heading stayed about 80° off for the rest of the walk
+/// and outside the association's gate (1 heading observation used instead of 11, 27 % of path).
+/// Now the turn the gyro measured since that stance is added back.
+#[test]
+fn a_state_restored_in_a_turn_keeps_the_turn() {
+    let log = read_imu_csv(
+        &root().join("tests/data/gdins_exp17_rect_loop_small/imu.csv"),
+        &ImuCsvOptions::default(),
+    )
+    .unwrap();
+    let cfg = Config::from_file(&root().join("configs/gdins.toml")).unwrap();
+    let (_, _, c_clean) = run(&log, &cfg);
+    let mut bad = log.clone();
+    for r in bad.rows.iter_mut().filter(|r| (7.7..7.8).contains(&r.t_s)) {
+        r.accel_m_s2[2] = 280.0;
+    }
+    let (_, _, c) = run(&bad, &cfg);
+    assert!(
+        c.health_restores > MAX_UNDONE,
+        "{} restores",
+        c.health_restores
+    );
+    assert!(
+        c.heading_used + 1 >= c_clean.heading_used,
+        "{} heading observations used, {} on the clean walk",
+        c.heading_used,
+        c_clean.heading_used
+    );
+}
+
+/// Failed checks in a row that only undo their update (the estimator's `MAX_UNDONE_UPDATES`):
+/// more restore the last healthy stance.
+const MAX_UNDONE: u64 = 3;

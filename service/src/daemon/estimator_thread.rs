@@ -238,6 +238,12 @@ impl<'a> EstState<'a> {
                 fault.name()
             );
         }
+        if e.velocity_reset {
+            tracing::warn!(
+                seq = s.seq,
+                "the stance update found a velocity far beyond what the filter allowed (garbage samples since the last stance?); velocity reset"
+            );
+        }
         if let Some(first) = e.replaced_first_t_s {
             tracing::warn!(
                 seq = s.seq,
@@ -328,6 +334,7 @@ impl<'a> EstState<'a> {
         p.rejected_time_jump += c.rejected_time_jump;
         p.clipped_samples += c.clipped_samples;
         p.health_restores += c.health_restores;
+        p.velocity_resets += c.velocity_resets;
         p.gaps += c.gaps;
         p.stances += c.stances;
         p.heading_used += c.heading_used;
@@ -393,7 +400,7 @@ impl<'a> EstState<'a> {
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
              σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
-             health restores {}, time gaps {}, IMU head missing {}, missing at restart {}, \
+             health restores {}, velocity resets {}, time gaps {}, IMU head missing {}, missing at restart {}, \
              lost in a killed daemon {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
@@ -413,6 +420,7 @@ impl<'a> EstState<'a> {
             self.previous.rejected_time_jump + self.est.counters().rejected_time_jump,
             self.previous.clipped_samples + self.est.counters().clipped_samples,
             self.previous.health_restores + self.est.counters().health_restores,
+            self.previous.velocity_resets + self.est.counters().velocity_resets,
             self.previous.gaps + self.est.counters().gaps,
             rx.head_missing.load(Ordering::Relaxed),
             rx.missing_at_restart.load(Ordering::Relaxed),

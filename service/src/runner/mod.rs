@@ -183,7 +183,8 @@ impl<'a> Feed<'a> {
             Ok(e)
                 if e.gap_s.is_some()
                     || e.health_fault.is_some()
-                    || e.replaced_first_t_s.is_some() =>
+                    || e.replaced_first_t_s.is_some()
+                    || e.velocity_reset =>
             {
                 self.warned += 1;
                 if self.warned <= MAX_REFUSED_EXAMPLES {
@@ -200,6 +201,11 @@ impl<'a> Feed<'a> {
                         tracing::warn!(
                             "{at}: estimator state failed the health check ({}); last good state restored",
                             fault.name()
+                        );
+                    }
+                    if e.velocity_reset {
+                        tracing::warn!(
+                            "{at}: the stance update found a velocity far beyond what the filter allowed (garbage samples since the last stance?); velocity reset"
                         );
                     }
                     if let Some(first) = e.replaced_first_t_s {

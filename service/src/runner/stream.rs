@@ -58,6 +58,8 @@ pub struct Summary {
     pub clipped_samples: u64,
     /// Updates that failed the estimator's health check (the last good state was restored).
     pub health_restores: u64,
+    /// Stance updates that found a velocity far beyond what the filter allowed and reset it.
+    pub velocity_resets: u64,
     /// Samples integrated on the smoothed clock because the stamps jitter (host arrival times).
     pub jittery_clock_samples: u64,
     /// Alignment came from a short first stance (no initial rest, no rest-mean prior).
@@ -412,6 +414,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         samples_refused: feed.refused,
         clipped_samples: c.clipped_samples,
         health_restores: c.health_restores,
+        velocity_resets: c.velocity_resets,
         jittery_clock_samples: c.jittery_clock_samples,
         started_without_rest: c.started_without_rest,
         zero_rate_updates: c.zero_rate_updates,

@@ -507,6 +507,15 @@ impl Eskf {
         }
     }
 
+    /// The attitude turns about the vertical by `angle_rad`, known to `sd_rad`: the nominal
+    /// rotates (position, velocity and the other states stay), and the heading variance grows
+    /// by `sd_rad²`. Used when a restored state lacks a turn the gyro measured since.
+    pub fn turn_heading(&mut self, angle_rad: f64, sd_rad: f64) {
+        self.nav_from_body =
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), angle_rad) * self.nav_from_body;
+        self.p[ix(TH + 2, TH + 2)] += sd_rad * sd_rad;
+    }
+
     /// The velocity variance grows by `var` on every axis (a bridged gap).
     pub fn widen_velocity(&mut self, var: f64) {
         for i in 0..3 {

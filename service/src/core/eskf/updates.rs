@@ -152,6 +152,29 @@ impl Eskf {
         }
     }
 
+    /// Whether the stance velocity update's innovation lies beyond `max_z2` times its variance
+    /// on some axis: a lower bound of its NIS (`rᵀS⁻¹r ≥ rᵢ²/Sᵢᵢ`), so a cheap test for a
+    /// velocity that cannot be what the filter holds.
+    pub fn stance_velocity_implausible(
+        &self,
+        expected_m_s: &Vector3<f64>,
+        sd_m_s: f64,
+        max_z2: f64,
+    ) -> bool {
+        let r = expected_m_s - self.v_m_s;
+        let rv = sd_m_s * sd_m_s;
+        (0..3).any(|a| r[a] * r[a] > max_z2 * (self.p[ix(V0 + a, V0 + a)] + rv))
+    }
+
+    /// The velocity is not what the filter holds (garbage samples since the last stance): its
+    /// error becomes independent of every other state with variance `var_m2_s2` per axis, so
+    /// the next stance update sets it without moving the attitude or the bias.
+    pub fn reset_velocity(&mut self, var_m2_s2: f64) {
+        for a in 0..3 {
+            self.clear_state(V0 + a, var_m2_s2);
+        }
+    }
+
     /// Zero-rate update: during a rest the gyro reads its bias (plus its g-sensitivity times the
     /// specific force, when that is a state). `mean_rate_rad_s` and `mean_f_m_s2` are the means
     /// over the rest (sensor axes); `sd_rad_s` the σ of the mean rate, per axis. `None` when

@@ -23,12 +23,15 @@
 //! (or first stance) that starts the filter, and a warm start; `observations.rs` what happens
 //! once per stance (calibration and heading observations); `association.rs` the weighted
 //! association with the dominant directions; `rest.rs` the rest sums; `gaps.rs` a step longer
-//! than `estimator.max_dt_s` (bridged or a new segment); `tests.rs` its unit tests.
+//! than `estimator.max_dt_s` (bridged or a new segment); `recovery.rs` what it does when the
+//! state or the input goes bad (health check, velocity reset, a first time stamp that was an
+//! outlier); `tests.rs` its unit tests.
 
 mod alignment;
 mod association;
 mod gaps;
 mod observations;
+mod recovery;
 mod rest;
 mod types;
 
@@ -39,6 +42,7 @@ pub use types::{
 };
 
 use gaps::Gap;
+use recovery::VELOCITY_RESET_Z2;
 use rest::{RestMeans, RestSums};
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
@@ -60,9 +64,6 @@ use corridor_shared::sensor::CLIP_FRACTION;
 /// Standard gravity, m/s² (a start without rest: no rest to measure it on).
 const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
-
-/// Failed health checks in a row that undo the update; beyond, the stance copy is restored.
-const MAX_UNDONE_UPDATES: u32 = 3;
 
 /// The bias filter of the `paper` and `rotation_aware` modes.
 #[derive(Debug, Clone)]
@@ -218,24 +219,6 @@ impl Estimator {
         }
     }
 
-    /// The stream's first sample carried a time that the next two samples contradict (see
-    /// [`corridor_shared::sensor::TimeVerdict::Rebase`]): it is dropped after the fact, counted
-    /// as a refused time jump, and the estimator starts again from the current sample. Only the
-    /// first sample can be such an outlier (every later time was judged against one that a
-    /// sample had followed), so nothing but that sample is lost. Kept: the counters, the time
-    /// rule's state (which accepted the current time), a warm start and an external heading not
-    /// yet used. Allocates (a new estimator), once at most per stream.
-    fn restart_after_time_outlier(&mut self) {
-        let mut fresh = Estimator::new(self.p.cfg.clone(), self.p.aid.clone());
-        fresh.p.plausibility = self.p.plausibility.clone();
-        fresh.p.counters = self.p.counters;
-        fresh.p.counters.samples = fresh.p.counters.samples.saturating_sub(1);
-        fresh.p.counters.rejected_time_jump += 1;
-        fresh.p.warm_start = self.p.warm_start.take();
-        fresh.p.pending_heading = self.p.pending_heading.take();
-        *self = fresh;
-    }
-
     /// The configuration.
     pub fn config(&self) -> &Config {
         &self.p.cfg
@@ -338,6 +321,7 @@ impl Estimator {
         out.clipped = clipped;
         out.health_fault = None;
         out.gap_s = None;
+        out.velocity_reset = false;
         out.replaced_first_t_s = accepted.replaced_first_t_s;
         out.detector_statistic = decision.statistic;
         out.zupt = None;
@@ -473,53 +457,6 @@ impl Pipeline {
         self.fill_output(eskf);
     }
 
-    /// The health check after an update; `true` when it failed. The first
-    /// [`MAX_UNDONE_UPDATES`] failures in a row undo the update (the state before it was
-    /// healthy, and unlike the stance copy it holds the foot's rotation since the stance);
-    /// further ones restore the state of the last healthy stance. Keeps a copy of the state at
-    /// the first sample of each healthy stance.
-    fn guard_health(&mut self, eskf: &mut Eskf, before: &Eskf, stance: bool, t_s: f64) -> bool {
-        let bias = self.bias_only(eskf);
-        let limits = HealthLimits {
-            max_speed_m_s: self.cfg.max_speed_m_s.get(),
-            max_gyro_bias_rad_s: self.cfg.sensor.max_gyro_bias_rad_s(),
-        };
-        let failed = match health::check(eskf, &bias, &limits) {
-            Ok(()) => {
-                self.consecutive_faults = 0;
-                if stance && !self.good_saved_this_stance {
-                    self.good.save(&(eskf.clone(), self.bias.clone()));
-                    self.good_saved_this_stance = true;
-                }
-                false
-            }
-            Err(fault) => {
-                self.consecutive_faults += 1;
-                if self.consecutive_faults <= MAX_UNDONE_UPDATES {
-                    eskf.copy_state_from(before);
-                    if let Some(b) = self.before_bias.get() {
-                        self.bias.clone_from(b);
-                    }
-                } else if let Some((e, b)) = self.good.get() {
-                    eskf.copy_state_from(e);
-                    self.bias.clone_from(b);
-                }
-                // Either copy may hold the bias filter from before the mounting-yaw
-                // calibration (without its observer) while the phase stays tracking.
-                if self.phase == Phase::Tracking {
-                    self.calibrate_bias_filter(eskf.nav_from_body, t_s);
-                }
-                self.counters.health_restores += 1;
-                self.out.health_fault = Some(fault);
-                true
-            }
-        };
-        if !stance {
-            self.good_saved_this_stance = false;
-        }
-        failed
-    }
-
     /// Foot-from-sensor rotation: `R_z(mount_yaw)·tilt0`.
     fn foot_from_sensor(&self) -> UnitQuaternion<f64> {
         rot_z(self.mount_yaw_rad) * self.tilt0
@@ -622,13 +559,21 @@ impl Pipeline {
             // provisional yaw from the first "straight" strides was tried: on a walk that starts
             // in a spiral it was confidently wrong (exp37's no-prior recovery 112 -> 795 %).
             let h = self.cfg.eskf.zupt_rolling_height_m;
-            self.out.zupt = Some(if h > 0.0 {
-                let forward = self.foot_forward_body();
-                let v = rolling_velocity(&eskf.nav_from_body, &omega, &forward, h);
-                eskf.stance_velocity_update(&v, sd)
+            let v = if h > 0.0 {
+                rolling_velocity(&eskf.nav_from_body, &omega, &self.foot_forward_body(), h)
             } else {
-                eskf.zupt_with_sd(sd)
-            });
+                Vector3::zeros()
+            };
+            // A velocity far beyond what the filter allows (a burst of garbage samples since the
+            // last stance that the health check did not catch) would turn the attitude and the
+            // bias by what only the velocity got wrong: it is reset instead, as after a gap.
+            if eskf.stance_velocity_implausible(&v, sd, VELOCITY_RESET_Z2) {
+                let v_max = self.cfg.max_speed_m_s.get();
+                eskf.reset_velocity(v_max * v_max);
+                self.counters.velocity_resets += 1;
+                self.out.velocity_reset = true;
+            }
+            self.out.zupt = Some(eskf.stance_velocity_update(&v, sd));
             self.counters.zupts += 1;
         }
         // Once per stance (footfall): a stance event that began since the last one seen here

@@ -160,6 +160,9 @@ pub struct Counters {
     /// the sample's update (the state before it), further ones restore the state of the last
     /// healthy stance.
     pub health_restores: u64,
+    /// Stance updates that found a velocity far beyond what the filter allowed (garbage samples
+    /// since the last stance) and reset the velocity first.
+    pub velocity_resets: u64,
     /// Steps longer than `estimator.max_dt_s`: up to `estimator.max_bridge_s` bridged (one step
     /// across the gap, covariance widened by what the interpolation misses), longer ones start a
     /// new segment (nothing integrated over the gap, velocity and attitude covariance widened).
@@ -250,6 +253,9 @@ pub struct Estimate {
     /// outlier: the first sample was dropped after the fact and the estimator started again
     /// here.
     pub replaced_first_t_s: Option<f64>,
+    /// The stance update on this sample found a velocity far beyond what the filter allowed
+    /// and reset it first (counted in `velocity_resets`).
+    pub velocity_reset: bool,
     /// Zero-velocity detector statistic.
     pub detector_statistic: f64,
     /// Tracking, and less than `estimator.converged_unabsorbed` of a bias error present when the
@@ -283,6 +289,7 @@ impl Default for Estimate {
             clipped: false,
             health_fault: None,
             replaced_first_t_s: None,
+            velocity_reset: false,
             gap_s: None,
             detector_statistic: f64::NAN,
             converged: false,

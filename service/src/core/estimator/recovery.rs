@@ -1,0 +1,130 @@
+//! When the state or the input goes bad: the health check after each update (undo it, or go
+//! back to the last healthy stance with the turn since added back), the velocity reset of a
+//! stance update that finds a velocity far beyond what the filter allows, and the restart when
+//! the stream's first time stamp turns out to be an outlier.
+
+use super::*;
+
+/// Failed health checks in a row that undo the update; beyond, the stance copy is restored.
+const MAX_UNDONE_UPDATES: u32 = 3;
+
+/// A stance update whose innovation on some velocity axis exceeds this many times its variance
+/// (20σ) finds a velocity the filter cannot hold: the velocity is reset. The largest NIS of a
+/// stance update over the 16 gdins walks is 55 (the fast exp38; 1.7–10 on the others).
+pub(super) const VELOCITY_RESET_Z2: f64 = 400.0;
+
+/// σ of the turn added back to a state restored from the last healthy stance, as a fraction of
+/// that turn: the gyro over less than a stride measures it to a scale error or a clipped peak
+/// (a few %), rounded up.
+const RESTORED_TURN_SD: f64 = 0.1;
+
+impl BiasFilter {
+    /// The filter of `saved` (a copy from the last healthy stance) with this one's observer,
+    /// which integrates the raw gyro from its epoch and so already holds the rotation since.
+    pub(super) fn restore_keeping_observer(&mut self, saved: &BiasFilter) {
+        match (self, saved) {
+            (BiasFilter::Paper { kf, obs }, BiasFilter::Paper { kf: k, obs: o }) => {
+                kf.clone_from(k);
+                if obs.is_none() {
+                    obs.clone_from(o);
+                }
+            }
+            (
+                BiasFilter::RotationAware { kf, obs },
+                BiasFilter::RotationAware { kf: k, obs: o },
+            ) => {
+                kf.clone_from(k);
+                if obs.is_none() {
+                    obs.clone_from(o);
+                }
+            }
+            (this, saved) => this.clone_from(saved),
+        }
+    }
+}
+
+impl Estimator {
+    /// The stream's first sample carried a time that the next two samples contradict (see
+    /// [`corridor_shared::sensor::TimeVerdict::Rebase`]): it is dropped after the fact, counted
+    /// as a refused time jump, and the estimator starts again from the current sample. Only the
+    /// first sample can be such an outlier (every later time was judged against one that a
+    /// sample had followed), so nothing but that sample is lost. Kept: the counters, the time
+    /// rule's state (which accepted the current time), a warm start and an external heading not
+    /// yet used. Allocates (a new estimator), once at most per stream.
+    pub(super) fn restart_after_time_outlier(&mut self) {
+        let mut fresh = Estimator::new(self.p.cfg.clone(), self.p.aid.clone());
+        fresh.p.plausibility = self.p.plausibility.clone();
+        fresh.p.counters = self.p.counters;
+        fresh.p.counters.samples = fresh.p.counters.samples.saturating_sub(1);
+        fresh.p.counters.rejected_time_jump += 1;
+        fresh.p.warm_start = self.p.warm_start.take();
+        fresh.p.pending_heading = self.p.pending_heading.take();
+        *self = fresh;
+    }
+}
+
+impl Pipeline {
+    /// The health check after an update; `true` when it failed. The first
+    /// [`MAX_UNDONE_UPDATES`] failures in a row undo the update (the state before it was
+    /// healthy, and unlike the stance copy it holds the foot's rotation since the stance);
+    /// further ones restore the state of the last healthy stance. Keeps a copy of the state at
+    /// the first sample of each healthy stance.
+    pub(super) fn guard_health(
+        &mut self,
+        eskf: &mut Eskf,
+        before: &Eskf,
+        stance: bool,
+        t_s: f64,
+    ) -> bool {
+        let bias = self.bias_only(eskf);
+        let limits = HealthLimits {
+            max_speed_m_s: self.cfg.max_speed_m_s.get(),
+            max_gyro_bias_rad_s: self.cfg.sensor.max_gyro_bias_rad_s(),
+        };
+        let failed = match health::check(eskf, &bias, &limits) {
+            Ok(()) => {
+                self.consecutive_faults = 0;
+                if stance && !self.good_saved_this_stance {
+                    self.good.save(&(eskf.clone(), self.bias.clone()));
+                    self.good_saved_this_stance = true;
+                }
+                false
+            }
+            Err(fault) => {
+                self.consecutive_faults += 1;
+                if self.consecutive_faults <= MAX_UNDONE_UPDATES {
+                    eskf.copy_state_from(before);
+                    if let Some(b) = self.before_bias.get() {
+                        self.bias.clone_from(b);
+                    }
+                } else if let Some((e, b)) = self.good.get() {
+                    // The turn since that stance, as the gyro integrated it (the state before
+                    // this sample): the stance's attitude alone left the heading where it was
+                    // there, and after a turn outside the gate for the rest of the walk.
+                    let fwd = self.forward_body;
+                    let turn = wrap_pi(
+                        heading_of_axis(&before.nav_from_body, &fwd)
+                            - heading_of_axis(&e.nav_from_body, &fwd),
+                    );
+                    eskf.copy_state_from(e);
+                    if turn.is_finite() {
+                        eskf.turn_heading(turn, RESTORED_TURN_SD * turn.abs());
+                    }
+                    self.bias.restore_keeping_observer(b);
+                }
+                // Either copy may hold the bias filter from before the mounting-yaw
+                // calibration (without its observer) while the phase stays tracking.
+                if self.phase == Phase::Tracking {
+                    self.calibrate_bias_filter(eskf.nav_from_body, t_s);
+                }
+                self.counters.health_restores += 1;
+                self.out.health_fault = Some(fault);
+                true
+            }
+        };
+        if !stance {
+            self.good_saved_this_stance = false;
+        }
+        failed
+    }
+}
