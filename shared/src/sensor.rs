@@ -9,6 +9,8 @@
 //!   unit mix-up, a bit flip): the sample is rejected. It is set well above √3 × range because
 //!   factory calibration (scale factor, misalignment) lets a clipped axis read a few percent beyond
 //!   its nominal rail (the gdins logs of the ±8 g 3DM-GX5-25 hold a few values up to 12.5 g).
+//!   A single axis beyond [`AXIS_ABSURD_FACTOR`] × its range is absurd too, whatever the norm:
+//!   the sensor cannot output it.
 //!
 //! There is no rate-of-change limit: with every axis bounded, a sample-to-sample change is bounded
 //! by the plausible magnitude already, and a tighter bound would need the sensor's bandwidth and
@@ -22,6 +24,10 @@ use serde::{Deserialize, Serialize};
 
 /// Fraction of the range at which a value counts as clipped.
 pub const CLIP_FRACTION: f64 = 0.98;
+/// A single axis reading beyond this many times its range cannot come from the sensor: the
+/// sample is refused. The 16 gdins logs reach 1.02 × the gyro range and 1.56 × the accel range
+/// on an axis (factory scaling past the rail), the x-io log a third of either.
+pub const AXIS_ABSURD_FACTOR: f64 = 2.0;
 /// Default gyro range: ±2000 °/s, the widest common MEMS full scale, rad/s.
 pub const DEFAULT_GYRO_RANGE_RAD_S: f64 = 34.906_585;
 /// Default accelerometer range: ±16 g, m/s².

@@ -40,6 +40,9 @@ fn absurd_samples_never_reach_the_published_bias_or_the_checkpoint() {
     let wide = corridor_shared::sensor::SensorFile {
         max_accel_m_s2: Some(1e301),
         max_gyro_rad_s: Some(1e301),
+        // The per-axis limit (twice the range) lifted too.
+        accel_range_m_s2: Some(1e300),
+        gyro_range_rad_s: Some(1e300),
         ..Default::default()
     }
     .validate()

@@ -8,7 +8,9 @@
 //! (within [`CLIP_FRACTION`] of the range) is accepted and flagged as clipped.
 
 use super::estimator::{ImuInput, SampleError};
-use corridor_shared::sensor::{CLIP_FRACTION, SensorLimits, TimeGuard, TimeVerdict};
+use corridor_shared::sensor::{
+    AXIS_ABSURD_FACTOR, CLIP_FRACTION, SensorLimits, TimeGuard, TimeVerdict,
+};
 
 /// Field names in sample order, for messages.
 const FIELDS: [&str; 6] = [
@@ -85,6 +87,22 @@ impl Plausibility {
                     field,
                     value,
                     limit,
+                });
+            }
+        }
+        // A single axis the sensor cannot output, whatever the norm.
+        for (k, &value) in values.iter().enumerate() {
+            let range = if k < 3 {
+                l.gyro_range_rad_s()
+            } else {
+                l.accel_range_m_s2()
+            };
+            if value.abs() > AXIS_ABSURD_FACTOR * range {
+                return Err(SampleError::Implausible {
+                    t_s: s.t_s,
+                    field: FIELDS[k],
+                    value,
+                    limit: AXIS_ABSURD_FACTOR * range,
                 });
             }
         }
@@ -169,6 +187,14 @@ mod tests {
                 ..
             }
         ));
+        // One axis beyond twice its range (the norm is within its limit): refused.
+        let err = p
+            .check(&sample(0.005, [0.1; 3], [0.0, 0.0, 160.0]))
+            .unwrap_err();
+        assert!(
+            matches!(err, SampleError::Implausible { field: "az_m_s2", limit, .. } if limit == 156.9),
+            "{err}"
+        );
         // At the rail (8.6 ≥ 0.98 × 8.73): accepted and flagged.
         assert_eq!(
             clipped(p.check(&sample(0.005, [0.0, 8.6, 0.0], [0.0, 0.0, 9.8]))),

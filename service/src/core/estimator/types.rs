@@ -49,7 +49,7 @@ pub enum SampleError {
         prev_t_s: f64,
     },
     /// A magnitude beyond what the sensor can output (`sensor.max_gyro_rad_s`,
-    /// `sensor.max_accel_m_s2`).
+    /// `sensor.max_accel_m_s2`), or one axis beyond twice its range.
     #[error("sample at t = {t_s} s: {field} = {value:e} is beyond the plausible {limit}")]
     Implausible {
         /// Sample time.
