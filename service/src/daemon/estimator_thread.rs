@@ -249,6 +249,9 @@ impl<'a> EstState<'a> {
                 seq = s.seq,
                 "the stream's first sample had time {first} s, which the samples after it do not follow; it was dropped and the estimator starts again here"
             );
+            // Its time paced the periodic bias output (a first time in the future stopped it);
+            // the attitude published for it stays published.
+            self.last_bias_t_s = f64::NEG_INFINITY;
         }
         self.last = e;
         self.last_imu_seq = s.seq;

@@ -511,8 +511,25 @@ impl Eskf {
     /// rotates (position, velocity and the other states stay), and the heading variance grows
     /// by `sd_rad²`. Used when a restored state lacks a turn the gyro measured since.
     pub fn turn_heading(&mut self, angle_rad: f64, sd_rad: f64) {
-        self.nav_from_body =
-            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), angle_rad) * self.nav_from_body;
+        let r = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), angle_rad);
+        self.nav_from_body = UnitQuaternion::from_rotation_matrix(&r) * self.nav_from_body;
+        // The attitude error is in the navigation frame: its block turns with the nominal,
+        // rows and columns (P ← T P Tᵀ, T = R on the attitude block), and so does its part of
+        // the bias-error response.
+        let (m, n) = (*r.matrix(), self.layout.n);
+        for c in 0..n {
+            response::rotate_block(&mut self.p[c * MAX_N..][..MAX_N], TH, &m);
+        }
+        for rr in 0..n {
+            let mut row: [f64; MAX_N] = std::array::from_fn(|c| self.p[ix(rr, c)]);
+            response::rotate_block(&mut row, TH, &m);
+            for (c, v) in row.iter().enumerate().take(n) {
+                self.p[ix(rr, c)] = *v;
+            }
+        }
+        for c in 0..3 {
+            response::rotate_block(&mut self.response[c * MAX_N..][..MAX_N], TH, &m);
+        }
         self.p[ix(TH + 2, TH + 2)] += sd_rad * sd_rad;
     }
 

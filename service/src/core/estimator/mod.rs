@@ -451,9 +451,12 @@ impl Pipeline {
             // rest is refused, the next one observes the bias.
             self.last = prev;
             self.counters.zero_rate_refused += u64::from(applied);
+            // A velocity reset in it is undone as well; the next stance update judges again.
+            self.out.velocity_reset = false;
         } else if applied {
             self.counters.zero_rate_updates += 1;
         }
+        self.counters.velocity_resets += u64::from(self.out.velocity_reset);
         self.fill_output(eskf);
     }
 
@@ -570,7 +573,7 @@ impl Pipeline {
             if eskf.stance_velocity_implausible(&v, sd, VELOCITY_RESET_Z2) {
                 let v_max = self.cfg.max_speed_m_s.get();
                 eskf.reset_velocity(v_max * v_max);
-                self.counters.velocity_resets += 1;
+                // Counted once the step is kept (`step_running`).
                 self.out.velocity_reset = true;
             }
             self.out.zupt = Some(eskf.stance_velocity_update(&v, sd));

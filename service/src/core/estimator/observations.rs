@@ -150,10 +150,12 @@ impl Pipeline {
                     };
                     // Straight walking: the footprint line decides once it holds enough
                     // footprints; until then (the first strides of tracking) a stride over
-                    // which the foot turned is no straight stride.
-                    let straight = match self.line.as_mut().and_then(|l| l.push(xy)) {
-                        Some(on_line) => on_line,
-                        None => stride_turn_rad <= h.straight_max_change_rad.get(),
+                    // which the foot turned is no straight stride. Without the line test
+                    // (`line_footprints = 0`) every stride is associated, as before it.
+                    let straight = match self.line.as_mut().map(|l| l.push(xy)) {
+                        None => true,
+                        Some(Some(on_line)) => on_line,
+                        Some(None) => stride_turn_rad <= h.straight_max_change_rad.get(),
                     };
                     let assoc = if !straight {
                         Err(Rejection::NotStraight)

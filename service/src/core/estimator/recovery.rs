@@ -56,6 +56,8 @@ impl Estimator {
         fresh.p.plausibility = self.p.plausibility.clone();
         fresh.p.counters = self.p.counters;
         fresh.p.counters.samples = fresh.p.counters.samples.saturating_sub(1);
+        // Only that sample was counted so far: a rail it was at goes with it.
+        fresh.p.counters.clipped_samples = 0;
         fresh.p.counters.rejected_time_jump += 1;
         fresh.p.warm_start = self.p.warm_start.take();
         fresh.p.pending_heading = self.p.pending_heading.take();
@@ -109,6 +111,11 @@ impl Pipeline {
                     eskf.copy_state_from(e);
                     if turn.is_finite() {
                         eskf.turn_heading(turn, RESTORED_TURN_SD * turn.abs());
+                    }
+                    // The observer as it was before this sample (the next step integrates the
+                    // sample's interval again), with the stance's filter.
+                    if let Some(bb) = self.before_bias.get() {
+                        self.bias.clone_from(bb);
                     }
                     self.bias.restore_keeping_observer(b);
                 }
