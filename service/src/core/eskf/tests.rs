@@ -583,3 +583,40 @@ fn heading_offset_state_absorbs_a_constant_offset() {
         f.ext.heading_offset_rad.to_degrees()
     );
 }
+
+#[test]
+fn a_heading_turn_rotates_the_attitude_and_its_covariance_with_it() {
+    // A filter with correlations (a few propagation and update steps in a swing-like motion).
+    let mut f = filter(
+        UnitQuaternion::from_euler_angles(0.1, -0.2, 0.3),
+        Vector3::zeros(),
+        0.01,
+        0.01,
+        all_ext(),
+    );
+    for k in 0..40 {
+        let w = Vector3::new(0.5, 2.0 * (k as f64 * 0.1).sin(), 0.3);
+        f.propagate(&w, &Vector3::new(1.0, 0.5, 9.81), 0.005);
+    }
+    f.zupt();
+    let (q0, p0) = (f.nav_from_body, dense(&f));
+    let a = 0.7;
+    f.turn_heading(a, 0.0);
+    let r = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), a);
+    assert!(
+        f.nav_from_body
+            .angle_to(&(UnitQuaternion::from_rotation_matrix(&r) * q0))
+            < 1e-12
+    );
+    // P ← T P Tᵀ with T the identity but R on the attitude block.
+    let n = p0.nrows();
+    let mut t = nalgebra::DMatrix::<f64>::identity(n, n);
+    t.view_mut((TH, TH), (3, 3)).copy_from(r.matrix());
+    let want = &t * &p0 * t.transpose();
+    let err = (dense(&f) - want).abs().max();
+    assert!(err < 1e-15, "{err}");
+    // The σ given is added to the heading variance.
+    let before = dense(&f)[(TH + 2, TH + 2)];
+    f.turn_heading(0.0, 0.1);
+    assert!((dense(&f)[(TH + 2, TH + 2)] - before - 0.01).abs() < 1e-15);
+}
