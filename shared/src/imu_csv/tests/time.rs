@@ -1,0 +1,86 @@
+//! The time rule of the reader (`sensor::TimeGuard`), row by row: going back, duplicates, an
+//! absurd time mid-file, on the last row and on the first.
+
+use super::*;
+
+#[test]
+fn time_going_backwards_is_rejected() {
+    // Line 6 holds t = 0.02; put an earlier time there.
+    let text = replace_line(&good_file(200), 6, "0.001,0.01,0.02,0.03,0.1,0.2,9.8");
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(log.rows.len(), 199);
+    let r = &log.rejected[0];
+    assert_eq!(
+        (r.line, r.column.as_str(), r.value.as_str()),
+        (6, "t_s", "0.001")
+    );
+    assert_eq!(r.reason, RejectReason::TimeNotIncreasing);
+    assert_eq!(log.rejected_counts()["time_not_increasing"], 1);
+    assert_eq!(
+        r.to_string(),
+        "line 6 column t_s: value \"0.001\" is not after the previous accepted t_s"
+    );
+    // The next row is compared with the last accepted time, not with the rejected one.
+    assert_eq!(log.rows[4].line, 7);
+}
+
+#[test]
+fn an_absurd_time_is_rejected_and_the_rows_after_it_are_kept() {
+    // Before: t = 1e30 on line 6 became the time base and every later row was rejected as
+    // "not after the previous accepted t_s", the error naming line 7.
+    let text = replace_line(&good_file(200), 6, "1e30,0.01,0.02,0.03,0.1,0.2,9.8");
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(log.rows.len(), 199);
+    assert_eq!(log.rejected.len(), 1);
+    let r = &log.rejected[0];
+    assert_eq!((r.line, r.reason), (6, RejectReason::TimeJump));
+    assert_eq!(log.rejected_counts()["time_jump"], 1);
+    // On the last row too.
+    let n = good_file(200).trim_end().lines().count();
+    let text = replace_line(&good_file(200), n, "1e30,0.01,0.02,0.03,0.1,0.2,9.8");
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!((log.rows.len(), log.rejected[0].line), (199, n as u64));
+    assert!(log.rows.iter().all(|r| r.t_s < 2.0));
+}
+
+#[test]
+fn an_absurd_first_time_is_rejected_once_the_rows_after_it_agree() {
+    // Before: t = 1e9 on the first row became the time base and every later row was rejected
+    // as "not after the previous accepted t_s" (the whole log refused).
+    let text = replace_line(&good_file(200), 2, "1e9,0.01,0.02,0.03,0.1,0.2,9.8");
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    // The row that exposed it (line 3) goes too: it was refused before the next one agreed.
+    assert_eq!(log.rows.len(), 198);
+    assert_eq!(log.rows[0].line, 4);
+    assert!(log.rows.windows(2).all(|w| w[1].t_s > w[0].t_s));
+    let reasons: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
+    assert_eq!(
+        reasons,
+        [
+            (3, RejectReason::TimeNotIncreasing),
+            (2, RejectReason::TimeOutlier)
+        ]
+    );
+    assert_eq!(log.rejected[1].value, "1000000000");
+    assert_eq!(log.rejected_counts()["time_outlier"], 1);
+    // A good first row is held only until the second follows it, and a one-row log keeps its
+    // row.
+    let log = parse_imu_csv(&good_file(200), path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(
+        (log.rows.len(), log.rows[0].line, log.rows[1].line),
+        (200, 2, 3)
+    );
+    let log = parse_imu_csv(&good_file(1), path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(log.rows.len(), 1);
+}
+
+#[test]
+fn duplicate_timestamp_is_rejected() {
+    let text = replace_line(&good_file(200), 4, &row(0.005));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(log.rows.len(), 199);
+    assert_eq!(log.rejected.len(), 1);
+    assert_eq!(log.rejected[0].line, 4);
+    assert_eq!(log.rejected[0].reason, RejectReason::TimeNotIncreasing);
+    assert_eq!(log.rejected[0].value, "0.005");
+}

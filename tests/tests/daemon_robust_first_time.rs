@@ -1,0 +1,73 @@
+//! A stream whose very first sample carries a bad time stamp (a driver that sends garbage
+//! first). Before, that time became the time base and the daemon refused every later sample as
+//! "not increasing", for the life of the stream. Now the two samples after it, which follow each
+//! other, replace it: the daemon drops the first sample after the fact, counts it, and runs as
+//! on the stream without it (bias bit-identical to the estimator fed the same samples), with
+//! its periodic bias output (paced by sensor time, which the dropped 1e9 s had stopped).
+//!
+//! One daemon test per binary (see `one_daemon_at_a_time`).
+
+mod daemon_common;
+
+use corridor_client::{Delivery, Domain, Subscriber};
+use corridor_service::core::{Estimator, ImuInput};
+use corridor_service::runner::heading_aid;
+use corridor_shared::wire::BiasSample;
+use daemon_common::*;
+
+#[test]
+fn a_bad_first_time_stamp_costs_two_samples_not_the_stream() {
+    let _one = one_daemon_at_a_time();
+    let name = "test_robust_daemon_first_time";
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let dcfg = daemon_config(&domain, Delivery::Lossless);
+    let bias_period_s = dcfg.bias_period_s;
+    let daemon = Running::start(dcfg);
+    let bias = Subscriber::<BiasSample>::open(&domain, "test-first-time-bias", WAIT).unwrap();
+    let mut rows = exp36_rows();
+    rows.truncate(4000); // 20 s
+    rows[0].t_s = 1e9;
+    let producer = produce(
+        &domain,
+        "test-first-time",
+        Delivery::Lossless,
+        rows.clone(),
+        true,
+    );
+    let got = until_end(&bias, |b| b.flags);
+    producer.join();
+    drop(bias);
+    let report = daemon.stop();
+
+    // The estimator fed the same samples, in-process.
+    let cfg = config();
+    let mut est = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
+    let mut refused = 0;
+    for r in &rows {
+        let s = ImuInput {
+            t_s: r.t_s,
+            gyro_rad_s: r.gyro_rad_s,
+            accel_m_s2: r.accel_m_s2,
+        };
+        refused += usize::from(est.step(&s).is_err());
+    }
+    let c = est.counters();
+    // The second sample refused (not increasing), the first dropped after the fact.
+    assert_eq!(refused, 1);
+    assert_eq!(
+        (c.samples, c.rejected_time, c.rejected_time_jump),
+        (3998, 1, 1)
+    );
+    let last = got.last().expect("bias samples");
+    assert_eq!(last.gyro_bias_rad_s, est.last_estimate().gyro_bias_rad_s);
+    // Periodic bias output over the 20 s (before: none after the alignment's).
+    let periodic = got.iter().filter(|b| b.t_s < 1e8).count() as f64;
+    assert!(
+        periodic >= 0.5 * 19.0 / bias_period_s,
+        "{periodic} bias samples in 20 s at a period of {bias_period_s} s"
+    );
+    let d = report.diagnostics;
+    assert_eq!((d.accepted, d.rejected_time), (3998, 1), "{d:?}");
+    cleanup_domain(name);
+}
