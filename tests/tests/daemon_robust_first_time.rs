@@ -62,8 +62,8 @@ fn a_bad_first_time_stamp_costs_two_samples_not_the_stream() {
     let last = got.last().expect("bias samples");
     assert_eq!(last.gyro_bias_rad_s, est.last_estimate().gyro_bias_rad_s);
     // The periodic bias output runs from the start of the stream, the first one within a period
-    // of it (before: after the one published for the
-    // dropped sample at 1e9 s, nothing until the alignment, then only at heading observations).
+    // of it (before: after the one published for the dropped sample at 1e9 s, nothing until
+    // the alignment, then only at heading observations).
     let times: Vec<f64> = got.iter().map(|b| b.t_s).filter(|&t| t < 1e8).collect();
     let longest = times
         .windows(2)
