@@ -32,14 +32,21 @@ pub struct Accepted {
 #[derive(Debug, Clone)]
 pub struct Plausibility {
     limits: SensorLimits,
+    /// Per field, in sample order: the value beyond which one axis is absurd.
+    axis_limits: [f64; 6],
     time: TimeGuard,
 }
 
 impl Plausibility {
     /// A check with `limits` and no time base yet.
     pub fn new(limits: SensorLimits) -> Self {
+        let (g, a) = (
+            AXIS_ABSURD_FACTOR * limits.gyro_range_rad_s(),
+            AXIS_ABSURD_FACTOR * limits.accel_range_m_s2(),
+        );
         Self {
             time: TimeGuard::from_limits(&limits),
+            axis_limits: [g, g, g, a, a, a],
             limits,
         }
     }
@@ -91,18 +98,13 @@ impl Plausibility {
             }
         }
         // A single axis the sensor cannot output, whatever the norm.
-        for (k, &value) in values.iter().enumerate() {
-            let range = if k < 3 {
-                l.gyro_range_rad_s()
-            } else {
-                l.accel_range_m_s2()
-            };
-            if value.abs() > AXIS_ABSURD_FACTOR * range {
+        for ((&value, &limit), field) in values.iter().zip(&self.axis_limits).zip(FIELDS) {
+            if value.abs() > limit {
                 return Err(SampleError::Implausible {
                     t_s: s.t_s,
-                    field: FIELDS[k],
+                    field,
                     value,
-                    limit: AXIS_ABSURD_FACTOR * range,
+                    limit,
                 });
             }
         }

@@ -133,11 +133,6 @@ impl Pipeline {
     fn eskf_observations(&mut self, eskf: &mut Eskf, forward: &Vector3<f64>) {
         let h = &self.cfg.heading;
         let xy = [eskf.p_m.x, eskf.p_m.y];
-        // How far the foot turned over the stride (the gyro over one stride: a bias error
-        // adds a fraction of a degree).
-        let stride_turn_rad = self
-            .footprint_yaw_rad
-            .map_or(0.0, |prev| wrap_pi(self.levelled_yaw(eskf) - prev).abs());
         if h.observations.stride() && !self.resumed_look {
             let event = match eskf.stride_prediction() {
                 Some((len, dir, var)) if len >= h.min_stride_m.get() => {
@@ -150,12 +145,16 @@ impl Pipeline {
                     };
                     // Straight walking: the footprint line decides once it holds enough
                     // footprints; until then (the first strides of tracking) a stride over
-                    // which the foot turned is no straight stride. Without the line test
-                    // (`line_footprints = 0`) every stride is associated, as before it.
+                    // which the foot turned is no straight stride (the turn is the gyro's over
+                    // one stride: a bias error adds a fraction of a degree). Without the line
+                    // test (`line_footprints = 0`) every stride is associated, as before it.
                     let straight = match self.line.as_mut().map(|l| l.push(xy)) {
                         None => true,
                         Some(Some(on_line)) => on_line,
-                        Some(None) => stride_turn_rad <= h.straight_max_change_rad.get(),
+                        Some(None) => self.footprint_yaw_rad.is_none_or(|prev| {
+                            wrap_pi(self.levelled_yaw(eskf) - prev).abs()
+                                <= h.straight_max_change_rad.get()
+                        }),
                     };
                     let assoc = if !straight {
                         Err(Rejection::NotStraight)
