@@ -23,7 +23,7 @@ fn exp36() -> (ImuLog, Config) {
 }
 
 /// Final position and bias of `log` through the runner, and the estimator counters.
-fn run(log: &ImuLog, cfg: &Config) -> ([f64; 2], [f64; 3], corridor_service::core::Counters) {
+fn run(log: &ImuLog, cfg: &Config) -> Outcome {
     let aid = heading_aid(cfg, None).unwrap();
     let out = run_log(log, cfg, &aid, &BiasInjection::default(), |_, _| {});
     let n = out.trace.t_s.len();
@@ -223,18 +223,7 @@ fn a_burst_of_bad_samples_right_after_the_calibration_does_not_undo_it() {
 /// keeps what the burst did to it (nothing tells how long the wrong velocity lasted).
 #[test]
 fn a_burst_of_garbage_force_resets_the_velocity_and_spares_the_bias_and_heading() {
-    let log = read_imu_csv(
-        &root().join("tests/data/gdins_exp17_rect_loop_small/imu.csv"),
-        &ImuCsvOptions::default(),
-    )
-    .unwrap();
-    let cfg = Config::from_file(&root().join("configs/gdins.toml")).unwrap();
-    let (_, bias_clean, c_clean) = run(&log, &cfg);
-    let mut bad = log.clone();
-    for r in bad.rows.iter_mut().filter(|r| (7.5..7.6).contains(&r.t_s)) {
-        r.accel_m_s2[2] = 60.0;
-    }
-    let (_, bias, c) = run(&bad, &cfg);
+    let ((_, bias_clean, c_clean), (_, bias, c)) = exp17_with_a_burst(7.5, 60.0);
     assert_eq!((c_clean.velocity_resets, c.velocity_resets), (0, 1));
     for k in 0..3 {
         assert!(
@@ -258,18 +247,7 @@ fn a_burst_of_garbage_force_resets_the_velocity_and_spares_the_bias_and_heading(
 /// Now the turn the gyro measured since that stance is added back.
 #[test]
 fn a_state_restored_in_a_turn_keeps_the_turn() {
-    let log = read_imu_csv(
-        &root().join("tests/data/gdins_exp17_rect_loop_small/imu.csv"),
-        &ImuCsvOptions::default(),
-    )
-    .unwrap();
-    let cfg = Config::from_file(&root().join("configs/gdins.toml")).unwrap();
-    let (_, _, c_clean) = run(&log, &cfg);
-    let mut bad = log.clone();
-    for r in bad.rows.iter_mut().filter(|r| (7.7..7.8).contains(&r.t_s)) {
-        r.accel_m_s2[2] = 150.0;
-    }
-    let (_, _, c) = run(&bad, &cfg);
+    let ((_, _, c_clean), (_, _, c)) = exp17_with_a_burst(7.7, 150.0);
     assert!(
         c.health_restores > MAX_UNDONE,
         "{} restores",
@@ -281,6 +259,28 @@ fn a_state_restored_in_a_turn_keeps_the_turn() {
         c.heading_used,
         c_clean.heading_used
     );
+}
+
+type Outcome = ([f64; 2], [f64; 3], corridor_service::core::Counters);
+
+/// exp17 through the runner clean, and with the vertical force replaced by `accel_z_m_s2` for
+/// the 0.1 s from `t0_s`.
+fn exp17_with_a_burst(t0_s: f64, accel_z_m_s2: f64) -> (Outcome, Outcome) {
+    let log = read_imu_csv(
+        &root().join("tests/data/gdins_exp17_rect_loop_small/imu.csv"),
+        &ImuCsvOptions::default(),
+    )
+    .unwrap();
+    let cfg = Config::from_file(&root().join("configs/gdins.toml")).unwrap();
+    let mut bad = log.clone();
+    for r in bad
+        .rows
+        .iter_mut()
+        .filter(|r| (t0_s..t0_s + 0.1).contains(&r.t_s))
+    {
+        r.accel_m_s2[2] = accel_z_m_s2;
+    }
+    (run(&log, &cfg), run(&bad, &cfg))
 }
 
 /// Failed checks in a row that only undo their update (the estimator's `MAX_UNDONE_UPDATES`):
