@@ -19,6 +19,28 @@ fn corridor(args: &[&str]) -> std::process::Output {
 
 /// A suite file of bundled walks with their gaits (paths absolute, so that it can live in a
 /// temporary directory), written to `dir/suite.toml`.
+/// `corridor run --imu IMU --out OUT`, then `extra`.
+fn run_cmd(imu: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "run",
+        "--imu",
+        imu.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    corridor(&args)
+}
+
+/// The gdins sensor configuration.
+fn gdins() -> String {
+    root()
+        .join("configs/gdins.toml")
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
 fn suite_of(dir: &Path, walks: &[(&str, &str)]) -> PathBuf {
     let mut suite = String::new();
     for (walk, gait) in walks {
@@ -49,20 +71,19 @@ fn tmp(name: &str) -> TempDir {
 fn run_writes_estimates_innovations_and_summary() {
     let out = tmp("run");
     let data = root().join("tests/data/gdins_exp36_corridor_out_and_back");
-    let o = corridor(&[
-        "run",
-        "--imu",
-        data.join("imu.csv").to_str().unwrap(),
-        "--truth",
-        data.join("ground_truth.csv").to_str().unwrap(),
-        "--config",
-        root().join("configs/gdins.toml").to_str().unwrap(),
-        "--inject-gyro-bias",
-        "0.001,0.001,0.005",
-        "--plots",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_cmd(
+        &data.join("imu.csv"),
+        &out,
+        &[
+            "--truth",
+            data.join("ground_truth.csv").to_str().unwrap(),
+            "--config",
+            &gdins(),
+            "--inject-gyro-bias",
+            "0.001,0.001,0.005",
+            "--plots",
+        ],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let est = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
     let header = est.lines().next().unwrap();
@@ -164,13 +185,7 @@ fn malformed_rows_are_counted_and_reported_with_line_column_and_value() {
     let imu = dir.join("imu.csv");
     std::fs::write(&imu, lines.join("\n") + "\n").unwrap();
     let out = dir.join("o");
-    let o = corridor(&[
-        "run",
-        "--imu",
-        imu.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_cmd(&imu, &out, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -212,15 +227,7 @@ fn absurd_values_and_times_are_refused_counted_and_named_in_the_summary() {
     let imu = dir.join("imu.csv");
     std::fs::write(&imu, lines.join("\n") + "\n").unwrap();
     let out = dir.join("o");
-    let o = corridor(&[
-        "run",
-        "--imu",
-        imu.to_str().unwrap(),
-        "--config",
-        root().join("configs/gdins.toml").to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_cmd(&imu, &out, &["--config", &gdins()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary = read_json(&out.join("summary.json"));
     assert_eq!(summary["input_rows_rejected"]["time_jump"], 2);
@@ -249,15 +256,7 @@ fn absurd_values_and_times_are_refused_counted_and_named_in_the_summary() {
 fn a_nan_flag_value_is_an_error_naming_the_flag() {
     let data = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
     let out = tmp("nanflag");
-    let o = corridor(&[
-        "run",
-        "--imu",
-        data.to_str().unwrap(),
-        "--inject-after-s",
-        "nan",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_cmd(&data, &out, &["--inject-after-s", "nan"]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -280,13 +279,7 @@ fn too_many_bad_rows_stop_the_run_with_the_first_one_named() {
     }
     let imu = dir.join("imu.csv");
     std::fs::write(&imu, text).unwrap();
-    let o = corridor(&[
-        "run",
-        "--imu",
-        imu.to_str().unwrap(),
-        "--out",
-        dir.join("o").to_str().unwrap(),
-    ]);
+    let o = run_cmd(&imu, &dir.join("o"), &[]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -309,13 +302,7 @@ fn degrees_per_second_are_refused() {
         text += &format!("{},0.0,{gy},0.0,0.0,0.0,9.81\n", k as f64 * 0.005);
     }
     std::fs::write(&imu, text).unwrap();
-    let o = corridor(&[
-        "run",
-        "--imu",
-        imu.to_str().unwrap(),
-        "--out",
-        dir.join("o").to_str().unwrap(),
-    ]);
+    let o = run_cmd(&imu, &dir.join("o"), &[]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("deg/s"), "{err}");
@@ -327,15 +314,7 @@ fn bad_config_names_the_key() {
     let cfg = dir.join("c.toml");
     std::fs::write(&cfg, "[heading]\nsigma_deg = -3.0\n").unwrap();
     let imu = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
-    let o = corridor(&[
-        "run",
-        "--imu",
-        imu.to_str().unwrap(),
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        dir.join("o").to_str().unwrap(),
-    ]);
+    let o = run_cmd(&imu, &dir.join("o"), &["--config", cfg.to_str().unwrap()]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -351,20 +330,11 @@ fn run_starts_from_a_checkpoint_as_the_daemon_does_and_names_a_missing_one() {
     let imu = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
     let config = root().join("configs/gdins.toml");
     let run = |ckpt: Option<&Path>, out: &str| {
-        let out = dir.join(out);
-        let mut args = vec![
-            "run",
-            "--imu",
-            imu.to_str().unwrap(),
-            "--config",
-            config.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ];
+        let mut extra = vec!["--config", config.to_str().unwrap()];
         if let Some(c) = ckpt {
-            args.extend(["--checkpoint", c.to_str().unwrap()]);
+            extra.extend(["--checkpoint", c.to_str().unwrap()]);
         }
-        corridor(&args)
+        run_cmd(&imu, &dir.join(out), &extra)
     };
     // The bias of the first estimate after the alignment.
     let start_bias = |out: &str| -> [f64; 3] {
@@ -477,21 +447,20 @@ fn eval_scores_the_footprints_before_a_flagged_truth_leg() {
     let cut = dir.join("truth_before_leg_30.csv");
     std::fs::write(&cut, truth.join("\n") + "\n").unwrap();
     let run = dir.join("run");
-    let o = corridor(&[
-        "run",
-        "--imu",
-        data.join("imu.csv").to_str().unwrap(),
-        "--config",
-        root().join("configs/gdins.toml").to_str().unwrap(),
-        "--start-heading-deg",
-        "0",
-        "--grid-deg",
-        "0",
-        "--truth",
-        cut.to_str().unwrap(),
-        "--out",
-        run.to_str().unwrap(),
-    ]);
+    let o = run_cmd(
+        &data.join("imu.csv"),
+        &run,
+        &[
+            "--config",
+            &gdins(),
+            "--start-heading-deg",
+            "0",
+            "--grid-deg",
+            "0",
+            "--truth",
+            cut.to_str().unwrap(),
+        ],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary = read_json(&run.join("summary.json"));
     let expected = summary["eval"]["rms_error_pct_of_path"].as_f64().unwrap();
@@ -653,15 +622,7 @@ fn a_bad_mode_is_said_once_and_clamped_footprints_are_said_on_the_terminal() {
     let out = tmp("said");
     let data = root().join("tests/data/gdins_exp36_corridor_out_and_back");
     let imu = data.join("imu.csv");
-    let o = corridor(&[
-        "run",
-        "--imu",
-        imu.to_str().unwrap(),
-        "--out",
-        out.join("a").to_str().unwrap(),
-        "--mode",
-        "kalman",
-    ]);
+    let o = run_cmd(&imu, &out.join("a"), &["--mode", "kalman"]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -674,17 +635,11 @@ fn a_bad_mode_is_said_once_and_clamped_footprints_are_said_on_the_terminal() {
     let mut text = std::fs::read_to_string(data.join("ground_truth.csv")).unwrap();
     text.push_str("1000.0,0.0,0.0,0.0,99,1\n");
     std::fs::write(&truth, text).unwrap();
-    let o = corridor(&[
-        "run",
-        "--imu",
-        imu.to_str().unwrap(),
-        "--config",
-        root().join("configs/gdins.toml").to_str().unwrap(),
-        "--truth",
-        truth.to_str().unwrap(),
-        "--out",
-        out.join("b").to_str().unwrap(),
-    ]);
+    let o = run_cmd(
+        &imu,
+        &out.join("b"),
+        &["--config", &gdins(), "--truth", truth.to_str().unwrap()],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
