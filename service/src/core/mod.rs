@@ -21,5 +21,5 @@ pub mod rotation;
 pub mod stance;
 
 pub use estimator::{
-    Counters, Estimate, Estimator, ImuInput, Phase, SampleError, WarmStart, WarmStartError,
+    Counters, Estimate, Estimator, ImuInput, Notice, Phase, SampleError, WarmStart, WarmStartError,
 };

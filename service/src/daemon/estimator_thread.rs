@@ -225,30 +225,10 @@ impl<'a> EstState<'a> {
                 return;
             }
         };
-        if let Some(gap_s) = e.gap_s {
-            tracing::warn!(
-                seq = s.seq,
-                "gap of {gap_s:.3} s in the IMU stream; a new segment starts here"
-            );
+        for n in e.notices(cfg.estimator.max_bridge_s) {
+            tracing::warn!(seq = s.seq, "{n}");
         }
-        if let Some(fault) = e.health_fault {
-            tracing::warn!(
-                seq = s.seq,
-                "estimator state failed the health check ({}); last good state restored",
-                fault.name()
-            );
-        }
-        if e.velocity_reset {
-            tracing::warn!(
-                seq = s.seq,
-                "the stance update found a velocity far beyond what the filter allowed (garbage samples since the last stance?); velocity reset"
-            );
-        }
-        if let Some(first) = e.replaced_first_t_s {
-            tracing::warn!(
-                seq = s.seq,
-                "the stream's first sample had time {first} s, which the samples after it do not follow; it was dropped and the estimator starts again here"
-            );
+        if e.replaced_first_t_s.is_some() {
             // Its time paced the periodic bias output (a first time in the future stopped it);
             // the attitude published for it stays published.
             self.last_bias_t_s = f64::NEG_INFINITY;

@@ -180,42 +180,17 @@ impl<'a> Feed<'a> {
         };
         let max_bridge_s = self.est.config().max_bridge_s;
         match self.est.step(&input) {
-            Ok(e)
-                if e.gap_s.is_some()
-                    || e.health_fault.is_some()
-                    || e.replaced_first_t_s.is_some()
-                    || e.velocity_reset =>
-            {
-                self.warned += 1;
-                if self.warned <= MAX_REFUSED_EXAMPLES {
-                    let at = format!("{}:{}", self.path.display(), row.line);
-                    if let Some(gap_s) = e.gap_s {
-                        let what = if gap_s <= max_bridge_s {
-                            "bridged by one step"
-                        } else {
-                            "a new segment starts here"
-                        };
-                        tracing::warn!("{at}: gap of {gap_s:.3} s in the data; {what}");
-                    }
-                    if let Some(fault) = e.health_fault {
-                        tracing::warn!(
-                            "{at}: estimator state failed the health check ({}); last good state restored",
-                            fault.name()
-                        );
-                    }
-                    if e.velocity_reset {
-                        tracing::warn!(
-                            "{at}: the stance update found a velocity far beyond what the filter allowed (garbage samples since the last stance?); velocity reset"
-                        );
-                    }
-                    if let Some(first) = e.replaced_first_t_s {
-                        tracing::warn!(
-                            "{at}: the first sample's time {first} s was an outlier (the samples after it do not follow it); it was dropped and the estimator starts again here"
-                        );
+            Ok(e) => {
+                let mut notices = e.notices(max_bridge_s).peekable();
+                if notices.peek().is_some() {
+                    self.warned += 1;
+                    if self.warned <= MAX_REFUSED_EXAMPLES {
+                        for n in notices {
+                            tracing::warn!("{}:{}: {n}", self.path.display(), row.line);
+                        }
                     }
                 }
             }
-            Ok(_) => {}
             Err(err) => {
                 if self.refused.len() < MAX_REFUSED_EXAMPLES {
                     let at = format!("{}:{}: {err}", self.path.display(), row.line);

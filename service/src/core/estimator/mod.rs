@@ -37,8 +37,8 @@ mod types;
 
 pub use association::association_weight;
 pub use types::{
-    Counters, Estimate, HeadingEvent, HeadingRefused, ImuInput, Phase, SampleError, WarmStart,
-    WarmStartError,
+    Counters, Estimate, HeadingEvent, HeadingRefused, ImuInput, Notice, Phase, SampleError,
+    WarmStart, WarmStartError,
 };
 
 use gaps::Gap;

@@ -411,3 +411,31 @@ fn a_stance_split_by_a_short_pause_is_one_stance() {
         );
     }
 }
+
+/// The runner and the daemon print an estimate's events through `Estimate::notices`: one
+/// wording, and a bridged gap said as bridged (the daemon used to call every gap a new segment).
+#[test]
+fn an_estimate_says_its_events_once_in_one_wording() {
+    let mut e = Estimate::default();
+    assert_eq!(e.notices(0.16).count(), 0);
+    e.gap_s = Some(0.1);
+    e.velocity_reset = true;
+    let said: Vec<String> = e.notices(0.16).map(|n| n.to_string()).collect();
+    assert_eq!(said.len(), 2);
+    assert_eq!(said[0], "gap of 0.100 s in the data; bridged by one step");
+    assert!(said[1].ends_with("velocity reset"), "{}", said[1]);
+    e.gap_s = Some(10.0);
+    e.velocity_reset = false;
+    e.replaced_first_t_s = Some(1e9);
+    let said: Vec<String> = e.notices(0.16).map(|n| n.to_string()).collect();
+    assert!(
+        said[0].ends_with("a new segment starts here"),
+        "{}",
+        said[0]
+    );
+    assert!(
+        said[1].contains("1000000000 s was an outlier"),
+        "{}",
+        said[1]
+    );
+}

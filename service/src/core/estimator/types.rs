@@ -311,3 +311,67 @@ pub struct HeadingRefused {
     /// Its σ.
     pub sd_rad: f64,
 }
+
+/// Something an estimate reports that a log should say, once per event (see
+/// [`Estimate::notices`]): the offline runner and the daemon print the same words.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Notice {
+    /// A step longer than `estimator.max_dt_s` before this sample, bridged by one step or not.
+    Gap {
+        /// Its length, s.
+        gap_s: f64,
+        /// Integrated as one step (not longer than `estimator.max_bridge_s`).
+        bridged: bool,
+    },
+    /// The state failed the health check and an earlier one was restored.
+    HealthFault(HealthFault),
+    /// The stance update found a velocity far beyond what the filter allowed and reset it.
+    VelocityReset,
+    /// The stream's first sample, at this time (s), was dropped as a time outlier.
+    FirstTimeReplaced(f64),
+}
+
+impl std::fmt::Display for Notice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Notice::Gap { gap_s, bridged } => write!(
+                f,
+                "gap of {gap_s:.3} s in the data; {}",
+                if bridged {
+                    "bridged by one step"
+                } else {
+                    "a new segment starts here"
+                }
+            ),
+            Notice::HealthFault(fault) => write!(
+                f,
+                "estimator state failed the health check ({}); last good state restored",
+                fault.name()
+            ),
+            Notice::VelocityReset => f.write_str(
+                "the stance update found a velocity far beyond what the filter allowed (garbage \
+                 samples since the last stance?); velocity reset",
+            ),
+            Notice::FirstTimeReplaced(first_t_s) => write!(
+                f,
+                "the first sample's time {first_t_s} s was an outlier (the samples after it do not \
+                 follow it); it was dropped and the estimator starts again here"
+            ),
+        }
+    }
+}
+
+impl Estimate {
+    /// What this sample's estimate reports that a log should say; `max_bridge_s` is the
+    /// configuration's `estimator.max_bridge_s` (whether a gap was bridged).
+    pub fn notices(&self, max_bridge_s: f64) -> impl Iterator<Item = Notice> {
+        let gap = self.gap_s.map(|gap_s| Notice::Gap {
+            gap_s,
+            bridged: gap_s <= max_bridge_s,
+        });
+        gap.into_iter()
+            .chain(self.health_fault.map(Notice::HealthFault))
+            .chain(self.velocity_reset.then_some(Notice::VelocityReset))
+            .chain(self.replaced_first_t_s.map(Notice::FirstTimeReplaced))
+    }
+}
