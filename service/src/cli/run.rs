@@ -89,6 +89,12 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
                 .into(),
         );
     }
+    if s.initial_rest_moving_blocks > 0 {
+        notes.push(format!(
+            "the foot moved in {:.2} s of the initial rest (rocking, a weight shift): left out of the bias prior and the tilt",
+            s.initial_rest_moving_blocks as f64 * corridor_service::core::estimator::REST_BLOCK_S
+        ));
+    }
     if s.clipped_samples > 0 {
         notes.push(format!(
             "{} samples at a sensor rail (clipped)",

@@ -64,6 +64,9 @@ pub struct Summary {
     pub jittery_clock_samples: u64,
     /// Alignment came from a short first stance (no initial rest, no rest-mean prior).
     pub started_without_rest: bool,
+    /// 50 ms blocks of the initial rest left out of the bias prior and the tilt because the
+    /// foot moved in them.
+    pub initial_rest_moving_blocks: u64,
     /// Zero-rate updates of the bias at rests after the alignment.
     pub zero_rate_updates: u64,
     /// Rests not fused (see the estimator's counter of the same name).
@@ -417,6 +420,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         velocity_resets: c.velocity_resets,
         jittery_clock_samples: c.jittery_clock_samples,
         started_without_rest: c.started_without_rest,
+        initial_rest_moving_blocks: c.initial_rest_moving_blocks,
         zero_rate_updates: c.zero_rate_updates,
         zero_rate_refused: c.zero_rate_refused,
         eval,

@@ -287,6 +287,14 @@ impl ConfigFile {
                     v if (0.0..=60.0).contains(&v) => v,
                     v => return Err(invalid("alignment.rest_tail_s", v, "must be in [0, 60] s")),
                 },
+                rest_max_rate_change_rad_s: Positive::in_range(
+                    "alignment.rest_max_rate_change_rad_s",
+                    a.rest_max_rate_change_rad_s
+                        .unwrap_or(ALIGNMENT_REST_MAX_RATE_CHANGE_RAD_S),
+                    0.0,
+                    10.0,
+                    "must be in (0, 10] rad/s",
+                )?,
                 min_start_stance_s: in_range(
                     "alignment.min_start_stance_s",
                     a.min_start_stance_s.unwrap_or(ALIGNMENT_MIN_START_STANCE_S),

@@ -42,6 +42,7 @@ impl Pipeline {
         }
         self.counters.started_without_rest = short_start;
         let (mean_f, mean_w) = rest.means();
+        self.counters.initial_rest_moving_blocks = rest.moving_blocks();
         // The prior's σ: √(floor² + spread²), the bias instability floor and the rest's rate
         // spread over √(number of 50 ms blocks) (a rest during which the foot still sways).
         let prior_sd = rest

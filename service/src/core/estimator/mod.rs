@@ -43,6 +43,7 @@ pub use types::{
 
 use gaps::Gap;
 use recovery::VELOCITY_RESET_Z2;
+pub use rest::REST_BLOCK_S;
 use rest::{RestMeans, RestSums};
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
@@ -203,7 +204,10 @@ impl Estimator {
             was_stance: false,
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
-            stance_rest: RestSums::new(cfg.alignment.rest_tail_s),
+            stance_rest: RestSums::new(
+                cfg.alignment.rest_tail_s,
+                cfg.alignment.rest_max_rate_change_rad_s.get(),
+            ),
             zero_rate_applied: false,
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
@@ -214,7 +218,10 @@ impl Estimator {
             cfg,
         };
         Self {
-            stage: Stage::Aligning(Box::new(RestSums::new(p.cfg.alignment.rest_tail_s))),
+            stage: Stage::Aligning(Box::new(RestSums::new(
+                p.cfg.alignment.rest_tail_s,
+                p.cfg.alignment.rest_max_rate_change_rad_s.get(),
+            ))),
             p,
         }
     }

@@ -1,4 +1,5 @@
-//! The initial rest's means of specific force and rate, without its last part.
+//! A rest's means of specific force and rate, without its last part and without the blocks in
+//! which the foot moved.
 
 use nalgebra::Vector3;
 
@@ -12,6 +13,8 @@ struct Sums {
     w: Vector3<f64>,
     /// Sum of the squared rates, per axis.
     w2: Vector3<f64>,
+    /// The block moved: its mean rate left the rest's (see [`RestSums::push`]); not summed.
+    moving: bool,
 }
 
 impl Sums {
@@ -28,8 +31,11 @@ impl Sums {
 /// rate (rad/s), sensor axes.
 pub(super) type RestMeans = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
 
-/// The initial rest, in blocks, so that its last `tail_s` (the foot already starting to move
-/// while the detector still says "stance") can be left out of the means. Fixed capacity.
+/// A rest, in blocks, so that its last `tail_s` (the foot already starting to move while the
+/// detector still says "stance") can be left out of the means, and so can any block whose mean
+/// rate lies further than `max_rate_change_rad_s` from the mean of the rest's blocks so far (a
+/// foot that rocks or shifts its weight before its first step: exp40 rocks at 0.05–0.2 rad/s
+/// for 0.7 s after 0.6 s of quiet, all of it "stance"). Fixed capacity.
 #[derive(Debug, Clone)]
 pub(super) struct RestSums {
     pub(super) t_first_s: f64,
@@ -38,13 +44,16 @@ pub(super) struct RestSums {
     current: Sums,
     current_start_s: f64,
     capacity: usize,
+    max_rate_change_rad_s: f64,
+    /// Settled blocks left out because the foot moved in them.
+    settled_moving: u64,
 }
 
-/// Block length of the rest accumulator.
-const REST_BLOCK_S: f64 = 0.05;
+/// Block length of the rest accumulator, s.
+pub const REST_BLOCK_S: f64 = 0.05;
 
 impl RestSums {
-    pub(super) fn new(tail_s: f64) -> Self {
+    pub(super) fn new(tail_s: f64, max_rate_change_rad_s: f64) -> Self {
         let capacity = (tail_s / REST_BLOCK_S).ceil() as usize + 1;
         Self {
             t_first_s: f64::NAN,
@@ -53,6 +62,8 @@ impl RestSums {
             current: Sums::default(),
             current_start_s: f64::NAN,
             capacity,
+            max_rate_change_rad_s,
+            settled_moving: 0,
         }
     }
 
@@ -61,6 +72,7 @@ impl RestSums {
         self.settled = Sums::default();
         self.recent.clear();
         self.current = Sums::default();
+        self.settled_moving = 0;
     }
 
     pub(super) fn is_empty(&self) -> bool {
@@ -76,7 +88,16 @@ impl RestSums {
             if self.recent.len() == self.capacity
                 && let Some(old) = self.recent.pop_front()
             {
-                self.settled.add(&old);
+                if old.moving {
+                    self.settled_moving += 1;
+                } else {
+                    self.settled.add(&old);
+                }
+            }
+            let still = self.still_blocks();
+            if still.n > 0 && self.current.n > 0 {
+                let change = self.current.w / self.current.n as f64 - still.w / still.n as f64;
+                self.current.moving = change.norm() > self.max_rate_change_rad_s;
             }
             self.recent.push_back(self.current);
             self.current = Sums::default();
@@ -117,16 +138,73 @@ impl RestSums {
         var.map(|v| (v / s.blocks.max(1) as f64).sqrt())
     }
 
-    /// The part the means use: the settled part, or everything when that is empty.
-    fn used(&self) -> Sums {
+    /// Blocks left out of [`RestSums::means`] because the foot moved in them (not those of the
+    /// tail, which is left out anyway).
+    pub(super) fn moving_blocks(&self) -> u64 {
+        if self.settled.n > 0 {
+            self.settled_moving
+        } else {
+            self.recent.iter().filter(|b| b.moving).count() as u64
+        }
+    }
+
+    /// Every closed block in which the foot did not move, the settled ones and the recent.
+    fn still_blocks(&self) -> Sums {
         let mut s = self.settled;
-        if s.n == 0 {
-            s.blocks = 0;
-            for b in &self.recent {
-                s.add(b);
-            }
-            s.add(&self.current);
+        for b in self.recent.iter().filter(|b| !b.moving) {
+            s.add(b);
         }
         s
+    }
+
+    /// The part the means use: the settled part, or everything still when that is empty.
+    fn used(&self) -> Sums {
+        if self.settled.n > 0 {
+            return self.settled;
+        }
+        let mut s = self.still_blocks();
+        s.add(&self.current);
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 0.6 s of quiet at the bias `b`, then 1.2 s in which the foot rocks (as exp40's does
+    /// before its first step, all of it "stance" to the detector), at 200 Hz.
+    fn rocking_rest(max_rate_change_rad_s: f64) -> RestSums {
+        let b = Vector3::new(0.001, -0.005, 0.008);
+        let g = Vector3::new(0.0, 0.0, 9.81);
+        let mut rest = RestSums::new(0.5, max_rate_change_rad_s);
+        for i in 0..360 {
+            let t = i as f64 * 0.005;
+            // A little sway while quiet, ±0.15 rad/s of rocking about y at 1 Hz after 0.6 s (whose
+            // mean over the rocking part is not zero: it stops mid-swing).
+            let sway = 0.003 * (40.0 * t).sin();
+            let rock = if t < 0.6 {
+                0.0
+            } else {
+                0.15 * (std::f64::consts::TAU * (t - 0.6)).sin()
+            };
+            rest.push(t, &g, &(b + Vector3::new(sway, sway + rock, -sway)));
+        }
+        rest
+    }
+
+    #[test]
+    fn blocks_in_which_the_foot_rocks_are_left_out_of_the_rest_means() {
+        let b = Vector3::new(0.001, -0.005, 0.008);
+        let rest = rocking_rest(0.05);
+        let (_, w, sem) = rest.settled_means(0.5).expect("0.6 s of quiet settles");
+        assert!((w - b).norm() < 1e-3, "{w}");
+        assert!(sem.norm() < 3e-3, "{sem}");
+        assert!(rest.moving_blocks() >= 8, "{}", rest.moving_blocks());
+        // Every block counted, the rocking ones included, the mean is the rocking's.
+        let all = rocking_rest(10.0);
+        let (_, w_all) = all.means();
+        assert!((w_all - b).norm() > 5e-3, "{w_all}");
+        assert_eq!(all.moving_blocks(), 0);
     }
 }

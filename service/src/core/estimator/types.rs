@@ -190,6 +190,9 @@ pub struct Counters {
     pub stride_rejected: u64,
     /// Times the initial rest was too short and alignment started over.
     pub alignment_restarts: u64,
+    /// 50 ms blocks of the initial rest left out of its means (bias prior, tilt) because the
+    /// foot moved in them (`alignment.rest_max_rate_change_rad_s`).
+    pub initial_rest_moving_blocks: u64,
     /// Alignment came from a first stance shorter than `alignment.min_rest_s` (no rest-mean
     /// bias prior).
     pub started_without_rest: bool,
