@@ -173,28 +173,21 @@ pub fn heading_jacobian(q: &UnitQuaternion<f64>, axis_body: &Vector3<f64>) -> Ve
 }
 
 /// The horizontal velocity (navigation frame) of a sensor `height_m` above the floor contact of a
-/// foot that rolls about its lateral axis, as it does from heel strike to foot flat (about the
-/// heel) and at heel-off (about the ball): a point at height h above a contact point on the floor
-/// moves horizontally at ω × h·ẑ, whatever the contact's place along the foot, so only the height
-/// matters (its vertical speed depends on that place: left at zero, within the lever-arm σ). Only
-/// the rate about the foot's lateral axis is used (the forward axis `forward_body`, in body
-/// axes, gives it); the result points along the walking direction. Zero when the foot axis is
-/// vertical.
+/// foot that rolls over that contact, as it does from heel strike to foot flat (about the heel),
+/// at heel-off (about the ball) and sideways over the edge of the sole: a point at height h above
+/// a contact point on the floor moves horizontally at ω × h·ẑ, whatever the contact's place
+/// along the foot, so only the height matters (its vertical speed depends on that place: left
+/// at zero, within the lever-arm σ). Both horizontal components of the rate count: a turn about
+/// the vertical moves nothing, and neither the foot's forward axis nor the mounting yaw is
+/// needed.
 pub fn rolling_velocity(
     q: &UnitQuaternion<f64>,
     omega_body_rad_s: &Vector3<f64>,
-    forward_body: &Vector3<f64>,
     height_m: f64,
 ) -> Vector3<f64> {
-    let f = q * forward_body;
-    let n = f.x.hypot(f.y);
-    if n < 1e-6 {
-        return Vector3::zeros();
-    }
-    let d = Vector3::new(f.x / n, f.y / n, 0.0);
-    let lateral = Vector3::new(-d.y, d.x, 0.0); // ẑ × d: left of the walking direction
-    // (ω_l·l) × h·ẑ = h·ω_l·(l × ẑ) = h·ω_l·d.
-    d * (height_m * (q * omega_body_rad_s).dot(&lateral))
+    let w = q * omega_body_rad_s;
+    // ω × h·ẑ = h·(ω_y, −ω_x, 0).
+    Vector3::new(height_m * w.y, -height_m * w.x, 0.0)
 }
 
 /// Roll and pitch (ZYX) of a body frame whose measured specific force (pointing up at rest)
@@ -234,18 +227,23 @@ mod tests {
     }
 
     #[test]
-    fn a_foot_rolling_nose_down_moves_a_sensor_above_the_floor_forward() {
+    fn a_foot_rolling_over_its_contact_moves_a_sensor_above_the_floor() {
         // Foot along nav x; its lateral (left) axis is nav y. A nose-down roll is a positive
         // rotation about y (it takes x towards −z); the top of the foot then moves forward.
         let q = UnitQuaternion::identity();
-        let v = rolling_velocity(&q, &Vector3::new(0.0, 2.0, 0.0), &Vector3::x(), 0.08);
+        let v = rolling_velocity(&q, &Vector3::new(0.0, 2.0, 0.0), 0.08);
         assert!((v - Vector3::new(0.16, 0.0, 0.0)).norm() < 1e-12, "{v}");
-        // A roll about the foot's own long axis and a twist about the vertical give nothing.
-        let v = rolling_velocity(&q, &Vector3::new(3.0, 0.0, 1.0), &Vector3::x(), 0.08);
+        // Rolling over the sole's outer (right) edge, a positive rotation about the forward
+        // axis, takes the top of the foot to the right (−y); a twist about the vertical
+        // moves nothing.
+        let v = rolling_velocity(&q, &Vector3::new(3.0, 0.0, 0.0), 0.08);
+        assert!((v - Vector3::new(0.0, -0.24, 0.0)).norm() < 1e-12, "{v}");
+        let v = rolling_velocity(&q, &Vector3::new(0.0, 0.0, 1.0), 0.08);
         assert!(v.norm() < 1e-12, "{v}");
-        // The same foot walking along nav y (yawed by 90°): forward is now nav y.
+        // The same foot walking along nav y (yawed by 90°): the nose-down roll now moves the
+        // sensor along nav y, whatever the sensor's axes are called.
         let q = rot_z(std::f64::consts::FRAC_PI_2);
-        let v = rolling_velocity(&q, &Vector3::new(0.0, 2.0, 0.0), &Vector3::x(), 0.08);
+        let v = rolling_velocity(&q, &Vector3::new(0.0, 2.0, 0.0), 0.08);
         assert!((v - Vector3::new(0.0, 0.16, 0.0)).norm() < 1e-12, "{v}");
     }
 

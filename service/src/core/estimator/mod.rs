@@ -561,16 +561,11 @@ impl Pipeline {
             // rotation rate: at the edges of a stance the zero velocity is that much less sure.
             let arm = self.cfg.eskf.zupt_lever_arm_m * omega.norm();
             let sd = self.cfg.eskf.zupt_sd_m_s.get().hypot(arm);
-            // ... and, rolling about its heel or ball, along the walking direction at its height
-            // above the floor times the rate about the foot's lateral axis.
-            // Before the mounting yaw is calibrated the sensor's x axis stands in for the
-            // foot's: a mounting off by an angle a turns the expected velocity by a and scales
-            // it by cos a (25° here), and a sensor across the foot gets about a plain ZUPT. A
-            // provisional yaw from the first "straight" strides was tried: on a walk that starts
-            // in a spiral it was confidently wrong (exp37's no-prior recovery 112 -> 795 %).
+            // ... and, rolling over its heel, its ball or the edge of its sole, at its height
+            // above the floor times the horizontal rate (ω × h·ẑ; no mounting yaw needed).
             let h = self.cfg.eskf.zupt_rolling_height_m;
             let v = if h > 0.0 {
-                rolling_velocity(&eskf.nav_from_body, &omega, &self.foot_forward_body(), h)
+                rolling_velocity(&eskf.nav_from_body, &omega, h)
             } else {
                 Vector3::zeros()
             };
