@@ -6,7 +6,7 @@ use super::*;
 pub const ESTIMATES_HEADER: &str = "t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,roll_rad,pitch_rad,yaw_rad,qw,qx,qy,qz,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,bias_unabsorbed,stance,stance_began,converged,phase";
 
 /// CSV header of `innovations.csv`.
-pub const INNOVATIONS_HEADER: &str = "t_s,kind,accepted,reason,r0,r1,r2,s0,s1,s2,nis,foot_heading_deg,direction_deg,baseline_s,gyro_norm_rad_s,accel_norm_m_s2,gz_rad_s";
+pub const INNOVATIONS_HEADER: &str = "t_s,kind,accepted,reason,r0,r1,r2,s0,s1,s2,nis,foot_heading_deg,direction_deg,baseline_s,gyro_norm_rad_s,accel_norm_m_s2,gz_rad_s,observed_t_s";
 
 /// Writes one `estimates.csv` row.
 pub fn write_estimate_row(w: &mut impl Write, e: &Estimate) -> std::io::Result<()> {
@@ -58,8 +58,17 @@ pub fn write_innovation_rows(
     if let Some(z) = &e.zupt {
         writeln!(
             w,
-            "{},zupt,1,,{},{},{},{},{},{},{},,,,{gn},{an},{}",
-            e.t_s, z.r[0], z.r[1], z.r[2], z.s_diag[0], z.s_diag[1], z.s_diag[2], z.nis, g[2]
+            "{},zupt,1,,{},{},{},{},{},{},{},,,,{gn},{an},{},{}",
+            e.t_s,
+            z.r[0],
+            z.r[1],
+            z.r[2],
+            z.s_diag[0],
+            z.s_diag[1],
+            z.s_diag[2],
+            z.nis,
+            g[2],
+            e.t_s
         )?;
     }
     for (kind, h) in [("stride", &e.stride), ("heading", &e.heading)] {
@@ -69,7 +78,7 @@ pub fn write_innovation_rows(
         match &h.outcome {
             Ok(i) => writeln!(
                 w,
-                "{},{kind},1,,{},{},{},{},{},{},{},{fh},{dir},{},{gn},{an},{}",
+                "{},{kind},1,,{},{},{},{},{},{},{},{fh},{dir},{},{gn},{an},{},{}",
                 e.t_s,
                 i.r[0],
                 i.r[1],
@@ -79,14 +88,16 @@ pub fn write_innovation_rows(
                 i.s_diag[2],
                 i.nis,
                 h.baseline_s,
-                g[2]
+                g[2],
+                h.observed_t_s
             )?,
             Err(r) => writeln!(
                 w,
-                "{},{kind},0,{},,,,,,,,{fh},,,{gn},{an},{}",
+                "{},{kind},0,{},,,,,,,,{fh},,,{gn},{an},{},{}",
                 e.t_s,
                 r.name(),
-                g[2]
+                g[2],
+                h.observed_t_s
             )?,
         }
     }

@@ -250,9 +250,9 @@ impl StrideUse {
             if !(straight || weave) {
                 continue;
             }
-            let inside = |s: &&StanceUse| s.t_s > cur.0 && s.t_s <= cur.1;
-            let stride = stances.iter().filter(inside).any(|s| s.stride);
-            let foot = stances.iter().filter(inside).any(|s| s.foot_axis);
+            let inside = |t_s: f64| t_s > cur.0 && t_s <= cur.1;
+            let stride = stances.iter().any(|s| s.stride && inside(s.stride_t_s));
+            let foot = stances.iter().any(|s| s.foot_axis && inside(s.t_s));
             if straight {
                 u.straight += 1;
                 u.straight_used += usize::from(stride || foot);
@@ -270,6 +270,9 @@ impl StrideUse {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct StanceUse {
     t_s: f64,
+    /// The end of the stride observed (earlier than `t_s` for a stride observed one stance
+    /// late).
+    stride_t_s: f64,
     stride: bool,
     foot_axis: bool,
 }
@@ -313,6 +316,7 @@ impl NisSeries {
         if e.stride.is_some() || e.heading.is_some() {
             self.stances.push(StanceUse {
                 t_s: e.t_s,
+                stride_t_s: e.stride.as_ref().map_or(e.t_s, |s| s.observed_t_s),
                 stride: used[0],
                 foot_axis: used[1],
             });

@@ -193,6 +193,9 @@ pub const HEADING_LINE_FOOTPRINTS: usize = 0;
 /// `heading.line_lateral_m`.
 pub const HEADING_LINE_LATERAL_M: f64 = 0.05;
 
+/// `heading.stride_look_ahead`.
+pub const HEADING_STRIDE_LOOK_AHEAD: bool = false;
+
 /// `heading.aligned_prior`: prior probability of walking along a dominant direction.
 pub const HEADING_ALIGNED_PRIOR: f64 = 0.7;
 

@@ -245,6 +245,10 @@ pub struct HeadingFile {
     pub line_footprints: Option<usize>,
     /// Largest distance of those footprints from their line (default 0.05 m).
     pub line_lateral_m: Option<f64>,
+    /// Observe each stride one stance late, once the footprint after it is known: the line
+    /// test must then hold both with the stride's own footprint last and with the next one
+    /// (default false).
+    pub stride_look_ahead: Option<bool>,
     /// Prior probability that a stance's walking direction is a dominant direction, for the
     /// association weight (default 0.7).
     pub aligned_prior: Option<f64>,

@@ -187,6 +187,8 @@ pub struct HeadingConfig {
     pub line_footprints: usize,
     /// Largest lateral distance of the straight-line test.
     pub line_lateral_m: Positive,
+    /// Stride observations one stance late (the line test with the next footprint too).
+    pub stride_look_ahead: bool,
     /// Prior probability of an aligned stance.
     pub aligned_prior: Fraction,
     /// Smallest fused association weight.

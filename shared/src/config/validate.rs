@@ -549,6 +549,7 @@ impl ConfigFile {
                     10.0,
                     "must be in (0, 10] m",
                 )?,
+                stride_look_ahead: h.stride_look_ahead.unwrap_or(HEADING_STRIDE_LOOK_AHEAD),
                 aligned_prior: Fraction::new(
                     "heading.aligned_prior",
                     h.aligned_prior.unwrap_or(HEADING_ALIGNED_PRIOR),

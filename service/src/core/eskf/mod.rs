@@ -12,7 +12,9 @@
 //!   `m_zx·ω_x + m_zy·ω_y`; an axis misalignment as it reaches the heading when z is the axis
 //!   nearest the vertical);
 //! - the previous footprint (2 states: a stochastic clone of the horizontal position at the
-//!   last stance, so that the direction of the stride since then can be observed).
+//!   last stance, so that the direction of the stride since then can be observed), and with
+//!   look-ahead the one before it (2 more: the stride between the two clones is observed one
+//!   stance late, once the footprint after it shows whether it lay on a straight stretch).
 //!
 //! Error state: δp, δv, δθ (navigation frame, applied as `exp(δθ)·q`), δb, then the extensions
 //! in that order. The covariance lives in a fixed array sized for every extension, is propagated
@@ -26,8 +28,8 @@
 use super::rotation::{exp_rotvec, heading_jacobian, heading_of_axis, skew, wrap_pi};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
-/// Largest error-state dimension (12 base states and 14 extension states).
-pub const MAX_N: usize = 26;
+/// Largest error-state dimension (12 base states and 16 extension states).
+pub const MAX_N: usize = 28;
 
 /// χ² gate of a zero-rate update (3 degrees of freedom, p = 10⁻³): a rest's mean rate further
 /// from the bias the filter holds is not fused.
@@ -94,6 +96,9 @@ pub struct Extensions {
     pub coupling_sd: Option<f64>,
     /// Footprint-clone states for stride-direction observations.
     pub footprint_clone: bool,
+    /// A second footprint clone (the footprint before the last), for stride observations made
+    /// one stance late (only with `footprint_clone`).
+    pub stride_look_ahead: bool,
 }
 
 /// Indices of the extension states in the error state.
@@ -106,9 +111,16 @@ struct Layout {
     gsens: Option<usize>,
     coupling: Option<usize>,
     clone: Option<usize>,
+    /// The clone of the footprint before the last (look-ahead), right after `clone`.
+    clone_prev: Option<usize>,
 }
 
 impl Layout {
+    /// First indices of the footprint clones (each a horizontal pair).
+    fn clones(&self) -> impl Iterator<Item = usize> + use<> {
+        self.clone.into_iter().chain(self.clone_prev)
+    }
+
     fn new(ext: &Extensions) -> Self {
         let mut n = 12;
         let mut take = |on: bool, k: usize| {
@@ -123,6 +135,7 @@ impl Layout {
         let gsens = take(ext.g_sensitivity_sd.is_some(), 3);
         let coupling = take(ext.coupling_sd.is_some(), 2);
         let clone = take(ext.footprint_clone, 2);
+        let clone_prev = take(ext.footprint_clone && ext.stride_look_ahead, 2);
         Self {
             n,
             rate,
@@ -131,6 +144,7 @@ impl Layout {
             gsens,
             coupling,
             clone,
+            clone_prev,
         }
     }
 
@@ -197,6 +211,8 @@ pub struct Eskf {
     pub ext: ExtensionEstimates,
     /// The cloned footprint (horizontal position at the last clone), m; NaN before the first.
     pub footprint_xy_m: [f64; 2],
+    /// The footprint cloned before it (look-ahead only), m; NaN before the second clone.
+    pub prev_footprint_xy_m: [f64; 2],
     /// Error covariance, column-major with stride `MAX_N`; only the leading `n × n` is used.
     p: [f64; MAX_N * MAX_N],
     /// The closed-loop response to a bias error present when the bias was set
@@ -246,6 +262,7 @@ impl Eskf {
             gyro_bias_rad_s,
             ext: ExtensionEstimates::default(),
             footprint_xy_m: [f64::NAN; 2],
+            prev_footprint_xy_m: [f64::NAN; 2],
             p: [0.0; MAX_N * MAX_N],
             response: [0.0; MAX_N * 3],
             layout,
@@ -313,6 +330,7 @@ impl Eskf {
         self.gyro_bias_rad_s = src.gyro_bias_rad_s;
         self.ext = src.ext;
         self.footprint_xy_m = src.footprint_xy_m;
+        self.prev_footprint_xy_m = src.prev_footprint_xy_m;
         self.layout = src.layout;
         self.gravity_m_s2 = src.gravity_m_s2;
         self.noise = src.noise;
@@ -405,6 +423,7 @@ impl Eskf {
         next.gyro_bias_rad_s = self.gyro_bias_rad_s;
         next.ext = self.ext;
         next.footprint_xy_m = self.footprint_xy_m;
+        next.prev_footprint_xy_m = self.prev_footprint_xy_m;
         let step_half = exp_rotvec(&(omega_rad_s * (0.5 * dt_s)));
         let half = self.nav_from_body * step_half;
         let f_nav = half * f_m_s2;
@@ -454,6 +473,10 @@ impl Eskf {
             self.footprint_xy_m[0] += dx[i];
             self.footprint_xy_m[1] += dx[i + 1];
         }
+        if let Some(i) = self.layout.clone_prev {
+            self.prev_footprint_xy_m[0] += dx[i];
+            self.prev_footprint_xy_m[1] += dx[i + 1];
+        }
     }
 
     /// Rotates the navigation frame about z by `angle_rad` (used once the map frame is known).
@@ -464,16 +487,16 @@ impl Eskf {
         self.v_m_s = m * self.v_m_s;
         self.nav_from_body = UnitQuaternion::from_rotation_matrix(&r) * self.nav_from_body;
         let n = self.layout.n;
-        let clone = self.layout.clone;
-        if clone.is_some() {
-            let [x, y] = self.footprint_xy_m;
-            self.footprint_xy_m = [m[(0, 0)] * x + m[(0, 1)] * y, m[(1, 0)] * x + m[(1, 1)] * y];
-        }
-        // P ← T P Tᵀ with T = blockdiag(R, R, R, I, …, R₂ₓ₂ for the clone), block by block:
+        let turn =
+            |[x, y]: [f64; 2]| [m[(0, 0)] * x + m[(0, 1)] * y, m[(1, 0)] * x + m[(1, 1)] * y];
+        self.footprint_xy_m = turn(self.footprint_xy_m);
+        self.prev_footprint_xy_m = turn(self.prev_footprint_xy_m);
+        // P ← T P Tᵀ with T = blockdiag(R, R, R, I, …, R₂ₓ₂ for each clone), block by block:
         // its rows in every column, then its columns in every row.
-        let blocks = clone
+        let blocks = self
+            .layout
+            .clones()
             .map(|k| (k, true))
-            .into_iter()
             .chain([P0, V0, TH].map(|b| (b, false)));
         for (b, horizontal) in blocks {
             let rotate = |x: &mut [f64]| {

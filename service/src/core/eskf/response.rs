@@ -72,16 +72,21 @@ impl Eskf {
     /// The navigation frame rotated by `m` about z: the p, v and θ rows (and the clone's) rotate
     /// with it.
     pub(super) fn rotate_bias_response(&mut self, m: &Matrix3<f64>) {
-        let clone = self.layout.clone;
+        let layout = self.layout;
         for c in 0..3 {
-            rotate_nav_rows(&mut self.response[c * MAX_N..][..MAX_N], m, clone);
+            rotate_nav_rows(&mut self.response[c * MAX_N..][..MAX_N], m, layout.clones());
         }
     }
 
-    /// A new footprint clone at state `k`: its error is the horizontal position's.
-    pub(super) fn clone_bias_response(&mut self, k: usize) {
+    /// A new footprint clone at state `k`: its error is the horizontal position's; with
+    /// look-ahead the clone before it (`prev`) takes the old clone's first.
+    pub(super) fn clone_bias_response(&mut self, k: usize, prev: Option<usize>) {
         for c in 0..3 {
             let col = &mut self.response[c * MAX_N..][..MAX_N];
+            if let Some(j) = prev {
+                col[j] = col[k];
+                col[j + 1] = col[k + 1];
+            }
             col[k] = col[P0];
             col[k + 1] = col[P0 + 1];
         }
@@ -96,9 +101,13 @@ impl Eskf {
 }
 
 /// Rotates the navigation-frame rows of one column (of the covariance or of the response) by
-/// `m`: the horizontal clone `clone` with the upper-left 2 × 2, and the p, v and θ blocks.
-pub(super) fn rotate_nav_rows(col: &mut [f64], m: &Matrix3<f64>, clone: Option<usize>) {
-    if let Some(k) = clone {
+/// `m`: the horizontal clones `clones` with the upper-left 2 × 2, and the p, v and θ blocks.
+pub(super) fn rotate_nav_rows(
+    col: &mut [f64],
+    m: &Matrix3<f64>,
+    clones: impl IntoIterator<Item = usize>,
+) {
+    for k in clones {
         rotate_horizontal(col, k, m);
     }
     for b in [P0, V0, TH] {

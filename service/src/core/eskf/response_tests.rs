@@ -40,14 +40,13 @@ fn estimate_difference(b: &Eskf, a: &Eskf) -> [f64; MAX_N] {
             ],
         );
     }
-    if let Some(i) = lay.clone {
-        put(
-            i,
-            &[
-                b.footprint_xy_m[0] - a.footprint_xy_m[0],
-                b.footprint_xy_m[1] - a.footprint_xy_m[1],
-            ],
-        );
+    for (i, xb, xa) in [
+        (lay.clone, b.footprint_xy_m, a.footprint_xy_m),
+        (lay.clone_prev, b.prev_footprint_xy_m, a.prev_footprint_xy_m),
+    ] {
+        if let Some(i) = i {
+            put(i, &[xb[0] - xa[0], xb[1] - xa[1]]);
+        }
     }
     d
 }

@@ -262,6 +262,24 @@ impl Eskf {
             return;
         };
         let n = self.layout.n;
+        let prev = self.layout.clone_prev;
+        if let Some(a) = prev {
+            // With look-ahead the old clone becomes the previous one: its rows and columns
+            // move over first.
+            self.prev_footprint_xy_m = self.footprint_xy_m;
+            for k in 0..2 {
+                for j in (0..n).filter(|&j| j != a && j != a + 1) {
+                    let v = self.p[ix(c + k, j)];
+                    self.p[ix(a + k, j)] = v;
+                    self.p[ix(j, a + k)] = v;
+                }
+            }
+            for x in 0..2 {
+                for y in 0..2 {
+                    self.p[ix(a + x, a + y)] = self.p[ix(c + x, c + y)];
+                }
+            }
+        }
         self.footprint_xy_m = [self.p_m.x, self.p_m.y];
         for k in 0..2 {
             for j in 0..n {
@@ -279,15 +297,19 @@ impl Eskf {
                 self.p[ix(c + a, c + b)] = self.p[ix(P0 + a, P0 + b)];
             }
         }
-        self.clone_bias_response(c);
+        self.clone_bias_response(c, prev);
     }
 
-    /// The stride since the cloned footprint: its horizontal length (m), direction (rad) and
-    /// the direction's sparse Jacobian row, or `None` without a clone.
+    /// The stride observed now: its horizontal length (m), direction (rad) and the direction's
+    /// sparse Jacobian row, or `None` without a clone. The stride since the cloned footprint,
+    /// or with look-ahead the one between the two clones (the stride before the last).
     fn stride(&self) -> Option<(f64, f64, SparseRow)> {
         let c = self.layout.clone?;
-        let [x0, y0] = self.footprint_xy_m;
-        let (dx, dy) = (self.p_m.x - x0, self.p_m.y - y0);
+        let (to, from, [x0, y0], [x1, y1]) = match self.layout.clone_prev {
+            None => (P0, c, self.footprint_xy_m, [self.p_m.x, self.p_m.y]),
+            Some(a) => (c, a, self.prev_footprint_xy_m, self.footprint_xy_m),
+        };
+        let (dx, dy) = (x1 - x0, y1 - y0);
         let d2 = dx * dx + dy * dy;
         if !d2.is_finite() || d2 <= 0.0 {
             return None;
@@ -296,7 +318,7 @@ impl Eskf {
         Some((
             d2.sqrt(),
             dy.atan2(dx),
-            [(P0, hx), (P0 + 1, hy), (c, -hx), (c + 1, -hy)],
+            [(to, hx), (to + 1, hy), (from, -hx), (from + 1, -hy)],
         ))
     }
 

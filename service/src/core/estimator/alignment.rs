@@ -90,6 +90,7 @@ impl Pipeline {
                 coupling_sd: m.gyro_coupling_z_sd_rad.map(|v| v.get()),
                 footprint_clone: self.cfg.mode == Mode::Eskf
                     && self.cfg.heading.observations.stride(),
+                stride_look_ahead: self.cfg.heading.stride_look_ahead,
             }
         } else {
             // The extensions are observed through the filter's own heading updates, which the

@@ -137,6 +137,12 @@ struct Pipeline {
     /// Yaw of the sensor's levelled x axis at the previous footprint: the foot's turn over a
     /// stride is measured from it.
     footprint_yaw_rad: Option<f64>,
+    /// The same at the footprint before it, and the times of those two footprints (older
+    /// first): what a stride observed one stance late needs (`heading.stride_look_ahead`).
+    prev_footprint_yaw_rad: Option<f64>,
+    footprint_t_s: [f64; 2],
+    /// The footprint-line test's verdict at the previous footprint (look-ahead).
+    line_before: Option<bool>,
     straight: StraightWalk,
     line: Option<FootprintLine>,
     stance_events: StanceEvents,
@@ -197,6 +203,9 @@ impl Estimator {
             mount_sum: (0.0, 0.0, 0),
             last_footprint: None,
             footprint_yaw_rad: None,
+            prev_footprint_yaw_rad: None,
+            footprint_t_s: [f64::NAN; 2],
+            line_before: None,
             stance_events: StanceEvents::new(cfg.detector.merge_gap_s, cfg.max_dt_s.get()),
             stance_edge: StanceEdge::None,
             stances_seen: 0,

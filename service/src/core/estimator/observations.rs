@@ -38,8 +38,7 @@ impl Pipeline {
                     wrap_pi(stride_dir - prev).abs() <= h.straight_max_change_rad.get()
                 });
             self.last_footprint = Some(([eskf.p_m.x, eskf.p_m.y], Some(stride_dir)));
-            eskf.clone_footprint();
-            self.footprint_yaw_rad = Some(self.levelled_yaw(eskf));
+            self.new_footprint(eskf, t_s);
             if !straight {
                 return;
             }
@@ -60,7 +59,7 @@ impl Pipeline {
             return;
         }
         if self.cfg.mode == Mode::Eskf && self.pending_heading.is_none() {
-            self.eskf_observations(eskf, &forward);
+            self.eskf_observations(eskf, &forward, t_s);
             return;
         }
         let foot_heading = wrap_pi(eskf.predicted_heading(&forward));
@@ -80,6 +79,7 @@ impl Pipeline {
             direction_rad: f64::NAN,
             outcome: Err(Rejection::NoSource),
             baseline_s: 0.0,
+            observed_t_s: t_s,
         };
         match direction {
             Err(r) => {
@@ -128,64 +128,17 @@ impl Pipeline {
     }
 
     /// The `eskf` mode's observations at a stance: the stride direction since the previous
-    /// footprint and the foot axis, each associated with the nearest dominant direction and
-    /// fused with the weight of that association (see [`association_weight`]).
-    fn eskf_observations(&mut self, eskf: &mut Eskf, forward: &Vector3<f64>) {
-        let h = &self.cfg.heading;
+    /// footprint (with `heading.stride_look_ahead`, the stride before it, one stance late) and
+    /// the foot axis, each associated with the nearest dominant direction and fused with the
+    /// weight of that association (see [`association_weight`]).
+    fn eskf_observations(&mut self, eskf: &mut Eskf, forward: &Vector3<f64>, t_s: f64) {
+        // The foot axis is associated where the stance began, before the stride update.
         let xy = [eskf.p_m.x, eskf.p_m.y];
-        if h.observations.stride() && !self.resumed_look {
-            let event = match eskf.stride_prediction() {
-                Some((len, dir, var)) if len >= h.min_stride_m.get() => {
-                    let sd = h.stride_sigma_rad.get();
-                    let mut event = HeadingEvent {
-                        foot_heading_rad: dir,
-                        direction_rad: f64::NAN,
-                        outcome: Err(Rejection::NoSource),
-                        baseline_s: 0.0,
-                    };
-                    // Straight walking: the footprint line decides once it holds enough
-                    // footprints; until then (the first strides of tracking) a stride over
-                    // which the foot turned is no straight stride (the turn is the gyro's over
-                    // one stride: a bias error adds a fraction of a degree). Without the line
-                    // test (`line_footprints = 0`) every stride is associated, as before it.
-                    let straight = match self.line.as_mut().map(|l| l.push(xy)) {
-                        None => true,
-                        Some(Some(on_line)) => on_line,
-                        Some(None) => self.footprint_yaw_rad.is_none_or(|prev| {
-                            wrap_pi(self.levelled_yaw(eskf) - prev).abs()
-                                <= h.straight_max_change_rad.get()
-                        }),
-                    };
-                    let assoc = if !straight {
-                        Err(Rejection::NotStraight)
-                    } else {
-                        weighted_association(&self.aid, h, xy, dir, var + sd * sd)
-                    };
-                    match assoc {
-                        Ok((d, w)) => {
-                            event.direction_rad = d;
-                            if let Some(i) = eskf.stride_direction_update(d, sd / w.sqrt()) {
-                                self.counters.stride_used += 1;
-                                event.outcome = Ok(i);
-                            }
-                        }
-                        Err(r) => {
-                            self.counters.stride_rejected += 1;
-                            event.outcome = Err(r);
-                        }
-                    }
-                    Some(event)
-                }
-                Some(_) => {
-                    self.counters.stride_rejected += 1;
-                    None
-                }
-                None => None,
-            };
-            eskf.clone_footprint();
-            self.footprint_yaw_rad = Some(self.levelled_yaw(eskf));
-            self.out.stride = event;
+        if self.cfg.heading.observations.stride() && !self.resumed_look {
+            self.out.stride = self.stride_observation(eskf, t_s);
+            self.new_footprint(eskf, t_s);
         }
+        let h = &self.cfg.heading;
         let (foot_heading, var) = eskf.heading_prediction(forward);
         let straight = self.straight.push(foot_heading);
         let mut event = HeadingEvent {
@@ -193,6 +146,7 @@ impl Pipeline {
             direction_rad: f64::NAN,
             outcome: Err(Rejection::NoSource),
             baseline_s: 0.0,
+            observed_t_s: t_s,
         };
         if h.observations.foot_axis() {
             let sd = h.sigma_rad.get();
@@ -236,6 +190,99 @@ impl Pipeline {
                 }
             }
         }
+    }
+
+    /// The stride direction observation at a new footprint (before the footprint is cloned):
+    /// the stride since the previous footprint or, with `heading.stride_look_ahead`, the one
+    /// before it, judged straight once the footprint after it is known.
+    fn stride_observation(&mut self, eskf: &mut Eskf, t_s: f64) -> Option<HeadingEvent> {
+        let h = &self.cfg.heading;
+        let xy = [eskf.p_m.x, eskf.p_m.y];
+        let look_ahead = h.stride_look_ahead;
+        // With look-ahead the line test sees every footprint, and the stride before the
+        // last is straight when the line held both at its own footprint and at this one.
+        let ahead = look_ahead.then(|| {
+            let now = self.line.as_mut().and_then(|l| l.push(xy));
+            let both = self.line_before.zip(now).map(|(a, b)| a && b);
+            self.line_before = now;
+            both
+        });
+        // The foot's turn over the observed stride (the gyro's over one stride: a bias
+        // error adds a fraction of a degree); with look-ahead, also over the stride after it.
+        let now = self.levelled_yaw(eskf);
+        let turn = if look_ahead {
+            self.footprint_yaw_rad
+                .zip(self.prev_footprint_yaw_rad)
+                .map(|(b, a)| wrap_pi(b - a).abs().max(wrap_pi(now - b).abs()))
+        } else {
+            self.footprint_yaw_rad.map(|prev| wrap_pi(now - prev))
+        };
+        let observed_t_s = if look_ahead {
+            self.footprint_t_s[1]
+        } else {
+            t_s
+        };
+        match eskf.stride_prediction() {
+            Some((len, dir, var)) if len >= h.min_stride_m.get() => {
+                let sd = h.stride_sigma_rad.get();
+                let mut event = HeadingEvent {
+                    foot_heading_rad: dir,
+                    direction_rad: f64::NAN,
+                    outcome: Err(Rejection::NoSource),
+                    baseline_s: 0.0,
+                    observed_t_s,
+                };
+                // Straight walking: the footprint line decides once it holds enough
+                // footprints; until then (the first strides of tracking) a stride over
+                // which the foot turned is no straight stride. Without the line test
+                // (`line_footprints = 0`) every stride is associated, as before it.
+                let verdict = match (self.line.as_mut(), ahead) {
+                    (None, _) => None,
+                    (Some(_), Some(both)) => Some(both),
+                    (Some(l), None) => Some(l.push(xy)),
+                };
+                let straight = match verdict {
+                    None => true,
+                    Some(Some(on_line)) => on_line,
+                    Some(None) => turn.is_none_or(|t| t.abs() <= h.straight_max_change_rad.get()),
+                };
+                // The map is asked at the stride's own end.
+                let at = if look_ahead { eskf.footprint_xy_m } else { xy };
+                let assoc = if !straight {
+                    Err(Rejection::NotStraight)
+                } else {
+                    weighted_association(&self.aid, h, at, dir, var + sd * sd)
+                };
+                match assoc {
+                    Ok((d, w)) => {
+                        event.direction_rad = d;
+                        if let Some(i) = eskf.stride_direction_update(d, sd / w.sqrt()) {
+                            self.counters.stride_used += 1;
+                            event.outcome = Ok(i);
+                        }
+                    }
+                    Err(r) => {
+                        self.counters.stride_rejected += 1;
+                        event.outcome = Err(r);
+                    }
+                }
+                Some(event)
+            }
+            Some(_) => {
+                self.counters.stride_rejected += 1;
+                None
+            }
+            None => None,
+        }
+    }
+
+    /// The current position becomes the cloned footprint (the previous one, with look-ahead,
+    /// the footprint before it), with the foot's yaw and the time there.
+    fn new_footprint(&mut self, eskf: &mut Eskf, t_s: f64) {
+        eskf.clone_footprint();
+        self.prev_footprint_yaw_rad = self.footprint_yaw_rad;
+        self.footprint_yaw_rad = Some(self.levelled_yaw(eskf));
+        self.footprint_t_s = [self.footprint_t_s[1], t_s];
     }
 
     /// Yaw of the sensor's levelled x axis (the attitude with the initial tilt taken out).

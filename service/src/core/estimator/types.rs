@@ -139,6 +139,9 @@ pub struct HeadingEvent {
     pub outcome: Result<Innovation, Rejection>,
     /// Elapsed time since the observer epoch (bias-filter modes), s.
     pub baseline_s: f64,
+    /// When the observed walking ended, s: the stance's own time, or for a stride observed
+    /// one stance late (`heading.stride_look_ahead`) the time of the footprint ending it.
+    pub observed_t_s: f64,
 }
 
 /// Running counters.
