@@ -655,6 +655,8 @@ impl Eskf {
 }
 
 #[cfg(test)]
+mod clone_tests;
+#[cfg(test)]
 mod response_tests;
 #[cfg(test)]
 mod tests;
