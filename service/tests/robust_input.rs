@@ -245,6 +245,11 @@ fn a_burst_of_garbage_force_resets_the_velocity_and_spares_the_bias_and_heading(
 /// the rest of the walk and outside the association's gate (1 heading observation used instead
 /// of 11, 27 % of path).
 /// Now the turn the gyro measured since that stance is added back.
+///
+/// The restored state is from before the stance's footprint was cloned: the footprints the
+/// stride observations had recorded since no longer match the filter's, and are forgotten
+/// (before, the next stance observed one stride judged by the next one's line test and turn,
+/// and the one after a double stride).
 #[test]
 fn a_state_restored_in_a_turn_keeps_the_turn() {
     let ((_, _, c_clean), (_, _, c)) = exp17_with_a_burst(7.7, 150.0);
@@ -253,6 +258,8 @@ fn a_state_restored_in_a_turn_keeps_the_turn() {
         "{} restores",
         c.health_restores
     );
+    assert_eq!(c_clean.footprints_forgotten, 0);
+    assert!(c.footprints_forgotten >= 1, "{c:?}");
     assert!(
         c.heading_used + 1 >= c_clean.heading_used,
         "{} heading observations used, {} on the clean walk",

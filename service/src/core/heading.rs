@@ -250,6 +250,12 @@ impl FootprintLine {
         }
     }
 
+    /// Forgets every footprint recorded.
+    pub fn clear(&mut self) {
+        self.len = 0;
+        self.next = 0;
+    }
+
     /// Records a footprint; `Some(true)` when the last `n` lie on a line, `Some(false)` when
     /// they do not, `None` until `n` footprints are known.
     pub fn push(&mut self, xy: [f64; 2]) -> Option<bool> {

@@ -58,6 +58,8 @@ pub struct Summary {
     pub clipped_samples: u64,
     /// Updates that failed the estimator's health check (the last good state was restored).
     pub health_restores: u64,
+    /// Of those, the ones that forgot the cloned footprints (see `Counters`).
+    pub footprints_forgotten: u64,
     /// Stance updates that found a velocity far beyond what the filter allowed and reset it.
     pub velocity_resets: u64,
     /// Samples integrated on the smoothed clock because the stamps jitter (host arrival times).
@@ -417,6 +419,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         samples_refused: feed.refused,
         clipped_samples: c.clipped_samples,
         health_restores: c.health_restores,
+        footprints_forgotten: c.footprints_forgotten,
         velocity_resets: c.velocity_resets,
         jittery_clock_samples: c.jittery_clock_samples,
         started_without_rest: c.started_without_rest,

@@ -83,7 +83,7 @@ pub const ALIGNMENT_GYRO_BIAS_PRIOR: BiasPrior = BiasPrior::RestMean;
 /// `alignment.rest_tail_s`: the end of a rest left out of its means, s.
 pub const ALIGNMENT_REST_TAIL_S: f64 = 0.5;
 
-/// `alignment.rest_max_rate_change_rad_s`: a 50 ms block of a rest whose mean rate lies further
+/// `alignment.rest_max_rate_change_rad_s`: a 50 ms block of the initial rest whose mean rate lies further
 /// than this from the rest's mean so far is motion, rad/s (about 3°/s: the quiet parts of the
 /// bundled rests sway by up to about 0.03 rad/s, a foot that rocks before its first step by
 /// 0.04–0.2).

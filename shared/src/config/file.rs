@@ -124,9 +124,10 @@ pub struct AlignmentFile {
     /// The last part of the rest left out of the means: the foot starts to move before the
     /// detector sees it (default 0.5 s).
     pub rest_tail_s: Option<f64>,
-    /// A 50 ms block of a rest whose mean rate lies further than this from the mean of the
+    /// A 50 ms block of the initial rest whose mean rate lies further than this from the mean of the
     /// rest's blocks so far is motion (a foot that rocks or shifts its weight while the stance
-    /// detector still says stance) and is left out of the means (default 0.05 rad/s).
+    /// detector still says stance) and is left out of the means (default 0.05 rad/s). Not
+    /// applied to a walking stance that aligns without a rest, nor to the later rests.
     pub rest_max_rate_change_rad_s: Option<f64>,
     /// Without an initial rest of `min_rest_s`, the first stance at least this long aligns the
     /// filter, without a rest-mean bias prior (default 0.1 s; 0 waits for a rest).

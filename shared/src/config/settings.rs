@@ -85,7 +85,7 @@ pub struct AlignmentConfig {
     pub gravity_m_s2: Option<Positive>,
     /// Tail of the rest left out of the means.
     pub rest_tail_s: f64,
-    /// A rest block further than this from the rest's mean rate is motion, rad/s.
+    /// An initial-rest block further than this from the rest's mean rate is motion, rad/s.
     pub rest_max_rate_change_rad_s: Positive,
     /// Shortest first stance that aligns without a rest (0: wait for a rest).
     pub min_start_stance_s: f64,

@@ -90,3 +90,27 @@ fn with_look_ahead_the_stride_observed_is_the_one_between_the_two_clones() {
     let (_, dir, _) = g.stride_prediction().unwrap();
     assert!((dir - 1.0f64.atan2(0.5)).abs() < 1e-12, "{dir}");
 }
+
+#[test]
+fn a_copy_from_before_a_clone_says_so_and_forgotten_footprints_observe_no_stride() {
+    let mut f = level_filter(0.01, all_ext());
+    let before = f.clone();
+    f.clone_footprint();
+    f.p_m.x = 1.0;
+    f.clone_footprint();
+    f.p_m.x = 2.0;
+    assert_eq!(f.footprints_cloned, 2);
+    assert!(f.stride_prediction().is_some());
+    let mut g = f.clone();
+    g.copy_state_from(&before);
+    assert_eq!(g.footprints_cloned, 0);
+    f.forget_footprints();
+    assert!(f.stride_prediction().is_none());
+    // One new footprint is not enough with look-ahead: the stride needs two.
+    f.clone_footprint();
+    assert!(f.stride_prediction().is_none());
+    f.p_m.x = 3.0;
+    f.clone_footprint();
+    let (len, _, _) = f.stride_prediction().unwrap();
+    assert!((len - 1.0).abs() < 1e-12, "{len}");
+}

@@ -213,6 +213,8 @@ pub struct Eskf {
     pub footprint_xy_m: [f64; 2],
     /// The footprint cloned before it (look-ahead only), m; NaN before the second clone.
     pub prev_footprint_xy_m: [f64; 2],
+    /// Footprints cloned so far: a copy of the filter from before a clone has fewer.
+    pub footprints_cloned: u64,
     /// Error covariance, column-major with stride `MAX_N`; only the leading `n × n` is used.
     p: [f64; MAX_N * MAX_N],
     /// The closed-loop response to a bias error present when the bias was set
@@ -263,6 +265,7 @@ impl Eskf {
             ext: ExtensionEstimates::default(),
             footprint_xy_m: [f64::NAN; 2],
             prev_footprint_xy_m: [f64::NAN; 2],
+            footprints_cloned: 0,
             p: [0.0; MAX_N * MAX_N],
             response: [0.0; MAX_N * 3],
             layout,
@@ -331,6 +334,7 @@ impl Eskf {
         self.ext = src.ext;
         self.footprint_xy_m = src.footprint_xy_m;
         self.prev_footprint_xy_m = src.prev_footprint_xy_m;
+        self.footprints_cloned = src.footprints_cloned;
         self.layout = src.layout;
         self.gravity_m_s2 = src.gravity_m_s2;
         self.noise = src.noise;
@@ -424,6 +428,7 @@ impl Eskf {
         next.ext = self.ext;
         next.footprint_xy_m = self.footprint_xy_m;
         next.prev_footprint_xy_m = self.prev_footprint_xy_m;
+        next.footprints_cloned = self.footprints_cloned;
         let step_half = exp_rotvec(&(omega_rad_s * (0.5 * dt_s)));
         let half = self.nav_from_body * step_half;
         let f_nav = half * f_m_s2;

@@ -254,6 +254,14 @@ impl Eskf {
         )
     }
 
+    /// Forgets the cloned footprints (their nominal positions become NaN): no stride is
+    /// observed until new ones are cloned. For a filter put back to a copy that no longer
+    /// matches the footprints its user recorded.
+    pub fn forget_footprints(&mut self) {
+        self.footprint_xy_m = [f64::NAN; 2];
+        self.prev_footprint_xy_m = [f64::NAN; 2];
+    }
+
     /// Starts a new stride: the current horizontal position becomes the cloned footprint,
     /// with its covariance (rows and columns of the clone copied from those of x and y).
     /// Without the clone states this does nothing.
@@ -281,6 +289,7 @@ impl Eskf {
             }
         }
         self.footprint_xy_m = [self.p_m.x, self.p_m.y];
+        self.footprints_cloned += 1;
         for k in 0..2 {
             for j in 0..n {
                 let v = if j == c || j == c + 1 {

@@ -41,8 +41,14 @@ impl Pipeline {
             return None;
         }
         self.counters.started_without_rest = short_start;
-        let (mean_f, mean_w) = rest.means();
-        self.counters.initial_rest_moving_blocks = rest.moving_blocks();
+        // A rest's blocks in which the foot moved are left out; a walking stance's (no rest)
+        // are not: it begins with its landing, which the motion test would take as reference.
+        let (mean_f, mean_w) = if short_start {
+            rest.means_all()
+        } else {
+            self.counters.initial_rest_moving_blocks = rest.moving_blocks();
+            rest.means()
+        };
         // The prior's σ: √(floor² + spread²), the bias instability floor and the rest's rate
         // spread over √(number of 50 ms blocks) (a rest during which the foot still sways).
         let prior_sd = rest

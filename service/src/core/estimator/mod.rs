@@ -213,10 +213,10 @@ impl Estimator {
             was_stance: false,
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
-            stance_rest: RestSums::new(
-                cfg.alignment.rest_tail_s,
-                cfg.alignment.rest_max_rate_change_rad_s.get(),
-            ),
+            // Without the motion test: a later rest begins with a landing, which the test,
+            // anchored on the first block, would take as the reference and leave every quiet
+            // block out (the zero-rate update then never came).
+            stance_rest: RestSums::new(cfg.alignment.rest_tail_s, f64::INFINITY),
             zero_rate_applied: false,
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),

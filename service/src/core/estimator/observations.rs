@@ -285,6 +285,23 @@ impl Pipeline {
         self.footprint_t_s = [self.footprint_t_s[1], t_s];
     }
 
+    /// After a health fault put the filter back to a copy from before a footprint was cloned
+    /// (an undone update at a stance observation, or a restored stance): the filter's clones
+    /// and the footprints, yaws, times and line verdicts recorded here no longer match, so all
+    /// of them are forgotten, and strides are observed again from the next new footprints.
+    pub(super) fn forget_footprints(&mut self, eskf: &mut Eskf) {
+        eskf.forget_footprints();
+        self.counters.footprints_forgotten += 1;
+        self.last_footprint = None;
+        self.footprint_yaw_rad = None;
+        self.prev_footprint_yaw_rad = None;
+        self.footprint_t_s = [f64::NAN; 2];
+        self.line_before = None;
+        if let Some(l) = self.line.as_mut() {
+            l.clear();
+        }
+    }
+
     /// Yaw of the sensor's levelled x axis (the attitude with the initial tilt taken out).
     fn levelled_yaw(&self, eskf: &Eskf) -> f64 {
         yaw(&(eskf.nav_from_body * self.tilt0.inverse()))

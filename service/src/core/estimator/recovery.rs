@@ -94,6 +94,7 @@ impl Pipeline {
             }
             Err(fault) => {
                 self.consecutive_faults += 1;
+                let cloned = eskf.footprints_cloned;
                 if self.consecutive_faults <= MAX_UNDONE_UPDATES {
                     eskf.copy_state_from(before);
                     if let Some(b) = self.before_bias.get() {
@@ -118,6 +119,9 @@ impl Pipeline {
                         self.bias.clone_from(bb);
                     }
                     self.bias.restore_keeping_observer(b);
+                }
+                if eskf.footprints_cloned != cloned {
+                    self.forget_footprints(eskf);
                 }
                 // Either copy may hold the bias filter from before the mounting-yaw
                 // calibration (without its observer) while the phase stays tracking.

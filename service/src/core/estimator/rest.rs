@@ -40,6 +40,8 @@ pub(super) type RestMeans = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
 pub(super) struct RestSums {
     pub(super) t_first_s: f64,
     settled: Sums,
+    /// The settled part with its moving blocks too.
+    settled_all: Sums,
     recent: std::collections::VecDeque<Sums>,
     current: Sums,
     current_start_s: f64,
@@ -58,6 +60,7 @@ impl RestSums {
         Self {
             t_first_s: f64::NAN,
             settled: Sums::default(),
+            settled_all: Sums::default(),
             recent: std::collections::VecDeque::with_capacity(capacity + 1),
             current: Sums::default(),
             current_start_s: f64::NAN,
@@ -70,6 +73,7 @@ impl RestSums {
     pub(super) fn clear(&mut self) {
         self.t_first_s = f64::NAN;
         self.settled = Sums::default();
+        self.settled_all = Sums::default();
         self.recent.clear();
         self.current = Sums::default();
         self.settled_moving = 0;
@@ -88,6 +92,7 @@ impl RestSums {
             if self.recent.len() == self.capacity
                 && let Some(old) = self.recent.pop_front()
             {
+                self.settled_all.add(&old);
                 if old.moving {
                     self.settled_moving += 1;
                 } else {
@@ -121,6 +126,19 @@ impl RestSums {
     /// Means over the settled part, or over everything when the rest was too short for that.
     pub(super) fn means(&self) -> (Vector3<f64>, Vector3<f64>) {
         let s = self.used();
+        let n = s.n.max(1) as f64;
+        (s.f / n, s.w / n)
+    }
+
+    /// Means over every sample pushed, the blocks in which the foot moved included: a first
+    /// stance that aligns a walk without a rest begins with its landing, which the motion test
+    /// (anchored on the first block) would take for the reference.
+    pub(super) fn means_all(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let mut s = self.settled_all;
+        for b in &self.recent {
+            s.add(b);
+        }
+        s.add(&self.current);
         let n = s.n.max(1) as f64;
         (s.f / n, s.w / n)
     }

@@ -122,10 +122,15 @@ fn a_later_rest_observes_the_bias_with_a_zero_rate_update() {
         cfg.alignment.gyro_bias_prior = BiasPrior::None;
         cfg.eskf.zero_rate_updates = zero_rate_updates;
         let mut est = Estimator::new(cfg, HeadingAid::None);
-        // Aligned on a 1 s rest without prior, a push, a 2 s rest, a 0.1 s wobble (shorter
-        // than the merge gap: the stance may still resume), a short stance, a push.
+        // Aligned on a 1 s rest without prior, a push, a landing (120 ms of the foot still
+        // rolling at 0.25 rad/s) and a 2 s rest, a 0.1 s wobble (shorter than the merge gap:
+        // the stance may still resume), a short stance, a push. The landing is the rest's first
+        // 50 ms blocks: no reference for what is still (the initial rest's motion test, anchored
+        // on the first block, left every quiet block out and the rest was never fused).
         let t = feed(&mut est, 0.0, 200, bias, level);
         let t = feed(&mut est, t, 10, bias, pushed);
+        let landing = [bias[0], bias[1] + 0.25, bias[2]];
+        let t = feed(&mut est, t, 24, landing, level);
         let t = feed(&mut est, t, 400, bias, level);
         let wobble = [bias[0], bias[1] + 2.0, bias[2]];
         let t = feed(&mut est, t, 20, wobble, level);

@@ -163,6 +163,9 @@ pub struct Counters {
     /// the sample's update (the state before it), further ones restore the state of the last
     /// healthy stance.
     pub health_restores: u64,
+    /// Health faults that put the filter back to before a footprint it had cloned: the cloned
+    /// footprints were forgotten, and strides are observed again from the next ones.
+    pub footprints_forgotten: u64,
     /// Stance updates that found a velocity far beyond what the filter allowed (garbage samples
     /// since the last stance) and reset the velocity first.
     pub velocity_resets: u64,
