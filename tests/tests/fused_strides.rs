@@ -60,7 +60,10 @@ fn walked_off_deg(truth: &[TruthPoint], t_s: f64, dir: f64) -> (f64, usize) {
         .iter()
         .position(|f| f.t_s >= t_s - 0.01)
         .expect("a footprint after the stride");
-    assert!(j > 0, "a stride fused at {t_s} s, before the first footprint");
+    assert!(
+        j > 0,
+        "a stride fused at {t_s} s, before the first footprint"
+    );
     let walked = (truth[j].y_m - truth[j - 1].y_m).atan2(truth[j].x_m - truth[j - 1].x_m);
     let off = corridor_service::core::rotation::wrap_pi(dir - walked).to_degrees();
     (off, j)
