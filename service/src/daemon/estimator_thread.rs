@@ -317,6 +317,7 @@ impl<'a> EstState<'a> {
         p.rejected_time_jump += c.rejected_time_jump;
         p.clipped_samples += c.clipped_samples;
         p.health_restores += c.health_restores;
+        p.footprints_forgotten += c.footprints_forgotten;
         p.velocity_resets += c.velocity_resets;
         p.gaps += c.gaps;
         p.stances += c.stances;
@@ -383,7 +384,7 @@ impl<'a> EstState<'a> {
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
              σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
-             health restores {}, velocity resets {}, time gaps {}, IMU head missing {}, missing at restart {}, \
+             health restores {} (footprints forgotten {}), velocity resets {}, time gaps {}, IMU head missing {}, missing at restart {}, \
              lost in a killed daemon {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
@@ -403,6 +404,7 @@ impl<'a> EstState<'a> {
             self.previous.rejected_time_jump + self.est.counters().rejected_time_jump,
             self.previous.clipped_samples + self.est.counters().clipped_samples,
             self.previous.health_restores + self.est.counters().health_restores,
+            self.previous.footprints_forgotten + self.est.counters().footprints_forgotten,
             self.previous.velocity_resets + self.est.counters().velocity_resets,
             self.previous.gaps + self.est.counters().gaps,
             rx.head_missing.load(Ordering::Relaxed),
