@@ -137,10 +137,10 @@ struct Pipeline {
     /// Yaw of the sensor's levelled x axis at the previous footprint: the foot's turn over a
     /// stride is measured from it.
     footprint_yaw_rad: Option<f64>,
-    /// The same at the footprint before it, and the times of those two footprints (older
-    /// first): what a stride observed one stance late needs (`heading.stride_look_ahead`).
+    /// The same at the footprint before it, and the time of the last footprint: what a
+    /// stride observed one stance late needs (`heading.stride_look_ahead`).
     prev_footprint_yaw_rad: Option<f64>,
-    footprint_t_s: [f64; 2],
+    footprint_t_s: f64,
     /// The footprint-line test's verdict at the previous footprint (look-ahead).
     line_before: Option<bool>,
     straight: StraightWalk,
@@ -204,7 +204,7 @@ impl Estimator {
             last_footprint: None,
             footprint_yaw_rad: None,
             prev_footprint_yaw_rad: None,
-            footprint_t_s: [f64::NAN; 2],
+            footprint_t_s: f64::NAN,
             line_before: None,
             stance_events: StanceEvents::new(cfg.detector.merge_gap_s, cfg.max_dt_s.get()),
             stance_edge: StanceEdge::None,
@@ -216,7 +216,7 @@ impl Estimator {
             // Without the motion test: a later rest begins with a landing, which the test,
             // anchored on the first block, would take as the reference and leave every quiet
             // block out (the zero-rate update then never came).
-            stance_rest: RestSums::new(cfg.alignment.rest_tail_s, f64::INFINITY),
+            stance_rest: RestSums::new(cfg.alignment.rest_tail_s, None),
             zero_rate_applied: false,
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
@@ -229,7 +229,7 @@ impl Estimator {
         Self {
             stage: Stage::Aligning(Box::new(RestSums::new(
                 p.cfg.alignment.rest_tail_s,
-                p.cfg.alignment.rest_max_rate_change_rad_s.get(),
+                Some(p.cfg.alignment.rest_max_rate_change_rad_s.get()),
             ))),
             p,
         }

@@ -217,11 +217,7 @@ impl Pipeline {
         } else {
             self.footprint_yaw_rad.map(|prev| wrap_pi(now - prev))
         };
-        let observed_t_s = if look_ahead {
-            self.footprint_t_s[1]
-        } else {
-            t_s
-        };
+        let observed_t_s = if look_ahead { self.footprint_t_s } else { t_s };
         match eskf.stride_prediction() {
             Some((len, dir, var)) if len >= h.min_stride_m.get() => {
                 let sd = h.stride_sigma_rad.get();
@@ -282,7 +278,7 @@ impl Pipeline {
         eskf.clone_footprint();
         self.prev_footprint_yaw_rad = self.footprint_yaw_rad;
         self.footprint_yaw_rad = Some(self.levelled_yaw(eskf));
-        self.footprint_t_s = [self.footprint_t_s[1], t_s];
+        self.footprint_t_s = t_s;
     }
 
     /// After a health fault put the filter back to a copy from before a footprint was cloned
@@ -295,7 +291,7 @@ impl Pipeline {
         self.last_footprint = None;
         self.footprint_yaw_rad = None;
         self.prev_footprint_yaw_rad = None;
-        self.footprint_t_s = [f64::NAN; 2];
+        self.footprint_t_s = f64::NAN;
         self.line_before = None;
         if let Some(l) = self.line.as_mut() {
             l.clear();

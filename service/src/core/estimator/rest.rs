@@ -33,9 +33,10 @@ pub(super) type RestMeans = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
 
 /// A rest, in blocks, so that its last `tail_s` (the foot already starting to move while the
 /// detector still says "stance") can be left out of the means, and so can any block whose mean
-/// rate lies further than `max_rate_change_rad_s` from the mean of the rest's blocks so far (a
-/// foot that rocks or shifts its weight before its first step: exp40 rocks at 0.05–0.2 rad/s
-/// for 0.7 s after 0.6 s of quiet, all of it "stance"). Fixed capacity.
+/// rate lies further than `max_rate_change_rad_s` (when given: the initial rest's) from the
+/// mean of the rest's still blocks so far (a foot that rocks or shifts its weight before its
+/// first step: exp40 rocks at 0.05–0.2 rad/s for 0.7 s after 0.6 s of quiet, all of it
+/// "stance"). Fixed capacity.
 #[derive(Debug, Clone)]
 pub(super) struct RestSums {
     pub(super) t_first_s: f64,
@@ -46,7 +47,7 @@ pub(super) struct RestSums {
     current: Sums,
     current_start_s: f64,
     capacity: usize,
-    max_rate_change_rad_s: f64,
+    max_rate_change_rad_s: Option<f64>,
     /// Settled blocks left out because the foot moved in them.
     settled_moving: u64,
 }
@@ -55,7 +56,7 @@ pub(super) struct RestSums {
 pub const REST_BLOCK_S: f64 = 0.05;
 
 impl RestSums {
-    pub(super) fn new(tail_s: f64, max_rate_change_rad_s: f64) -> Self {
+    pub(super) fn new(tail_s: f64, max_rate_change_rad_s: Option<f64>) -> Self {
         let capacity = (tail_s / REST_BLOCK_S).ceil() as usize + 1;
         Self {
             t_first_s: f64::NAN,
@@ -99,10 +100,13 @@ impl RestSums {
                     self.settled.add(&old);
                 }
             }
-            let still = self.still_blocks();
-            if still.n > 0 && self.current.n > 0 {
+            if let Some(max) = self.max_rate_change_rad_s
+                && self.current.n > 0
+                && let still = self.still_blocks()
+                && still.n > 0
+            {
                 let change = self.current.w / self.current.n as f64 - still.w / still.n as f64;
-                self.current.moving = change.norm() > self.max_rate_change_rad_s;
+                self.current.moving = change.norm() > max;
             }
             self.recent.push_back(self.current);
             self.current = Sums::default();
@@ -192,7 +196,7 @@ mod tests {
 
     /// 0.6 s of quiet at the bias `b`, then 1.2 s in which the foot rocks (as exp40's does
     /// before its first step, all of it "stance" to the detector), at 200 Hz.
-    fn rocking_rest(max_rate_change_rad_s: f64) -> RestSums {
+    fn rocking_rest(max_rate_change_rad_s: Option<f64>) -> RestSums {
         let b = Vector3::new(0.001, -0.005, 0.008);
         let g = Vector3::new(0.0, 0.0, 9.81);
         let mut rest = RestSums::new(0.5, max_rate_change_rad_s);
@@ -214,13 +218,13 @@ mod tests {
     #[test]
     fn blocks_in_which_the_foot_rocks_are_left_out_of_the_rest_means() {
         let b = Vector3::new(0.001, -0.005, 0.008);
-        let rest = rocking_rest(0.05);
+        let rest = rocking_rest(Some(0.05));
         let (_, w, sem) = rest.settled_means(0.5).expect("0.6 s of quiet settles");
         assert!((w - b).norm() < 1e-3, "{w}");
         assert!(sem.norm() < 3e-3, "{sem}");
         assert!(rest.moving_blocks() >= 8, "{}", rest.moving_blocks());
         // Every block counted, the rocking ones included, the mean is the rocking's.
-        let all = rocking_rest(10.0);
+        let all = rocking_rest(None);
         let (_, w_all) = all.means();
         assert!((w_all - b).norm() > 5e-3, "{w_all}");
         assert_eq!(all.moving_blocks(), 0);
