@@ -116,6 +116,9 @@ pub enum Rejection {
     /// The association weight was too low: the walker is most likely not walking along the
     /// nearest direction (a weave, a side-step, a turn).
     Unlikely,
+    /// The foot axis points along a direction the stride that brought it there does not
+    /// follow (`heading.foot_axis_stride_max_deg`): a weave.
+    OffStride,
     /// No heading source.
     NoSource,
 }
@@ -128,6 +131,7 @@ impl Rejection {
             Rejection::OutsideGate => "outside_gate",
             Rejection::OutsideMap => "outside_map",
             Rejection::Unlikely => "unlikely",
+            Rejection::OffStride => "off_stride",
             Rejection::NoSource => "no_source",
         }
     }

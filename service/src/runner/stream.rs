@@ -400,6 +400,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
             ("outside_gate", c.heading_outside_gate),
             ("outside_map", c.heading_outside_map),
             ("unlikely", c.heading_unlikely),
+            ("off_stride", c.heading_off_stride),
         ]),
         stride_observations_used: c.stride_used,
         stride_observations_rejected: c.stride_rejected,

@@ -250,6 +250,10 @@ pub struct HeadingFile {
     /// test must then hold both with the stride's own footprint last and with the next one
     /// (default false).
     pub stride_look_ahead: Option<bool>,
+    /// The `eskf` mode fuses a foot axis only when the stride that brought the foot there runs
+    /// within this angle of the direction the foot axis is associated with (degrees; default:
+    /// absent, no such test).
+    pub foot_axis_stride_max_deg: Option<f64>,
     /// Prior probability that a stance's walking direction is a dominant direction, for the
     /// association weight (default 0.7).
     pub aligned_prior: Option<f64>,

@@ -321,6 +321,7 @@ mod tests {
         for (section, key) in [
             ("heading", "sigma_deg"),
             ("heading", "stride_sigma_deg"),
+            ("heading", "foot_axis_stride_max_deg"),
             ("model", "heading_offset_sd_deg"),
             ("model", "gyro_coupling_z_sd_deg"),
         ] {
@@ -338,6 +339,7 @@ mod tests {
             ("alignment", "gravity_m_s2", "1e6"),
             ("sensor", "max_gyro_bias_rad_s", "1e-12"),
             ("heading", "start_heading_deg", "1e300"),
+            ("heading", "foot_axis_stride_max_deg", "120"),
             ("model", "heading_offset_sd_deg", "1e300"),
         ] {
             let f = ConfigFile::parse(&format!("[{section}]\n{key} = {v}\n"), Path::new("a.toml"))

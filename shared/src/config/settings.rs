@@ -189,6 +189,9 @@ pub struct HeadingConfig {
     pub line_lateral_m: Positive,
     /// Stride observations one stance late (the line test with the next footprint too).
     pub stride_look_ahead: bool,
+    /// Largest angle between a fused foot axis's direction and the stride before it (`None`:
+    /// no such test).
+    pub foot_axis_stride_max_rad: Option<Positive>,
     /// Prior probability of an aligned stance.
     pub aligned_prior: Fraction,
     /// Smallest fused association weight.

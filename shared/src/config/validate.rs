@@ -550,6 +550,18 @@ impl ConfigFile {
                     "must be in (0, 10] m",
                 )?,
                 stride_look_ahead: h.stride_look_ahead.unwrap_or(HEADING_STRIDE_LOOK_AHEAD),
+                foot_axis_stride_max_rad: h
+                    .foot_axis_stride_max_deg
+                    .map(|v| {
+                        Positive::from_degrees_in_range(
+                            "heading.foot_axis_stride_max_deg",
+                            v,
+                            0.0,
+                            90.0,
+                            "must be in (0, 90]°",
+                        )
+                    })
+                    .transpose()?,
                 aligned_prior: Fraction::new(
                     "heading.aligned_prior",
                     h.aligned_prior.unwrap_or(HEADING_ALIGNED_PRIOR),

@@ -134,6 +134,11 @@ impl Pipeline {
     fn eskf_observations(&mut self, eskf: &mut Eskf, forward: &Vector3<f64>, t_s: f64) {
         // The foot axis is associated where the stance began, before the stride update.
         let xy = [eskf.p_m.x, eskf.p_m.y];
+        // The stride that brought the foot here (before it is observed or cloned).
+        let stride_dir = eskf
+            .current_stride_prediction()
+            .filter(|&(len, _, _)| len >= self.cfg.heading.min_stride_m.get())
+            .map(|(_, dir, _)| dir);
         if self.cfg.heading.observations.stride() && !self.resumed_look {
             self.out.stride = self.stride_observation(eskf, t_s);
             self.new_footprint(eskf, t_s);
@@ -155,6 +160,15 @@ impl Pipeline {
             } else {
                 Err(Rejection::NotStraight)
             };
+            // A foot that points along a corridor says where the walker walks only when the
+            // stride that brought it there runs along that corridor too: in a weave the foot
+            // turns back before the walk does.
+            let assoc = assoc.and_then(|(d, w)| match (h.foot_axis_stride_max_rad, stride_dir) {
+                (Some(max), Some(s)) if wrap_pi(s - d).abs() > max.get() => {
+                    Err(Rejection::OffStride)
+                }
+                _ => Ok((d, w)),
+            });
             match assoc {
                 Ok((d, w)) => {
                     event.direction_rad = d;
@@ -309,6 +323,7 @@ impl Pipeline {
             Rejection::OutsideGate => self.counters.heading_outside_gate += 1,
             Rejection::OutsideMap => self.counters.heading_outside_map += 1,
             Rejection::Unlikely => self.counters.heading_unlikely += 1,
+            Rejection::OffStride => self.counters.heading_off_stride += 1,
             Rejection::NoSource => {}
         }
     }

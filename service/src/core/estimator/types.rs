@@ -190,6 +190,8 @@ pub struct Counters {
     /// Rejected: the association weight was below `heading.min_weight` (the residual says the
     /// walker is not walking along the associated direction: a weave, a side-step).
     pub heading_unlikely: u64,
+    /// Rejected: the foot axis is off the stride before it (`heading.foot_axis_stride_max_deg`).
+    pub heading_off_stride: u64,
     /// Stride-direction observations used.
     pub stride_used: u64,
     /// Stride-direction observations rejected (too short, outside the gate, unlikely).
