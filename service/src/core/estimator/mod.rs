@@ -143,6 +143,9 @@ struct Pipeline {
     footprint_t_s: f64,
     /// The footprint-line test's verdict at the previous footprint (look-ahead).
     line_before: Option<bool>,
+    /// The state was restored from the last healthy stance and no stride has run along its
+    /// corridor since: the heading may be off by more than its variance says.
+    heading_suspect: bool,
     straight: StraightWalk,
     line: Option<FootprintLine>,
     stance_events: StanceEvents,
@@ -206,6 +209,7 @@ impl Estimator {
             prev_footprint_yaw_rad: None,
             footprint_t_s: f64::NAN,
             line_before: None,
+            heading_suspect: false,
             stance_events: StanceEvents::new(cfg.detector.merge_gap_s, cfg.max_dt_s.get()),
             stance_edge: StanceEdge::None,
             stances_seen: 0,

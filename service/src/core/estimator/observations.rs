@@ -163,11 +163,23 @@ impl Pipeline {
             // A foot that points along a corridor says where the walker walks only when the
             // stride that brought it there runs along that corridor too: in a weave the foot
             // turns back before the walk does.
-            let assoc = assoc.and_then(|(d, w)| match (h.foot_axis_stride_max_rad, stride_dir) {
-                (Some(max), Some(s)) if wrap_pi(s - d).abs() > max.get() => {
+            // After a fault put the state back to the last healthy stance, the heading carries
+            // what the faulty samples did to it, by more than its variance says: the strides
+            // then run off the corridor with the foot, and the foot axis is the way back. The
+            // test waits until a stride runs along its corridor again.
+            let off = match (h.foot_axis_stride_max_rad, stride_dir, &assoc) {
+                (Some(max), Some(s), Ok((d, _))) => wrap_pi(s - d).abs() > max.get(),
+                _ => false,
+            };
+            if !off && assoc.is_ok() {
+                self.heading_suspect = false;
+            }
+            let assoc = assoc.and_then(|dw| {
+                if off && !self.heading_suspect {
                     Err(Rejection::OffStride)
+                } else {
+                    Ok(dw)
                 }
-                _ => Ok((d, w)),
             });
             match assoc {
                 Ok((d, w)) => {

@@ -119,6 +119,7 @@ impl Pipeline {
                         self.bias.clone_from(bb);
                     }
                     self.bias.restore_keeping_observer(b);
+                    self.heading_suspect = true;
                 }
                 if eskf.footprints_cloned != cloned {
                     self.forget_footprints(eskf);
