@@ -339,21 +339,16 @@ impl Eskf {
     }
 
     /// The stride walked since the last cloned footprint (also with look-ahead, where the
-    /// observed stride is the one before it): length (m), direction (rad) and the direction's
-    /// variance (rad²), or `None` without a clone.
-    pub fn current_stride_prediction(&self) -> Option<(f64, f64, f64)> {
-        let c = self.layout.clone?;
+    /// observed stride is the one before it): horizontal length (m) and direction (rad), or
+    /// `None` without a clone.
+    pub fn stride_since_footprint(&self) -> Option<(f64, f64)> {
+        self.layout.clone?;
         let (dx, dy) = (
             self.p_m.x - self.footprint_xy_m[0],
             self.p_m.y - self.footprint_xy_m[1],
         );
-        let d2 = dx * dx + dy * dy;
-        if !d2.is_finite() || d2 <= 0.0 {
-            return None;
-        }
-        let (hx, hy) = (-dy / d2, dx / d2);
-        let h: SparseRow = [(P0, hx), (P0 + 1, hy), (c, -hx), (c + 1, -hy)];
-        Some((d2.sqrt(), dy.atan2(dx), self.predicted_variance(&h)))
+        let len = dx.hypot(dy);
+        (len.is_finite() && len > 0.0).then(|| (len, dy.atan2(dx)))
     }
 
     /// Stride-direction observation: the walking direction since the cloned footprint is

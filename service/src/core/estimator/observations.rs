@@ -136,9 +136,9 @@ impl Pipeline {
         let xy = [eskf.p_m.x, eskf.p_m.y];
         // The stride that brought the foot here (before it is observed or cloned).
         let stride_dir = eskf
-            .current_stride_prediction()
-            .filter(|&(len, _, _)| len >= self.cfg.heading.min_stride_m.get())
-            .map(|(_, dir, _)| dir);
+            .stride_since_footprint()
+            .filter(|&(len, _)| len >= self.cfg.heading.min_stride_m.get())
+            .map(|(_, dir)| dir);
         if self.cfg.heading.observations.stride() && !self.resumed_look {
             self.out.stride = self.stride_observation(eskf, t_s);
             self.new_footprint(eskf, t_s);
@@ -160,27 +160,7 @@ impl Pipeline {
             } else {
                 Err(Rejection::NotStraight)
             };
-            // A foot that points along a corridor says where the walker walks only when the
-            // stride that brought it there runs along that corridor too: in a weave the foot
-            // turns back before the walk does.
-            // After a fault put the state back to the last healthy stance, the heading carries
-            // what the faulty samples did to it, by more than its variance says: the strides
-            // then run off the corridor with the foot, and the foot axis is the way back. The
-            // test waits until a stride runs along its corridor again.
-            let off = match (h.foot_axis_stride_max_rad, stride_dir, &assoc) {
-                (Some(max), Some(s), Ok((d, _))) => wrap_pi(s - d).abs() > max.get(),
-                _ => false,
-            };
-            if !off && assoc.is_ok() {
-                self.heading_suspect = false;
-            }
-            let assoc = assoc.and_then(|dw| {
-                if off && !self.heading_suspect {
-                    Err(Rejection::OffStride)
-                } else {
-                    Ok(dw)
-                }
-            });
+            let assoc = assoc.and_then(|dw| self.stride_test(dw, stride_dir));
             match assoc {
                 Ok((d, w)) => {
                     event.direction_rad = d;
@@ -195,6 +175,32 @@ impl Pipeline {
             }
         }
         self.out.heading = Some(event);
+    }
+
+    /// The foot axis associated with direction `d` (weight `w`) is evidence of the walking
+    /// direction only when the stride that brought the foot there (`stride_dir`) runs along the
+    /// same corridor, within `heading.foot_axis_stride_max_deg`: in a weave the foot turns back
+    /// towards the corridor before the walk does. After a fault put the state back to the last
+    /// healthy stance, the heading carries what the faulty samples did to it, by more than its
+    /// variance says: the strides then run off the corridor with the foot, and the foot axis is
+    /// the way back, so the test waits until a stride runs along its corridor again.
+    fn stride_test(
+        &mut self,
+        (d, w): (f64, f64),
+        stride_dir: Option<f64>,
+    ) -> Result<(f64, f64), Rejection> {
+        let Some(max) = self.cfg.heading.foot_axis_stride_max_rad else {
+            return Ok((d, w));
+        };
+        let off = stride_dir.is_some_and(|s| wrap_pi(s - d).abs() > max.get());
+        if !off {
+            self.heading_suspect = false;
+        }
+        if off && !self.heading_suspect {
+            Err(Rejection::OffStride)
+        } else {
+            Ok((d, w))
+        }
     }
 
     /// Once the mounting yaw is known: the paper's filter re-expresses its prior in the foot
