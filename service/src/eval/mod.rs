@@ -12,7 +12,8 @@
 //!    GCP0 position on GCP0 and rotates about it so that the direction GCP0→GCPk matches
 //!    the truth, where k is the first GCP at least `heading_min_dist_m` from GCP0; GCP0
 //!    is then left out of the RMS and max. [`Align::Lsq`] fits the least-squares 2-D
-//!    rigid transform (rotation + translation, no scale) over all GCPs.
+//!    rigid transform (rotation + translation, no scale) over all GCPs. [`Align::Translation`]
+//!    (not in the script) only puts GCP0 on GCP0: the trajectory's own heading is scored.
 //! 3. **Figures.** RMS / max / final-GCP error, loop-closure error for closed walks,
 //!    path lengths, the heading error of every GCP-to-GCP leg at least 5 m long and the
 //!    heading drift rate (slope of a least-squares line through those errors).

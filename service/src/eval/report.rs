@@ -126,6 +126,15 @@ pub(super) fn report(
             res.rotation_deg = Some(wrap_deg(theta.to_degrees()));
             (q, 1)
         }
+        Align::Translation => {
+            let q: Vec<P2> = p
+                .iter()
+                .map(|&pi| rot_add(0.0, sub(pi, p[0]), g[0]))
+                .collect();
+            res.alignment = Align::Translation.as_str().to_owned();
+            res.rotation_deg = Some(0.0);
+            (q, 1)
+        }
         Align::Lsq => {
             let (pm, gm) = (mean(&p), mean(&g));
             let (mut num, mut den) = (0.0, 0.0);
@@ -202,7 +211,7 @@ pub(super) fn report(
     res.legs = Some(legs);
     res.scored_gcps = Some(
         match opts.align {
-            Align::FirstLeg => "all but GCP0",
+            Align::FirstLeg | Align::Translation => "all but GCP0",
             Align::Lsq => "all",
         }
         .to_owned(),

@@ -294,6 +294,49 @@ fn rigid_motion_of_truth_has_zero_error_under_lsq() {
 }
 
 #[test]
+fn translation_alignment_scores_the_trajectorys_own_heading() {
+    let truth = l_walk();
+    // Moved only: nothing to score.
+    let (t, x, y) = traj_from(&truth, |p| [p[0] + 7.0, p[1] - 3.0]);
+    let rep = evaluate(
+        &t,
+        &x,
+        &y,
+        &truth,
+        &opts(Align::Translation, Interp::Nearest),
+    )
+    .unwrap();
+    assert_zero_error(&rep);
+    assert_eq!(rep.alignment, "translation");
+    assert_eq!(rep.scored_gcps.as_deref(), Some("all but GCP0"));
+    // Turned by 3° about the start: the first leg takes it out, the map frame keeps it, each
+    // footprint off by its distance from the start times 2·sin(1.5°).
+    let ang = 3.0_f64.to_radians();
+    let g0 = [truth[0].x_m, truth[0].y_m];
+    let (t, x, y) = traj_from(&truth, |p| rot_add(ang, [p[0] - g0[0], p[1] - g0[1]], g0));
+    let first = evaluate(&t, &x, &y, &truth, &opts(Align::FirstLeg, Interp::Nearest)).unwrap();
+    assert_zero_error(&first);
+    let map = evaluate(
+        &t,
+        &x,
+        &y,
+        &truth,
+        &opts(Align::Translation, Interp::Nearest),
+    )
+    .unwrap();
+    let far = truth
+        .iter()
+        .map(|g| (g.x_m - g0[0]).hypot(g.y_m - g0[1]))
+        .fold(0.0, f64::max);
+    let expected = far * 2.0 * (ang / 2.0).sin();
+    assert!(
+        (map.max_error_m.unwrap() - expected).abs() < 1e-9,
+        "{map:?}"
+    );
+    assert_eq!("translation".parse::<Align>().unwrap(), Align::Translation);
+}
+
+#[test]
 fn wrap_deg_matches_python_modulo() {
     assert_eq!(wrap_deg(180.0), -180.0);
     assert_eq!(wrap_deg(-180.0), -180.0);

@@ -30,6 +30,11 @@ pub enum Align {
     FirstLeg,
     /// Least-squares rigid transform over all GCPs (`--align lsq`); flatters drift.
     Lsq,
+    /// Translate onto GCP0 only, keeping the trajectory's own heading (`--align translation`;
+    /// not in the reference script). For a run that starts from the map's heading in the
+    /// truth's frame this is the error in the map frame: a heading aid's absolute heading is
+    /// scored instead of being rotated away by the first leg.
+    Translation,
 }
 
 /// How the trajectory is sampled at GCP times.
@@ -49,6 +54,7 @@ impl Align {
         match self {
             Align::FirstLeg => "first-leg",
             Align::Lsq => "lsq",
+            Align::Translation => "translation",
         }
     }
 }
@@ -77,11 +83,12 @@ impl fmt::Display for Interp {
 
 impl FromStr for Align {
     type Err = EvalError;
-    /// Parses `first-leg` or `lsq`.
+    /// Parses `first-leg`, `lsq` or `translation`.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
             "first-leg" => Ok(Align::FirstLeg),
             "lsq" => Ok(Align::Lsq),
+            "translation" => Ok(Align::Translation),
             other => Err(EvalError::UnknownAlign(other.to_owned())),
         }
     }

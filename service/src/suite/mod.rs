@@ -68,7 +68,7 @@ pub use tables::{
     NOT_WORSE_TOLERANCE_PCT, Summary, headline_markdown, markdown, nis_markdown, summary,
 };
 
-use crate::eval::EvalOptions;
+use crate::eval::{Align, EvalOptions};
 use crate::runner::{self, RunError, RunOutcome, heading_aid};
 use corridor_shared::config::{BiasPrior, Config, ConfigFile, Mode};
 use corridor_shared::imu_csv::ImuLog;
@@ -107,6 +107,17 @@ pub struct Footprint {
     pub rms_pct: f64,
     /// Error at the last GCP, m.
     pub final_m: f64,
+}
+
+/// The default and the baseline in the map frame: translated onto the first footprint, each
+/// with its own heading (both start from the map's start heading), not turned by the first leg
+/// ([`Align::Translation`]).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct MapFrame {
+    /// The ZUPT + rest-mean baseline.
+    pub baseline: Footprint,
+    /// The default (best mode, rest-mean prior).
+    pub default: Footprint,
 }
 
 /// The default and the baseline scored on the footprints before the first leg the data set's
@@ -186,6 +197,8 @@ pub struct SuiteRow {
     pub final_bias_rad_s: [f64; 3],
     /// The footprint figures before the first leg the data set flags (recordings with one).
     pub before_suspect: Option<BeforeSuspect>,
+    /// The footprint figures in the map frame (no first-leg rotation).
+    pub map_frame: MapFrame,
 }
 
 /// Runs the suite (the table's rows).
@@ -346,9 +359,27 @@ impl<'a> Ctx<'a> {
         out: &RunOutcome,
         truth: &[TruthPoint],
     ) -> Result<Footprint, RunError> {
+        self.footprint_aligned(out, truth, Align::FirstLeg)
+    }
+
+    /// The footprint figures of a run in the map frame ([`MapFrame`]).
+    fn footprint_map_frame(&self, out: &RunOutcome) -> Result<Footprint, RunError> {
+        self.footprint_aligned(out, &self.truth, Align::Translation)
+    }
+
+    fn footprint_aligned(
+        &self,
+        out: &RunOutcome,
+        truth: &[TruthPoint],
+        align: Align,
+    ) -> Result<Footprint, RunError> {
+        let opts = EvalOptions {
+            align,
+            ..EvalOptions::default()
+        };
         let rep = out
             .trace
-            .evaluate(truth, &EvalOptions::default())
+            .evaluate(truth, &opts)
             .map_err(|source| RunError::Eval {
                 truth: self.base.join(&self.rec.truth),
                 source,
@@ -522,6 +553,10 @@ fn run_recording(
         }),
         None => None,
     };
+    let map_frame = MapFrame {
+        baseline: ctx.footprint_map_frame(&zupt_rest_run)?,
+        default: ctx.footprint_map_frame(&best_r0)?,
+    };
     let front_end = ctx.front_end(
         best,
         best_r0.counters.clipped_samples,
@@ -562,6 +597,7 @@ fn run_recording(
             .copied()
             .unwrap_or([f64::NAN; 3]),
         before_suspect,
+        map_frame,
     })
 }
 
