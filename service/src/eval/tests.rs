@@ -296,16 +296,11 @@ fn rigid_motion_of_truth_has_zero_error_under_lsq() {
 #[test]
 fn translation_alignment_scores_the_trajectorys_own_heading() {
     let truth = l_walk();
+    let map_frame = |(t, x, y): &(Vec<f64>, Vec<f64>, Vec<f64>)| {
+        evaluate(t, x, y, &truth, &opts(Align::Translation, Interp::Nearest)).unwrap()
+    };
     // Moved only: nothing to score.
-    let (t, x, y) = traj_from(&truth, |p| [p[0] + 7.0, p[1] - 3.0]);
-    let rep = evaluate(
-        &t,
-        &x,
-        &y,
-        &truth,
-        &opts(Align::Translation, Interp::Nearest),
-    )
-    .unwrap();
+    let rep = map_frame(&traj_from(&truth, |p| [p[0] + 7.0, p[1] - 3.0]));
     assert_zero_error(&rep);
     assert_eq!(rep.alignment, "translation");
     assert_eq!(rep.scored_gcps.as_deref(), Some("all but GCP0"));
@@ -316,14 +311,7 @@ fn translation_alignment_scores_the_trajectorys_own_heading() {
     let (t, x, y) = traj_from(&truth, |p| rot_add(ang, [p[0] - g0[0], p[1] - g0[1]], g0));
     let first = evaluate(&t, &x, &y, &truth, &opts(Align::FirstLeg, Interp::Nearest)).unwrap();
     assert_zero_error(&first);
-    let map = evaluate(
-        &t,
-        &x,
-        &y,
-        &truth,
-        &opts(Align::Translation, Interp::Nearest),
-    )
-    .unwrap();
+    let map = map_frame(&(t, x, y));
     let far = truth
         .iter()
         .map(|g| (g.x_m - g0[0]).hypot(g.y_m - g0[1]))
