@@ -127,10 +127,8 @@ pub(super) fn report(
             (q, 1)
         }
         Align::Translation => {
-            let q: Vec<P2> = p
-                .iter()
-                .map(|&pi| rot_add(0.0, sub(pi, p[0]), g[0]))
-                .collect();
+            let [sx, sy] = sub(g[0], p[0]);
+            let q: Vec<P2> = p.iter().map(|&[x, y]| [x + sx, y + sy]).collect();
             res.alignment = Align::Translation.as_str().to_owned();
             res.rotation_deg = Some(0.0);
             (q, 1)

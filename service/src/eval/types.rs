@@ -30,8 +30,8 @@ pub enum Align {
     FirstLeg,
     /// Least-squares rigid transform over all GCPs (`--align lsq`); flatters drift.
     Lsq,
-    /// Translate onto GCP0 only, keeping the trajectory's own heading (`--align translation`;
-    /// not in the reference script). For a run that starts from the map's heading in the
+    /// Translate onto GCP0 only, keeping the trajectory's own heading (not in the reference
+    /// script). For a run that starts from the map's heading in the
     /// truth's frame this is the error in the map frame: a heading aid's absolute heading is
     /// scored instead of being rotated away by the first leg.
     Translation,

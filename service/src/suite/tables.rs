@@ -77,12 +77,16 @@ impl FlagSummary {
 
 pub(super) use crate::stats::median;
 
+/// The largest of `v` (NaN when empty).
+fn worst(v: &[f64]) -> f64 {
+    v.iter().copied().fold(f64::NAN, f64::max)
+}
+
 /// The summary over the normal-gait rows.
 pub fn summary(rows: &[SuiteRow]) -> Summary {
     let normal: Vec<&SuiteRow> = rows.iter().filter(|r| r.gait == Gait::Normal).collect();
     let mut base: Vec<f64> = normal.iter().map(|r| r.zupt_rest.rms_pct).collect();
     let mut def: Vec<f64> = normal.iter().map(|r| r.best_rest.rms_pct).collect();
-    let worst = |v: &[f64]| v.iter().copied().fold(f64::NAN, f64::max);
     Summary {
         n: normal.len(),
         baseline_worst_pct: worst(&base),
@@ -197,7 +201,7 @@ fn map_frame_markdown(rows: &[SuiteRow]) -> String {
             worse += usize::from(d > b + NOT_WORSE_TOLERANCE_PCT);
         }
     }
-    let worst = |v: &[f64]| v.iter().copied().fold(f64::NAN, f64::max);
+    let (def_worst, base_worst) = (worst(&def), worst(&base));
     format!(
         "\nIn the map frame: each run translated onto the first footprint and scored with its own \
          heading (both start from the map's start heading, in the truth's frame), not turned by its \
@@ -208,10 +212,10 @@ fn map_frame_markdown(rows: &[SuiteRow]) -> String {
          Normal gait ({} recordings), map frame: median {:.2} % (baseline {:.2} %), worst {:.2} % \
          (baseline {:.2} %); default worse than the baseline by more than {:.2} % of path on {}.\n",
         def.len(),
-        median(&mut def.clone()),
-        median(&mut base.clone()),
-        worst(&def),
-        worst(&base),
+        median(&mut def),
+        median(&mut base),
+        def_worst,
+        base_worst,
         NOT_WORSE_TOLERANCE_PCT,
         worse
     )

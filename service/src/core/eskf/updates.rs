@@ -314,21 +314,10 @@ impl Eskf {
     /// or with look-ahead the one between the two clones (the stride before the last).
     fn stride(&self) -> Option<(f64, f64, SparseRow)> {
         let c = self.layout.clone?;
-        let (to, from, [x0, y0], [x1, y1]) = match self.layout.clone_prev {
-            None => (P0, c, self.footprint_xy_m, [self.p_m.x, self.p_m.y]),
-            Some(a) => (c, a, self.prev_footprint_xy_m, self.footprint_xy_m),
-        };
-        let (dx, dy) = (x1 - x0, y1 - y0);
-        let d2 = dx * dx + dy * dy;
-        if !d2.is_finite() || d2 <= 0.0 {
-            return None;
+        match self.layout.clone_prev {
+            None => stride_between(P0, c, self.footprint_xy_m, [self.p_m.x, self.p_m.y]),
+            Some(a) => stride_between(c, a, self.prev_footprint_xy_m, self.footprint_xy_m),
         }
-        let (hx, hy) = (-dy / d2, dx / d2);
-        Some((
-            d2.sqrt(),
-            dy.atan2(dx),
-            [(to, hx), (to + 1, hy), (from, -hx), (from + 1, -hy)],
-        ))
     }
 
     /// The stride since the cloned footprint: length (m), direction (rad) and the direction's
@@ -342,13 +331,9 @@ impl Eskf {
     /// observed stride is the one before it): horizontal length (m) and direction (rad), or
     /// `None` without a clone.
     pub fn stride_since_footprint(&self) -> Option<(f64, f64)> {
-        self.layout.clone?;
-        let (dx, dy) = (
-            self.p_m.x - self.footprint_xy_m[0],
-            self.p_m.y - self.footprint_xy_m[1],
-        );
-        let len = dx.hypot(dy);
-        (len.is_finite() && len > 0.0).then(|| (len, dy.atan2(dx)))
+        let c = self.layout.clone?;
+        stride_between(P0, c, self.footprint_xy_m, [self.p_m.x, self.p_m.y])
+            .map(|(len, dir, _)| (len, dir))
     }
 
     /// Stride-direction observation: the walking direction since the cloned footprint is
@@ -362,4 +347,25 @@ impl Eskf {
         let r = wrap_pi(direction_obs_rad - dir);
         Some(self.update(&[h], [r], [sd_rad * sd_rad]))
     }
+}
+
+/// The stride from `[x0, y0]` (state index `from`) to `[x1, y1]` (`to`): horizontal length (m),
+/// direction (rad) and the direction's sparse Jacobian row, or `None` for no displacement.
+fn stride_between(
+    to: usize,
+    from: usize,
+    [x0, y0]: [f64; 2],
+    [x1, y1]: [f64; 2],
+) -> Option<(f64, f64, SparseRow)> {
+    let (dx, dy) = (x1 - x0, y1 - y0);
+    let d2 = dx * dx + dy * dy;
+    if !d2.is_finite() || d2 <= 0.0 {
+        return None;
+    }
+    let (hx, hy) = (-dy / d2, dx / d2);
+    Some((
+        d2.sqrt(),
+        dy.atan2(dx),
+        [(to, hx), (to + 1, hy), (from, -hx), (from + 1, -hy)],
+    ))
 }
