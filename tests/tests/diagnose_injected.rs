@@ -149,6 +149,30 @@ fn clean_recordings_show_only_the_documented_heading_offset_and_short_strides() 
         "{:#?}",
         r.effects
     );
+    // the bias does not move with the onset of walking, and the onset test says how large a
+    // g-sensitivity it would have seen
+    let onset = r.onset.expect("a walk that begins after a rest");
+    assert!(!onset.explains(), "{onset:?}");
+    assert!(onset.mde.is_some_and(|m| m < 0.01), "{onset:?}");
+}
+
+/// A g-sensitivity shows in the filter's bias the moment walking begins: a stride's mean
+/// specific force differs from the rest's (about 3 m/s², mostly along the sensor's x axis, the
+/// foot pitched on average), and the bias takes up the rate error that adds. The bias-change
+/// test named it a bias drift before (its fix, a faster bias random walk, does not remove it);
+/// the onset test names it, and the g-sensitivity states lower the footprint error.
+#[test]
+fn injected_g_sensitivity_is_named_from_the_bias_at_the_onset_of_walking_and_fixed() {
+    let (mut log, truth) = load("gdins_exp25_multi_corridor");
+    LogInjection::GSensitivity {
+        k_rad_s_per_m_s2: 0.02,
+    }
+    .apply(&mut log.rows);
+    let r = run(&log, &truth, &config(0.0, true));
+    assert_found_and_fixed(&r, "g_sensitivity");
+    assert_eq!(r.iterations[0].fix, Fix::GSensitivity);
+    let onset = r.onset.expect("a walk that begins after a rest");
+    assert!(onset.explains(), "{onset:?}");
 }
 
 #[test]

@@ -148,6 +148,9 @@ pub struct Analysis {
     /// The test of the filter's bias estimate against its random walk (error-state modes
     /// without bias-rate states).
     pub bias_change: Option<super::bias_change::BiasChange>,
+    /// The bias change that came with the onset of walking (see
+    /// [`super::bias_change::onset_change`]).
+    pub onset: Option<super::bias_change::OnsetChange>,
 }
 
 /// Runs the model of `file` on `log` and analyses its residuals, with the power of the walk
@@ -182,6 +185,8 @@ pub fn analyse(
     // yaw error built up by a unit amount of each effect since the filter last removed it
     let mut yaw_error = [0.0; super::power::N_REFERENCES];
     let mut tracking_from_s: Option<f64> = None;
+    // Σ (f − f_rest) and its samples over the bias-change test's first block (sensor axes)
+    let mut onset_sum = (Vector3::zeros(), 0u32);
     let outcome = run_log(log, &cfg, &aid, &BiasInjection::default(), |input, e| {
         sample += 1;
         let w = Vector3::from(input.gyro_rad_s);
@@ -203,8 +208,13 @@ pub fn analyse(
             e.nav_from_body[3],
         ));
         if e.phase == crate::core::Phase::Tracking {
-            tracking_from_s.get_or_insert(e.t_s);
+            let from = *tracking_from_s.get_or_insert(e.t_s);
             let f_rest = rest_sum / f64::from(rest_n.max(1));
+            let first = from + super::bias_change::SETTLE_S;
+            if (first..first + super::bias_change::BLOCK_S).contains(&e.t_s) {
+                onset_sum.0 += f - f_rest;
+                onset_sum.1 += 1;
+            }
             for (k, r) in super::power::REFERENCES.iter().enumerate() {
                 yaw_error[k] += (q * (r.rate_error)(&w, &f, &f_rest)).z * dt;
             }
@@ -357,20 +367,27 @@ pub fn analyse(
     };
     let mut effects = rank_effects(&used, cfg.mode);
     // The bias is a pure random walk in the error-state filter unless bias-rate states drive it.
-    let bias_change = tracking_from_s
-        .filter(|_| {
-            matches!(cfg.mode, Mode::Eskf | Mode::Zupt)
-                && file.model.bias_rate_rw_rad_s2_sqrt_s.is_none()
-        })
-        .and_then(|from_s| {
-            super::bias_change::bias_change(
-                &outcome.trace.t_s,
-                &outcome.trace.bias_rad_s,
-                &outcome.trace.bias_sd_rad_s,
-                cfg.eskf.gyro_bias_rw_rad_s_sqrt_s,
-                from_s,
-            )
-        });
+    let from_s = tracking_from_s.filter(|_| {
+        matches!(cfg.mode, Mode::Eskf | Mode::Zupt)
+            && file.model.bias_rate_rw_rad_s2_sqrt_s.is_none()
+    });
+    let trace = from_s.map(|from_s| super::bias_change::BiasTrace {
+        t_s: &outcome.trace.t_s,
+        bias_rad_s: &outcome.trace.bias_rad_s,
+        bias_sd_rad_s: &outcome.trace.bias_sd_rad_s,
+        rw_rad_s_sqrt_s: cfg.eskf.gyro_bias_rw_rad_s_sqrt_s,
+        from_s,
+    });
+    let mut bias_change = trace.and_then(|t| t.change());
+    let onset_force = (onset_sum.1 > 0).then(|| onset_sum.0 / f64::from(onset_sum.1));
+    let onset = bias_change
+        .as_ref()
+        .zip(onset_force)
+        .and_then(|(c, f)| super::bias_change::onset_change(c, &f.into()));
+    // A change that came with the motion is the motion's: the drift test goes on across it.
+    if let (Some(o), Some(t)) = (onset.filter(|o| o.explains()), trace) {
+        bias_change = t.change_across(&o.force_m_s2);
+    }
     if let Some(c) = &bias_change {
         super::bias_change::apply_bias_change(&mut effects, c);
     }
@@ -389,6 +406,9 @@ pub fn analyse(
         &power,
         matches!(cfg.mode, Mode::Eskf | Mode::Zupt),
     );
+    if let Some(o) = &onset {
+        super::bias_change::apply_onset_change(&mut effects, o);
+    }
     let scale_factor = outcome.extensions.and_then(|(x, sd)| {
         sd.scale_factor
             .map(|sd| std::array::from_fn(|k| [x.scale_factor[k], sd[k]]))
@@ -408,6 +428,7 @@ pub fn analyse(
         stances,
         power,
         bias_change,
+        onset,
     })
 }
 

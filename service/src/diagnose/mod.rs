@@ -33,7 +33,10 @@
 //!   (`bias_change`: a bias the filter followed leaves no trend in the residuals); the fix is
 //!   bias-rate states for a ramp, a faster bias random walk for a step;
 //! - `gyro_scale_factor`: `r` proportional to the signed turn since the last used observation;
-//! - `g_sensitivity`: `r` proportional to ∫| |f| − g |;
+//! - `g_sensitivity`: `r` proportional to ∫| |f| − g |, or the g-sensitivity signature, or the
+//!   filter's bias moving along the specific force walking adds as walking begins (the onset
+//!   test of `bias_change`: a bias has no reason to change then, a rate error that depends on
+//!   the motion does); the fix is g-sensitivity states (`model.g_sensitivity_sd`);
 //! - `axis_misalignment`: `r` proportional to the total rotation ∫|ω| (cadence), not to the turn,
 //!   or the y→z / x→z coupling signatures; the fix is cross-coupling states into the sensor z
 //!   axis (`model.gyro_coupling_z_sd_deg`);
@@ -54,7 +57,8 @@
 //! - `ranking`: the evidence for each effect ([`Finding`]), the residual tests and the
 //!   nested-model F test ([`score_by_likelihood`]);
 //! - `bias_change`: whether the filter's own bias estimate moved more than its random walk
-//!   allows ([`BiasChange`]), a second test of `bias_drift`;
+//!   allows ([`BiasChange`]), a second test of `bias_drift`, and whether it moved along the
+//!   specific force of walking as walking began ([`OnsetChange`]), a test of `g_sensitivity`;
 //! - `clipping`: rails in the data below the configured gyro range ([`Rail`]);
 //! - `power`: the power of the walk for each effect: every stance's residual fitted on the
 //!   effect's signature ([`Power`]);
@@ -78,7 +82,7 @@ pub use analysis::{
     Analysis, Consistency, DIAGNOSIS_ALIGNED_PRIOR, HeadingResidual, ResidualKind, StanceResidual,
     analyse,
 };
-pub use bias_change::{BLOCK_S, BiasChange, bias_change};
+pub use bias_change::{BLOCK_S, BiasChange, BiasTrace, OnsetChange, onset_change};
 pub use catalogue::{Effect, Fix, RAIL_OF_RANGE, apply_fix};
 pub use clipping::{Rail, find_rails};
 pub use power::{
@@ -135,6 +139,9 @@ pub struct Report {
     pub verdict: String,
     /// The power of the walk on the starting model, per effect variant.
     pub power: Vec<Power>,
+    /// The bias change that came with the onset of walking, on the starting model, with its
+    /// detectable g-sensitivity.
+    pub onset: Option<OnsetChange>,
     /// The stride length against the footprints (with truth only), on the model the heading
     /// effects left: the line the loop's last step acted on.
     pub stride_length: Option<StrideLine>,
@@ -268,10 +275,11 @@ pub fn run_diagnosis(
     let report = Report {
         top_effect: top.map_or("none".to_string(), |e| e.name.to_string()),
         verdict: top.map_or_else(
-            || power::nothing_found(&first.power, &first.effects),
+            || power::nothing_found(&first.power, &first.effects, first.onset.as_ref()),
             |e| format!("{} (score {:.1})", e.name, e.score),
         ),
         power: first.power.clone(),
+        onset: first.onset,
         stride_length: stride_line,
         effects: first.effects.clone(),
         before: first.consistency.clone(),

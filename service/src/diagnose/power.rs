@@ -379,6 +379,12 @@ pub fn calibrate_by_injection(
         let mut injected = log.clone();
         (reference.probe)(reference.probe_size).apply(&mut injected.rows);
         let run = analyse(&injected, file, None, map)?;
+        if reference.effect == Effect::GSensitivity
+            && let (Some(o), Some(o_inj)) = (a.onset.as_mut(), run.onset)
+        {
+            // the onset test's own detectable size, from the same injection
+            o.mde = super::bias_change::onset_mde(o, &o_inj, reference.probe_size);
+        }
         let by_key: HashMap<_, f64> = run.stances.iter().map(|s| (key(s), s.r_rad)).collect();
         let rows: Vec<Row> = a
             .stances
@@ -432,6 +438,12 @@ pub fn calibrate_by_injection(
             .max_by(|x, y| x.score.total_cmp(&y.score))
         {
             f.mde = best.mde;
+        }
+        // a g-sensitivity shows in the onset test too: the smaller of the two sizes
+        if f.name == Effect::GSensitivity
+            && let Some(m) = a.onset.and_then(|o| o.mde)
+        {
+            f.mde = Some(f.mde.map_or(m, |p| p.min(m)));
         }
     }
     Ok(())
@@ -562,10 +574,26 @@ pub fn apply_power(effects: &mut [Finding], power: &[Power], score: bool) {
 
 /// The verdict when nothing is significant: the detectable sizes of the effects the walk can
 /// show, and the ones it cannot with the reason.
-pub fn nothing_found(power: &[Power], effects: &[Finding]) -> String {
+pub fn nothing_found(
+    power: &[Power],
+    effects: &[Finding],
+    onset: Option<&super::bias_change::OnsetChange>,
+) -> String {
+    // a g-sensitivity the onset test shows (within the plausible sizes)
+    let onset_mde = onset.and_then(|o| o.mde).filter(|&m| {
+        REFERENCES
+            .iter()
+            .any(|r| r.effect == Effect::GSensitivity && m <= r.plausible_max)
+    });
     let shown: Vec<String> = power
         .iter()
         .filter_map(|p| p.mde.map(|m| format!("{} {}", p.variant, p.format_size(m))))
+        .chain(onset_mde.map(|m| {
+            format!(
+                "g-sensitivity {} (the bias at the onset of walking)",
+                format_unit("rad/s per m/s²", m)
+            )
+        }))
         .chain(
             effects
                 .iter()
@@ -578,6 +606,7 @@ pub fn nothing_found(power: &[Power], effects: &[Finding]) -> String {
         .collect();
     let cannot: Vec<String> = power
         .iter()
+        .filter(|p| !(p.effect == Effect::GSensitivity && onset_mde.is_some()))
         .filter_map(|p| {
             p.cannot
                 .as_ref()

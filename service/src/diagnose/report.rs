@@ -2,7 +2,7 @@
 
 use super::Report;
 use super::analysis::{Analysis, Consistency, HeadingResidual};
-use super::catalogue::Fix;
+use super::catalogue::{Effect, Fix};
 use crate::runner::RunError;
 use std::path::Path;
 
@@ -64,6 +64,13 @@ pub fn write_report(
                 Some(m) => format!("{} ≥ {}", p.variant, p.format_size(m)),
                 None => format!("{}: cannot show", p.variant),
             })
+            .chain(
+                report
+                    .onset
+                    .and_then(|o| o.mde)
+                    .filter(|_| e.name == Effect::GSensitivity)
+                    .map(|m| format!("at the onset of walking ≥ {m:.2e} rad/s per m/s²")),
+            )
             .collect();
         let detectable = if !variants.is_empty() {
             variants.join("; ")

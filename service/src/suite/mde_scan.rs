@@ -5,7 +5,9 @@
 //! [`MDE_FACTORS`] times the prediction (up to the largest size plausible for a working sensor,
 //! [`Reference::plausible_max`](crate::diagnose::Reference)), each judged afresh: its power
 //! score (the matched filter's `β̂/se`, the figure the prediction is about) and whether the
-//! ranking names it at all.
+//! ranking names it at all. The onset test of a g-sensitivity (the bias change when walking
+//! begins, [`crate::diagnose::onset_change`]) has its own row, [`ONSET_VARIANT`]: its
+//! prediction comes from the same probe injection, its score is the test's own.
 //!
 //! A prediction is right when the walk shows the effect from about the predicted size on: at
 //! that size the score reaches the threshold half the time, at twice it almost always (an
@@ -16,8 +18,8 @@
 use super::SuiteRecording;
 use super::detection::injected_walk;
 use crate::diagnose::{
-    Effect, MDE_Z, PLACEBO_SHIFTS, REFERENCES, SIGNIFICANT, apply_fix, format_unit, judge,
-    placebo_z,
+    Analysis, Effect, MDE_Z, OnsetChange, PLACEBO_SHIFTS, REFERENCES, Reference, SIGNIFICANT,
+    apply_fix, format_unit, judge, placebo_z,
 };
 use crate::runner::RunError;
 use crate::stats::normal_cdf;
@@ -39,6 +41,10 @@ pub const MDE_FACTORS: [f64; 9] = [
     2.828_427_124_746_190_3,
     4.0,
 ];
+
+/// The row of the onset test (a g-sensitivity seen in the bias when walking begins:
+/// [`crate::diagnose::onset_change`]), scanned as the power fits are.
+pub const ONSET_VARIANT: &str = "g-sensitivity, onset";
 
 /// Why a row has no scan when the starting model has the effect's state.
 const MODELLED: &str = "the starting model has the effect's state";
@@ -192,30 +198,13 @@ pub fn scan_walk(
         } else if let Some(predicted) = row.predicted {
             // Sizes beyond any plausible one of a working sensor are not injected: there the
             // filter itself fails (a g-sensitivity of 0.04 rad/s per m/s² leaves no fit).
-            for factor in MDE_FACTORS
-                .into_iter()
-                .filter(|f| f * predicted <= reference.plausible_max)
-            {
-                let size = factor * predicted;
-                let (injected, truth) = injected_walk(log, truth, &(reference.probe)(size));
-                let (a, _) = judge(&injected, model, Some(&truth), None)?;
+            scan_points(&mut row, log, truth, model, reference, predicted, |a| {
                 let fit = a.power.iter().find(|p| p.variant == reference.variant);
-                row.points.push(ScanPoint {
-                    factor,
-                    size,
-                    estimate: fit.map_or(f64::NAN, |p| p.estimate),
-                    power_score: fit.map_or(0.0, |p| p.score),
-                    named: a
-                        .effects
-                        .iter()
-                        .any(|f| f.name == reference.effect && f.score >= SIGNIFICANT),
-                });
-            }
-            let flags = |hit: fn(&ScanPoint) -> bool| -> Vec<(f64, bool)> {
-                row.points.iter().map(|p| (p.factor, hit(p))).collect()
-            };
-            row.power_from = detected_from(&flags(|p| p.power_score >= SIGNIFICANT));
-            row.named_from = detected_from(&flags(|p| p.named));
+                (
+                    fit.map_or(f64::NAN, |p| p.estimate),
+                    fit.map_or(0.0, |p| p.score),
+                )
+            })?;
         } else {
             row.skipped = Some(
                 power
@@ -226,7 +215,94 @@ pub fn scan_walk(
         progress(&row);
         rows.push(row);
     }
+    let row = scan_onset(r, log, truth, model, &clean)?;
+    progress(&row);
+    rows.push(row);
     Ok(rows)
+}
+
+/// The scan of the onset test's detectable g-sensitivity: injected at [`MDE_FACTORS`] times it,
+/// its own score (when it points along the force change) and the ranking's naming.
+fn scan_onset(
+    r: &SuiteRecording,
+    log: &ImuLog,
+    truth: &[TruthPoint],
+    model: &ConfigFile,
+    clean: &Analysis,
+) -> Result<ScanRow, RunError> {
+    let reference = REFERENCES
+        .iter()
+        .find(|x| x.effect == Effect::GSensitivity)
+        .expect("g-sensitivity is a reference");
+    let test_score = |o: Option<&OnsetChange>| o.filter(|o| o.explains()).map_or(0.0, |o| o.score);
+    let mut row = ScanRow {
+        recording: r.name.clone(),
+        variant: ONSET_VARIANT.to_string(),
+        unit: reference.unit.to_string(),
+        predicted: clean.onset.and_then(|o| o.mde),
+        clean_score: clean.onset.as_ref().map(|o| test_score(Some(o))),
+        clean_estimate: clean.onset.map(|o| (o.k_taken_up, f64::NAN)),
+        response: None,
+        placebo_z_rms: None,
+        skipped: None,
+        points: Vec::new(),
+        power_from: None,
+        named_from: None,
+    };
+    if already_modelled(reference.effect, model) {
+        row.skipped = Some(MODELLED.into());
+        return Ok(row);
+    }
+    let Some(predicted) = row.predicted else {
+        row.skipped = Some("no onset test (no rest before the walk, or too short)".into());
+        return Ok(row);
+    };
+    scan_points(&mut row, log, truth, model, reference, predicted, |a| {
+        (
+            a.onset.map_or(f64::NAN, |o| o.k_taken_up),
+            test_score(a.onset.as_ref()),
+        )
+    })?;
+    Ok(row)
+}
+
+/// Injects `reference` at [`MDE_FACTORS`] × `predicted` (up to its plausible limit), judges each
+/// afresh, and fills `row`'s points and the factors its test (`test`: the estimate and score of
+/// the judged walk) and the ranking's naming hold from.
+fn scan_points(
+    row: &mut ScanRow,
+    log: &ImuLog,
+    truth: &[TruthPoint],
+    model: &ConfigFile,
+    reference: &Reference,
+    predicted: f64,
+    test: impl Fn(&Analysis) -> (f64, f64),
+) -> Result<(), RunError> {
+    for factor in MDE_FACTORS
+        .into_iter()
+        .filter(|f| f * predicted <= reference.plausible_max)
+    {
+        let size = factor * predicted;
+        let (injected, truth) = injected_walk(log, truth, &(reference.probe)(size));
+        let (a, _) = judge(&injected, model, Some(&truth), None)?;
+        let (estimate, power_score) = test(&a);
+        row.points.push(ScanPoint {
+            factor,
+            size,
+            estimate,
+            power_score,
+            named: a
+                .effects
+                .iter()
+                .any(|f| f.name == reference.effect && f.score >= SIGNIFICANT),
+        });
+    }
+    let flags = |hit: fn(&ScanPoint) -> bool| -> Vec<(f64, bool)> {
+        row.points.iter().map(|p| (p.factor, hit(p))).collect()
+    };
+    row.power_from = detected_from(&flags(|p| p.power_score >= SIGNIFICANT));
+    row.named_from = detected_from(&flags(|p| p.named));
+    Ok(())
 }
 
 fn format_from(from: Option<f64>, largest: f64) -> String {
@@ -237,7 +313,11 @@ fn format_from(from: Option<f64>, largest: f64) -> String {
 /// power score and the ranking's naming hold; then, per effect, on how many walks each holds at
 /// each factor, and on how many the prediction agrees within a factor of 2.
 pub fn scan_markdown(rows: &[ScanRow]) -> String {
-    let variants: Vec<&str> = REFERENCES.iter().map(|r| r.variant).collect();
+    let variants: Vec<&str> = REFERENCES
+        .iter()
+        .map(|r| r.variant)
+        .chain([ONSET_VARIANT])
+        .collect();
     let mut recordings: Vec<&str> = Vec::new();
     for r in rows {
         if !recordings.contains(&r.recording.as_str()) {
@@ -246,7 +326,7 @@ pub fn scan_markdown(rows: &[ScanRow]) -> String {
     }
     let mut md = format!(
         "
-Predicted detectable sizes checked by injection: each effect injected into the clean walk at {} × the size the diagnosis predicts there (the walk's starting model, as in the injected columns), judged afresh; sizes beyond any plausible one of a working sensor are left out (`to k×`: the largest injected). `power from`: the smallest factor from which the power fit's score reaches {SIGNIFICANT} at every larger one (the figure the prediction is about: reached half the time at 1×, almost always at 2×); `named from`: the same for the ranking naming the effect. The prediction agrees within a factor of 2 when that factor is in [½, 2]. `(clean s)`: the clean walk's own power score s is already significant, so every injection is detected and the prediction is not checked there. `cannot`: the diagnosis says the walk cannot show the effect; `modelled`: the starting model has its state.\n\n| recording |",
+Predicted detectable sizes checked by injection: each effect injected into the clean walk at {} × the size the diagnosis predicts there (the walk's starting model, as in the injected columns), judged afresh; sizes beyond any plausible one of a working sensor are left out (`to k×`: the largest injected). `power from`: the smallest factor from which the power fit's score reaches {SIGNIFICANT} at every larger one (the figure the prediction is about: reached half the time at 1×, almost always at 2×); `named from`: the same for the ranking naming the effect. The prediction agrees within a factor of 2 when that factor is in [½, 2]. `(clean s)`: the clean walk's own power score s is already significant, so every injection is detected and the prediction is not checked there. `cannot`: the diagnosis says the walk cannot show the effect; `modelled`: the starting model has its state. `{ONSET_VARIANT}`: the onset test of a g-sensitivity (the filter's bias moving along the specific force walking adds, as walking begins), its prediction from the same probe injection, its `power from` the test's own score (`cannot`: no test, the walk has no rest before it or too few blocks).\n\n| recording |",
         MDE_FACTORS
             .iter()
             .map(|f| format!("{f:.2}"))
