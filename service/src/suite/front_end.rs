@@ -54,6 +54,10 @@ pub struct FrontEnd {
     pub clipping_off: Footprint,
     /// The default run on the log cut to its last [`KEPT_REST_S`] of initial rest.
     pub without_rest: Option<Footprint>,
+    /// The same run scored in the map frame (as [`super::MapFrame`]): the first-leg alignment
+    /// turns a run by its heading error at the end of its first 5 m, which is where a start
+    /// without a bias prior is least sure of it.
+    pub without_rest_map_frame: Option<Footprint>,
     /// The same cut log started from a checkpoint, as a daemon restarted without a rest: the
     /// bias the other walks of the same sensor configuration ended with ([`checkpoint_from`]).
     pub without_rest_checkpoint: Option<Footprint>,
@@ -135,9 +139,12 @@ pub fn front_end_markdown(rows: &[SuiteRow]) -> String {
          stance, no rest-mean prior), the same start from a checkpoint (a daemon restarted while the wearer \
          walks: the bias the other walks of the sensor ended with, per axis their median with their spread \
          as σ, none of this walk's own), and the clipping model (attitude variance about a clipped gyro \
-         axis), footprint RMS, % of path.\n\n\
-         | recording | default | without rest | difference | from a checkpoint | difference | clipped samples | clipping model off |\n\
-         |---|---|---|---|---|---|---|---|\n"
+         axis), footprint RMS, % of path. The start without rest is also scored in the map frame (as the \
+         map-frame table above: translated onto the first footprint, its own heading kept), against the \
+         default run's map-frame figure: the first-leg alignment turns a run by its heading error at the \
+         end of its first 5 m, where a start without a bias prior is least sure of it.\n\n\
+         | recording | default | without rest | difference | map frame: default | without rest | difference | from a checkpoint | difference | clipped samples | clipping model off |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n"
     );
     for r in rows {
         let fe = &r.front_end;
@@ -152,8 +159,15 @@ pub fn front_end_markdown(rows: &[SuiteRow]) -> String {
         let warm = fe
             .without_rest_checkpoint
             .map_or("—".into(), |f| format!("{:.2} %", f.rms_pct));
+        let map = r.map_frame.default.rms_pct;
+        let (cut_map, diff_map) = fe.without_rest_map_frame.map_or(("—".into(), "—".into()), |f| {
+            (
+                format!("{:.2} %", f.rms_pct),
+                format!("{:+.2}", f.rms_pct - map),
+            )
+        });
         s.push_str(&format!(
-            "| {} | {:.2} % | {} | {} | {} | {} | {} | {:.2} % |\n",
+            "| {} | {:.2} % | {} | {} | {map:.2} % | {cut_map} | {diff_map} | {} | {} | {} | {:.2} % |\n",
             r.recording,
             r.best_rest.rms_pct,
             cut,

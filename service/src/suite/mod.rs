@@ -463,18 +463,20 @@ impl<'a> Ctx<'a> {
         off.eskf.clipped_rate_sd_rad_s = Some(0.0);
         let (_, clipping_off) =
             self.run_with(&off, mode, BiasPrior::RestMean, BiasInjection::default())?;
-        let without_rest = match self.without_rest() {
-            Some(cut) => Some(
-                cut.run(mode, BiasPrior::RestMean, BiasInjection::default())?
-                    .1,
-            ),
-            None => None,
+        let (without_rest, without_rest_map_frame) = match self.without_rest() {
+            Some(cut) => {
+                let (out, first_leg) =
+                    cut.run(mode, BiasPrior::RestMean, BiasInjection::default())?;
+                (Some(first_leg), Some(cut.footprint_map_frame(&out)?))
+            }
+            None => (None, None),
         };
         let cfg = self.default_config(mode)?;
         Ok(FrontEnd {
             clipped_samples,
             clipping_off,
             without_rest,
+            without_rest_map_frame,
             without_rest_checkpoint: None,
             detectors: every_stride
                 .then(|| front_end::compare_detectors(&self.log.rows, &self.truth, &cfg)),
