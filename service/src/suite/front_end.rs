@@ -160,12 +160,14 @@ pub fn front_end_markdown(rows: &[SuiteRow]) -> String {
             .without_rest_checkpoint
             .map_or("—".into(), |f| format!("{:.2} %", f.rms_pct));
         let map = r.map_frame.default.rms_pct;
-        let (cut_map, diff_map) = fe.without_rest_map_frame.map_or(("—".into(), "—".into()), |f| {
-            (
-                format!("{:.2} %", f.rms_pct),
-                format!("{:+.2}", f.rms_pct - map),
-            )
-        });
+        let (cut_map, diff_map) =
+            fe.without_rest_map_frame
+                .map_or(("—".into(), "—".into()), |f| {
+                    (
+                        format!("{:.2} %", f.rms_pct),
+                        format!("{:+.2}", f.rms_pct - map),
+                    )
+                });
         s.push_str(&format!(
             "| {} | {:.2} % | {} | {} | {map:.2} % | {cut_map} | {diff_map} | {} | {} | {} | {:.2} % |\n",
             r.recording,
