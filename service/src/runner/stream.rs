@@ -62,6 +62,9 @@ pub struct Summary {
     pub footprints_forgotten: u64,
     /// Stance updates that found a velocity far beyond what the filter allowed and reset it.
     pub velocity_resets: u64,
+    /// Times the heading was taken as lost and its variance widened (straight strides in a row
+    /// off every direction: `heading.reacquire_strides`).
+    pub heading_reacquisitions: u64,
     /// Samples integrated on the smoothed clock because the stamps jitter (host arrival times).
     pub jittery_clock_samples: u64,
     /// Alignment came from a short first stance (no initial rest, no rest-mean prior).
@@ -422,6 +425,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         health_restores: c.health_restores,
         footprints_forgotten: c.footprints_forgotten,
         velocity_resets: c.velocity_resets,
+        heading_reacquisitions: c.heading_reacquisitions,
         jittery_clock_samples: c.jittery_clock_samples,
         started_without_rest: c.started_without_rest,
         initial_rest_moving_blocks: c.initial_rest_moving_blocks,

@@ -259,4 +259,9 @@ pub struct HeadingFile {
     pub aligned_prior: Option<f64>,
     /// Smallest association weight that is still fused (default 0.5).
     pub min_weight: Option<f64>,
+    /// The `eskf` mode takes its heading as lost after this many straight strides in a row
+    /// that no direction takes and that run off the nearest one by one angle: it widens the
+    /// heading variance to that angle so that the directions can be found again (default:
+    /// absent, never).
+    pub reacquire_strides: Option<u32>,
 }

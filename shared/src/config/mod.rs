@@ -349,6 +349,17 @@ mod tests {
             assert!(err.contains(v) && err.len() < 200, "{err}");
         }
 
+        for v in ["0", "1", "101"] {
+            let f = ConfigFile::parse(
+                &format!("[heading]\nreacquire_strides = {v}\n"),
+                Path::new("a.toml"),
+            )
+            .unwrap();
+            let err = f.validate().unwrap_err().to_string();
+            assert!(err.contains("heading.reacquire_strides"), "{err}");
+            assert!(err.contains(v) && err.contains("2..=100"), "{err}");
+        }
+
         for v in ["-0.1", "2.0", "nan"] {
             let f = ConfigFile::parse(
                 &format!("[estimator]\nmax_bridge_s = {v}\n"),

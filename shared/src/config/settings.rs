@@ -196,6 +196,9 @@ pub struct HeadingConfig {
     pub aligned_prior: Fraction,
     /// Smallest fused association weight.
     pub min_weight: Fraction,
+    /// Straight strides in a row, off every direction by one angle, after which the heading is
+    /// taken as lost (`None`: never).
+    pub reacquire_strides: Option<u32>,
 }
 
 impl Default for DaemonSettings {

@@ -166,6 +166,15 @@ impl ConfigFile {
                 "must be <= 100",
             ));
         }
+        if let Some(n) = h.reacquire_strides
+            && !(2..=100).contains(&n)
+        {
+            return Err(invalid(
+                "heading.reacquire_strides",
+                n,
+                "must be in 2..=100",
+            ));
+        }
         let calibration_strides = h.calibration_strides.unwrap_or(HEADING_CALIBRATION_STRIDES);
         if calibration_strides == 0 || calibration_strides > 100 {
             return Err(invalid(
@@ -570,6 +579,7 @@ impl ConfigFile {
                     "heading.min_weight",
                     h.min_weight.unwrap_or(HEADING_MIN_WEIGHT),
                 )?,
+                reacquire_strides: h.reacquire_strides,
             },
         })
     }

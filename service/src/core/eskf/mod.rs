@@ -580,6 +580,11 @@ impl Eskf {
         }
     }
 
+    /// The heading's variance, rad².
+    pub fn heading_variance(&self) -> f64 {
+        self.p[ix(TH + 2, TH + 2)]
+    }
+
     /// Sets the heading variance (after the map frame is fixed, the heading is known).
     pub fn set_heading_variance(&mut self, var_rad2: f64) {
         self.clear_state(TH + 2, var_rad2);

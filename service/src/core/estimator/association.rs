@@ -9,15 +9,22 @@ use corridor_shared::config::HeadingConfig;
 /// with the nearest dominant direction, and weighs the association: the posterior probability
 /// that the walker walks along that direction rather than in some other direction (uniform over
 /// the spacing of the candidate directions), with prior `heading.aligned_prior`. Below
-/// `heading.min_weight` the observation is rejected as unlikely.
+/// `heading.min_weight` the observation is rejected as unlikely. `wide_gate`: the gate is at
+/// least 3√`s_rad2` (a heading taken as lost, see `reacquire.rs`).
 pub(super) fn weighted_association(
     aid: &HeadingAid,
     h: &HeadingConfig,
     xy: [f64; 2],
     value_rad: f64,
     s_rad2: f64,
+    wide_gate: bool,
 ) -> Result<(f64, f64), Rejection> {
-    let dir = aid.associate(xy, value_rad, h.gate_rad.get())?;
+    let gate = if wide_gate {
+        h.gate_rad.get().max(3.0 * s_rad2.sqrt())
+    } else {
+        h.gate_rad.get()
+    };
+    let dir = aid.associate(xy, value_rad, gate)?;
     let w = association_weight(
         wrap_pi(dir - value_rad),
         s_rad2,

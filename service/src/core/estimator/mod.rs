@@ -22,7 +22,8 @@
 //! takes and gives (samples, estimates, counters, warm start); `alignment.rs` the initial rest
 //! (or first stance) that starts the filter, and a warm start; `observations.rs` what happens
 //! once per stance (calibration and heading observations); `association.rs` the weighted
-//! association with the dominant directions; `rest.rs` the rest sums; `gaps.rs` a step longer
+//! association with the dominant directions; `reacquire.rs` a heading lost beyond the
+//! association's reach, and the way back; `rest.rs` the rest sums; `gaps.rs` a step longer
 //! than `estimator.max_dt_s` (bridged or a new segment); `recovery.rs` what it does when the
 //! state or the input goes bad (health check, velocity reset, a first time stamp that was an
 //! outlier); `tests.rs` its unit tests.
@@ -31,6 +32,7 @@ mod alignment;
 mod association;
 mod gaps;
 mod observations;
+mod reacquire;
 mod recovery;
 mod rest;
 mod types;
@@ -146,6 +148,11 @@ struct Pipeline {
     /// The state was restored from the last healthy stance and no stride has run along its
     /// corridor since: the heading may be off by more than its variance says.
     heading_suspect: bool,
+    /// Straight strides in a row that no direction took (`heading.reacquire_strides`).
+    off_direction: reacquire::OffDirectionRun,
+    /// The heading was taken as lost and its variance widened: the gate is 3σ until a
+    /// direction takes a stride or a foot axis again.
+    reacquiring: bool,
     straight: StraightWalk,
     line: Option<FootprintLine>,
     stance_events: StanceEvents,
@@ -210,6 +217,8 @@ impl Estimator {
             footprint_t_s: f64::NAN,
             line_before: None,
             heading_suspect: false,
+            off_direction: reacquire::OffDirectionRun::default(),
+            reacquiring: false,
             stance_events: StanceEvents::new(cfg.detector.merge_gap_s, cfg.max_dt_s.get()),
             stance_edge: StanceEdge::None,
             stances_seen: 0,
@@ -342,6 +351,7 @@ impl Estimator {
         out.health_fault = None;
         out.gap_s = None;
         out.velocity_reset = false;
+        out.heading_reacquired = None;
         out.replaced_first_t_s = accepted.replaced_first_t_s;
         out.detector_statistic = decision.statistic;
         out.zupt = None;
@@ -472,11 +482,14 @@ impl Pipeline {
             self.last = prev;
             self.counters.zero_rate_refused += u64::from(applied);
             // A velocity reset in it is undone as well; the next stance update judges again.
+            // So is a heading taken as lost (its widened variance): the run starts over.
             self.out.velocity_reset = false;
+            self.out.heading_reacquired = None;
         } else if applied {
             self.counters.zero_rate_updates += 1;
         }
         self.counters.velocity_resets += u64::from(self.out.velocity_reset);
+        self.counters.heading_reacquisitions += u64::from(self.out.heading_reacquired.is_some());
         self.fill_output(eskf);
     }
 

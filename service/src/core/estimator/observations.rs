@@ -156,7 +156,8 @@ impl Pipeline {
         if h.observations.foot_axis() {
             let sd = h.sigma_rad.get();
             let assoc = if straight {
-                weighted_association(&self.aid, h, xy, foot_heading, var + sd * sd)
+                let s2 = var + sd * sd;
+                weighted_association(&self.aid, h, xy, foot_heading, s2, self.reacquiring)
             } else {
                 Err(Rejection::NotStraight)
             };
@@ -166,6 +167,7 @@ impl Pipeline {
                     event.direction_rad = d;
                     let i = eskf.heading_update(d, sd / w.sqrt(), forward);
                     self.counters.heading_used += 1;
+                    self.reacquiring = false;
                     event.outcome = Ok(i);
                 }
                 Err(r) => {
@@ -279,13 +281,15 @@ impl Pipeline {
                 let assoc = if !straight {
                     Err(Rejection::NotStraight)
                 } else {
-                    weighted_association(&self.aid, h, at, dir, var + sd * sd)
+                    weighted_association(&self.aid, h, at, dir, var + sd * sd, self.reacquiring)
                 };
+                self.track_off_direction(eskf, at, dir, &assoc);
                 match assoc {
                     Ok((d, w)) => {
                         event.direction_rad = d;
                         if let Some(i) = eskf.stride_direction_update(d, sd / w.sqrt()) {
                             self.counters.stride_used += 1;
+                            self.reacquiring = false;
                             event.outcome = Ok(i);
                         }
                     }
@@ -301,6 +305,39 @@ impl Pipeline {
                 None
             }
             None => None,
+        }
+    }
+
+    /// A straight stride that no direction took (outside the gate, or unlikely) extends the run
+    /// of strides off the nearest direction; anything else ends it. A run of
+    /// `heading.reacquire_strides` at one angle: the heading is taken as lost (`reacquire.rs`).
+    fn track_off_direction(
+        &mut self,
+        eskf: &mut Eskf,
+        at: [f64; 2],
+        dir: f64,
+        assoc: &Result<(f64, f64), Rejection>,
+    ) {
+        let Some(strides) = self.cfg.heading.reacquire_strides else {
+            return;
+        };
+        let missed = matches!(assoc, Err(Rejection::OutsideGate | Rejection::Unlikely));
+        let nearest = self.aid.associate(at, dir, std::f64::consts::PI);
+        let (true, Ok(nearest)) = (missed, nearest) else {
+            self.off_direction.clear();
+            return;
+        };
+        let spread = self.cfg.heading.straight_max_change_rad.get();
+        if let Some(off) = self
+            .off_direction
+            .push(wrap_pi(nearest - dir), spread, strides)
+        {
+            let sd = self.cfg.heading.stride_sigma_rad.get();
+            eskf.set_heading_variance(eskf.heading_variance().max(off * off + sd * sd));
+            self.reacquiring = true;
+            // the foot axis waits for a stride along its corridor, as after a restore
+            self.heading_suspect = true;
+            self.out.heading_reacquired = Some(off);
         }
     }
 

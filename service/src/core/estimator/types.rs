@@ -192,6 +192,9 @@ pub struct Counters {
     pub heading_unlikely: u64,
     /// Rejected: the foot axis is off the stride before it (`heading.foot_axis_stride_max_deg`).
     pub heading_off_stride: u64,
+    /// Times the heading was taken as lost and its variance widened
+    /// (`heading.reacquire_strides`).
+    pub heading_reacquisitions: u64,
     /// Stride-direction observations used.
     pub stride_used: u64,
     /// Stride-direction observations rejected (too short, outside the gate, unlikely).
@@ -267,6 +270,9 @@ pub struct Estimate {
     /// The stance update on this sample found a velocity far beyond what the filter allowed
     /// and reset it first (counted in `velocity_resets`).
     pub velocity_reset: bool,
+    /// The heading was taken as lost on this sample: the straight strides before it ran this
+    /// far (rad) off the nearest direction (counted in `heading_reacquisitions`).
+    pub heading_reacquired: Option<f64>,
     /// Zero-velocity detector statistic.
     pub detector_statistic: f64,
     /// Tracking, and less than `estimator.converged_unabsorbed` of a bias error present when the
@@ -301,6 +307,7 @@ impl Default for Estimate {
             health_fault: None,
             replaced_first_t_s: None,
             velocity_reset: false,
+            heading_reacquired: None,
             gap_s: None,
             detector_statistic: f64::NAN,
             converged: false,
@@ -338,6 +345,9 @@ pub enum Notice {
     HealthFault(HealthFault),
     /// The stance update found a velocity far beyond what the filter allowed and reset it.
     VelocityReset,
+    /// Straight strides in a row ran this far (rad) off every direction: the heading was taken
+    /// as lost and its variance widened.
+    HeadingReacquired(f64),
     /// The stream's first sample, at this time (s), was dropped as a time outlier.
     FirstTimeReplaced(f64),
 }
@@ -363,6 +373,12 @@ impl std::fmt::Display for Notice {
                 "the stance update found a velocity far beyond what the filter allowed (garbage \
                  samples since the last stance?); velocity reset",
             ),
+            Notice::HeadingReacquired(off_rad) => write!(
+                f,
+                "straight strides in a row ran {:+.1}° off every corridor direction: the heading \
+                 is taken as lost and its variance widened to find the directions again",
+                off_rad.to_degrees()
+            ),
             Notice::FirstTimeReplaced(first_t_s) => write!(
                 f,
                 "the first sample's time {first_t_s} s was an outlier (the samples after it do not \
@@ -383,6 +399,7 @@ impl Estimate {
         gap.into_iter()
             .chain(self.health_fault.map(Notice::HealthFault))
             .chain(self.velocity_reset.then_some(Notice::VelocityReset))
+            .chain(self.heading_reacquired.map(Notice::HeadingReacquired))
             .chain(self.replaced_first_t_s.map(Notice::FirstTimeReplaced))
     }
 }
