@@ -22,8 +22,9 @@
 //! walking adds (a stride's mean specific force minus the rest's, about 3 m/s² along the sensor's
 //! x axis on the suite's walks). The first block's change along that force, over its σ, is a
 //! standard normal under the model. Over the detection matrix's walks an injected
-//! 0.02 rad/s per m/s² moves it by 8–14σ on 10 of 11, every other injection by less than 3.5σ,
-//! the clean walks by less than 1.5σ. Where it is significant and the change points along the
+//! 0.02 rad/s per m/s² moves it by 8–14σ on 10 of 11, every other injection by less than 3.5σ
+//! but a gyro clipped at ±5 rad/s (up to 18σ either way; its rail's finding goes first), the
+//! clean walks by less than 1.5σ. Where it is significant and the change points along the
 //! force (cosine ≥ [`ONSET_MIN_COS`]), the drift test runs across that direction
 //! ([`BiasTrace::change_across`]); the filter keeps following the offset for minutes, so the drift can
 //! still reach the cap, and among equal scores the motion's explanation goes first.
