@@ -319,6 +319,7 @@ impl<'a> EstState<'a> {
         p.health_restores += c.health_restores;
         p.footprints_forgotten += c.footprints_forgotten;
         p.velocity_resets += c.velocity_resets;
+        p.heading_reacquisitions += c.heading_reacquisitions;
         p.gaps += c.gaps;
         p.stances += c.stances;
         p.heading_used += c.heading_used;
@@ -384,7 +385,7 @@ impl<'a> EstState<'a> {
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
              σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
-             health restores {} (footprints forgotten {}), velocity resets {}, time gaps {}, IMU head missing {}, missing at restart {}, \
+             health restores {} (footprints forgotten {}), velocity resets {}, headings taken as lost {}, time gaps {}, IMU head missing {}, missing at restart {}, \
              lost in a killed daemon {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
@@ -406,6 +407,7 @@ impl<'a> EstState<'a> {
             self.previous.health_restores + self.est.counters().health_restores,
             self.previous.footprints_forgotten + self.est.counters().footprints_forgotten,
             self.previous.velocity_resets + self.est.counters().velocity_resets,
+            self.previous.heading_reacquisitions + self.est.counters().heading_reacquisitions,
             self.previous.gaps + self.est.counters().gaps,
             rx.head_missing.load(Ordering::Relaxed),
             rx.missing_at_restart.load(Ordering::Relaxed),
