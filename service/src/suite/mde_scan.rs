@@ -65,7 +65,7 @@ pub struct ScanPoint {
 }
 
 /// The scan of one effect on one walk.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct ScanRow {
     /// Recording.
     pub recording: String,
@@ -188,10 +188,7 @@ pub fn scan_walk(
             placebo_z_rms: (!placebo.is_empty()).then(|| {
                 (placebo.iter().map(|z| z * z).sum::<f64>() / placebo.len() as f64).sqrt()
             }),
-            skipped: None,
-            points: Vec::new(),
-            power_from: None,
-            named_from: None,
+            ..ScanRow::default()
         };
         if already_modelled(reference.effect, model) {
             row.skipped = Some(MODELLED.into());
@@ -242,12 +239,7 @@ fn scan_onset(
         predicted: clean.onset.and_then(|o| o.mde),
         clean_score: clean.onset.as_ref().map(|o| test_score(Some(o))),
         clean_estimate: clean.onset.map(|o| (o.k_taken_up, f64::NAN)),
-        response: None,
-        placebo_z_rms: None,
-        skipped: None,
-        points: Vec::new(),
-        power_from: None,
-        named_from: None,
+        ..ScanRow::default()
     };
     if already_modelled(reference.effect, model) {
         row.skipped = Some(MODELLED.into());

@@ -322,8 +322,10 @@ impl Pipeline {
             return;
         };
         let missed = matches!(assoc, Err(Rejection::OutsideGate | Rejection::Unlikely));
-        let nearest = self.aid.associate(at, dir, std::f64::consts::PI);
-        let (true, Ok(nearest)) = (missed, nearest) else {
+        let nearest = missed
+            .then(|| self.aid.associate(at, dir, std::f64::consts::PI).ok())
+            .flatten();
+        let Some(nearest) = nearest else {
             self.off_direction.clear();
             return;
         };
