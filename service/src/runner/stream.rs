@@ -38,6 +38,8 @@ pub struct Summary {
     pub gaps: u64,
     /// Of them, bridged (up to `estimator.max_bridge_s`).
     pub gaps_bridged: u64,
+    /// Of them, filled from the stride before (`estimator.max_fill_s`).
+    pub gaps_filled: u64,
     /// Heading observations used.
     pub heading_observations_used: u64,
     /// Heading observations rejected, by reason.
@@ -397,6 +399,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         zupts: c.zupts,
         gaps: c.gaps,
         gaps_bridged: c.gaps_bridged,
+        gaps_filled: c.gaps_filled,
         heading_observations_used: c.heading_used,
         heading_observations_rejected: BTreeMap::from([
             ("not_straight", c.heading_not_straight),

@@ -370,6 +370,19 @@ mod tests {
             assert!(err.contains("estimator.max_bridge_s"), "{err}");
         }
 
+        for v in ["-0.1", "1.5", "nan"] {
+            let f = ConfigFile::parse(
+                &format!("[estimator]\nmax_fill_s = {v}\n"),
+                Path::new("a.toml"),
+            )
+            .unwrap();
+            let err = f.validate().unwrap_err().to_string();
+            assert!(
+                err.contains("estimator.max_fill_s") && err.contains("[0, 1]"),
+                "{err}"
+            );
+        }
+
         let f = ConfigFile::parse("[detector]\nwindow = 0\n", Path::new("a.toml")).unwrap();
         assert!(
             f.validate()

@@ -14,6 +14,8 @@ pub struct Config {
     pub max_dt_s: Positive,
     /// Longest gap bridged by one step (0: none).
     pub max_bridge_s: f64,
+    /// Longest gap filled from the stride before (0: none).
+    pub max_fill_s: f64,
     /// Largest plausible foot speed (health check).
     pub max_speed_m_s: Positive,
     /// What the sensor can output, and the time-step bounds.

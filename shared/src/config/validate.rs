@@ -263,6 +263,14 @@ impl ConfigFile {
                 1.0,
                 "must be in [0, 1] s",
             )?,
+            // Half of the slowest stride: a longer gap loses a footfall.
+            max_fill_s: in_range(
+                "estimator.max_fill_s",
+                e.max_fill_s.unwrap_or(ESTIMATOR_MAX_FILL_S),
+                0.0,
+                1.0,
+                "must be in [0, 1] s",
+            )?,
             max_speed_m_s: Positive::in_range(
                 "estimator.max_speed_m_s",
                 e.max_speed_m_s.unwrap_or(ESTIMATOR_MAX_SPEED_M_S),

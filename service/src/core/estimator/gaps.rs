@@ -1,27 +1,61 @@
 //! Gaps in the data: a step longer than `estimator.max_dt_s` is bridged by one step when it is
-//! short (a few lost samples), else it starts a new segment.
+//! short (a few lost samples), filled with the same phase of the stride before when it is
+//! longer but within half a stride (`estimator.max_fill_s`) and the rates around it match that
+//! stride's, else it starts a new segment.
 
+use super::stride_memory::Remembered;
 use super::*;
 
+/// Largest RMS difference between the rates around a gap and those one stride earlier for the
+/// stride before to stand in for the lost samples, rad/s. Measured without footprints
+/// (`docs/experiments/stride-template.py`: 0.2 and 0.4 s taken out of the 16 gdins walks at 40
+/// places each, the rotation over the gap against the remembered stride's): up to a mismatch of
+/// 2.5 rad/s the stride before turns the foot closer to the real rotation than no rotation at all
+/// (what a new segment integrates) on 85–95 % of the cuts in each band, from 2.5 to 3.5 on 53–73 %.
+const FILL_MAX_MISMATCH_RAD_S: f64 = 2.5;
+
+/// The rotation and the velocity change of a filled gap are taken as known to this fraction:
+/// the attitude and velocity variances grow by its square times theirs. The same measurement:
+/// the remembered stride's rotation is off by a median 0.20 of the real one.
+const FILL_RELATIVE_SD: f64 = 0.2;
+
 /// What [`Pipeline::cross_gap`] did with the step before the current sample.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) enum Gap {
     /// A regular step, or a gap bridged: integrate it as usual.
     Integrate,
     /// A new segment: nothing is integrated over the step.
     NewSegment,
+    /// Filled with the stride before up to this (sample-clock time, rate, force), from which
+    /// the step to the current sample is integrated as usual.
+    Filled((f64, Vector3<f64>, Vector3<f64>)),
 }
 
 impl Pipeline {
-    /// Judges the step `dt` from the previous sample (`w.0`, `f.0`) to this one (`w.1`, `f.1`)
-    /// and widens the covariance of a gap; counts and reports it.
+    /// Remembers the sample just navigated (and a footfall on it) for [`Self::fill_gap`].
+    pub(super) fn remember(&mut self, t_clock: f64, w: &Vector3<f64>, f: &Vector3<f64>) {
+        self.memory.push(Remembered {
+            t_s: t_clock,
+            gyro_rad_s: *w,
+            accel_m_s2: *f,
+        });
+        if self.stance_edge == StanceEdge::Began {
+            self.memory.footfall(t_clock);
+        }
+    }
+
+    /// Judges the step from the previous sample (time `w.0`, rate `w.1`, force `f.0`) to this
+    /// one (time `t_clock`, `w.2`, `f.1`) and widens the covariance of a gap; counts and reports
+    /// it.
     pub(super) fn cross_gap(
         &mut self,
-        eskf: &mut Eskf,
-        dt: f64,
-        w: (&Vector3<f64>, &Vector3<f64>),
+        eskf: &mut Box<Eskf>,
+        t_clock: f64,
+        (t_prev, w_prev, w_now): (f64, &Vector3<f64>, &Vector3<f64>),
         f: (&Vector3<f64>, &Vector3<f64>),
     ) -> Gap {
+        let dt = t_clock - t_prev;
+        let w = (w_prev, w_now);
         if dt <= self.cfg.max_dt_s.get() {
             return Gap::Integrate;
         }
@@ -43,6 +77,12 @@ impl Pipeline {
             }
             return Gap::Integrate;
         }
+        if dt <= self.cfg.max_fill_s
+            && let Some(last) = self.fill_gap(eskf, t_clock, w_now)
+        {
+            self.counters.gaps_filled += 1;
+            return Gap::Filled(last);
+        }
         // A new segment. Extrapolating two samples over the gap is meaningless (a 10 s gap once
         // gave a vertical velocity of −286 m/s), so nothing is integrated over it. The velocity
         // is kept (the best guess for a short gap; the next ZUPT settles it) but its variance
@@ -55,5 +95,44 @@ impl Pipeline {
         let v_max = self.cfg.max_speed_m_s.get();
         eskf.widen_after_gap(dt, v_max * v_max);
         Gap::NewSegment
+    }
+}
+
+impl Pipeline {
+    /// Fills a gap ending at `t_after_s` (rate `gyro_after`) with the remembered samples one
+    /// stride earlier, when the rates around the gap match them: propagates the filter through
+    /// them and widens its attitude and velocity variance by [`FILL_RELATIVE_SD`] of the
+    /// rotation and velocity change they made. Returns the last filled sample, on the current
+    /// clock; `None` (nothing changed) when the memory cannot fill it.
+    fn fill_gap(
+        &mut self,
+        eskf: &mut Box<Eskf>,
+        t_after_s: f64,
+        gyro_after: &Vector3<f64>,
+    ) -> Option<(f64, Vector3<f64>, Vector3<f64>)> {
+        let lag = self.memory.stride_lag(t_after_s, gyro_after)?;
+        if lag.mismatch_rad_s > FILL_MAX_MISMATCH_RAD_S || lag.from >= lag.to {
+            return None;
+        }
+        let newest = *self.memory.get(self.memory.len() - 1);
+        let mut spare = self.before.take().unwrap_or_else(|| eskf.clone());
+        let v_before = eskf.v_m_s;
+        let mut turned = UnitQuaternion::identity();
+        let (mut t, mut w, mut f) = (newest.t_s, newest.gyro_rad_s, newest.accel_m_s2);
+        for i in lag.from..lag.to {
+            let s = *self.memory.get(i);
+            let t_s = s.t_s + lag.lag_s;
+            let (w_avg, f_avg) = ((w + s.gyro_rad_s) * 0.5, (f + s.accel_m_s2) * 0.5);
+            let omega = self.propagate(eskf, &mut spare, t_s - t, &w_avg, &f_avg);
+            turned *= UnitQuaternion::from_scaled_axis(omega * (t_s - t));
+            (t, w, f) = (t_s, s.gyro_rad_s, s.accel_m_s2);
+        }
+        self.before = Some(spare);
+        let var = (FILL_RELATIVE_SD * turned.angle()).powi(2);
+        for k in 0..3 {
+            eskf.widen_attitude_about(&Vector3::ith(k, 1.0), var);
+        }
+        eskf.widen_velocity((FILL_RELATIVE_SD * (eskf.v_m_s - v_before).norm()).powi(2));
+        Some((t, w, f))
     }
 }

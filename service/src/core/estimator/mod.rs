@@ -24,9 +24,10 @@
 //! once per stance (calibration and heading observations); `association.rs` the weighted
 //! association with the dominant directions; `reacquire.rs` a heading lost beyond the
 //! association's reach, and the way back; `rest.rs` the rest sums; `gaps.rs` a step longer
-//! than `estimator.max_dt_s` (bridged or a new segment); `recovery.rs` what it does when the
-//! state or the input goes bad (health check, velocity reset, a first time stamp that was an
-//! outlier); `tests.rs` its unit tests.
+//! than `estimator.max_dt_s` (bridged, filled from the stride before, or a new segment);
+//! `stride_memory.rs` the last strides' samples and footfalls that fill one; `recovery.rs`
+//! what it does when the state or the input goes bad (health check, velocity reset, a first
+//! time stamp that was an outlier); `tests.rs` its unit tests.
 
 mod alignment;
 mod association;
@@ -35,6 +36,7 @@ mod observations;
 mod reacquire;
 mod recovery;
 mod rest;
+mod stride_memory;
 mod types;
 
 pub use association::association_weight;
@@ -165,6 +167,8 @@ struct Pipeline {
     /// The previous navigated sample was a stance sample.
     was_stance: bool,
     clock: SampleClock,
+    /// The last strides' samples and footfalls, to fill a gap in a swing (`stride_memory.rs`).
+    memory: stride_memory::StrideMemory,
     /// The current stance's sums, for the zero-rate update when it turns out to be a rest.
     stance_rest: RestSums,
     /// A rest was fused by a zero-rate update with the current sample (see `step_running`).
@@ -226,6 +230,7 @@ impl Estimator {
             was_stance: false,
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
+            memory: stride_memory::StrideMemory::default(),
             // Without the motion test: a later rest begins with a landing, which the test,
             // anchored on the first block, would take as the reference and leave every quiet
             // block out (the zero-rate update then never came).
@@ -444,11 +449,19 @@ impl Pipeline {
         };
         // `prev` and `last` hold the sample clock's times (see `step`).
         let t_clock = self.last.map_or(t_s, |l| l.0);
+        let gap = self.cross_gap(eskf, t_clock, (t_prev, &w_prev, w), (&f_prev, f));
+        let (t_prev, w_prev, f_prev) = match gap {
+            Gap::NewSegment => {
+                self.memory.clear();
+                self.remember(t_clock, w, f);
+                self.fill_output(eskf);
+                return;
+            }
+            Gap::Integrate => (t_prev, w_prev, f_prev),
+            // The gap was filled up to its last remembered sample: the step from there.
+            Gap::Filled(last) => last,
+        };
         let dt = t_clock - t_prev;
-        if self.cross_gap(eskf, dt, (&w_prev, w), (&f_prev, f)) == Gap::NewSegment {
-            self.fill_output(eskf);
-            return;
-        }
         let w_avg = (w + w_prev) * 0.5;
         let f_avg = (f + f_prev) * 0.5;
         // The state before the sample: the bias filter is copied; the filter's buffer is the
@@ -479,7 +492,9 @@ impl Pipeline {
             // zero-rate update made in it is undone too, and not made again (it used to be, at
             // every sample, and a rest that itself broke the state froze the estimator): the
             // rest is refused, the next one observes the bias.
-            self.last = prev;
+            // After a filled gap, from its last filled sample: the fill stays (the filter went
+            // back to the state after it), it is not made again.
+            self.last = Some((t_prev, w_prev, f_prev));
             self.counters.zero_rate_refused += u64::from(applied);
             // A velocity reset in it is undone as well; the next stance update judges again.
             // So is a heading taken as lost (its widened variance): the run starts over.
@@ -487,6 +502,9 @@ impl Pipeline {
             self.out.heading_reacquired = None;
         } else if applied {
             self.counters.zero_rate_updates += 1;
+        }
+        if !failed {
+            self.remember(t_clock, w, f);
         }
         self.counters.velocity_resets += u64::from(self.out.velocity_reset);
         self.counters.heading_reacquisitions += u64::from(self.out.heading_reacquired.is_some());
@@ -557,25 +575,7 @@ impl Pipeline {
         stance: bool,
         stance_age_s: f64,
     ) {
-        let bias = self.bias_only(eskf);
-        match &mut self.bias {
-            BiasFilter::InEskf => {}
-            BiasFilter::Paper { obs, .. } => {
-                if let Some(o) = obs {
-                    o.propagate(w_avg, dt);
-                }
-            }
-            BiasFilter::RotationAware { obs, .. } => {
-                if let Some(o) = obs {
-                    o.propagate(w_avg, &bias, dt);
-                }
-            }
-        }
-        let omega = eskf.corrected_rate(w_avg, f_avg, &bias);
-        // Propagated into the spare buffer, which becomes the running filter: `spare` is left
-        // with the state before the sample.
-        eskf.propagate_into(spare, &omega, f_avg, dt);
-        std::mem::swap(eskf, spare);
+        let omega = self.propagate(eskf, spare, dt, w_avg, f_avg);
         let clip_var = (self.cfg.eskf.clipped_rate_sd_rad_s * dt).powi(2);
         for (k, &c) in self.clipped_gyro_axes.iter().enumerate() {
             if c && clip_var > 0.0 {
@@ -648,6 +648,37 @@ impl Pipeline {
             self.stance_rest.clear();
         }
         self.was_stance = stance;
+    }
+
+    /// One strapdown step of the filter and of the paper and rotation-aware modes' observers,
+    /// on the step's mean rate and force; returns the bias-corrected rate. Propagated into the
+    /// spare buffer, which becomes the running filter: `spare` is left with the state before.
+    fn propagate(
+        &mut self,
+        eskf: &mut Box<Eskf>,
+        spare: &mut Box<Eskf>,
+        dt: f64,
+        w_avg: &Vector3<f64>,
+        f_avg: &Vector3<f64>,
+    ) -> Vector3<f64> {
+        let bias = self.bias_only(eskf);
+        match &mut self.bias {
+            BiasFilter::InEskf => {}
+            BiasFilter::Paper { obs, .. } => {
+                if let Some(o) = obs {
+                    o.propagate(w_avg, dt);
+                }
+            }
+            BiasFilter::RotationAware { obs, .. } => {
+                if let Some(o) = obs {
+                    o.propagate(w_avg, &bias, dt);
+                }
+            }
+        }
+        let omega = eskf.corrected_rate(w_avg, f_avg, &bias);
+        eskf.propagate_into(spare, &omega, f_avg, dt);
+        std::mem::swap(eskf, spare);
+        omega
     }
 
     /// At the end of a stance that was a rest (its part before the last `alignment.rest_tail_s`

@@ -175,6 +175,8 @@ pub struct Counters {
     pub gaps: u64,
     /// Of the gaps, those bridged.
     pub gaps_bridged: u64,
+    /// Of them, filled from the stride before (`estimator.max_fill_s`).
+    pub gaps_filled: u64,
     /// Stances since alignment.
     pub stances: u64,
     /// ZUPT updates.

@@ -1,0 +1,326 @@
+//! The last stride or two of samples, kept to fill a gap in a swing with the same phase of the
+//! stride before (`estimator.max_fill_s`).
+//!
+//! Walking repeats itself: the swing a foot makes now rotates it much as the one before did, at
+//! the same time after its footfall. A gap too long to bridge by one step (`max_bridge_s`)
+//! loses the motion in it, up to a radian of rotation in a swing; as a new segment nothing is
+//! integrated over it. Here the samples one stride earlier stand in for the lost ones: the
+//! stride's lag is found by matching the rates before the gap (and the first one after it)
+//! against the memory, within ±20 % of the last stride period, and refused when they do not
+//! match.
+
+use nalgebra::Vector3;
+
+/// Samples kept: 2048 (10 s at 200 Hz, 5 s at 400 Hz). A lag beyond the memory is not filled.
+pub(super) const MEMORY_SAMPLES: usize = 2048;
+
+/// Rate samples before the gap that the stride's lag is matched on.
+const MATCH_SAMPLES: usize = 30;
+
+/// The stride lag is searched within this fraction of the last stride period either way.
+const LAG_SPAN: f64 = 0.2;
+
+/// One remembered sample: sample-clock time, gyro and specific force (sensor axes).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Remembered {
+    pub t_s: f64,
+    pub gyro_rad_s: Vector3<f64>,
+    pub accel_m_s2: Vector3<f64>,
+}
+
+/// A fixed ring of the last [`MEMORY_SAMPLES`] samples and the last two footfall times.
+/// Allocated once, at construction.
+#[derive(Debug, Clone)]
+pub(super) struct StrideMemory {
+    ring: Vec<Remembered>,
+    /// Index of the oldest sample.
+    head: usize,
+    len: usize,
+    /// The last two footfalls (stance events begun), sample clock, newest last.
+    footfalls_s: [f64; 2],
+}
+
+/// Where in the memory the lost samples of a gap are taken from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct StrideLag {
+    /// The stride lag, s: a lost sample at t stands for the remembered one at t − lag.
+    pub lag_s: f64,
+    /// Memory index (0 = oldest) of the first remembered sample inside the gap, and one past
+    /// the last.
+    pub from: usize,
+    pub to: usize,
+    /// RMS rate difference between the samples around the gap and their remembered
+    /// counterparts, rad/s.
+    pub mismatch_rad_s: f64,
+}
+
+impl Default for StrideMemory {
+    fn default() -> Self {
+        let zero = Remembered {
+            t_s: f64::NAN,
+            gyro_rad_s: Vector3::zeros(),
+            accel_m_s2: Vector3::zeros(),
+        };
+        Self {
+            ring: vec![zero; MEMORY_SAMPLES],
+            head: 0,
+            len: 0,
+            footfalls_s: [f64::NAN; 2],
+        }
+    }
+}
+
+impl StrideMemory {
+    /// Remembers one sample (the oldest is forgotten when the memory is full).
+    pub fn push(&mut self, s: Remembered) {
+        // Once per sample: no division for the wrap.
+        let cap = self.ring.len();
+        if self.len < cap {
+            let i = self.head + self.len;
+            self.ring[if i >= cap { i - cap } else { i }] = s;
+            self.len += 1;
+        } else {
+            self.ring[self.head] = s;
+            self.head = if self.head + 1 == cap {
+                0
+            } else {
+                self.head + 1
+            };
+        }
+    }
+
+    /// A footfall (a stance event began) at `t_s`.
+    pub fn footfall(&mut self, t_s: f64) {
+        self.footfalls_s = [self.footfalls_s[1], t_s];
+    }
+
+    /// Forgets everything (a new segment: the walk before it says nothing of the one after).
+    pub fn clear(&mut self) {
+        self.head = 0;
+        self.len = 0;
+        self.footfalls_s = [f64::NAN; 2];
+    }
+
+    /// The `i`-th remembered sample, 0 = oldest.
+    pub fn get(&self, i: usize) -> &Remembered {
+        &self.ring[(self.head + i) % self.ring.len()]
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// The time between the last two footfalls, s (NaN before two).
+    pub fn stride_period_s(&self) -> f64 {
+        self.footfalls_s[1] - self.footfalls_s[0]
+    }
+
+    /// The stride lag for a gap from the newest remembered sample to a sample at `t_after_s`
+    /// with rate `gyro_after`: the lag within ±[`LAG_SPAN`] of the last stride period whose
+    /// remembered rates best match the [`MATCH_SAMPLES`] rates before the gap and the one after
+    /// it. `None` without two footfalls, when the gap is longer than half a stride, or when the
+    /// memory does not reach back far enough.
+    pub fn stride_lag(&self, t_after_s: f64, gyro_after: &Vector3<f64>) -> Option<StrideLag> {
+        let n = self.len;
+        let period = self.stride_period_s();
+        // NaN: fewer than two footfalls.
+        if n < MATCH_SAMPLES + 2 || period.is_nan() || period <= 0.0 {
+            return None;
+        }
+        let newest = self.get(n - 1);
+        let gap_s = t_after_s - newest.t_s;
+        // The footfall clock must be recent: a stride period from before a long stop says
+        // nothing of the phase now.
+        if gap_s.is_nan()
+            || gap_s <= 0.0
+            || gap_s > 0.5 * period
+            || newest.t_s - self.footfalls_s[1] > 2.0 * period
+        {
+            return None;
+        }
+        let (lo, hi) = ((1.0 - LAG_SPAN) * period, (1.0 + LAG_SPAN) * period);
+        let mut best: Option<(f64, usize)> = None;
+        // Shift s: the sample at index i stands for the one at i + s.
+        for s in 1..n - MATCH_SAMPLES {
+            let lag = newest.t_s - self.get(n - 1 - s).t_s;
+            if lag < lo {
+                continue;
+            }
+            if lag > hi {
+                break;
+            }
+            let before: f64 = (n - MATCH_SAMPLES..n)
+                .map(|i| (self.get(i).gyro_rad_s - self.get(i - s).gyro_rad_s).norm_squared())
+                .sum();
+            let after = (gyro_after - self.at(t_after_s - lag)?.gyro_rad_s).norm_squared();
+            let cost = (before + after) / (MATCH_SAMPLES + 1) as f64;
+            if best.is_none_or(|(c, _)| cost < c) {
+                best = Some((cost, s));
+            }
+        }
+        let (cost, s) = best?;
+        let lag_s = newest.t_s - self.get(n - 1 - s).t_s;
+        let from = n - s;
+        let to = (from..n)
+            .find(|&i| self.get(i).t_s + lag_s >= t_after_s)
+            .unwrap_or(n);
+        Some(StrideLag {
+            lag_s,
+            from,
+            to,
+            mismatch_rad_s: cost.sqrt(),
+        })
+    }
+
+    /// The remembered sample nearest to `t_s` (binary search on the times).
+    fn at(&self, t_s: f64) -> Option<&Remembered> {
+        if self.len == 0 {
+            return None;
+        }
+        let (mut a, mut b) = (0, self.len);
+        while a < b {
+            let m = (a + b) / 2;
+            if self.get(m).t_s < t_s {
+                a = m + 1;
+            } else {
+                b = m;
+            }
+        }
+        let i = match a {
+            0 => 0,
+            a if a == self.len => self.len - 1,
+            a if t_s - self.get(a - 1).t_s < self.get(a).t_s - t_s => a - 1,
+            a => a,
+        };
+        Some(self.get(i))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DT: f64 = 0.005;
+
+    /// A gait with a period of `period_s`: a swing rotation in the first 60 % of each stride,
+    /// still in the rest; a footfall at 60 % of each.
+    fn gait(t_s: f64, period_s: f64) -> Vector3<f64> {
+        let phase = (t_s / period_s).fract();
+        if phase < 0.6 {
+            let x = phase / 0.6 * std::f64::consts::TAU;
+            Vector3::new(
+                0.3 * x.sin(),
+                5.0 * x.sin() + 2.0 * (2.0 * x).sin(),
+                0.5 * x.cos(),
+            )
+        } else {
+            Vector3::zeros()
+        }
+    }
+
+    fn walked(period_s: f64, until_s: f64) -> StrideMemory {
+        let mut m = StrideMemory::default();
+        let mut k = 0;
+        loop {
+            let t_s = k as f64 * DT;
+            if t_s > until_s {
+                break m;
+            }
+            m.push(Remembered {
+                t_s,
+                gyro_rad_s: gait(t_s, period_s),
+                accel_m_s2: Vector3::new(0.0, 0.0, 9.81),
+            });
+            let phase = (t_s / period_s).fract();
+            if (phase - 0.6).abs() < 0.5 * DT {
+                m.footfall(t_s);
+            }
+            k += 1;
+        }
+    }
+
+    #[test]
+    fn the_lag_of_a_regular_gait_is_its_period_and_the_gap_is_covered() {
+        let period = 1.1;
+        let m = walked(period, 10.2);
+        assert!(
+            (m.stride_period_s() - period).abs() < 1.5 * DT,
+            "{}",
+            m.stride_period_s()
+        );
+        // 0.25 s lost in the swing after 10.2 s.
+        let t_after = 10.2 + 0.25;
+        let lag = m.stride_lag(t_after, &gait(t_after, period)).unwrap();
+        assert!((lag.lag_s - period).abs() < 1.5 * DT, "{lag:?}");
+        assert!(lag.mismatch_rad_s < 0.1, "{lag:?}");
+        // The remembered samples stand for the lost ones: after the newest, before the one
+        // after the gap.
+        let first = m.get(lag.from).t_s + lag.lag_s;
+        let last = m.get(lag.to - 1).t_s + lag.lag_s;
+        assert!(first > 10.2 - 1e-9 && first < 10.2 + 1.5 * DT, "{first}");
+        assert!(last < t_after && last > t_after - 1.5 * DT, "{last}");
+    }
+
+    #[test]
+    fn a_gait_that_changed_matches_worse_than_one_that_did_not() {
+        let m = walked(1.0, 10.2);
+        let t_after = 10.45;
+        let same = m.stride_lag(t_after, &gait(t_after, 1.0)).unwrap();
+        // The rate after the gap from another motion (a turn on the spot).
+        let other = m.stride_lag(t_after, &Vector3::new(0.0, 0.0, 4.0)).unwrap();
+        assert!(
+            other.mismatch_rad_s > 3.0 * same.mismatch_rad_s.max(0.1),
+            "{same:?} {other:?}"
+        );
+    }
+
+    #[test]
+    fn no_lag_without_two_footfalls_across_half_a_stride_or_after_a_long_stop() {
+        let mut m = StrideMemory::default();
+        for k in 0..400 {
+            let t_s = k as f64 * DT;
+            m.push(Remembered {
+                t_s,
+                gyro_rad_s: gait(t_s, 1.0),
+                accel_m_s2: Vector3::zeros(),
+            });
+        }
+        // No footfall yet.
+        assert_eq!(m.stride_lag(2.2, &Vector3::zeros()), None);
+        let m = walked(1.0, 10.2);
+        // More than half a stride lost.
+        assert_eq!(m.stride_lag(10.2 + 0.55, &Vector3::zeros()), None);
+        assert!(m.stride_lag(10.2 + 0.45, &Vector3::zeros()).is_some());
+        // The last footfall long ago: the phase is not known any more.
+        let mut stopped = walked(1.0, 10.2);
+        for k in 1..500 {
+            stopped.push(Remembered {
+                t_s: 10.2 + k as f64 * DT,
+                gyro_rad_s: Vector3::zeros(),
+                accel_m_s2: Vector3::zeros(),
+            });
+        }
+        assert_eq!(stopped.stride_lag(12.9, &Vector3::zeros()), None);
+        stopped.clear();
+        assert_eq!(stopped.len(), 0);
+    }
+
+    #[test]
+    fn the_memory_keeps_the_newest_samples() {
+        let mut m = StrideMemory::default();
+        let n = MEMORY_SAMPLES + 952;
+        for k in 0..n {
+            m.push(Remembered {
+                t_s: k as f64,
+                gyro_rad_s: Vector3::zeros(),
+                accel_m_s2: Vector3::zeros(),
+            });
+        }
+        assert_eq!(m.len(), MEMORY_SAMPLES);
+        assert_eq!(m.get(0).t_s, 952.0);
+        assert_eq!(m.get(MEMORY_SAMPLES - 1).t_s, (n - 1) as f64);
+        assert_eq!(m.at(1000.4).unwrap().t_s, 1000.0);
+        assert_eq!(m.at(1000.6).unwrap().t_s, 1001.0);
+        assert_eq!(m.at(-5.0).unwrap().t_s, 952.0);
+    }
+}
