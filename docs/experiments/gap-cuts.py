@@ -9,8 +9,8 @@ pseudo-random offset of up to 1 s), against the same walk without the cut.
 The samples, not only the time, are removed: the motion in the gap is lost. Prints one line per
 cut, then per length the median and worst change and how many cuts are worse by more than 0.1 %
 of path. The figures of `estimator.max_bridge_s` and `estimator.max_fill_s` in
-`configs/gdins.toml` came from this script (with `max_bridge_s = 0` or `max_fill_s = 0` in a copy
-of the config for the "new segment" column). Needs the
+`configs/gdins.toml` came from this script (with `max_fill_s = 0`, and `max_bridge_s = 0` for the
+bridge's figures, in a copy of the config for the "new segment" column). Needs the
 release binary (`cargo build --release -p corridor-service --bin corridor`).
 """
 import json, os, random, re, statistics, subprocess, sys, tempfile

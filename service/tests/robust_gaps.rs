@@ -89,6 +89,7 @@ fn a_few_samples_lost_in_a_swing_are_bridged_and_the_footprints_stay() {
         |tr: &[(f64, [f64; 3])], t: f64| tr[tr.partition_point(|x| x.0 < t).min(tr.len() - 1)].1;
     let mut segment_cfg = cfg.clone();
     segment_cfg.max_bridge_s = 0.0;
+    segment_cfg.max_fill_s = 0.0;
     // Nine places through three strides: swing, touchdown, stance.
     let (mut bridged_m, mut segment_m) = (Vec::new(), Vec::new());
     for k in [5000, 5050, 5100, 7000, 7050, 7100, 9000, 9050, 9100] {
@@ -109,7 +110,7 @@ fn a_few_samples_lost_in_a_swing_are_bridged_and_the_footprints_stay() {
         assert_eq!((c.gaps, c.gaps_bridged), (1, 1));
         bridged_m.push(moved(&bridged));
         let (segmented, c) = positions(&cut, &segment_cfg);
-        assert_eq!((c.gaps, c.gaps_bridged), (1, 0));
+        assert_eq!((c.gaps, c.gaps_bridged, c.gaps_filled), (1, 0, 0));
         segment_m.push(moved(&segmented));
     }
     let median = |v: &mut Vec<f64>| {

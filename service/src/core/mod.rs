@@ -21,5 +21,6 @@ pub mod rotation;
 pub mod stance;
 
 pub use estimator::{
-    Counters, Estimate, Estimator, ImuInput, Notice, Phase, SampleError, WarmStart, WarmStartError,
+    Counters, Estimate, Estimator, GapCrossing, ImuInput, Notice, Phase, SampleError, WarmStart,
+    WarmStartError,
 };

@@ -225,7 +225,7 @@ impl<'a> EstState<'a> {
                 return;
             }
         };
-        for n in e.notices(cfg.estimator.max_bridge_s) {
+        for n in e.notices() {
             tracing::warn!(seq = s.seq, "{n}");
         }
         if e.replaced_first_t_s.is_some() {

@@ -178,10 +178,9 @@ impl<'a> Feed<'a> {
             gyro_rad_s: gyro,
             accel_m_s2: row.accel_m_s2,
         };
-        let max_bridge_s = self.est.config().max_bridge_s;
         match self.est.step(&input) {
             Ok(e) => {
-                let mut notices = e.notices(max_bridge_s).peekable();
+                let mut notices = e.notices().peekable();
                 if notices.peek().is_some() {
                     self.warned += 1;
                     if self.warned <= MAX_REFUSED_EXAMPLES {

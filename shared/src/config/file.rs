@@ -108,7 +108,8 @@ pub struct EstimatorFile {
     /// longer one starts a new segment (default 0.16 s; 0: every gap is a new segment).
     pub max_bridge_s: Option<f64>,
     /// A longer gap up to this long, within half a stride, is filled with the samples of the
-    /// same phase one stride earlier when the rates around it match them (default 0: off).
+    /// same phase one stride earlier when the rates around it match them (default 0.45 s;
+    /// 0: off).
     pub max_fill_s: Option<f64>,
     /// Largest plausible foot speed, m/s; a faster estimate fails the health check (default 15).
     pub max_speed_m_s: Option<f64>,

@@ -32,16 +32,14 @@ pub(super) enum Gap {
 }
 
 impl Pipeline {
-    /// Remembers the sample just navigated (and a footfall on it) for [`Self::fill_gap`].
+    /// Remembers the sample just navigated for [`Self::fill_gap`] (the footfalls are
+    /// remembered in `step`, whatever the filter makes of their sample).
     pub(super) fn remember(&mut self, t_clock: f64, w: &Vector3<f64>, f: &Vector3<f64>) {
         self.memory.push(Remembered {
             t_s: t_clock,
             gyro_rad_s: *w,
             accel_m_s2: *f,
         });
-        if self.stance_edge == StanceEdge::Began {
-            self.memory.footfall(t_clock);
-        }
     }
 
     /// Judges the step from the previous sample (time `w.0`, rate `w.1`, force `f.0`) to this
@@ -61,6 +59,7 @@ impl Pipeline {
         }
         self.counters.gaps += 1;
         self.out.gap_s = Some(dt);
+        self.out.gap_crossing = Some(GapCrossing::Bridged);
         if dt <= self.cfg.max_bridge_s {
             // A short gap (a few lost samples) is bridged: one step on the mean of the rates and
             // forces on both sides of it, as every step is integrated. What that interpolation
@@ -78,11 +77,13 @@ impl Pipeline {
             return Gap::Integrate;
         }
         if dt <= self.cfg.max_fill_s
-            && let Some(last) = self.fill_gap(eskf, t_clock, w_now)
+            && let Some(last) = self.fill_gap(eskf, t_prev, t_clock, w_now)
         {
             self.counters.gaps_filled += 1;
+            self.out.gap_crossing = Some(GapCrossing::Filled);
             return Gap::Filled(last);
         }
+        self.out.gap_crossing = Some(GapCrossing::NewSegment);
         // A new segment. Extrapolating two samples over the gap is meaningless (a 10 s gap once
         // gave a vertical velocity of −286 m/s), so nothing is integrated over it. The velocity
         // is kept (the best guess for a short gap; the next ZUPT settles it) but its variance
@@ -99,22 +100,34 @@ impl Pipeline {
 }
 
 impl Pipeline {
-    /// Fills a gap ending at `t_after_s` (rate `gyro_after`) with the remembered samples one
-    /// stride earlier, when the rates around the gap match them: propagates the filter through
-    /// them and widens its attitude and velocity variance by [`FILL_RELATIVE_SD`] of the
-    /// rotation and velocity change they made. Returns the last filled sample, on the current
-    /// clock; `None` (nothing changed) when the memory cannot fill it.
+    /// Fills a gap from `t_prev_s` to `t_after_s` (rate `gyro_after`) with the remembered
+    /// samples one stride earlier, when the rates around the gap match them: propagates the
+    /// filter through them and widens its attitude and velocity variance by
+    /// [`FILL_RELATIVE_SD`] of the rotation and velocity change they made; the filled samples
+    /// are remembered in turn. Returns the last filled sample, on the current clock; `None`
+    /// (nothing changed) when the memory cannot fill it. The fill is not health-checked on its
+    /// own: the check after the next sample judges it (and undoes that sample's update back to
+    /// the state after the fill, or from the fourth failure in a row restores the last healthy
+    /// stance, before the gap).
     fn fill_gap(
         &mut self,
         eskf: &mut Box<Eskf>,
+        t_prev_s: f64,
         t_after_s: f64,
         gyro_after: &Vector3<f64>,
     ) -> Option<(f64, Vector3<f64>, Vector3<f64>)> {
-        let lag = self.memory.stride_lag(t_after_s, gyro_after)?;
+        let newest = *self.memory.get(self.memory.len().checked_sub(1)?);
+        // The memory must end where the filter is (not so after a failed health check that
+        // left a remembered sample out).
+        if newest.t_s != t_prev_s {
+            return None;
+        }
+        let lag = self
+            .memory
+            .stride_lag(t_after_s, gyro_after, self.cfg.max_dt_s.get())?;
         if lag.mismatch_rad_s > FILL_MAX_MISMATCH_RAD_S || lag.from >= lag.to {
             return None;
         }
-        let newest = *self.memory.get(self.memory.len() - 1);
         let mut spare = self.before.take().unwrap_or_else(|| eskf.clone());
         let v_before = eskf.v_m_s;
         let mut turned = UnitQuaternion::identity();
@@ -128,6 +141,7 @@ impl Pipeline {
             (t, w, f) = (t_s, s.gyro_rad_s, s.accel_m_s2);
         }
         self.before = Some(spare);
+        self.memory.push_filled(lag.from, lag.to, lag.lag_s);
         let var = (FILL_RELATIVE_SD * turned.angle()).powi(2);
         for k in 0..3 {
             eskf.widen_attitude_about(&Vector3::ith(k, 1.0), var);

@@ -41,8 +41,8 @@ mod types;
 
 pub use association::association_weight;
 pub use types::{
-    Counters, Estimate, HeadingEvent, HeadingRefused, ImuInput, Notice, Phase, SampleError,
-    WarmStart, WarmStartError,
+    Counters, Estimate, GapCrossing, HeadingEvent, HeadingRefused, ImuInput, Notice, Phase,
+    SampleError, WarmStart, WarmStartError,
 };
 
 use gaps::Gap;
@@ -348,6 +348,10 @@ impl Estimator {
         p.last = Some((t_clock, w, f));
         let decision = p.detector.push(s.t_s, &w, &f);
         p.stance_edge = p.stance_events.push(t_clock, decision.stance);
+        if p.stance_edge == StanceEdge::Began {
+            // Whatever the filter makes of this sample: the stride clock of a gap's fill.
+            p.memory.footfall(t_clock);
+        }
         let out = &mut p.out;
         out.t_s = s.t_s;
         out.stance = decision.stance;
@@ -355,6 +359,7 @@ impl Estimator {
         out.clipped = clipped;
         out.health_fault = None;
         out.gap_s = None;
+        out.gap_crossing = None;
         out.velocity_reset = false;
         out.heading_reacquired = None;
         out.replaced_first_t_s = accepted.replaced_first_t_s;

@@ -118,9 +118,15 @@ impl StrideMemory {
     /// The stride lag for a gap from the newest remembered sample to a sample at `t_after_s`
     /// with rate `gyro_after`: the lag within ±[`LAG_SPAN`] of the last stride period whose
     /// remembered rates best match the [`MATCH_SAMPLES`] rates before the gap and the one after
-    /// it. `None` without two footfalls, when the gap is longer than half a stride, or when the
-    /// memory does not reach back far enough.
-    pub fn stride_lag(&self, t_after_s: f64, gyro_after: &Vector3<f64>) -> Option<StrideLag> {
+    /// it. `None` without two footfalls, when the gap is longer than half a stride, when the
+    /// memory does not reach back far enough, or when the remembered samples that would fill
+    /// the gap have a gap themselves (a step longer than `max_step_s`).
+    pub fn stride_lag(
+        &self,
+        t_after_s: f64,
+        gyro_after: &Vector3<f64>,
+        max_step_s: f64,
+    ) -> Option<StrideLag> {
         let n = self.len;
         let period = self.stride_period_s();
         // NaN: fewer than two footfalls.
@@ -141,7 +147,7 @@ impl StrideMemory {
         let (lo, hi) = ((1.0 - LAG_SPAN) * period, (1.0 + LAG_SPAN) * period);
         let mut best: Option<(f64, usize)> = None;
         // Shift s: the sample at index i stands for the one at i + s.
-        for s in 1..n - MATCH_SAMPLES {
+        for s in 1..=n - MATCH_SAMPLES {
             let lag = newest.t_s - self.get(n - 1 - s).t_s;
             if lag < lo {
                 continue;
@@ -164,12 +170,34 @@ impl StrideMemory {
         let to = (from..n)
             .find(|&i| self.get(i).t_s + lag_s >= t_after_s)
             .unwrap_or(n);
+        // From the newest sample's counterpart to the last one that fills, and from there to
+        // the sample after the gap: no hole.
+        let hole = (from..to).any(|i| self.get(i).t_s - self.get(i - 1).t_s > max_step_s)
+            || to > from && t_after_s - (self.get(to - 1).t_s + lag_s) > max_step_s;
+        if hole {
+            return None;
+        }
         Some(StrideLag {
             lag_s,
             from,
             to,
             mismatch_rad_s: cost.sqrt(),
         })
+    }
+
+    /// Remembers the samples `from..to` again, `lag_s` later: the samples that filled a gap,
+    /// so that the memory goes on without a hole. Reads each before the push that may forget
+    /// the oldest (every index moves down by one then).
+    pub fn push_filled(&mut self, from: usize, to: usize, lag_s: f64) {
+        let mut forgotten = 0;
+        for i in from..to {
+            let s = *self.get(i - forgotten);
+            forgotten += usize::from(self.len == self.ring.len());
+            self.push(Remembered {
+                t_s: s.t_s + lag_s,
+                ..s
+            });
+        }
     }
 
     /// The remembered sample nearest to `t_s` (binary search on the times).
@@ -201,6 +229,7 @@ mod tests {
     use super::*;
 
     const DT: f64 = 0.005;
+    const MAX_STEP: f64 = 0.05;
 
     /// A gait with a period of `period_s`: a swing rotation in the first 60 % of each stride,
     /// still in the rest; a footfall at 60 % of each.
@@ -231,8 +260,8 @@ mod tests {
                 gyro_rad_s: gait(t_s, period_s),
                 accel_m_s2: Vector3::new(0.0, 0.0, 9.81),
             });
-            let phase = (t_s / period_s).fract();
-            if (phase - 0.6).abs() < 0.5 * DT {
+            // The sample nearest to 60 % of each stride.
+            if ((t_s / period_s).fract() - 0.6).abs() * period_s < 0.5 * DT {
                 m.footfall(t_s);
             }
             k += 1;
@@ -250,14 +279,17 @@ mod tests {
         );
         // 0.25 s lost in the swing after 10.2 s.
         let t_after = 10.2 + 0.25;
-        let lag = m.stride_lag(t_after, &gait(t_after, period)).unwrap();
+        let lag = m
+            .stride_lag(t_after, &gait(t_after, period), MAX_STEP)
+            .unwrap();
         assert!((lag.lag_s - period).abs() < 1.5 * DT, "{lag:?}");
         assert!(lag.mismatch_rad_s < 0.1, "{lag:?}");
-        // The remembered samples stand for the lost ones: after the newest, before the one
-        // after the gap.
+        // The remembered samples stand for the lost ones: from the one after the newest to
+        // the one before the sample after the gap.
+        let newest = m.get(m.len() - 1).t_s;
         let first = m.get(lag.from).t_s + lag.lag_s;
         let last = m.get(lag.to - 1).t_s + lag.lag_s;
-        assert!(first > 10.2 - 1e-9 && first < 10.2 + 1.5 * DT, "{first}");
+        assert!((first - (newest + DT)).abs() < 0.5 * DT, "{first} {newest}");
         assert!(last < t_after && last > t_after - 1.5 * DT, "{last}");
     }
 
@@ -265,9 +297,13 @@ mod tests {
     fn a_gait_that_changed_matches_worse_than_one_that_did_not() {
         let m = walked(1.0, 10.2);
         let t_after = 10.45;
-        let same = m.stride_lag(t_after, &gait(t_after, 1.0)).unwrap();
+        let same = m
+            .stride_lag(t_after, &gait(t_after, 1.0), MAX_STEP)
+            .unwrap();
         // The rate after the gap from another motion (a turn on the spot).
-        let other = m.stride_lag(t_after, &Vector3::new(0.0, 0.0, 4.0)).unwrap();
+        let other = m
+            .stride_lag(t_after, &Vector3::new(0.0, 0.0, 4.0), MAX_STEP)
+            .unwrap();
         assert!(
             other.mismatch_rad_s > 3.0 * same.mismatch_rad_s.max(0.1),
             "{same:?} {other:?}"
@@ -286,11 +322,14 @@ mod tests {
             });
         }
         // No footfall yet.
-        assert_eq!(m.stride_lag(2.2, &Vector3::zeros()), None);
+        assert_eq!(m.stride_lag(2.2, &Vector3::zeros(), MAX_STEP), None);
         let m = walked(1.0, 10.2);
         // More than half a stride lost.
-        assert_eq!(m.stride_lag(10.2 + 0.55, &Vector3::zeros()), None);
-        assert!(m.stride_lag(10.2 + 0.45, &Vector3::zeros()).is_some());
+        assert_eq!(m.stride_lag(10.2 + 0.55, &Vector3::zeros(), MAX_STEP), None);
+        assert!(
+            m.stride_lag(10.2 + 0.45, &Vector3::zeros(), MAX_STEP)
+                .is_some()
+        );
         // The last footfall long ago: the phase is not known any more.
         let mut stopped = walked(1.0, 10.2);
         for k in 1..500 {
@@ -300,9 +339,57 @@ mod tests {
                 accel_m_s2: Vector3::zeros(),
             });
         }
-        assert_eq!(stopped.stride_lag(12.9, &Vector3::zeros()), None);
+        assert_eq!(stopped.stride_lag(12.9, &Vector3::zeros(), MAX_STEP), None);
         stopped.clear();
         assert_eq!(stopped.len(), 0);
+    }
+
+    #[test]
+    fn a_full_memory_finds_the_lag_and_goes_on_after_a_fill_without_a_hole() {
+        // 30 s at 200 Hz: the ring has wrapped.
+        let period = 1.2;
+        let mut m = walked(period, 30.0);
+        assert_eq!(m.len(), MEMORY_SAMPLES);
+        let t_after = 30.0 + 0.3;
+        let lag = m
+            .stride_lag(t_after, &gait(t_after, period), MAX_STEP)
+            .unwrap();
+        assert!((lag.lag_s - period).abs() < 1.5 * DT, "{lag:?}");
+        let filled: Vec<Remembered> = (lag.from..lag.to).map(|i| *m.get(i)).collect();
+        m.push_filled(lag.from, lag.to, lag.lag_s);
+        assert_eq!(m.len(), MEMORY_SAMPLES);
+        // The filled samples are the newest, in order, a stride later, each what it stood for.
+        let k = filled.len();
+        for (j, f) in filled.iter().enumerate() {
+            let got = m.get(MEMORY_SAMPLES - k + j);
+            assert_eq!(got.t_s, f.t_s + lag.lag_s);
+            assert_eq!(got.gyro_rad_s, f.gyro_rad_s);
+            assert!(
+                (got.gyro_rad_s - gait(got.t_s, period)).norm() < 1e-9,
+                "{j}"
+            );
+        }
+        // A hole in the samples that would fill a gap: refused.
+        let walk = walked(period, 10.2);
+        let mut holed = StrideMemory::default();
+        for i in 0..walk.len() {
+            let s = *walk.get(i);
+            // 0.1 s missing one stride before the gap after 10.2 s.
+            if !(9.1..9.2).contains(&s.t_s) {
+                holed.push(s);
+            }
+        }
+        holed.footfalls_s = walk.footfalls_s;
+        let t_after = 10.2 + 0.2;
+        assert_eq!(
+            holed.stride_lag(t_after, &gait(t_after, period), MAX_STEP),
+            None
+        );
+        assert!(
+            holed
+                .stride_lag(t_after, &gait(t_after, period), 0.2)
+                .is_some()
+        );
     }
 
     #[test]

@@ -422,17 +422,26 @@ fn a_stance_split_by_a_short_pause_is_one_stance() {
 #[test]
 fn an_estimate_says_its_events_once_in_one_wording() {
     let mut e = Estimate::default();
-    assert_eq!(e.notices(0.16).count(), 0);
+    assert_eq!(e.notices().count(), 0);
     e.gap_s = Some(0.1);
+    e.gap_crossing = Some(GapCrossing::Bridged);
     e.velocity_reset = true;
-    let said: Vec<String> = e.notices(0.16).map(|n| n.to_string()).collect();
+    let said: Vec<String> = e.notices().map(|n| n.to_string()).collect();
     assert_eq!(said.len(), 2);
     assert_eq!(said[0], "gap of 0.100 s in the data; bridged by one step");
     assert!(said[1].ends_with("velocity reset"), "{}", said[1]);
-    e.gap_s = Some(10.0);
+    e.gap_s = Some(0.3);
+    e.gap_crossing = Some(GapCrossing::Filled);
     e.velocity_reset = false;
+    let said: Vec<String> = e.notices().map(|n| n.to_string()).collect();
+    assert_eq!(
+        said,
+        ["gap of 0.300 s in the data; filled with the same phase of the stride before"]
+    );
+    e.gap_s = Some(10.0);
+    e.gap_crossing = Some(GapCrossing::NewSegment);
     e.replaced_first_t_s = Some(1e9);
-    let said: Vec<String> = e.notices(0.16).map(|n| n.to_string()).collect();
+    let said: Vec<String> = e.notices().map(|n| n.to_string()).collect();
     assert!(
         said[0].ends_with("a new segment starts here"),
         "{}",

@@ -260,8 +260,10 @@ pub struct Estimate {
     /// An axis of this sample is at the rail of its range (probably clipped).
     pub clipped: bool,
     /// Length of the gap before this sample, s, when the step was longer than
-    /// `estimator.max_dt_s` (a new segment starts here).
+    /// `estimator.max_dt_s`, and how it was crossed.
     pub gap_s: Option<f64>,
+    /// How the gap before this sample was crossed (with `gap_s`).
+    pub gap_crossing: Option<GapCrossing>,
     /// Set when the state failed the health check on this sample and the last good state was
     /// restored (the estimate shows the restored state).
     pub health_fault: Option<HealthFault>,
@@ -311,6 +313,7 @@ impl Default for Estimate {
             velocity_reset: false,
             heading_reacquired: None,
             gap_s: None,
+            gap_crossing: None,
             detector_statistic: f64::NAN,
             converged: false,
             zupt: None,
@@ -332,6 +335,19 @@ pub struct HeadingRefused {
     pub sd_rad: f64,
 }
 
+/// How a gap in the data (a step longer than `estimator.max_dt_s`) was crossed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GapCrossing {
+    /// Integrated as one step on the rates and forces on both sides (up to
+    /// `estimator.max_bridge_s`).
+    Bridged,
+    /// Filled with the samples of the same phase one stride earlier (up to
+    /// `estimator.max_fill_s`).
+    Filled,
+    /// Nothing integrated over it: a new segment starts.
+    NewSegment,
+}
+
 /// Something an estimate reports that a log should say, once per event (see
 /// [`Estimate::notices`]): the offline runner and the daemon print the same words.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -340,8 +356,8 @@ pub enum Notice {
     Gap {
         /// Its length, s.
         gap_s: f64,
-        /// Integrated as one step (not longer than `estimator.max_bridge_s`).
-        bridged: bool,
+        /// How it was crossed.
+        crossing: GapCrossing,
     },
     /// The state failed the health check and an earlier one was restored.
     HealthFault(HealthFault),
@@ -357,13 +373,13 @@ pub enum Notice {
 impl std::fmt::Display for Notice {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match *self {
-            Notice::Gap { gap_s, bridged } => write!(
+            Notice::Gap { gap_s, crossing } => write!(
                 f,
                 "gap of {gap_s:.3} s in the data; {}",
-                if bridged {
-                    "bridged by one step"
-                } else {
-                    "a new segment starts here"
+                match crossing {
+                    GapCrossing::Bridged => "bridged by one step",
+                    GapCrossing::Filled => "filled with the same phase of the stride before",
+                    GapCrossing::NewSegment => "a new segment starts here",
                 }
             ),
             Notice::HealthFault(fault) => write!(
@@ -391,13 +407,12 @@ impl std::fmt::Display for Notice {
 }
 
 impl Estimate {
-    /// What this sample's estimate reports that a log should say; `max_bridge_s` is the
-    /// configuration's `estimator.max_bridge_s` (whether a gap was bridged).
-    pub fn notices(&self, max_bridge_s: f64) -> impl Iterator<Item = Notice> {
-        let gap = self.gap_s.map(|gap_s| Notice::Gap {
-            gap_s,
-            bridged: gap_s <= max_bridge_s,
-        });
+    /// What this sample's estimate reports that a log should say.
+    pub fn notices(&self) -> impl Iterator<Item = Notice> {
+        let gap = self
+            .gap_s
+            .zip(self.gap_crossing)
+            .map(|(gap_s, crossing)| Notice::Gap { gap_s, crossing });
         gap.into_iter()
             .chain(self.health_fault.map(Notice::HealthFault))
             .chain(self.velocity_reset.then_some(Notice::VelocityReset))
