@@ -42,9 +42,9 @@ impl Pipeline {
         });
     }
 
-    /// Judges the step from the previous sample (time `w.0`, rate `w.1`, force `f.0`) to this
-    /// one (time `t_clock`, `w.2`, `f.1`) and widens the covariance of a gap; counts and reports
-    /// it.
+    /// Judges the step from the previous sample (time `t_prev`, rate `w_prev`, force `f.0`) to
+    /// this one (time `t_clock`, rate `w_now`, force `f.1`); bridges, fills or widens the
+    /// covariance of a gap, and counts and reports it.
     pub(super) fn cross_gap(
         &mut self,
         eskf: &mut Box<Eskf>,
@@ -97,9 +97,7 @@ impl Pipeline {
         eskf.widen_after_gap(dt, v_max * v_max);
         Gap::NewSegment
     }
-}
 
-impl Pipeline {
     /// Fills a gap from `t_prev_s` to `t_after_s` (rate `gyro_after`) with the remembered
     /// samples one stride earlier, when the rates around the gap match them: propagates the
     /// filter through them and widens its attitude and velocity variance by
