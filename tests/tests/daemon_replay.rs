@@ -2,7 +2,9 @@
 //! [`Producer`], read back with [`Subscriber`]s.
 //!
 //! - `replay_matches_offline_run_sample_by_sample`: the exp36 log at full speed with the lossless
-//!   policy gives exactly the estimates of the offline `run_log`, with no sample lost.
+//!   policy gives exactly the estimates of the offline `run_log`, with no sample lost;
+//!   `a_gap_filled_from_the_stride_before_is_the_same_through_the_daemon` the same with 0.3 s cut
+//!   out of a swing.
 //! - `bad_samples_over_ipc_are_rejected_and_counted`: NaN, time going backwards, a duplicate and a
 //!   late `seq` are refused and counted in `Diagnostics`; a second daemon on the domain is
 //!   refused.
@@ -79,23 +81,53 @@ fn diagnostics_at_end(sub: &Subscriber<Diagnostics>) -> Diagnostics {
 fn replay_matches_offline_run_sample_by_sample() {
     let _one = one_daemon_at_a_time();
     let imu_path: PathBuf = manifest().join("data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let log = read_imu_csv(&imu_path, &ImuCsvOptions::default()).unwrap();
+    let (offline, counters, report) = replay_and_compare(&log, "test_daemon_replay");
+    // The walk is long enough for the flag to rise (the estimate has absorbed 95 % of an error
+    // in the rest-mean bias): the comparison covered both states.
+    assert!(offline.iter().any(|e| e.converged) && !offline[0].converged);
+    assert_eq!(counters.gaps, 0);
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+}
+
+#[test]
+fn a_gap_filled_from_the_stride_before_is_the_same_through_the_daemon() {
+    // 0.3 s cut out of a swing (issue 9; `estimator.max_fill_s`): the daemon fills it from its
+    // own memory of the stride before, exactly as the offline run does.
+    let _one = one_daemon_at_a_time();
+    let imu_path: PathBuf = manifest().join("data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let mut log = read_imu_csv(&imu_path, &ImuCsvOptions::default()).unwrap();
+    log.rows.drain(9000..9060);
+    let (_, counters, _) = replay_and_compare(&log, "test_daemon_replay_gap");
+    assert_eq!((counters.gaps, counters.gaps_filled), (1, 1));
+}
+
+/// Runs `log` offline and through an in-process daemon on domain `domain_name` (lossless, at
+/// full speed) and checks that every published attitude equals the offline estimate of its
+/// sample, with nothing lost. Returns the offline estimates and counters and the daemon's report.
+fn replay_and_compare(
+    log: &corridor_shared::imu_csv::ImuLog,
+    domain_name: &str,
+) -> (
+    Vec<Estimate>,
+    corridor_service::core::Counters,
+    DaemonReport,
+) {
     let cfg = config();
     let aid = heading_aid(&cfg, None).unwrap();
-    let log = read_imu_csv(&imu_path, &ImuCsvOptions::default()).unwrap();
     let mut offline: Vec<Estimate> = Vec::with_capacity(log.rows.len());
-    let outcome = run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+    let outcome = run_log(log, &cfg, &aid, &BiasInjection::default(), |_, e| {
         offline.push(*e)
     });
     assert!(outcome.refused.is_empty());
     assert_eq!(offline.len(), log.rows.len());
 
-    let domain = Domain::new("test_daemon_replay").unwrap();
+    let domain = Domain::new(domain_name).unwrap();
     // No accounting file of an earlier run (counters, output seq continue across daemon lives).
     let _ = std::fs::remove_file(domain.daemon_state_path());
     let mut dcfg = DaemonConfig::new(domain.clone(), cfg, aid);
     dcfg.delivery = Delivery::Lossless;
     let daemon = Running::start(dcfg);
-
     let attitude = Subscriber::<AttitudeSample>::open(&domain, "test-attitude", WAIT).unwrap();
     let diagnostics = Subscriber::<Diagnostics>::open(&domain, "test-diagnostics", WAIT).unwrap();
 
@@ -170,10 +202,6 @@ fn replay_matches_offline_run_sample_by_sample() {
             "convergence flag at sample {i}"
         );
     }
-    // The walk is long enough for the flag to rise (the estimate has absorbed 95 % of an error
-    // in the rest-mean bias): the comparison above covered both states.
-    assert!(offline.iter().any(|e| e.converged) && !offline[0].converged);
-
     let d = diagnostics_at_end(&diagnostics);
     assert_eq!(d.received, offline.len() as u64 + 1);
     assert_eq!(d.accepted, offline.len() as u64);
@@ -192,7 +220,7 @@ fn replay_matches_offline_run_sample_by_sample() {
     let report = daemon.stop();
     assert_eq!(report.streams_finished, 1);
     assert_eq!(report.diagnostics.accepted, offline.len() as u64);
-    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    (offline, outcome.counters, report)
 }
 
 #[test]
