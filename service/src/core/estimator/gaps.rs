@@ -9,9 +9,10 @@ use super::*;
 /// Largest RMS difference between the rates around a gap and those one stride earlier for the
 /// stride before to stand in for the lost samples, rad/s. Measured without footprints
 /// (`docs/experiments/stride-template.py`: 0.2 and 0.4 s taken out of the 16 gdins walks at 40
-/// places each, the rotation over the gap against the remembered stride's): up to a mismatch of
-/// 2.5 rad/s the stride before turns the foot closer to the real rotation than no rotation at all
-/// (what a new segment integrates) on 85–95 % of the cuts in each band, from 2.5 to 3.5 on 53–73 %.
+/// places each, the rotation over the gap against the remembered stride's): in each 0.5 rad/s
+/// band of the mismatch up to 2.5 rad/s the stride before turns the foot closer to the real
+/// rotation than no rotation at all (what a new segment integrates) on 76–95 % of the cuts, from
+/// 2.5 to 3.5 on 53–73 %, beyond on 52–62 %.
 const FILL_MAX_MISMATCH_RAD_S: f64 = 2.5;
 
 /// The rotation and the velocity change of a filled gap are taken as known to this fraction:
