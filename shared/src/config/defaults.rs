@@ -71,7 +71,8 @@ pub const ESTIMATOR_MAX_DT_S: f64 = 0.05;
 /// +0.16 / +8.59 (23) against +0.00 / +2.11 (13); 0.2 s +0.27 / +10.43 (26) against +0.08 /
 /// +34.21 (19); 0.3 s +0.34 / +13.79 (28) against +0.62 / +29.00 (31). So the 0.15 s cut, the
 /// longest measured at which the bridge is better on all three (it leaves a step of 0.155 s:
-/// 0.16). Chosen on the footprints of the whole suite, said so.
+/// 0.16). Chosen on the footprints of the whole suite, said so. Measured again in session 17
+/// (`configs/gdins.toml`): the bridge keeps the better median and count up to 0.15 s.
 pub const ESTIMATOR_MAX_BRIDGE_S: f64 = 0.16;
 
 /// `estimator.max_fill_s`: a gap longer than `max_bridge_s` up to this long (and within half the
