@@ -61,4 +61,6 @@ for name, imu, truth, sh in recs:
 for length in lengths:
     d = [v - b for (L, b, v) in res if L == length and v is not None]
     print(f"gap {length} s: median {statistics.median(d):+.2f}, worst {max(d):+.2f} % of path; "
-          f"{sum(x > 0.1 for x in d)} of {len(d)} cuts worse by more than 0.1")
+          f"{sum(x > 0.1 for x in d)} of {len(d)} cuts worse by more than 0.1 "
+          f"(by more than 1: {sum(x > 1 for x in d)}, 3: {sum(x > 3 for x in d)}; "
+          f"mean {statistics.mean(d):+.2f})")

@@ -10,8 +10,8 @@ from a plain |ω| < 0.6 rad/s footfall list), the lag whose remembered rates bes
 rates before the gap and the one after it (RMS difference: the "mismatch"). Prints, per mismatch
 band, on how many cuts the remembered stride's rotation over the gap is closer to the real one
 than the real one is to no rotation at all (what a new segment loses), and the median of both
-angles; and the median error relative to the rotation. The estimator's refusal above 3.5 rad/s
-and the σ of a quarter of the filled rotation (`FILL_MAX_MISMATCH_RAD_S`, `FILL_RELATIVE_SD` in
+angles; and the median error relative to the rotation. The estimator's refusal above 2.5 rad/s
+and the σ of a fifth of the filled rotation (`FILL_MAX_MISMATCH_RAD_S`, `FILL_RELATIVE_SD` in
 `service/src/core/estimator/gaps.rs`) come from this table.
 """
 import glob, os, random, sys

@@ -1,7 +1,9 @@
 //! Time gaps (issue 9 item 4, issue 10): a step longer than `estimator.max_dt_s` starts a new
 //! segment instead of being integrated as one long step; a gap of a few lost samples (up to
-//! `estimator.max_bridge_s`) is bridged by one step.
+//! `estimator.max_bridge_s`) is bridged by one step; a gap of part of a stride (up to
+//! `estimator.max_fill_s`) is filled from the stride before.
 
+use corridor_service::core::GapCrossing;
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::Config;
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
@@ -150,14 +152,36 @@ fn a_longer_gap_in_a_swing_is_filled_from_the_stride_before() {
     let aid = heading_aid(&cfg, None).unwrap();
     let attitudes = |log: &ImuLog, cfg: &Config| {
         let mut out: Vec<(f64, UnitQuaternion<f64>)> = Vec::new();
+        let mut said: Vec<(GapCrossing, String)> = Vec::new();
         let c = run_log(log, cfg, &aid, &BiasInjection::default(), |_, e| {
             let [w, i, j, k] = e.nav_from_body;
             out.push((
                 e.t_s,
                 UnitQuaternion::from_quaternion(Quaternion::new(w, i, j, k)),
             ));
+            if let Some(crossing) = e.gap_crossing {
+                said.extend(e.notices().map(|n| (crossing, n.to_string())));
+            }
         })
         .counters;
+        // The estimate after the gap says how it was crossed, once.
+        if c.gaps == 1 {
+            let want = if c.gaps_filled == 1 {
+                (
+                    GapCrossing::Filled,
+                    "filled with the same phase of the stride before",
+                )
+            } else {
+                (GapCrossing::NewSegment, "a new segment starts here")
+            };
+            assert_eq!(said.len(), 1, "{said:?}");
+            assert!(
+                said[0].0 == want.0 && said[0].1.ends_with(want.1),
+                "{said:?}"
+            );
+        } else {
+            assert!(said.is_empty(), "{said:?}");
+        }
         (out, c)
     };
     let (clean, _) = attitudes(&log, &cfg);

@@ -60,7 +60,8 @@ pub const ESTIMATOR_MODE: Mode = Mode::Eskf;
 /// `estimator.converged_unabsorbed`: 95 % of a start bias error absorbed.
 pub const ESTIMATOR_CONVERGED_UNABSORBED: f64 = 0.05;
 
-/// `estimator.max_dt_s`: a longer step is a gap (bridged up to `max_bridge_s`, else a new segment), s.
+/// `estimator.max_dt_s`: a longer step is a gap (bridged up to `max_bridge_s`, filled from the
+/// stride before up to `max_fill_s`, else a new segment), s.
 pub const ESTIMATOR_MAX_DT_S: f64 = 0.05;
 
 /// `estimator.max_bridge_s`: a gap up to this long is bridged (one step with the rates and
@@ -72,7 +73,8 @@ pub const ESTIMATOR_MAX_DT_S: f64 = 0.05;
 /// +34.21 (19); 0.3 s +0.34 / +13.79 (28) against +0.62 / +29.00 (31). So the 0.15 s cut, the
 /// longest measured at which the bridge is better on all three (it leaves a step of 0.155 s:
 /// 0.16). Chosen on the footprints of the whole suite, said so. Measured again in session 17
-/// (`configs/gdins.toml`): the bridge keeps the better median and count up to 0.15 s.
+/// (`configs/gdins.toml`): the bridge keeps the better median and count up to 0.15 s, but its
+/// worst case is now worse than a new segment's at 0.1 s (+8.44 against +5.99).
 pub const ESTIMATOR_MAX_BRIDGE_S: f64 = 0.16;
 
 /// `estimator.max_fill_s`: a gap longer than `max_bridge_s` up to this long (and within half the

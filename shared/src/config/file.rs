@@ -105,7 +105,8 @@ pub struct EstimatorFile {
     pub max_dt_s: Option<f64>,
     /// A gap up to this long is bridged: integrated as one step on the rates and forces on
     /// both sides of it, with the attitude and velocity variance that interpolation leaves; a
-    /// longer one starts a new segment (default 0.16 s; 0: every gap is a new segment).
+    /// longer one is filled (`max_fill_s`) or starts a new segment (default 0.16 s; 0: none is
+    /// bridged).
     pub max_bridge_s: Option<f64>,
     /// A longer gap up to this long, within half a stride, is filled with the samples of the
     /// same phase one stride earlier when the rates around it match them (default 0.45 s;

@@ -458,6 +458,9 @@ impl Pipeline {
         let (t_prev, w_prev, f_prev) = match gap {
             Gap::NewSegment => {
                 self.memory.clear();
+                if self.stance_edge == StanceEdge::Began {
+                    self.memory.footfall(t_clock);
+                }
                 self.remember(t_clock, w, f);
                 self.fill_output(eskf);
                 return;

@@ -393,6 +393,28 @@ mod tests {
     }
 
     #[test]
+    fn filled_samples_are_remembered_in_order_whether_or_not_the_ring_fills_up_meanwhile() {
+        let period = 1.0;
+        // Not full before or after; full only part of the way through the fill.
+        for until_s in [5.0, (MEMORY_SAMPLES - 20) as f64 * DT] {
+            let mut m = walked(period, until_s);
+            let t_after = until_s + 0.3;
+            let lag = m
+                .stride_lag(t_after, &gait(t_after, period), MAX_STEP)
+                .unwrap();
+            let filled: Vec<Remembered> = (lag.from..lag.to).map(|i| *m.get(i)).collect();
+            let (len, k) = (m.len(), filled.len());
+            m.push_filled(lag.from, lag.to, lag.lag_s);
+            assert_eq!(m.len(), (len + k).min(MEMORY_SAMPLES), "{until_s}");
+            for (j, f) in filled.iter().enumerate() {
+                let got = m.get(m.len() - k + j);
+                assert_eq!(got.t_s, f.t_s + lag.lag_s, "{until_s} {j}");
+                assert_eq!(got.gyro_rad_s, f.gyro_rad_s, "{until_s} {j}");
+            }
+        }
+    }
+
+    #[test]
     fn the_memory_keeps_the_newest_samples() {
         let mut m = StrideMemory::default();
         let n = MEMORY_SAMPLES + 952;

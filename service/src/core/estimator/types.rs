@@ -170,12 +170,13 @@ pub struct Counters {
     /// since the last stance) and reset the velocity first.
     pub velocity_resets: u64,
     /// Steps longer than `estimator.max_dt_s`: up to `estimator.max_bridge_s` bridged (one step
-    /// across the gap, covariance widened by what the interpolation misses), longer ones start a
+    /// across the gap, covariance widened by what the interpolation misses), longer ones up to
+    /// `estimator.max_fill_s` filled from the stride before when it matches, the others start a
     /// new segment (nothing integrated over the gap, velocity and attitude covariance widened).
     pub gaps: u64,
     /// Of the gaps, those bridged.
     pub gaps_bridged: u64,
-    /// Of them, filled from the stride before (`estimator.max_fill_s`).
+    /// Of the gaps, those filled from the stride before (`estimator.max_fill_s`).
     pub gaps_filled: u64,
     /// Stances since alignment.
     pub stances: u64,
