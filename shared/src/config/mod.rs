@@ -360,27 +360,20 @@ mod tests {
             assert!(err.contains(v) && err.contains("2..=100"), "{err}");
         }
 
-        for v in ["-0.1", "2.0", "nan"] {
-            let f = ConfigFile::parse(
-                &format!("[estimator]\nmax_bridge_s = {v}\n"),
-                Path::new("a.toml"),
-            )
-            .unwrap();
-            let err = f.validate().unwrap_err().to_string();
-            assert!(err.contains("estimator.max_bridge_s"), "{err}");
-        }
-
-        for v in ["-0.1", "1.5", "nan"] {
-            let f = ConfigFile::parse(
-                &format!("[estimator]\nmax_fill_s = {v}\n"),
-                Path::new("a.toml"),
-            )
-            .unwrap();
-            let err = f.validate().unwrap_err().to_string();
-            assert!(
-                err.contains("estimator.max_fill_s") && err.contains("[0, 1]"),
-                "{err}"
-            );
+        for (key, values) in [
+            ("max_bridge_s", ["-0.1", "2.0", "nan"]),
+            ("max_fill_s", ["-0.1", "1.5", "nan"]),
+        ] {
+            for v in values {
+                let f =
+                    ConfigFile::parse(&format!("[estimator]\n{key} = {v}\n"), Path::new("a.toml"))
+                        .unwrap();
+                let err = f.validate().unwrap_err().to_string();
+                assert!(
+                    err.contains(&format!("estimator.{key}")) && err.contains("[0, 1]"),
+                    "{err}"
+                );
+            }
         }
 
         let f = ConfigFile::parse("[detector]\nwindow = 0\n", Path::new("a.toml")).unwrap();

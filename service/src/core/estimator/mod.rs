@@ -22,9 +22,10 @@
 //! takes and gives (samples, estimates, counters, warm start); `alignment.rs` the initial rest
 //! (or first stance) that starts the filter, and a warm start; `observations.rs` what happens
 //! once per stance (calibration and heading observations); `association.rs` the weighted
-//! association with the dominant directions; `reacquire.rs` a heading lost beyond the
-//! association's reach, and the way back; `rest.rs` the rest sums; `gaps.rs` a step longer
-//! than `estimator.max_dt_s` (bridged, filled from the stride before, or a new segment);
+//! association with the dominant directions; `navigation.rs` one sample's strapdown step and
+//! stance updates; `reacquire.rs` a heading lost beyond the association's reach, and the way
+//! back; `rest.rs` the rest sums; `gaps.rs` a step longer than `estimator.max_dt_s` (bridged,
+//! filled from the stride before, or a new segment);
 //! `stride_memory.rs` the last strides' samples and footfalls that fill one; `recovery.rs`
 //! what it does when the state or the input goes bad (health check, velocity reset, a first
 //! time stamp that was an outlier); `tests.rs` its unit tests.
@@ -32,6 +33,7 @@
 mod alignment;
 mod association;
 mod gaps;
+mod navigation;
 mod observations;
 mod reacquire;
 mod recovery;
@@ -567,140 +569,6 @@ impl Pipeline {
                 )
             }
             BiasFilter::RotationAware { kf, .. } => (kf.b_rad_s, kf.sd(), Some(kf.unabsorbed)),
-        }
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn navigate(
-        &mut self,
-        eskf: &mut Box<Eskf>,
-        spare: &mut Box<Eskf>,
-        t_s: f64,
-        dt: f64,
-        w_avg: &Vector3<f64>,
-        f_avg: &Vector3<f64>,
-        f_now: &Vector3<f64>,
-        stance: bool,
-        stance_age_s: f64,
-    ) {
-        let omega = self.propagate(eskf, spare, dt, w_avg, f_avg);
-        let clip_var = (self.cfg.eskf.clipped_rate_sd_rad_s * dt).powi(2);
-        for (k, &c) in self.clipped_gyro_axes.iter().enumerate() {
-            if c && clip_var > 0.0 {
-                eskf.widen_attitude_about(&Vector3::ith(k, 1.0), clip_var);
-            }
-        }
-        if stance {
-            // A foot that rolls about its heel or toe moves the sensor at the lever arm times the
-            // rotation rate: at the edges of a stance the zero velocity is that much less sure.
-            let arm = self.cfg.eskf.zupt_lever_arm_m * omega.norm();
-            let sd = self.cfg.eskf.zupt_sd_m_s.get().hypot(arm);
-            // ... and, rolling over its heel, its ball or the edge of its sole, at its height
-            // above the floor times the horizontal rate (ω × h·ẑ; no mounting yaw needed).
-            let h = self.cfg.eskf.zupt_rolling_height_m;
-            let v = if h > 0.0 {
-                rolling_velocity(&eskf.nav_from_body, &omega, h)
-            } else {
-                Vector3::zeros()
-            };
-            // A velocity far beyond what the filter allows (a burst of garbage samples since the
-            // last stance that the health check did not catch) would turn the attitude and the
-            // bias by what only the velocity got wrong: it is reset instead, as after a gap.
-            if eskf.stance_velocity_implausible(&v, sd, VELOCITY_RESET_Z2) {
-                let v_max = self.cfg.max_speed_m_s.get();
-                eskf.reset_velocity(v_max * v_max);
-                // Counted once the step is kept (`step_running`).
-                self.out.velocity_reset = true;
-            }
-            self.out.zupt = Some(eskf.stance_velocity_update(&v, sd));
-            self.counters.zupts += 1;
-        }
-        // Once per stance (footfall): a stance event that began since the last one seen here
-        // (it may have begun while aligning).
-        if stance && self.stances_seen != self.stance_events.count() {
-            self.stances_seen = self.stance_events.count();
-            self.stance_rest.clear();
-            self.stance_obs_done = false;
-            self.resumed_look = false;
-            self.stance_f_sum = (Vector3::zeros(), 0);
-            self.counters.stances += 1;
-        } else if self.stance_edge == StanceEdge::Resumed {
-            // The heading is observed again once the foot has settled after the pause (heel
-            // strike, pause, foot flat): observing only in the first part was measured worse
-            // (exp40 1.67 -> 3.71 %, 3.2-4.1 % under six perturbations of the noise figures
-            // against 1.6-1.8 %; the other walks within 0.03 %). The stride is not observed
-            // again (it was, since the previous footfall).
-            self.stance_obs_done = false;
-            self.resumed_look = true;
-        }
-        if stance {
-            self.stance_f_sum.0 += f_now;
-            self.stance_f_sum.1 += 1;
-            if !self.stance_obs_done && stance_age_s >= self.cfg.heading.obs_delay_s {
-                self.stance_obs_done = true;
-                self.stance_observation(eskf, t_s);
-            }
-            if self.cfg.eskf.zero_rate_updates {
-                self.stance_rest.push(t_s, f_avg, w_avg);
-            }
-        } else if self.was_stance {
-            // The end of an uninterrupted stance: a rest must be uninterrupted, so each part of
-            // a merged stance is tested on its own, at its first pause sample.
-            let min_rest_s = self.cfg.alignment.min_rest_s.get();
-            if let (true, Some(rest)) = (
-                self.cfg.eskf.zero_rate_updates,
-                self.stance_rest.settled_means(min_rest_s),
-            ) {
-                self.fuse_rest(eskf, rest);
-            }
-            self.stance_rest.clear();
-        }
-        self.was_stance = stance;
-    }
-
-    /// One strapdown step of the filter and of the paper and rotation-aware modes' observers,
-    /// on the step's mean rate and force; returns the bias-corrected rate. Propagated into the
-    /// spare buffer, which becomes the running filter: `spare` is left with the state before.
-    fn propagate(
-        &mut self,
-        eskf: &mut Box<Eskf>,
-        spare: &mut Box<Eskf>,
-        dt: f64,
-        w_avg: &Vector3<f64>,
-        f_avg: &Vector3<f64>,
-    ) -> Vector3<f64> {
-        let bias = self.bias_only(eskf);
-        match &mut self.bias {
-            BiasFilter::InEskf => {}
-            BiasFilter::Paper { obs, .. } => {
-                if let Some(o) = obs {
-                    o.propagate(w_avg, dt);
-                }
-            }
-            BiasFilter::RotationAware { obs, .. } => {
-                if let Some(o) = obs {
-                    o.propagate(w_avg, &bias, dt);
-                }
-            }
-        }
-        let omega = eskf.corrected_rate(w_avg, f_avg, &bias);
-        eskf.propagate_into(spare, &omega, f_avg, dt);
-        std::mem::swap(eskf, spare);
-        omega
-    }
-
-    /// At the end of a stance that was a rest (its part before the last `alignment.rest_tail_s`
-    /// lasts `alignment.min_rest_s`): the mean rate over that part observes the gyro bias with
-    /// the σ of the rest-mean prior (√(floor² + spread²), see `rest.rs`), as the initial rest
-    /// does. Counted once the health check has passed (`step_running`).
-    fn fuse_rest(&mut self, eskf: &mut Eskf, rest: RestMeans) {
-        let (mean_f, mean_w, sem) = rest;
-        let floor = self.cfg.eskf.gyro_bias_prior_sd_rad_s.get();
-        let sd = sem.map(|v| v.hypot(floor));
-        match eskf.zero_rate_update(&mean_w, &mean_f, &sd) {
-            Some(Ok(_)) => self.zero_rate_applied = true,
-            Some(Err(_)) => self.counters.zero_rate_refused += 1,
-            None => {}
         }
     }
 
