@@ -5,8 +5,8 @@ sensor's heading: mean ± spread per walk (mm/s) over every bundled gdins walk, 
     python3 docs/experiments/touchdown-residual.py      # from the repository root
 
 A systematic lateral part is a touchdown velocity the model lacks (README, known issues; a 5
-mrad/s vertical gyro bias leaves about 7 mm/s there). A stance's first update is the first
-`zupt` row of innovations.csv more than 0.1 s after the previous one. Needs the release binary
+mrad/s vertical gyro bias leaves about 7 mm/s there). A stance's first update is the `zupt` row
+at the sample whose estimate says `stance_began` (one per footfall). Needs the release binary
 (`cargo build --release -p corridor-service --bin corridor`).
 """
 import csv, glob, math, os, statistics, subprocess, tempfile
@@ -20,15 +20,12 @@ with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, name)
         subprocess.run([binary, "run", "--imu", imu, "--config", config, "--out", out],
                        check=True, capture_output=True)
-        yaw = {r["t_s"]: float(r["yaw_rad"]) for r in csv.DictReader(open(out + "/estimates.csv"))}
-        prev, along, lateral = None, [], []
+        # The heading at each footfall's first sample.
+        yaw = {r["t_s"]: float(r["yaw_rad"])
+               for r in csv.DictReader(open(out + "/estimates.csv")) if r["stance_began"] == "1"}
+        along, lateral = [], []
         for r in csv.DictReader(open(out + "/innovations.csv")):
-            if r["kind"] != "zupt":
-                continue
-            t = float(r["t_s"])
-            first = prev is None or t - prev > 0.1
-            prev = t
-            if not first or r["t_s"] not in yaw:
+            if r["kind"] != "zupt" or r["t_s"] not in yaw:
                 continue
             y, r0, r1 = yaw[r["t_s"]], float(r["r0"]), float(r["r1"])
             along.append(1e3 * (r0 * math.cos(y) + r1 * math.sin(y)))
