@@ -78,6 +78,10 @@ pub struct Summary {
     pub zero_rate_updates: u64,
     /// Rests not fused (see the estimator's counter of the same name).
     pub zero_rate_refused: u64,
+    /// Footfalls the detector missed, updated late (`detector.late_stance_min_s`).
+    pub late_footfalls: u64,
+    /// Late footfalls whose update was not made (see the estimator's counter).
+    pub late_footfalls_dropped: u64,
     /// Footprint evaluation (first-leg alignment), when truth was given.
     pub eval: Option<EvalReport>,
 }
@@ -434,6 +438,8 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         initial_rest_moving_blocks: c.initial_rest_moving_blocks,
         zero_rate_updates: c.zero_rate_updates,
         zero_rate_refused: c.zero_rate_refused,
+        late_footfalls: c.late_footfalls,
+        late_footfalls_dropped: c.late_footfalls_dropped,
         eval,
     };
     let sum_path = staged.stage(opts.out_dir.join("summary.json"));

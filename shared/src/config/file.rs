@@ -165,6 +165,11 @@ pub struct DetectorFile {
     pub adaptive_window_s: Option<f64>,
     /// Largest adaptive threshold (default 10 × `threshold`).
     pub adaptive_max_threshold: Option<f64>,
+    /// A late footfall: a dip of the statistic below the threshold at least this long but
+    /// shorter than `min_stance_s`, with no stance within `merge_gap_s` before or after it, is a
+    /// footfall the detector missed; its quietest sample gets the zero-velocity update,
+    /// `merge_gap_s` late (absent: off).
+    pub late_stance_min_s: Option<f64>,
 }
 
 /// `[eskf]` section: the ZUPT-aided error-state filter.

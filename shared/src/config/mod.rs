@@ -376,6 +376,21 @@ mod tests {
             }
         }
 
+        for v in ["-0.01", "0.05"] {
+            let f = ConfigFile::parse(
+                &format!("[detector]\nlate_stance_min_s = {v}\n"),
+                Path::new("a.toml"),
+            )
+            .unwrap();
+            let err = f.validate().unwrap_err().to_string();
+            assert!(
+                err.contains("detector.late_stance_min_s")
+                    && err.contains(v)
+                    && err.contains("detector.min_stance_s]"),
+                "{err}"
+            );
+        }
+
         let f = ConfigFile::parse("[detector]\nwindow = 0\n", Path::new("a.toml")).unwrap();
         assert!(
             f.validate()

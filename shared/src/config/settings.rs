@@ -116,6 +116,8 @@ pub struct DetectorConfig {
     pub adaptive_window_s: Positive,
     /// Largest adaptive threshold.
     pub adaptive_max_threshold: Positive,
+    /// Shortest dip taken as a late footfall (off when `None`).
+    pub late_stance_min_s: Option<Positive>,
 }
 
 /// Validated `[eskf]`.

@@ -372,6 +372,19 @@ impl ConfigFile {
                         DETECTOR_ADAPTIVE_MAX_FACTOR * d.threshold.unwrap_or(DETECTOR_THRESHOLD),
                     ),
                 )?,
+                late_stance_min_s: d
+                    .late_stance_min_s
+                    .map(|v| {
+                        // A dip as long as a stance is a stance: longer would never fire.
+                        Positive::in_range(
+                            "detector.late_stance_min_s",
+                            v,
+                            0.0,
+                            d.min_stance_s.unwrap_or(DETECTOR_MIN_STANCE_S),
+                            "must be in (0, detector.min_stance_s] s",
+                        )
+                    })
+                    .transpose()?,
             },
             eskf: EskfConfig {
                 accel_noise_m_s2: Positive::in_range(

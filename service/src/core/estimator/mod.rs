@@ -26,13 +26,16 @@
 //! stance updates; `reacquire.rs` a heading lost beyond the association's reach, and the way
 //! back; `rest.rs` the rest sums; `gaps.rs` a step longer than `estimator.max_dt_s` (bridged,
 //! filled from the stride before, or a new segment);
-//! `stride_memory.rs` the last strides' samples and footfalls that fill one; `recovery.rs`
+//! `stride_memory.rs` the last strides' samples and footfalls that fill one;
+//! `late_footfall.rs` a footfall the detector missed (a short dip of its statistic with no
+//! stance around it), updated late from the stride memory; `recovery.rs`
 //! what it does when the state or the input goes bad (health check, velocity reset, a first
 //! time stamp that was an outlier); `tests.rs` its unit tests.
 
 mod alignment;
 mod association;
 mod gaps;
+mod late_footfall;
 mod navigation;
 mod observations;
 mod reacquire;
@@ -55,7 +58,8 @@ use rest::{RestMeans, RestSums};
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::clock::SampleClock;
 use super::eskf::{
-    BiasStates, Eskf, EskfInit, EskfNoise, ExtensionEstimates, ExtensionSd, Extensions, max_row_sum,
+    BiasStates, Eskf, EskfInit, EskfNoise, ExtensionEstimates, ExtensionSd, Extensions, Innovation,
+    max_row_sum,
 };
 use super::heading::{FootprintLine, HeadingAid, Rejection, StraightWalk};
 use super::health::{self, HealthLimits, LastGood};
@@ -64,8 +68,8 @@ use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rolling_velocity, rot_z, tilt_from_specific_force,
     wrap_pi, yaw,
 };
-use super::stance::{StanceDetector, StanceEdge, StanceEvents};
-use corridor_shared::config::{BiasPrior, Config, Mode};
+use super::stance::{StanceDecision, StanceDetector, StanceEdge, StanceEvents};
+use corridor_shared::config::{BiasPrior, Config, DetectorConfig, Mode, Positive};
 use corridor_shared::sensor::CLIP_FRACTION;
 
 /// Standard gravity, m/s² (a start without rest: no rest to measure it on).
@@ -171,6 +175,8 @@ struct Pipeline {
     clock: SampleClock,
     /// The last strides' samples and footfalls, to fill a gap in a swing (`stride_memory.rs`).
     memory: stride_memory::StrideMemory,
+    /// Dips of the detector's statistic that may be a missed footfall (`late_footfall.rs`).
+    late: late_footfall::LateFootfall,
     /// The current stance's sums, for the zero-rate update when it turns out to be a rest.
     stance_rest: RestSums,
     /// A rest was fused by a zero-rate update with the current sample (see `step_running`).
@@ -233,6 +239,7 @@ impl Estimator {
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
             memory: stride_memory::StrideMemory::default(),
+            late: late_footfall::LateFootfall::new(&cfg.detector),
             // Without the motion test: a later rest begins with a landing, which the test,
             // anchored on the first block, would take as the reference and leave every quiet
             // block out (the zero-rate update then never came).
@@ -367,6 +374,7 @@ impl Estimator {
         out.replaced_first_t_s = accepted.replaced_first_t_s;
         out.detector_statistic = decision.statistic;
         out.zupt = None;
+        out.late_footfall_t_s = None;
         out.heading = None;
         out.stride = None;
 
@@ -379,15 +387,7 @@ impl Estimator {
         let Stage::Running(eskf) = &mut self.stage else {
             return Ok(&self.p.out); // not reached: aligned just above
         };
-        p.step_running(
-            eskf,
-            s.t_s,
-            prev,
-            &w,
-            &f,
-            decision.stance,
-            decision.stance_age_s,
-        );
+        p.step_running(eskf, s.t_s, prev, (&w, &f), &decision);
         Ok(&self.p.out)
     }
 
@@ -437,17 +437,15 @@ impl Estimator {
 impl Pipeline {
     /// The rest of [`Estimator::step`] once aligned: the segment check, navigation and the
     /// stance observations, the health check, the output.
-    #[allow(clippy::too_many_arguments)]
     fn step_running(
         &mut self,
         eskf: &mut Box<Eskf>,
         t_s: f64,
         prev: Option<(f64, Vector3<f64>, Vector3<f64>)>,
-        w: &Vector3<f64>,
-        f: &Vector3<f64>,
-        stance: bool,
-        stance_age_s: f64,
+        (w, f): (&Vector3<f64>, &Vector3<f64>),
+        decision: &StanceDecision,
     ) {
+        let (stance, stance_age_s) = (decision.stance, decision.stance_age_s);
         if self.good.get().is_none() {
             self.good.save(&((**eskf).clone(), self.bias.clone()));
         }
@@ -460,6 +458,7 @@ impl Pipeline {
         let (t_prev, w_prev, f_prev) = match gap {
             Gap::NewSegment => {
                 self.memory.clear();
+                self.late.drop_pending();
                 if self.stance_edge == StanceEdge::Began {
                     self.memory.footfall(t_clock);
                 }
@@ -482,8 +481,11 @@ impl Pipeline {
             (BiasFilter::InEskf, Some(BiasFilter::InEskf)) => {}
             _ => self.before_bias.save(&self.bias),
         }
+        if self.out.gap_s.is_some() {
+            self.late.drop_pending();
+        }
         let mut before = self.before.take().unwrap_or_else(|| eskf.clone());
-        self.navigate(
+        let omega = self.navigate(
             eskf,
             &mut before,
             t_s,
@@ -513,8 +515,12 @@ impl Pipeline {
         } else if applied {
             self.counters.zero_rate_updates += 1;
         }
-        if !failed {
+        if failed {
+            self.late.drop_pending();
+        } else {
             self.remember(t_clock, w, f);
+            let dip = (decision.raw, stance, decision.statistic);
+            self.follow_dips(eskf, t_clock, dip, &omega);
         }
         self.counters.velocity_resets += u64::from(self.out.velocity_reset);
         self.counters.heading_reacquisitions += u64::from(self.out.heading_reacquired.is_some());

@@ -17,37 +17,11 @@ impl Pipeline {
         f_now: &Vector3<f64>,
         stance: bool,
         stance_age_s: f64,
-    ) {
+    ) -> Vector3<f64> {
         let omega = self.propagate(eskf, spare, dt, w_avg, f_avg);
-        let clip_var = (self.cfg.eskf.clipped_rate_sd_rad_s * dt).powi(2);
-        for (k, &c) in self.clipped_gyro_axes.iter().enumerate() {
-            if c && clip_var > 0.0 {
-                eskf.widen_attitude_about(&Vector3::ith(k, 1.0), clip_var);
-            }
-        }
+        self.widen_clipped(eskf, self.clipped_gyro_axes, dt);
         if stance {
-            // A foot that rolls about its heel or toe moves the sensor at the lever arm times the
-            // rotation rate: at the edges of a stance the zero velocity is that much less sure.
-            let arm = self.cfg.eskf.zupt_lever_arm_m * omega.norm();
-            let sd = self.cfg.eskf.zupt_sd_m_s.get().hypot(arm);
-            // ... and, rolling over its heel, its ball or the edge of its sole, at its height
-            // above the floor times the horizontal rate (ω × h·ẑ; no mounting yaw needed).
-            let h = self.cfg.eskf.zupt_rolling_height_m;
-            let v = if h > 0.0 {
-                rolling_velocity(&eskf.nav_from_body, &omega, h)
-            } else {
-                Vector3::zeros()
-            };
-            // A velocity far beyond what the filter allows (a burst of garbage samples since the
-            // last stance that the health check did not catch) would turn the attitude and the
-            // bias by what only the velocity got wrong: it is reset instead, as after a gap.
-            if eskf.stance_velocity_implausible(&v, sd, VELOCITY_RESET_Z2) {
-                let v_max = self.cfg.max_speed_m_s.get();
-                eskf.reset_velocity(v_max * v_max);
-                // Counted once the step is kept (`step_running`).
-                self.out.velocity_reset = true;
-            }
-            self.out.zupt = Some(eskf.stance_velocity_update(&v, sd));
+            self.out.zupt = self.stance_velocity_update(eskf, &omega, true);
             self.counters.zupts += 1;
         }
         // Once per stance (footfall): a stance event that began since the last one seen here
@@ -91,6 +65,54 @@ impl Pipeline {
             self.stance_rest.clear();
         }
         self.was_stance = stance;
+        omega
+    }
+
+    /// The attitude variance about each gyro axis at its rail grows by the clipped rate's σ
+    /// over the step: the rotation the rail cut off.
+    pub(super) fn widen_clipped(&self, eskf: &mut Eskf, clipped_axes: [bool; 3], dt: f64) {
+        let clip_var = (self.cfg.eskf.clipped_rate_sd_rad_s * dt).powi(2);
+        for (k, &c) in clipped_axes.iter().enumerate() {
+            if c && clip_var > 0.0 {
+                eskf.widen_attitude_about(&Vector3::ith(k, 1.0), clip_var);
+            }
+        }
+    }
+
+    /// The stance velocity update of a sample whose bias-corrected rate is `omega`. A velocity
+    /// beyond what the filter allows is reset first when `may_reset` (and reported), else the
+    /// update is not made (`None`).
+    pub(super) fn stance_velocity_update(
+        &mut self,
+        eskf: &mut Eskf,
+        omega: &Vector3<f64>,
+        may_reset: bool,
+    ) -> Option<Innovation> {
+        // A foot that rolls about its heel or toe moves the sensor at the lever arm times the
+        // rotation rate: at the edges of a stance the zero velocity is that much less sure.
+        let arm = self.cfg.eskf.zupt_lever_arm_m * omega.norm();
+        let sd = self.cfg.eskf.zupt_sd_m_s.get().hypot(arm);
+        // ... and, rolling over its heel, its ball or the edge of its sole, at its height
+        // above the floor times the horizontal rate (ω × h·ẑ; no mounting yaw needed).
+        let h = self.cfg.eskf.zupt_rolling_height_m;
+        let v = if h > 0.0 {
+            rolling_velocity(&eskf.nav_from_body, omega, h)
+        } else {
+            Vector3::zeros()
+        };
+        // A velocity far beyond what the filter allows (a burst of garbage samples since the
+        // last stance that the health check did not catch) would turn the attitude and the
+        // bias by what only the velocity got wrong: it is reset instead, as after a gap.
+        if eskf.stance_velocity_implausible(&v, sd, VELOCITY_RESET_Z2) {
+            if !may_reset {
+                return None;
+            }
+            let v_max = self.cfg.max_speed_m_s.get();
+            eskf.reset_velocity(v_max * v_max);
+            // Counted once the step is kept (`step_running`).
+            self.out.velocity_reset = true;
+        }
+        Some(eskf.stance_velocity_update(&v, sd))
     }
 
     /// One strapdown step of the filter and of the paper and rotation-aware modes' observers,

@@ -1,0 +1,132 @@
+//! Footfalls the stance detector misses in fast gait (issue 9): a dip of its statistic shorter
+//! than `detector.min_stance_s` with no stance around it is a footfall, updated late at its
+//! quietest sample (`detector.late_stance_min_s`).
+
+use corridor_service::eval::EvalOptions;
+use corridor_service::runner::{heading_aid, run_log};
+use corridor_shared::config::{Config, ConfigFile, ConfigOverrides};
+use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn walk(name: &str) -> (ImuLog, Vec<TruthPoint>) {
+    let dir = root().join("tests/data").join(name);
+    (
+        read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap(),
+        read_truth_csv(&dir.join("ground_truth.csv")).unwrap(),
+    )
+}
+
+/// The shipped configuration (start heading 0, as the suite's for both walks here), with the
+/// late footfalls on or off.
+fn config(late: bool) -> Config {
+    let path = root().join("configs/gdins.toml");
+    let mut file = ConfigFile::read(&path).unwrap();
+    assert!(file.detector.late_stance_min_s.is_some(), "shipped on");
+    if !late {
+        file.detector.late_stance_min_s = None;
+    }
+    ConfigOverrides {
+        start_heading_deg: Some(0.0),
+        ..Default::default()
+    }
+    .validate(&file, &path)
+    .unwrap()
+}
+
+struct Run {
+    rms_pct: f64,
+    late_at_s: Vec<f64>,
+    stance_ends_s: Vec<f64>,
+    positions: Vec<[f64; 3]>,
+    dropped: u64,
+}
+
+fn run(log: &ImuLog, truth: &[TruthPoint], cfg: &Config) -> Run {
+    let (mut late_at_s, mut stance_ends_s, mut positions) = (Vec::new(), Vec::new(), Vec::new());
+    let mut was_stance = None;
+    let out = run_log(
+        log,
+        cfg,
+        &heading_aid(cfg, None).unwrap(),
+        &BiasInjection::default(),
+        |_, e| {
+            late_at_s.extend(e.late_footfall_t_s);
+            if let (Some(t), false) = (was_stance, e.stance) {
+                stance_ends_s.push(t);
+            }
+            was_stance = e.stance.then_some(e.t_s);
+            positions.push(e.p_m);
+        },
+    );
+    assert_eq!(out.counters.late_footfalls, late_at_s.len() as u64);
+    let rms_pct = out
+        .trace
+        .evaluate(truth, &EvalOptions::default())
+        .unwrap()
+        .rms_error_pct_of_path
+        .unwrap();
+    Run {
+        rms_pct,
+        late_at_s,
+        stance_ends_s,
+        positions,
+        dropped: out.counters.late_footfalls_dropped,
+    }
+}
+
+#[test]
+fn fast_gait_footfalls_the_detector_misses_are_updated_late_where_the_footprints_are() {
+    let (log, truth) = walk("gdins_exp38_zigzag_extreme");
+    let off = run(&log, &truth, &config(false));
+    let on = run(&log, &truth, &config(true));
+    assert!(off.late_at_s.is_empty());
+    assert!(
+        on.late_at_s.len() >= 2,
+        "late footfalls: {:?}",
+        on.late_at_s
+    );
+    assert_eq!(on.dropped, 0);
+    // Each one is a listed footprint that no detected stance ends near (the listed time is the
+    // end of its stance; the quietest sample lies within the stance, before it).
+    for &t in &on.late_at_s {
+        let listed = truth
+            .iter()
+            .map(|p| p.t_s)
+            .min_by(|a, b| (a - t).abs().total_cmp(&(b - t).abs()))
+            .unwrap();
+        assert!(
+            (listed - t).abs() < 0.15,
+            "late footfall at {t:.3} s, nearest footprint {listed:.3} s"
+        );
+        let nearest_stance_end = on
+            .stance_ends_s
+            .iter()
+            .map(|e| (e - listed).abs())
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            nearest_stance_end > 0.3,
+            "footprint {listed:.3} s: a stance ends {nearest_stance_end:.3} s from it"
+        );
+    }
+    assert!(
+        on.rms_pct < off.rms_pct - 0.05,
+        "footprint RMS {:.3} % with the late footfalls, {:.3} % without",
+        on.rms_pct,
+        off.rms_pct
+    );
+}
+
+#[test]
+fn a_normal_walk_has_no_late_footfall_and_runs_as_without_them() {
+    let (log, truth) = walk("gdins_exp36_corridor_out_and_back");
+    let off = run(&log, &truth, &config(false));
+    let on = run(&log, &truth, &config(true));
+    assert!(on.late_at_s.is_empty(), "{:?}", on.late_at_s);
+    assert_eq!(on.positions, off.positions);
+}
