@@ -106,12 +106,17 @@ impl StanceMatch {
 }
 
 /// Stances as (first, last stance sample) intervals, s, from each sample's "a new stance
-/// begins" and "stance" flags; the last one may still be open.
+/// begins" and "stance" flags; the last one may still be open. A footfall the detector missed
+/// and the estimator updated late is one too, at its quietest sample (it lies after the last
+/// stance: none within `detector.merge_gap_s` of it).
 #[derive(Debug, Default)]
 pub(super) struct StanceIntervals(Vec<(f64, f64)>);
 
 impl StanceIntervals {
-    pub(super) fn push(&mut self, t_s: f64, began: bool, stance: bool) {
+    pub(super) fn push(&mut self, t_s: f64, began: bool, stance: bool, late: Option<f64>) {
+        if let Some(t) = late {
+            self.0.push((t, t));
+        }
         if began {
             self.0.push((t_s, t_s));
         }
@@ -291,7 +296,8 @@ pub(super) struct NisSeries {
 
 impl NisSeries {
     pub(super) fn push(&mut self, e: &crate::core::Estimate) {
-        self.intervals.push(e.t_s, e.stance_began, e.stance);
+        self.intervals
+            .push(e.t_s, e.stance_began, e.stance, e.late_footfall_t_s);
         match &e.zupt {
             Some(z) if !self.in_stance => {
                 self.zupt_first.push(z.nis);

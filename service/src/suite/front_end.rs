@@ -78,7 +78,7 @@ pub fn stance_intervals(rows: &[ImuRow], cfg: &DetectorConfig, max_step_s: f64) 
         let f = Vector3::from(r.accel_m_s2);
         let stance = d.push(r.t_s, &w, &f).stance;
         let began = events.push(r.t_s, stance) == StanceEdge::Began;
-        out.push(r.t_s, began, stance);
+        out.push(r.t_s, began, stance, None);
     }
     out.get().to_vec()
 }
@@ -218,7 +218,9 @@ fn stance_misses_markdown(rows: &[SuiteRow]) -> String {
          is found (a stance ends within ±50 ms of it), found with its end further off (the nearest stance end \
          lies beyond ±50 ms but nearer than half the way to a neighbouring footprint: the footfall was \
          detected, its end placed differently), or missed; a detected stance that is no listed \
-         footprint's nearest by those limits is extra.\n\n\
+         footprint's nearest by those limits is extra. A footfall the detector missed and the \
+         estimator updated late (`detector.late_stance_min_s`, `detector.overdue_stride_factor`) \
+         counts as a stance ending at its quietest sample.\n\n\
          | recording | listed | found | end further off | missed | extra stances | \
          median end offset (detected − listed) |\n|---|---|---|---|---|---|---|\n",
     );

@@ -170,6 +170,10 @@ pub struct DetectorFile {
     /// footfall the detector missed; its quietest sample gets the zero-velocity update,
     /// `merge_gap_s` late (absent: off).
     pub late_stance_min_s: Option<f64>,
+    /// An overdue footfall: when this many stride periods have passed since the last footfall
+    /// without a stance, the quietest sample of the cycle (below the adaptive threshold's cap)
+    /// is a footfall the detector missed, updated late as above (absent: off).
+    pub overdue_stride_factor: Option<f64>,
 }
 
 /// `[eskf]` section: the ZUPT-aided error-state filter.

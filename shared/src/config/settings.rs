@@ -118,6 +118,8 @@ pub struct DetectorConfig {
     pub adaptive_max_threshold: Positive,
     /// Shortest dip taken as a late footfall (off when `None`).
     pub late_stance_min_s: Option<Positive>,
+    /// Stride periods after which a footfall is overdue (off when `None`).
+    pub overdue_stride_factor: Option<Positive>,
 }
 
 /// Validated `[eskf]`.

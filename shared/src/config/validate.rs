@@ -385,6 +385,19 @@ impl ConfigFile {
                         )
                     })
                     .transpose()?,
+                // Earlier than a whole stride period, every footfall would be overdue.
+                overdue_stride_factor: d
+                    .overdue_stride_factor
+                    .map(|v| {
+                        Positive::in_range(
+                            "detector.overdue_stride_factor",
+                            v,
+                            1.1,
+                            5.0,
+                            "must be in [1.1, 5] stride periods",
+                        )
+                    })
+                    .transpose()?,
             },
             eskf: EskfConfig {
                 accel_noise_m_s2: Positive::in_range(

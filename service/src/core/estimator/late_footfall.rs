@@ -1,25 +1,34 @@
-//! A footfall the detector missed, updated late (`detector.late_stance_min_s`).
+//! Footfalls the detector missed, updated late (`detector.late_stance_min_s`,
+//! `detector.overdue_stride_factor`).
 //!
-//! In fast gait the foot never stops rotating: the statistic of some stances dips below the
-//! threshold for less than `detector.min_stance_s`, and the stride runs on to the next footfall
-//! without a zero-velocity update. A dip that short also comes before many ordinary stances
-//! (heel strike, then foot flat), so it cannot be told from one when it happens; what tells it
-//! is that no stance follows: between footfalls the foot swings for at least 0.65 s even in fast
-//! gait, while the parts of one footfall lie within `detector.merge_gap_s` (0.3 s) of each other
-//! (see `DETECTOR_MERGE_GAP_S`). So a dip of at least `late_stance_min_s`, with no stance within
-//! `merge_gap_s` before it and none in the `merge_gap_s` after it, is taken as a footfall, and
-//! its quietest sample gets the stance velocity update then, `merge_gap_s` late: the filter as
-//! it was at that sample (kept while the dip lasted) is updated and propagated again through
-//! the samples since, from the stride memory. What the estimator output in between stays as it
-//! was; the state from then on is as if the update had been made on time.
+//! In fast gait the foot never stops rotating: the statistic of some footfalls dips below the
+//! threshold for less than `detector.min_stance_s`, or not at all, and the stride runs on to the
+//! next footfall without a zero-velocity update. Two kinds are recognised, both only once it is
+//! clear that no stance follows: between footfalls the foot swings for at least 0.65 s even in
+//! fast gait, while the parts of one footfall lie within `detector.merge_gap_s` (0.3 s) of each
+//! other (see `DETECTOR_MERGE_GAP_S`).
+//! - *A short dip*: at least `late_stance_min_s` below the threshold, with no stance within
+//!   `merge_gap_s` before it and none in the `merge_gap_s` after it. (A dip that short also
+//!   comes before many ordinary stances, heel strike then foot flat, so it cannot be told from
+//!   one when it happens.)
+//! - *An overdue footfall*: `overdue_stride_factor` times the stride period (the median of the
+//!   last three intervals between footfalls) after the last footfall, no stance has begun: the
+//!   quietest sample since the last stance (plus `merge_gap_s`) whose statistic is below the
+//!   adaptive threshold's cap is the footfall, if no stance begins within `merge_gap_s` after
+//!   it. Not twice in a row: a stance or a short dip must come between.
 //!
-//! It adds no heading observation and no footfall to the stride bookkeeping (the stride that
-//! ends there runs on to the next stance, as before); it is counted
-//! (`Counters::late_footfalls`). A gap, a health fault or a new segment in between drops it.
+//! The footfall's quietest sample gets the stance velocity update then: the filter as it was at
+//! that sample (kept while it was the quietest) is updated and propagated again through the
+//! samples since, from the stride memory. What the estimator output in between stays as it was;
+//! the state from then on is as if the update had been made on time. It adds no heading
+//! observation and no footfall to the stride bookkeeping (the stride that ends there runs on to
+//! the next stance, as before); it is counted (`Counters::late_footfalls`) and marked on the
+//! estimate (`Estimate::late_footfall_t_s`). A gap, a health fault or a new segment in between
+//! drops it.
 
 use super::*;
 
-/// The filter at the quietest sample of the current dip, and what its update needs.
+/// The filter at a candidate footfall's quietest sample, and what its update needs.
 #[derive(Debug, Clone)]
 pub(super) struct Quietest {
     eskf: Eskf,
@@ -31,102 +40,199 @@ pub(super) struct Quietest {
     statistic: f64,
 }
 
-/// The late-footfall tracker: the current dip and the one waiting for its `merge_gap_s`.
+/// Which candidate a waiting footfall is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Candidate {
+    /// The quietest sample of a short dip.
+    Dip,
+    /// The quietest sample of a stride cycle without a footfall.
+    Overdue,
+}
+
+/// The late-footfall tracker: the current dip, the current cycle's quietest sample, and the
+/// candidate waiting for its `merge_gap_s`.
 #[derive(Debug, Clone)]
 pub(super) struct LateFootfall {
     min_dip_s: Option<f64>,
+    overdue_factor: Option<f64>,
+    /// A cycle's quietest sample must lie below this statistic (the adaptive threshold's cap).
+    quiet_max: f64,
     wait_s: f64,
     /// The last sample that was a stance (sample clock).
     last_stance_s: f64,
+    /// The last four footfalls (stances' first samples and late footfalls), the newest last.
+    footfalls_s: [f64; 4],
+    /// An overdue footfall may be looked for (a stance or a short dip since the last one).
+    armed: bool,
+    /// Overdue candidates only after this time (the last stance or late footfall plus the wait).
+    search_from_s: f64,
     /// Start of the current dip (raw below the threshold, not yet a stance), and its last sample.
     dip: Option<(f64, f64)>,
     /// The current dip's quietest sample (kept without allocating after the first).
-    quietest: LastGood<Quietest>,
-    /// A finished dip waiting for `wait_s` without a stance: the time its wait ends.
-    pending_until_s: Option<f64>,
+    dip_quietest: LastGood<Quietest>,
+    /// The current cycle's quietest sample below `quiet_max`.
+    cycle_quietest: LastGood<Quietest>,
+    /// A candidate waiting: the time its wait ends.
+    pending: Option<(f64, Candidate)>,
 }
 
 impl LateFootfall {
     pub(super) fn new(cfg: &DetectorConfig) -> Self {
         Self {
             min_dip_s: cfg.late_stance_min_s.map(Positive::get),
+            overdue_factor: cfg.overdue_stride_factor.map(Positive::get),
+            quiet_max: match cfg.adaptive_factor {
+                Some(_) => cfg.adaptive_max_threshold.get(),
+                None => cfg.threshold.get(),
+            },
             wait_s: cfg.merge_gap_s,
             last_stance_s: f64::NEG_INFINITY,
+            footfalls_s: [f64::NAN; 4],
+            armed: false,
+            search_from_s: f64::INFINITY,
             dip: None,
-            quietest: LastGood::default(),
-            pending_until_s: None,
+            dip_quietest: LastGood::default(),
+            cycle_quietest: LastGood::default(),
+            pending: None,
         }
     }
 
-    /// Forgets the dip and any footfall waiting (a gap, a fault, a new segment).
+    /// Forgets the dip, the cycle and any footfall waiting (a gap, a fault, a new segment).
     pub(super) fn drop_pending(&mut self) {
         self.dip = None;
-        self.pending_until_s = None;
+        self.pending = None;
+        self.armed = false;
+    }
+
+    fn footfall(&mut self, t_s: f64) {
+        self.footfalls_s = [
+            self.footfalls_s[1],
+            self.footfalls_s[2],
+            self.footfalls_s[3],
+            t_s,
+        ];
+        self.search_from_s = t_s + self.wait_s;
+    }
+
+    /// The stride period: the median of the last three intervals between footfalls.
+    fn period_s(&self) -> Option<f64> {
+        let f = &self.footfalls_s;
+        let mut d = [f[1] - f[0], f[2] - f[1], f[3] - f[2]];
+        d.sort_by(f64::total_cmp);
+        d[1].is_finite().then_some(d[1])
+    }
+}
+
+/// Keeps the filter at a sample in `slot`.
+fn keep(
+    slot: &mut LastGood<Quietest>,
+    eskf: &Eskf,
+    bias: &BiasFilter,
+    at: (f64, f64, Vector3<f64>),
+) {
+    let (t_s, statistic, omega) = at;
+    match slot.get_mut() {
+        Some(q) => {
+            q.eskf.copy_state_from(eskf);
+            q.bias.clone_from(bias);
+            (q.omega, q.t_s, q.statistic) = (omega, t_s, statistic);
+        }
+        None => slot.save(&Quietest {
+            eskf: eskf.clone(),
+            bias: bias.clone(),
+            omega,
+            t_s,
+            statistic,
+        }),
     }
 }
 
 impl Pipeline {
-    /// Follows the dips of the detector's statistic after a kept sample (`raw`: below the
-    /// threshold; `stance`: a stance sample); when a dip's wait ends without a stance, updates
-    /// it late. `omega` is the sample's bias-corrected rate.
-    pub(super) fn follow_dips(
+    /// Follows the footfalls after a kept sample (`raw`: its statistic below the threshold;
+    /// `stance`: a stance sample; `began`: a stance event's first); when a candidate's wait ends
+    /// without a stance, updates it late. `omega` is the sample's bias-corrected rate.
+    pub(super) fn follow_footfalls(
         &mut self,
         eskf: &mut Box<Eskf>,
         t_clock: f64,
-        (raw, stance, statistic): (bool, bool, f64),
+        (raw, stance, began, statistic): (bool, bool, bool, f64),
         omega: &Vector3<f64>,
     ) {
-        let Some(min_dip_s) = self.late.min_dip_s else {
-            return;
-        };
         let late = &mut self.late;
+        if late.min_dip_s.is_none() && late.overdue_factor.is_none() {
+            return;
+        }
         if stance {
             late.last_stance_s = t_clock;
-            late.drop_pending();
+            if began {
+                late.footfall(t_clock);
+            }
+            late.search_from_s = t_clock + late.wait_s;
+            late.armed = true;
+            late.dip = None;
+            late.pending = None;
             return;
         }
-        if raw {
-            let (start, _) = *late.dip.get_or_insert((t_clock, t_clock));
-            late.dip = Some((start, t_clock));
-            // Two dips within the wait are parts of one footfall: the quieter sample of both.
-            let waiting = late.pending_until_s.is_some();
-            let quieter = late
-                .quietest
-                .get()
-                .is_none_or(|q| (!waiting && q.t_s < start) || statistic < q.statistic);
-            if quieter {
-                match late.quietest.get_mut() {
-                    Some(q) => {
-                        q.eskf.copy_state_from(eskf);
-                        q.bias.clone_from(&self.bias);
-                        (q.omega, q.t_s, q.statistic) = (*omega, t_clock, statistic);
-                    }
-                    None => late.quietest.save(&Quietest {
-                        eskf: (**eskf).clone(),
-                        bias: self.bias.clone(),
-                        omega: *omega,
-                        t_s: t_clock,
-                        statistic,
-                    }),
+        let at = (t_clock, statistic, *omega);
+        if let Some(min_dip_s) = late.min_dip_s {
+            if raw {
+                let (start, _) = *late.dip.get_or_insert((t_clock, t_clock));
+                late.dip = Some((start, t_clock));
+                // Two dips within the wait are parts of one footfall: the quieter of both.
+                let waiting = late.pending.is_some_and(|p| p.1 == Candidate::Dip);
+                if late
+                    .dip_quietest
+                    .get()
+                    .is_none_or(|q| (!waiting && q.t_s < start) || statistic < q.statistic)
+                {
+                    keep(&mut late.dip_quietest, eskf, &self.bias, at);
+                }
+            } else if let Some((start, end)) = late.dip.take() {
+                // A dip of `n` samples spans about `n` sample periods.
+                let long_enough = t_clock - start >= min_dip_s;
+                if long_enough && start - late.last_stance_s > late.wait_s {
+                    late.pending = Some((end + late.wait_s, Candidate::Dip));
                 }
             }
-        } else if let Some((start, end)) = late.dip.take() {
-            // A dip of `n` samples spans about `n` sample periods.
-            let long_enough = t_clock - start >= min_dip_s;
-            if long_enough && start - late.last_stance_s > late.wait_s {
-                late.pending_until_s = Some(end + late.wait_s);
+        }
+        if let (Some(factor), true) = (late.overdue_factor, late.armed) {
+            if t_clock >= late.search_from_s
+                && statistic < late.quiet_max
+                && late
+                    .cycle_quietest
+                    .get()
+                    .is_none_or(|q| q.t_s < late.search_from_s || statistic < q.statistic)
+            {
+                keep(&mut late.cycle_quietest, eskf, &self.bias, at);
+            }
+            let due = late
+                .period_s()
+                .is_some_and(|p| t_clock - late.footfalls_s[3] >= factor * p);
+            if due && late.pending.is_none() {
+                late.armed = false;
+                if let Some(q) = late.cycle_quietest.get()
+                    && q.t_s >= late.search_from_s
+                {
+                    late.pending = Some((q.t_s + late.wait_s, Candidate::Overdue));
+                }
             }
         }
-        if late.pending_until_s.is_some_and(|until| t_clock >= until) {
-            late.pending_until_s = None;
-            self.update_late(eskf);
+        if let Some((until, candidate)) = late.pending
+            && t_clock >= until
+        {
+            late.pending = None;
+            self.update_late(eskf, candidate);
         }
     }
 
-    /// The late update: the filter at the dip's quietest sample, its stance velocity update, and
-    /// the samples since propagated again from the stride memory.
-    fn update_late(&mut self, eskf: &mut Box<Eskf>) {
-        let Some(q) = self.late.quietest.get() else {
+    /// The late update: the filter at the candidate's quietest sample, its stance velocity
+    /// update, and the samples since propagated again from the stride memory.
+    fn update_late(&mut self, eskf: &mut Box<Eskf>, candidate: Candidate) {
+        let slot = match candidate {
+            Candidate::Dip => &self.late.dip_quietest,
+            Candidate::Overdue => &self.late.cycle_quietest,
+        };
+        let Some(q) = slot.get() else {
             return;
         };
         let n = self.memory.len();
@@ -163,5 +269,9 @@ impl Pipeline {
         self.before = Some(spare);
         self.counters.late_footfalls += 1;
         self.out.late_footfall_t_s = Some(t_quiet_s);
+        self.late.footfall(t_quiet_s);
+        // A short dip is a footfall as a stance is; an overdue one is not looked for twice in a
+        // row.
+        self.late.armed = candidate == Candidate::Dip;
     }
 }

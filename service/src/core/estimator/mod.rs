@@ -27,8 +27,8 @@
 //! back; `rest.rs` the rest sums; `gaps.rs` a step longer than `estimator.max_dt_s` (bridged,
 //! filled from the stride before, or a new segment);
 //! `stride_memory.rs` the last strides' samples and footfalls that fill one;
-//! `late_footfall.rs` a footfall the detector missed (a short dip of its statistic with no
-//! stance around it), updated late from the stride memory; `recovery.rs`
+//! `late_footfall.rs` a footfall the detector missed (a short dip of its statistic, or a stride
+//! cycle without a stance), updated late from the stride memory; `recovery.rs`
 //! what it does when the state or the input goes bad (health check, velocity reset, a first
 //! time stamp that was an outlier); `tests.rs` its unit tests.
 
@@ -519,8 +519,9 @@ impl Pipeline {
             self.late.drop_pending();
         } else {
             self.remember(t_clock, w, f);
-            let dip = (decision.raw, stance, decision.statistic);
-            self.follow_dips(eskf, t_clock, dip, &omega);
+            let began = self.stance_edge == StanceEdge::Began;
+            let flags = (decision.raw, stance, began, decision.statistic);
+            self.follow_footfalls(eskf, t_clock, flags, &omega);
         }
         self.counters.velocity_resets += u64::from(self.out.velocity_reset);
         self.counters.heading_reacquisitions += u64::from(self.out.heading_reacquired.is_some());
