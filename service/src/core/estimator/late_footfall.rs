@@ -18,8 +18,8 @@
 //!   it. Not twice in a row: a stance or a short dip must come between.
 //!
 //! The footfall's quietest sample gets the stance velocity update then: the filter as it was at
-//! that sample (kept while it was the quietest) is updated and propagated again through the
-//! samples since, from the stride memory. What the estimator output in between stays as it was;
+//! that sample (propagated to, from a copy kept at the dip's or the cycle's first sample) is
+//! updated and propagated again through the samples since, from the stride memory. What the estimator output in between stays as it was;
 //! the state from then on is as if the update had been made on time. It adds no heading
 //! observation and no footfall to the stride bookkeeping (the stride that ends there runs on to
 //! the next stance, as before); it is counted (`Counters::late_footfalls`) and marked on the
@@ -28,17 +28,20 @@
 
 use super::*;
 
-/// The filter at a candidate footfall's quietest sample, and what its update needs.
+/// The filter at the first sample of a candidate's search (a dip's first sample, a cycle's
+/// first searched one): a late update propagates from here to the quietest sample. One copy per
+/// dip or cycle, not one per quieter sample.
 #[derive(Debug, Clone)]
-pub(super) struct Quietest {
+pub(super) struct Anchor {
     eskf: Eskf,
     bias: BiasFilter,
-    /// The bias-corrected rate of that sample (the rolling model's edge velocity).
-    omega: Vector3<f64>,
     /// Its time on the sample clock (as the stride memory holds it).
     t_s: f64,
-    statistic: f64,
 }
+
+/// A candidate's quietest sample so far: time (sample clock), statistic, bias-corrected rate
+/// (the rolling model's edge velocity).
+type Quiet = (f64, f64, Vector3<f64>);
 
 /// Which candidate a waiting footfall is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,16 +65,23 @@ pub(super) struct LateFootfall {
     last_stance_s: f64,
     /// The last four footfalls (stances' first samples and late footfalls), the newest last.
     footfalls_s: [f64; 4],
+    /// The stride period: the median of the three intervals between them (NaN until known).
+    period_s: f64,
     /// An overdue footfall may be looked for (a stance or a short dip since the last one).
     armed: bool,
     /// Overdue candidates only after this time (the last stance or late footfall plus the wait).
     search_from_s: f64,
     /// Start of the current dip (raw below the threshold, not yet a stance), and its last sample.
     dip: Option<(f64, f64)>,
-    /// The current dip's quietest sample (kept without allocating after the first).
-    dip_quietest: LastGood<Quietest>,
+    /// The filter at the current dip's first sample (kept without allocating after the first),
+    /// and the dip's quietest sample.
+    dip_anchor: LastGood<Anchor>,
+    dip_quiet: Option<Quiet>,
+    /// The filter at the first sample of the current cycle's search (one copy per stride: an
+    /// overdue footfall is propagated to from here).
+    anchor: LastGood<Anchor>,
     /// The current cycle's quietest sample below `quiet_max`.
-    cycle_quietest: LastGood<Quietest>,
+    cycle_quiet: Option<Quiet>,
     /// A candidate waiting: the time its wait ends.
     pending: Option<(f64, Candidate)>,
 }
@@ -88,11 +98,14 @@ impl LateFootfall {
             wait_s: cfg.merge_gap_s,
             last_stance_s: f64::NEG_INFINITY,
             footfalls_s: [f64::NAN; 4],
+            period_s: f64::NAN,
             armed: false,
             search_from_s: f64::INFINITY,
             dip: None,
-            dip_quietest: LastGood::default(),
-            cycle_quietest: LastGood::default(),
+            dip_anchor: LastGood::default(),
+            dip_quiet: None,
+            anchor: LastGood::default(),
+            cycle_quiet: None,
             pending: None,
         }
     }
@@ -105,44 +118,31 @@ impl LateFootfall {
     }
 
     fn footfall(&mut self, t_s: f64) {
-        self.footfalls_s = [
+        let f = [
             self.footfalls_s[1],
             self.footfalls_s[2],
             self.footfalls_s[3],
             t_s,
         ];
-        self.search_from_s = t_s + self.wait_s;
-    }
-
-    /// The stride period: the median of the last three intervals between footfalls.
-    fn period_s(&self) -> Option<f64> {
-        let f = &self.footfalls_s;
         let mut d = [f[1] - f[0], f[2] - f[1], f[3] - f[2]];
         d.sort_by(f64::total_cmp);
-        d[1].is_finite().then_some(d[1])
+        (self.footfalls_s, self.period_s) = (f, d[1]);
+        self.search_from_s = t_s + self.wait_s;
     }
 }
 
-/// Keeps the filter at a sample in `slot`.
-fn keep(
-    slot: &mut LastGood<Quietest>,
-    eskf: &Eskf,
-    bias: &BiasFilter,
-    at: (f64, f64, Vector3<f64>),
-) {
-    let (t_s, statistic, omega) = at;
+/// Keeps the filter at the sample at `t_s` in `slot`.
+fn keep(slot: &mut LastGood<Anchor>, eskf: &Eskf, bias: &BiasFilter, t_s: f64) {
     match slot.get_mut() {
-        Some(q) => {
-            q.eskf.copy_state_from(eskf);
-            q.bias.clone_from(bias);
-            (q.omega, q.t_s, q.statistic) = (omega, t_s, statistic);
+        Some(a) => {
+            a.eskf.copy_state_from(eskf);
+            a.bias.clone_from(bias);
+            a.t_s = t_s;
         }
-        None => slot.save(&Quietest {
+        None => slot.save(&Anchor {
             eskf: eskf.clone(),
             bias: bias.clone(),
-            omega,
             t_s,
-            statistic,
         }),
     }
 }
@@ -176,17 +176,21 @@ impl Pipeline {
         let at = (t_clock, statistic, *omega);
         if let Some(min_dip_s) = late.min_dip_s {
             if raw {
-                let (start, _) = *late.dip.get_or_insert((t_clock, t_clock));
-                late.dip = Some((start, t_clock));
-                // Two dips within the wait are parts of one footfall: the quieter of both.
+                // Two dips within the wait are parts of one footfall: the quieter of both, from
+                // the first one's anchor.
                 let waiting = late.pending.is_some_and(|p| p.1 == Candidate::Dip);
-                if late
-                    .dip_quietest
-                    .get()
-                    .is_none_or(|q| (!waiting && q.t_s < start) || statistic < q.statistic)
-                {
-                    keep(&mut late.dip_quietest, eskf, &self.bias, at);
+                match late.dip {
+                    None if !waiting => {
+                        keep(&mut late.dip_anchor, eskf, &self.bias, t_clock);
+                        late.dip_quiet = Some(at);
+                    }
+                    _ if late.dip_quiet.is_none_or(|q| statistic < q.1) => {
+                        late.dip_quiet = Some(at);
+                    }
+                    _ => {}
                 }
+                let start = late.dip.map_or(t_clock, |d| d.0);
+                late.dip = Some((start, t_clock));
             } else if let Some((start, end)) = late.dip.take() {
                 // A dip of `n` samples spans about `n` sample periods.
                 let long_enough = t_clock - start >= min_dip_s;
@@ -196,24 +200,25 @@ impl Pipeline {
             }
         }
         if let (Some(factor), true) = (late.overdue_factor, late.armed) {
-            if t_clock >= late.search_from_s
-                && statistic < late.quiet_max
-                && late
-                    .cycle_quietest
-                    .get()
-                    .is_none_or(|q| q.t_s < late.search_from_s || statistic < q.statistic)
-            {
-                keep(&mut late.cycle_quietest, eskf, &self.bias, at);
+            if t_clock >= late.search_from_s {
+                if late.anchor.get().is_none_or(|a| a.t_s < late.search_from_s) {
+                    keep(&mut late.anchor, eskf, &self.bias, t_clock);
+                }
+                let quieter = late
+                    .cycle_quiet
+                    .is_none_or(|q| q.0 < late.search_from_s || statistic < q.1);
+                if statistic < late.quiet_max && quieter {
+                    late.cycle_quiet = Some(at);
+                }
             }
-            let due = late
-                .period_s()
-                .is_some_and(|p| t_clock - late.footfalls_s[3] >= factor * p);
+            // NaN until four footfalls: never due.
+            let due = t_clock - late.footfalls_s[3] >= factor * late.period_s;
             if due && late.pending.is_none() {
                 late.armed = false;
-                if let Some(q) = late.cycle_quietest.get()
-                    && q.t_s >= late.search_from_s
+                if let Some((t_s, ..)) = late.cycle_quiet
+                    && t_s >= late.search_from_s
                 {
-                    late.pending = Some((q.t_s + late.wait_s, Candidate::Overdue));
+                    late.pending = Some((t_s + late.wait_s, Candidate::Overdue));
                 }
             }
         }
@@ -225,47 +230,38 @@ impl Pipeline {
         }
     }
 
-    /// The late update: the filter at the candidate's quietest sample, its stance velocity
-    /// update, and the samples since propagated again from the stride memory.
+    /// The late update: the filter at the candidate's quietest sample (propagated to from its
+    /// anchor), its stance velocity update, and the samples since propagated again from the
+    /// stride memory.
     fn update_late(&mut self, eskf: &mut Box<Eskf>, candidate: Candidate) {
-        let slot = match candidate {
-            Candidate::Dip => &self.late.dip_quietest,
-            Candidate::Overdue => &self.late.cycle_quietest,
+        let (start, quiet) = match candidate {
+            Candidate::Dip => (self.late.dip_anchor.get(), self.late.dip_quiet),
+            Candidate::Overdue => (self.late.anchor.get(), self.late.cycle_quiet),
         };
-        let Some(q) = slot.get() else {
+        let (Some(start), Some((t_quiet_s, _, omega))) = (start, quiet) else {
             return;
         };
+        // The memory holds every kept sample since the start, the current one last.
         let n = self.memory.len();
-        // The memory holds every kept sample since the quietest one, the current one last.
-        let Some(from) = (0..n).rev().find(|&i| self.memory.get(i).t_s == q.t_s) else {
+        let index_of = |t_s: f64| (0..n).rev().find(|&i| self.memory.get(i).t_s == t_s);
+        let (Some(from), Some(quiet_at)) = (index_of(start.t_s), index_of(t_quiet_s)) else {
             self.counters.late_footfalls_dropped += 1;
             return;
         };
         let mut replay = self.before.take().unwrap_or_else(|| eskf.clone());
-        replay.copy_state_from(&q.eskf);
-        let (omega, bias_then, t_quiet_s) = (q.omega, q.bias.clone(), q.t_s);
-        if self
-            .stance_velocity_update(&mut replay, &omega, false)
-            .is_none()
-        {
-            // Too far from a standing foot for the filter: not a footfall after all.
-            self.before = Some(replay);
+        replay.copy_state_from(&start.eskf);
+        self.bias = start.bias.clone();
+        let mut spare = std::mem::replace(eskf, replay);
+        self.propagate_remembered(eskf, &mut spare, from, quiet_at);
+        if self.stance_velocity_update(eskf, &omega, false).is_none() {
+            // Too far from a standing foot for the filter: not a footfall after all. Propagated
+            // on without it, the filter is again what it was.
             self.counters.late_footfalls_dropped += 1;
+            self.propagate_remembered(eskf, &mut spare, quiet_at, n - 1);
+            self.before = Some(spare);
             return;
         }
-        self.bias = bias_then;
-        std::mem::swap(eskf, &mut replay);
-        let mut spare = replay;
-        let rail = CLIP_FRACTION * self.cfg.sensor.gyro_range_rad_s();
-        for i in from + 1..n {
-            let (a, b) = (*self.memory.get(i - 1), *self.memory.get(i));
-            let dt = b.t_s - a.t_s;
-            let w_avg = (a.gyro_rad_s + b.gyro_rad_s) * 0.5;
-            let f_avg = (a.accel_m_s2 + b.accel_m_s2) * 0.5;
-            self.propagate(eskf, &mut spare, dt, &w_avg, &f_avg);
-            // As `navigate` does after each sample with an axis at its rail.
-            self.widen_clipped(eskf, b.gyro_rad_s.map(|v| v.abs() >= rail).into(), dt);
-        }
+        self.propagate_remembered(eskf, &mut spare, quiet_at, n - 1);
         self.before = Some(spare);
         self.counters.late_footfalls += 1;
         self.out.late_footfall_t_s = Some(t_quiet_s);
@@ -273,5 +269,26 @@ impl Pipeline {
         // A short dip is a footfall as a stance is; an overdue one is not looked for twice in a
         // row.
         self.late.armed = candidate == Candidate::Dip;
+    }
+
+    /// Propagates the filter through the remembered samples after index `from` up to `to`, as
+    /// `navigate` did when they came (no stance among them).
+    fn propagate_remembered(
+        &mut self,
+        eskf: &mut Box<Eskf>,
+        spare: &mut Box<Eskf>,
+        from: usize,
+        to: usize,
+    ) {
+        let rail = CLIP_FRACTION * self.cfg.sensor.gyro_range_rad_s();
+        for i in from + 1..=to {
+            let (a, b) = (*self.memory.get(i - 1), *self.memory.get(i));
+            let dt = b.t_s - a.t_s;
+            let w_avg = (a.gyro_rad_s + b.gyro_rad_s) * 0.5;
+            let f_avg = (a.accel_m_s2 + b.accel_m_s2) * 0.5;
+            self.propagate(eskf, spare, dt, &w_avg, &f_avg);
+            // As `navigate` does after each sample with an axis at its rail.
+            self.widen_clipped(eskf, b.gyro_rad_s.map(|v| v.abs() >= rail).into(), dt);
+        }
     }
 }
