@@ -4,7 +4,9 @@
 //! - `replay_matches_offline_run_sample_by_sample`: the exp36 log at full speed with the lossless
 //!   policy gives exactly the estimates of the offline `run_log`, with no sample lost;
 //!   `a_gap_filled_from_the_stride_before_is_the_same_through_the_daemon` the same with 0.3 s cut
-//!   out of a swing.
+//!   out of a swing; `late_footfalls_are_the_same_through_the_daemon` the same on the fast exp38,
+//!   whose missed footfalls are updated late (the filter propagated again from the stride
+//!   memory inside one step).
 //! - `bad_samples_over_ipc_are_rejected_and_counted`: NaN, time going backwards, a duplicate and a
 //!   late `seq` are refused and counted in `Diagnostics`; a second daemon on the domain is
 //!   refused.
@@ -100,6 +102,23 @@ fn a_gap_filled_from_the_stride_before_is_the_same_through_the_daemon() {
     log.rows.drain(9000..9060);
     let (_, counters, _) = replay_and_compare(&log, "test_daemon_replay_gap");
     assert_eq!((counters.gaps, counters.gaps_filled), (1, 1));
+}
+
+#[test]
+fn late_footfalls_are_the_same_through_the_daemon() {
+    // Fast gait (issue 9; `detector.late_stance_min_s`, `detector.overdue_stride_factor`): the
+    // step that updates a missed footfall late propagates the filter again through the samples
+    // since, from the stride memory, in the daemon as offline.
+    let _one = one_daemon_at_a_time();
+    let imu_path: PathBuf = manifest().join("data/gdins_exp38_zigzag_extreme/imu.csv");
+    let log = read_imu_csv(&imu_path, &ImuCsvOptions::default()).unwrap();
+    let (offline, counters, _) = replay_and_compare(&log, "test_daemon_replay_late");
+    assert!(counters.late_footfalls >= 2, "{counters:?}");
+    let late = offline
+        .iter()
+        .filter(|e| e.late_footfall_t_s.is_some())
+        .count();
+    assert_eq!(late as u64, counters.late_footfalls);
 }
 
 /// Runs `log` offline and through an in-process daemon on domain `domain_name` (lossless, at
