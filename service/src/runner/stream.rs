@@ -78,7 +78,8 @@ pub struct Summary {
     pub zero_rate_updates: u64,
     /// Rests not fused (see the estimator's counter of the same name).
     pub zero_rate_refused: u64,
-    /// Footfalls the detector missed, updated late (`detector.late_stance_min_s`).
+    /// Footfalls the detector missed, updated late (`detector.late_stance_min_s`,
+    /// `detector.overdue_stride_factor`).
     pub late_footfalls: u64,
     /// Late footfalls whose update was not made (see the estimator's counter).
     pub late_footfalls_dropped: u64,

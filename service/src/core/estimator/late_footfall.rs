@@ -253,16 +253,15 @@ impl Pipeline {
         self.bias = start.bias.clone();
         let mut spare = std::mem::replace(eskf, replay);
         self.propagate_remembered(eskf, &mut spare, from, quiet_at);
-        if self.stance_velocity_update(eskf, &omega, false).is_none() {
-            // Too far from a standing foot for the filter: not a footfall after all. Propagated
-            // on without it, the filter is again what it was.
-            self.counters.late_footfalls_dropped += 1;
-            self.propagate_remembered(eskf, &mut spare, quiet_at, n - 1);
-            self.before = Some(spare);
-            return;
-        }
+        // Too far from a standing foot for the filter: not a footfall after all. Propagated on
+        // without the update, the filter is again what it was.
+        let updated = self.stance_velocity_update(eskf, &omega, false).is_some();
         self.propagate_remembered(eskf, &mut spare, quiet_at, n - 1);
         self.before = Some(spare);
+        if !updated {
+            self.counters.late_footfalls_dropped += 1;
+            return;
+        }
         self.counters.late_footfalls += 1;
         self.out.late_footfall_t_s = Some(t_quiet_s);
         self.late.footfall(t_quiet_s);

@@ -175,7 +175,8 @@ struct Pipeline {
     clock: SampleClock,
     /// The last strides' samples and footfalls, to fill a gap in a swing (`stride_memory.rs`).
     memory: stride_memory::StrideMemory,
-    /// Dips of the detector's statistic that may be a missed footfall (`late_footfall.rs`).
+    /// Short dips of the detector's statistic and stride cycles without a stance that may be a
+    /// missed footfall (`late_footfall.rs`).
     late: late_footfall::LateFootfall,
     /// The current stance's sums, for the zero-rate update when it turns out to be a rest.
     stance_rest: RestSums,
@@ -455,10 +456,13 @@ impl Pipeline {
         // `prev` and `last` hold the sample clock's times (see `step`).
         let t_clock = self.last.map_or(t_s, |l| l.0);
         let gap = self.cross_gap(eskf, t_clock, (t_prev, &w_prev, w), (&f_prev, f));
+        if self.out.gap_s.is_some() {
+            // Bridged, filled or a new segment: no late footfall reaches back across it.
+            self.late.drop_pending();
+        }
         let (t_prev, w_prev, f_prev) = match gap {
             Gap::NewSegment => {
                 self.memory.clear();
-                self.late.drop_pending();
                 if self.stance_edge == StanceEdge::Began {
                     self.memory.footfall(t_clock);
                 }
@@ -480,9 +484,6 @@ impl Pipeline {
             // measurable at every sample).
             (BiasFilter::InEskf, Some(BiasFilter::InEskf)) => {}
             _ => self.before_bias.save(&self.bias),
-        }
-        if self.out.gap_s.is_some() {
-            self.late.drop_pending();
         }
         let mut before = self.before.take().unwrap_or_else(|| eskf.clone());
         let omega = self.navigate(

@@ -182,12 +182,13 @@ pub struct Counters {
     pub stances: u64,
     /// ZUPT updates.
     pub zupts: u64,
-    /// Footfalls the detector missed (a dip of its statistic shorter than a stance, with no
-    /// stance around it) whose quietest sample got the stance velocity update late
-    /// (`detector.late_stance_min_s`).
+    /// Footfalls the detector missed (a dip of its statistic shorter than a stance with no
+    /// stance around it, or a stride cycle without a stance) whose quietest sample got the
+    /// stance velocity update late (`detector.late_stance_min_s`,
+    /// `detector.overdue_stride_factor`).
     pub late_footfalls: u64,
-    /// Such dips whose late update was not made (the stride memory no longer reached back to
-    /// the sample, or the velocity was too far from a standing foot's).
+    /// Such footfalls whose late update was not made (the stride memory no longer reached back
+    /// to the sample, or the velocity was too far from a standing foot's).
     pub late_footfalls_dropped: u64,
     /// Heading observations used.
     pub heading_used: u64,
@@ -293,7 +294,8 @@ pub struct Estimate {
     /// ZUPT innovation, when one was applied on this sample.
     pub zupt: Option<Innovation>,
     /// A footfall the detector missed was updated late on this sample: the time (sample
-    /// clock) of its quietest sample, which the update was made at (`detector.late_stance_min_s`).
+    /// clock) of its quietest sample, which the update was made at (`detector.late_stance_min_s`,
+    /// `detector.overdue_stride_factor`).
     pub late_footfall_t_s: Option<f64>,
     /// Heading observation event, when one was taken on this sample.
     pub heading: Option<HeadingEvent>,
