@@ -331,7 +331,18 @@ pub fn apply_onset_change(effects: &mut Vec<Finding>, o: &OnsetChange) {
 
 /// Adds the test to the bias-drift finding: its score when larger, the fix a step (most of the
 /// χ² in one block) or a drift calls for, and the figures in the evidence.
-pub fn apply_bias_change(effects: &mut [Finding], c: &BiasChange) {
+pub fn apply_bias_change(effects: &mut Vec<Finding>, c: &BiasChange) {
+    // The filter's own bias needs no used heading observation: with too few of them to test
+    // the residuals, the drift's finding is this test's alone.
+    if !effects.iter().any(|f| f.name == Effect::BiasDrift) {
+        effects.push(Finding {
+            name: Effect::BiasDrift,
+            score: 0.0,
+            evidence: "residual tests: not made (too few used heading observations)".into(),
+            fix: None,
+            mde: None,
+        });
+    }
     let Some(f) = effects.iter_mut().find(|f| f.name == Effect::BiasDrift) else {
         return;
     };
@@ -422,6 +433,28 @@ mod tests {
         // the same step under a random walk ten times faster is what the model allows
         let fast = bias_trace(&t, &b, &s, 1e-2).change().unwrap();
         assert!(fast.score < 1.0, "{fast:?}");
+    }
+
+    #[test]
+    fn the_bias_change_names_a_drift_where_the_residuals_could_not_be_tested() {
+        // The ranking had too few used heading observations to test the residuals: only
+        // `unexplained`. The filter's own bias still shows the step.
+        let (t, b, s) = trace(200.0, 5e-4, |t| if t >= 100.0 { 0.01 } else { 0.0 });
+        let c = bias_trace(&t, &b, &s, 1e-4).change().unwrap();
+        let mut effects = vec![Finding {
+            name: Effect::Unexplained,
+            score: 0.0,
+            evidence: "only 3 heading observations: too few to test".into(),
+            fix: None,
+            mde: None,
+        }];
+        apply_bias_change(&mut effects, &c);
+        let drift = effects
+            .iter()
+            .find(|f| f.name == Effect::BiasDrift)
+            .unwrap();
+        assert_eq!(drift.score, c.score);
+        assert_eq!(drift.fix, Some(Fix::BiasRandomWalkTimes10), "a step");
     }
 
     #[test]

@@ -511,13 +511,42 @@ fn correlation(base: &[StanceResidual], a: &[Option<f64>], b: &[Option<f64>]) ->
     r.is_finite().then_some(r)
 }
 
+/// The effects whose score is their signature test's (in the error-state modes).
+const SCORED_BY_SIGNATURE: [Effect; 3] = [
+    Effect::GyroScaleFactor,
+    Effect::AxisMisalignment,
+    Effect::GSensitivity,
+];
+
 /// Puts the power into the findings: the signature test scores the effects that only it tests
 /// well (scale factor, axis misalignment, g-sensitivity: the best variant); for timing and bias
 /// drift, whose own tests stay, it adds the detectable size to the evidence. With `score` false
 /// (the bias-filter modes: their heading observations correct the bias, not the heading, which
 /// the signature's `R/S` does not model, and the signature then grows like a drift) the
 /// evidence is added and the residual tests keep scoring.
-pub fn apply_power(effects: &mut [Finding], power: &[Power], score: bool) {
+///
+/// An effect the signature test scores gets its finding even where the residual regression on
+/// the used heading observations has none (fewer than eight used, or its regressor did not
+/// vary): the signature is fitted to every stance's residual, and a walk whose heading
+/// observations the effect itself drove outside the gate is where it shows most.
+pub fn apply_power(effects: &mut Vec<Finding>, power: &[Power], score: bool) {
+    if score {
+        for p in power {
+            if SCORED_BY_SIGNATURE.contains(&p.effect)
+                && !effects.iter().any(|f| f.name == p.effect)
+            {
+                effects.push(Finding {
+                    name: p.effect,
+                    score: 0.0,
+                    evidence: "residual regression: not tested (too few used heading \
+                               observations, or its regressor did not vary)"
+                        .into(),
+                    fix: p.effect.fixes().first().map(|&(fix, _)| fix),
+                    mde: None,
+                });
+            }
+        }
+    }
     for f in effects.iter_mut() {
         let mine: Vec<&Power> = power.iter().filter(|p| p.effect == f.name).collect();
         let Some(best) = mine.iter().max_by(|a, b| a.score.total_cmp(&b.score)) else {
@@ -556,11 +585,7 @@ pub fn apply_power(effects: &mut [Finding], power: &[Power], score: bool) {
                 )
             })
             .collect();
-        let scored_here = score
-            && matches!(
-                f.name,
-                Effect::GyroScaleFactor | Effect::AxisMisalignment | Effect::GSensitivity
-            );
+        let scored_here = score && SCORED_BY_SIGNATURE.contains(&f.name);
         if scored_here {
             f.score = best.score;
             f.evidence = format!("{}; residual regression: {}", words.join("; "), f.evidence);
@@ -660,5 +685,49 @@ mod tests {
             .collect();
         let z = placebo_z(&slow, 0, PLACEBO_SHIFTS);
         assert!(rms(&z) > 2.0, "slow wave: {z:?}");
+    }
+
+    #[test]
+    fn a_signature_scores_its_effect_where_the_residual_regression_has_no_finding() {
+        // Too few used heading observations: the ranking has only `unexplained`.
+        let power = |effect, variant, score| Power {
+            effect,
+            variant,
+            unit: "fraction",
+            estimate: 0.05,
+            std_err: 0.005,
+            score,
+            mde: Some(0.02),
+            cannot: None,
+            residuals: 120,
+            response: Some(0.9),
+            mde_signature: Some(0.018),
+            indistinguishable_from: Vec::new(),
+        };
+        let only_unexplained = || {
+            vec![Finding {
+                name: Effect::Unexplained,
+                score: 0.0,
+                evidence: "only 5 heading observations: too few to test".into(),
+                fix: None,
+                mde: None,
+            }]
+        };
+        let p = [
+            power(Effect::GyroScaleFactor, "z scale", 30.0),
+            power(Effect::Timing, "clock rate", 12.0),
+        ];
+        let mut effects = only_unexplained();
+        apply_power(&mut effects, &p, true);
+        assert_eq!(effects[0].name, Effect::GyroScaleFactor);
+        assert_eq!(effects[0].score, 30.0);
+        assert_eq!(effects[0].fix, Some(super::super::Fix::ScaleFactor));
+        assert_eq!(effects[0].mde, Some(0.02));
+        // timing keeps its own tests: its signature only adds to their evidence
+        assert!(effects.iter().all(|f| f.name != Effect::Timing));
+        // the bias-filter modes do not score by the signature
+        let mut effects = only_unexplained();
+        apply_power(&mut effects, &p, false);
+        assert_eq!(effects.len(), 1);
     }
 }
