@@ -1,6 +1,6 @@
 //! The regression of a power fit: weighted least squares of the stance residuals on an
 //! effect's signature, one intercept per residual kind, with a Newey–West standard error
-//! (consecutive stances share accumulated gyro error). See `power.rs` for what the signature is.
+//! (consecutive stances share accumulated gyro error). See `power/mod.rs` for what the signature is.
 
 /// Bartlett-kernel lags of the Newey–West standard error, in residual rows (two rows per
 /// stance: about four stances, the run of stances between two used observations after a turn).

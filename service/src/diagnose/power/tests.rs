@@ -1,0 +1,78 @@
+//! Tests of the power fits and of how their findings enter the ranking.
+
+use super::*;
+use crate::diagnose::signature_fit::tests::noise;
+
+#[test]
+fn placebo_fits_are_standard_normal_on_white_residuals_and_wide_on_slow_ones() {
+    // A signature that rises and falls over the walk (turns accumulating), and residuals
+    // that are white, then a slow wave of their own (a period of 80 rows, ten times the
+    // Newey–West window of HAC_LAGS rows): structure the window cannot see, which lines up
+    // with the shifted signature now more, now less.
+    let stance = |i: usize, r_rad: f64| StanceResidual {
+        sample: i,
+        t_s: i as f64,
+        kind: ResidualKind::FootAxis,
+        r_rad,
+        direction_rad: 0.0,
+        weight: 1.0,
+        sd_rad: 0.2,
+        spacing_rad: std::f64::consts::FRAC_PI_2,
+        accepted: true,
+        signature: [(i as f64 / 15.0).sin(); N_REFERENCES],
+    };
+    let rms = |z: &[f64]| (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
+    let white: Vec<StanceResidual> = (0..600).map(|i| stance(i, 0.01 * noise(i))).collect();
+    let z = placebo_z(&white, 0, PLACEBO_SHIFTS);
+    assert_eq!(z.len(), PLACEBO_SHIFTS);
+    assert!((0.5..1.6).contains(&rms(&z)), "white: {z:?}");
+    let slow: Vec<StanceResidual> = (0..600)
+        .map(|i| stance(i, 0.02 * (i as f64 / 13.0 + 1.0).sin() + 0.005 * noise(i)))
+        .collect();
+    let z = placebo_z(&slow, 0, PLACEBO_SHIFTS);
+    assert!(rms(&z) > 2.0, "slow wave: {z:?}");
+}
+
+#[test]
+fn a_signature_scores_its_effect_where_the_residual_regression_has_no_finding() {
+    // Too few used heading observations: the ranking has only `unexplained`.
+    let power = |effect, variant, score| Power {
+        effect,
+        variant,
+        unit: "fraction",
+        estimate: 0.05,
+        std_err: 0.005,
+        score,
+        mde: Some(0.02),
+        cannot: None,
+        residuals: 120,
+        response: Some(0.9),
+        mde_signature: Some(0.018),
+        indistinguishable_from: Vec::new(),
+    };
+    let only_unexplained = || {
+        vec![Finding {
+            name: Effect::Unexplained,
+            score: 0.0,
+            evidence: "only 5 heading observations: too few to test".into(),
+            fix: None,
+            mde: None,
+        }]
+    };
+    let p = [
+        power(Effect::GyroScaleFactor, "z scale", 30.0),
+        power(Effect::Timing, "clock rate", 12.0),
+    ];
+    let mut effects = only_unexplained();
+    apply_power(&mut effects, &p, true);
+    assert_eq!(effects[0].name, Effect::GyroScaleFactor);
+    assert_eq!(effects[0].score, 30.0);
+    assert_eq!(effects[0].fix, Some(super::super::Fix::ScaleFactor));
+    assert_eq!(effects[0].mde, Some(0.02));
+    // timing keeps its own tests: its signature only adds to their evidence
+    assert!(effects.iter().all(|f| f.name != Effect::Timing));
+    // the bias-filter modes do not score by the signature
+    let mut effects = only_unexplained();
+    apply_power(&mut effects, &p, false);
+    assert_eq!(effects.len(), 1);
+}
