@@ -121,6 +121,14 @@ pub enum Fix {
         /// The rail, mrad/s.
         milli_rad_s: u32,
     },
+    /// The strides' scale against the footprints taken out as an accelerometer scale error
+    /// (`model.accel_scale_factor`, composed with the one the model has): what a model with
+    /// the rolling-foot stance update can still do about strides of the wrong length. Not a
+    /// state: only position information shows it.
+    StrideScale {
+        /// Estimated / surveyed stride length − 1, parts per million.
+        ratio_ppm: i32,
+    },
 }
 
 /// The rolling height the stance-length fix sets, m: the sensor's height on the instep above
@@ -134,7 +142,7 @@ pub const RAIL_OF_RANGE: f64 = 0.99;
 
 impl Fix {
     /// Every fix (the clipping fix at a 5 rad/s rail).
-    pub const ALL: [Fix; 9] = [
+    pub const ALL: [Fix; 10] = [
         Fix::HeadingOffset,
         Fix::BiasRate,
         Fix::BiasRandomWalkTimes10,
@@ -144,6 +152,7 @@ impl Fix {
         Fix::RotationAware,
         Fix::RollingStance,
         Fix::GyroRail { milli_rad_s: 5000 },
+        Fix::StrideScale { ratio_ppm: 20_000 },
     ];
 
     /// The configuration change in words, without the data's figures (see `Display`).
@@ -158,6 +167,7 @@ impl Fix {
             Fix::RotationAware => "estimator.mode = rotation_aware",
             Fix::RollingStance => "eskf.zupt_rolling_height_m = 0.08",
             Fix::GyroRail { .. } => "sensor.gyro_range_rad_s = the rail / 0.99",
+            Fix::StrideScale { .. } => "model.accel_scale_factor from the stride ratio",
         }
     }
 
@@ -182,6 +192,11 @@ impl fmt::Display for Fix {
                 "sensor.gyro_range_rad_s = {:.3} (the rail {:.3} / {RAIL_OF_RANGE})",
                 f64::from(*milli_rad_s) / 1000.0 / RAIL_OF_RANGE,
                 f64::from(*milli_rad_s) / 1000.0
+            ),
+            Fix::StrideScale { ratio_ppm } => write!(
+                f,
+                "model.accel_scale_factor composed with strides {:.4} × the surveyed",
+                1.0 + f64::from(*ratio_ppm) * 1e-6
             ),
             _ => f.write_str(self.label()),
         }
@@ -249,6 +264,12 @@ pub fn apply_fix(fix: Fix, file: &mut ConfigFile) -> bool {
                 file.eskf.clipped_rate_sd_rad_s = None; // the default
             }
         }
+        Fix::StrideScale { ratio_ppm } if ratio_ppm != 0 => {
+            // The sensor reads (1 + k) × the force and the model divides by (1 + k₀): strides
+            // come out (1 + k) / (1 + k₀) = ratio long, so k = (1 + k₀) · ratio − 1.
+            let k0 = m.accel_scale_factor.unwrap_or(0.0);
+            m.accel_scale_factor = Some((1.0 + k0) * (1.0 + f64::from(ratio_ppm) * 1e-6) - 1.0);
+        }
         _ => return false,
     }
     true
@@ -281,17 +302,23 @@ mod tests {
             assert_eq!(serde_json::to_value(e).unwrap(), e.name());
         }
         for f in Fix::ALL {
-            if let Fix::GyroRail { .. } = f {
-                assert_eq!(
+            match f {
+                Fix::GyroRail { .. } => assert_eq!(
                     f.to_string(),
                     "sensor.gyro_range_rad_s = 5.051 (the rail 5.000 / 0.99)"
-                );
-            } else {
-                assert_eq!(f.to_string(), f.label());
+                ),
+                Fix::StrideScale { .. } => assert_eq!(
+                    f.to_string(),
+                    "model.accel_scale_factor composed with strides 1.0200 × the surveyed"
+                ),
+                _ => assert_eq!(f.to_string(), f.label()),
             }
             assert_eq!(serde_json::to_value(f).unwrap(), f.to_string());
-            // The extension states are exactly the `model.` keys.
-            assert_eq!(f.is_model_extension(), f.label().starts_with("model."));
+            // The extension states are exactly the `model.` keys, but the stride scale's
+            // (a known correction, not a state).
+            let state_key =
+                f.label().starts_with("model.") && !matches!(f, Fix::StrideScale { .. });
+            assert_eq!(f.is_model_extension(), state_key);
         }
     }
 
@@ -327,7 +354,7 @@ mod tests {
         // Every fix but the data's is reachable from some effect.
         for f in Fix::ALL
             .into_iter()
-            .filter(|f| !matches!(f, Fix::GyroRail { .. }))
+            .filter(|f| !matches!(f, Fix::GyroRail { .. } | Fix::StrideScale { .. }))
         {
             assert!(
                 Effect::ALL
@@ -350,7 +377,9 @@ mod tests {
             let before = format!("{file:?}");
             assert!(apply_fix(f, &mut file), "{f} applies to the default model");
             assert_ne!(format!("{file:?}"), before, "{f} changed nothing");
-            if f != Fix::BiasRandomWalkTimes10 {
+            // The random walk and the stride scale compose (the stride scale's test is in
+            // `stride_length.rs`).
+            if !matches!(f, Fix::BiasRandomWalkTimes10 | Fix::StrideScale { .. }) {
                 assert!(!apply_fix(f, &mut file), "{f} applied twice");
             }
         }

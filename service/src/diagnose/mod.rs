@@ -186,6 +186,37 @@ fn improved(before: &Consistency, after: &Consistency) -> bool {
     }
 }
 
+/// The stride scale of `file`'s run fitted on the first half of the footprints (by time), and
+/// whether taking it out lowers the footprint error of the second half alone; `None` when the
+/// first half has too few single strides to fit.
+fn stride_scale_out_of_sample(
+    log: &ImuLog,
+    file: &ConfigFile,
+    truth: &[TruthPoint],
+    map: Option<&Path>,
+) -> Result<Option<(Fix, bool)>, RunError> {
+    let mid = truth.len() / 2;
+    let (first, second) = (&truth[..=mid], &truth[mid..]);
+    let Some(fit) = analyse(log, file, Some(first), map)?.stride_length else {
+        return Ok(None);
+    };
+    let fix = Fix::StrideScale {
+        ratio_ppm: ((fit.ratio - 1.0).clamp(-0.19, 0.19) * 1e6).round() as i32,
+    };
+    let mut fixed = file.clone();
+    if !apply_fix(fix, &mut fixed) {
+        return Ok(None);
+    }
+    let rms = |f: &ConfigFile| -> Result<Option<f64>, RunError> {
+        Ok(analyse(log, f, Some(second), map)?.consistency.gcp_rms_m)
+    };
+    let kept = match (rms(file)?, rms(&fixed)?) {
+        (Some(b), Some(a)) => a < b,
+        _ => false,
+    };
+    Ok(Some((fix, kept)))
+}
+
 /// The first step of the loop: `start` analysed, the power of each effect with its response
 /// measured by injection, every fixable effect scored (and its candidate model). What the
 /// loop starts from, and all that a check of what is named, and of the detectable sizes, needs.
@@ -253,9 +284,22 @@ pub fn run_diagnosis(
         .cloned()
     {
         let mut f = file.clone();
-        if let Some(fix) = top.fix.filter(|&fix| apply_fix(fix, &mut f)) {
+        // The stride scale is fitted on the footprints themselves: it is fitted on the first
+        // half of them and must lower the second half's error alone, so that "the error fell"
+        // is not true by construction.
+        let (fix, judged) = match (top.fix, truth) {
+            (Some(Fix::StrideScale { .. }), Some(t)) => {
+                match stride_scale_out_of_sample(log, &file, t, map)? {
+                    Some((fix, kept)) => (Some(fix), Some(kept)),
+                    None => (None, None),
+                }
+            }
+            (fix, _) => (fix, None),
+        };
+        if let Some(fix) = fix.filter(|&fix| apply_fix(fix, &mut f)) {
             let mut a = analyse(log, &f, truth, map)?;
-            let kept = improved(&current.consistency, &a.consistency);
+            // (and the whole walk's error must fall too, as for every other fix)
+            let kept = judged.unwrap_or(true) && improved(&current.consistency, &a.consistency);
             iterations.push(Iteration {
                 effect: top.name,
                 score: top.score,

@@ -154,7 +154,8 @@ fn t_critical(df: f64) -> f64 {
 }
 
 /// The finding of the fit, with the rolling-foot stance update as its fix when the model has
-/// none (`rolling`: the model's rolling height is set).
+/// none (`rolling`: the model's rolling height is set), and once it has it, the scale itself
+/// taken out as the accelerometer's (the footprints are position information).
 pub fn stride_length_finding(s: &StrideLength, rolling: bool) -> Finding {
     Finding {
         name: Effect::StrideLength,
@@ -167,12 +168,19 @@ pub fn stride_length_finding(s: &StrideLength, rolling: bool) -> Finding {
             s.legs,
             s.outliers,
             if rolling {
-                "the model has the rolling-foot stance update: a stride scale left needs position observations, not a filter state"
+                "the model has the rolling-foot stance update: the scale left is taken out as an accelerometer scale error (the footprints are the position information a filter state would lack)"
             } else {
                 "a plain zero-velocity update cuts the foot's rolling out of every stride"
             }
         ),
-        fix: (!rolling).then_some(Fix::RollingStance),
+        fix: Some(if rolling {
+            Fix::StrideScale {
+                // beyond ±20 % the configuration refuses it (a wrong unit, not a scale)
+                ratio_ppm: ((s.ratio - 1.0).clamp(-0.19, 0.19) * 1e6).round() as i32,
+            }
+        } else {
+            Fix::RollingStance
+        }),
         mde: Some(s.mde),
     }
 }
@@ -228,18 +236,28 @@ mod tests {
     }
 
     #[test]
-    fn the_fix_is_the_rolling_stance_update_until_the_model_has_it() {
+    fn the_fix_is_the_rolling_stance_update_until_the_model_has_it_then_the_scale() {
         let s = fit(&legs(0.98, 60)).unwrap();
         assert_eq!(
             stride_length_finding(&s, false).fix,
             Some(Fix::RollingStance)
         );
         let f = stride_length_finding(&s, true);
-        assert_eq!(f.fix, None);
-        assert!(
-            f.evidence.contains("position observations"),
-            "{}",
-            f.evidence
-        );
+        let Some(Fix::StrideScale { ratio_ppm }) = f.fix else {
+            panic!("{:?}", f.fix)
+        };
+        assert!((f64::from(ratio_ppm) * 1e-6 - (s.ratio - 1.0)).abs() < 1e-6);
+        assert!(f.evidence.contains("accelerometer"), "{}", f.evidence);
+        // applied twice, the scales compose: the model's factor becomes (1 + k₀)·ratio − 1
+        let mut file = corridor_shared::config::ConfigFile::default();
+        assert!(crate::diagnose::apply_fix(f.fix.unwrap(), &mut file));
+        let k0 = file.model.accel_scale_factor.unwrap();
+        assert!((k0 - (s.ratio - 1.0)).abs() < 1e-6, "{k0}");
+        assert!(crate::diagnose::apply_fix(
+            Fix::StrideScale { ratio_ppm: 10_000 },
+            &mut file
+        ));
+        let k1 = file.model.accel_scale_factor.unwrap();
+        assert!((k1 - ((1.0 + k0) * 1.01 - 1.0)).abs() < 1e-9, "{k1}");
     }
 }

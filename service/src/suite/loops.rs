@@ -41,10 +41,12 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<String, SuiteError> {
                     "{} ({:.1}){}",
                     it.effect,
                     it.score,
-                    if it.kept {
-                        ""
-                    } else {
-                        " — tried, footprint error rose, not kept"
+                    match (it.kept, it.fix) {
+                        (true, _) => "",
+                        (false, crate::diagnose::Fix::StrideScale { .. }) => {
+                            " — tried, footprint error (of the second half, or of the walk) not lower, not kept"
+                        }
+                        (false, _) => " — tried, footprint error rose, not kept",
                     }
                 )
             })

@@ -56,6 +56,12 @@ pub struct ModelFile {
     /// misalignment as it reaches the heading when z is the axis nearest the vertical):
     /// initial σ, degrees.
     pub gyro_coupling_z_sd_deg: Option<f64>,
+    /// Not a state: a known accelerometer scale error common to every axis, as a fraction (the
+    /// sensor reads `1 + k` times the specific force); every sample's specific force is divided
+    /// by `1 + k` before anything uses it. Strides come out `1 + k` times too long with it (the
+    /// gravity is taken from the rest), so only position information (surveyed footprints) can
+    /// tell it: `corridor diagnose` sets it from their stride ratio. Default 0.
+    pub accel_scale_factor: Option<f64>,
 }
 
 /// `[daemon]` section: the estimator service.

@@ -341,6 +341,7 @@ mod tests {
             ("heading", "start_heading_deg", "1e300"),
             ("heading", "foot_axis_stride_max_deg", "120"),
             ("detector", "overdue_stride_factor", "1.05"),
+            ("model", "accel_scale_factor", "-0.25"),
             ("model", "heading_offset_sd_deg", "1e300"),
         ] {
             let f = ConfigFile::parse(&format!("[{section}]\n{key} = {v}\n"), Path::new("a.toml"))

@@ -49,6 +49,9 @@ pub struct ModelSettings {
     pub g_sensitivity_sd: Option<Positive>,
     /// Cross-coupling (into the sensor z axis) initial σ, rad.
     pub gyro_coupling_z_sd_rad: Option<Positive>,
+    /// What every sample's specific force is multiplied by: `1 / (1 + model.accel_scale_factor)`
+    /// (1 without it).
+    pub accel_correction: f64,
 }
 
 /// Validated `[daemon]`.

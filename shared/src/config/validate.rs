@@ -235,6 +235,17 @@ impl ConfigFile {
                 90.0,
                 "must be in (0, 90]°",
             )?,
+            accel_correction: {
+                let k = md.accel_scale_factor.unwrap_or(0.0);
+                if !(k.is_finite() && k.abs() < 0.2) {
+                    return Err(invalid(
+                        "model.accel_scale_factor",
+                        k,
+                        "must be in (-0.2, 0.2): a larger error is a wrong unit, not a scale",
+                    ));
+                }
+                1.0 / (1.0 + k)
+            },
         };
         if let Some(v) = e.converged_sd_rad_s {
             return Err(invalid(

@@ -321,7 +321,9 @@ impl Estimator {
     /// Processes one sample. On error nothing changed and the sample is counted as rejected.
     pub fn step(&mut self, s: &ImuInput) -> Result<&Estimate, SampleError> {
         let w = Vector3::from(s.gyro_rad_s);
-        let f = Vector3::from(s.accel_m_s2);
+        // A known accelerometer scale error (`model.accel_scale_factor`) taken out; the
+        // plausibility limits are on what the sensor output.
+        let f = Vector3::from(s.accel_m_s2) * self.p.cfg.model.accel_correction;
         let accepted = match self.p.plausibility.check(s) {
             Ok(a) => a,
             Err(e) => {
