@@ -171,6 +171,14 @@ impl Fix {
         }
     }
 
+    /// The stride-scale fix for strides `ratio` times the surveyed length (within the ±19 % the
+    /// configuration takes: beyond 20 % it is a wrong unit, not a scale).
+    pub fn stride_scale(ratio: f64) -> Fix {
+        Fix::StrideScale {
+            ratio_ppm: ((ratio - 1.0).clamp(-0.19, 0.19) * 1e6).round() as i32,
+        }
+    }
+
     /// An extension state of the error-state filter (a `model.` key).
     pub fn is_model_extension(self) -> bool {
         matches!(

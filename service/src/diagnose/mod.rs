@@ -123,6 +123,9 @@ pub struct Iteration {
     pub before: Consistency,
     /// After.
     pub after: Consistency,
+    /// For a fix fitted on the footprints (the stride scale): the footprint RMS of the second
+    /// half of the footprints, before and after, m, the fix fitted on the first half.
+    pub held_out_rms_m: Option<[f64; 2]>,
     /// Kept (the error or, without truth, the NIS/whiteness improved).
     pub kept: bool,
 }
@@ -187,22 +190,20 @@ fn improved(before: &Consistency, after: &Consistency) -> bool {
 }
 
 /// The stride scale of `file`'s run fitted on the first half of the footprints (by time), and
-/// whether taking it out lowers the footprint error of the second half alone; `None` when the
-/// first half has too few single strides to fit.
+/// the footprint RMS of the second half alone without and with it taken out, m; `None` when the
+/// first half has too few single strides to fit or the second half cannot be scored.
 fn stride_scale_out_of_sample(
     log: &ImuLog,
     file: &ConfigFile,
     truth: &[TruthPoint],
     map: Option<&Path>,
-) -> Result<Option<(Fix, bool)>, RunError> {
+) -> Result<Option<(Fix, [f64; 2])>, RunError> {
     let mid = truth.len() / 2;
     let (first, second) = (&truth[..=mid], &truth[mid..]);
     let Some(fit) = analyse(log, file, Some(first), map)?.stride_length else {
         return Ok(None);
     };
-    let fix = Fix::StrideScale {
-        ratio_ppm: ((fit.ratio - 1.0).clamp(-0.19, 0.19) * 1e6).round() as i32,
-    };
+    let fix = Fix::stride_scale(fit.ratio);
     let mut fixed = file.clone();
     if !apply_fix(fix, &mut fixed) {
         return Ok(None);
@@ -210,11 +211,7 @@ fn stride_scale_out_of_sample(
     let rms = |f: &ConfigFile| -> Result<Option<f64>, RunError> {
         Ok(analyse(log, f, Some(second), map)?.consistency.gcp_rms_m)
     };
-    let kept = match (rms(file)?, rms(&fixed)?) {
-        (Some(b), Some(a)) => a < b,
-        _ => false,
-    };
-    Ok(Some((fix, kept)))
+    Ok(rms(file)?.zip(rms(&fixed)?).map(|(b, a)| (fix, [b, a])))
 }
 
 /// The first step of the loop: `start` analysed, the power of each effect with its response
@@ -264,6 +261,7 @@ pub fn run_diagnosis(
             fix: cand.fix,
             before: current.consistency.clone(),
             after: cand.analysis.consistency.clone(),
+            held_out_rms_m: None,
             kept,
         });
         if !kept {
@@ -287,10 +285,10 @@ pub fn run_diagnosis(
         // The stride scale is fitted on the footprints themselves: it is fitted on the first
         // half of them and must lower the second half's error alone, so that "the error fell"
         // is not true by construction.
-        let (fix, judged) = match (top.fix, truth) {
+        let (fix, held_out) = match (top.fix, truth) {
             (Some(Fix::StrideScale { .. }), Some(t)) => {
                 match stride_scale_out_of_sample(log, &file, t, map)? {
-                    Some((fix, kept)) => (Some(fix), Some(kept)),
+                    Some((fix, rms)) => (Some(fix), Some(rms)),
                     None => (None, None),
                 }
             }
@@ -299,13 +297,15 @@ pub fn run_diagnosis(
         if let Some(fix) = fix.filter(|&fix| apply_fix(fix, &mut f)) {
             let mut a = analyse(log, &f, truth, map)?;
             // (and the whole walk's error must fall too, as for every other fix)
-            let kept = judged.unwrap_or(true) && improved(&current.consistency, &a.consistency);
+            let kept = held_out.is_none_or(|[before, after]| after < before)
+                && improved(&current.consistency, &a.consistency);
             iterations.push(Iteration {
                 effect: top.name,
                 score: top.score,
                 fix,
                 before: current.consistency.clone(),
                 after: a.consistency.clone(),
+                held_out_rms_m: held_out,
                 kept,
             });
             if kept {

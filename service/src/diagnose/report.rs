@@ -118,7 +118,14 @@ pub fn write_report(
             it.after.nis_mean,
             it.before.whiteness_p,
             it.after.whiteness_p,
-            if it.kept { "yes" } else { "no" }
+            match (it.kept, it.held_out_rms_m) {
+                (k, Some([b, a])) => format!(
+                    "{} (fitted on the first half of the footprints; the second half {b:.2} → {a:.2} m)",
+                    if k { "yes" } else { "no" }
+                ),
+                (true, None) => "yes".into(),
+                (false, None) => "no".into(),
+            }
         ));
     }
     md.push_str(&format!(

@@ -174,10 +174,7 @@ pub fn stride_length_finding(s: &StrideLength, rolling: bool) -> Finding {
             }
         ),
         fix: Some(if rolling {
-            Fix::StrideScale {
-                // beyond ±20 % the configuration refuses it (a wrong unit, not a scale)
-                ratio_ppm: ((s.ratio - 1.0).clamp(-0.19, 0.19) * 1e6).round() as i32,
-            }
+            Fix::stride_scale(s.ratio)
         } else {
             Fix::RollingStance
         }),
