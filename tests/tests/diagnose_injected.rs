@@ -139,6 +139,11 @@ fn clean_recordings_show_only_the_documented_heading_offset_and_short_strides() 
     assert!((stride.fit.ratio - 1.0).abs() < 0.005, "{stride:?}");
     let steps: Vec<(Effect, bool)> = r.iterations.iter().map(|i| (i.effect, i.kept)).collect();
     assert_eq!(steps, [(Effect::StrideLength, false)]);
+    let it = &r.iterations[0];
+    let [held_before, held_after] = it.held_out_rms_m.expect("judged on the second half");
+    assert!(held_after < held_before, "{:?}", it.held_out_rms_m);
+    let (b, a) = (it.before.gcp_rms_m.unwrap(), it.after.gcp_rms_m.unwrap());
+    assert!(a > b, "the whole walk {b:.3} -> {a:.3} m");
 
     let (log, truth) = load("gdins_exp25_multi_corridor");
     let r = run(&log, &truth, &config(0.0, false));
