@@ -18,19 +18,25 @@ use corridor_service::core::Estimate;
 use corridor_service::daemon::{self, DaemonConfig, DaemonReport};
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::{Config, ConfigFile};
-use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
+use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::services::ServiceError;
 use corridor_shared::wire::{
     AttitudeSample, Diagnostics, FLAG_CONVERGED, FLAG_END_OF_STREAM, ImuSample,
 };
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
 const WAIT: Duration = Duration::from_secs(60);
+
+/// A bundled recording's IMU log.
+fn bundled_walk(name: &str) -> ImuLog {
+    let path = manifest().join("data").join(name).join("imu.csv");
+    read_imu_csv(&path, &ImuCsvOptions::default()).unwrap()
+}
 
 fn manifest() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -82,8 +88,7 @@ fn diagnostics_at_end(sub: &Subscriber<Diagnostics>) -> Diagnostics {
 #[test]
 fn replay_matches_offline_run_sample_by_sample() {
     let _one = one_daemon_at_a_time();
-    let imu_path: PathBuf = manifest().join("data/gdins_exp36_corridor_out_and_back/imu.csv");
-    let log = read_imu_csv(&imu_path, &ImuCsvOptions::default()).unwrap();
+    let log = bundled_walk("gdins_exp36_corridor_out_and_back");
     let (offline, counters, report) = replay_and_compare(&log, "test_daemon_replay");
     // The walk is long enough for the flag to rise (the estimate has absorbed 95 % of an error
     // in the rest-mean bias): the comparison covered both states.
@@ -97,8 +102,7 @@ fn a_gap_filled_from_the_stride_before_is_the_same_through_the_daemon() {
     // 0.3 s cut out of a swing (issue 9; `estimator.max_fill_s`): the daemon fills it from its
     // own memory of the stride before, exactly as the offline run does.
     let _one = one_daemon_at_a_time();
-    let imu_path: PathBuf = manifest().join("data/gdins_exp36_corridor_out_and_back/imu.csv");
-    let mut log = read_imu_csv(&imu_path, &ImuCsvOptions::default()).unwrap();
+    let mut log = bundled_walk("gdins_exp36_corridor_out_and_back");
     log.rows.drain(9000..9060);
     let (_, counters, _) = replay_and_compare(&log, "test_daemon_replay_gap");
     assert_eq!((counters.gaps, counters.gaps_filled), (1, 1));
@@ -110,8 +114,7 @@ fn late_footfalls_are_the_same_through_the_daemon() {
     // step that updates a missed footfall late propagates the filter again through the samples
     // since, from the stride memory, in the daemon as offline.
     let _one = one_daemon_at_a_time();
-    let imu_path: PathBuf = manifest().join("data/gdins_exp38_zigzag_extreme/imu.csv");
-    let log = read_imu_csv(&imu_path, &ImuCsvOptions::default()).unwrap();
+    let log = bundled_walk("gdins_exp38_zigzag_extreme");
     let (offline, counters, _) = replay_and_compare(&log, "test_daemon_replay_late");
     assert!(counters.late_footfalls >= 2, "{counters:?}");
     let late = offline
@@ -125,7 +128,7 @@ fn late_footfalls_are_the_same_through_the_daemon() {
 /// full speed) and checks that every published attitude equals the offline estimate of its
 /// sample, with nothing lost. Returns the offline estimates and counters and the daemon's report.
 fn replay_and_compare(
-    log: &corridor_shared::imu_csv::ImuLog,
+    log: &ImuLog,
     domain_name: &str,
 ) -> (
     Vec<Estimate>,

@@ -334,18 +334,20 @@ pub fn apply_onset_change(effects: &mut Vec<Finding>, o: &OnsetChange) {
 pub fn apply_bias_change(effects: &mut Vec<Finding>, c: &BiasChange) {
     // The filter's own bias needs no used heading observation: with too few of them to test
     // the residuals, the drift's finding is this test's alone.
-    if !effects.iter().any(|f| f.name == Effect::BiasDrift) {
-        effects.push(Finding {
-            name: Effect::BiasDrift,
-            score: 0.0,
-            evidence: "residual tests: not made (too few used heading observations)".into(),
-            fix: None,
-            mde: None,
-        });
-    }
-    let Some(f) = effects.iter_mut().find(|f| f.name == Effect::BiasDrift) else {
-        return;
+    let i = match effects.iter().position(|f| f.name == Effect::BiasDrift) {
+        Some(i) => i,
+        None => {
+            effects.push(Finding {
+                name: Effect::BiasDrift,
+                score: 0.0,
+                evidence: "residual tests: not made (too few used heading observations)".into(),
+                fix: None,
+                mde: None,
+            });
+            effects.len() - 1
+        }
     };
+    let f = &mut effects[i];
     let step_like = c.largest_share > 0.5;
     f.evidence = format!(
         "{}; the filter's bias against its random walk, {}: χ² {:.1} over {} blocks of \
