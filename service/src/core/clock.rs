@@ -23,6 +23,11 @@ const PHASE_GAIN: f64 = 0.02;
 const FREQUENCY_GAIN: f64 = PHASE_GAIN * PHASE_GAIN / 4.0;
 /// A stamp further than this many periods from the smoothed clock re-synchronises it (a gap).
 const RESYNC_PERIODS: f64 = 3.0;
+/// The same for stamps already taken as jittery, and during the warm-up: a driver that stamps
+/// on receipt hands over samples in bursts (a USB frame of several), so steps of three or four
+/// periods followed by steps of almost nothing are its normal rhythm, not gaps. Only a step this
+/// many periods long (50 ms at 200 Hz) is one there.
+const BURST_PERIODS: f64 = 10.0;
 /// A step this many periods long or longer is a lost sample (left out of the jitter statistic).
 const LOST_SAMPLE_PERIODS: f64 = 1.5;
 
@@ -69,8 +74,14 @@ impl SampleClock {
         let dt = t_s - last;
         // A gap (several periods without a sample) is no part of the clock's statistics: the
         // smoothed clock jumps to the stamp (missing samples keep their time), and a warm-up in
-        // progress starts again from it.
-        if self.period_s > 0.0 && dt > RESYNC_PERIODS * self.period_s {
+        // progress starts again from it. Before the stamps are judged, and once they are taken as
+        // jittery, only a step longer than a burst is a gap.
+        let gap_periods = if self.jittery || self.steps < WARMUP_STEPS {
+            BURST_PERIODS
+        } else {
+            RESYNC_PERIODS
+        };
+        if self.period_s > 0.0 && dt > gap_periods * self.period_s {
             if self.steps < WARMUP_STEPS {
                 self.steps = 0;
                 self.warm_sum_s = 0.0;
@@ -92,7 +103,11 @@ impl SampleClock {
             if self.steps == WARMUP_STEPS {
                 let mut steps = self.warm_steps_s;
                 let (_, median, _) = steps.select_nth_unstable_by(k / 2, f64::total_cmp);
-                self.period_s = *median;
+                // Unless most steps fall inside bursts (groups of samples stamped together):
+                // then the median is the spacing within a burst, and the mean is the period.
+                if *median >= 0.5 * self.period_s {
+                    self.period_s = *median;
+                }
             }
             self.smoothed_s = t_s;
         } else {
@@ -113,7 +128,12 @@ impl SampleClock {
             };
             let predicted = self.smoothed_s + ticks * self.period_s;
             let error = t_s - predicted;
-            if error.abs() > RESYNC_PERIODS * self.period_s {
+            let resync = if self.jittery {
+                BURST_PERIODS
+            } else {
+                RESYNC_PERIODS
+            };
+            if error.abs() > resync * self.period_s {
                 // Far off (a burst after a stall, a gap): the phase jumps to the stamp, the
                 // period is not touched, and the returned time stays monotonic (below).
                 self.smoothed_s = t_s;
@@ -224,6 +244,48 @@ mod tests {
                 c.period_s()
             );
         }
+    }
+
+    /// A driver that stamps on receipt and hands samples over in bursts: groups of 1–4 samples
+    /// stamped together (0.5–4 ms after the group's last sample, 15 µs apart), so steps run
+    /// from almost nothing to four periods. Before `BURST_PERIODS`, every step of three periods
+    /// restarted the warm-up, which then never ended: the stamps were integrated as they were
+    /// (the suite on such stamps: normal-gait median 0.28 → 0.45 %, worst 0.70 → 3.20 %).
+    #[test]
+    fn stamps_that_arrive_in_bursts_are_recognised_and_smoothed() {
+        let mut c = SampleClock::default();
+        let mut seed = 3;
+        let (mut k, mut last) = (0usize, f64::NEG_INFINITY);
+        // Each integration step against the sensor's 5 ms: the stamps' and the clock's.
+        let (mut prev_stamp, mut prev_t) = (0.0, 0.0);
+        let (mut raw_err, mut smooth_err, mut n) = (0.0, 0.0, 0);
+        while k < 8000 {
+            let group = 1 + (4.0 * lcg(&mut seed)) as usize;
+            let arrival = (k + group - 1) as f64 * 0.005 + 0.0005 + 0.0035 * lcg(&mut seed);
+            for j in 0..group {
+                let stamp = (arrival + 1.5e-5 * j as f64).max(last + 1e-6);
+                last = stamp;
+                let t = c.push(stamp);
+                if k > 2000 {
+                    n += 1;
+                    raw_err += (stamp - prev_stamp - 0.005).powi(2);
+                    smooth_err += (t - prev_t - 0.005).powi(2);
+                }
+                (prev_stamp, prev_t) = (stamp, t);
+            }
+            k += group;
+        }
+        assert!(c.jittery(), "bursts not recognised as jitter");
+        assert!(
+            (c.period_s() - 0.005).abs() < 5e-5,
+            "period {}",
+            c.period_s()
+        );
+        let (raw, smooth) = ((raw_err / n as f64).sqrt(), (smooth_err / n as f64).sqrt());
+        assert!(
+            smooth < 0.1 * raw,
+            "step error: raw {raw} s, smoothed {smooth} s"
+        );
     }
 
     #[test]
