@@ -89,6 +89,12 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
                 .into(),
         );
     }
+    if s.rest_prior_refused {
+        notes.push(
+            "the initial rest turned faster than the sensor's largest bias (sensor.max_gyro_bias_rad_s): not a rest, no rest-mean bias prior"
+                .into(),
+        );
+    }
     if s.initial_rest_moving_blocks > 0 {
         notes.push(format!(
             "the foot moved in {:.2} s of the initial rest (rocking, a weight shift): left out of the bias prior and the tilt",

@@ -71,6 +71,8 @@ pub struct Summary {
     pub jittery_clock_samples: u64,
     /// Alignment came from a short first stance (no initial rest, no rest-mean prior).
     pub started_without_rest: bool,
+    /// The initial rest turned faster than the sensor's largest bias: no rest-mean prior.
+    pub rest_prior_refused: bool,
     /// 50 ms blocks of the initial rest left out of the bias prior and the tilt because the
     /// foot moved in them.
     pub initial_rest_moving_blocks: u64,
@@ -436,6 +438,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         heading_reacquisitions: c.heading_reacquisitions,
         jittery_clock_samples: c.jittery_clock_samples,
         started_without_rest: c.started_without_rest,
+        rest_prior_refused: c.rest_prior_refused,
         initial_rest_moving_blocks: c.initial_rest_moving_blocks,
         zero_rate_updates: c.zero_rate_updates,
         zero_rate_refused: c.zero_rate_refused,

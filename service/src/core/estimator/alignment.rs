@@ -68,8 +68,15 @@ impl Pipeline {
         let (roll, pitch) = tilt_from_specific_force(&mean_f);
         self.tilt0 = from_euler_zyx(roll, pitch, 0.0);
         self.update_forward_body();
+        // A "rest" that turned faster than any bias of this sensor can be is no measurement of
+        // the bias (a foot pivoting on its heel, a log that starts mid-walk): its mean rate would
+        // start the filter in a state the health check refuses, and every later state with it.
+        let bound = self.cfg.sensor.max_gyro_bias_rad_s();
+        let turning = !short_start && mean_w.iter().any(|v| v.abs() > bound);
+        self.counters.rest_prior_refused =
+            turning && self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean;
         let (b0, sd0) = match self.cfg.alignment.gyro_bias_prior {
-            BiasPrior::RestMean if !short_start => {
+            BiasPrior::RestMean if !short_start && !turning => {
                 (mean_w, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
             }
             BiasPrior::RestMean | BiasPrior::None => (
@@ -134,7 +141,8 @@ impl Pipeline {
                 obs: None,
             },
         };
-        let rest_prior = self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean && !short_start;
+        let rest_prior =
+            self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean && !short_start && !turning;
         // The prior's covariance per axis (floor and the rest's own spread), in each filter's
         // axes.
         let prior_cov = Matrix3::from_diagonal(&prior_sd.map(|v| v * v));

@@ -218,6 +218,10 @@ pub struct Counters {
     /// Alignment came from a first stance shorter than `alignment.min_rest_s` (no rest-mean
     /// bias prior).
     pub started_without_rest: bool,
+    /// The initial "rest" turned faster than any bias of the sensor can be
+    /// (`sensor.max_gyro_bias_rad_s` on some axis: a foot pivoting, or a log started mid-walk),
+    /// so its mean rate was not taken as the bias prior.
+    pub rest_prior_refused: bool,
     /// Zero-rate updates of the gyro bias at rests after the alignment.
     pub zero_rate_updates: u64,
     /// Rests whose mean rate was not fused: beyond the χ² gate of the bias the filter holds

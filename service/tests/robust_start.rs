@@ -1,0 +1,68 @@
+//! A log that starts mid-walk (a daemon started while the wearer walks). exp29 cut 3 s before
+//! its second corner: the first stance long enough to be taken as the initial rest is the
+//! corner, where the foot pivots about the vertical at about 0.24 rad/s. Its mean rate used to
+//! become the rest-mean bias prior: a bias beyond `sensor.max_gyro_bias_rad_s` (0.2 rad/s), a
+//! state the health check refused from the first sample on, and every state after it: the run
+//! stayed at the origin for the remaining 93 s, with no error (found by cutting every bundled
+//! walk at 30 % of its footprints, session 21).
+
+use corridor_service::eval::EvalOptions;
+use corridor_service::runner::{heading_aid, run_log};
+use corridor_shared::config::{BiasPrior, ConfigFile, ConfigOverrides};
+use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
+use corridor_shared::injection::BiasInjection;
+use corridor_shared::truth_csv::read_truth_csv;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The cut: between exp29's first two surveyed corners after the start (11.70 s).
+const CUT_S: f64 = 11.7;
+
+#[test]
+fn a_rest_that_turns_faster_than_any_bias_is_not_the_bias_prior() {
+    let dir = root().join("tests/data/gdins_exp29_corridor_circuit");
+    let mut log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
+    log.rows.retain(|r| r.t_s >= CUT_S);
+    let truth: Vec<_> = read_truth_csv(&dir.join("ground_truth.csv"))
+        .unwrap()
+        .into_iter()
+        .filter(|p| p.t_s > CUT_S)
+        .collect();
+    // The ZUPT baseline's configuration: its alignment keeps the pivot's blocks (the default's
+    // `rest_max_rate_change_rad_s` happens to leave most of them out).
+    let path = root().join("configs/gdins_zupt_baseline.toml");
+    let cfg = ConfigOverrides {
+        gyro_bias_prior: Some(BiasPrior::RestMean),
+        // The corridor walked from the first corner on.
+        start_heading_deg: Some(-90.0),
+        ..Default::default()
+    }
+    .validate(&ConfigFile::read(&path).unwrap(), &path)
+    .unwrap();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let mut largest_bias = 0.0f64;
+    let out = run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+        largest_bias = e
+            .gyro_bias_rad_s
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(largest_bias, |m, v| m.max(v.abs()));
+    });
+    assert_eq!(out.counters.health_restores, 0, "the state was refused");
+    assert!(
+        largest_bias <= cfg.sensor.max_gyro_bias_rad_s(),
+        "bias {largest_bias} rad/s"
+    );
+    // It navigates: the ZUPT filter's footprint error on the 93 s left, as on whole walks.
+    let report = out.trace.evaluate(&truth, &EvalOptions::default()).unwrap();
+    let pct = report.rms_error_pct_of_path.unwrap();
+    assert!(pct < 3.0, "footprint RMS {pct:.2} % of path");
+    // And says why it started without a prior.
+    assert!(
+        out.counters.rest_prior_refused,
+        "the pivot's mean rate was taken as the bias prior"
+    );
+}
