@@ -91,7 +91,7 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
     }
     if s.rest_prior_refused {
         notes.push(
-            "the initial rest turned faster than the sensor's largest bias (sensor.max_gyro_bias_rad_s): not a rest, no rest-mean bias prior"
+            "the initial rest turned faster than a bias of this sensor can be (alignment.max_prior_rate_rad_s, sensor.max_gyro_bias_rad_s): a pivoting foot, no rest-mean bias prior"
                 .into(),
         );
     }

@@ -324,6 +324,7 @@ mod tests {
             ("heading", "foot_axis_stride_max_deg"),
             ("model", "heading_offset_sd_deg"),
             ("model", "gyro_coupling_z_sd_deg"),
+            ("alignment", "max_prior_rate_rad_s"),
         ] {
             let f = ConfigFile::parse(&format!("[{section}]\n{key} = -3.0\n"), Path::new("a.toml"))
                 .unwrap();
@@ -343,6 +344,7 @@ mod tests {
             ("detector", "overdue_stride_factor", "1.05"),
             ("model", "accel_scale_factor", "-0.25"),
             ("model", "heading_offset_sd_deg", "1e300"),
+            ("alignment", "max_prior_rate_rad_s", "20"),
         ] {
             let f = ConfigFile::parse(&format!("[{section}]\n{key} = {v}\n"), Path::new("a.toml"))
                 .unwrap();

@@ -94,6 +94,9 @@ pub struct AlignmentConfig {
     pub rest_max_rate_change_rad_s: Positive,
     /// Shortest first stance that aligns without a rest (0: wait for a rest).
     pub min_start_stance_s: f64,
+    /// The largest initial-rest mean rate (magnitude) taken as the bias prior, rad/s (`None`:
+    /// only the sensor's largest bias, per axis).
+    pub max_prior_rate_rad_s: Option<Positive>,
 }
 
 /// Validated `[detector]`.

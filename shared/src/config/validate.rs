@@ -330,6 +330,18 @@ impl ConfigFile {
                     60.0,
                     "must be in [0, 60] s",
                 )?,
+                max_prior_rate_rad_s: a
+                    .max_prior_rate_rad_s
+                    .map(|v| {
+                        Positive::in_range(
+                            "alignment.max_prior_rate_rad_s",
+                            v,
+                            0.0,
+                            10.0,
+                            "must be in (0, 10] rad/s",
+                        )
+                    })
+                    .transpose()?,
             },
             detector: DetectorConfig {
                 kind: d.kind.unwrap_or(DETECTOR_KIND),

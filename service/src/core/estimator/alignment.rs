@@ -71,8 +71,16 @@ impl Pipeline {
         // A "rest" that turned faster than any bias of this sensor can be is no measurement of
         // the bias (a foot pivoting on its heel, a log that starts mid-walk): its mean rate would
         // start the filter in a state the health check refuses, and every later state with it.
+        // The same for a rest turning faster than `alignment.max_prior_rate_rad_s` (its rate's
+        // magnitude), where a sensor's biases are known to be smaller.
         let bound = self.cfg.sensor.max_gyro_bias_rad_s();
-        let turning = !short_start && mean_w.iter().any(|v| v.abs() > bound);
+        let turning = !short_start
+            && (mean_w.iter().any(|v| v.abs() > bound)
+                || self
+                    .cfg
+                    .alignment
+                    .max_prior_rate_rad_s
+                    .is_some_and(|m| mean_w.norm() > m.get()));
         self.counters.rest_prior_refused =
             turning && self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean;
         let (b0, sd0) = match self.cfg.alignment.gyro_bias_prior {

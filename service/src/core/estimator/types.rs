@@ -219,8 +219,9 @@ pub struct Counters {
     /// bias prior).
     pub started_without_rest: bool,
     /// The initial "rest" turned faster than any bias of the sensor can be
-    /// (`sensor.max_gyro_bias_rad_s` on some axis: a foot pivoting, or a log started mid-walk),
-    /// so its mean rate was not taken as the bias prior.
+    /// (`sensor.max_gyro_bias_rad_s` on some axis, or `alignment.max_prior_rate_rad_s` in
+    /// magnitude: a foot pivoting, or a log started mid-walk), so its mean rate was not taken
+    /// as the bias prior.
     pub rest_prior_refused: bool,
     /// Zero-rate updates of the gyro bias at rests after the alignment.
     pub zero_rate_updates: u64,
