@@ -71,7 +71,8 @@ pub struct Summary {
     pub jittery_clock_samples: u64,
     /// Alignment came from a short first stance (no initial rest, no rest-mean prior).
     pub started_without_rest: bool,
-    /// The initial rest turned faster than the sensor's largest bias: no rest-mean prior.
+    /// The initial rest turned faster than a bias of the sensor can be
+    /// (`alignment.max_prior_rate_rad_s`, `sensor.max_gyro_bias_rad_s`): no rest-mean prior.
     pub rest_prior_refused: bool,
     /// 50 ms blocks of the initial rest left out of the bias prior and the tilt because the
     /// foot moved in them.

@@ -144,9 +144,10 @@ pub struct AlignmentFile {
     /// filter, without a rest-mean bias prior (default 0.1 s; 0 waits for a rest).
     pub min_start_stance_s: Option<f64>,
     /// The largest initial-rest mean rate (its magnitude) taken as the bias prior, rad/s (left
-    /// out: only `sensor.max_gyro_bias_rad_s`, per axis). A rest through which the foot pivots slowly about the
-    /// vertical shows no other sign of motion, and its mean rate would be a confident, wrong
-    /// prior: set it near the largest bias the sensor shows, well below the health bound.
+    /// out: only `sensor.max_gyro_bias_rad_s`, per axis). A rest through which the foot pivots
+    /// slowly about the vertical shows no other sign of motion, and its mean rate would be a
+    /// confident, wrong prior: set it near the largest bias the sensor shows, well below the
+    /// health bound.
     pub max_prior_rate_rad_s: Option<f64>,
 }
 
