@@ -197,6 +197,22 @@ mod tests {
         assert!(!c.jittery());
     }
 
+    /// The clock took the stamps as jittery, found the 5 ms period, and its timing error (sum of
+    /// squares over `n` samples) is below `ratio` times the stamps' own.
+    fn assert_smoothed(c: &SampleClock, raw_err: f64, smooth_err: f64, n: usize, ratio: f64) {
+        assert!(c.jittery(), "the stamps were not recognised as jittery");
+        assert!(
+            (c.period_s() - 0.005).abs() < 5e-5,
+            "period {}",
+            c.period_s()
+        );
+        let (raw, smooth) = ((raw_err / n as f64).sqrt(), (smooth_err / n as f64).sqrt());
+        assert!(
+            smooth < ratio * raw,
+            "timing error: raw {raw} s, smoothed {smooth} s"
+        );
+    }
+
     /// Arrival delays of 0–4 ms at 200 Hz; `stalls` (at sample, length s, then the buffered
     /// samples arrive 0.1 ms apart).
     fn host_stamps(n: usize, gaps: &[(usize, f64)], stalls: &[(usize, f64)]) -> Vec<f64> {
@@ -276,17 +292,7 @@ mod tests {
             }
             k += group;
         }
-        assert!(c.jittery(), "bursts not recognised as jitter");
-        assert!(
-            (c.period_s() - 0.005).abs() < 5e-5,
-            "period {}",
-            c.period_s()
-        );
-        let (raw, smooth) = ((raw_err / n as f64).sqrt(), (smooth_err / n as f64).sqrt());
-        assert!(
-            smooth < 0.1 * raw,
-            "step error: raw {raw} s, smoothed {smooth} s"
-        );
+        assert_smoothed(&c, raw_err, smooth_err, n, 0.1);
     }
 
     #[test]
@@ -325,16 +331,6 @@ mod tests {
                 );
             }
         }
-        assert!(c.jittery());
-        assert!(
-            (c.period_s() - 0.005).abs() < 5e-5,
-            "period {}",
-            c.period_s()
-        );
-        let (raw, smooth) = ((raw_err / n as f64).sqrt(), (smooth_err / n as f64).sqrt());
-        assert!(
-            smooth < 0.25 * raw,
-            "timing noise: raw {raw} s, smoothed {smooth} s"
-        );
+        assert_smoothed(&c, raw_err, smooth_err, n, 0.25);
     }
 }
