@@ -76,12 +76,7 @@ impl SampleClock {
         // smoothed clock jumps to the stamp (missing samples keep their time), and a warm-up in
         // progress starts again from it. Before the stamps are judged, and once they are taken as
         // jittery, only a step longer than a burst is a gap.
-        let gap_periods = if self.jittery || self.steps < WARMUP_STEPS {
-            BURST_PERIODS
-        } else {
-            RESYNC_PERIODS
-        };
-        if self.period_s > 0.0 && dt > gap_periods * self.period_s {
+        if self.period_s > 0.0 && dt > self.gap_periods() * self.period_s {
             if self.steps < WARMUP_STEPS {
                 self.steps = 0;
                 self.warm_sum_s = 0.0;
@@ -128,12 +123,7 @@ impl SampleClock {
             };
             let predicted = self.smoothed_s + ticks * self.period_s;
             let error = t_s - predicted;
-            let resync = if self.jittery {
-                BURST_PERIODS
-            } else {
-                RESYNC_PERIODS
-            };
-            if error.abs() > resync * self.period_s {
+            if error.abs() > self.gap_periods() * self.period_s {
                 // Far off (a burst after a stall, a gap): the phase jumps to the stamp, the
                 // period is not touched, and the returned time stays monotonic (below).
                 self.smoothed_s = t_s;
@@ -162,6 +152,16 @@ impl SampleClock {
         };
         self.last_out_s = out;
         out
+    }
+
+    /// How many periods from the clock a stamp must be to be a gap: [`BURST_PERIODS`] while the
+    /// stamps are being judged (the warm-up) and once they are jittery, else [`RESYNC_PERIODS`].
+    fn gap_periods(&self) -> f64 {
+        if self.jittery || self.steps < WARMUP_STEPS {
+            BURST_PERIODS
+        } else {
+            RESYNC_PERIODS
+        }
     }
 
     /// Whether the stamps are being smoothed.

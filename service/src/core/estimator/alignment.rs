@@ -81,16 +81,16 @@ impl Pipeline {
                     .alignment
                     .max_prior_rate_rad_s
                     .is_some_and(|m| mean_w.norm() > m.get()));
-        self.counters.rest_prior_refused =
-            turning && self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean;
-        let (b0, sd0) = match self.cfg.alignment.gyro_bias_prior {
-            BiasPrior::RestMean if !short_start && !turning => {
-                (mean_w, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
-            }
-            BiasPrior::RestMean | BiasPrior::None => (
+        let wants_prior = self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean;
+        self.counters.rest_prior_refused = wants_prior && turning;
+        let rest_prior = wants_prior && !short_start && !turning;
+        let (b0, sd0) = if rest_prior {
+            (mean_w, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
+        } else {
+            (
                 Vector3::zeros(),
                 self.cfg.eskf.gyro_bias_initial_sd_rad_s.get(),
-            ),
+            )
         };
         let e = &self.cfg.eskf;
         let own_bias = matches!(self.cfg.mode, Mode::Zupt | Mode::Eskf);
@@ -149,8 +149,6 @@ impl Pipeline {
                 obs: None,
             },
         };
-        let rest_prior =
-            self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean && !short_start && !turning;
         // The prior's covariance per axis (floor and the rest's own spread), in each filter's
         // axes.
         let prior_cov = Matrix3::from_diagonal(&prior_sd.map(|v| v * v));
