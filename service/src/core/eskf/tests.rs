@@ -623,3 +623,46 @@ fn a_heading_turn_rotates_the_attitude_and_its_covariance_with_it() {
     f.turn_heading(0.0, 0.1);
     assert!((dense(&f)[(TH + 2, TH + 2)] - before - 0.01).abs() < 1e-15);
 }
+
+#[test]
+fn widening_the_heading_offset_forgets_what_the_foot_axes_taught_it() {
+    for ext in extension_sets() {
+        let mut f = filter(
+            from_euler_zyx(0.0, 0.0, 0.3),
+            Vector3::zeros(),
+            0.01,
+            0.01,
+            ext,
+        );
+        // Foot axes correlate the offset with the heading and shrink its variance.
+        for _ in 0..5 {
+            f.heading_update(0.3, 0.02, &Vector3::x());
+        }
+        let before = dense(&f);
+        f.widen_heading_offset(0.05 * 0.05);
+        let after = dense(&f);
+        let Some(i) = f.layout.offset else {
+            assert_eq!(before, after, "without the state nothing changes");
+            continue;
+        };
+        assert!(before[(i, i)] < 0.04 * 0.04 && before[(i, TH + 2)] != 0.0);
+        assert_eq!(after[(i, i)], 0.05 * 0.05);
+        for j in (0..f.layout.n).filter(|&j| j != i) {
+            assert_eq!(
+                (after[(i, j)], after[(j, i)]),
+                (0.0, 0.0),
+                "correlation with {j}"
+            );
+            for k in (0..f.layout.n).filter(|&k| k != i) {
+                assert_eq!(
+                    after[(j, k)],
+                    before[(j, k)],
+                    "({j}, {k}) is not the offset's"
+                );
+            }
+        }
+        // A variance already wider than asked for is kept.
+        f.widen_heading_offset(0.01 * 0.01);
+        assert_eq!(dense(&f)[(i, i)], 0.05 * 0.05);
+    }
+}
