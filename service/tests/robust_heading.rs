@@ -2,7 +2,8 @@
 //! the shoe, samples lost in a turn) by more than the association's gate: every stride then
 //! looks like walking off the corridor, and before `heading.reacquire_strides` the heading was
 //! never found again. Here a rotation about the vertical is added to exp28's samples in the
-//! stance at 60 s, where the walker stands in a long corridor.
+//! stance at 60 s, where the walker stands in a long corridor; and exp22 starts from a heading
+//! 5° off its corridor, which the first foot axes put into the foot-heading offset.
 
 use corridor_service::eval::EvalOptions;
 use corridor_service::runner::{heading_aid, run_log};

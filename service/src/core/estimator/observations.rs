@@ -340,8 +340,8 @@ impl Pipeline {
             // now in doubt: a start heading off by 5° ends up in it (exp22: the offset 4° from
             // where the right start puts it), and the foot axes then agree with the wrong
             // heading and narrow it again. It is learned afresh, from its prior σ.
-            if let Some(sd) = self.cfg.model.heading_offset_sd_rad {
-                eskf.widen_heading_offset(sd.get() * sd.get());
+            if let Some(offset_sd) = self.cfg.model.heading_offset_sd_rad {
+                eskf.widen_heading_offset(offset_sd.get() * offset_sd.get());
             }
             self.reacquiring = true;
             // the foot axis waits for a stride along its corridor, as after a restore
