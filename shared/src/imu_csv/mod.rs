@@ -306,7 +306,7 @@ pub enum ImuCsvError {
     },
     /// More than the allowed fraction of data rows was rejected.
     #[error(
-        "{path}: {rejected} of {total} data rows rejected, more than the allowed fraction {max_rejected_fraction}; first: {}",
+        "{path}: {rejected} of {total} data rows rejected, more than the allowed fraction {max_rejected_fraction}; first: {}{hint}",
         .first.located(.path)
     )]
     TooManyRejected {
@@ -318,8 +318,11 @@ pub enum ImuCsvError {
         total: u64,
         /// The allowed fraction ([`ImuCsvOptions::max_rejected_fraction`]).
         max_rejected_fraction: f64,
-        /// The first rejected row.
-        first: RejectedRow,
+        /// The first rejected row (boxed: it keeps the error small).
+        first: Box<RejectedRow>,
+        /// What the rows' times probably are, when they look like another unit than seconds
+        /// (starts with a space), else empty.
+        hint: String,
     },
     /// The file has no data rows (it is empty or holds only a header) or no row was accepted.
     #[error(

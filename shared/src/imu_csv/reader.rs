@@ -30,6 +30,11 @@ pub struct ImuCsvReader<R> {
     /// Length of the source when known (a file's size), bytes.
     pub(super) len_bytes: Option<u64>,
     pub(super) time: TimeGuard,
+    /// The largest time step the rule takes, s ([`ImuCsvOptions::max_dt_s`]).
+    pub(super) max_dt_s: f64,
+    /// The first and last `t_s` of the rows that parsed, and their count (whatever the time
+    /// rule said of them): the raw step a refused log advances by ([`Self::time_unit_hint`]).
+    pub(super) parsed_t: Option<(f64, f64, u64)>,
     /// Blank lines since the last non-blank one: (first line, count). Fine at the end of the
     /// file; rejected as malformed when a data row follows.
     pub(super) blank: Option<(u64, u64)>,
@@ -86,6 +91,8 @@ impl<R: BufRead> ImuCsvReader<R> {
             first_row_bytes: 0,
             len_bytes: None,
             time: TimeGuard::new(opts.min_dt_s, opts.max_dt_s),
+            max_dt_s: opts.max_dt_s,
+            parsed_t: None,
             blank: None,
             total: 0,
             rejected_counts: [0; 5],
@@ -276,7 +283,12 @@ impl<R: BufRead> ImuCsvReader<R> {
             }
             let line = std::mem::take(&mut self.line);
             let text = strip_cr(Self::line_str(&line));
-            let verdict = match parse_row(text, line_no, n_fields, self.temp_index) {
+            let parsed = parse_row(text, line_no, n_fields, self.temp_index);
+            if let Ok(row) = &parsed {
+                let (first, _, n) = self.parsed_t.unwrap_or((row.t_s, row.t_s, 0));
+                self.parsed_t = Some((first, row.t_s, n + 1));
+            }
+            let verdict = match parsed {
                 Ok(row) => match self.time.check(row.t_s) {
                     verdict @ (TimeVerdict::Accept | TimeVerdict::Rebase) => {
                         self.time.accept(row.t_s);
@@ -348,6 +360,33 @@ impl<R: BufRead> ImuCsvReader<R> {
         row
     }
 
+    /// For a log whose rows were refused mostly as time jumps: whether its `t_s` advance by a
+    /// step the time rule would take in milliseconds, microseconds or nanoseconds (the mean
+    /// step over the rows that parsed, scaled); empty otherwise.
+    fn time_unit_hint(&self, n_rejected: u64) -> String {
+        let jumps = RejectReason::ALL
+            .iter()
+            .zip(self.rejected_counts)
+            .find_map(|(r, n)| (*r == RejectReason::TimeJump).then_some(n))
+            .unwrap_or(0);
+        let Some((first, last, n)) = self.parsed_t else {
+            return String::new();
+        };
+        if 2 * jumps <= n_rejected || n < 3 {
+            return String::new();
+        }
+        let step = (last - first) / (n - 1) as f64;
+        [(1e-3, "milliseconds"), (1e-6, "microseconds"), (1e-9, "nanoseconds")]
+            .iter()
+            .find(|(scale, _)| step > self.max_dt_s && step * scale <= self.max_dt_s)
+            .map_or(String::new(), |(scale, unit)| {
+                format!(
+                    " (the rows' t_s advance by {step:.4} on average: {:.4} s if they are {unit}; t_s must be in seconds)",
+                    step * scale
+                )
+            })
+    }
+
     /// The checks over the whole log, in the order of [`parse_imu_csv`].
     pub(super) fn finish(&mut self) -> Result<(), ImuCsvError> {
         let path = || self.path.clone();
@@ -366,7 +405,8 @@ impl<R: BufRead> ImuCsvReader<R> {
                 rejected: n_rejected,
                 total: self.total,
                 max_rejected_fraction: self.max_rejected_fraction,
-                first: self.rejected[0].clone(),
+                first: Box::new(self.rejected[0].clone()),
+                hint: self.time_unit_hint(n_rejected),
             });
         }
         if self.accepted == 0 {

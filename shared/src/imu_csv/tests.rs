@@ -348,6 +348,27 @@ fn long_values_are_truncated_to_64_characters() {
 }
 
 #[test]
+fn times_in_another_unit_than_seconds_are_named_in_the_error() {
+    for (scale, unit, step) in [
+        (1e3, "milliseconds", "5.0000"),
+        (1e6, "microseconds", "5000.0000"),
+    ] {
+        let mut text = String::from(HEADER);
+        for i in 0..100 {
+            text.push_str(&format!("\n{}", row(i as f64 * 0.005 * scale)));
+        }
+        let err = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap_err();
+        let message = err.to_string();
+        assert!(
+            message.ends_with(&format!(
+                " (the rows' t_s advance by {step} on average: 0.0050 s if they are {unit}; t_s must be in seconds)"
+            )),
+            "{message}"
+        );
+    }
+}
+
+#[test]
 fn too_many_rejected_is_an_error_naming_the_first() {
     // 2 bad rows of 100 is 2 % > 1 %.
     let text = replace_line(&good_file(100), 7, "0.025,0.01,0.02,0.03,0.1,NaN,9.8");
