@@ -381,7 +381,8 @@ impl<R: BufRead> ImuCsvReader<R> {
             .find(|(scale, _)| step > self.max_dt_s && step * scale <= self.max_dt_s)
             .map_or(String::new(), |(scale, unit)| {
                 format!(
-                    " (the rows' t_s advance by {step:.4} on average: {:.4} s if they are {unit}; t_s must be in seconds)",
+                    " (the rows' t_s advance by {step:.4} on average: {:.4} s if they are \
+                     {unit}; t_s must be in seconds)",
                     step * scale
                 )
             })
