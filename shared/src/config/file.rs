@@ -209,9 +209,9 @@ pub struct EskfFile {
     /// Lever arm between the sensor and the point the foot rolls about at the edges of a
     /// stance (default 0: off): the ZUPT σ of a sample is √(zupt_sd² + (arm·|ω|)²).
     pub zupt_lever_arm_m: Option<f64>,
-    /// Zero-rate updates: every later rest of at least `alignment.min_rest_s` (its last
-    /// `alignment.rest_tail_s` left out) observes the gyro bias like the initial rest, with σ
-    /// √(`gyro_bias_prior_sd_rad_s`² + the rest's spread²) (default true).
+    /// Zero-rate updates: every later rest of at least `alignment.min_rest_s` (its first and
+    /// its last `alignment.rest_tail_s` left out) observes the gyro bias like the initial rest,
+    /// with σ √(`gyro_bias_prior_sd_rad_s`² + the rest's spread²) (default true).
     pub zero_rate_updates: Option<bool>,
     /// Height of the sensor above the floor contact about which the foot rolls at heel strike
     /// and heel-off, m: the stance velocity update expects the sensor to move at this height

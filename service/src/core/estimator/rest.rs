@@ -1,5 +1,5 @@
-//! A rest's means of specific force and rate, without its last part and without the blocks in
-//! which the foot moved.
+//! A rest's means of specific force and rate, without its last part, without its first part
+//! when it begins with a landing, and without the blocks in which the foot moved.
 
 use nalgebra::Vector3;
 
@@ -36,7 +36,10 @@ pub(super) type RestMeans = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
 /// rate lies further than `max_rate_change_rad_s` (when given: the initial rest's) from the
 /// mean of the rest's still blocks so far (a foot that rocks or shifts its weight before its
 /// first step: exp40 rocks at 0.05–0.2 rad/s for 0.7 s after 0.6 s of quiet, all of it
-/// "stance"). Fixed capacity.
+/// "stance"). A later rest begins with the foot's landing (rolling to flat at up to the stance
+/// detector's threshold), which the motion test, anchored on the first block, would take for
+/// the reference: its first `head_s` are left out instead ([`RestSums::leaving_out_head`]).
+/// Fixed capacity.
 #[derive(Debug, Clone)]
 pub(super) struct RestSums {
     pub(super) t_first_s: f64,
@@ -50,6 +53,8 @@ pub(super) struct RestSums {
     max_rate_change_rad_s: Option<f64>,
     /// Settled blocks left out because the foot moved in them.
     settled_moving: u64,
+    /// The first part of the rest left out of every mean, s.
+    head_s: f64,
 }
 
 /// Block length of the rest accumulator, s.
@@ -68,7 +73,13 @@ impl RestSums {
             capacity,
             max_rate_change_rad_s,
             settled_moving: 0,
+            head_s: 0.0,
         }
+    }
+
+    /// The same, leaving the rest's first `head_s` out of every mean.
+    pub(super) fn leaving_out_head(self, head_s: f64) -> Self {
+        Self { head_s, ..self }
     }
 
     pub(super) fn clear(&mut self) {
@@ -108,7 +119,9 @@ impl RestSums {
                 let change = self.current.w / self.current.n as f64 - still.w / still.n as f64;
                 self.current.moving = change.norm() > max;
             }
-            self.recent.push_back(self.current);
+            if self.current_start_s - self.t_first_s >= self.head_s {
+                self.recent.push_back(self.current);
+            }
             self.current = Sums::default();
             self.current_start_s = t_s;
         }
