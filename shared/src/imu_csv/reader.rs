@@ -207,7 +207,7 @@ impl<R: BufRead> ImuCsvReader<R> {
             }
         }
         let header = strip_cr(Self::line_str(&self.line)).to_string();
-        let names: Vec<&str> = header.split(',').map(str::trim_ascii).collect();
+        let names: Vec<&str> = header.split(',').map(unquote).collect();
         let problem = if names.len() < REQUIRED_COLUMNS.len()
             || !names.iter().zip(REQUIRED_COLUMNS).all(|(a, b)| *a == b)
         {
@@ -308,7 +308,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                         line: line_no,
                         column: REQUIRED_COLUMNS[0].to_string(),
                         value: truncate_chars(
-                            text.split(',').next().unwrap_or("").trim_ascii(),
+                            unquote(text.split(',').next().unwrap_or("")),
                             MAX_VALUE_CHARS,
                         ),
                         reason: if verdict == TimeVerdict::Jump {
@@ -376,16 +376,20 @@ impl<R: BufRead> ImuCsvReader<R> {
             return String::new();
         }
         let step = (last - first) / (n - 1) as f64;
-        [(1e-3, "milliseconds"), (1e-6, "microseconds"), (1e-9, "nanoseconds")]
-            .iter()
-            .find(|(scale, _)| step > self.max_dt_s && step * scale <= self.max_dt_s)
-            .map_or(String::new(), |(scale, unit)| {
-                format!(
-                    " (the rows' t_s advance by {step:.4} on average: {:.4} s if they are \
+        [
+            (1e-3, "milliseconds"),
+            (1e-6, "microseconds"),
+            (1e-9, "nanoseconds"),
+        ]
+        .iter()
+        .find(|(scale, _)| step > self.max_dt_s && step * scale <= self.max_dt_s)
+        .map_or(String::new(), |(scale, unit)| {
+            format!(
+                " (the rows' t_s advance by {step:.4} on average: {:.4} s if they are \
                      {unit}; t_s must be in seconds)",
-                    step * scale
-                )
-            })
+                step * scale
+            )
+        })
     }
 
     /// The checks over the whole log, in the order of [`parse_imu_csv`].

@@ -34,7 +34,7 @@ pub(super) fn parse_row(
         // Keep counting fields after a problem: a wrong count outranks a bad field.
         if problem.is_none() && (index < values.len() || Some(index) == temp_index) {
             // `,` is ASCII, so both ends are char boundaries.
-            let field = text[field_start..field_end].trim_ascii();
+            let field = unquote(&text[field_start..field_end]);
             match field.parse::<f64>() {
                 Ok(v) if v.is_finite() => {
                     if index < values.len() {
@@ -112,6 +112,17 @@ pub(super) fn find_comma_or_newline(bytes: &[u8], from: usize) -> usize {
 #[inline]
 pub(super) fn norm3(v: [f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+/// A field without the white space around it and without one pair of double quotes around
+/// that (as spreadsheets and `csv.QUOTE_ALL` write them; a quoted comma still splits the field).
+#[inline]
+pub(super) fn unquote(field: &str) -> &str {
+    let field = field.trim_ascii();
+    match field.as_bytes() {
+        [b'"', .., b'"'] if field.len() >= 2 => field[1..field.len() - 1].trim_ascii(),
+        _ => field,
+    }
 }
 
 /// Removes one trailing `\r` (CRLF line ends).

@@ -147,6 +147,33 @@ fn bom_crlf_whitespace_and_trailing_blank_lines_are_accepted() {
 }
 
 #[test]
+fn quoted_names_and_numbers_are_read_as_unquoted() {
+    let plain = good_file(3);
+    let quote_all = |line: &str| -> String {
+        line.split(',')
+            .map(|f| format!("\"{f}\""))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let quoted: String = plain.lines().map(|l| quote_all(l) + "\n").collect();
+    // Names quoted, numbers not (Python's csv.QUOTE_NONNUMERIC).
+    let names_only: String = plain
+        .lines()
+        .enumerate()
+        .map(|(i, l)| if i == 0 { quote_all(l) } else { l.to_string() } + "\n")
+        .collect();
+    let want = parse_imu_csv(&plain, path(), &ImuCsvOptions::default()).unwrap();
+    for text in [quoted, names_only] {
+        let got = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+        assert_eq!(got.rows, want.rows, "{text}");
+    }
+    // An unmatched quote is still malformed, named with its text.
+    let text = replace_line(&plain, 3, "\"0.005,0.01,-0.02,0.03,0.1,0.2,9.8");
+    let log = parse_imu_csv(&text, path(), &lenient()).unwrap();
+    assert_eq!(log.rejected[0].value, "\"0.005");
+}
+
+#[test]
 fn wrong_header_is_an_error_naming_file_line_and_text() {
     let text = format!("time,gx,gy,gz,ax,ay,az\n{}\n", row(0.0));
     let err = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap_err();
