@@ -287,7 +287,7 @@ pub struct HeadingFile {
     pub min_weight: Option<f64>,
     /// The `eskf` mode takes its heading as lost after this many straight strides in a row
     /// that no direction takes and that run off the nearest one by one angle: it widens the
-    /// heading variance to that angle so that the directions can be found again, and the
-    /// heading offset's (`model.heading_offset_sd_deg`) to its prior σ (default: absent, never).
+    /// heading variance to that angle so that the directions can be found again (default:
+    /// absent, never).
     pub reacquire_strides: Option<u32>,
 }

@@ -590,15 +590,6 @@ impl Eskf {
         self.clear_state(TH + 2, var_rad2);
     }
 
-    /// Widens the heading-offset state (when enabled) to at least `var_rad2`, independent of
-    /// every other state: what the foot axes taught it while the heading was wrong.
-    pub fn widen_heading_offset(&mut self, var_rad2: f64) {
-        if let Some(i) = self.layout.offset {
-            let var = self.p[ix(i, i)].max(var_rad2);
-            self.clear_state(i, var);
-        }
-    }
-
     /// Makes state `i`'s error independent of everything before: variance `var`, no
     /// correlations, no part of the bias-error response.
     fn clear_state(&mut self, i: usize, var: f64) {

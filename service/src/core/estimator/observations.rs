@@ -336,13 +336,6 @@ impl Pipeline {
         {
             let sd = self.cfg.heading.stride_sigma_rad.get();
             eskf.set_heading_variance(eskf.heading_variance().max(off * off + sd * sd));
-            // The foot-heading offset was learned from foot axes measured against the heading
-            // now in doubt: a start heading off by 5° ends up in it (exp22: the offset 4° from
-            // where the right start puts it), and the foot axes then agree with the wrong
-            // heading and narrow it again. It is learned afresh, from its prior σ.
-            if let Some(offset_sd) = self.cfg.model.heading_offset_sd_rad {
-                eskf.widen_heading_offset(offset_sd.get() * offset_sd.get());
-            }
             self.reacquiring = true;
             // the foot axis waits for a stride along its corridor, as after a restore
             self.heading_suspect = true;

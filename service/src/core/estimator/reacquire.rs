@@ -9,11 +9,8 @@
 //! (the footprint-line test, which does not depend on the heading) that no direction took and
 //! that run off the nearest direction by the same angle (within
 //! `heading.straight_max_change_deg`), the heading is taken as lost: its variance is widened to
-//! that angle, and the gate to 3σ until a direction takes a stride again. The foot-heading
-//! offset (`model.heading_offset_sd_deg`) goes back to its prior σ: the foot axes that taught it
-//! were measured against the heading now in doubt (a start heading off by 5° ends up there, and
-//! the foot axes then agree with the wrong heading). The association then decides with its
-//! weight, as at the start; nothing is snapped.
+//! that angle, and the gate to 3σ until a direction takes a stride again. The association then
+//! decides with its weight, as at the start; nothing is snapped.
 //!
 //! What it cannot tell apart: a straight walk that long across a hall at an angle to the
 //! corridors. With a grid and no map, such a walk is taken for a lost heading and pulled
