@@ -120,7 +120,7 @@ pub(super) fn norm3(v: [f64; 3]) -> f64 {
 pub(super) fn unquote(field: &str) -> &str {
     let field = field.trim_ascii();
     match field.as_bytes() {
-        [b'"', .., b'"'] if field.len() >= 2 => field[1..field.len() - 1].trim_ascii(),
+        [b'"', .., b'"'] => field[1..field.len() - 1].trim_ascii(),
         _ => field,
     }
 }
