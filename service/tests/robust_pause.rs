@@ -56,16 +56,15 @@ fn paused_exp40() -> (ImuLog, Vector3<f64>, f64, f64) {
     let mut out = log.clone();
     let pause = (0..n).map(|m| {
         let r = &log.rows[rest.start + m % 100];
-        let mut row = r.clone();
+        let mut row = *r;
         row.t_s = t_k + (m + 1) as f64 * DT_S;
-        row.gyro_rad_s = Vector3::from(r.gyro_rad_s).into();
         row.accel_m_s2 = (f_held + Vector3::from(r.accel_m_s2) - f_rest).into();
         row
     });
     let after: Vec<_> = log.rows[k + 1..]
         .iter()
         .map(|r| {
-            let mut r = r.clone();
+            let mut r = *r;
             r.t_s += n as f64 * DT_S;
             r
         })
