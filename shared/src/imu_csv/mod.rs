@@ -114,6 +114,14 @@ impl RejectReason {
         RejectReason::TimeOutlier,
     ];
 
+    /// Position in [`RejectReason::ALL`] (and in the reader's counts).
+    pub fn index(self) -> usize {
+        RejectReason::ALL
+            .iter()
+            .position(|r| *r == self)
+            .expect("every reason is in ALL")
+    }
+
     /// Stable snake_case name of the reason (`malformed`, `non_finite`, `time_not_increasing`,
     /// `time_jump`).
     pub fn name(self) -> &'static str {

@@ -239,11 +239,7 @@ impl<R: BufRead> ImuCsvReader<R> {
 
     /// Counts a rejected row and keeps it while fewer than `keep_rejected` are kept.
     pub(super) fn reject(&mut self, row: RejectedRow) {
-        let k = RejectReason::ALL
-            .iter()
-            .position(|r| *r == row.reason)
-            .expect("every reason is in ALL");
-        self.rejected_counts[k] += 1;
+        self.rejected_counts[row.reason.index()] += 1;
         if self.rejected.len() < self.keep_rejected {
             self.rejected.push(row);
         }
@@ -364,11 +360,7 @@ impl<R: BufRead> ImuCsvReader<R> {
     /// step the time rule would take in milliseconds, microseconds or nanoseconds (the mean
     /// step over the rows that parsed, scaled); empty otherwise.
     fn time_unit_hint(&self, n_rejected: u64) -> String {
-        let jumps = RejectReason::ALL
-            .iter()
-            .zip(self.rejected_counts)
-            .find_map(|(r, n)| (*r == RejectReason::TimeJump).then_some(n))
-            .unwrap_or(0);
+        let jumps = self.rejected_counts[RejectReason::TimeJump.index()];
         let Some((first, last, n)) = self.parsed_t else {
             return String::new();
         };
