@@ -132,6 +132,7 @@ mod tests {
             EskfNoise {
                 accel_m_s2: 0.03,
                 gyro_rad_s: 0.01,
+                rest_gyro_rad_s: 1e-3,
                 gyro_bias_rw: 7e-4,
                 zupt_m_s: 0.01,
             },

@@ -154,6 +154,13 @@ pub const ESKF_ZUPT_LEVER_ARM_M: f64 = 0.0;
 /// `eskf.zero_rate_updates`.
 pub const ESKF_ZERO_RATE_UPDATES: bool = true;
 
+/// `eskf.zero_rate_interval_s`: a long rest is fused every 2 s of its settled part.
+pub const ESKF_ZERO_RATE_INTERVAL_S: f64 = 2.0;
+
+/// `eskf.rest_gyro_noise_rad_s`: ten times the quietest rests' noise density of the gdins
+/// sensor (about 1e-4 rad/s/√Hz, its datasheet's 0.005 °/s/√Hz), the swaying ones' level.
+pub const ESKF_REST_GYRO_NOISE_RAD_S: f64 = 1e-3;
+
 /// `eskf.zupt_rolling_height_m` (0: a plain zero-velocity update).
 pub const ESKF_ZUPT_ROLLING_HEIGHT_M: f64 = 0.0;
 

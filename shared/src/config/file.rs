@@ -213,6 +213,14 @@ pub struct EskfFile {
     /// its last `alignment.rest_tail_s` left out) observes the gyro bias like the initial rest,
     /// with σ √(`gyro_bias_prior_sd_rad_s`² + the rest's spread²) (default true).
     pub zero_rate_updates: Option<bool>,
+    /// A rest longer than this is fused while it lasts, every this many seconds of its
+    /// settled part, not only at its end (default 2 s): the yaw integrates the difference
+    /// between the filter's bias and the rest's rate until the bias is observed.
+    pub zero_rate_interval_s: Option<f64>,
+    /// The gyro noise σ while the foot rests (from the first zero-rate update of a rest to its
+    /// end), rad/s: the sensor's own noise, not the swing's error budget of `gyro_noise_rad_s`
+    /// (default 1e-3).
+    pub rest_gyro_noise_rad_s: Option<f64>,
     /// Height of the sensor above the floor contact about which the foot rolls at heel strike
     /// and heel-off, m: the stance velocity update expects the sensor to move at this height
     /// times the rate about the foot's lateral axis, along the walking direction (default 0: a

@@ -149,6 +149,10 @@ pub struct EskfConfig {
     pub zupt_lever_arm_m: f64,
     /// Zero-rate updates at later rests.
     pub zero_rate_updates: bool,
+    /// A long rest is fused every this many seconds of its settled part.
+    pub zero_rate_interval_s: Positive,
+    /// Gyro noise σ while the foot rests.
+    pub rest_gyro_noise_rad_s: Positive,
     /// Sensor height above the rolling contact (0: plain ZUPT).
     pub zupt_rolling_height_m: f64,
     /// σ of the true rate's excess over a clipped gyro axis.

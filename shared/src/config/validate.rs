@@ -483,6 +483,21 @@ impl ConfigFile {
                     "must be in [0, 1] m",
                 )?,
                 zero_rate_updates: k.zero_rate_updates.unwrap_or(ESKF_ZERO_RATE_UPDATES),
+                zero_rate_interval_s: Positive::in_range(
+                    "eskf.zero_rate_interval_s",
+                    k.zero_rate_interval_s.unwrap_or(ESKF_ZERO_RATE_INTERVAL_S),
+                    0.0,
+                    3600.0,
+                    "must be in (0, 3600] s",
+                )?,
+                rest_gyro_noise_rad_s: Positive::in_range(
+                    "eskf.rest_gyro_noise_rad_s",
+                    k.rest_gyro_noise_rad_s
+                        .unwrap_or(ESKF_REST_GYRO_NOISE_RAD_S),
+                    0.0,
+                    10.0,
+                    "must be in (0, 10] rad/s",
+                )?,
                 zupt_rolling_height_m: in_range(
                     "eskf.zupt_rolling_height_m",
                     k.zupt_rolling_height_m

@@ -254,7 +254,12 @@ impl Eskf {
             }
         }
         let qa = self.noise.accel_m_s2.powi(2) * dt;
-        let qg = self.noise.gyro_rad_s.powi(2) * dt;
+        let gyro = if self.at_rest {
+            self.noise.rest_gyro_rad_s
+        } else {
+            self.noise.gyro_rad_s
+        };
+        let qg = gyro.powi(2) * dt;
         let qb = if self.estimate_bias {
             self.noise.gyro_bias_rw.powi(2) * dt
         } else {

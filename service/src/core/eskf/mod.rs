@@ -46,6 +46,9 @@ pub struct EskfNoise {
     pub accel_m_s2: f64,
     /// Gyro white noise σ, rad/s.
     pub gyro_rad_s: f64,
+    /// The same while the foot rests ([`Eskf::set_at_rest`]): the sensor's own noise, without
+    /// the errors a swing builds, rad/s.
+    pub rest_gyro_rad_s: f64,
     /// Gyro-bias random walk σ, rad/s/√s (0 freezes the bias states).
     pub gyro_bias_rw: f64,
     /// ZUPT σ, m/s.
@@ -225,6 +228,8 @@ pub struct Eskf {
     noise: EskfNoise,
     ext_cfg: Extensions,
     estimate_bias: bool,
+    /// The foot rests: the attitude's process noise is [`EskfNoise::rest_gyro_rad_s`].
+    at_rest: bool,
 }
 
 /// One row of a sparse measurement Jacobian: (state index, value) pairs.
@@ -271,6 +276,7 @@ impl Eskf {
             layout,
             gravity_m_s2,
             noise,
+            at_rest: false,
             ext_cfg: ext,
             estimate_bias,
         };
@@ -340,6 +346,13 @@ impl Eskf {
         self.noise = src.noise;
         self.ext_cfg = src.ext_cfg;
         self.estimate_bias = src.estimate_bias;
+        self.at_rest = src.at_rest;
+    }
+
+    /// The foot rests (a rest the estimator has observed as one) or walks again: while it
+    /// rests, the attitude's process noise is the sensor's own ([`EskfNoise::rest_gyro_rad_s`]).
+    pub fn set_at_rest(&mut self, at_rest: bool) {
+        self.at_rest = at_rest;
     }
 
     /// Copies the upper triangle of the covariance onto the lower one.
@@ -429,6 +442,7 @@ impl Eskf {
         next.footprint_xy_m = self.footprint_xy_m;
         next.prev_footprint_xy_m = self.prev_footprint_xy_m;
         next.footprints_cloned = self.footprints_cloned;
+        next.at_rest = self.at_rest;
         let step_half = exp_rotvec(&(omega_rad_s * (0.5 * dt_s)));
         let half = self.nav_from_body * step_half;
         let f_nav = half * f_m_s2;

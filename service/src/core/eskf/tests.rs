@@ -5,6 +5,7 @@ fn noise() -> EskfNoise {
     EskfNoise {
         accel_m_s2: 0.5,
         gyro_rad_s: 0.01,
+        rest_gyro_rad_s: 1e-3,
         gyro_bias_rw: 1e-4,
         zupt_m_s: 0.01,
     }

@@ -97,6 +97,7 @@ impl Pipeline {
         let noise = EskfNoise {
             accel_m_s2: e.accel_noise_m_s2.get(),
             gyro_rad_s: e.gyro_noise_rad_s.get(),
+            rest_gyro_rad_s: e.rest_gyro_noise_rad_s.get(),
             gyro_bias_rw: e.gyro_bias_rw_rad_s_sqrt_s,
             zupt_m_s: e.zupt_sd_m_s.get(),
         };

@@ -29,6 +29,7 @@ impl Pipeline {
         if stance && self.stances_seen != self.stance_events.count() {
             self.stances_seen = self.stance_events.count();
             self.stance_rest.clear();
+            eskf.set_at_rest(false);
             self.stance_obs_done = false;
             self.resumed_look = false;
             self.stance_f_sum = (Vector3::zeros(), 0);
@@ -51,10 +52,25 @@ impl Pipeline {
             }
             if self.cfg.eskf.zero_rate_updates {
                 self.stance_rest.push(t_s, f_avg, w_avg);
+                // A long rest is fused as it goes: fused only at its end, the yaw integrated
+                // the difference between the filter's bias and the rest's rate for the whole
+                // rest (a 120 s pause at every walk's middle footprint, at the initial rest's
+                // rate: normal-gait median 2.32 %, worst 17.8 %; 0.30 / 0.85 % now).
+                let interval_s = self.cfg.eskf.zero_rate_interval_s.get();
+                if let Some(rest) = self.stance_rest.settled_means(interval_s) {
+                    self.fuse_rest(eskf, rest);
+                    self.stance_rest.restart_settled();
+                    // From here to the end of the stance the foot rests: the attitude's noise
+                    // is the sensor's, not a swing's (the yaw σ of `gyro_noise_rad_s` grew by
+                    // 14° in a 600 s pause, and exp26's strides after it were associated
+                    // wrongly: 13.5 %, 0.29 % at the rest's noise).
+                    eskf.set_at_rest(true);
+                }
             }
         } else if self.was_stance {
             // The end of an uninterrupted stance: a rest must be uninterrupted, so each part of
             // a merged stance is tested on its own, at its first pause sample.
+            eskf.set_at_rest(false);
             let min_rest_s = self.cfg.alignment.min_rest_s.get();
             if let (true, Some(rest)) = (
                 self.cfg.eskf.zero_rate_updates,

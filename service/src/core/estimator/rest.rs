@@ -91,6 +91,14 @@ impl RestSums {
         self.settled_moving = 0;
     }
 
+    /// Forgets the settled part (fused already) and goes on with the rest: the blocks still in
+    /// its tail, the current one and the head left out stay as they are.
+    pub(super) fn restart_settled(&mut self) {
+        self.settled = Sums::default();
+        self.settled_all = Sums::default();
+        self.settled_moving = 0;
+    }
+
     pub(super) fn is_empty(&self) -> bool {
         self.t_first_s.is_nan()
     }
