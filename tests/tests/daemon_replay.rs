@@ -296,6 +296,11 @@ fn bad_samples_over_ipc_are_rejected_and_counted() {
     send(at(7, 8.0 * dt)); // duplicate seq
     send(at(6, 9.0 * dt)); // late seq
     send(at(10, 10.0 * dt)); // good, after a gap of 2 (seq 8 and 9)
+    let mut absurd = at(11, 11.0 * dt);
+    absurd.gyro_rad_s[2] = 1e6;
+    send(absurd); // refused by the estimator: implausible
+    send(at(12, 60.0)); // refused by the estimator: a jump the next sample does not confirm
+    send(at(13, 13.0 * dt)); // good
     p.finish().unwrap();
     sent += 1;
     assert_eq!(p.stats().imu_undelivered, 0);
@@ -307,12 +312,64 @@ fn bad_samples_over_ipc_are_rejected_and_counted() {
     assert_eq!(d.rejected_duplicate_seq, 1);
     assert_eq!(d.late, 1);
     assert_eq!(d.seq_gaps, 2);
-    assert_eq!(d.accepted, 7);
+    assert_eq!(d.accepted, 8);
     assert_eq!(d.dropped_overflow, 0);
 
     let report = daemon.stop();
     assert_eq!(report.diagnostics.rejected_non_finite, 1);
+    // Not on the wire (v3): in the report and its JSON.
+    assert_eq!(
+        (report.rejected_implausible, report.rejected_time_jump),
+        (1, 1)
+    );
     assert_eq!(report.streams_finished, 1);
+}
+
+#[test]
+fn a_device_clock_that_restarts_starts_a_new_stream() {
+    // The same producer, its clock reset mid-stream (a device reset, a wrapped counter): the
+    // estimator refused every later sample until the new clock passed the old one.
+    let _one = one_daemon_at_a_time();
+    let cfg = config();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let domain = Domain::new("test_daemon_clock_reset").unwrap();
+    let _ = std::fs::remove_file(domain.daemon_state_path());
+    let mut dcfg = DaemonConfig::new(domain.clone(), cfg, aid);
+    dcfg.delivery = Delivery::Lossless;
+    let daemon = Running::start(dcfg);
+    let diagnostics = Subscriber::<Diagnostics>::open(&domain, "test-diagnostics", WAIT).unwrap();
+    let mut p = Producer::new(&domain, "test-reset-producer", Delivery::Lossless).unwrap();
+    p.wait_for_daemon(WAIT).unwrap();
+    let dt = 0.005;
+    let at = |seq: u64, t_s: f64| ImuSample {
+        seq,
+        t_s,
+        gyro_rad_s: [0.001, -0.002, 0.003],
+        accel_m_s2: [0.0, 0.0, 9.81],
+        temp_c: f64::NAN,
+        ..ImuSample::default()
+    };
+    for i in 0..600 {
+        p.send_imu_raw(at(i, 1000.0 + i as f64 * dt)).unwrap();
+    }
+    // A stray earlier stamp and a short replayed burst are refused, not a restart.
+    p.send_imu_raw(at(600, 10.0)).unwrap();
+    for i in 0..50 {
+        p.send_imu_raw(at(601 + i, 1000.0 + i as f64 * dt)).unwrap();
+    }
+    // The clock restarts at 0 and runs on: 1 s of it is refused, then a new stream.
+    for i in 0..600 {
+        p.send_imu_raw(at(651 + i, i as f64 * dt)).unwrap();
+    }
+    p.finish().unwrap();
+    // The first end of stream published is the restart's.
+    let first = diagnostics_at_end(&diagnostics);
+    assert_eq!((first.accepted, first.t_s), (600, 1000.0 + 599.0 * dt));
+    let report = daemon.stop();
+    assert_eq!(report.streams_finished, 2, "{report:?}");
+    let d = report.diagnostics;
+    assert_eq!(d.rejected_time, 1 + 50 + 200, "{d:?}");
+    assert_eq!(d.accepted, 600 + 400, "{d:?}");
 }
 
 /// One daemon per process at a time (see `daemon_common::one_daemon_at_a_time` in the other

@@ -69,6 +69,8 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
             "seq_gaps": d.seq_gaps,
             "rejected_non_finite": d.rejected_non_finite,
             "rejected_time": d.rejected_time,
+            "rejected_implausible": report.rejected_implausible,
+            "rejected_time_jump": report.rejected_time_jump,
             "rejected_duplicate_seq": d.rejected_duplicate_seq,
             "late": d.late,
             "dropped_overflow": d.dropped_overflow,

@@ -8,11 +8,23 @@ use super::receive::{Msg, RxCounters};
 use super::state::{OUT_ATTITUDE, OUT_BIAS, OUT_DIAGNOSTICS, OUT_NAV, StateFile};
 use super::{DaemonConfig, DaemonError, DaemonReport};
 use crate::checkpoint::{self, Checkpoint, CheckpointError};
-use crate::core::{Counters, Estimate, Estimator, ImuInput, Phase, WarmStart};
+use crate::core::{Counters, Estimate, Estimator, ImuInput, Phase, SampleError, WarmStart};
 use corridor_shared::wire::{
     Diagnostics, FLAG_END_OF_STREAM, FLAG_SHUTDOWN, ImuSample, NavSample, monotonic_ns,
 };
 use crossbeam_channel::{RecvTimeoutError, TryRecvError};
+
+/// A clock that went back and runs on regularly for this long (its own time, s) has restarted:
+/// the stream ends and a new one begins, as for a restarted producer. Shorter runs of earlier
+/// times (a stray stamp, a replayed burst) are refused and counted as `rejected_time`; every
+/// sample of the run before the restart is too.
+const CLOCK_RESTART_S: f64 = 1.0;
+
+/// `t_s` follows `prev_s` as the time rule wants the next sample to.
+fn follows(cfg: &DaemonConfig, prev_s: f64, t_s: f64) -> bool {
+    let dt = t_s - prev_s;
+    dt > cfg.estimator.sensor.min_dt_s() && dt <= cfg.estimator.sensor.max_dt_s()
+}
 use iceoryx2::prelude::*;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
@@ -47,6 +59,9 @@ struct EstState<'a> {
     streams_finished: u64,
     /// The next sample comes from a new producer (see [`Msg::NewProducer`]).
     producer_changed: bool,
+    /// Samples refused in a row because their time went back, each following the one before
+    /// it (a driver whose clock restarted): how many, the first one's time and the last one's.
+    went_back: (u64, f64, f64),
     /// The state each new stream starts from (checkpoint configured only).
     warm: Option<WarmStart>,
     warm_started_from: Option<Checkpoint>,
@@ -96,6 +111,7 @@ impl<'a> EstState<'a> {
             last_nis: f64::NAN,
             streams_finished: 0,
             producer_changed: false,
+            went_back: (0, f64::NAN, f64::NAN),
             warm: None,
             warm_started_from: None,
             saved_at_samples: 0,
@@ -170,6 +186,25 @@ impl<'a> EstState<'a> {
         }
     }
 
+    /// A sample refused because its time went back: counts it into the run of such samples
+    /// that follow each other.
+    fn note_went_back(&mut self, cfg: &DaemonConfig, t_s: f64) {
+        let (n, first, last) = self.went_back;
+        self.went_back = if n > 0 && follows(cfg, last, t_s) {
+            (n + 1, first, t_s)
+        } else {
+            (1, t_s, t_s)
+        };
+    }
+
+    /// The clock went back and has run on regularly from there for [`CLOCK_RESTART_S`] of its
+    /// own time, this sample included: a restarted device clock, not a stray stamp or a
+    /// replayed burst.
+    fn clock_restarted(&self, cfg: &DaemonConfig, t_s: f64) -> bool {
+        let (n, first, last) = self.went_back;
+        n > 0 && follows(cfg, last, t_s) && t_s - first >= CLOCK_RESTART_S
+    }
+
     /// A fresh estimator for a new stream, warm-started from the last saved state if any.
     fn new_estimator(&mut self, cfg: &DaemonConfig) -> Estimator {
         let mut est = Estimator::new(cfg.estimator.clone(), cfg.aid.clone());
@@ -185,16 +220,24 @@ impl<'a> EstState<'a> {
     fn on_sample(&mut self, cfg: &DaemonConfig, out: &mut Outputs, rx: &RxCounters, s: &ImuSample) {
         let clock_went_back =
             s.t_s.partial_cmp(&self.last.t_s) != Some(std::cmp::Ordering::Greater);
-        if std::mem::take(&mut self.producer_changed)
-            && self.est.counters().samples > 0
+        let producer_changed = std::mem::take(&mut self.producer_changed);
+        if self.est.counters().samples > 0
             && clock_went_back
+            && (producer_changed || self.clock_restarted(cfg, s.t_s))
         {
-            // The new producer's clock restarted: end the old stream as a marker would.
+            // The producer's clock restarted: end the old stream as a marker would.
             tracing::warn!(
                 t_s = s.t_s,
                 last_t_s = self.last.t_s,
-                "new IMU producer restarted its clock; starting a new stream"
+                refused = self.went_back.0,
+                "{}",
+                if producer_changed {
+                    "new IMU producer restarted its clock; starting a new stream"
+                } else {
+                    "the IMU clock went back and runs on from there; starting a new stream"
+                }
             );
+            self.went_back = (0, f64::NAN, f64::NAN);
             let marker = ImuSample {
                 seq: self.last_imu_seq,
                 flags: FLAG_END_OF_STREAM,
@@ -208,8 +251,14 @@ impl<'a> EstState<'a> {
             accel_m_s2: s.accel_m_s2,
         };
         let e = match self.est.step(&input) {
-            Ok(e) => *e,
+            Ok(e) => {
+                self.went_back = (0, f64::NAN, f64::NAN);
+                *e
+            }
             Err(err) => {
+                if let SampleError::TimeNotIncreasing { .. } = err {
+                    self.note_went_back(cfg, s.t_s);
+                }
                 // Counted by the estimator (Diagnostics and the health line); the first few of
                 // each stream are named with their sequence number.
                 let c = self.est.counters();
@@ -519,6 +568,11 @@ pub(super) fn estimator_thread(
     st.save_checkpoint(cfg);
     let mut diagnostics = st.diagnostics(counters, FLAG_SHUTDOWN);
     diagnostics.seq = out.diagnostics.seq.saturating_sub(1);
+    let c = st.est.counters();
+    let (rejected_implausible, rejected_time_jump) = (
+        st.previous.rejected_implausible + c.rejected_implausible,
+        st.previous.rejected_time_jump + c.rejected_time_jump,
+    );
     Ok(DaemonReport {
         diagnostics,
         streams_finished: st.streams_finished,
@@ -535,6 +589,8 @@ pub(super) fn estimator_thread(
         missing_at_restart: counters.missing_at_restart.load(Ordering::Relaxed),
         estimated: counters.taken.load(Ordering::Relaxed),
         lost_in_daemon: counters.lost_in_daemon.load(Ordering::Relaxed),
+        rejected_implausible,
+        rejected_time_jump,
         angles_dropped: counters.angles_dropped.load(Ordering::Relaxed),
         angles_ignored: counters.angles_ignored.load(Ordering::Relaxed),
         published: [
