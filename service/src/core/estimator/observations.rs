@@ -4,6 +4,10 @@
 use super::association::weighted_association;
 use super::*;
 
+/// The paper mode's observer starts a new epoch when its raw attitude is this far from the
+/// observed one, rad (its logarithm wraps at π).
+const PAPER_EPOCH_MAX_ANGLE_RAD: f64 = 2.0;
+
 impl Pipeline {
     /// Once per stance: calibration or a heading observation.
     pub(super) fn stance_observation(&mut self, eskf: &mut Eskf, t_s: f64) {
@@ -94,15 +98,25 @@ impl Pipeline {
                     BiasFilter::InEskf => Some(eskf.heading_update(dir, sd, &forward)),
                     BiasFilter::Paper { kf, obs } => {
                         let q_true = rot_z(sensor_yaw) * self.tilt0;
-                        obs.as_ref()
-                            .and_then(|o| o.observe(&q_true, t_s))
-                            .map(|(y, el)| {
-                                event.baseline_s = el;
-                                kf.predict(t_s);
-                                let r = Vector3::new(tilt_sd / el, tilt_sd / el, sd / el)
-                                    .map(|v| v * v);
-                                kf.update(&y, &Matrix3::identity(), &r)
-                            })
+                        let innovation =
+                            obs.as_ref()
+                                .and_then(|o| o.observe(&q_true, t_s))
+                                .map(|(y, el)| {
+                                    event.baseline_s = el;
+                                    kf.predict(t_s);
+                                    let r = Vector3::new(tilt_sd / el, tilt_sd / el, sd / el)
+                                        .map(|v| v * v);
+                                    kf.update(&y, &Matrix3::identity(), &r)
+                                });
+                        // The raw attitude drifts from the true one by the bias times the time
+                        // since the epoch; past π the logarithm wraps and the observation turns
+                        // round (a long-running daemon at this sensor's 6.5e-3 rad/s: after 8
+                        // minutes). The epoch restarts at this observation well before that;
+                        // the bundled walks (at most 1.5 rad) never reach it.
+                        if let Some(o) = obs.as_mut() {
+                            o.restart_if_far(&q_true, t_s, PAPER_EPOCH_MAX_ANGLE_RAD);
+                        }
+                        innovation
                     }
                     BiasFilter::RotationAware { kf, obs } => {
                         let (sum, n) = self.stance_f_sum;
