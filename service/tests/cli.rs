@@ -263,6 +263,16 @@ fn a_nan_flag_value_is_an_error_naming_the_flag() {
         err.contains("--inject-after-s") && err.contains("nan"),
         "{err}"
     );
+    // A flag that overrides a config key: the flag is named, not the config file.
+    let o = run_cmd(&data, &out, &["--start-heading-deg", "400"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.starts_with("error: --start-heading-deg 400: must be in")
+            && err.contains("heading.start_heading_deg")
+            && !err.contains("built-in defaults"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -31,16 +31,18 @@ pub struct ModelArgs {
 }
 
 impl ModelArgs {
-    /// Reads the config file and applies the overrides; errors name the key and the value.
+    /// Reads the config file and applies the overrides; errors name the key and the value,
+    /// and the flag when the value came from one.
     pub fn config(&self) -> Result<Config> {
-        let file = self.config_file()?;
+        let file = match &self.config {
+            Some(p) => ConfigFile::read(p)?,
+            None => ConfigFile::default(),
+        };
         let path = self
             .config
             .clone()
             .unwrap_or_else(|| PathBuf::from("<built-in defaults>"));
-        Ok(file
-            .validate()
-            .map_err(|e| corridor_shared::config::with_path(e, &path))?)
+        Ok(self.overrides()?.validate(&file, &path)?)
     }
 
     /// The `[daemon]` section of the config file, validated.

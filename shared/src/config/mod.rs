@@ -56,6 +56,19 @@ pub enum ConfigError {
         /// What the value must satisfy.
         rule: &'static str,
     },
+    /// A value given on the command line (a [`ConfigOverrides`] field) is outside the range of
+    /// the key it sets.
+    #[error("{flag} {value}: {rule} (it sets the config key `{key}`)")]
+    Flag {
+        /// The command-line flag, e.g. `--start-heading-deg`.
+        flag: &'static str,
+        /// Dotted key the flag sets.
+        key: String,
+        /// The value given, as text.
+        value: String,
+        /// What the value must satisfy.
+        rule: &'static str,
+    },
 }
 
 /// A finite, strictly positive number.

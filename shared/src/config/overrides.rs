@@ -45,11 +45,30 @@ impl ConfigOverrides {
     }
 
     /// `file` (read from `path`) with the overrides applied, validated; errors name `path`
-    /// and the key.
+    /// and the key, or the command-line flag when the bad value is an override's.
     pub fn validate(&self, file: &ConfigFile, path: &Path) -> Result<Config, ConfigError> {
-        self.applied(file)
-            .validate()
-            .map_err(|e| with_path(e, path))
+        self.applied(file).validate().map_err(|e| match e {
+            ConfigError::Invalid {
+                key, value, rule, ..
+            } if self.flag_of(&key).is_some() => ConfigError::Flag {
+                flag: self.flag_of(&key).unwrap_or_default(),
+                key,
+                value,
+                rule,
+            },
+            other => with_path(other, path),
+        })
+    }
+
+    /// The command-line flag that overrode `key`, if one did.
+    fn flag_of(&self, key: &str) -> Option<&'static str> {
+        match key {
+            "heading.start_heading_deg" if self.start_heading_deg.is_some() => {
+                Some("--start-heading-deg")
+            }
+            "heading.grid_deg" if self.grid_deg.is_some() => Some("--grid-deg"),
+            _ => None,
+        }
     }
 }
 
@@ -86,7 +105,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            err.contains("heading.start_heading_deg") && err.contains("c.toml"),
+            err.starts_with("--start-heading-deg NaN") && err.contains("heading.start_heading_deg"),
             "{err}"
         );
     }
