@@ -113,9 +113,28 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// `--out` must be a directory (or not exist yet): said before any work is done, not after a
+/// suite of minutes.
+fn check_out_dir(out: &std::path::Path) -> anyhow::Result<()> {
+    if out.exists() && !out.is_dir() {
+        anyhow::bail!("--out {}: exists and is not a directory", out.display());
+    }
+    Ok(())
+}
+
 /// Runs the command; its exit code (`status` has its own, the others succeed or fail).
 fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
     let done = |r: anyhow::Result<()>| r.map(|()| ExitCode::SUCCESS);
+    let out = match &cli.command {
+        Command::Run(a) => Some(&a.out),
+        Command::Demo(a) => Some(&a.out),
+        Command::Diagnose(a) => Some(&a.out),
+        Command::Eval(a) => a.out.as_ref(),
+        _ => None,
+    };
+    if let Some(out) = out {
+        check_out_dir(out)?;
+    }
     match cli.command {
         Command::Run(a) => done(run::run(&a)),
         Command::Demo(a) => done(demo::demo(&a)),
