@@ -661,7 +661,7 @@ fn a_bad_mode_is_said_once_and_clamped_footprints_are_said_on_the_terminal() {
 #[test]
 fn an_out_path_that_is_a_file_is_refused_before_any_work() {
     let dir = tmp("outfile");
-    let file = dir.path().join("afile");
+    let file = dir.join("afile");
     std::fs::write(&file, "").unwrap();
     for args in [
         vec!["eval", "--suite", "configs/eval/gdins.toml", "--out"],
