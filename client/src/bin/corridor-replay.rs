@@ -3,7 +3,7 @@
 //!
 //! Reports what it sent and how many samples reached no subscriber.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use clap::Parser;
 use corridor_client::replay::{ReplayOptions, Speed, replay};
 use corridor_client::{Delivery, Domain};
@@ -63,8 +63,8 @@ fn run() -> Result<()> {
     if a.loops == 0 {
         bail!("--loop 0: nothing to send");
     }
-    let log = read_imu_csv(&a.imu, &ImuCsvOptions::default())
-        .with_context(|| format!("reading {}", a.imu.display()))?;
+    // Its errors name the file.
+    let log = read_imu_csv(&a.imu, &ImuCsvOptions::default())?;
     if log.rows.is_empty() {
         bail!("{}: no samples", a.imu.display());
     }

@@ -30,6 +30,13 @@ pub(super) struct EvalArgs {
 
 /// Runs the suite, prints the table and writes it when asked.
 pub(super) fn eval(a: EvalArgs) -> Result<()> {
+    for (flag, path) in [("--suite", Some(&a.suite)), ("--sweep", a.sweep.as_ref())] {
+        if let Some(p) = path
+            && !p.is_file()
+        {
+            anyhow::bail!("{flag} {}: no such file", p.display());
+        }
+    }
     if let Some(sweep) = &a.sweep {
         let results = corridor_service::suite::run_sweep(&a.suite, sweep)?;
         let md = corridor_service::suite::sweep_markdown(&results);
