@@ -45,6 +45,31 @@ pub const LEG_MIN_DIST_M: f64 = 5.0;
 /// (1 ms: CSV rounding).
 pub(super) const SPAN_SLACK_S: f64 = 1e-3;
 
+/// At least two GCP times within the trajectory's span, `eval_traj.py`'s 1 ms of tolerance
+/// included (beyond it a GCP is clamped to an end with a warning; with every GCP clamped the
+/// reference fails later, on a trajectory that "did not move", which says nothing of the cause).
+pub(crate) fn check_overlap(gcp_t_s: &[f64], from_s: f64, to_s: f64) -> Result<(), EvalError> {
+    let inside = gcp_t_s
+        .iter()
+        .filter(|&&t| t >= from_s - SPAN_SLACK_S && t <= to_s + SPAN_SLACK_S)
+        .count();
+    if inside >= 2 {
+        return Ok(());
+    }
+    let (lo, hi) = gcp_t_s
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &t| {
+            (a.min(t), b.max(t))
+        });
+    Err(EvalError::TruthOutsideTrajectory {
+        truth_from_s: lo,
+        truth_to_s: hi,
+        traj_from_s: from_s,
+        traj_to_s: to_s,
+        inside,
+    })
+}
+
 /// Evaluates a 2-D trajectory against ground-truth GCPs, exactly as the reference
 /// script `tools/eval_traj.py` does.
 ///
@@ -55,7 +80,8 @@ pub(super) const SPAN_SLACK_S: f64 = 1e-3;
 ///
 /// # Errors
 /// [`EvalError`] when the columns differ in length, fewer than two rows or GCPs are
-/// left, or first-leg alignment cannot set a heading.
+/// left, fewer than two GCP times lie within the trajectory's span, or first-leg alignment
+/// cannot set a heading.
 pub fn evaluate(
     t_s: &[f64],
     x_m: &[f64],
@@ -90,6 +116,7 @@ pub fn evaluate(
     let truth = finite_gcps(truth)?;
     let n = truth.len();
     let tg: Vec<f64> = truth.iter().map(|g| g.t_s).collect();
+    check_overlap(&tg, t[0], t[t.len() - 1])?;
     let (p, dt_used) = sample_traj(&t, &xy, &tg, opts.interp);
     let in_span: Vec<P2> = t
         .iter()

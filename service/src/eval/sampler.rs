@@ -111,6 +111,8 @@ impl GcpSampler {
         if let Some(t_s) = self.out_of_order_s {
             return Err(EvalError::NotIncreasing { t_s });
         }
+        let gcp_t: Vec<f64> = self.truth.iter().map(|g| g.t_s).collect();
+        super::check_overlap(&gcp_t, t0, t1)?;
         let n = self.truth.len();
         let (mut p, mut dt_used) = (Vec::with_capacity(n), Vec::with_capacity(n));
         for (i, g) in self.truth.iter().enumerate() {

@@ -467,6 +467,23 @@ fn streamed_evaluation_equals_the_whole_trajectorys_at_the_edges() {
         streamed(&t, &x, &y, &gcps[..1], &o),
         evaluate(&t, &x, &y, &gcps[..1], &o)
     );
+    // A truth of another clock (every GCP after the trajectory): said so, by both.
+    let late: Vec<TruthGcp> = gcps
+        .iter()
+        .map(|g| TruthGcp {
+            t_s: g.t_s + 1000.0,
+            ..*g
+        })
+        .collect();
+    for e in [
+        evaluate(&t, &x, &y, &late, &o),
+        streamed(&t, &x, &y, &late, &o),
+    ] {
+        assert!(
+            matches!(e, Err(EvalError::TruthOutsideTrajectory { inside: 0, .. })),
+            "{e:?}"
+        );
+    }
     // A row that goes back in time is refused, not silently mis-sampled.
     t.swap(20, 21);
     y.swap(20, 21);

@@ -295,6 +295,24 @@ pub enum EvalError {
         /// Distance between the trajectory's positions at GCP0 and GCPk, metres.
         moved_m: f64,
     },
+    /// Fewer than two GCP times lie within the trajectory's time span (a truth of another
+    /// recording, or on another clock): every GCP would be clamped to an end of the trajectory.
+    #[error(
+        "the truth's times ({truth_from_s} to {truth_to_s} s) lie outside the trajectory's \
+         ({traj_from_s} to {traj_to_s} s; {inside} GCP inside): is it this recording's truth, on its clock?"
+    )]
+    TruthOutsideTrajectory {
+        /// First and last GCP time, s.
+        truth_from_s: f64,
+        /// See `truth_from_s`.
+        truth_to_s: f64,
+        /// First and last trajectory time, s.
+        traj_from_s: f64,
+        /// See `traj_from_s`.
+        traj_to_s: f64,
+        /// GCPs within the trajectory's span.
+        inside: usize,
+    },
     /// A streamed trajectory row did not come after the previous one ([`GcpSampler`]).
     #[error("trajectory row at t = {t_s} s is not after the previous row")]
     NotIncreasing {
