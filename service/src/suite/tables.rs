@@ -150,9 +150,10 @@ pub fn headline_markdown(rows: &[SuiteRow]) -> String {
     }
     let m = summary(rows);
     s.push_str(&format!(
-        "\nNormal gait ({} recordings): median {:.2} % (baseline {:.2} %), worst {:.2} % (baseline {:.2} %); \
+        "\nNormal gait ({} recording{}): median {:.2} % (baseline {:.2} %), worst {:.2} % (baseline {:.2} %); \
          default better on {} of {}, worse by more than {:.2} % of path on {}.\n",
         m.n,
+        if m.n == 1 { "" } else { "s" },
         m.default_median_pct,
         m.baseline_median_pct,
         m.default_worst_pct,
@@ -209,9 +210,10 @@ fn map_frame_markdown(rows: &[SuiteRow]) -> String {
          % of path.\n\n\
          | recording | baseline, map frame | default, map frame | default − baseline | baseline, first leg | default, first leg |\n\
          |---|---|---|---|---|---|\n{table}\n\
-         Normal gait ({} recordings), map frame: median {:.2} % (baseline {:.2} %), worst {:.2} % \
+         Normal gait ({} recording{}), map frame: median {:.2} % (baseline {:.2} %), worst {:.2} % \
          (baseline {:.2} %); default worse than the baseline by more than {:.2} % of path on {}.\n",
         def.len(),
+        if def.len() == 1 { "" } else { "s" },
         median(&mut def),
         median(&mut base),
         def_worst,
