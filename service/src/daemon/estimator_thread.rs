@@ -20,6 +20,9 @@ use crossbeam_channel::{RecvTimeoutError, TryRecvError};
 /// sample of the run before the restart is too.
 const CLOCK_RESTART_S: f64 = 1.0;
 
+/// Warnings kept for the daemon's report (all of them are logged).
+const MAX_REPORTED_WARNINGS: usize = 64;
+
 /// `t_s` follows `prev_s` as the time rule wants the next sample to.
 fn follows(cfg: &DaemonConfig, prev_s: f64, t_s: f64) -> bool {
     let dt = t_s - prev_s;
@@ -72,6 +75,8 @@ struct EstState<'a> {
     latency_health: LatencyHistogram,
     health: HealthMark,
     warnings: Vec<String>,
+    /// The last checkpoint save's error, while saves keep failing with it.
+    last_save_error: Option<String>,
 }
 
 /// `[x, y, z]` with 3 significant digits, for the health line.
@@ -126,12 +131,20 @@ impl<'a> EstState<'a> {
                 dropped: 0,
             },
             warnings: Vec::new(),
+            last_save_error: None,
         }
     }
 
     fn warn(&mut self, w: String) {
         tracing::warn!("{w}");
-        self.warnings.push(w);
+        // Bounded: a daemon that runs for weeks keeps the first ones for its report.
+        match self.warnings.len() {
+            n if n < MAX_REPORTED_WARNINGS => self.warnings.push(w),
+            MAX_REPORTED_WARNINGS => self
+                .warnings
+                .push("further warnings are in the log only".to_owned()),
+            _ => {}
+        }
     }
 
     /// Accepted samples over all streams.
@@ -404,13 +417,22 @@ impl<'a> EstState<'a> {
             Ok(()) => {
                 self.saved_at_samples = accepted;
                 self.checkpoints_saved += 1;
+                self.last_save_error = None;
                 self.warm = Some(state);
                 tracing::debug!(path = %path.display(), t_s = cp.t_s, "checkpoint saved");
             }
             Err(e) => {
                 // Still the best state for the next stream of this process.
                 self.warm = Some(state);
-                self.warn(e.to_string());
+                // Tried again at the next period (the directory may come back); the same
+                // failure is said once, not every 30 s.
+                let text = e.to_string();
+                if self.last_save_error.as_deref() == Some(text.as_str()) {
+                    tracing::debug!("{text} (again)");
+                } else {
+                    self.warn(text.clone());
+                    self.last_save_error = Some(text);
+                }
             }
         }
     }
