@@ -111,6 +111,12 @@ fn run() -> Result<()> {
             "no"
         }
     );
+    // The producer sees only its side: what the daemon dropped after receiving (a full queue
+    // under live delivery, refused samples) is in the daemon's counters.
+    println!(
+        "what the daemon did with them (dropped on a full queue, refused, estimated): corridor status --domain {}",
+        a.domain
+    );
     println!("rows rejected by the CSV reader: {}", log.rejected.len());
     println!("elapsed: {:.3} s ({rate:.0} samples/s)", r.elapsed_s);
     if s.imu_undelivered > 0 {
