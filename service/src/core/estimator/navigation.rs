@@ -58,13 +58,15 @@ impl Pipeline {
                 // rate: normal-gait median 2.32 %, worst 17.8 %; 0.30 / 0.85 % now).
                 let interval_s = self.cfg.eskf.zero_rate_interval_s.get();
                 if let Some(rest) = self.stance_rest.settled_means(interval_s) {
-                    self.fuse_rest(eskf, rest);
                     self.stance_rest.restart_settled();
-                    // From here to the end of the stance the foot rests: the attitude's noise
-                    // is the sensor's, not a swing's (the yaw σ of `gyro_noise_rad_s` grew by
-                    // 14° in a 600 s pause, and exp26's strides after it were associated
-                    // wrongly: 13.5 %, 0.29 % at the rest's noise).
-                    eskf.set_at_rest(true);
+                    // From here to the end of the stance the foot rests (when its mean rate
+                    // was a bias, not a slow turn the gate refused): the attitude's noise is
+                    // the sensor's, not a swing's (the yaw σ of `gyro_noise_rad_s` grew by 14°
+                    // in a 600 s pause, and exp26's strides after it were associated wrongly:
+                    // 13.5 %, 0.29 % at the rest's noise).
+                    if self.fuse_rest(eskf, rest) {
+                        eskf.set_at_rest(true);
+                    }
                 }
             }
         } else if self.was_stance {
@@ -163,17 +165,23 @@ impl Pipeline {
     }
 
     /// At the end of a stance that was a rest (its part before the last `alignment.rest_tail_s`
-    /// lasts `alignment.min_rest_s`): the mean rate over that part observes the gyro bias with
-    /// the σ of the rest-mean prior (√(floor² + spread²), see `rest.rs`), as the initial rest
-    /// does. Counted once the health check has passed (`step_running`).
-    fn fuse_rest(&mut self, eskf: &mut Eskf, rest: RestMeans) {
+    /// lasts `alignment.min_rest_s`), and every `eskf.zero_rate_interval_s` of a long one: the
+    /// mean rate over that part observes the gyro bias with the σ of the rest-mean prior
+    /// (√(floor² + spread²), see `rest.rs`), as the initial rest does. Counted once the health
+    /// check has passed (`step_running`). Says whether the update was made (not refused by its
+    /// gate: a slow turn).
+    fn fuse_rest(&mut self, eskf: &mut Eskf, rest: RestMeans) -> bool {
         let (mean_f, mean_w, sem) = rest;
         let floor = self.cfg.eskf.gyro_bias_prior_sd_rad_s.get();
         let sd = sem.map(|v| v.hypot(floor));
         match eskf.zero_rate_update(&mean_w, &mean_f, &sd) {
-            Some(Ok(_)) => self.zero_rate_applied = true,
+            Some(Ok(_)) => {
+                self.zero_rate_applied = true;
+                return true;
+            }
             Some(Err(_)) => self.counters.zero_rate_refused += 1,
             None => {}
         }
+        false
     }
 }
