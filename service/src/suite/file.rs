@@ -169,6 +169,15 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
             "inject_gyro_bias_rad_s: {v:?} must be a finite number within ±{MAX_INJECTED_BIAS_RAD_S} rad/s"
         )));
     }
+    // Tables and results are keyed by name: two of one name would be one row twice.
+    let mut names: Vec<&str> = file.recordings.iter().map(|r| r.name.as_str()).collect();
+    names.sort_unstable();
+    if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+        return Err(error(format!(
+            "two recordings are named {:?}: names must be unique",
+            w[0]
+        )));
+    }
     let base = path.parent().unwrap_or(Path::new("."));
     let recordings = file
         .recordings
@@ -374,6 +383,17 @@ mod tests {
         read_suite(&write_suite(dir, truth, extra))
             .map(|f| f.recordings[0].clone())
             .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn two_recordings_of_one_name_are_refused() {
+        let dir = std::env::temp_dir().join(format!("corridor-suite-names-{}", std::process::id()));
+        let truth = "t_s,x_m,y_m,z_m\n0.0,0.0,0.0,0.0\n1.0,0.1,0.9,0.0\n";
+        let twice = "start_heading_deg = 0.0\n[[recording]]\nname = \"walk\"\nimu = \"imu.csv\"\n\
+                     truth = \"truth.csv\"\nconfig = \"c.toml\"\nstart_heading_deg = 0.0\n";
+        let err = read_one(&dir, truth, twice).unwrap_err();
+        assert!(err.contains("two recordings are named \"walk\""), "{err}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
