@@ -245,18 +245,36 @@ fn replay_and_compare(
     (offline, outcome.counters, report)
 }
 
-#[test]
-fn bad_samples_over_ipc_are_rejected_and_counted() {
-    let _one = one_daemon_at_a_time();
+/// A lossless daemon on `name`, fresh (no accounting file of an earlier run: counters and output
+/// seq continue across daemon lives), with its configuration and a diagnostics subscriber.
+fn fresh_daemon(name: &str) -> (Domain, DaemonConfig, Running, Subscriber<Diagnostics>) {
     let cfg = config();
     let aid = heading_aid(&cfg, None).unwrap();
-    let domain = Domain::new("test_daemon_reject").unwrap();
-    // No accounting file of an earlier run (counters, output seq continue across daemon lives).
+    let domain = Domain::new(name).unwrap();
     let _ = std::fs::remove_file(domain.daemon_state_path());
     let mut dcfg = DaemonConfig::new(domain.clone(), cfg, aid);
     dcfg.delivery = Delivery::Lossless;
     let daemon = Running::start(dcfg.clone());
     let diagnostics = Subscriber::<Diagnostics>::open(&domain, "test-diagnostics", WAIT).unwrap();
+    (domain, dcfg, daemon, diagnostics)
+}
+
+/// A still sensor's sample.
+fn still(seq: u64, t_s: f64) -> ImuSample {
+    ImuSample {
+        seq,
+        t_s,
+        gyro_rad_s: [0.001, -0.002, 0.003],
+        accel_m_s2: [0.0, 0.0, 9.81],
+        temp_c: f64::NAN,
+        ..ImuSample::default()
+    }
+}
+
+#[test]
+fn bad_samples_over_ipc_are_rejected_and_counted() {
+    let _one = one_daemon_at_a_time();
+    let (domain, dcfg, daemon, diagnostics) = fresh_daemon("test_daemon_reject");
 
     // A second daemon on the same domain is refused with a clear error.
     let err = daemon::run(dcfg, Arc::new(AtomicBool::new(true))).unwrap_err();
@@ -271,14 +289,7 @@ fn bad_samples_over_ipc_are_rejected_and_counted() {
 
     let mut p = Producer::new(&domain, "test-bad-producer", Delivery::Lossless).unwrap();
     p.wait_for_daemon(WAIT).unwrap();
-    let at = |seq: u64, t_s: f64| ImuSample {
-        seq,
-        t_s,
-        gyro_rad_s: [0.001, -0.002, 0.003],
-        accel_m_s2: [0.0, 0.0, 9.81],
-        temp_c: f64::NAN,
-        ..ImuSample::default()
-    };
+    let at = still;
     let dt = 0.005;
     let mut sent = 0u64;
     let mut send = |s: ImuSample| {
@@ -330,25 +341,11 @@ fn a_device_clock_that_restarts_starts_a_new_stream() {
     // The same producer, its clock reset mid-stream (a device reset, a wrapped counter): the
     // estimator refused every later sample until the new clock passed the old one.
     let _one = one_daemon_at_a_time();
-    let cfg = config();
-    let aid = heading_aid(&cfg, None).unwrap();
-    let domain = Domain::new("test_daemon_clock_reset").unwrap();
-    let _ = std::fs::remove_file(domain.daemon_state_path());
-    let mut dcfg = DaemonConfig::new(domain.clone(), cfg, aid);
-    dcfg.delivery = Delivery::Lossless;
-    let daemon = Running::start(dcfg);
-    let diagnostics = Subscriber::<Diagnostics>::open(&domain, "test-diagnostics", WAIT).unwrap();
+    let (domain, _, daemon, diagnostics) = fresh_daemon("test_daemon_clock_reset");
     let mut p = Producer::new(&domain, "test-reset-producer", Delivery::Lossless).unwrap();
     p.wait_for_daemon(WAIT).unwrap();
     let dt = 0.005;
-    let at = |seq: u64, t_s: f64| ImuSample {
-        seq,
-        t_s,
-        gyro_rad_s: [0.001, -0.002, 0.003],
-        accel_m_s2: [0.0, 0.0, 9.81],
-        temp_c: f64::NAN,
-        ..ImuSample::default()
-    };
+    let at = still;
     for i in 0..600 {
         p.send_imu_raw(at(i, 1000.0 + i as f64 * dt)).unwrap();
     }
