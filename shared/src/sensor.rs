@@ -201,6 +201,15 @@ impl SensorLimits {
     pub fn max_dt_s(&self) -> f64 {
         self.max_dt_s
     }
+    /// `t_s` follows `prev_s` as the time rule wants the next sample to (see [`TimeGuard`]).
+    pub fn follows(&self, prev_s: f64, t_s: f64) -> bool {
+        step_follows(t_s - prev_s, self.min_dt_s, self.max_dt_s)
+    }
+}
+
+/// A time step the rule takes without confirmation: more than `min_dt_s`, at most `max_dt_s`.
+fn step_follows(dt_s: f64, min_dt_s: f64, max_dt_s: f64) -> bool {
+    dt_s > min_dt_s && dt_s <= max_dt_s
 }
 
 /// What [`TimeGuard::check`] decided about a sample time.
@@ -264,10 +273,7 @@ impl TimeGuard {
         let Some(last) = self.last_s else {
             return TimeVerdict::Accept;
         };
-        let follows = |from: f64| {
-            let dt = t_s - from;
-            dt > self.min_dt_s && dt <= self.max_dt_s
-        };
+        let follows = |from: f64| step_follows(t_s - from, self.min_dt_s, self.max_dt_s);
         if follows(last) {
             return TimeVerdict::Accept;
         }

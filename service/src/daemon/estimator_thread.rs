@@ -13,6 +13,9 @@ use corridor_shared::wire::{
     Diagnostics, FLAG_END_OF_STREAM, FLAG_SHUTDOWN, ImuSample, NavSample, monotonic_ns,
 };
 use crossbeam_channel::{RecvTimeoutError, TryRecvError};
+use iceoryx2::prelude::*;
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
 
 /// A clock that went back and runs on regularly for this long (its own time, s) has restarted:
 /// the stream ends and a new one begins, as for a restarted producer. Shorter runs of earlier
@@ -22,15 +25,6 @@ const CLOCK_RESTART_S: f64 = 1.0;
 
 /// Warnings kept for the daemon's report (all of them are logged).
 const MAX_REPORTED_WARNINGS: usize = 64;
-
-/// `t_s` follows `prev_s` as the time rule wants the next sample to.
-fn follows(cfg: &DaemonConfig, prev_s: f64, t_s: f64) -> bool {
-    let dt = t_s - prev_s;
-    dt > cfg.estimator.sensor.min_dt_s() && dt <= cfg.estimator.sensor.max_dt_s()
-}
-use iceoryx2::prelude::*;
-use std::sync::Arc;
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// Refused samples per stream that are logged as warnings (the rest at debug level; all counted).
@@ -62,9 +56,9 @@ struct EstState<'a> {
     streams_finished: u64,
     /// The next sample comes from a new producer (see [`Msg::NewProducer`]).
     producer_changed: bool,
-    /// Samples refused in a row because their time went back, each following the one before
-    /// it (a driver whose clock restarted): how many, the first one's time and the last one's.
-    went_back: (u64, f64, f64),
+    /// The run of samples refused in a row because their time went back, each following the
+    /// one before it (a driver whose clock restarted): its first time and its last.
+    went_back: Option<(f64, f64)>,
     /// The state each new stream starts from (checkpoint configured only).
     warm: Option<WarmStart>,
     warm_started_from: Option<Checkpoint>,
@@ -116,7 +110,7 @@ impl<'a> EstState<'a> {
             last_nis: f64::NAN,
             streams_finished: 0,
             producer_changed: false,
-            went_back: (0, f64::NAN, f64::NAN),
+            went_back: None,
             warm: None,
             warm_started_from: None,
             saved_at_samples: 0,
@@ -202,20 +196,20 @@ impl<'a> EstState<'a> {
     /// A sample refused because its time went back: counts it into the run of such samples
     /// that follow each other.
     fn note_went_back(&mut self, cfg: &DaemonConfig, t_s: f64) {
-        let (n, first, last) = self.went_back;
-        self.went_back = if n > 0 && follows(cfg, last, t_s) {
-            (n + 1, first, t_s)
-        } else {
-            (1, t_s, t_s)
+        let first = match self.went_back {
+            Some((first, last)) if cfg.estimator.sensor.follows(last, t_s) => first,
+            _ => t_s,
         };
+        self.went_back = Some((first, t_s));
     }
 
     /// The clock went back and has run on regularly from there for [`CLOCK_RESTART_S`] of its
     /// own time, this sample included: a restarted device clock, not a stray stamp or a
     /// replayed burst.
     fn clock_restarted(&self, cfg: &DaemonConfig, t_s: f64) -> bool {
-        let (n, first, last) = self.went_back;
-        n > 0 && follows(cfg, last, t_s) && t_s - first >= CLOCK_RESTART_S
+        self.went_back.is_some_and(|(first, last)| {
+            cfg.estimator.sensor.follows(last, t_s) && t_s - first >= CLOCK_RESTART_S
+        })
     }
 
     /// A fresh estimator for a new stream, warm-started from the last saved state if any.
@@ -242,7 +236,6 @@ impl<'a> EstState<'a> {
             tracing::warn!(
                 t_s = s.t_s,
                 last_t_s = self.last.t_s,
-                refused = self.went_back.0,
                 "{}",
                 if producer_changed {
                     "new IMU producer restarted its clock; starting a new stream"
@@ -250,7 +243,7 @@ impl<'a> EstState<'a> {
                     "the IMU clock went back and runs on from there; starting a new stream"
                 }
             );
-            self.went_back = (0, f64::NAN, f64::NAN);
+            self.went_back = None;
             let marker = ImuSample {
                 seq: self.last_imu_seq,
                 flags: FLAG_END_OF_STREAM,
@@ -265,7 +258,7 @@ impl<'a> EstState<'a> {
         };
         let e = match self.est.step(&input) {
             Ok(e) => {
-                self.went_back = (0, f64::NAN, f64::NAN);
+                self.went_back = None;
                 *e
             }
             Err(err) => {
