@@ -12,6 +12,7 @@
 //! and 12 heading observations in the walk instead of 33); now a rest is fused every
 //! `eskf.zero_rate_interval_s` while it lasts, and at the sensor's own noise (session 23).
 
+use corridor_service::core::Counters;
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::{ConfigFile, ConfigOverrides};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
@@ -91,27 +92,37 @@ fn config() -> corridor_shared::config::Config {
     .unwrap()
 }
 
-#[test]
-fn a_pause_mid_walk_observes_the_bias_without_the_landing() {
-    let (log, w_pause, t_start, t_end) = paused("gdins_exp40_serpentine_return", 20.0);
+/// The walk run with the default configuration: its counters, the yaw the pause from `t_start`
+/// to `t_end` moved (from [`SETTLED_S`] in, once the landing's stance updates have done their
+/// part, to its end), degrees, and the bias at its end.
+fn over_the_pause(log: &ImuLog, t_start: f64, t_end: f64) -> (Counters, f64, [f64; 3]) {
     let cfg = config();
     let aid = heading_aid(&cfg, None).unwrap();
-    // The bias at the end of the pause, and the yaw the pause moved (from 2 s in, once the
-    // landing's stance updates have done their part, to its end).
     let (mut yaw_start, mut at_end) = (None, None);
-    let out = run_log(&log, &cfg, &aid, &BiasInjection::default(), |s, e| {
+    let out = run_log(log, &cfg, &aid, &BiasInjection::default(), |s, e| {
         if s.t_s <= t_start + SETTLED_S {
             yaw_start = Some(e.yaw_rad);
         } else if s.t_s <= t_end {
             at_end = Some((e.gyro_bias_rad_s, e.yaw_rad));
         }
     });
-    assert!(
-        out.counters.zero_rate_updates >= 5,
-        "the pause is fused as a rest while it lasts: {} updates",
-        out.counters.zero_rate_updates
-    );
     let (bias, yaw_end) = at_end.unwrap();
+    (
+        out.counters,
+        (yaw_end - yaw_start.unwrap()).to_degrees(),
+        bias,
+    )
+}
+
+#[test]
+fn a_pause_mid_walk_observes_the_bias_without_the_landing() {
+    let (log, w_pause, t_start, t_end) = paused("gdins_exp40_serpentine_return", 20.0);
+    let (counters, turn_deg, bias) = over_the_pause(&log, t_start, t_end);
+    assert!(
+        counters.zero_rate_updates >= 5,
+        "the pause is fused as a rest while it lasts: {} updates",
+        counters.zero_rate_updates
+    );
     for axis in 0..3 {
         assert!(
             (bias[axis] - w_pause[axis]).abs() < 6e-4,
@@ -120,7 +131,6 @@ fn a_pause_mid_walk_observes_the_bias_without_the_landing() {
             w_pause[axis]
         );
     }
-    let turn_deg = (yaw_end - yaw_start.unwrap()).to_degrees();
     assert!(
         turn_deg.abs() < 1.5,
         "the rest turned the heading by {turn_deg:.2}°"
@@ -132,24 +142,21 @@ fn a_long_pause_keeps_the_heading_and_its_observations() {
     // exp36: straight out and back, the pause at its turn. The rest's rate (the initial rest's)
     // differs from the bias the filter walked with by about 2e-3 rad/s on the vertical.
     let (log, _, t_start, t_end) = paused("gdins_exp36_corridor_out_and_back", 120.0);
-    let cfg = config();
-    let aid = heading_aid(&cfg, None).unwrap();
-    let (mut yaw_start, mut yaw_end) = (None, None);
-    let out = run_log(&log, &cfg, &aid, &BiasInjection::default(), |s, e| {
-        if s.t_s <= t_start + SETTLED_S {
-            yaw_start = Some(e.yaw_rad);
-        } else if s.t_s <= t_end {
-            yaw_end = Some(e.yaw_rad);
-        }
-    });
-    let turn_deg = (yaw_end.unwrap() - yaw_start.unwrap()).to_degrees();
+    let (counters, turn_deg, _) = over_the_pause(&log, t_start, t_end);
     // The walk back is still aided as without the pause.
+    let cfg = config();
     let (clean, _, _, _) = paused("gdins_exp36_corridor_out_and_back", 0.0);
-    let clean = run_log(&clean, &cfg, &aid, &BiasInjection::default(), |_, _| {});
-    let used = |c: &corridor_service::core::Counters| c.heading_used + c.stride_used;
+    let clean = run_log(
+        &clean,
+        &cfg,
+        &heading_aid(&cfg, None).unwrap(),
+        &BiasInjection::default(),
+        |_, _| {},
+    );
+    let used = |c: &Counters| c.heading_used + c.stride_used;
     println!(
         "yaw moved {turn_deg:.2}° over the pause; heading observations used {} (without the pause {})",
-        used(&out.counters),
+        used(&counters),
         used(&clean.counters)
     );
     assert!(
@@ -157,9 +164,9 @@ fn a_long_pause_keeps_the_heading_and_its_observations() {
         "the 120 s rest turned the heading by {turn_deg:.2}°"
     );
     assert!(
-        used(&out.counters) + 3 >= used(&clean.counters),
+        used(&counters) + 3 >= used(&clean.counters),
         "heading observations used: {} with the pause, {} without",
-        used(&out.counters),
+        used(&counters),
         used(&clean.counters)
     );
 }
