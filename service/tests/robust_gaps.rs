@@ -277,3 +277,43 @@ fn an_hours_gap_with_the_foot_at_rest_keeps_the_walk_after_it() {
         "a footprint after the gap moved by {worst:.2} m"
     );
 }
+
+#[test]
+fn a_stamp_glitched_forward_is_dropped_and_the_walk_goes_on_as_without_it() {
+    // The daemon's path: samples straight into the estimator, no CSV reader (which rejects
+    // such a row before the estimator sees it). One stamp 0.9 s ahead, within
+    // `sensor.max_dt_s`: before, it was taken for a gap (a new segment) and the next 180
+    // samples were refused as not increasing, the footprints after it up to 0.95 m off (exp29).
+    let log = read_imu_csv(&data().join("imu.csv"), &ImuCsvOptions::default()).unwrap();
+    let cfg = Config::from_file(&data().join("../../../configs/gdins.toml")).unwrap();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let last_of = |log: &ImuLog| {
+        let (mut last, mut glitches) = (None, Vec::new());
+        let c = run_log(log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+            last = Some(*e);
+            glitches.extend(e.glitch_t_s);
+        })
+        .counters;
+        (last.unwrap(), c, glitches)
+    };
+    // Mid-swing, at touchdown, at rest.
+    for k in [5003, 7010, 9001] {
+        let mut glitched = log.clone();
+        glitched.rows[k].t_s += 0.9;
+        let mut without = log.clone();
+        without.rows.remove(k);
+        let (g, gc, glitches) = last_of(&glitched);
+        let (w, wc, _) = last_of(&without);
+        assert_eq!(glitches, [glitched.rows[k].t_s], "k {k}");
+        assert_eq!(
+            (gc.samples, gc.rejected_time_jump, gc.rejected_time, gc.gaps),
+            (wc.samples, 1, 0, 0),
+            "k {k}"
+        );
+        // The state as if the glitched sample had never come, bit for bit.
+        assert_eq!(g.p_m, w.p_m, "k {k}");
+        assert_eq!(g.nav_from_body, w.nav_from_body, "k {k}");
+        assert_eq!(g.gyro_bias_rad_s, w.gyro_bias_rad_s, "k {k}");
+        assert_eq!(gc.heading_used, wc.heading_used, "k {k}");
+    }
+}

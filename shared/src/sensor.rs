@@ -18,7 +18,10 @@
 //!
 //! Time: a step not above `min_dt_s` is refused; a step longer than `max_dt_s` is a **time jump**:
 //! the sample is refused unless the next one confirms the new time base ([`TimeGuard`]), so one
-//! corrupt `t_s = 1e30` costs one row, and a real long gap costs one row too.
+//! corrupt `t_s = 1e30` costs one row, and a real long gap costs one row too. A shorter step that
+//! is still a gap (beyond the guard's `gap_dt_s`) is accepted but provisional: when the next time
+//! goes back and follows the one before it, the gap's far side was a stamp glitch
+//! ([`TimeVerdict::Glitch`]) and is dropped after the fact, so the good samples after it are kept.
 
 use serde::{Deserialize, Serialize};
 
@@ -225,6 +228,11 @@ pub enum TimeVerdict {
     /// which no sample has followed yet: the first time was the outlier. Accept this one as
     /// the new time base; what was taken with the first one has to be dropped by the caller.
     Rebase,
+    /// The last accepted time jumped forward by more than the guard's `gap_dt_s` (within
+    /// `max_dt_s`), and this one goes back and follows the time before it within `gap_dt_s`:
+    /// the last time was a stamp glitch, not a gap. Accept this one (the time before the glitch
+    /// is its base); what was taken with the glitched sample has to be dropped by the caller.
+    Glitch,
 }
 
 /// The time rule of the CSV reader and of the estimator: strictly increasing by more than
@@ -234,32 +242,51 @@ pub enum TimeVerdict {
 /// that breaks the rule (earlier, or a jump) is a candidate too, and when the next sample
 /// follows that candidate the first time was the outlier ([`TimeVerdict::Rebase`]): one bad
 /// stamp on the first row no longer makes every later row "not increasing".
+/// A step longer than `gap_dt_s` (a gap, not a jump) is accepted at once but stays provisional
+/// until the next accepted time: a next time that goes back and follows the time before the gap
+/// within `gap_dt_s` says the gap's far side was a single glitched stamp
+/// ([`TimeVerdict::Glitch`]). Without that, one stamp 0.9 s ahead made every good sample of the
+/// next 0.9 s "not increasing" (180 samples at 200 Hz, and the walk's footprints 0.95 m off).
+/// A glitch of two or more samples in a row is taken for a gap, as before.
 /// The caller calls [`TimeGuard::accept`] with every time it accepts.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TimeGuard {
     min_dt_s: f64,
     max_dt_s: f64,
+    gap_dt_s: f64,
     last_s: Option<f64>,
     candidate_s: Option<f64>,
     /// A sample has followed the time base (every accepted time but the very first).
     confirmed: bool,
+    /// While the last accepted step was a gap beyond `gap_dt_s` from a confirmed time: that
+    /// time (the base a glitch would go back to).
+    before_gap_s: Option<f64>,
 }
 
 impl TimeGuard {
-    /// A guard with the given step bounds and no time base yet.
-    pub fn new(min_dt_s: f64, max_dt_s: f64) -> Self {
+    /// A guard with the given step bounds and no time base yet; a step beyond `gap_dt_s` is
+    /// provisional until the next accepted time (infinite: never).
+    pub fn new(min_dt_s: f64, max_dt_s: f64, gap_dt_s: f64) -> Self {
         Self {
             min_dt_s,
             max_dt_s,
+            gap_dt_s,
             last_s: None,
             candidate_s: None,
             confirmed: false,
+            before_gap_s: None,
         }
     }
 
-    /// The guard of `limits`.
-    pub fn from_limits(limits: &SensorLimits) -> Self {
-        Self::new(limits.min_dt_s, limits.max_dt_s)
+    /// The guard of `limits`, with a step beyond `gap_dt_s` provisional.
+    pub fn from_limits(limits: &SensorLimits, gap_dt_s: f64) -> Self {
+        Self::new(limits.min_dt_s, limits.max_dt_s, gap_dt_s)
+    }
+
+    /// Whether the last accepted time is provisional: it came after a gap beyond `gap_dt_s`,
+    /// and the next accepted time decides whether it was a glitch ([`TimeVerdict::Glitch`]).
+    pub fn provisional(&self) -> bool {
+        self.before_gap_s.is_some()
     }
 
     /// The last accepted time.
@@ -276,6 +303,12 @@ impl TimeGuard {
         let follows = |from: f64| step_follows(t_s - from, self.min_dt_s, self.max_dt_s);
         if follows(last) {
             return TimeVerdict::Accept;
+        }
+        if let Some(before) = self.before_gap_s
+            && t_s <= last
+            && step_follows(t_s - before, self.min_dt_s, self.gap_dt_s)
+        {
+            return TimeVerdict::Glitch;
         }
         if let Some(c) = self.candidate_s
             && follows(c)
@@ -300,6 +333,13 @@ impl TimeGuard {
 
     /// Records `t_s` as accepted: the new time base.
     pub fn accept(&mut self, t_s: f64) {
+        // A gap from a confirmed time that is itself no glitch's far side stays provisional.
+        self.before_gap_s = match self.last_s {
+            Some(last) if self.confirmed && self.before_gap_s.is_none() => {
+                (t_s - last > self.gap_dt_s).then_some(last)
+            }
+            _ => None,
+        };
         self.confirmed = self.last_s.is_some();
         self.last_s = Some(t_s);
         self.candidate_s = None;
@@ -316,12 +356,15 @@ mod tests {
     use super::*;
 
     fn run(times: &[f64]) -> Vec<TimeVerdict> {
-        let mut g = TimeGuard::new(1e-6, 1.0);
+        let mut g = TimeGuard::new(1e-6, 1.0, 0.05);
         times
             .iter()
             .map(|&t| {
                 let v = g.check(t);
-                if matches!(v, TimeVerdict::Accept | TimeVerdict::Rebase) {
+                if matches!(
+                    v,
+                    TimeVerdict::Accept | TimeVerdict::Rebase | TimeVerdict::Glitch
+                ) {
                     g.accept(t);
                 }
                 v
@@ -373,6 +416,59 @@ mod tests {
             run(&[0.0, 0.005, -3.0, -2.995]),
             [Accept, Accept, NotIncreasing, NotIncreasing]
         );
+    }
+
+    #[test]
+    fn a_single_stamp_ahead_is_a_glitch_and_the_good_times_after_it_are_kept() {
+        use TimeVerdict::*;
+        // One stamp 0.9 s ahead (within max_dt_s, so accepted as a gap): the next time goes
+        // back and follows the one before it. Before, it and every time up to 0.9 s were
+        // "not increasing".
+        assert_eq!(
+            run(&[0.0, 0.005, 0.905, 0.010, 0.015]),
+            [Accept, Accept, Accept, Glitch, Accept]
+        );
+        // A real gap: the next time follows its far side.
+        assert_eq!(
+            run(&[0.0, 0.005, 0.905, 0.910, 0.915]),
+            [Accept, Accept, Accept, Accept, Accept]
+        );
+        // Only the time right before the gap is a glitch's base, and only within gap_dt_s.
+        assert_eq!(
+            run(&[0.0, 0.005, 0.905, 0.2, 0.910]),
+            [Accept, Accept, Accept, NotIncreasing, Accept]
+        );
+        // Once the gap's far side is followed, going back is refused as before (so a glitch
+        // of two samples in a row is taken for a gap).
+        assert_eq!(
+            run(&[0.0, 0.005, 0.905, 0.910, 0.010]),
+            [Accept, Accept, Accept, Accept, NotIncreasing]
+        );
+        // A step within gap_dt_s is never provisional; neither is a gap from the very first time.
+        assert_eq!(
+            run(&[0.0, 0.005, 0.045, 0.010]),
+            [Accept, Accept, Accept, NotIncreasing]
+        );
+        assert_eq!(run(&[0.0, 0.9, 0.005]), [Accept, Accept, NotIncreasing]);
+    }
+
+    #[test]
+    fn provisional_says_whether_the_last_time_came_after_a_gap() {
+        let mut g = TimeGuard::new(1e-6, 1.0, 0.05);
+        for t in [0.0, 0.005] {
+            assert_eq!(g.check(t), TimeVerdict::Accept);
+            g.accept(t);
+            assert!(!g.provisional());
+        }
+        assert_eq!(g.check(0.5), TimeVerdict::Accept);
+        g.accept(0.5);
+        assert!(g.provisional());
+        assert_eq!(g.check(0.0), TimeVerdict::NotIncreasing);
+        assert!(g.provisional(), "a refused time decides nothing");
+        assert_eq!(g.check(0.010), TimeVerdict::Glitch);
+        g.accept(0.010);
+        assert!(!g.provisional());
+        assert_eq!(g.last_s(), Some(0.010));
     }
 
     #[test]

@@ -5,6 +5,11 @@
 //! on the stream without it (bias bit-identical to the estimator fed the same samples), with
 //! its periodic bias output (paced by sensor time, which the dropped 1e9 s had stopped).
 //!
+//! The same stream carries a stamp glitched 0.99 s ahead mid-stream (within `sensor.max_dt_s`,
+//! so it looks like a gap). Before, the 180 good samples after it were refused as "not
+//! increasing" and the gap started a new segment; now the next sample, which goes back and
+//! follows the time before it, shows it to be a glitch, and the daemon drops it after the fact.
+//!
 //! One daemon test per binary (see `one_daemon_at_a_time`).
 
 mod daemon_common;
@@ -16,7 +21,7 @@ use corridor_shared::wire::BiasSample;
 use daemon_common::*;
 
 #[test]
-fn a_bad_first_time_stamp_costs_two_samples_not_the_stream() {
+fn a_bad_first_time_stamp_costs_two_samples_and_a_glitched_one_costs_one() {
     let _one = one_daemon_at_a_time();
     let name = "test_robust_daemon_first_time";
     cleanup_domain(name);
@@ -28,6 +33,8 @@ fn a_bad_first_time_stamp_costs_two_samples_not_the_stream() {
     let mut rows = exp36_rows();
     rows.truncate(4000); // 20 s
     rows[0].t_s = 1e9;
+    let glitch_t_s = rows[2000].t_s + 0.99;
+    rows[2000].t_s = glitch_t_s;
     let producer = produce(
         &domain,
         "test-first-time",
@@ -53,18 +60,27 @@ fn a_bad_first_time_stamp_costs_two_samples_not_the_stream() {
         refused += usize::from(est.step(&s).is_err());
     }
     let c = est.counters();
-    // The second sample refused (not increasing), the first dropped after the fact.
+    // The second sample refused (not increasing), the first and the glitched one dropped after
+    // the fact.
     assert_eq!(refused, 1);
     assert_eq!(
-        (c.samples, c.rejected_time, c.rejected_time_jump),
-        (3998, 1, 1)
+        (c.samples, c.rejected_time, c.rejected_time_jump, c.gaps),
+        (3997, 1, 2, 0)
     );
     let last = got.last().expect("bias samples");
     assert_eq!(last.gyro_bias_rad_s, est.last_estimate().gyro_bias_rad_s);
     // The periodic bias output runs from the start of the stream, the first one within a period
     // of it (before: after the one published for the dropped sample at 1e9 s, nothing until
-    // the alignment, then only at heading observations).
-    let times: Vec<f64> = got.iter().map(|b| b.t_s).filter(|&t| t < 1e8).collect();
+    // the alignment, then only at heading observations), and on after the glitch (a bias sample
+    // was published for it; paced by its time, the output would pause for a period).
+    // Its pacing starts again at the sample that dropped it.
+    assert!(got.iter().any(|b| b.t_s == glitch_t_s));
+    assert!(got.iter().any(|b| b.t_s == rows[2001].t_s));
+    let times: Vec<f64> = got
+        .iter()
+        .map(|b| b.t_s)
+        .filter(|&t| t < 1e8 && t != glitch_t_s)
+        .collect();
     let longest = times
         .windows(2)
         .map(|w| w[1] - w[0])
@@ -74,6 +90,6 @@ fn a_bad_first_time_stamp_costs_two_samples_not_the_stream() {
         "{longest} s without a bias sample at a period of {bias_period_s} s"
     );
     let d = report.diagnostics;
-    assert_eq!((d.accepted, d.rejected_time), (3998, 1), "{d:?}");
+    assert_eq!((d.accepted, d.rejected_time), (3997, 1), "{d:?}");
     cleanup_domain(name);
 }

@@ -35,7 +35,7 @@ pub(super) fn diagnose(a: &DiagnoseArgs) -> Result<()> {
         .imu
         .as_deref()
         .context("--imu is required without --suite")?;
-    let log = corridor_service::runner::read_log(imu, &a.model.config()?.sensor)?;
+    let log = corridor_service::runner::read_log(imu, &a.model.config()?)?;
     let truth = a
         .truth
         .as_deref()

@@ -4,7 +4,8 @@
 //! A sample is refused when a value is not finite, when |ω| or |f| is beyond what the sensor can
 //! output (`sensor.max_gyro_rad_s`, `sensor.max_accel_m_s2`), or when its time breaks the time
 //! rule of [`TimeGuard`] (not increasing by `sensor.min_dt_s`, or a jump beyond
-//! `sensor.max_dt_s` that the next sample does not confirm). A sample with an axis at the rail
+//! `sensor.max_dt_s` that the next sample does not confirm; a gap's far side that the next sample
+//! shows to be a stamp glitch is dropped after the fact). A sample with an axis at the rail
 //! (within [`CLIP_FRACTION`] of the range) is accepted and flagged as clipped.
 
 use super::estimator::{ImuInput, SampleError};
@@ -26,6 +27,13 @@ pub struct Accepted {
     /// that first sample was the outlier ([`TimeVerdict::Rebase`]), and what was taken with it
     /// is to be dropped.
     pub replaced_first_t_s: Option<f64>,
+    /// The previous accepted time, which jumped forward by a gap and which this sample goes
+    /// back behind, following the time before it: that time was a stamp glitch
+    /// ([`TimeVerdict::Glitch`]), and what was taken with it is to be dropped.
+    pub glitch_t_s: Option<f64>,
+    /// This sample's time came after a gap (beyond `estimator.max_dt_s`) and stays provisional
+    /// until the next accepted sample: the caller keeps what it needs to drop it after the fact.
+    pub provisional: bool,
 }
 
 /// The plausibility check of one stream.
@@ -38,14 +46,15 @@ pub struct Plausibility {
 }
 
 impl Plausibility {
-    /// A check with `limits` and no time base yet.
-    pub fn new(limits: SensorLimits) -> Self {
+    /// A check with `limits` and no time base yet; a step beyond `gap_dt_s` is provisional
+    /// until the next accepted sample ([`TimeVerdict::Glitch`]).
+    pub fn new(limits: SensorLimits, gap_dt_s: f64) -> Self {
         let (g, a) = (
             AXIS_ABSURD_FACTOR * limits.gyro_range_rad_s(),
             AXIS_ABSURD_FACTOR * limits.accel_range_m_s2(),
         );
         Self {
-            time: TimeGuard::from_limits(&limits),
+            time: TimeGuard::from_limits(&limits, gap_dt_s),
             axis_limits: [g, g, g, a, a, a],
             limits,
         }
@@ -108,10 +117,12 @@ impl Plausibility {
                 });
             }
         }
-        let first_t_s = self.time.last_s();
-        let replaced_first_t_s = match self.time.check(s.t_s) {
-            TimeVerdict::Accept => None,
-            TimeVerdict::Rebase => first_t_s,
+        let last_t_s = self.time.last_s();
+        let (mut replaced_first_t_s, mut glitch_t_s) = (None, None);
+        match self.time.check(s.t_s) {
+            TimeVerdict::Accept => {}
+            TimeVerdict::Rebase => replaced_first_t_s = last_t_s,
+            TimeVerdict::Glitch => glitch_t_s = last_t_s,
             TimeVerdict::NotIncreasing => {
                 return Err(SampleError::TimeNotIncreasing {
                     t_s: s.t_s,
@@ -125,13 +136,15 @@ impl Plausibility {
                     max_dt_s: l.max_dt_s(),
                 });
             }
-        };
+        }
         self.time.accept(s.t_s);
         let rail = |v: &[f64; 3], range: f64| v.iter().any(|x| x.abs() >= CLIP_FRACTION * range);
         Ok(Accepted {
             clipped: rail(&s.gyro_rad_s, l.gyro_range_rad_s())
                 || rail(&s.accel_m_s2, l.accel_range_m_s2()),
             replaced_first_t_s,
+            glitch_t_s,
+            provisional: self.time.provisional(),
         })
     }
 }
@@ -149,7 +162,7 @@ mod tests {
             max_accel_m_s2: Some(200.0),
             ..Default::default()
         };
-        Plausibility::new(f.validate().unwrap())
+        Plausibility::new(f.validate().unwrap(), 0.05)
     }
 
     fn sample(t_s: f64, g: [f64; 3], a: [f64; 3]) -> ImuInput {
@@ -222,7 +235,9 @@ mod tests {
             p.check(&rest(0.005)),
             Ok(Accepted {
                 clipped: false,
-                replaced_first_t_s: None
+                replaced_first_t_s: None,
+                glitch_t_s: None,
+                provisional: false,
             })
         );
         assert!(matches!(
@@ -243,5 +258,22 @@ mod tests {
         let a = p.check(&rest(0.005)).unwrap();
         assert_eq!(a.replaced_first_t_s, Some(1e9));
         assert_eq!(p.check(&rest(0.010)).unwrap().replaced_first_t_s, None);
+    }
+
+    #[test]
+    fn a_sample_after_a_gap_is_provisional_until_the_next_one_says_glitch_or_gap() {
+        let mut p = gx5();
+        let rest = |t| sample(t, [0.0; 3], [0.0, 0.0, 9.8]);
+        for t in [0.0, 0.005] {
+            assert!(!p.check(&rest(t)).unwrap().provisional);
+        }
+        assert!(p.check(&rest(0.905)).unwrap().provisional);
+        let a = p.check(&rest(0.010)).unwrap();
+        assert_eq!((a.glitch_t_s, a.provisional), (Some(0.905), false));
+        assert_eq!(p.last_t_s(), Some(0.010));
+        // A real gap: the next sample follows its far side.
+        assert!(p.check(&rest(0.9)).unwrap().provisional);
+        let a = p.check(&rest(0.905)).unwrap();
+        assert_eq!((a.glitch_t_s, a.provisional), (None, false));
     }
 }

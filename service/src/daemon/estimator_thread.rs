@@ -283,9 +283,10 @@ impl<'a> EstState<'a> {
         for n in e.notices() {
             tracing::warn!(seq = s.seq, "{n}");
         }
-        if e.replaced_first_t_s.is_some() {
-            // Its time paced the periodic bias output (a first time in the future stopped it);
-            // the attitude published for it stays published.
+        if e.replaced_first_t_s.is_some() || e.glitch_t_s.is_some() {
+            // Its time paced the periodic bias output (a first time in the future stopped it, a
+            // glitched stamp paused it for as long as the stamp was ahead); the attitude
+            // published for it stays published.
             self.last_bias_t_s = f64::NEG_INFINITY;
         }
         self.last = e;

@@ -218,17 +218,15 @@ impl<'a> Feed<'a> {
 /// Rejected input rows printed one by one (the rest are counted).
 pub(crate) const REJECTED_ROWS_LOGGED: usize = 20;
 
-/// Reads a whole log with the time-step limits of `sensor` (as `corridor run` streams one),
-/// and says which rows it rejected: the first [`REJECTED_ROWS_LOGGED`] with their place, then
-/// their number (the in-memory paths, `corridor diagnose` and the suite, used to drop them
-/// without a word).
-pub fn read_log(
-    path: &Path,
-    sensor: &corridor_shared::sensor::SensorLimits,
-) -> Result<ImuLog, ImuCsvError> {
+/// Reads a whole log with the time-step limits and gap threshold of `config` (as `corridor run`
+/// streams one), and says which rows it rejected: the first [`REJECTED_ROWS_LOGGED`] with their
+/// place, then their number (the in-memory paths, `corridor diagnose` and the suite, used to
+/// drop them without a word).
+pub fn read_log(path: &Path, config: &Config) -> Result<ImuLog, ImuCsvError> {
     let opts = corridor_shared::imu_csv::ImuCsvOptions {
-        min_dt_s: sensor.min_dt_s(),
-        max_dt_s: sensor.max_dt_s(),
+        min_dt_s: config.sensor.min_dt_s(),
+        max_dt_s: config.sensor.max_dt_s(),
+        gap_dt_s: config.max_dt_s.get(),
         ..Default::default()
     };
     let log = corridor_shared::imu_csv::read_imu_csv(path, &opts)?;

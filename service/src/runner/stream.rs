@@ -269,6 +269,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     let csv = corridor_shared::imu_csv::ImuCsvOptions {
         min_dt_s: opts.config.sensor.min_dt_s(),
         max_dt_s: opts.config.sensor.max_dt_s(),
+        gap_dt_s: opts.config.max_dt_s.get(),
         ..opts.csv.clone()
     };
     let mut reader = ImuCsvReader::open(&opts.imu, &csv)?;

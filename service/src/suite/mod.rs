@@ -290,15 +290,15 @@ struct Ctx<'a> {
     truth: Vec<TruthPoint>,
 }
 
-/// A recording's log, read with its configuration's time-step limits (rejected rows said, see
+/// A recording's log, read with its configuration's time-step limits and gap threshold (rejected rows said, see
 /// [`crate::runner::read_log`]), and its truth.
 pub(crate) fn read_recording(
     base: &Path,
     r: &SuiteRecording,
 ) -> Result<(ImuLog, Vec<TruthPoint>), RunError> {
-    let sensor = ConfigFile::read(&base.join(&r.config))?.validate()?.sensor;
+    let config = ConfigFile::read(&base.join(&r.config))?.validate()?;
     Ok((
-        crate::runner::read_log(&base.join(&r.imu), &sensor)?,
+        crate::runner::read_log(&base.join(&r.imu), &config)?,
         read_truth_csv(&base.join(&r.truth))?,
     ))
 }

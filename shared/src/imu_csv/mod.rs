@@ -102,16 +102,21 @@ pub enum RejectReason {
     /// the first stamp was the outlier (found only after the row that exposed it was rejected
     /// as not increasing or as a jump).
     TimeOutlier,
+    /// A row after a gap (a step beyond [`ImuCsvOptions::gap_dt_s`]) that the next row
+    /// contradicts by going back and following the row before the gap: the gap was one glitched
+    /// stamp (found only when that next row was read).
+    TimeGlitch,
 }
 
 impl RejectReason {
     /// All reasons, in the order used by [`ImuLog::rejected_counts`].
-    pub const ALL: [RejectReason; 5] = [
+    pub const ALL: [RejectReason; 6] = [
         RejectReason::Malformed,
         RejectReason::NonFinite,
         RejectReason::TimeNotIncreasing,
         RejectReason::TimeJump,
         RejectReason::TimeOutlier,
+        RejectReason::TimeGlitch,
     ];
 
     /// Position in [`RejectReason::ALL`] (and in the reader's counts).
@@ -123,7 +128,7 @@ impl RejectReason {
     }
 
     /// Stable snake_case name of the reason (`malformed`, `non_finite`, `time_not_increasing`,
-    /// `time_jump`).
+    /// `time_jump`, `time_outlier`, `time_glitch`).
     pub fn name(self) -> &'static str {
         match self {
             RejectReason::Malformed => "malformed",
@@ -131,6 +136,7 @@ impl RejectReason {
             RejectReason::TimeNotIncreasing => "time_not_increasing",
             RejectReason::TimeJump => "time_jump",
             RejectReason::TimeOutlier => "time_outlier",
+            RejectReason::TimeGlitch => "time_glitch",
         }
     }
 }
@@ -148,6 +154,10 @@ impl fmt::Display for RejectReason {
             RejectReason::TimeOutlier => {
                 "is the first time stamp, and the rows after it do not follow it (they follow \
                  each other)"
+            }
+            RejectReason::TimeGlitch => {
+                "came after a gap, and the next row goes back and follows the row before it (a \
+                 glitched stamp)"
             }
         })
     }
@@ -256,6 +266,11 @@ pub struct ImuCsvOptions {
     /// the next row confirms it ([`crate::sensor::TimeGuard`]), s. Default
     /// [`crate::sensor::DEFAULT_MAX_DT_S`].
     pub max_dt_s: f64,
+    /// A row more than this after the previous accepted one (a gap, within `max_dt_s`) is held
+    /// until the next row: when that row goes back and follows the one before the gap, the held
+    /// row's time was a glitch and it is rejected (`time_glitch`), s. The estimator's gap
+    /// threshold (`estimator.max_dt_s`); default [`crate::config::defaults::ESTIMATOR_MAX_DT_S`].
+    pub gap_dt_s: f64,
 }
 
 impl Default for ImuCsvOptions {
@@ -265,6 +280,7 @@ impl Default for ImuCsvOptions {
             check_units: true,
             min_dt_s: 0.0,
             max_dt_s: crate::sensor::DEFAULT_MAX_DT_S,
+            gap_dt_s: crate::config::defaults::ESTIMATOR_MAX_DT_S,
         }
     }
 }

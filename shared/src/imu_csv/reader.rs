@@ -40,9 +40,10 @@ pub struct ImuCsvReader<R> {
     pub(super) blank: Option<(u64, u64)>,
     /// Data rows (accepted and rejected).
     pub(super) total: u64,
-    pub(super) rejected_counts: [u64; 5],
+    pub(super) rejected_counts: [u64; RejectReason::ALL.len()],
     /// The first accepted row, held back until a row follows its time (a first time stamp that
-    /// the next rows contradict is the outlier: [`TimeVerdict::Rebase`]).
+    /// the next rows contradict is the outlier: [`TimeVerdict::Rebase`]), and a row after a gap,
+    /// held until the next row shows whether it was a stamp glitch ([`TimeVerdict::Glitch`]).
     pub(super) held: Option<ImuRow>,
     /// A row to return before reading on (the one that released the held row).
     pub(super) ready: Option<ImuRow>,
@@ -90,12 +91,12 @@ impl<R: BufRead> ImuCsvReader<R> {
             bytes_read: 0,
             first_row_bytes: 0,
             len_bytes: None,
-            time: TimeGuard::new(opts.min_dt_s, opts.max_dt_s),
+            time: TimeGuard::new(opts.min_dt_s, opts.max_dt_s, opts.gap_dt_s),
             max_dt_s: opts.max_dt_s,
             parsed_t: None,
             blank: None,
             total: 0,
-            rejected_counts: [0; 5],
+            rejected_counts: [0; RejectReason::ALL.len()],
             held: None,
             ready: None,
             rejected: Vec::new(),
@@ -286,16 +287,20 @@ impl<R: BufRead> ImuCsvReader<R> {
             }
             let verdict = match parsed {
                 Ok(row) => match self.time.check(row.t_s) {
-                    verdict @ (TimeVerdict::Accept | TimeVerdict::Rebase) => {
+                    verdict @ (TimeVerdict::Accept | TimeVerdict::Rebase | TimeVerdict::Glitch) => {
                         self.time.accept(row.t_s);
-                        if verdict == TimeVerdict::Rebase
+                        if verdict != TimeVerdict::Accept
                             && let Some(first) = self.held.take()
                         {
                             self.reject(RejectedRow {
                                 line: first.line,
                                 column: REQUIRED_COLUMNS[0].to_string(),
                                 value: first.t_s.to_string(),
-                                reason: RejectReason::TimeOutlier,
+                                reason: if verdict == TimeVerdict::Glitch {
+                                    RejectReason::TimeGlitch
+                                } else {
+                                    RejectReason::TimeOutlier
+                                },
                             });
                         }
                         Ok(row)
@@ -333,8 +338,10 @@ impl<R: BufRead> ImuCsvReader<R> {
             };
             self.line = line;
             match verdict {
-                // The very first time: held until a row follows it.
-                Ok(row) if !self.time.confirmed() => self.held = Some(row),
+                // The very first time, or a time after a gap: held until a row follows it.
+                Ok(row) if !self.time.confirmed() || self.time.provisional() => {
+                    self.held = Some(row)
+                }
                 Ok(row) => {
                     if let Some(first) = self.held.take() {
                         self.ready = Some(row);

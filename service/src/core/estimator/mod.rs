@@ -110,6 +110,10 @@ enum Stage {
 pub struct Estimator {
     stage: Stage,
     p: Pipeline,
+    /// The estimator before the last accepted sample, while that sample's time came after a
+    /// gap and is provisional: the next sample may show it to be a stamp glitch, and it is then
+    /// dropped after the fact (`recovery.rs`). A copy per gap, not per sample.
+    before_gap: Option<Box<(Stage, Pipeline)>>,
 }
 
 /// Everything of the estimator but its stage: the per-sample pipeline around the filter, whose
@@ -212,7 +216,7 @@ impl Estimator {
             aid,
             phase: Phase::Aligning,
             counters: Counters::default(),
-            plausibility: Plausibility::new(cfg.sensor),
+            plausibility: Plausibility::new(cfg.sensor, cfg.max_dt_s.get()),
             last: None,
             bias: BiasFilter::InEskf,
             good: LastGood::default(),
@@ -263,6 +267,7 @@ impl Estimator {
                 Some(p.cfg.alignment.rest_max_rate_change_rad_s.get()),
             ))),
             p,
+            before_gap: None,
         }
     }
 
@@ -343,6 +348,13 @@ impl Estimator {
         if accepted.replaced_first_t_s.is_some() {
             self.restart_after_time_outlier();
         }
+        if accepted.glitch_t_s.is_some() {
+            self.drop_glitched_sample();
+        }
+        // Allocates, once per gap (never on a stream without one).
+        self.before_gap = accepted
+            .provisional
+            .then(|| Box::new((self.stage.clone(), self.p.clone())));
         let clipped = accepted.clipped;
         let p = &mut self.p;
         let prev = p.last;
@@ -378,6 +390,7 @@ impl Estimator {
         out.velocity_reset = false;
         out.heading_reacquired = None;
         out.replaced_first_t_s = accepted.replaced_first_t_s;
+        out.glitch_t_s = accepted.glitch_t_s;
         out.detector_statistic = decision.statistic;
         out.zupt = None;
         out.late_footfall_t_s = None;

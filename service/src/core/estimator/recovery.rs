@@ -1,7 +1,8 @@
 //! When the state or the input goes bad: the health check after each update (undo it, or go
 //! back to the last healthy stance with the turn since added back), the velocity reset of a
-//! stance update that finds a velocity far beyond what the filter allows, and the restart when
-//! the stream's first time stamp turns out to be an outlier.
+//! stance update that finds a velocity far beyond what the filter allows, the restart when the
+//! stream's first time stamp turns out to be an outlier, and the undoing of a sample whose time
+//! after a gap turns out to be a glitch.
 
 use super::*;
 
@@ -62,6 +63,31 @@ impl Estimator {
         fresh.p.warm_start = self.p.warm_start.take();
         fresh.p.pending_heading = self.p.pending_heading.take();
         *self = fresh;
+    }
+
+    /// The previous sample's time had jumped forward by a gap, and the current sample goes back
+    /// and follows the time before it ([`corridor_shared::sensor::TimeVerdict::Glitch`]): that
+    /// sample is dropped after the fact, counted as a refused time jump, and the estimator goes
+    /// back to the copy taken before it. Kept from now: the time rule (which accepted the
+    /// current time), the refusals counted since, and an external heading or warm start handed
+    /// in since (one handed in before and used by the dropped sample is pending again).
+    pub(super) fn drop_glitched_sample(&mut self) {
+        let Some(saved) = self.before_gap.take() else {
+            return; // not reached: every provisional sample leaves its copy
+        };
+        let (stage, mut p) = *saved;
+        std::mem::swap(&mut p.plausibility, &mut self.p.plausibility);
+        let now = &self.p.counters;
+        let c = &mut p.counters;
+        c.rejected_non_finite = now.rejected_non_finite;
+        c.rejected_time = now.rejected_time;
+        c.rejected_implausible = now.rejected_implausible;
+        c.rejected_time_jump = now.rejected_time_jump + 1;
+        c.headings_refused = now.headings_refused;
+        p.pending_heading = self.p.pending_heading.take().or(p.pending_heading);
+        p.warm_start = self.p.warm_start.take().or(p.warm_start);
+        self.stage = stage;
+        self.p = p;
     }
 }
 

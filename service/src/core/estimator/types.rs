@@ -155,7 +155,9 @@ pub struct Counters {
     pub rejected_time: u64,
     /// Samples refused because a magnitude was beyond what the sensor can output.
     pub rejected_implausible: u64,
-    /// Samples refused because their time jumped beyond `sensor.max_dt_s` unconfirmed.
+    /// Samples refused because their time jumped beyond `sensor.max_dt_s` unconfirmed, and
+    /// samples dropped after the fact: a first time the samples after it contradicted, a time
+    /// after a gap that the next sample showed to be a glitch.
     pub rejected_time_jump: u64,
     /// Accepted samples with an axis at the rail of its range (probably clipped).
     pub clipped_samples: u64,
@@ -285,6 +287,10 @@ pub struct Estimate {
     /// outlier: the first sample was dropped after the fact and the estimator started again
     /// here.
     pub replaced_first_t_s: Option<f64>,
+    /// Set on the sample that showed the previous accepted sample's time (this value, s), which
+    /// had jumped forward by a gap, to be a stamp glitch: that sample was dropped after the fact
+    /// (the state is as if it had never come) and this one follows the time before it.
+    pub glitch_t_s: Option<f64>,
     /// The stance update on this sample found a velocity far beyond what the filter allowed
     /// and reset it first (counted in `velocity_resets`).
     pub velocity_reset: bool,
@@ -328,6 +334,7 @@ impl Default for Estimate {
             clipped: false,
             health_fault: None,
             replaced_first_t_s: None,
+            glitch_t_s: None,
             velocity_reset: false,
             heading_reacquired: None,
             gap_s: None,
@@ -387,6 +394,8 @@ pub enum Notice {
     HeadingReacquired(f64),
     /// The stream's first sample, at this time (s), was dropped as a time outlier.
     FirstTimeReplaced(f64),
+    /// The previous sample, at this time (s) after a gap, was dropped as a stamp glitch.
+    TimeGlitch(f64),
 }
 
 impl std::fmt::Display for Notice {
@@ -421,6 +430,10 @@ impl std::fmt::Display for Notice {
                 "the first sample's time {first_t_s} s was an outlier (the samples after it do not \
                  follow it); it was dropped and the estimator starts again here"
             ),
+            Notice::TimeGlitch(t_s) => write!(
+                f,
+                "the previous sample's time {t_s} s was a glitch (this one goes back and follows                  the time before it); that sample was dropped after the fact"
+            ),
         }
     }
 }
@@ -437,5 +450,6 @@ impl Estimate {
             .chain(self.velocity_reset.then_some(Notice::VelocityReset))
             .chain(self.heading_reacquired.map(Notice::HeadingReacquired))
             .chain(self.replaced_first_t_s.map(Notice::FirstTimeReplaced))
+            .chain(self.glitch_t_s.map(Notice::TimeGlitch))
     }
 }

@@ -75,6 +75,38 @@ fn an_absurd_first_time_is_rejected_once_the_rows_after_it_agree() {
 }
 
 #[test]
+fn a_stamp_glitched_forward_by_less_than_a_jump_is_rejected_and_the_rows_after_it_kept() {
+    // Line 100 holds t = 0.49; put it 0.9 s ahead (a gap, not a jump: max_dt_s is 1 s).
+    // Before: it was accepted as a gap and the next 180 rows, up to t = 1.39, were rejected as
+    // "not after the previous accepted t_s".
+    let text = replace_line(&good_file(400), 100, &row(1.39));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(log.rows.len(), 399);
+    let r = &log.rejected[0];
+    assert_eq!((r.line, r.reason), (100, RejectReason::TimeGlitch));
+    assert_eq!(log.rejected_counts()["time_glitch"], 1);
+    assert_eq!(
+        r.to_string(),
+        "line 100 column t_s: value \"1.39\" came after a gap, and the next row goes back and \
+         follows the row before it (a glitched stamp)"
+    );
+    assert_eq!((log.rows[97].line, log.rows[98].line), (99, 101));
+    // A real gap at the same place (every row from line 100 on 0.9 s later): the row after it
+    // is held until the next one follows it, then both are kept, in order.
+    let gapped: String = good_file(400)
+        .lines()
+        .enumerate()
+        .map(|(i, l)| match i + 1 {
+            n if n >= 100 => format!("{}\n", row((n - 2) as f64 * 0.005 + 0.9)),
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    let log = parse_imu_csv(&gapped, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
+    assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
+}
+
+#[test]
 fn duplicate_timestamp_is_rejected() {
     let text = replace_line(&good_file(200), 4, &row(0.005));
     let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
