@@ -135,6 +135,7 @@ mod tests {
                 rest_gyro_rad_s: 1e-3,
                 gyro_bias_rw: 7e-4,
                 zupt_m_s: 0.01,
+                stance_yaw_max_sd_rad: f64::INFINITY,
             },
             Extensions {
                 heading_offset_sd: Some(0.1),

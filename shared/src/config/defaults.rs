@@ -161,6 +161,9 @@ pub const ESKF_ZERO_RATE_INTERVAL_S: f64 = 2.0;
 /// sensor (about 1e-4 rad/s/√Hz, its datasheet's 0.005 °/s/√Hz), the swaying ones' level.
 pub const ESKF_REST_GYRO_NOISE_RAD_S: f64 = 1e-3;
 
+/// `eskf.stance_yaw_max_sd_rad` (0: the stance updates move the yaw whatever its σ).
+pub const ESKF_STANCE_YAW_MAX_SD_RAD: f64 = 0.0;
+
 /// `eskf.zupt_rolling_height_m` (0: a plain zero-velocity update).
 pub const ESKF_ZUPT_ROLLING_HEIGHT_M: f64 = 0.0;
 

@@ -221,6 +221,12 @@ pub struct EskfFile {
     /// end), rad/s: the sensor's own noise, not the swing's error budget of `gyro_noise_rad_s`
     /// (default 1e-3).
     pub rest_gyro_noise_rad_s: Option<f64>,
+    /// Above this yaw σ the stance velocity updates leave the yaw alone (a Schmidt update: its
+    /// estimate and variance stay, the other states see its correlations), rad (default 0:
+    /// off). Stance updates observe the yaw only through the horizontal force at the stance's
+    /// edges, where the foot's motion is least modelled; with the yaw wide (after a long gap,
+    /// or without heading information for long) they turned it by degrees.
+    pub stance_yaw_max_sd_rad: Option<f64>,
     /// Height of the sensor above the floor contact about which the foot rolls at heel strike
     /// and heel-off, m: the stance velocity update expects the sensor to move at this height
     /// times the rate about the foot's lateral axis, along the walking direction (default 0: a

@@ -153,6 +153,8 @@ pub struct EskfConfig {
     pub zero_rate_interval_s: Positive,
     /// Gyro noise σ while the foot rests.
     pub rest_gyro_noise_rad_s: Positive,
+    /// Above this yaw σ the stance updates leave the yaw alone (0: off).
+    pub stance_yaw_max_sd_rad: f64,
     /// Sensor height above the rolling contact (0: plain ZUPT).
     pub zupt_rolling_height_m: f64,
     /// σ of the true rate's excess over a clipped gyro axis.

@@ -498,6 +498,14 @@ impl ConfigFile {
                     10.0,
                     "must be in (0, 10] rad/s",
                 )?,
+                stance_yaw_max_sd_rad: in_range(
+                    "eskf.stance_yaw_max_sd_rad",
+                    k.stance_yaw_max_sd_rad
+                        .unwrap_or(ESKF_STANCE_YAW_MAX_SD_RAD),
+                    0.0,
+                    std::f64::consts::PI,
+                    "must be in [0, π] rad (0: off)",
+                )?,
                 zupt_rolling_height_m: in_range(
                     "eskf.zupt_rolling_height_m",
                     k.zupt_rolling_height_m

@@ -53,6 +53,9 @@ pub struct EskfNoise {
     pub gyro_bias_rw: f64,
     /// ZUPT σ, m/s.
     pub zupt_m_s: f64,
+    /// Above this yaw σ the stance velocity updates leave the yaw alone (a Schmidt update),
+    /// rad; infinite: never.
+    pub stance_yaw_max_sd_rad: f64,
 }
 
 /// Whether the filter estimates the gyro bias.

@@ -8,6 +8,7 @@ fn noise() -> EskfNoise {
         rest_gyro_rad_s: 1e-3,
         gyro_bias_rw: 1e-4,
         zupt_m_s: 0.01,
+        stance_yaw_max_sd_rad: f64::INFINITY,
     }
 }
 
@@ -338,6 +339,63 @@ fn update_matches_the_textbook_kalman_formulas() {
     f.zupt();
     assert!((want - dense(&f)).abs().max() < 1e-15);
     assert!((f.v_m_s - (v_before + Vector3::new(dx[V0], dx[V0 + 1], dx[V0 + 2]))).norm() < 1e-14);
+}
+
+#[test]
+fn a_stance_update_leaves_a_wide_yaw_alone_in_the_schmidt_joseph_form() {
+    let mut f = filter(
+        from_euler_zyx(0.2, -0.3, 1.0),
+        Vector3::zeros(),
+        0.01,
+        0.01,
+        all_ext(),
+    );
+    f.noise.stance_yaw_max_sd_rad = 5f64.to_radians();
+    // A gap widens the yaw to 10°; a horizontal force then ties it to the velocity.
+    f.widen_after_gap(600.0, 0.0);
+    for _ in 0..20 {
+        f.propagate(
+            &Vector3::new(1.0, -2.0, 0.5),
+            &Vector3::new(3.0, 2.0, 9.0),
+            0.005,
+        );
+    }
+    let n = f.dim();
+    let yaw = TH + 2;
+    let p = dense(&f);
+    assert!(p[(yaw, yaw)].sqrt() > 5f64.to_radians());
+    assert!(p[(yaw, V0)].abs() > 1e-4, "the yaw is tied to the velocity");
+    let mut h = nalgebra::DMatrix::<f64>::zeros(3, n);
+    for i in 0..3 {
+        h[(i, V0 + i)] = 1.0;
+    }
+    let r_var = 0.01f64.powi(2);
+    let s = &h * &p * h.transpose() + nalgebra::DMatrix::<f64>::identity(3, 3) * r_var;
+    let mut k = &p * h.transpose() * s.try_inverse().unwrap();
+    k.row_mut(yaw).fill(0.0);
+    let i_kh = nalgebra::DMatrix::<f64>::identity(n, n) - &k * &h;
+    let want = &i_kh * &p * i_kh.transpose() + &k * k.transpose() * r_var;
+    let v_before = f.v_m_s;
+    let dx = &k * nalgebra::DVector::from_column_slice(&[-v_before.x, -v_before.y, -v_before.z]);
+    f.zupt();
+    let got = dense(&f);
+    let scale = p.abs().max();
+    assert!(
+        (&want - &got).abs().max() < 1e-12 * scale,
+        "{}",
+        (&want - &got).abs().max()
+    );
+    assert_eq!(got[(yaw, yaw)], p[(yaw, yaw)], "the yaw's variance stays");
+    assert!((f.v_m_s - (v_before + Vector3::new(dx[V0], dx[V0 + 1], dx[V0 + 2]))).norm() < 1e-12);
+    // Below the bound it is the usual update (the textbook test above), and the yaw narrows.
+    let mut f = level_filter(0.01, Extensions::default());
+    f.noise.stance_yaw_max_sd_rad = 5f64.to_radians();
+    for _ in 0..20 {
+        f.propagate(&Vector3::zeros(), &Vector3::new(3.0, 2.0, 9.0), 0.005);
+    }
+    let before = f.cov(yaw, yaw);
+    f.zupt();
+    assert!(f.cov(yaw, yaw) < before);
 }
 
 #[test]

@@ -95,6 +95,10 @@ impl Eskf {
 
     /// Stance velocity update: the sensor's velocity is `expected_m_s` (navigation frame; zero
     /// for a flat foot, the rolling motion at the edges of a stance) with σ `sd_m_s` per axis.
+    /// While the yaw's σ exceeds [`EskfNoise::stance_yaw_max_sd_rad`] the yaw is a considered
+    /// state (Schmidt): its estimate and variance stay as they are, every other state is
+    /// updated as usual and its covariance with the yaw as the Joseph form with that gain
+    /// gives, which is the usual update's except for the yaw's own variance.
     pub fn stance_velocity_update(
         &mut self,
         expected_m_s: &Vector3<f64>,
@@ -125,7 +129,19 @@ impl Eskf {
             let v = s_inv.transpose() * Vector3::from(*pi);
             (k[0][i], k[1][i], k[2][i]) = (v.x, v.y, v.z);
         }
-        self.update_bias_response_velocity(&k);
+        let yaw = TH + 2;
+        let yaw_var = self.p[ix(yaw, yaw)];
+        let consider_yaw = yaw_var > self.noise.stance_yaw_max_sd_rad.powi(2);
+        if consider_yaw {
+            // The response to a bias error keeps its yaw row, as the yaw does.
+            let mut k_yaw_kept = k;
+            for kc in &mut k_yaw_kept {
+                kc[yaw] = 0.0;
+            }
+            self.update_bias_response_velocity(&k_yaw_kept);
+        } else {
+            self.update_bias_response_velocity(&k);
+        }
         // P ← P − K·(PHᵀ)ᵀ on the upper triangle, then mirrored. Each column's part as slices
         // of one length, so that the loop has no bounds checks.
         let [k0, k1, k2] = &k;
@@ -142,6 +158,10 @@ impl Eskf {
         let mut dx = [0.0; MAX_N];
         for (d, pi) in dx.iter_mut().zip(&pht).take(n) {
             *d = pi[0] * s_inv_r.x + pi[1] * s_inv_r.y + pi[2] * s_inv_r.z;
+        }
+        if consider_yaw {
+            dx[yaw] = 0.0;
+            self.p[ix(yaw, yaw)] = yaw_var;
         }
         self.inject(&dx);
         Innovation {

@@ -100,6 +100,10 @@ impl Pipeline {
             rest_gyro_rad_s: e.rest_gyro_noise_rad_s.get(),
             gyro_bias_rw: e.gyro_bias_rw_rad_s_sqrt_s,
             zupt_m_s: e.zupt_sd_m_s.get(),
+            stance_yaw_max_sd_rad: match e.stance_yaw_max_sd_rad {
+                0.0 => f64::INFINITY,
+                sd => sd,
+            },
         };
         let m = &self.cfg.model;
         let ext = if own_bias {
