@@ -633,7 +633,11 @@ fn a_bad_mode_is_said_once_and_clamped_footprints_are_said_on_the_terminal() {
     let data = root().join("tests/data/gdins_exp36_corridor_out_and_back");
     let imu = data.join("imu.csv");
     let o = run_cmd(&imu, &out.join("a"), &["--mode", "kalman"]);
-    assert!(!o.status.success());
+    // A usage error, as an unknown flag (2), and a flag value out of its key's range too.
+    assert_eq!(o.status.code(), Some(2));
+    let range = run_cmd(&imu, &out.join("a"), &["--start-heading-deg", "400"]);
+    assert_eq!(range.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&range.stderr).contains("heading.start_heading_deg"));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         err.matches("kalman").count() == 1 && !err.contains("unknown variant"),

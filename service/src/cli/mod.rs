@@ -109,6 +109,19 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     match dispatch(cli) {
         Ok(code) => code,
+        // A flag's value outside the range of the key it sets is a usage error, as the
+        // argument parser's own (exit code 2).
+        Err(e)
+            if e.chain().any(|c| {
+                matches!(
+                    c.downcast_ref::<corridor_shared::config::ConfigError>(),
+                    Some(corridor_shared::config::ConfigError::Flag { .. })
+                )
+            }) =>
+        {
+            eprintln!("error: {}", corridor_client::error_message(&e));
+            ExitCode::from(2)
+        }
         Err(e) => corridor_client::exit(Err(e)),
     }
 }

@@ -23,10 +23,10 @@ pub struct ModelArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub grid_deg: Option<f64>,
     /// Estimation mode: zupt, paper, rotation_aware or eskf (overrides the config).
-    #[arg(long)]
+    #[arg(long, value_parser = ["zupt", "paper", "rotation_aware", "eskf"])]
     pub mode: Option<String>,
     /// Gyro-bias prior: none or rest_mean (overrides the config).
-    #[arg(long)]
+    #[arg(long, value_parser = ["none", "rest_mean"])]
     pub prior: Option<String>,
 }
 
