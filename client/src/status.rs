@@ -46,12 +46,21 @@ impl Status {
             "running"
         };
         let _ = writeln!(s, "corridor daemon, domain {domain:?}: {state}");
-        let _ = writeln!(
-            s,
-            "phase:            {} (sensor time {})",
-            phase::name(d.phase),
-            fmt_opt(d.t_s, 3, " s")
-        );
+        if d.flags & FLAG_END_OF_STREAM != 0 {
+            // The estimator is already the next stream's, aligning and without a time yet: its
+            // phase beside the ended stream's bias read as a contradiction.
+            let _ = writeln!(
+                s,
+                "phase:            between streams (the next one starts with its alignment)"
+            );
+        } else {
+            let _ = writeln!(
+                s,
+                "phase:            {} (sensor time {})",
+                phase::name(d.phase),
+                fmt_opt(d.t_s, 3, " s")
+            );
+        }
         let rate = self
             .sample_rate_hz()
             .map_or("idle".to_owned(), |r| format!("{r:.1} Hz (sensor clock)"));
@@ -102,7 +111,11 @@ impl Status {
                     v(b.gyro_bias_rad_s),
                     fmt_opt(b.t_s, 3, " s")
                 );
-                let _ = writeln!(s, "bias σ:           {} rad/s", v(b.gyro_bias_sd_rad_s));
+                if b.gyro_bias_sd_rad_s.iter().all(|x| x.is_nan()) {
+                    let _ = writeln!(s, "bias σ:           none before the alignment");
+                } else {
+                    let _ = writeln!(s, "bias σ:           {} rad/s", v(b.gyro_bias_sd_rad_s));
+                }
                 let _ = writeln!(
                     s,
                     "converged:        {} ({})",
@@ -213,5 +226,50 @@ impl StatusReader {
             bias: self.latest_bias,
             missed: self.diagnostics.missed(),
         }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_screen_between_streams_says_so_and_no_nan_sigma() {
+        // After a stream's end the estimator is the next stream's (aligning, no time yet), and
+        // a bias published before the alignment has no σ: the screen used to say
+        // "aligning (sensor time n/a)" beside the ended stream's bias, and "[nan, nan, nan]".
+        let status = Status {
+            diagnostics: Diagnostics {
+                t_s: f64::NAN,
+                phase: phase::ALIGNING,
+                flags: FLAG_END_OF_STREAM,
+                ..Diagnostics::default()
+            },
+            previous: None,
+            bias: Some(BiasSample {
+                gyro_bias_sd_rad_s: [f64::NAN; 3],
+                ..BiasSample::default()
+            }),
+            missed: 0,
+        };
+        let screen = status.render("d");
+        assert!(screen.contains("running, stream ended"), "{screen}");
+        assert!(screen.contains("between streams"), "{screen}");
+        assert!(!screen.contains("aligning"), "{screen}");
+        assert!(
+            screen.contains("bias σ:           none before the alignment"),
+            "{screen}"
+        );
+        assert!(!screen.contains("nan"), "{screen}");
+        // Within a stream: its phase and time.
+        let mut running = status;
+        running.diagnostics.flags = 0;
+        running.diagnostics.phase = phase::TRACKING;
+        running.diagnostics.t_s = 12.5;
+        let screen = running.render("d");
+        assert!(
+            screen.contains("tracking (sensor time 12.500 s)"),
+            "{screen}"
+        );
     }
 }
