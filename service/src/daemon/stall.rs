@@ -7,17 +7,27 @@
 //! discards the sample for that receiver only (the others still get it) and marks the receiver
 //! as stalled: from then on a sample that does not fit its buffer is discarded at once. A
 //! stalled consumer that reads again gets the samples that fit, so it is served like a `live`
-//! consumer; every sample it did not get is counted. A dead consumer's connection goes away when
-//! iceoryx2 cleans up its node; until then it counts as stalled.
+//! consumer; every sample it did not get is counted. Once nothing has been discarded for it for
+//! [`RECOVERED_AFTER`], it has caught up and is lossless again: a later full buffer is waited on
+//! up to the bound, as the first time (before, a consumer that stalled once stayed lossy for the
+//! daemon's life, and the list of stalled consumers only grew). A dead consumer's connection
+//! goes away when iceoryx2 cleans up its node; until then it counts as stalled, and on an output
+//! published less often than [`RECOVERED_AFTER`] it costs one wait of the bound per sample.
 
 use iceoryx2::port::{BackpressureAction, BackpressureInfo};
 use std::sync::{Arc, Mutex, PoisonError};
-use std::time::Duration;
+use std::time::{Duration, Instant};
+
+/// A stalled consumer for which nothing was discarded for this long has caught up: it is waited
+/// on again. Longer than the period of every periodic output (the bias's, 1 s by default), so
+/// a consumer that stays stalled is not waited on at each of its samples.
+pub(super) const RECOVERED_AFTER: Duration = Duration::from_secs(60);
 
 /// Counts of one publisher's stalled consumers.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct StallCounts {
-    /// Consumers that stalled the publisher for longer than the bound.
+    /// Times a consumer stalled the publisher for longer than the bound (a consumer that
+    /// recovered and stalled again counts again).
     pub stalled_consumers: u64,
     /// Samples discarded for stalled consumers.
     pub discarded: u64,
@@ -25,8 +35,9 @@ pub struct StallCounts {
 
 #[derive(Debug, Default)]
 struct State {
-    /// Port ids of the stalled receivers (grows only when a consumer stalls).
-    stalled: Vec<u128>,
+    /// Port ids of the stalled receivers, with when a sample was last discarded for each (those
+    /// quiet for [`RECOVERED_AFTER`] leave it).
+    stalled: Vec<(u128, Instant)>,
     counts: StallCounts,
     /// Stalls not reported yet.
     unreported: Vec<u128>,
@@ -53,19 +64,25 @@ impl StallGuard {
         &self,
     ) -> impl Fn(&BackpressureInfo) -> BackpressureAction + Send + 'static {
         let guard = self.clone();
-        move |info: &BackpressureInfo| guard.decide(info.receiver_port_id, info.elapsed_time)
+        move |info: &BackpressureInfo| {
+            guard.decide(info.receiver_port_id, info.elapsed_time, Instant::now())
+        }
     }
 
-    fn decide(&self, receiver: u128, waited: Duration) -> BackpressureAction {
+    fn decide(&self, receiver: u128, waited: Duration, now: Instant) -> BackpressureAction {
         let mut s = self.state.lock().unwrap_or_else(PoisonError::into_inner);
-        if s.stalled.contains(&receiver) {
+        // Consumers quiet for long enough have caught up.
+        s.stalled
+            .retain(|&(_, last)| now.saturating_duration_since(last) < RECOVERED_AFTER);
+        if let Some(entry) = s.stalled.iter_mut().find(|(r, _)| *r == receiver) {
+            entry.1 = now;
             s.counts.discarded += 1;
             return BackpressureAction::DiscardData;
         }
         if waited < self.bound {
             return BackpressureAction::Retry;
         }
-        s.stalled.push(receiver);
+        s.stalled.push((receiver, now));
         s.unreported.push(receiver);
         s.counts.stalled_consumers += 1;
         s.counts.discarded += 1;
@@ -95,12 +112,16 @@ mod tests {
     fn a_consumer_waits_up_to_the_bound_then_is_discarded_at_once() {
         let g = StallGuard::new(Duration::from_millis(100));
         let ms = Duration::from_millis;
-        assert_eq!(g.decide(7, ms(50)), BackpressureAction::Retry);
-        assert_eq!(g.decide(7, ms(100)), BackpressureAction::DiscardData);
+        let t0 = Instant::now();
+        assert_eq!(g.decide(7, ms(50), t0), BackpressureAction::Retry);
+        assert_eq!(g.decide(7, ms(100), t0), BackpressureAction::DiscardData);
         // The next sample that does not fit: no wait at all.
-        assert_eq!(g.decide(7, ms(0)), BackpressureAction::DiscardData);
+        assert_eq!(
+            g.decide(7, ms(0), t0 + ms(5)),
+            BackpressureAction::DiscardData
+        );
         // Another consumer is not affected.
-        assert_eq!(g.decide(8, ms(0)), BackpressureAction::Retry);
+        assert_eq!(g.decide(8, ms(0), t0 + ms(5)), BackpressureAction::Retry);
         assert_eq!(
             g.counts(),
             StallCounts {
@@ -110,5 +131,38 @@ mod tests {
         );
         assert_eq!(g.take_new_stalls(), vec![7]);
         assert!(g.take_new_stalls().is_empty());
+    }
+
+    #[test]
+    fn a_stalled_consumer_that_caught_up_is_waited_on_again() {
+        let g = StallGuard::new(Duration::from_millis(100));
+        let ms = Duration::from_millis;
+        let t0 = Instant::now();
+        assert_eq!(g.decide(7, ms(100), t0), BackpressureAction::DiscardData);
+        // Still stalled: each sample that does not fit is discarded at once, and each discard
+        // keeps it stalled, however long it lasts.
+        let mut t = t0;
+        for _ in 0..100 {
+            t += ms(1000);
+            assert_eq!(g.decide(7, ms(0), t), BackpressureAction::DiscardData);
+        }
+        // It read again and nothing was discarded for it for RECOVERED_AFTER: lossless again.
+        let later = t + RECOVERED_AFTER;
+        assert_eq!(g.decide(7, ms(0), later), BackpressureAction::Retry);
+        assert_eq!(g.decide(7, ms(100), later), BackpressureAction::DiscardData);
+        assert_eq!(
+            g.counts(),
+            StallCounts {
+                stalled_consumers: 2,
+                discarded: 102
+            }
+        );
+        // The list holds the consumers stalled now, not every one that ever stalled.
+        for r in 10..20 {
+            assert_eq!(g.decide(r, ms(100), later), BackpressureAction::DiscardData);
+        }
+        let quiet = later + RECOVERED_AFTER;
+        assert_eq!(g.decide(99, ms(0), quiet), BackpressureAction::Retry);
+        assert!(g.state.lock().unwrap().stalled.is_empty());
     }
 }
