@@ -258,8 +258,8 @@ pub struct TimeGuard {
     candidate_s: Option<f64>,
     /// A sample has followed the time base (every accepted time but the very first).
     confirmed: bool,
-    /// While the last accepted step was a gap beyond `gap_dt_s` from a confirmed time: that
-    /// time (the base a glitch would go back to).
+    /// While the last accepted step was a gap beyond `gap_dt_s` (within `max_dt_s`): the time
+    /// before it (the base a glitch would go back to).
     before_gap_s: Option<f64>,
 }
 
@@ -333,13 +333,13 @@ impl TimeGuard {
 
     /// Records `t_s` as accepted: the new time base.
     pub fn accept(&mut self, t_s: f64) {
-        // A gap from a confirmed time that is itself no glitch's far side stays provisional.
-        self.before_gap_s = match self.last_s {
-            Some(last) if self.confirmed && self.before_gap_s.is_none() => {
-                (t_s - last > self.gap_dt_s).then_some(last)
-            }
-            _ => None,
-        };
+        // A gap from the last accepted time stays provisional: also from the very first time, and
+        // from a gap's far side (accepting the next time confirms that one). Not a time after a
+        // refused jump or a replaced first time: those do not follow the last time.
+        self.before_gap_s = self.last_s.filter(|&last| {
+            let dt_s = t_s - last;
+            dt_s > self.gap_dt_s && dt_s <= self.max_dt_s
+        });
         self.confirmed = self.last_s.is_some();
         self.last_s = Some(t_s);
         self.candidate_s = None;
@@ -444,12 +444,27 @@ mod tests {
             run(&[0.0, 0.005, 0.905, 0.910, 0.010]),
             [Accept, Accept, Accept, Accept, NotIncreasing]
         );
-        // A step within gap_dt_s is never provisional; neither is a gap from the very first time.
+        // A step within gap_dt_s is never provisional.
         assert_eq!(
             run(&[0.0, 0.005, 0.045, 0.010]),
             [Accept, Accept, Accept, NotIncreasing]
         );
-        assert_eq!(run(&[0.0, 0.9, 0.005]), [Accept, Accept, NotIncreasing]);
+        // A glitch on the second time, and one on the sample right after a gap's far side:
+        // before, the good times after either were refused.
+        assert_eq!(run(&[0.0, 0.9, 0.005]), [Accept, Accept, Glitch]);
+        assert_eq!(
+            run(&[0.0, 0.005, 0.5, 1.3, 0.505]),
+            [Accept, Accept, Accept, Accept, Glitch]
+        );
+        // A time after a refused jump, or one replacing a bad first time, is not provisional.
+        assert_eq!(
+            run(&[0.0, 0.005, 10.0, 10.005, 0.01]),
+            [Accept, Accept, Jump, Accept, NotIncreasing]
+        );
+        assert_eq!(
+            run(&[-50.0, 0.0, 0.005, -49.99]),
+            [Accept, Jump, Rebase, NotIncreasing]
+        );
     }
 
     #[test]

@@ -275,5 +275,15 @@ mod tests {
         assert!(p.check(&rest(0.9)).unwrap().provisional);
         let a = p.check(&rest(0.905)).unwrap();
         assert_eq!((a.glitch_t_s, a.provisional), (None, false));
+        // A gap right after a gap's far side is provisional too, and its glitch caught.
+        assert!(p.check(&rest(1.2)).unwrap().provisional);
+        assert!(p.check(&rest(1.5)).unwrap().provisional);
+        let a = p.check(&rest(1.205)).unwrap();
+        assert_eq!((a.glitch_t_s, a.provisional), (Some(1.5), false));
+        // So is a glitch on the stream's second sample.
+        let mut p = gx5();
+        p.check(&rest(0.0)).unwrap();
+        assert!(p.check(&rest(0.9)).unwrap().provisional);
+        assert_eq!(p.check(&rest(0.005)).unwrap().glitch_t_s, Some(0.9));
     }
 }

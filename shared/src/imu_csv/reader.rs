@@ -338,9 +338,12 @@ impl<R: BufRead> ImuCsvReader<R> {
             };
             self.line = line;
             match verdict {
-                // The very first time, or a time after a gap: held until a row follows it.
+                // The very first time, or a time after a gap: held until a row follows it. A
+                // row held before (a gap's far side, now followed by another gap) goes out.
                 Ok(row) if !self.time.confirmed() || self.time.provisional() => {
-                    self.held = Some(row)
+                    if let Some(before) = self.held.replace(row) {
+                        return Ok(Some(self.emit(before)));
+                    }
                 }
                 Ok(row) => {
                     if let Some(first) = self.held.take() {

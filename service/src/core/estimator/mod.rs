@@ -112,7 +112,10 @@ pub struct Estimator {
     p: Pipeline,
     /// The estimator before the last accepted sample, while that sample's time came after a
     /// gap and is provisional: the next sample may show it to be a stamp glitch, and it is then
-    /// dropped after the fact (`recovery.rs`). A copy per gap, not per sample.
+    /// dropped after the fact (`recovery.rs`). A copy per gap, not per sample: about 160 KB and
+    /// a few allocations (the filter, its saved copies, the stride memory). A stream whose every
+    /// step is a gap (a producer slower than 1 / `estimator.max_dt_s`, a config for another
+    /// rate) pays it at every sample; its summary counts the gaps.
     before_gap: Option<Box<(Stage, Pipeline)>>,
 }
 
@@ -351,7 +354,7 @@ impl Estimator {
         if accepted.glitch_t_s.is_some() {
             self.drop_glitched_sample();
         }
-        // Allocates, once per gap (never on a stream without one).
+        // Allocates, once per gap (never on a stream without one; see `before_gap`).
         self.before_gap = accepted
             .provisional
             .then(|| Box::new((self.stage.clone(), self.p.clone())));

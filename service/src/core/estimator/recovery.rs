@@ -69,8 +69,10 @@ impl Estimator {
     /// and follows the time before it ([`corridor_shared::sensor::TimeVerdict::Glitch`]): that
     /// sample is dropped after the fact, counted as a refused time jump, and the estimator goes
     /// back to the copy taken before it. Kept from now: the time rule (which accepted the
-    /// current time), the refusals counted since, and an external heading or warm start handed
-    /// in since (one handed in before and used by the dropped sample is pending again).
+    /// current time), the refusals counted since, an external heading handed in since (one
+    /// handed in before and used by the dropped sample is pending again), and a warm start
+    /// handed in since (applied again to the restored filter when it was running: a different
+    /// state than the copy's counts as handed in since).
     pub(super) fn drop_glitched_sample(&mut self) {
         let Some(saved) = self.before_gap.take() else {
             return; // not reached: every provisional sample leaves its copy
@@ -85,9 +87,13 @@ impl Estimator {
         c.rejected_time_jump = now.rejected_time_jump + 1;
         c.headings_refused = now.headings_refused;
         p.pending_heading = self.p.pending_heading.take().or(p.pending_heading);
-        p.warm_start = self.p.warm_start.take().or(p.warm_start);
+        let warm_start_since = self.p.warm_start.filter(|ws| Some(*ws) != p.warm_start);
+        p.warm_start = self.p.warm_start.or(p.warm_start);
         self.stage = stage;
         self.p = p;
+        if let (Some(ws), Stage::Running(eskf)) = (warm_start_since, &mut self.stage) {
+            self.p.apply_warm_start(eskf, &ws);
+        }
     }
 }
 

@@ -323,6 +323,37 @@ fn warm_start_takes_the_saved_state_fuses_a_fresh_rest_and_refuses_bad_states() 
 }
 
 #[test]
+fn a_warm_start_handed_in_between_a_glitched_stamp_and_the_sample_that_exposes_it_is_kept() {
+    let mut est = Estimator::new(Config::default(), HeadingAid::None);
+    rest_then_move(&mut est, [0.004, -0.002, 0.006]);
+    let moving = |t_s| ImuInput {
+        t_s,
+        gyro_rad_s: [0.0, 3.0, 0.0],
+        accel_m_s2: [0.0, 0.0, 9.81],
+    };
+    // 0.9 s ahead: accepted as a gap, provisional.
+    est.step(&moving(3.9)).unwrap();
+    let saved = WarmStart {
+        gyro_bias_rad_s: [0.001, 0.001, 0.001],
+        gyro_bias_cov: [[1e-8, 0.0, 0.0], [0.0, 1e-8, 0.0], [0.0, 0.0, 1e-8]],
+    };
+    est.set_warm_start(saved).unwrap();
+    // Goes back and follows the time before it: the 3.9 s sample is dropped, and the state
+    // goes back to the copy before it, which had not seen the warm start.
+    let e = *est.step(&moving(3.005)).unwrap();
+    assert_eq!(e.glitch_t_s, Some(3.9));
+    assert_eq!(est.counters().rejected_time_jump, 1);
+    let state = est.bias_state().unwrap();
+    for k in 0..3 {
+        assert!(
+            (state.gyro_bias_rad_s[k] - 0.001).abs() < 1e-6,
+            "axis {k}: {state:?}"
+        );
+        assert!(state.gyro_bias_cov[k][k] < 1.1e-8, "axis {k}: {state:?}");
+    }
+}
+
+#[test]
 fn bad_samples_are_refused_counted_and_change_nothing() {
     let mut est = Estimator::new(Config::default(), HeadingAid::None);
     est.step(&level_rest(0.0)).unwrap();

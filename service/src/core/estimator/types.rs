@@ -432,7 +432,8 @@ impl std::fmt::Display for Notice {
             ),
             Notice::TimeGlitch(t_s) => write!(
                 f,
-                "the previous sample's time {t_s} s was a glitch (this one goes back and follows                  the time before it); that sample was dropped after the fact"
+                "the previous sample's time {t_s} s was a glitch (this one goes back and follows \
+                 the time before it); that sample was dropped after the fact"
             ),
         }
     }

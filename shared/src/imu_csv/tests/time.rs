@@ -107,6 +107,49 @@ fn a_stamp_glitched_forward_by_less_than_a_jump_is_rejected_and_the_rows_after_i
 }
 
 #[test]
+fn gaps_in_a_row_keep_every_row_and_a_glitch_next_to_a_gap_is_still_caught() {
+    // Two gaps in a row (lines 100 and 101 each 0.3 s later than the row before): the held
+    // row goes out when the next gap's row is held, none is lost and the order stays.
+    let gapped: String = good_file(400)
+        .lines()
+        .enumerate()
+        .map(|(i, l)| match i + 1 {
+            100 => format!("{}\n", row(98.0 * 0.005 + 0.3)),
+            n if n >= 101 => format!("{}\n", row((n - 2) as f64 * 0.005 + 0.6)),
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    let log = parse_imu_csv(&gapped, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
+    assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
+    // A glitched stamp on the row right after a gap's far side (one gap of 0.3 s at line 100,
+    // line 101 0.7 s ahead), and one on the second row: before, the rows after either were
+    // refused as not increasing until the stamp's time.
+    let gapped: String = good_file(400)
+        .lines()
+        .enumerate()
+        .map(|(i, l)| match i + 1 {
+            n if n >= 100 => format!("{}\n", row((n - 2) as f64 * 0.005 + 0.3)),
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    let text = replace_line(&gapped, 101, &row(1.5));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!((log.rows.len(), log.rejected.len()), (399, 1));
+    assert_eq!(
+        (log.rejected[0].line, log.rejected[0].reason),
+        (101, RejectReason::TimeGlitch)
+    );
+    let text = replace_line(&good_file(400), 3, &row(0.9));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!((log.rows.len(), log.rejected.len()), (399, 1));
+    assert_eq!(
+        (log.rejected[0].line, log.rejected[0].reason),
+        (3, RejectReason::TimeGlitch)
+    );
+}
+
+#[test]
 fn duplicate_timestamp_is_rejected() {
     let text = replace_line(&good_file(200), 4, &row(0.005));
     let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
