@@ -23,11 +23,11 @@ pub struct ModelArgs {
     #[arg(long, allow_negative_numbers = true)]
     pub grid_deg: Option<f64>,
     /// Estimation mode: zupt, paper, rotation_aware or eskf (overrides the config).
-    #[arg(long, value_parser = ["zupt", "paper", "rotation_aware", "eskf"])]
-    pub mode: Option<String>,
+    #[arg(long, value_parser = listed::<Mode>(&["zupt", "paper", "rotation_aware", "eskf"]))]
+    pub mode: Option<Mode>,
     /// Gyro-bias prior: none or rest_mean (overrides the config).
-    #[arg(long, value_parser = ["none", "rest_mean"])]
-    pub prior: Option<String>,
+    #[arg(long, value_parser = listed::<BiasPrior>(&["none", "rest_mean"]))]
+    pub prior: Option<BiasPrior>,
 }
 
 impl ModelArgs {
@@ -42,7 +42,7 @@ impl ModelArgs {
             .config
             .clone()
             .unwrap_or_else(|| PathBuf::from("<built-in defaults>"));
-        Ok(self.overrides()?.validate(&file, &path)?)
+        Ok(self.overrides().validate(&file, &path)?)
     }
 
     /// The `[daemon]` section of the config file, validated.
@@ -63,37 +63,31 @@ impl ModelArgs {
             Some(p) => ConfigFile::read(p)?,
             None => ConfigFile::default(),
         };
-        self.overrides()?.apply(&mut file);
+        self.overrides().apply(&mut file);
         Ok(file)
     }
 
     /// The flags that override the config file.
-    pub fn overrides(&self) -> Result<ConfigOverrides> {
-        // The flag's own message only: serde's "unknown variant" says the same again.
-        let mode =
-            match &self.mode {
-                Some(m) => Some(toml::Value::String(m.clone()).try_into::<Mode>().map_err(
-                    |_| {
-                        anyhow::anyhow!(
-                            "--mode {m:?}: expected zupt, paper, rotation_aware or eskf"
-                        )
-                    },
-                )?),
-                None => None,
-            };
-        let gyro_bias_prior = match &self.prior {
-            Some(p) => Some(
-                toml::Value::String(p.clone())
-                    .try_into::<BiasPrior>()
-                    .map_err(|_| anyhow::anyhow!("--prior {p:?}: expected none or rest_mean"))?,
-            ),
-            None => None,
-        };
-        Ok(ConfigOverrides {
-            mode,
-            gyro_bias_prior,
+    pub fn overrides(&self) -> ConfigOverrides {
+        ConfigOverrides {
+            mode: self.mode,
+            gyro_bias_prior: self.prior,
             start_heading_deg: self.start_heading_deg,
             grid_deg: self.grid_deg,
-        })
+        }
     }
+}
+
+/// The parser of a flag that takes one of `names`, the config's own spellings of `T`'s values
+/// (the argument parser refuses any other and lists these).
+fn listed<T>(names: &'static [&'static str]) -> impl clap::builder::TypedValueParser<Value = T>
+where
+    T: serde::de::DeserializeOwned + Clone + Send + Sync + 'static,
+{
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(names).map(|name| {
+        toml::Value::String(name)
+            .try_into::<T>()
+            .expect("every listed name is one of the config's values")
+    })
 }

@@ -20,7 +20,7 @@ pub(super) struct ServeArgs {
     pub(super) delivery: Option<corridor_shared::services::Delivery>,
     /// Serve a secured domain from this runtime directory (overrides `daemon.runtime_dir`):
     /// only this user can connect, with CORRIDOR_RUNTIME_DIR set to the same directory.
-    #[arg(long)]
+    #[arg(long, value_parser = absolute_path)]
     pub(super) runtime_dir: Option<PathBuf>,
     /// Checkpoint file (overrides `daemon.checkpoint_path`): loaded at start (a bad one is
     /// moved aside, cold start), saved periodically, at each end of stream and at shutdown.
@@ -34,11 +34,6 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
     let config = a.model.config()?;
     let mut settings = a.model.daemon_settings()?;
     if let Some(dir) = &a.runtime_dir {
-        anyhow::ensure!(
-            dir.is_absolute(),
-            "--runtime-dir {}: must be an absolute path",
-            dir.display()
-        );
         settings.runtime_dir = Some(dir.clone());
     }
     let aid = runner::heading_aid(&config, a.model.map.as_deref())?;
@@ -100,4 +95,14 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
         }))?
     );
     Ok(())
+}
+
+/// `--runtime-dir`: an absolute path (a usage error otherwise, exit code 2).
+fn absolute_path(s: &str) -> std::result::Result<PathBuf, String> {
+    let dir = PathBuf::from(s);
+    if dir.is_absolute() {
+        Ok(dir)
+    } else {
+        Err(format!("{s}: must be an absolute path"))
+    }
 }
