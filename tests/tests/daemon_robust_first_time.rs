@@ -10,6 +10,11 @@
 //! increasing" and the gap started a new segment; now the next sample, which goes back and
 //! follows the time before it, shows it to be a glitch, and the daemon drops it after the fact.
 //!
+//! A second stamp, glitched 0.1 s ahead (a bridged gap), lies on a footfall: the daemon
+//! publishes that footfall's nav sample for the glitched sample, and, once it is dropped, again
+//! for the real footfall (before, the dropped sample's stance count was taken for the real one
+//! and the real footfall was never published).
+//!
 //! One daemon test per binary (see `one_daemon_at_a_time`).
 
 mod daemon_common;
@@ -17,11 +22,12 @@ mod daemon_common;
 use corridor_client::{Delivery, Domain, Subscriber};
 use corridor_service::core::{Estimator, ImuInput};
 use corridor_service::runner::heading_aid;
-use corridor_shared::wire::BiasSample;
+use corridor_shared::imu_csv::ImuRow;
+use corridor_shared::wire::{BiasSample, NavSample};
 use daemon_common::*;
 
 #[test]
-fn a_bad_first_time_stamp_costs_two_samples_and_a_glitched_one_costs_one() {
+fn a_bad_first_time_stamp_costs_two_samples_and_each_glitched_one_costs_one() {
     let _one = one_daemon_at_a_time();
     let name = "test_robust_daemon_first_time";
     cleanup_domain(name);
@@ -30,11 +36,37 @@ fn a_bad_first_time_stamp_costs_two_samples_and_a_glitched_one_costs_one() {
     let bias_period_s = dcfg.bias_period_s;
     let daemon = Running::start(dcfg);
     let bias = Subscriber::<BiasSample>::open(&domain, "test-first-time-bias", WAIT).unwrap();
+    let nav = Subscriber::<NavSample>::open(&domain, "test-first-time-nav", WAIT).unwrap();
     let mut rows = exp36_rows();
     rows.truncate(4000); // 20 s
     rows[0].t_s = 1e9;
     let glitch_t_s = rows[2000].t_s + 0.99;
     rows[2000].t_s = glitch_t_s;
+    let cfg = config();
+    let run = |rows: &[ImuRow]| {
+        let mut est = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
+        let stances: Vec<u64> = rows
+            .iter()
+            .map(|r| {
+                let s = ImuInput {
+                    t_s: r.t_s,
+                    gyro_rad_s: r.gyro_rad_s,
+                    accel_m_s2: r.accel_m_s2,
+                };
+                let _ = est.step(&s);
+                est.counters().stances
+            })
+            .collect();
+        (est, stances)
+    };
+    // The first footfall after 15 s, glitched 0.1 s ahead.
+    let (_, stances) = run(&rows);
+    let footfall = (3000..rows.len())
+        .find(|&k| stances[k] > stances[k - 1])
+        .expect("a footfall after 15 s");
+    let footfall_stance = stances[footfall];
+    let footfall_glitch_t_s = rows[footfall].t_s + 0.1;
+    rows[footfall].t_s = footfall_glitch_t_s;
     let producer = produce(
         &domain,
         "test-first-time",
@@ -43,29 +75,35 @@ fn a_bad_first_time_stamp_costs_two_samples_and_a_glitched_one_costs_one() {
         true,
     );
     let got = until_end(&bias, |b| b.flags);
+    let navs = until_end(&nav, |n| n.flags);
     producer.join();
-    drop(bias);
+    drop((bias, nav));
     let report = daemon.stop();
 
     // The estimator fed the same samples, in-process.
-    let cfg = config();
-    let mut est = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
-    let mut refused = 0;
-    for r in &rows {
-        let s = ImuInput {
-            t_s: r.t_s,
-            gyro_rad_s: r.gyro_rad_s,
-            accel_m_s2: r.accel_m_s2,
-        };
-        refused += usize::from(est.step(&s).is_err());
-    }
+    let (est, _) = run(&rows);
     let c = est.counters();
-    // The second sample refused (not increasing), the first and the glitched one dropped after
-    // the fact.
-    assert_eq!(refused, 1);
+    // The second sample refused (not increasing), the first and the two glitched ones dropped
+    // after the fact.
     assert_eq!(
         (c.samples, c.rejected_time, c.rejected_time_jump, c.gaps),
-        (3997, 1, 2, 0)
+        (3996, 1, 3, 0)
+    );
+    // The footfall's nav sample: the glitched sample's (it began the stance too), then the real
+    // one's.
+    let at_footfall: Vec<f64> = navs
+        .iter()
+        .filter(|n| n.stance == footfall_stance)
+        .map(|n| n.t_s)
+        .collect();
+    assert_eq!(
+        at_footfall.first(),
+        Some(&footfall_glitch_t_s),
+        "{at_footfall:?}"
+    );
+    assert!(
+        at_footfall.iter().any(|&t| t < footfall_glitch_t_s),
+        "the real footfall was not published: {at_footfall:?}"
     );
     let last = got.last().expect("bias samples");
     assert_eq!(last.gyro_bias_rad_s, est.last_estimate().gyro_bias_rad_s);
@@ -90,6 +128,6 @@ fn a_bad_first_time_stamp_costs_two_samples_and_a_glitched_one_costs_one() {
         "{longest} s without a bias sample at a period of {bias_period_s} s"
     );
     let d = report.diagnostics;
-    assert_eq!((d.accepted, d.rejected_time), (3997, 1), "{d:?}");
+    assert_eq!((d.accepted, d.rejected_time), (3996, 1), "{d:?}");
     cleanup_domain(name);
 }

@@ -52,6 +52,9 @@ struct EstState<'a> {
     last_bias_t_s: f64,
     last_phase: Phase,
     last_stances: u64,
+    /// `last_stances` before the last sample: a glitched sample dropped after the fact takes
+    /// the stance it may have begun with it, so that the real one is published again.
+    last_stances_before: u64,
     last_nis: f64,
     streams_finished: u64,
     /// The next sample comes from a new producer (see [`Msg::NewProducer`]).
@@ -107,6 +110,7 @@ impl<'a> EstState<'a> {
             last_bias_t_s: f64::NEG_INFINITY,
             last_phase: Phase::Aligning,
             last_stances: 0,
+            last_stances_before: 0,
             last_nis: f64::NAN,
             streams_finished: 0,
             producer_changed: false,
@@ -289,6 +293,13 @@ impl<'a> EstState<'a> {
             // published for it stays published.
             self.last_bias_t_s = f64::NEG_INFINITY;
         }
+        if e.glitch_t_s.is_some() {
+            // The dropped sample's nav sample, if it began a stance, stays published; the stance
+            // it counted went with it, and its real footfall is published again (the same stance
+            // number, the later `imu_seq`).
+            self.last_stances = self.last_stances_before;
+        }
+        self.last_stances_before = self.last_stances;
         self.last = e;
         self.last_imu_seq = s.seq;
         let ok = out
@@ -385,6 +396,7 @@ impl<'a> EstState<'a> {
         self.last_bias_t_s = f64::NEG_INFINITY;
         self.last_phase = Phase::Aligning;
         self.last_stances = 0;
+        self.last_stances_before = 0;
         self.streams_finished += 1;
     }
 
