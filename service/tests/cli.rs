@@ -638,7 +638,7 @@ fn a_bad_mode_is_said_once_and_clamped_footprints_are_said_on_the_terminal() {
     let range = run_cmd(&imu, &out.join("a"), &["--start-heading-deg", "400"]);
     assert_eq!(range.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&range.stderr).contains("heading.start_heading_deg"));
-    // A relative runtime directory and a diagnosis without a log (both exited with 1).
+    // A relative runtime directory (it exited with 1), and a diagnosis without a log.
     let relative = corridor(&["serve", "--runtime-dir", "run/corridor"]);
     assert_eq!(relative.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&relative.stderr).contains("must be an absolute path"));

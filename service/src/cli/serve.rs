@@ -20,7 +20,7 @@ pub(super) struct ServeArgs {
     pub(super) delivery: Option<corridor_shared::services::Delivery>,
     /// Serve a secured domain from this runtime directory (overrides `daemon.runtime_dir`):
     /// only this user can connect, with CORRIDOR_RUNTIME_DIR set to the same directory.
-    #[arg(long, value_parser = absolute_path)]
+    #[arg(long, value_parser = absolute_path())]
     pub(super) runtime_dir: Option<PathBuf>,
     /// Checkpoint file (overrides `daemon.checkpoint_path`): loaded at start (a bad one is
     /// moved aside, cold start), saved periodically, at each end of stream and at shutdown.
@@ -97,12 +97,14 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
     Ok(())
 }
 
-/// `--runtime-dir`: an absolute path (a usage error otherwise, exit code 2).
-fn absolute_path(s: &str) -> std::result::Result<PathBuf, String> {
-    let dir = PathBuf::from(s);
-    if dir.is_absolute() {
-        Ok(dir)
-    } else {
-        Err(format!("{s}: must be an absolute path"))
-    }
+/// `--runtime-dir`: an absolute path, any bytes (a usage error otherwise, exit code 2).
+fn absolute_path() -> impl clap::builder::TypedValueParser<Value = PathBuf> {
+    use clap::builder::TypedValueParser;
+    clap::builder::PathBufValueParser::new().try_map(|dir| {
+        if dir.is_absolute() {
+            Ok(dir)
+        } else {
+            Err(format!("{}: must be an absolute path", dir.display()))
+        }
+    })
 }

@@ -339,7 +339,8 @@ impl<R: BufRead> ImuCsvReader<R> {
             self.line = line;
             match verdict {
                 // The very first time, or a time after a gap: held until a row follows it. A
-                // row held before (a gap's far side, now followed by another gap) goes out.
+                // row held before (the first row, or a gap's far side, now followed by a gap)
+                // goes out.
                 Ok(row) if !self.time.confirmed() || self.time.provisional() => {
                     if let Some(before) = self.held.replace(row) {
                         return Ok(Some(self.emit(before)));

@@ -117,6 +117,9 @@ pub struct Estimator {
     /// step is a gap (a producer slower than 1 / `estimator.max_dt_s`, a config for another
     /// rate) pays it at every sample; its summary counts the gaps.
     before_gap: Option<Box<(Stage, Pipeline)>>,
+    /// A warm start was handed in since `before_gap` was taken: applied again to the filter
+    /// restored from it.
+    warm_start_since_copy: bool,
 }
 
 /// Everything of the estimator but its stage: the per-sample pipeline around the filter, whose
@@ -271,6 +274,7 @@ impl Estimator {
             ))),
             p,
             before_gap: None,
+            warm_start_since_copy: false,
         }
     }
 
@@ -358,6 +362,7 @@ impl Estimator {
         self.before_gap = accepted
             .provisional
             .then(|| Box::new((self.stage.clone(), self.p.clone())));
+        self.warm_start_since_copy = false;
         let clipped = accepted.clipped;
         let p = &mut self.p;
         let prev = p.last;
@@ -429,6 +434,7 @@ impl Estimator {
             return Err(WarmStartError { state: ws });
         }
         self.p.warm_start = Some(ws);
+        self.warm_start_since_copy = true;
         if let Stage::Running(eskf) = &mut self.stage {
             self.p.apply_warm_start(eskf, &ws);
         }

@@ -71,8 +71,7 @@ impl Estimator {
     /// back to the copy taken before it. Kept from now: the time rule (which accepted the
     /// current time), the refusals counted since, an external heading handed in since (one
     /// handed in before and used by the dropped sample is pending again), and a warm start
-    /// handed in since (applied again to the restored filter when it was running: a different
-    /// state than the copy's counts as handed in since).
+    /// handed in since (applied again to the restored filter when it was running).
     pub(super) fn drop_glitched_sample(&mut self) {
         let Some(saved) = self.before_gap.take() else {
             return; // not reached: every provisional sample leaves its copy
@@ -87,7 +86,7 @@ impl Estimator {
         c.rejected_time_jump = now.rejected_time_jump + 1;
         c.headings_refused = now.headings_refused;
         p.pending_heading = self.p.pending_heading.take().or(p.pending_heading);
-        let warm_start_since = self.p.warm_start.filter(|ws| Some(*ws) != p.warm_start);
+        let warm_start_since = self.p.warm_start.filter(|_| self.warm_start_since_copy);
         p.warm_start = self.p.warm_start.or(p.warm_start);
         self.stage = stage;
         self.p = p;
