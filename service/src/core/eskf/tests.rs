@@ -293,6 +293,11 @@ fn the_fast_propagation_and_the_zupt_keep_the_covariance_exactly_symmetric() {
     }
 }
 
+/// The stance update's H: it selects the velocity of an `n`-state filter.
+fn velocity_h(n: usize) -> nalgebra::DMatrix<f64> {
+    nalgebra::DMatrix::from_fn(3, n, |i, j| f64::from(u8::from(j == V0 + i)))
+}
+
 #[test]
 fn update_matches_the_textbook_kalman_formulas() {
     let mut f = filter(
@@ -327,10 +332,7 @@ fn update_matches_the_textbook_kalman_formulas() {
 
     // ZUPT: H selects the velocity.
     let p = dense(&f);
-    let mut h = nalgebra::DMatrix::<f64>::zeros(3, n);
-    for i in 0..3 {
-        h[(i, V0 + i)] = 1.0;
-    }
+    let h = velocity_h(n);
     let s = &h * &p * h.transpose() + nalgebra::DMatrix::<f64>::identity(3, 3) * 1e-4;
     let k = &p * h.transpose() * s.clone().try_inverse().unwrap();
     let want = &p - &k * &h * &p;
@@ -365,10 +367,7 @@ fn a_stance_update_leaves_a_wide_yaw_alone_in_the_schmidt_joseph_form() {
     let p = dense(&f);
     assert!(p[(yaw, yaw)].sqrt() > 5f64.to_radians());
     assert!(p[(yaw, V0)].abs() > 1e-4, "the yaw is tied to the velocity");
-    let mut h = nalgebra::DMatrix::<f64>::zeros(3, n);
-    for i in 0..3 {
-        h[(i, V0 + i)] = 1.0;
-    }
+    let h = velocity_h(n);
     let r_var = 0.01f64.powi(2);
     let s = &h * &p * h.transpose() + nalgebra::DMatrix::<f64>::identity(3, 3) * r_var;
     let mut k = &p * h.transpose() * s.try_inverse().unwrap();

@@ -3,6 +3,20 @@
 
 use super::*;
 
+/// [`good_file`] with gaps: each `(line, gap_s)` makes that line and every later one `gap_s`
+/// later.
+fn with_gaps(n: usize, gaps: &[(u64, f64)]) -> String {
+    let mut s = String::from(HEADER);
+    s.push('\n');
+    for i in 0..n {
+        let line = i as u64 + 2;
+        let shift_s: f64 = gaps.iter().filter(|g| line >= g.0).map(|g| g.1).sum();
+        s.push_str(&row(i as f64 * 0.005 + shift_s));
+        s.push('\n');
+    }
+    s
+}
+
 #[test]
 fn time_going_backwards_is_rejected() {
     // Line 6 holds t = 0.02; put an earlier time there.
@@ -93,14 +107,7 @@ fn a_stamp_glitched_forward_by_less_than_a_jump_is_rejected_and_the_rows_after_i
     assert_eq!((log.rows[97].line, log.rows[98].line), (99, 101));
     // A real gap at the same place (every row from line 100 on 0.9 s later): the row after it
     // is held until the next one follows it, then both are kept, in order.
-    let gapped: String = good_file(400)
-        .lines()
-        .enumerate()
-        .map(|(i, l)| match i + 1 {
-            n if n >= 100 => format!("{}\n", row((n - 2) as f64 * 0.005 + 0.9)),
-            _ => format!("{l}\n"),
-        })
-        .collect();
+    let gapped = with_gaps(400, &[(100, 0.9)]);
     let log = parse_imu_csv(&gapped, path(), &ImuCsvOptions::default()).unwrap();
     assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
     assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
@@ -110,29 +117,14 @@ fn a_stamp_glitched_forward_by_less_than_a_jump_is_rejected_and_the_rows_after_i
 fn gaps_in_a_row_keep_every_row_and_a_glitch_next_to_a_gap_is_still_caught() {
     // Two gaps in a row (lines 100 and 101 each 0.3 s later than the row before): the held
     // row goes out when the next gap's row is held, none is lost and the order stays.
-    let gapped: String = good_file(400)
-        .lines()
-        .enumerate()
-        .map(|(i, l)| match i + 1 {
-            100 => format!("{}\n", row(98.0 * 0.005 + 0.3)),
-            n if n >= 101 => format!("{}\n", row((n - 2) as f64 * 0.005 + 0.6)),
-            _ => format!("{l}\n"),
-        })
-        .collect();
+    let gapped = with_gaps(400, &[(100, 0.3), (101, 0.3)]);
     let log = parse_imu_csv(&gapped, path(), &ImuCsvOptions::default()).unwrap();
     assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
     assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
     // A glitched stamp on the row right after a gap's far side (one gap of 0.3 s at line 100,
     // line 101 0.7 s ahead), and one on the second row: before, the rows after either were
     // refused as not increasing until the stamp's time.
-    let gapped: String = good_file(400)
-        .lines()
-        .enumerate()
-        .map(|(i, l)| match i + 1 {
-            n if n >= 100 => format!("{}\n", row((n - 2) as f64 * 0.005 + 0.3)),
-            _ => format!("{l}\n"),
-        })
-        .collect();
+    let gapped = with_gaps(400, &[(100, 0.3)]);
     let text = replace_line(&gapped, 101, &row(1.5));
     let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
     assert_eq!((log.rows.len(), log.rejected.len()), (399, 1));
