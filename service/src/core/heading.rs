@@ -201,6 +201,14 @@ pub struct StraightWalk {
 }
 
 impl StraightWalk {
+    /// Becomes a copy of `src` in its own history: no allocation when it is as long. Every
+    /// other field is `Copy` (see `StanceDetector::copy_from`).
+    pub fn copy_from(&mut self, src: &Self) {
+        let mut history = std::mem::take(&mut self.history);
+        history.clone_from(&src.history);
+        *self = Self { history, ..*src };
+    }
+
     /// Looks back over `n` stances.
     pub fn new(n: usize, max_change_rad: f64) -> Self {
         Self {

@@ -94,6 +94,23 @@ pub struct StanceDecision {
 }
 
 impl StanceDetector {
+    /// Becomes a copy of `src` in its own windows: no allocation when they are as long (the
+    /// estimator's copy before a gap, `before_gap`). Every other field is `Copy`: a new one
+    /// that is not must be copied here, or this does not compile.
+    pub fn copy_from(&mut self, src: &Self) {
+        let (mut gyro, mut accel) = (
+            std::mem::take(&mut self.gyro),
+            std::mem::take(&mut self.accel),
+        );
+        gyro.clone_from(&src.gyro);
+        accel.clone_from(&src.accel);
+        *self = Self {
+            gyro,
+            accel,
+            ..*src
+        };
+    }
+
     /// A detector with the given configuration; `gravity_m_s2` is refined by
     /// [`StanceDetector::set_gravity`] after alignment.
     pub fn new(cfg: &DetectorConfig, gravity_m_s2: f64) -> Self {

@@ -30,10 +30,12 @@
 //! `late_footfall.rs` a footfall the detector missed (a short dip of its statistic, or a stride
 //! cycle without a stance), updated late from the stride memory; `recovery.rs`
 //! what it does when the state or the input goes bad (health check, velocity reset, a first
-//! time stamp that was an outlier); `tests.rs` its unit tests.
+//! time stamp that was an outlier, a glitched one); `gap_copy.rs` the copy of the estimator
+//! that undoes a glitched one; `tests.rs` its unit tests.
 
 mod alignment;
 mod association;
+mod gap_copy;
 mod gaps;
 mod late_footfall;
 mod navigation;
@@ -112,11 +114,9 @@ pub struct Estimator {
     p: Pipeline,
     /// The estimator before the last accepted sample, while that sample's time came after a
     /// gap and is provisional: the next sample may show it to be a stamp glitch, and it is then
-    /// dropped after the fact (`recovery.rs`). A copy per gap, not per sample: about 160 KB and
-    /// a few allocations (the filter, its saved copies, the stride memory). A stream whose every
-    /// step is a gap (a producer slower than 1 / `estimator.max_dt_s`, a config for another
-    /// rate) pays it at every sample; its summary counts the gaps.
-    before_gap: Option<Box<(Stage, Pipeline)>>,
+    /// dropped after the fact (`recovery.rs`). A copy per gap, in a buffer reused from the
+    /// second gap on (`gap_copy.rs`).
+    before_gap: gap_copy::GapCopy,
     /// A warm start was handed in since `before_gap` was taken: applied again to the filter
     /// restored from it.
     warm_start_since_copy: bool,
@@ -127,7 +127,8 @@ pub struct Estimator {
 #[derive(Debug, Clone)]
 struct Pipeline {
     cfg: Config,
-    aid: HeadingAid,
+    /// Shared with copies of the pipeline (it never changes).
+    aid: std::sync::Arc<HeadingAid>,
     detector: StanceDetector,
     phase: Phase,
     counters: Counters,
@@ -219,7 +220,7 @@ impl Estimator {
                     cfg.heading.line_lateral_m.get(),
                 )
             }),
-            aid,
+            aid: std::sync::Arc::new(aid),
             phase: Phase::Aligning,
             counters: Counters::default(),
             plausibility: Plausibility::new(cfg.sensor, cfg.max_dt_s.get()),
@@ -273,7 +274,7 @@ impl Estimator {
                 Some(p.cfg.alignment.rest_max_rate_change_rad_s.get()),
             ))),
             p,
-            before_gap: None,
+            before_gap: gap_copy::GapCopy::default(),
             warm_start_since_copy: false,
         }
     }
@@ -358,10 +359,12 @@ impl Estimator {
         if accepted.glitch_t_s.is_some() {
             self.drop_glitched_sample();
         }
-        // Allocates, once per gap (never on a stream without one; see `before_gap`).
-        self.before_gap = accepted
-            .provisional
-            .then(|| Box::new((self.stage.clone(), self.p.clone())));
+        // Allocates at the first gap only (see `before_gap`).
+        if accepted.provisional {
+            self.before_gap.save(&self.stage, &self.p);
+        } else {
+            self.before_gap.forget();
+        }
         self.warm_start_since_copy = false;
         let clipped = accepted.clipped;
         let p = &mut self.p;

@@ -53,7 +53,7 @@ impl Estimator {
     /// rule's state (which accepted the current time), a warm start and an external heading not
     /// yet used. Allocates (a new estimator), once at most per stream.
     pub(super) fn restart_after_time_outlier(&mut self) {
-        let mut fresh = Estimator::new(self.p.cfg.clone(), self.p.aid.clone());
+        let mut fresh = Estimator::new(self.p.cfg.clone(), (*self.p.aid).clone());
         fresh.p.plausibility = self.p.plausibility.clone();
         fresh.p.counters = self.p.counters;
         fresh.p.counters.samples = fresh.p.counters.samples.saturating_sub(1);
@@ -73,23 +73,21 @@ impl Estimator {
     /// handed in before and used by the dropped sample is pending again), and a warm start
     /// handed in since (applied again to the restored filter when it was running).
     pub(super) fn drop_glitched_sample(&mut self) {
-        let Some(saved) = self.before_gap.take() else {
+        // `now`: the pipeline that took the dropped sample; `self.p` the copy from before it.
+        let Some(now) = self.before_gap.swap_in(&mut self.stage, &mut self.p) else {
             return; // not reached: every provisional sample leaves its copy
         };
-        let (stage, mut p) = *saved;
-        std::mem::swap(&mut p.plausibility, &mut self.p.plausibility);
-        let now = &self.p.counters;
+        let p = &mut self.p;
+        std::mem::swap(&mut p.plausibility, &mut now.plausibility);
         let c = &mut p.counters;
-        c.rejected_non_finite = now.rejected_non_finite;
-        c.rejected_time = now.rejected_time;
-        c.rejected_implausible = now.rejected_implausible;
-        c.rejected_time_jump = now.rejected_time_jump + 1;
-        c.headings_refused = now.headings_refused;
-        p.pending_heading = self.p.pending_heading.take().or(p.pending_heading);
-        let warm_start_since = self.p.warm_start.filter(|_| self.warm_start_since_copy);
-        p.warm_start = self.p.warm_start.or(p.warm_start);
-        self.stage = stage;
-        self.p = p;
+        c.rejected_non_finite = now.counters.rejected_non_finite;
+        c.rejected_time = now.counters.rejected_time;
+        c.rejected_implausible = now.counters.rejected_implausible;
+        c.rejected_time_jump = now.counters.rejected_time_jump + 1;
+        c.headings_refused = now.counters.headings_refused;
+        p.pending_heading = now.pending_heading.take().or(p.pending_heading);
+        let warm_start_since = now.warm_start.filter(|_| self.warm_start_since_copy);
+        p.warm_start = now.warm_start.or(p.warm_start);
         if let (Some(ws), Stage::Running(eskf)) = (warm_start_since, &mut self.stage) {
             self.p.apply_warm_start(eskf, &ws);
         }

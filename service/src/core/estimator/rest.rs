@@ -61,6 +61,14 @@ pub(super) struct RestSums {
 pub const REST_BLOCK_S: f64 = 0.05;
 
 impl RestSums {
+    /// Becomes a copy of `src` in its own blocks: no allocation when its capacity suffices.
+    /// Every other field is `Copy` (see `StanceDetector::copy_from`).
+    pub(super) fn copy_from(&mut self, src: &Self) {
+        let mut recent = std::mem::take(&mut self.recent);
+        recent.clone_from(&src.recent);
+        *self = Self { recent, ..*src };
+    }
+
     pub(super) fn new(tail_s: f64, max_rate_change_rad_s: Option<f64>) -> Self {
         let capacity = (tail_s / REST_BLOCK_S).ceil() as usize + 1;
         Self {

@@ -71,6 +71,14 @@ impl Default for StrideMemory {
 }
 
 impl StrideMemory {
+    /// Becomes a copy of `src` in its own ring: no allocation (every ring is as long). Every
+    /// other field is `Copy` (see `StanceDetector::copy_from`).
+    pub fn copy_from(&mut self, src: &Self) {
+        let mut ring = std::mem::take(&mut self.ring);
+        ring.clone_from(&src.ring);
+        *self = Self { ring, ..*src };
+    }
+
     /// Remembers one sample (the oldest is forgotten when the memory is full).
     pub fn push(&mut self, s: Remembered) {
         // Once per sample: no division for the wrap.
