@@ -349,6 +349,11 @@ impl TimeGuard {
     pub fn confirmed(&self) -> bool {
         self.confirmed
     }
+
+    /// Whether `t_s` follows `from_s` within the step bounds (no confirmation needed).
+    pub fn follows(&self, from_s: f64, t_s: f64) -> bool {
+        step_follows(t_s - from_s, self.min_dt_s, self.max_dt_s)
+    }
 }
 
 #[cfg(test)]

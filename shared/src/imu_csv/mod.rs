@@ -96,7 +96,9 @@ pub enum RejectReason {
     /// `t_s` is not greater than the previous accepted row's `t_s` (duplicates included).
     TimeNotIncreasing,
     /// `t_s` jumps forward by more than [`ImuCsvOptions::max_dt_s`] and the next row does not
-    /// follow it (an outlier such as `1e30`; the first row after a real gap also lands here).
+    /// follow it (an outlier such as `1e30`). The first row after a real gap, which the next
+    /// row follows, is passed on (an estimator behind the reader refuses it until that row
+    /// confirms it, as on a live stream).
     TimeJump,
     /// The first row's `t_s`, which the next two rows contradict while following each other:
     /// the first stamp was the outlier (found only after the row that exposed it was rejected

@@ -45,8 +45,13 @@ pub struct ImuCsvReader<R> {
     /// the next rows contradict is the outlier: [`TimeVerdict::Rebase`]), and a row after a gap,
     /// held until the next row shows whether it was a stamp glitch ([`TimeVerdict::Glitch`]).
     pub(super) held: Option<ImuRow>,
-    /// A row to return before reading on (the one that released the held row).
-    pub(super) ready: Option<ImuRow>,
+    /// A row refused as a time jump, held until the next row: when that row follows it, the
+    /// jump was a real gap and it goes out before it (a reader of the stream judges it as a
+    /// live stream's would be judged: `corridor run`'s estimator refuses it until the next
+    /// sample confirms it, as the daemon does); otherwise it is rejected.
+    pub(super) jumped: Option<(ImuRow, RejectedRow)>,
+    /// Rows to return before reading on, in order (those released with the current one).
+    pub(super) ready: [Option<ImuRow>; 2],
     pub(super) rejected: Vec<RejectedRow>,
     pub(super) keep_rejected: usize,
     pub(super) accepted: u64,
@@ -98,7 +103,8 @@ impl<R: BufRead> ImuCsvReader<R> {
             total: 0,
             rejected_counts: [0; RejectReason::ALL.len()],
             held: None,
-            ready: None,
+            jumped: None,
+            ready: [None, None],
             rejected: Vec::new(),
             keep_rejected: REJECTED_ROWS_KEPT,
             accepted: 0,
@@ -248,13 +254,18 @@ impl<R: BufRead> ImuCsvReader<R> {
 
     /// The next accepted row, or an error, or `None` at the end of the source.
     pub(super) fn next_row(&mut self) -> Result<Option<ImuRow>, ImuCsvError> {
-        if let Some(row) = self.ready.take() {
+        if let Some(row) = self.ready[0].take() {
+            self.ready = [self.ready[1].take(), None];
             return Ok(Some(self.emit(row)));
         }
         let n_fields = self.names.len();
         loop {
             if !self.read_line()? {
-                // A one-row log: its only time had nothing to contradict it.
+                // A jump on the last row was never confirmed. A one-row log: its only time had
+                // nothing to contradict it.
+                if let Some((_, rejected)) = self.jumped.take() {
+                    self.reject(rejected);
+                }
                 return Ok(self.held.take().map(|row| self.emit(row)));
             }
             let line_no = self.line_no;
@@ -285,9 +296,26 @@ impl<R: BufRead> ImuCsvReader<R> {
                 let (first, _, n) = self.parsed_t.unwrap_or((row.t_s, row.t_s, 0));
                 self.parsed_t = Some((first, row.t_s, n + 1));
             }
+            let was_confirmed = self.time.confirmed();
+            // Ok: the row, with the row refused as a jump that it shows to be a real gap's far
+            // side. Err: the rejection, with the row when it was refused as a jump.
             let verdict = match parsed {
                 Ok(row) => match self.time.check(row.t_s) {
                     verdict @ (TimeVerdict::Accept | TimeVerdict::Rebase | TimeVerdict::Glitch) => {
+                        let far_side = verdict == TimeVerdict::Accept
+                            && was_confirmed
+                            && self
+                                .jumped
+                                .as_ref()
+                                .is_some_and(|(j, _)| self.time.follows(j.t_s, row.t_s));
+                        let jumped = match self.jumped.take() {
+                            Some((j, _)) if far_side => Some(j),
+                            Some((_, rejected)) => {
+                                self.reject(rejected);
+                                None
+                            }
+                            None => None,
+                        };
                         self.time.accept(row.t_s);
                         if verdict != TimeVerdict::Accept
                             && let Some(first) = self.held.take()
@@ -303,57 +331,73 @@ impl<R: BufRead> ImuCsvReader<R> {
                                 },
                             });
                         }
-                        Ok(row)
+                        Ok((row, jumped))
                     }
-                    verdict => Err(RejectedRow {
-                        line: line_no,
-                        column: REQUIRED_COLUMNS[0].to_string(),
-                        value: truncate_chars(
-                            unquote(text.split(',').next().unwrap_or("")),
-                            MAX_VALUE_CHARS,
-                        ),
-                        reason: if verdict == TimeVerdict::Jump {
-                            RejectReason::TimeJump
-                        } else {
-                            RejectReason::TimeNotIncreasing
+                    verdict => Err((
+                        (verdict == TimeVerdict::Jump).then_some(row),
+                        RejectedRow {
+                            line: line_no,
+                            column: REQUIRED_COLUMNS[0].to_string(),
+                            value: truncate_chars(
+                                unquote(text.split(',').next().unwrap_or("")),
+                                MAX_VALUE_CHARS,
+                            ),
+                            reason: if verdict == TimeVerdict::Jump {
+                                RejectReason::TimeJump
+                            } else {
+                                RejectReason::TimeNotIncreasing
+                            },
                         },
-                    }),
+                    )),
                 },
-                Err(RowProblem::FieldCount) => Err(RejectedRow {
-                    line: line_no,
-                    column: String::new(),
-                    value: truncate_chars(text, MAX_VALUE_CHARS),
-                    reason: RejectReason::Malformed,
-                }),
+                Err(RowProblem::FieldCount) => Err((
+                    None,
+                    RejectedRow {
+                        line: line_no,
+                        column: String::new(),
+                        value: truncate_chars(text, MAX_VALUE_CHARS),
+                        reason: RejectReason::Malformed,
+                    },
+                )),
                 Err(RowProblem::Field {
                     index,
                     text,
                     reason,
-                }) => Err(RejectedRow {
-                    line: line_no,
-                    column: self.names[index].clone(),
-                    value: truncate_chars(text, MAX_VALUE_CHARS),
-                    reason,
-                }),
+                }) => Err((
+                    None,
+                    RejectedRow {
+                        line: line_no,
+                        column: self.names[index].clone(),
+                        value: truncate_chars(text, MAX_VALUE_CHARS),
+                        reason,
+                    },
+                )),
             };
             self.line = line;
             match verdict {
                 // The very first time, or a time after a gap: held until a row follows it. A
                 // row held before (the first row, or a gap's far side, now followed by a gap)
                 // goes out.
-                Ok(row) if !self.time.confirmed() || self.time.provisional() => {
+                Ok((row, None)) if !self.time.confirmed() || self.time.provisional() => {
                     if let Some(before) = self.held.replace(row) {
                         return Ok(Some(self.emit(before)));
                     }
                 }
-                Ok(row) => {
-                    if let Some(first) = self.held.take() {
-                        self.ready = Some(row);
-                        return Ok(Some(self.emit(first)));
-                    }
-                    return Ok(Some(self.emit(row)));
+                // Out in order: a held row, a jumped one this row confirmed, this row.
+                Ok((row, jumped)) => {
+                    let mut out = [self.held.take(), jumped, Some(row)].into_iter().flatten();
+                    let first = out.next().unwrap_or(row);
+                    self.ready = [out.next(), out.next()];
+                    return Ok(Some(self.emit(first)));
                 }
-                Err(rejected) => self.reject(rejected),
+                // A jump: held until the next row says whether it was a gap's far side (a
+                // jump held before is rejected when the next row was not judged: a jump again).
+                Err((Some(row), rejected)) => {
+                    if let Some((_, before)) = self.jumped.replace((row, rejected)) {
+                        self.reject(before);
+                    }
+                }
+                Err((None, rejected)) => self.reject(rejected),
             }
         }
     }

@@ -142,6 +142,33 @@ fn gaps_in_a_row_keep_every_row_and_a_glitch_next_to_a_gap_is_still_caught() {
 }
 
 #[test]
+fn the_row_after_a_real_long_gap_goes_out_once_the_next_row_follows_it() {
+    // Every row from line 100 on 10 s later (beyond max_dt_s, 1 s). Before, line 100 was
+    // rejected as a time jump and the estimator behind the reader refused line 101 too (the
+    // jump again, from its own last time): two rows for one gap, and the gap reported one row
+    // late. Now the reader passes line 100 on, and the stream is the one a live sensor gives.
+    let log = parse_imu_csv(
+        &with_gaps(400, &[(100, 10.0)]),
+        path(),
+        &ImuCsvOptions::default(),
+    )
+    .unwrap();
+    assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
+    assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
+    // Two jumps in a row, the second confirmed: the first is rejected, the second goes out.
+    let text = replace_line(&with_gaps(400, &[(101, 20.0)]), 100, &row(10.0));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    let rejected: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
+    assert_eq!(rejected, [(100, RejectReason::TimeJump)]);
+    assert_eq!((log.rows.len(), log.rows[98].line), (399, 101));
+    // A jump that the next row does not follow, on the last row too, is rejected as before.
+    let n = good_file(200).trim_end().lines().count();
+    let text = replace_line(&good_file(200), n, &row(50.0));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!((log.rows.len(), log.rejected[0].line), (199, n as u64));
+}
+
+#[test]
 fn duplicate_timestamp_is_rejected() {
     let text = replace_line(&good_file(200), 4, &row(0.005));
     let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
