@@ -43,14 +43,13 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static ALLOC: Counting = Counting;
 
-/// A gap every this many samples.
-const GAP_EVERY: usize = 50;
-/// Its length: beyond `estimator.max_dt_s` (0.05 s), within `max_bridge_s` (0.16 s).
+/// A gap's length: beyond `estimator.max_dt_s` (0.05 s), within `max_bridge_s` (0.16 s).
 const GAP_S: f64 = 0.06;
-/// A stamp glitched ahead every this many samples.
-const GLITCH_EVERY: usize = 500;
 /// The samples kept one in this many over the slow stretch (200 Hz → 14 Hz: 0.07 s steps).
 const SLOW_KEEP_ONE_IN: usize = 14;
+/// Samples run before the allocations are counted: the alignment, the first stances, gaps and
+/// glitches (the buffers are made there).
+const WARM_UP: usize = 3000;
 
 #[test]
 fn gaps_and_glitched_stamps_allocate_nothing_after_the_first() {
@@ -59,69 +58,78 @@ fn gaps_and_glitched_stamps_allocate_nothing_after_the_first() {
     let log = read_imu_csv(&data.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
     let cfg = Config::from_file(&data.join("../../../configs/gdins.toml")).unwrap();
     assert_eq!(cfg.max_dt_s.get(), 0.05, "the gaps below are sized for it");
-    // The stream, and the same without its glitched samples.
-    let (mut stream, mut clean) = (Vec::new(), Vec::new());
-    let mut shift_s = 0.0;
-    let mut glitches = 0;
-    for (k, r) in log.rows.iter().enumerate() {
+    // (a gap every, a glitch every) so many samples. The dense one puts glitches next to long
+    // stances, where a copy whose rest blocks had less room than the original's grew them.
+    for (gap_every, glitch_every) in [(50, 500), (23, 61)] {
         // 20–24 s: a producer at 14 Hz.
-        if (4000..4800).contains(&k) && k % SLOW_KEEP_ONE_IN != 0 {
-            continue;
+        let slow = |k: usize| (4000..4800).contains(&k);
+        // The stream, and the same without its glitched samples.
+        let (mut stream, mut clean) = (Vec::new(), Vec::new());
+        let mut shift_s = 0.0;
+        let mut glitches = 0;
+        for (k, r) in log.rows.iter().enumerate() {
+            if slow(k) && k % SLOW_KEEP_ONE_IN != 0 {
+                continue;
+            }
+            if k % gap_every == 0 {
+                shift_s += GAP_S;
+            }
+            let s = ImuInput {
+                t_s: r.t_s + shift_s,
+                gyro_rad_s: r.gyro_rad_s,
+                accel_m_s2: r.accel_m_s2,
+            };
+            // Away from the gaps, the slow stretch and the end: a glitch's next sample must
+            // follow the one before it.
+            let clear = k % gap_every != 0
+                && (k + 1) % gap_every != 0
+                && !slow(k)
+                && !slow(k + 1)
+                && k + 1 < log.rows.len();
+            if k % glitch_every == glitch_every / 2 && clear {
+                stream.push(ImuInput {
+                    t_s: s.t_s + 0.5,
+                    ..s
+                });
+                glitches += 1;
+            } else {
+                stream.push(s);
+                clean.push(s);
+            }
         }
-        if k % GAP_EVERY == 0 {
-            shift_s += GAP_S;
+        let mut reference = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
+        for s in &clean {
+            reference.step(s).unwrap();
         }
-        let s = ImuInput {
-            t_s: r.t_s + shift_s,
-            gyro_rad_s: r.gyro_rad_s,
-            accel_m_s2: r.accel_m_s2,
-        };
-        // Away from the gaps: a glitch's next sample must follow the one before it.
-        if k % GLITCH_EVERY == GLITCH_EVERY / 2 + GAP_EVERY / 2 {
-            stream.push(ImuInput {
-                t_s: s.t_s + 0.5,
-                ..s
-            });
-            glitches += 1;
-        } else {
-            stream.push(s);
-            clean.push(s);
+        let mut est = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
+        let (warm_up, rest) = stream.split_at(WARM_UP);
+        for s in warm_up {
+            est.step(s).unwrap();
         }
+        let before = ALLOCATIONS.load(Ordering::Relaxed);
+        for s in rest {
+            est.step(s).unwrap();
+        }
+        let allocations = ALLOCATIONS.load(Ordering::Relaxed) - before;
+        // What ran: every gap (the slow stretch's steps among them), every glitch dropped.
+        let c = *est.counters();
+        assert!(c.gaps > 200, "{c:?}");
+        assert_eq!(c.rejected_time_jump, glitches, "{c:?}");
+        assert!(c.stances > 40, "{c:?}");
+        // Each glitched sample was dropped after the fact, from a copy in the reused buffer:
+        // the walk ends as without them, bit for bit.
+        assert_eq!(est.last_estimate(), reference.last_estimate());
+        assert_eq!(est.bias_state(), reference.bias_state());
+        let mut r = *reference.counters();
+        r.rejected_time_jump = glitches;
+        assert_eq!(c, r);
+        assert_eq!(
+            allocations,
+            0,
+            "every {gap_every} / {glitch_every}: {allocations} allocations over {} samples with \
+             {} gaps",
+            rest.len(),
+            c.gaps
+        );
     }
-    let mut reference = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
-    for s in &clean {
-        reference.step(s).unwrap();
-    }
-    let mut est = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
-    // The first 3000 samples: the alignment, the first stances, gaps and glitches (the buffers
-    // are made there).
-    let (warm_up, rest) = stream.split_at(3000);
-    for s in warm_up {
-        est.step(s).unwrap();
-    }
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
-    for s in rest {
-        est.step(s).unwrap();
-    }
-    let allocations = ALLOCATIONS.load(Ordering::Relaxed) - before;
-    let c = est.counters();
-    // What ran: every gap (the slow stretch's steps among them), every glitch dropped.
-    assert!(c.gaps > 200, "{c:?}");
-    assert_eq!(c.rejected_time_jump, glitches, "{c:?}");
-    assert!(c.stances > 40, "{c:?}");
-    // Each glitched sample was dropped after the fact, from a copy in the reused buffer: the
-    // walk ends as without them, bit for bit.
-    assert_eq!(est.last_estimate(), reference.last_estimate());
-    let r = reference.counters();
-    assert_eq!(
-        (c.samples, c.gaps, c.stances),
-        (r.samples, r.gaps, r.stances)
-    );
-    assert_eq!(
-        allocations,
-        0,
-        "{allocations} allocations over {} samples with {} gaps",
-        rest.len(),
-        c.gaps
-    );
 }

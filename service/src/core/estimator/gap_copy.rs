@@ -2,8 +2,9 @@
 //! provisional (`corridor_shared::sensor::TimeGuard`): the next sample may show that time to be
 //! a glitched stamp, and the estimator then goes back to the copy (`recovery.rs`). The copy
 //! lives in one buffer, allocated at the first gap and reused: a gap costs a copy of about
-//! 160 KB (the stride memory most of it) and no allocation after the first, also on a stream
-//! whose every step is a gap (a producer slower than 1 / `estimator.max_dt_s`).
+//! 160 KB (the stride memory most of it) and no allocation after the first gap and the first
+//! after the alignment (the filter's boxes are made then), also on a stream whose every step is
+//! a gap (a producer slower than 1 / `estimator.max_dt_s`).
 
 use super::*;
 
@@ -17,7 +18,7 @@ pub(super) struct GapCopy {
 
 impl GapCopy {
     /// Copies the estimator (before the sample about to be processed) into the buffer.
-    /// Allocates the first time only.
+    /// Allocates the first time, and the first time after the alignment.
     pub(super) fn save(&mut self, stage: &Stage, p: &Pipeline) {
         match &mut self.buffer {
             Some(b) => {

@@ -359,7 +359,7 @@ impl Estimator {
         if accepted.glitch_t_s.is_some() {
             self.drop_glitched_sample();
         }
-        // Allocates at the first gap only (see `before_gap`).
+        // Allocates at the first gap and the first after the alignment (see `before_gap`).
         if accepted.provisional {
             self.before_gap.save(&self.stage, &self.p);
         } else {

@@ -39,8 +39,9 @@ pub(super) type RestMeans = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
 /// "stance"). A later rest begins with the foot's landing (rolling to flat at up to the stance
 /// detector's threshold), which the motion test, anchored on the first block, would take for
 /// the reference: its first `head_s` are left out instead ([`RestSums::leaving_out_head`]).
-/// Fixed capacity.
-#[derive(Debug, Clone)]
+/// Fixed capacity, kept by its copies (`Clone` by hand: a derived one gives a copy only as
+/// much room as it holds, and the copy before a gap, `gap_copy.rs`, becomes the live one).
+#[derive(Debug)]
 pub(super) struct RestSums {
     pub(super) t_first_s: f64,
     settled: Sums,
@@ -60,9 +61,22 @@ pub(super) struct RestSums {
 /// Block length of the rest accumulator, s.
 pub const REST_BLOCK_S: f64 = 0.05;
 
+impl Clone for RestSums {
+    fn clone(&self) -> Self {
+        let mut recent = std::collections::VecDeque::with_capacity(self.capacity + 1);
+        recent.extend(self.recent.iter().copied());
+        Self { recent, ..*self }
+    }
+
+    fn clone_from(&mut self, src: &Self) {
+        self.copy_from(src);
+    }
+}
+
 impl RestSums {
-    /// Becomes a copy of `src` in its own blocks: no allocation when its capacity suffices.
-    /// Every other field is `Copy` (see `StanceDetector::copy_from`).
+    /// Becomes a copy of `src` in its own blocks: no allocation (every `RestSums` of one
+    /// configuration has room for as many). Every other field is `Copy` (see
+    /// `StanceDetector::copy_from`).
     pub(super) fn copy_from(&mut self, src: &Self) {
         let mut recent = std::mem::take(&mut self.recent);
         recent.clone_from(&src.recent);
