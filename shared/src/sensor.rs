@@ -285,17 +285,20 @@ impl TimeGuard {
 
     /// Whether the last accepted time is provisional: it came after a gap beyond `gap_dt_s`,
     /// and the next accepted time decides whether it was a glitch ([`TimeVerdict::Glitch`]).
+    #[inline]
     pub fn provisional(&self) -> bool {
         self.before_gap_s.is_some()
     }
 
     /// The last accepted time.
+    #[inline]
     pub fn last_s(&self) -> Option<f64> {
         self.last_s
     }
 
     /// Judges the finite time `t_s` against the time base; a jump is remembered as the candidate
     /// for a new base.
+    #[inline]
     pub fn check(&mut self, t_s: f64) -> TimeVerdict {
         let Some(last) = self.last_s else {
             return TimeVerdict::Accept;
@@ -332,6 +335,7 @@ impl TimeGuard {
     }
 
     /// Records `t_s` as accepted: the new time base.
+    #[inline]
     pub fn accept(&mut self, t_s: f64) {
         // A gap from the last accepted time stays provisional: also from the very first time, and
         // from a gap's far side (accepting the next time confirms that one). Not a time after a
@@ -346,6 +350,7 @@ impl TimeGuard {
     }
 
     /// Whether a sample has followed the time base (false for the very first time).
+    #[inline]
     pub fn confirmed(&self) -> bool {
         self.confirmed
     }

@@ -26,6 +26,7 @@ const EXP_SERIES_MAX_ANGLE2: f64 = 0.01;
 /// The rotation by the rotation vector `rotvec_rad` (axis × angle). Small rotations (every
 /// per-sample step) through the series of cos(θ/2) and sin(θ/2)/θ in θ², with no square root
 /// and no sine or cosine: the strapdown step's largest cost before, about 200 instructions.
+#[inline]
 pub fn exp_rotvec(rotvec_rad: &Vector3<f64>) -> UnitQuaternion<f64> {
     let x = rotvec_rad.norm_squared();
     if x >= EXP_SERIES_MAX_ANGLE2 {

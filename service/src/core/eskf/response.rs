@@ -133,6 +133,7 @@ pub(super) fn rotate_horizontal(x: &mut [f64], k: usize, m: &Matrix3<f64>) {
 
 /// The largest absolute row sum of `m` (the ∞-norm): with a bias error of the same size on
 /// every axis, the largest fraction of it left on one axis.
+#[inline]
 pub fn max_row_sum(m: &Matrix3<f64>) -> f64 {
     // `column_sum` adds the columns: the vector of the row sums.
     m.abs().column_sum().max()
