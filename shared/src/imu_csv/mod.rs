@@ -98,7 +98,8 @@ pub enum RejectReason {
     /// `t_s` jumps forward by more than [`ImuCsvOptions::max_dt_s`] and the next row does not
     /// follow it (an outlier such as `1e30`). The first row after a real gap, which the next
     /// row follows, is passed on (an estimator behind the reader refuses it until that row
-    /// confirms it, as on a live stream).
+    /// confirms it, as on a live stream), unless it comes right after the first row: the first
+    /// row is then the outlier ([`RejectReason::TimeOutlier`]) and it is rejected with it.
     TimeJump,
     /// The first row's `t_s`, which the next two rows contradict while following each other:
     /// the first stamp was the outlier (found only after the row that exposed it was rejected
@@ -233,7 +234,9 @@ pub struct ImuLog {
     pub path: PathBuf,
     /// Accepted samples in file order; `t_s` is strictly increasing.
     pub rows: Vec<ImuRow>,
-    /// Rejected data rows in file order, each with its reason.
+    /// Rejected data rows, each with its reason, in the order they were decided: file order,
+    /// but for a row held until the next row (a first time, a gap's far side, a time jump)
+    /// whose rejection follows that of rows rejected in between.
     pub rejected: Vec<RejectedRow>,
     /// Whether the file has a `temp_c` column (then every row has `temp_c: Some(_)`).
     pub has_temperature: bool,
@@ -264,8 +267,9 @@ pub struct ImuCsvOptions {
     pub check_units: bool,
     /// A row must follow the previous accepted one by more than this, s. Default 0.
     pub min_dt_s: f64,
-    /// A row more than this after the previous accepted one is a time jump, accepted only when
-    /// the next row confirms it ([`crate::sensor::TimeGuard`]), s. Default
+    /// A row more than this after the previous accepted one is a time jump, passed on only when
+    /// the next row confirms it ([`crate::sensor::TimeGuard`]; an estimator behind the reader
+    /// refuses it until then, as on a live stream), s. Default
     /// [`crate::sensor::DEFAULT_MAX_DT_S`].
     pub max_dt_s: f64,
     /// A row more than this after the previous accepted one (a gap, within `max_dt_s`) is held
@@ -338,7 +342,8 @@ pub enum ImuCsvError {
     TooManyRejected {
         /// The file.
         path: PathBuf,
-        /// Number of rejected data rows.
+        /// Number of rejected data rows, with the rows passed on after a time jump (a real
+        /// gap's far side, which an estimator behind the reader refuses until the next row).
         rejected: u64,
         /// Number of data rows (accepted + rejected).
         total: u64,

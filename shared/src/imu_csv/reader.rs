@@ -50,6 +50,10 @@ pub struct ImuCsvReader<R> {
     /// live stream's would be judged: `corridor run`'s estimator refuses it until the next
     /// sample confirms it, as the daemon does); otherwise it is rejected.
     pub(super) jumped: Option<(ImuRow, RejectedRow)>,
+    /// Rows passed on as a real gap's far side, and the first of them as a rejection: the
+    /// estimator behind the reader refuses each until the next row confirms it, so they count
+    /// with the rejected rows in the checks over the whole log ([`Self::finish`]).
+    pub(super) jumps_passed: (u64, Option<RejectedRow>),
     /// Rows to return before reading on, in order (those released with the current one).
     pub(super) ready: [Option<ImuRow>; 2],
     pub(super) rejected: Vec<RejectedRow>,
@@ -104,6 +108,7 @@ impl<R: BufRead> ImuCsvReader<R> {
             rejected_counts: [0; RejectReason::ALL.len()],
             held: None,
             jumped: None,
+            jumps_passed: (0, None),
             ready: [None, None],
             rejected: Vec::new(),
             keep_rejected: REJECTED_ROWS_KEPT,
@@ -130,7 +135,8 @@ impl<R: BufRead> ImuCsvReader<R> {
         self.rejected_counts.iter().sum()
     }
 
-    /// The first [`REJECTED_ROWS_KEPT`] rejected rows, in file order.
+    /// The first [`REJECTED_ROWS_KEPT`] rejected rows, in the order they were decided (see
+    /// [`ImuLog::rejected`]).
     pub fn rejected_rows(&self) -> &[RejectedRow] {
         &self.rejected
     }
@@ -309,7 +315,11 @@ impl<R: BufRead> ImuCsvReader<R> {
                                 .as_ref()
                                 .is_some_and(|(j, _)| self.time.follows(j.t_s, row.t_s));
                         let jumped = match self.jumped.take() {
-                            Some((j, _)) if far_side => Some(j),
+                            Some((j, rejected)) if far_side => {
+                                self.jumps_passed.0 += 1;
+                                self.jumps_passed.1.get_or_insert(rejected);
+                                Some(j)
+                            }
                             Some((_, rejected)) => {
                                 self.reject(rejected);
                                 None
@@ -415,7 +425,7 @@ impl<R: BufRead> ImuCsvReader<R> {
     /// step the time rule would take in milliseconds, microseconds or nanoseconds (the mean
     /// step over the rows that parsed, scaled); empty otherwise.
     fn time_unit_hint(&self, n_rejected: u64) -> String {
-        let jumps = self.rejected_counts[RejectReason::TimeJump.index()];
+        let jumps = self.rejected_counts[RejectReason::TimeJump.index()] + self.jumps_passed.0;
         let Some((first, last, n)) = self.parsed_t else {
             return String::new();
         };
@@ -450,14 +460,22 @@ impl<R: BufRead> ImuCsvReader<R> {
         } else {
             self.max_rejected_fraction
         };
-        let n_rejected = self.rows_rejected();
+        // The rows passed on after a time jump count: the estimator refuses them.
+        let n_rejected = self.rows_rejected() + self.jumps_passed.0;
         if n_rejected as f64 > max_fraction * self.total as f64 {
+            let first = self
+                .rejected
+                .iter()
+                .chain(&self.jumps_passed.1)
+                .min_by_key(|r| r.line)
+                .cloned()
+                .expect("a rejected row or a row passed on after a jump");
             return Err(ImuCsvError::TooManyRejected {
                 path: path(),
                 rejected: n_rejected,
                 total: self.total,
                 max_rejected_fraction: self.max_rejected_fraction,
-                first: Box::new(self.rejected[0].clone()),
+                first: Box::new(first),
                 hint: self.time_unit_hint(n_rejected),
             });
         }
