@@ -196,13 +196,7 @@ fn propagating_into_a_spare_equals_propagating_in_place() {
 #[test]
 fn block_propagation_equals_dense_formula_with_every_extension() {
     for ext in extension_sets() {
-        let mut f = filter(
-            from_euler_zyx(0.2, -0.3, 1.0),
-            Vector3::zeros(),
-            0.01,
-            0.01,
-            ext,
-        );
+        let mut f = tilted(Vector3::zeros(), ext);
         for _ in 0..3 {
             f.propagate(
                 &Vector3::new(1.0, -2.0, 0.5),
@@ -267,13 +261,7 @@ fn the_fast_propagation_and_the_zupt_keep_the_covariance_exactly_symmetric() {
     // one triangle and mirrors it: P is symmetric to the bit after every step and update, so
     // that no asymmetry builds up over a long run.
     for ext in &extension_sets()[..2] {
-        let mut f = filter(
-            from_euler_zyx(0.2, -0.3, 1.0),
-            Vector3::new(0.01, -0.02, 0.005),
-            0.01,
-            0.01,
-            *ext,
-        );
+        let mut f = tilted(Vector3::new(0.01, -0.02, 0.005), *ext);
         for k in 0..200 {
             let t = f64::from(k) * 0.01;
             f.propagate(
@@ -293,6 +281,18 @@ fn the_fast_propagation_and_the_zupt_keep_the_covariance_exactly_symmetric() {
     }
 }
 
+/// A filter at a tilted attitude and an arbitrary heading (roll 0.2, pitch −0.3, yaw 1 rad),
+/// with the given bias and extensions.
+fn tilted(gyro_bias_rad_s: Vector3<f64>, ext: Extensions) -> Eskf {
+    filter(
+        from_euler_zyx(0.2, -0.3, 1.0),
+        gyro_bias_rad_s,
+        0.01,
+        0.01,
+        ext,
+    )
+}
+
 /// The stance update's H: it selects the velocity of an `n`-state filter.
 fn velocity_h(n: usize) -> nalgebra::DMatrix<f64> {
     nalgebra::DMatrix::from_fn(3, n, |i, j| f64::from(u8::from(j == V0 + i)))
@@ -300,13 +300,7 @@ fn velocity_h(n: usize) -> nalgebra::DMatrix<f64> {
 
 #[test]
 fn update_matches_the_textbook_kalman_formulas() {
-    let mut f = filter(
-        from_euler_zyx(0.2, -0.3, 1.0),
-        Vector3::zeros(),
-        0.01,
-        0.01,
-        all_ext(),
-    );
+    let mut f = tilted(Vector3::zeros(), all_ext());
     for _ in 0..5 {
         f.propagate(
             &Vector3::new(1.0, -2.0, 0.5),
@@ -345,13 +339,7 @@ fn update_matches_the_textbook_kalman_formulas() {
 
 #[test]
 fn a_stance_update_leaves_a_wide_yaw_alone_in_the_schmidt_joseph_form() {
-    let mut f = filter(
-        from_euler_zyx(0.2, -0.3, 1.0),
-        Vector3::zeros(),
-        0.01,
-        0.01,
-        all_ext(),
-    );
+    let mut f = tilted(Vector3::zeros(), all_ext());
     f.noise.stance_yaw_max_sd_rad = 5f64.to_radians();
     // A gap widens the yaw to 10°; a horizontal force then ties it to the velocity.
     f.widen_after_gap(600.0, 0.0);
