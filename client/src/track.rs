@@ -17,6 +17,45 @@ pub struct Stride {
     pub nav: NavSample,
     /// Horizontal distance from the previous stride of the stream, m (0 for the first).
     pub step_m: f64,
+    /// The daemon sent this stance again: the sample that began it carried a glitched stamp
+    /// and was dropped after the fact, and this stride replaces the previous one (the same
+    /// `stance`, a later `imu_seq`); it is not counted again.
+    pub replaces_previous: bool,
+}
+
+/// The strides of one stream so far: their count, the path over them, and the last two (a
+/// stance sent again replaces the last).
+#[derive(Debug, Clone, Copy, Default)]
+struct Strides {
+    count: u64,
+    path_m: f64,
+    last: Option<NavSample>,
+    before_last: Option<NavSample>,
+    last_step_m: f64,
+}
+
+impl Strides {
+    fn add(&mut self, n: NavSample) -> Stride {
+        let again = self.last.is_some_and(|q| q.stance == n.stance);
+        if again {
+            self.path_m -= self.last_step_m;
+            self.last = self.before_last;
+        } else {
+            self.count += 1;
+        }
+        let step_m = self
+            .last
+            .map_or(0.0, |q| (n.p_m[0] - q.p_m[0]).hypot(n.p_m[1] - q.p_m[1]));
+        self.path_m += step_m;
+        self.before_last = self.last;
+        self.last = Some(n);
+        self.last_step_m = step_m;
+        Stride {
+            nav: n,
+            step_m,
+            replaces_previous: again,
+        }
+    }
 }
 
 /// Why following a stream stopped.
@@ -37,7 +76,7 @@ pub enum TrackStop {
 pub struct Track {
     /// Why it stopped.
     pub stopped: TrackStop,
-    /// Strides received.
+    /// Strides received (a stance sent again counted once).
     pub strides: u64,
     /// The last stride, if any.
     pub last: Option<NavSample>,
@@ -82,6 +121,7 @@ impl Tracker {
             end_stances: None,
             missed: 0,
         };
+        let mut strides = Strides::default();
         let mut last_rx = Instant::now();
         t.stopped = loop {
             if abort.load(Ordering::Relaxed) {
@@ -103,15 +143,56 @@ impl Tracker {
                 t.end_stances = Some(n.stance);
                 break TrackStop::EndOfStream;
             }
-            let step_m = t
-                .last
-                .map_or(0.0, |q| (n.p_m[0] - q.p_m[0]).hypot(n.p_m[1] - q.p_m[1]));
-            t.path_m += step_m;
-            t.strides += 1;
-            t.last = Some(n);
-            on_stride(&Stride { nav: n, step_m });
+            let stride = strides.add(n);
+            (t.strides, t.path_m, t.last) = (strides.count, strides.path_m, strides.last);
+            on_stride(&stride);
         };
         t.missed = self.nav.missed();
         Ok(t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn nav(stance: u64, x_m: f64, imu_seq: u64) -> NavSample {
+        NavSample {
+            stance,
+            p_m: [x_m, 0.0, 0.0],
+            imu_seq,
+            ..NavSample::default()
+        }
+    }
+
+    #[test]
+    fn a_stance_sent_again_replaces_the_last_stride() {
+        let mut s = Strides::default();
+        let got: Vec<(f64, bool)> = [
+            nav(1, 0.0, 10),
+            nav(2, 1.0, 20),
+            nav(2, 1.2, 21),
+            nav(3, 2.0, 30),
+        ]
+        .into_iter()
+        .map(|n| {
+            let stride = s.add(n);
+            (stride.step_m, stride.replaces_previous)
+        })
+        .collect();
+        // The stance 2 sent again (its first sample's stamp was a glitch) is measured from
+        // stance 1, not from the stance it replaces, and not counted twice.
+        let steps: Vec<f64> = got.iter().map(|g| g.0).collect();
+        assert!(
+            (steps[2] - 1.2).abs() < 1e-12 && (steps[3] - 0.8).abs() < 1e-12,
+            "{steps:?}"
+        );
+        assert_eq!(
+            got.iter().map(|g| g.1).collect::<Vec<_>>(),
+            [false, false, true, false]
+        );
+        assert_eq!(s.count, 3);
+        assert!((s.path_m - 2.0).abs() < 1e-12, "{}", s.path_m);
+        assert_eq!(s.last.map(|n| n.imu_seq), Some(30));
     }
 }

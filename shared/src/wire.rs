@@ -223,7 +223,8 @@ pub struct AttitudeSample {
 /// Position and velocity at a footfall, daemon → clients (`corridor/v3/nav`): one per stance
 /// (first sample of the stance), after alignment. A sample whose stamp turns out to be a glitch
 /// is dropped after its nav sample went out; its stance's real first sample then sends one
-/// again, with the same `stance` and a later `imu_seq`.
+/// again, with the same `stance` and a later `imu_seq` (`corridor_client`'s tracker takes it
+/// for the stride it replaces).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
 #[type_name("corridor_v3_NavSample")]
 #[repr(C)]

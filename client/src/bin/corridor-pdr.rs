@@ -47,14 +47,19 @@ fn run() -> Result<()> {
         let t = tracker.run(Duration::from_millis(500), None, &never, |s| {
             let (n, p) = (s.nav, s.nav.p_m);
             println!(
-                "{:>6} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>8.1} {:>9.3}",
+                "{:>6} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>8.1} {:>9.3}{}",
                 n.stance,
                 n.t_s,
                 p[0],
                 p[1],
                 p[2],
                 n.yaw_rad.to_degrees(),
-                s.step_m
+                s.step_m,
+                if s.replaces_previous {
+                    "  (again: replaces the line above, whose first sample had a glitched stamp)"
+                } else {
+                    ""
+                }
             );
         })?;
         if t.stopped != TrackStop::EndOfStream {
