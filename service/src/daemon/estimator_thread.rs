@@ -51,10 +51,6 @@ struct EstState<'a> {
     last_imu_seq: u64,
     last_bias_t_s: f64,
     last_phase: Phase,
-    last_stances: u64,
-    /// `last_stances` before the last sample: a glitched sample dropped after the fact takes
-    /// the stance it may have begun with it, so that the real one is published again.
-    last_stances_before: u64,
     last_nis: f64,
     streams_finished: u64,
     /// The next sample comes from a new producer (see [`Msg::NewProducer`]).
@@ -109,8 +105,6 @@ impl<'a> EstState<'a> {
             last_imu_seq: 0,
             last_bias_t_s: f64::NEG_INFINITY,
             last_phase: Phase::Aligning,
-            last_stances: 0,
-            last_stances_before: 0,
             last_nis: f64::NAN,
             streams_finished: 0,
             producer_changed: false,
@@ -293,13 +287,6 @@ impl<'a> EstState<'a> {
             // published for it stays published.
             self.last_bias_t_s = f64::NEG_INFINITY;
         }
-        if e.glitch_t_s.is_some() {
-            // The dropped sample's nav sample, if it began a stance, stays published; the stance
-            // it counted went with it, and its real footfall is published again (the same stance
-            // number, the later `imu_seq`).
-            self.last_stances = self.last_stances_before;
-        }
-        self.last_stances_before = self.last_stances;
         self.last = e;
         self.last_imu_seq = s.seq;
         let ok = out
@@ -325,14 +312,15 @@ impl<'a> EstState<'a> {
             let ok = out.bias.publish(|v, q| v.seq = q, bias_of(&e, s.seq));
             self.count(ok);
         }
-        let stances = self.est.counters().stances;
-        if stances > self.last_stances {
-            self.last_stances = stances;
+        // A glitched sample dropped after the fact took the stance it counted with it (its nav
+        // sample stays published): the real footfall counts it again, and is published with the
+        // same stance number and the later `imu_seq`.
+        if e.stance_counted {
             let nav = NavSample {
                 seq: 0,
                 t_s: e.t_s,
                 imu_seq: s.seq,
-                stance: stances,
+                stance: self.est.counters().stances,
                 p_m: e.p_m,
                 v_m_s: e.v_m_s,
                 yaw_rad: e.yaw_rad,
@@ -358,7 +346,7 @@ impl<'a> EstState<'a> {
         let nav = NavSample {
             t_s: self.last.t_s,
             imu_seq: s.seq,
-            stance: self.last_stances,
+            stance: self.est.counters().stances,
             p_m: self.last.p_m,
             v_m_s: self.last.v_m_s,
             yaw_rad: self.last.yaw_rad,
@@ -395,8 +383,6 @@ impl<'a> EstState<'a> {
         self.last = Estimate::default();
         self.last_bias_t_s = f64::NEG_INFINITY;
         self.last_phase = Phase::Aligning;
-        self.last_stances = 0;
-        self.last_stances_before = 0;
         self.streams_finished += 1;
     }
 

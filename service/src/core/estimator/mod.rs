@@ -394,6 +394,7 @@ impl Estimator {
         out.t_s = s.t_s;
         out.stance = decision.stance;
         out.stance_began = p.stance_edge == StanceEdge::Began;
+        out.stance_counted = false;
         out.clipped = clipped;
         out.health_fault = None;
         out.gap_s = None;

@@ -34,6 +34,7 @@ impl Pipeline {
             self.resumed_look = false;
             self.stance_f_sum = (Vector3::zeros(), 0);
             self.counters.stances += 1;
+            self.out.stance_counted = true;
         } else if self.stance_edge == StanceEdge::Resumed {
             // The heading is observed again once the foot has settled after the pause (heel
             // strike, pause, foot flat): observing only in the first part was measured worse

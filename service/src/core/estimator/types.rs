@@ -273,6 +273,10 @@ pub struct Estimate {
     /// A new stance (footfall) begins on this sample; the stance flags until the next one belong
     /// to it (a short pause inside it does not split it: `detector.merge_gap_s`).
     pub stance_began: bool,
+    /// The running filter counted a stance on this sample ([`Counters::stances`] rose): the
+    /// first running sample of a stance, which may have begun while aligning. The daemon's nav
+    /// sample goes out here.
+    pub stance_counted: bool,
     /// An axis of this sample is at the rail of its range (probably clipped).
     pub clipped: bool,
     /// Length of the gap before this sample, s, when the step was longer than
@@ -331,6 +335,7 @@ impl Default for Estimate {
             bias_unabsorbed: f64::NAN,
             stance: false,
             stance_began: false,
+            stance_counted: false,
             clipped: false,
             health_fault: None,
             replaced_first_t_s: None,
