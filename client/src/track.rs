@@ -31,29 +31,30 @@ struct Strides {
     path_m: f64,
     last: Option<NavSample>,
     before_last: Option<NavSample>,
-    last_step_m: f64,
+}
+
+/// Horizontal distance from `from` to `to`, m (0 from nothing).
+fn step_m(from: Option<NavSample>, to: &NavSample) -> f64 {
+    from.map_or(0.0, |q| (to.p_m[0] - q.p_m[0]).hypot(to.p_m[1] - q.p_m[1]))
 }
 
 impl Strides {
     fn add(&mut self, n: NavSample) -> Stride {
-        let again = self.last.is_some_and(|q| q.stance == n.stance);
-        if again {
-            self.path_m -= self.last_step_m;
+        let replaced = self.last.filter(|q| q.stance == n.stance);
+        if let Some(r) = replaced {
+            self.path_m -= step_m(self.before_last, &r);
             self.last = self.before_last;
         } else {
             self.count += 1;
         }
-        let step_m = self
-            .last
-            .map_or(0.0, |q| (n.p_m[0] - q.p_m[0]).hypot(n.p_m[1] - q.p_m[1]));
+        let step_m = step_m(self.last, &n);
         self.path_m += step_m;
         self.before_last = self.last;
         self.last = Some(n);
-        self.last_step_m = step_m;
         Stride {
             nav: n,
             step_m,
-            replaces_previous: again,
+            replaces_previous: replaced.is_some(),
         }
     }
 }
