@@ -224,6 +224,10 @@ pub enum TimeVerdict {
     NotIncreasing,
     /// The time jumps forward by more than `max_dt_s`: refused until a next sample confirms it.
     Jump,
+    /// The time follows the previous (refused) jump, and a sample had followed the time base
+    /// before it: the jump was a real gap. Accept this one as the new time base (the jumped
+    /// sample stays refused; a caller with look-ahead may pass it on, as the CSV reader does).
+    NewBase,
     /// The time follows the previous (refused) one, and both contradict the first time base,
     /// which no sample has followed yet: the first time was the outlier. Accept this one as
     /// the new time base; what was taken with the first one has to be dropped by the caller.
@@ -317,7 +321,7 @@ impl TimeGuard {
             && follows(c)
         {
             return if self.confirmed {
-                TimeVerdict::Accept
+                TimeVerdict::NewBase
             } else {
                 TimeVerdict::Rebase
             };
@@ -354,11 +358,6 @@ impl TimeGuard {
     pub fn confirmed(&self) -> bool {
         self.confirmed
     }
-
-    /// Whether `t_s` follows `from_s` within the step bounds (no confirmation needed).
-    pub fn follows(&self, from_s: f64, t_s: f64) -> bool {
-        step_follows(t_s - from_s, self.min_dt_s, self.max_dt_s)
-    }
 }
 
 #[cfg(test)]
@@ -373,7 +372,10 @@ mod tests {
                 let v = g.check(t);
                 if matches!(
                     v,
-                    TimeVerdict::Accept | TimeVerdict::Rebase | TimeVerdict::Glitch
+                    TimeVerdict::Accept
+                        | TimeVerdict::NewBase
+                        | TimeVerdict::Rebase
+                        | TimeVerdict::Glitch
                 ) {
                     g.accept(t);
                 }
@@ -397,7 +399,7 @@ mod tests {
         use TimeVerdict::*;
         assert_eq!(
             run(&[0.0, 0.01, 10.0, 10.01, 10.02]),
-            [Accept, Accept, Jump, Accept, Accept]
+            [Accept, Accept, Jump, NewBase, Accept]
         );
         assert_eq!(
             run(&[0.0, 0.01, 0.01, 0.005]),
@@ -469,7 +471,7 @@ mod tests {
         // A time after a refused jump, or one replacing a bad first time, is not provisional.
         assert_eq!(
             run(&[0.0, 0.005, 10.0, 10.005, 0.01]),
-            [Accept, Accept, Jump, Accept, NotIncreasing]
+            [Accept, Accept, Jump, NewBase, NotIncreasing]
         );
         assert_eq!(
             run(&[-50.0, 0.0, 0.005, -49.99]),

@@ -120,7 +120,7 @@ impl Plausibility {
         let last_t_s = self.time.last_s();
         let (mut replaced_first_t_s, mut glitch_t_s) = (None, None);
         match self.time.check(s.t_s) {
-            TimeVerdict::Accept => {}
+            TimeVerdict::Accept | TimeVerdict::NewBase => {}
             TimeVerdict::Rebase => replaced_first_t_s = last_t_s,
             TimeVerdict::Glitch => glitch_t_s = last_t_s,
             TimeVerdict::NotIncreasing => {

@@ -302,20 +302,17 @@ impl<R: BufRead> ImuCsvReader<R> {
                 let (first, _, n) = self.parsed_t.unwrap_or((row.t_s, row.t_s, 0));
                 self.parsed_t = Some((first, row.t_s, n + 1));
             }
-            let was_confirmed = self.time.confirmed();
             // Ok: the row, with the row refused as a jump that it shows to be a real gap's far
             // side. Err: the rejection, with the row when it was refused as a jump.
             let verdict = match parsed {
                 Ok(row) => match self.time.check(row.t_s) {
-                    verdict @ (TimeVerdict::Accept | TimeVerdict::Rebase | TimeVerdict::Glitch) => {
-                        let far_side = verdict == TimeVerdict::Accept
-                            && was_confirmed
-                            && self
-                                .jumped
-                                .as_ref()
-                                .is_some_and(|(j, _)| self.time.follows(j.t_s, row.t_s));
+                    verdict @ (TimeVerdict::Accept
+                    | TimeVerdict::NewBase
+                    | TimeVerdict::Rebase
+                    | TimeVerdict::Glitch) => {
+                        // The held jump was a real gap's far side: this row follows it.
                         let jumped = match self.jumped.take() {
-                            Some((j, rejected)) if far_side => {
+                            Some((j, rejected)) if verdict == TimeVerdict::NewBase => {
                                 self.jumps_passed.0 += 1;
                                 self.jumps_passed.1.get_or_insert(rejected);
                                 Some(j)
@@ -327,7 +324,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                             None => None,
                         };
                         self.time.accept(row.t_s);
-                        if verdict != TimeVerdict::Accept
+                        if matches!(verdict, TimeVerdict::Rebase | TimeVerdict::Glitch)
                             && let Some(first) = self.held.take()
                         {
                             self.reject(RejectedRow {
