@@ -202,7 +202,12 @@ fn a_longer_gap_in_a_swing_is_filled_from_the_stride_before() {
             at(tr, after_s).angle_to(&at(&clean, after_s)).to_degrees()
         };
         let (filled, c) = attitudes(&cut, &cfg);
-        assert_eq!((c.gaps, c.gaps_bridged), (1, 0), "k {k}");
+        // A loss, not the clock stepping forward (`a_clock_step_forward_is_not_taken_for_a_loss`).
+        assert_eq!(
+            (c.gaps, c.gaps_bridged, c.gaps_clock_steps),
+            (1, 0, 0),
+            "k {k}"
+        );
         filled_deg.push((off(&filled), c.gaps_filled));
         let (segmented, c) = attitudes(&cut, &segment_cfg);
         assert_eq!((c.gaps, c.gaps_bridged, c.gaps_filled), (1, 0, 0));
@@ -346,4 +351,74 @@ fn a_stamp_glitched_forward_is_dropped_and_the_walk_goes_on_as_without_it() {
         assert_eq!(g.gyro_bias_rad_s, w.gyro_bias_rad_s, "k {k}");
         assert_eq!(gc.heading_used, wc.heading_used, "k {k}");
     }
+}
+
+#[test]
+fn a_clock_step_forward_is_not_taken_for_a_loss() {
+    // The clock steps 0.3 s forward with no sample lost, at the 16 places where
+    // `a_longer_gap_in_a_swing_is_filled_from_the_stride_before` cuts 0.3 s out (none of those
+    // cuts is taken for a clock step: asserted there). Before, the step was filled like a loss
+    // with 0.3 s of the stride before's motion that never happened. Now, where the rates run on
+    // across it and the stride before says 0.3 s would have changed them, one sample step is
+    // integrated and the walk goes on as without the step.
+    let log = read_imu_csv(&data().join("imu.csv"), &ImuCsvOptions::default()).unwrap();
+    let cfg = Config::from_file(&data().join("../../../configs/gdins.toml")).unwrap();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let run = |log: &ImuLog| {
+        let mut out: Vec<(UnitQuaternion<f64>, [f64; 3])> = Vec::new();
+        let mut said = Vec::new();
+        let c = run_log(log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+            let [w, i, j, k] = e.nav_from_body;
+            out.push((
+                UnitQuaternion::from_quaternion(Quaternion::new(w, i, j, k)),
+                e.p_m,
+            ));
+            if e.gap_crossing == Some(GapCrossing::ClockStep) {
+                said.extend(e.notices().map(|n| n.to_string()));
+            }
+        })
+        .counters;
+        (out, c, said)
+    };
+    let (clean, _, _) = run(&log);
+    let (mut taken, mut off_deg) = (0, Vec::new());
+    for k in (0..8)
+        .map(|i| 3000 + 100 * i)
+        .chain((0..8).map(|i| 9000 + 100 * i))
+    {
+        let mut stepped = log.clone();
+        for r in &mut stepped.rows[k..] {
+            r.t_s += 0.3;
+        }
+        let (got, c, said) = run(&stepped);
+        assert_eq!((c.gaps, c.samples), (1, log.rows.len() as u64), "k {k}");
+        // Sample by sample (nothing lost), the attitude right after the step and the last
+        // position.
+        let moved = |i: usize| {
+            let d = got[i].1.iter().zip(&clean[i].1);
+            d.map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt()
+        };
+        let deg = got[k].0.angle_to(&clean[k].0).to_degrees();
+        let last = got.len() - 1;
+        if c.gaps_clock_steps == 1 {
+            taken += 1;
+            assert_eq!(said.len(), 1, "k {k}: {said:?}");
+            assert!(
+                said[0].ends_with("a clock step, integrated as one sample step"),
+                "{said:?}"
+            );
+            // Not bit for bit: the stamps after the step, less the step, differ in their last
+            // bits from the clean ones (before: degrees and metres).
+            println!("k {k}: {deg:.2e}°, {:.2e} m", moved(last));
+            assert!(
+                deg < 1e-2 && moved(last) < 1e-3,
+                "k {k}: {deg}°, {} m",
+                moved(last)
+            );
+        } else {
+            off_deg.push((k, deg, moved(last)));
+        }
+    }
+    println!("taken for a clock step at {taken} of 16 places; the others: {off_deg:?}");
+    assert!(taken >= 14, "{taken}: {off_deg:?}");
 }

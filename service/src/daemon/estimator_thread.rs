@@ -377,6 +377,7 @@ impl<'a> EstState<'a> {
         p.heading_reacquisitions += c.heading_reacquisitions;
         p.gaps += c.gaps;
         p.gaps_filled += c.gaps_filled;
+        p.gaps_clock_steps += c.gaps_clock_steps;
         p.stances += c.stances;
         p.heading_used += c.heading_used;
         self.est = self.new_estimator(cfg);
@@ -449,7 +450,7 @@ impl<'a> EstState<'a> {
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
              σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
-             health restores {} (footprints forgotten {}), velocity resets {}, headings taken as lost {}, time gaps {} (filled from the stride before {}), IMU head missing {}, missing at restart {}, \
+             health restores {} (footprints forgotten {}), velocity resets {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), IMU head missing {}, missing at restart {}, \
              lost in a killed daemon {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
@@ -474,6 +475,7 @@ impl<'a> EstState<'a> {
             self.previous.heading_reacquisitions + self.est.counters().heading_reacquisitions,
             self.previous.gaps + self.est.counters().gaps,
             self.previous.gaps_filled + self.est.counters().gaps_filled,
+            self.previous.gaps_clock_steps + self.est.counters().gaps_clock_steps,
             rx.head_missing.load(Ordering::Relaxed),
             rx.missing_at_restart.load(Ordering::Relaxed),
             rx.lost_in_daemon.load(Ordering::Relaxed),

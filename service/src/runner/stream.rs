@@ -40,6 +40,8 @@ pub struct Summary {
     pub gaps_bridged: u64,
     /// Of them, filled from the stride before (`estimator.max_fill_s`).
     pub gaps_filled: u64,
+    /// Of them, taken as the clock stepping forward with nothing lost.
+    pub gaps_clock_steps: u64,
     /// Heading observations used.
     pub heading_observations_used: u64,
     /// Heading observations rejected, by reason.
@@ -409,6 +411,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         gaps: c.gaps,
         gaps_bridged: c.gaps_bridged,
         gaps_filled: c.gaps_filled,
+        gaps_clock_steps: c.gaps_clock_steps,
         heading_observations_used: c.heading_used,
         heading_observations_rejected: BTreeMap::from([
             ("not_straight", c.heading_not_straight),

@@ -1,7 +1,9 @@
 //! Gaps in the data: a step longer than `estimator.max_dt_s` is bridged by one step when it is
 //! short (a few lost samples), filled with the same phase of the stride before when it is
 //! longer but within half a stride (`estimator.max_fill_s`) and the rates around it match that
-//! stride's, else it starts a new segment.
+//! stride's, else it starts a new segment. A step in that fill range across which the rates run
+//! on as if no time had passed, where the stride before says time passing would have changed
+//! them, is the clock stepping forward with nothing lost: one sample step is integrated.
 
 use super::stride_memory::Remembered;
 use super::*;
@@ -19,6 +21,21 @@ const FILL_MAX_MISMATCH_RAD_S: f64 = 2.5;
 /// the attitude and velocity variances grow by its square times theirs. The same measurement:
 /// the remembered stride's rotation is off by a median 0.20 of the real one.
 const FILL_RELATIVE_SD: f64 = 0.2;
+
+/// The first rate after a clock step lies on the straight continuation of the last two before
+/// it within this many times the larger of the last step's change of the rate and the RMS
+/// second difference over the last [`CONTINUATION_SAMPLES`] ...
+const CONTINUATION_TOLERANCE: f64 = 1.5;
+/// ... or within this, rad/s (the rate's own noise on a still foot).
+const CONTINUATION_FLOOR_RAD_S: f64 = 0.05;
+/// Samples before a gap whose second differences widen the continuation's tolerance.
+const CONTINUATION_SAMPLES: usize = 30;
+/// And the rate after the step must lie so close to that continuation that a real loss would
+/// have put it there with at most this probability: the rate at a loss's far side taken as the
+/// stride before's rate there, with its RMS mismatch on the samples before the gap as an
+/// isotropic spread. Where the stride before expects there what the continuation does (a foot
+/// still on both sides), continuity says nothing and the stamps are believed.
+const STEP_LOSS_PROBABILITY: f64 = 1e-3;
 
 /// What [`Pipeline::cross_gap`] did with the step before the current sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -41,6 +58,86 @@ impl Pipeline {
             gyro_rad_s: *w,
             accel_m_s2: *f,
         });
+    }
+
+    /// Whether a step from `t_prev_s` (the newest remembered sample) to a sample at `t_after_s`
+    /// with rate `gyro_after`, longer than a bridge and within a fill, is the sample clock
+    /// stepping forward with no sample lost. Two things must hold: the rate after it lies on
+    /// the straight continuation of the last two before it (within [`CONTINUATION_TOLERANCE`]
+    /// of how fast the rate was changing), and a real loss would have put it that close to the
+    /// continuation with a probability of at most [`STEP_LOSS_PROBABILITY`], judged by the
+    /// stride before (matched as for a fill): what it expects at the gap's far side, and how
+    /// well it matched the samples before the gap. Returns the time the clock stepped by beyond
+    /// one sample step (what the estimator then takes off every later stamp).
+    ///
+    /// Only in this range. Below it the bridge has no stride to judge by, and the continuation
+    /// alone is no test: it passed 16–21 % of real losses of 0.055–0.15 s cut at every 7th
+    /// sample of the 16 walks, and on 1–1.5 % of them the lost samples had turned the foot by
+    /// more than 0.3 rad (at a rate's peak the rate runs on across a short loss too;
+    /// `docs/experiments/rate-continuation.py`). Beyond it a new segment integrates nothing
+    /// over the step, which is what a clock step needs.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn clock_step(
+        &self,
+        t_prev_s: f64,
+        t_after_s: f64,
+        gyro_after: &Vector3<f64>,
+    ) -> Option<f64> {
+        let dt = t_after_s - t_prev_s;
+        if dt <= self.cfg.max_bridge_s || dt > self.cfg.max_fill_s {
+            return None;
+        }
+        let n = self.memory.len();
+        if n < CONTINUATION_SAMPLES + 2 {
+            return None;
+        }
+        let newest = *self.memory.get(n - 1);
+        let before = *self.memory.get(n - 2);
+        let step_s = newest.t_s - before.t_s;
+        if newest.t_s != t_prev_s || !(step_s > 0.0 && step_s <= self.cfg.max_dt_s.get()) {
+            return None;
+        }
+        let change = newest.gyro_rad_s - before.gyro_rad_s;
+        let continued = newest.gyro_rad_s + change;
+        let second_differences: f64 = (n - CONTINUATION_SAMPLES..n)
+            .map(|i| {
+                let (a, b, c) = (
+                    self.memory.get(i - 2),
+                    self.memory.get(i - 1),
+                    self.memory.get(i),
+                );
+                (c.gyro_rad_s - b.gyro_rad_s * 2.0 + a.gyro_rad_s).norm_squared()
+            })
+            .sum();
+        let spread = change
+            .norm()
+            .max((second_differences / CONTINUATION_SAMPLES as f64).sqrt());
+        let tolerance = (CONTINUATION_TOLERANCE * spread).max(CONTINUATION_FLOOR_RAD_S);
+        let run_on = (gyro_after - continued).norm();
+        let lag = self
+            .memory
+            .stride_lag(t_after_s, gyro_after, self.cfg.max_dt_s.get());
+        let expected = lag.and_then(|l| self.memory.at(t_after_s - l.lag_s).map(|r| r.gyro_rad_s));
+        let (Some(lag), Some(expected)) = (lag, expected) else {
+            return None;
+        };
+        // The stride before's mismatch on the samples before the gap alone (the lag's is over
+        // those and the one after, which a clock step puts off by what is tested here).
+        let k = lag.match_samples as f64;
+        let off = (gyro_after - expected).norm_squared();
+        let mismatch_sq = ((lag.mismatch_rad_s.powi(2) * (k + 1.0) - off) / k)
+            .max(CONTINUATION_FLOOR_RAD_S * CONTINUATION_FLOOR_RAD_S);
+        // The probability that a real loss's far-side rate, N(expected, mismatch²/3 per axis),
+        // lies within `run_on` (at least the floor) of the continuation, bounded above by the
+        // ball's volume times the largest density inside it.
+        let radius = run_on.max(CONTINUATION_FLOOR_RAD_S);
+        let var = mismatch_sq / 3.0;
+        let nearest = ((expected - continued).norm() - radius).max(0.0);
+        let ln_p = (4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)).ln()
+            - 1.5 * (std::f64::consts::TAU * var).ln()
+            - nearest * nearest / (2.0 * var);
+        (run_on <= tolerance && ln_p <= STEP_LOSS_PROBABILITY.ln()).then_some(dt - step_s)
     }
 
     /// Judges the step from the previous sample (time `t_prev`, rate `w_prev`, force `f.0`) to

@@ -52,6 +52,8 @@ pub(super) struct StrideLag {
     /// RMS rate difference between the samples around the gap and their remembered
     /// counterparts, rad/s.
     pub mismatch_rad_s: f64,
+    /// The samples before the gap it was matched on (the one after it besides).
+    pub match_samples: usize,
 }
 
 impl Default for StrideMemory {
@@ -190,6 +192,7 @@ impl StrideMemory {
             from,
             to,
             mismatch_rad_s: cost.sqrt(),
+            match_samples: MATCH_SAMPLES,
         })
     }
 
@@ -209,7 +212,7 @@ impl StrideMemory {
     }
 
     /// The remembered sample nearest to `t_s` (binary search on the times).
-    fn at(&self, t_s: f64) -> Option<&Remembered> {
+    pub fn at(&self, t_s: f64) -> Option<&Remembered> {
         if self.len == 0 {
             return None;
         }

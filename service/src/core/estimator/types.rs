@@ -180,6 +180,9 @@ pub struct Counters {
     pub gaps_bridged: u64,
     /// Of the gaps, those filled from the stride before (`estimator.max_fill_s`).
     pub gaps_filled: u64,
+    /// Of the gaps, those taken as the clock stepping forward with nothing lost (the rates
+    /// ran on across it): integrated as one sample step.
+    pub gaps_clock_steps: u64,
     /// Stances since alignment.
     pub stances: u64,
     /// ZUPT updates.
@@ -377,6 +380,10 @@ pub enum GapCrossing {
     Filled,
     /// Nothing integrated over it: a new segment starts.
     NewSegment,
+    /// The rates ran on across it where the stride before says time passing would have
+    /// changed them: the clock stepped forward with no sample lost, and one sample step is
+    /// integrated (up to `estimator.max_fill_s`).
+    ClockStep,
 }
 
 /// Something an estimate reports that a log should say, once per event (see
@@ -413,6 +420,8 @@ impl std::fmt::Display for Notice {
                     GapCrossing::Bridged => "bridged by one step",
                     GapCrossing::Filled => "filled with the same phase of the stride before",
                     GapCrossing::NewSegment => "a new segment starts here",
+                    GapCrossing::ClockStep =>
+                        "the rates run on across it: a clock step, integrated as one sample step",
                 }
             ),
             Notice::HealthFault(fault) => write!(
