@@ -14,7 +14,7 @@ often a clock step was taken (`gaps_clock_steps` in the summary; on a loss that 
 the median and worst change, and how many cases are worse by more than 0.1 % of path. Needs the
 release binary (`cargo build --release -p corridor-service --bin corridor`).
 """
-import csv, json, os, random, re, statistics, subprocess, sys, tempfile
+import csv, json, os, random, re, shutil, statistics, subprocess, sys, tempfile
 from concurrent.futures import ThreadPoolExecutor
 
 root = os.getcwd()
@@ -39,6 +39,10 @@ def run(imu, truth, sh, out):
         return s["eval"]["rms_error_pct_of_path"], s.get("gaps_clock_steps", 0), s["gaps_filled"]
     except (OSError, KeyError, TypeError, ValueError):
         return None, None, None
+    finally:
+        # Each run writes megabytes of estimates: 480 cases filled gigabytes.
+        if not out.endswith("base"):
+            shutil.rmtree(out, ignore_errors=True)
 
 
 def stamp(row, dt):
@@ -52,7 +56,7 @@ for n, (name, imu, truth, sh) in enumerate(recs):
     lines = open(imu).read().splitlines()
     header, rows = lines[0], lines[1:]
     tl = open(truth).read().splitlines()
-    out = os.path.join(tmp, f"base{n}")
+    out = os.path.join(tmp, f"{n}-base")
     base = run(imu, truth, sh, out)[0]
     ts = [float(r.split(",", 1)[0]) for r in rows]
     est = list(csv.DictReader(open(os.path.join(out, "estimates.csv"))))
@@ -85,6 +89,7 @@ for n, (name, imu, truth, sh) in enumerate(recs):
 with ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
     steps = list(pool.map(lambda c: run(*c[4]), cases))
     losses = list(pool.map(lambda c: run(*c[5]), cases))
+shutil.rmtree(tmp, ignore_errors=True)
 res = []
 for c, s, l in zip(cases, steps, losses):
     name, length, at, base = c[:4]

@@ -43,6 +43,13 @@ pub struct SampleClock {
     deviation: f64,
     jittery: bool,
     smoothed_s: f64,
+    /// The time the stamps stepped forward by with no sample lost, summed
+    /// ([`SampleClock::take_back`]): taken off every later stamp.
+    offset_s: f64,
+    /// Of that, what a stall may still pay back (jittery stamps): a driver that stamps on
+    /// receipt and stalls hands the held samples over in a burst, stamped almost together,
+    /// until the stamps are back on time.
+    stall_s: f64,
 }
 
 impl Default for SampleClock {
@@ -57,6 +64,8 @@ impl Default for SampleClock {
             deviation: 0.0,
             jittery: false,
             smoothed_s: 0.0,
+            offset_s: 0.0,
+            stall_s: 0.0,
         }
     }
 }
@@ -67,11 +76,14 @@ impl SampleClock {
     /// the previous time it returned.
     pub fn push(&mut self, t_s: f64) -> f64 {
         let Some(last) = self.last_stamp_s.replace(t_s) else {
+            let t_s = t_s - self.offset_s;
             self.smoothed_s = t_s;
             self.last_out_s = t_s;
             return t_s;
         };
         let dt = t_s - last;
+        // Stamps less what the clock stepped forward by (nothing, bit for bit, until it did).
+        let mut t_s = t_s - self.offset_s;
         // A gap (several periods without a sample) is no part of the clock's statistics: the
         // smoothed clock jumps to the stamp (missing samples keep their time), and a warm-up in
         // progress starts again from it. Before the stamps are judged, and once they are taken as
@@ -122,10 +134,36 @@ impl SampleClock {
                 }
             };
             let predicted = self.smoothed_s + ticks * self.period_s;
-            let error = t_s - predicted;
-            if error.abs() > self.gap_periods() * self.period_s {
-                // Far off (a burst after a stall, a gap): the phase jumps to the stamp, the
-                // period is not touched, and the returned time stays monotonic (below).
+            let mut error = t_s - predicted;
+            let far = self.gap_periods() * self.period_s;
+            // A stall taken back (`take_back`): the burst after it comes in behind the count by
+            // what it pays back. What lies within a period is the stamps' own jitter.
+            let paid = if self.stall_s > 0.0 {
+                (-error - self.period_s).clamp(0.0, self.stall_s)
+            } else {
+                0.0
+            };
+            if paid > 0.0 {
+                self.stall_s -= paid;
+                self.offset_s -= paid;
+                t_s += paid;
+                error += paid;
+            }
+            if paid > 0.0 || (self.jittery && error < -far) {
+                // Stamps behind the count: samples handed over late and together (a stall
+                // paying back, or one the estimator did not take back). An arrival time is never
+                // before the sample's own, so the count goes on, and a lag beyond the gap
+                // threshold is taken off the later stamps. Going back to them (the phase jumped
+                // to the stamp, the time kept monotonic at half a period a step) ran the clock at
+                // half speed until they caught up: 100 samples after a 0.25 s stall.
+                if error < -far {
+                    self.offset_s += error;
+                    t_s -= error;
+                }
+                self.smoothed_s = predicted;
+            } else if error.abs() > far {
+                // Far ahead (a gap), or off on a device clock: the phase jumps to the stamp,
+                // the period is not touched, and the returned time stays monotonic (below).
                 self.smoothed_s = t_s;
             } else {
                 self.smoothed_s = predicted + PHASE_GAIN * error;
@@ -162,6 +200,24 @@ impl SampleClock {
         } else {
             RESYNC_PERIODS
         }
+    }
+
+    /// The last stamp came after the clock stepped forward by `step_s` with no sample lost (the
+    /// estimator's judgement, from the rates): the time returned for it goes back by the step,
+    /// and every later stamp is taken less the step. On jittery stamps the step may be a stall
+    /// that the burst after it pays back (see `push`).
+    pub fn take_back(&mut self, step_s: f64) {
+        self.offset_s += step_s;
+        if self.jittery {
+            self.stall_s += step_s;
+        }
+        self.smoothed_s -= step_s;
+        self.last_out_s -= step_s;
+    }
+
+    /// What every stamp is taken less: the clock steps taken back, less what stalls paid back.
+    pub fn offset_s(&self) -> f64 {
+        self.offset_s
     }
 
     /// Whether the stamps are being smoothed.
@@ -332,5 +388,51 @@ mod tests {
             }
         }
         assert_smoothed(&c, raw_err, smooth_err, n, 0.25);
+    }
+
+    /// A stall of `stall_s` at sample 3000 of host stamps (the samples held arrive together
+    /// when it ends); `take_back` says whether the estimator took the stall's first sample for
+    /// a clock step (it judges that from the rates). Returns the output's steps from the stall's
+    /// first sample on, and the output less the sensor's own time at the end.
+    fn through_a_stall(stall_s: f64, take_back: bool) -> (Vec<f64>, f64) {
+        let stamps = host_stamps(4000, &[], &[(3000, stall_s)]);
+        let mut c = SampleClock::default();
+        let (mut steps, mut prev) = (Vec::new(), 0.0);
+        for (k, &t) in stamps.iter().enumerate() {
+            let mut out = c.push(t);
+            if k == 3000 && take_back {
+                let step = out - prev - c.period_s();
+                c.take_back(step);
+                out -= step;
+            }
+            if k >= 3000 {
+                steps.push(out - prev);
+            }
+            prev = out;
+        }
+        (steps, prev - 3999.0 * 0.005)
+    }
+
+    #[test]
+    fn the_burst_after_a_stall_is_counted_at_the_period() {
+        for stall_s in [0.06, 0.15, 0.25] {
+            // Taken back: the clock goes on as if the stamps had never stalled.
+            let (steps, off) = through_a_stall(stall_s, true);
+            let worst = steps
+                .iter()
+                .map(|s| (s / 0.005 - 1.0).abs())
+                .fold(0.0, f64::max);
+            assert!(worst < 0.1, "{stall_s} s: a step {worst} of a period off");
+            // Ahead of the sensor's time by the stamps' mean delay (2 ms), no more.
+            assert!(off.abs() < 0.005, "{stall_s} s: {off} s off at the end");
+            // Not taken back (a gap as far as the estimator knows): the time jumps at the
+            // stall, and from there on the count goes on. Before, the clock went back to the
+            // burst's stamps and ran at half a period a step until they caught up (100 samples
+            // after a 0.25 s stall).
+            let (steps, _) = through_a_stall(stall_s, false);
+            assert!(steps[0] > stall_s * 0.8, "{stall_s} s: {}", steps[0]);
+            let slowest = steps[1..].iter().fold(f64::INFINITY, |m, &s| m.min(s));
+            assert!(slowest > 0.7 * 0.005, "{stall_s} s: a step of {slowest} s");
+        }
     }
 }

@@ -1,8 +1,8 @@
 //! Gaps in the data: a step longer than `estimator.max_dt_s` is bridged by one step when it is
 //! short (a few lost samples), filled with the same phase of the stride before when it is
 //! longer but within half a stride (`estimator.max_fill_s`) and the rates around it match that
-//! stride's, else it starts a new segment. A step in that fill range across which the rates run
-//! on as if no time had passed, where the stride before says time passing would have changed
+//! stride's, else it starts a new segment. A step up to that fill range across which the rates
+//! run on as if no time had passed, where the stride before says time passing would have changed
 //! them, is the clock stepping forward with nothing lost: one sample step is integrated.
 
 use super::stride_memory::Remembered;
@@ -61,21 +61,23 @@ impl Pipeline {
     }
 
     /// Whether a step from `t_prev_s` (the newest remembered sample) to a sample at `t_after_s`
-    /// with rate `gyro_after`, longer than a bridge and within a fill, is the sample clock
-    /// stepping forward with no sample lost. Two things must hold: the rate after it lies on
-    /// the straight continuation of the last two before it (within [`CONTINUATION_TOLERANCE`]
-    /// of how fast the rate was changing), and a real loss would have put it that close to the
+    /// with rate `gyro_after`, longer than `max_dt_s` and within a fill, is the sample clock
+    /// stepping forward with no sample lost (or, on host stamps, a driver's stall: the samples
+    /// held come late and together). Two things must hold: the rate after it lies on the
+    /// straight continuation of the last two before it (within [`CONTINUATION_TOLERANCE`] of
+    /// how fast the rate was changing), and a real loss would have put it that close to the
     /// continuation with a probability of at most [`STEP_LOSS_PROBABILITY`], judged by the
     /// stride before (matched as for a fill): what it expects at the gap's far side, and how
     /// well it matched the samples before the gap. Returns the time the clock stepped by beyond
-    /// one sample step (what the estimator then takes off every later stamp).
+    /// one sample step (what [`SampleClock::take_back`] then takes off every later stamp).
     ///
-    /// Only in this range. Below it the bridge has no stride to judge by, and the continuation
-    /// alone is no test: it passed 16–21 % of real losses of 0.055–0.15 s cut at every 7th
-    /// sample of the 16 walks, and on 1–1.5 % of them the lost samples had turned the foot by
-    /// more than 0.3 rad (at a rate's peak the rate runs on across a short loss too;
-    /// `docs/experiments/rate-continuation.py`). Beyond it a new segment integrates nothing
-    /// over the step, which is what a clock step needs.
+    /// The continuation alone is no test: it passed 4–11 % of real losses of 0.06–0.4 s cut at
+    /// every 7th sample of the 16 walks, and on 7–20 % of those the lost samples had turned
+    /// the foot by more than 0.3 rad (at a rate's peak, or from a still foot to a still foot,
+    /// the rate runs on across a loss too; `docs/experiments/rate-continuation.py`). With the
+    /// stride before, no real loss of 0.06–0.3 s and 1 of 80 of 0.4 s (on a still foot) was
+    /// taken for a step at `docs/experiments/clock-steps.py`'s places. Beyond a fill a new
+    /// segment integrates nothing over the step, which is what a clock step needs.
     #[cold]
     #[inline(never)]
     pub(super) fn clock_step(
@@ -85,7 +87,7 @@ impl Pipeline {
         gyro_after: &Vector3<f64>,
     ) -> Option<f64> {
         let dt = t_after_s - t_prev_s;
-        if dt <= self.cfg.max_bridge_s || dt > self.cfg.max_fill_s {
+        if dt <= self.cfg.max_dt_s.get() || dt > self.cfg.max_fill_s {
             return None;
         }
         let n = self.memory.len();

@@ -263,7 +263,8 @@ impl Pipeline {
             return;
         }
         self.counters.late_footfalls += 1;
-        self.out.late_footfall_t_s = Some(t_quiet_s);
+        // An estimate's times are stamps: the sample clock's plus what it took back.
+        self.out.late_footfall_t_s = Some(t_quiet_s + self.clock.offset_s());
         self.late.footfall(t_quiet_s);
         // A short dip is a footfall as a stance is; an overdue one is not looked for twice in a
         // row.

@@ -184,9 +184,6 @@ struct Pipeline {
     /// The previous navigated sample was a stance sample.
     was_stance: bool,
     clock: SampleClock,
-    /// The time the sample clock stepped forward by with no sample lost, summed (taken off
-    /// every later stamp's clock time: see `gaps.rs`).
-    clock_offset_s: f64,
     /// The last strides' samples and footfalls, to fill a gap in a swing (`stride_memory.rs`).
     memory: stride_memory::StrideMemory,
     /// Short dips of the detector's statistic and stride cycles without a stance that may be a
@@ -253,7 +250,6 @@ impl Estimator {
             was_stance: false,
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
-            clock_offset_s: 0.0,
             memory: stride_memory::StrideMemory::default(),
             late: late_footfall::LateFootfall::new(&cfg.detector),
             // Without the motion test: a later rest begins with a landing, which the test,
@@ -385,22 +381,22 @@ impl Estimator {
         };
         // Integration runs on the sample clock: the stamps, or while they jitter (host arrival
         // times) a smoothed clock.
-        let mut t_clock = p.clock.push(s.t_s) - p.clock_offset_s;
+        let mut t_clock = p.clock.push(s.t_s);
         p.counters.jittery_clock_samples += u64::from(p.clock.jittery());
         // A clock that stepped forward with nothing lost: the time after the step goes on from
         // one sample step after the time before it.
         let clock_step = match (&self.stage, prev) {
-            (Stage::Running(_), Some((t_prev, ..))) if t_clock - t_prev > p.cfg.max_bridge_s => p
+            (Stage::Running(_), Some((t_prev, ..))) if t_clock - t_prev > p.cfg.max_dt_s.get() => p
                 .clock_step(t_prev, t_clock, &w)
                 .map(|step_s| (t_clock - t_prev, step_s)),
             _ => None,
         };
         if let Some((_, step_s)) = clock_step {
-            p.clock_offset_s += step_s;
+            p.clock.take_back(step_s);
             t_clock -= step_s;
         }
         p.last = Some((t_clock, w, f));
-        let decision = p.detector.push(s.t_s - p.clock_offset_s, &w, &f);
+        let decision = p.detector.push(t_clock, &w, &f);
         p.stance_edge = p.stance_events.push(t_clock, decision.stance);
         if p.stance_edge == StanceEdge::Began {
             // Whatever the filter makes of this sample: the stride clock of a gap's fill.

@@ -56,7 +56,7 @@ impl Pipeline {
                 self.mount_yaw_rad = self.mount_sum.1.atan2(self.mount_sum.0);
                 self.update_forward_body();
                 self.phase = Phase::Tracking;
-                self.calibrate_bias_filter(eskf.nav_from_body, t_s);
+                self.calibrate_bias_filter(eskf.nav_from_body, t_s - self.clock.offset_s());
                 // The stance copy the health check restores is taken again, now calibrated.
                 self.good_saved_this_stance = false;
             }
@@ -94,6 +94,9 @@ impl Pipeline {
                 event.direction_rad = dir;
                 let sensor_yaw = dir + self.mount_yaw_rad; // flat foot at heading `dir`
                 let tilt_sd = self.cfg.bias_kf.tilt_sd_rad.get();
+                // The bias filters' time runs on the stamps less the clock's steps, as the
+                // rotation they compare does (`SampleClock::take_back`).
+                let t_s = t_s - self.clock.offset_s();
                 let innovation = match &mut self.bias {
                     BiasFilter::InEskf => Some(eskf.heading_update(dir, sd, &forward)),
                     BiasFilter::Paper { kf, obs } => {
