@@ -17,16 +17,13 @@ release binary (`cargo build --release -p corridor-service --bin corridor`).
 import csv, json, os, random, re, shutil, statistics, subprocess, sys, tempfile
 from concurrent.futures import ThreadPoolExecutor
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from suite_walks import walks
+
 root = os.getcwd()
 binary = os.environ.get("BIN", os.path.join(root, "target/release/corridor"))
 config = os.environ.get("CONFIG", os.path.join(root, "configs/gdins.toml"))
-suite = open(os.path.join(root, "configs/eval/gdins.toml")).read()
-recs = []
-for block in suite.split("[[recording]]")[1:]:
-    name = re.search(r'name = "([^"]+)"', block).group(1)
-    path = lambda key: re.search(key + r' = "([^"]+)"', block).group(1).replace("../../", root + "/")
-    sh = re.search(r"start_heading_deg = ([-\d.]+)", block)
-    recs.append((name, path("imu"), path("truth"), float(sh.group(1)) if sh else 0.0))
+recs = walks(root, fast=True)
 
 tmp = tempfile.mkdtemp(prefix="clock-steps-")
 
