@@ -311,9 +311,10 @@ pub struct Estimate {
     pub converged: bool,
     /// ZUPT innovation, when one was applied on this sample.
     pub zupt: Option<Innovation>,
-    /// A footfall the detector missed was updated late on this sample: the time (sample
-    /// clock) of its quietest sample, which the update was made at (`detector.late_stance_min_s`,
-    /// `detector.overdue_stride_factor`).
+    /// A footfall the detector missed was updated late on this sample: the time of its
+    /// quietest sample, which the update was made at (`detector.late_stance_min_s`,
+    /// `detector.overdue_stride_factor`): the sample clock plus what it took back, so the
+    /// stamp on a device clock, about the stamp on a smoothed one.
     pub late_footfall_t_s: Option<f64>,
     /// Heading observation event, when one was taken on this sample.
     pub heading: Option<HeadingEvent>,
