@@ -76,7 +76,10 @@ impl Pipeline {
     /// the foot by more than 0.3 rad (at a rate's peak, or from a still foot to a still foot,
     /// the rate runs on across a loss too; `docs/experiments/rate-continuation.py`). With the
     /// stride before, no real loss of 0.06–0.3 s and 1 of 80 of 0.4 s (on a still foot) was
-    /// taken for a step at `docs/experiments/clock-steps.py`'s places. Beyond a fill a new
+    /// taken for a step at `docs/experiments/clock-steps.py`'s places; cut at every 23rd sample
+    /// of exp22 and exp38, 15 of 3102 of 0.06–0.15 s (0.5 %, `loss-scan.py`): the stride
+    /// before's spread is optimistic, and a rate that rises and falls within the lost samples
+    /// can run on across them. Beyond a fill a new
     /// segment integrates nothing over the step, which is what a clock step needs.
     #[cold]
     #[inline(never)]
