@@ -136,14 +136,13 @@ impl SampleClock {
             let predicted = self.smoothed_s + ticks * self.period_s;
             let mut error = t_s - predicted;
             let far = self.gap_periods() * self.period_s;
-            // A stall taken back (`take_back`): the burst after it comes in behind the count by
-            // what it pays back. What lies within a period is the stamps' own jitter.
-            // A stall's burst follows it at once (each of its samples a period further behind
-            // the count than the one before), and it is over when a sample comes in less than
-            // half a period behind the count: what is left is a step of the clock, kept. (Paid back
-            // by any later sample behind the count, a driver that hands samples over in groups
-            // of up to four, normally up to three periods behind, drained a taken-back 0.2 s
-            // step within 9 s, and the loop ran the period 3.5 % long to add it back.)
+            // A stall taken back (`take_back`): the burst after it follows at once, each sample a
+            // period further behind the count, and pays the stall back by what it lags beyond a
+            // period (within a period is the stamps' own jitter). It is over when a sample comes
+            // in less than half a period behind: what is left is a step of the clock, kept.
+            // (Paid back by any later sample behind the count, stamps handed over in groups of
+            // up to four, normally up to three periods behind, drained a taken-back 0.2 s step
+            // within 9 s, and the loop ran the period 3.5 % long to add it back.)
             if self.stall_s > 0.0 && error > -0.5 * self.period_s {
                 self.stall_s = 0.0;
             }

@@ -79,8 +79,8 @@ impl Pipeline {
     /// taken for a step at `docs/experiments/clock-steps.py`'s places; cut at every 23rd sample
     /// of exp22 and exp38, 15 of 3102 of 0.06–0.15 s (0.5 %, `loss-scan.py`): the stride
     /// before's spread is optimistic, and a rate that rises and falls within the lost samples
-    /// can run on across them. Beyond a fill a new
-    /// segment integrates nothing over the step, which is what a clock step needs.
+    /// can run on across them. Beyond a fill a new segment integrates nothing over the step,
+    /// which is what a clock step needs.
     #[cold]
     #[inline(never)]
     pub(super) fn clock_step(
@@ -120,18 +120,18 @@ impl Pipeline {
             .max((second_differences / CONTINUATION_SAMPLES as f64).sqrt());
         let tolerance = (CONTINUATION_TOLERANCE * spread).max(CONTINUATION_FLOOR_RAD_S);
         let run_on = (gyro_after - continued).norm();
+        if run_on > tolerance {
+            return None;
+        }
         let lag = self
             .memory
-            .stride_lag(t_after_s, gyro_after, self.cfg.max_dt_s.get());
-        let expected = lag.and_then(|l| self.memory.at(t_after_s - l.lag_s).map(|r| r.gyro_rad_s));
-        let (Some(lag), Some(expected)) = (lag, expected) else {
-            return None;
-        };
-        // The stride before's mismatch on the samples before the gap alone (the lag's is over
-        // those and the one after, which a clock step puts off by what is tested here).
-        let k = lag.match_samples as f64;
-        let off = (gyro_after - expected).norm_squared();
-        let mismatch_sq = ((lag.mismatch_rad_s.powi(2) * (k + 1.0) - off) / k)
+            .stride_lag(t_after_s, gyro_after, self.cfg.max_dt_s.get())?;
+        let expected = self.memory.at(t_after_s - lag.lag_s)?.gyro_rad_s;
+        // The stride before's mismatch on the samples before the gap (the one after it is what
+        // a clock step puts off, the thing tested here).
+        let mismatch_sq = lag
+            .mismatch_before_rad_s
+            .powi(2)
             .max(CONTINUATION_FLOOR_RAD_S * CONTINUATION_FLOOR_RAD_S);
         // The probability that a real loss's far-side rate, N(expected, mismatch²/3 per axis),
         // lies within `run_on` (at least the floor) of the continuation, bounded above by the
@@ -142,7 +142,7 @@ impl Pipeline {
         let ln_p = (4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)).ln()
             - 1.5 * (std::f64::consts::TAU * var).ln()
             - nearest * nearest / (2.0 * var);
-        (run_on <= tolerance && ln_p <= STEP_LOSS_PROBABILITY.ln()).then_some(dt - step_s)
+        (ln_p <= STEP_LOSS_PROBABILITY.ln()).then_some(dt - step_s)
     }
 
     /// Judges the step from the previous sample (time `t_prev`, rate `w_prev`, force `f.0`) to

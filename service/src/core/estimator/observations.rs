@@ -56,7 +56,7 @@ impl Pipeline {
                 self.mount_yaw_rad = self.mount_sum.1.atan2(self.mount_sum.0);
                 self.update_forward_body();
                 self.phase = Phase::Tracking;
-                self.calibrate_bias_filter(eskf.nav_from_body, t_s - self.clock.offset_s());
+                self.calibrate_bias_filter(eskf.nav_from_body, t_s);
                 // The stance copy the health check restores is taken again, now calibrated.
                 self.good_saved_this_stance = false;
             }
@@ -227,6 +227,8 @@ impl Pipeline {
     /// fault restored a bias filter from before the calibration (its observer is missing while
     /// the phase is tracking): without it no heading would be observed again.
     pub(super) fn calibrate_bias_filter(&mut self, nav_from_body: UnitQuaternion<f64>, t_s: f64) {
+        // The observer's epoch on the stamps less the clock's steps, as its later times.
+        let t_s = t_s - self.clock.offset_s();
         match &mut self.bias {
             BiasFilter::InEskf => {}
             BiasFilter::Paper { kf, obs } => {

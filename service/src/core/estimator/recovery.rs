@@ -156,7 +156,7 @@ impl Pipeline {
                 // Either copy may hold the bias filter from before the mounting-yaw
                 // calibration (without its observer) while the phase stays tracking.
                 if self.phase == Phase::Tracking {
-                    self.calibrate_bias_filter(eskf.nav_from_body, t_s - self.clock.offset_s());
+                    self.calibrate_bias_filter(eskf.nav_from_body, t_s);
                 }
                 self.counters.health_restores += 1;
                 self.out.health_fault = Some(fault);

@@ -52,8 +52,8 @@ pub(super) struct StrideLag {
     /// RMS rate difference between the samples around the gap and their remembered
     /// counterparts, rad/s.
     pub mismatch_rad_s: f64,
-    /// The samples before the gap it was matched on (the one after it besides).
-    pub match_samples: usize,
+    /// The same over the samples before the gap alone.
+    pub mismatch_before_rad_s: f64,
 }
 
 impl Default for StrideMemory {
@@ -155,7 +155,7 @@ impl StrideMemory {
             return None;
         }
         let (lo, hi) = ((1.0 - LAG_SPAN) * period, (1.0 + LAG_SPAN) * period);
-        let mut best: Option<(f64, usize)> = None;
+        let mut best: Option<(f64, f64, usize)> = None;
         // Shift s: the sample at index i stands for the one at i + s.
         for s in 1..=n - MATCH_SAMPLES {
             let lag = newest.t_s - self.get(n - 1 - s).t_s;
@@ -170,11 +170,11 @@ impl StrideMemory {
                 .sum();
             let after = (gyro_after - self.at(t_after_s - lag)?.gyro_rad_s).norm_squared();
             let cost = (before + after) / (MATCH_SAMPLES + 1) as f64;
-            if best.is_none_or(|(c, _)| cost < c) {
-                best = Some((cost, s));
+            if best.is_none_or(|(c, ..)| cost < c) {
+                best = Some((cost, before, s));
             }
         }
-        let (cost, s) = best?;
+        let (cost, before, s) = best?;
         let lag_s = newest.t_s - self.get(n - 1 - s).t_s;
         let from = n - s;
         let to = (from..n)
@@ -192,7 +192,7 @@ impl StrideMemory {
             from,
             to,
             mismatch_rad_s: cost.sqrt(),
-            match_samples: MATCH_SAMPLES,
+            mismatch_before_rad_s: (before / MATCH_SAMPLES as f64).sqrt(),
         })
     }
 
