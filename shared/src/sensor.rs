@@ -22,6 +22,9 @@
 //! is still a gap (beyond the guard's `gap_dt_s`) is accepted but provisional: when the next time
 //! goes back and follows the one before it, the gap's far side was a stamp glitch
 //! ([`TimeVerdict::Glitch`]) and is dropped after the fact, so the good samples after it are kept.
+//! A time that goes back by at most `max_dt_s` and that the next one follows is a step back of the
+//! clock ([`TimeVerdict::StepBack`]): the caller may take it as the new time base (the CSV reader
+//! does; the estimator asks the rates).
 
 use serde::{Deserialize, Serialize};
 
@@ -237,6 +240,14 @@ pub enum TimeVerdict {
     /// the last time was a stamp glitch, not a gap. Accept this one (the time before the glitch
     /// is its base); what was taken with the glitched sample has to be dropped by the caller.
     Glitch,
+    /// The time follows the previous (refused) one, which went back behind the time base by at
+    /// most `max_dt_s` after a sample had followed the base: the clock stepped back (a host clock
+    /// set back, a driver that re-sends what it sent) and runs on from there. The caller decides
+    /// from what it knows beyond the times (the estimator: the rates) whether to take it as the
+    /// new time base ([`TimeGuard::accept`]); not taken, the next time that follows it is a
+    /// `StepBack` again, until a time follows the base. A step back beyond `max_dt_s` is never
+    /// a time base (a restarted device clock: the daemon starts a new stream).
+    StepBack,
 }
 
 /// The time rule of the CSV reader and of the estimator: strictly increasing by more than
@@ -252,6 +263,8 @@ pub enum TimeVerdict {
 /// ([`TimeVerdict::Glitch`]). Without that, one stamp 0.9 s ahead made every good sample of the
 /// next 0.9 s "not increasing" (180 samples at 200 Hz, and the walk's footprints 0.95 m off).
 /// A glitch of two or more samples in a row is taken for a gap, as before.
+/// A time that goes back by at most `max_dt_s` and is followed by the next one is a step back
+/// of the clock ([`TimeVerdict::StepBack`]), which the caller may take as the new time base.
 /// The caller calls [`TimeGuard::accept`] with every time it accepts.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TimeGuard {
@@ -265,6 +278,9 @@ pub struct TimeGuard {
     /// While the last accepted step was a gap beyond `gap_dt_s` (within `max_dt_s`): the time
     /// before it (the base a glitch would go back to).
     before_gap_s: Option<f64>,
+    /// A time went back beyond `max_dt_s` since the last accepted one: no step back until a
+    /// time follows the base.
+    far_back: bool,
 }
 
 impl TimeGuard {
@@ -279,6 +295,7 @@ impl TimeGuard {
             candidate_s: None,
             confirmed: false,
             before_gap_s: None,
+            far_back: false,
         }
     }
 
@@ -320,17 +337,26 @@ impl TimeGuard {
         if let Some(c) = self.candidate_s
             && follows(c)
         {
-            return if self.confirmed {
-                TimeVerdict::NewBase
-            } else {
-                TimeVerdict::Rebase
-            };
+            if !self.confirmed {
+                return TimeVerdict::Rebase;
+            }
+            if c < last {
+                // Judged again at the next time, if the caller does not take this one.
+                self.candidate_s = Some(t_s);
+                return TimeVerdict::StepBack;
+            }
+            return TimeVerdict::NewBase;
         }
         let dt = t_s - last;
         if dt.is_nan() || dt <= self.min_dt_s {
-            // Going back is never a new time base once a sample has followed the base.
-            if !self.confirmed {
+            // Once a sample has followed the base, going back is a candidate only within
+            // `max_dt_s` (a step of the clock; beyond, a restarted clock or a bad stamp), and
+            // not while the times that went back further catch up with the base.
+            if !self.confirmed || (-dt <= self.max_dt_s && !self.far_back) {
                 self.candidate_s = Some(t_s);
+            } else {
+                self.candidate_s = None;
+                self.far_back = true;
             }
             return TimeVerdict::NotIncreasing;
         }
@@ -351,6 +377,7 @@ impl TimeGuard {
         self.confirmed = self.last_s.is_some();
         self.last_s = Some(t_s);
         self.candidate_s = None;
+        self.far_back = false;
     }
 
     /// Whether a sample has followed the time base (false for the very first time).
@@ -376,6 +403,7 @@ mod tests {
                         | TimeVerdict::NewBase
                         | TimeVerdict::Rebase
                         | TimeVerdict::Glitch
+                        | TimeVerdict::StepBack
                 ) {
                     g.accept(t);
                 }
@@ -423,7 +451,7 @@ mod tests {
             run(&[0.0, 0.005, -3.0, 0.010]),
             [Accept, Accept, NotIncreasing, Accept]
         );
-        // Going back is never confirmed once the base was followed.
+        // Going back beyond max_dt_s is never confirmed once the base was followed.
         assert_eq!(
             run(&[0.0, 0.005, -3.0, -2.995]),
             [Accept, Accept, NotIncreasing, NotIncreasing]
@@ -476,6 +504,55 @@ mod tests {
         assert_eq!(
             run(&[-50.0, 0.0, 0.005, -49.99]),
             [Accept, Jump, Rebase, NotIncreasing]
+        );
+    }
+
+    #[test]
+    fn a_clock_that_steps_back_within_max_dt_is_a_step_back_the_caller_may_take() {
+        use TimeVerdict::*;
+        // Set back by 0.3 s and running on: the first time after the step is refused, the
+        // second follows it. Before, every time up to 0.3 s was "not increasing".
+        assert_eq!(
+            run(&[0.0, 0.005, 0.010, -0.285, -0.280, -0.275]),
+            [Accept, Accept, Accept, NotIncreasing, StepBack, Accept]
+        );
+        // Not taken by the caller: every time that follows is a step back again, until one
+        // follows the base.
+        let mut g = TimeGuard::new(1e-6, 1.0, 0.05);
+        for t in [0.0, 0.005, 0.010] {
+            g.check(t);
+            g.accept(t);
+        }
+        assert_eq!(g.check(0.0), NotIncreasing);
+        assert_eq!(g.check(0.005), StepBack);
+        assert_eq!(g.check(0.010), StepBack);
+        assert_eq!(g.check(0.015), Accept);
+        // A stray earlier stamp is not a step (the next time follows the base), and neither is
+        // a step back beyond max_dt_s (a restarted clock), nor a duplicate followed by the base.
+        assert_eq!(
+            run(&[0.0, 0.005, -0.5, 0.010]),
+            [Accept, Accept, NotIncreasing, Accept]
+        );
+        assert_eq!(
+            run(&[0.0, 0.005, 0.010, -1.5, -1.495]),
+            [Accept, Accept, Accept, NotIncreasing, NotIncreasing]
+        );
+        // ... also once such times have come within max_dt_s of the base.
+        assert_eq!(
+            run(&[0.0, 0.005, 0.010, -1.5, -0.5, -0.495, 0.015]),
+            [
+                Accept,
+                Accept,
+                Accept,
+                NotIncreasing,
+                NotIncreasing,
+                NotIncreasing,
+                Accept
+            ]
+        );
+        assert_eq!(
+            run(&[0.0, 0.005, 0.005, 0.010]),
+            [Accept, Accept, NotIncreasing, Accept]
         );
     }
 

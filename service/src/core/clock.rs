@@ -223,7 +223,18 @@ impl SampleClock {
         self.last_out_s -= step_s;
     }
 
-    /// What every stamp is taken less: the clock steps taken back, less what stalls paid back.
+    /// The stamps stepped back by `shift_s` less one sample step before the next stamp (the
+    /// estimator's judgement, from the rates): every later stamp is taken plus it, so the
+    /// next time returned runs on from the last.
+    pub fn step_back(&mut self, shift_s: f64) {
+        self.offset_s -= shift_s;
+        if let Some(last) = &mut self.last_stamp_s {
+            *last -= shift_s;
+        }
+    }
+
+    /// What every stamp is taken less: the clock steps taken back, less what stalls paid back
+    /// and steps back added.
     pub fn offset_s(&self) -> f64 {
         self.offset_s
     }

@@ -5,7 +5,8 @@
 //! output (`sensor.max_gyro_rad_s`, `sensor.max_accel_m_s2`), or when its time breaks the time
 //! rule of [`TimeGuard`] (not increasing by `sensor.min_dt_s`, or a jump beyond
 //! `sensor.max_dt_s` that the next sample does not confirm; a gap's far side that the next sample
-//! shows to be a stamp glitch is dropped after the fact). A sample with an axis at the rail
+//! shows to be a stamp glitch is dropped after the fact; a step back of the clock is taken only
+//! when the caller's judge, the rates, says nothing was lost). A sample with an axis at the rail
 //! (within [`CLIP_FRACTION`] of the range) is accepted and flagged as clipped.
 
 use super::estimator::{ImuInput, SampleError};
@@ -34,6 +35,20 @@ pub struct Accepted {
     /// This sample's time came after a gap (beyond `estimator.max_dt_s`) and stays provisional
     /// until the next accepted sample: the caller keeps what it needs to drop it after the fact.
     pub provisional: bool,
+    /// The clock stepped back before this sample, and the caller's judge took the step
+    /// ([`TimeVerdict::StepBack`]): the last accepted time before it, and the time of the
+    /// sample refused after it, s.
+    pub stepped_back: Option<(f64, f64)>,
+}
+
+/// A step back of the clock, for the caller to judge: the last accepted time, and the sample
+/// refused just before this one, whose time went back behind it and which this one follows.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepBack {
+    /// The last accepted time, s.
+    pub last_t_s: f64,
+    /// The refused sample whose time went back (it stays refused).
+    pub first: ImuInput,
 }
 
 /// The plausibility check of one stream.
@@ -43,6 +58,11 @@ pub struct Plausibility {
     /// Per field, in sample order: the value beyond which one axis is absurd.
     axis_limits: [f64; 6],
     time: TimeGuard,
+    /// The last sample refused for a time that did not increase (a step back's first sample).
+    went_back: Option<ImuInput>,
+    /// The judge refused a step back since the last accepted sample: the samples that run on
+    /// from it are refused without asking again.
+    step_back_refused: bool,
 }
 
 impl Plausibility {
@@ -57,6 +77,8 @@ impl Plausibility {
             time: TimeGuard::from_limits(&limits, gap_dt_s),
             axis_limits: [g, g, g, a, a, a],
             limits,
+            went_back: None,
+            step_back_refused: false,
         }
     }
 
@@ -66,8 +88,14 @@ impl Plausibility {
     }
 
     /// Checks `s`; on `Ok` the sample is accepted (its time is the new time base). On `Err`
-    /// nothing changed except that a time jump is remembered as a candidate time base.
-    pub fn check(&mut self, s: &ImuInput) -> Result<Accepted, SampleError> {
+    /// nothing changed except that a time jump or a time that went back is remembered as a
+    /// candidate time base. A sample that runs on from a step back of the clock is accepted
+    /// when `judge_step_back` says so (asked once per step).
+    pub fn check(
+        &mut self,
+        s: &ImuInput,
+        judge_step_back: impl FnOnce(&StepBack) -> bool,
+    ) -> Result<Accepted, SampleError> {
         if !s.t_s.is_finite() {
             return Err(SampleError::NonFinite {
                 t_s: s.t_s,
@@ -118,16 +146,34 @@ impl Plausibility {
             }
         }
         let last_t_s = self.time.last_s();
-        let (mut replaced_first_t_s, mut glitch_t_s) = (None, None);
+        let (mut replaced_first_t_s, mut glitch_t_s, mut stepped_back) = (None, None, None);
+        let not_increasing = || SampleError::TimeNotIncreasing {
+            t_s: s.t_s,
+            prev_t_s: last_t_s.unwrap_or(f64::NAN),
+        };
         match self.time.check(s.t_s) {
             TimeVerdict::Accept | TimeVerdict::NewBase => {}
             TimeVerdict::Rebase => replaced_first_t_s = last_t_s,
             TimeVerdict::Glitch => glitch_t_s = last_t_s,
+            TimeVerdict::StepBack => {
+                let back = self
+                    .went_back
+                    .zip(last_t_s)
+                    .map(|(first, last_t_s)| StepBack { last_t_s, first });
+                match back {
+                    Some(back) if !self.step_back_refused && judge_step_back(&back) => {
+                        stepped_back = Some((back.last_t_s, back.first.t_s));
+                    }
+                    _ => {
+                        self.step_back_refused = true;
+                        self.went_back = Some(*s);
+                        return Err(not_increasing());
+                    }
+                }
+            }
             TimeVerdict::NotIncreasing => {
-                return Err(SampleError::TimeNotIncreasing {
-                    t_s: s.t_s,
-                    prev_t_s: self.time.last_s().unwrap_or(f64::NAN),
-                });
+                self.went_back = Some(*s);
+                return Err(not_increasing());
             }
             TimeVerdict::Jump => {
                 return Err(SampleError::TimeJump {
@@ -138,6 +184,8 @@ impl Plausibility {
             }
         }
         self.time.accept(s.t_s);
+        // (`went_back` stays: a step back is only ever judged right after a sample went back.)
+        self.step_back_refused = false;
         let rail = |v: &[f64; 3], range: f64| v.iter().any(|x| x.abs() >= CLIP_FRACTION * range);
         Ok(Accepted {
             clipped: rail(&s.gyro_rad_s, l.gyro_range_rad_s())
@@ -145,6 +193,7 @@ impl Plausibility {
             replaced_first_t_s,
             glitch_t_s,
             provisional: self.time.provisional(),
+            stepped_back,
         })
     }
 }
@@ -165,6 +214,11 @@ mod tests {
         Plausibility::new(f.validate().unwrap(), 0.05)
     }
 
+    /// A judge that takes no step back of the clock.
+    fn no_step(_: &StepBack) -> bool {
+        false
+    }
+
     fn sample(t_s: f64, g: [f64; 3], a: [f64; 3]) -> ImuInput {
         ImuInput {
             t_s,
@@ -178,11 +232,11 @@ mod tests {
         let mut p = gx5();
         let clipped = |r: Result<Accepted, SampleError>| r.map(|a| a.clipped);
         assert_eq!(
-            clipped(p.check(&sample(0.0, [0.1; 3], [0.0, 0.0, 9.8]))),
+            clipped(p.check(&sample(0.0, [0.1; 3], [0.0, 0.0, 9.8]), no_step)),
             Ok(false)
         );
         let err = p
-            .check(&sample(0.005, [0.1; 3], [0.0, 0.0, 1e30]))
+            .check(&sample(0.005, [0.1; 3], [0.0, 0.0, 1e30]), no_step)
             .unwrap_err();
         assert!(matches!(
             err,
@@ -193,7 +247,7 @@ mod tests {
         ));
         assert!(err.to_string().contains("1e30"), "{err}");
         let err = p
-            .check(&sample(0.005, [0.1, 1e300, 0.1], [0.0, 0.0, 9.8]))
+            .check(&sample(0.005, [0.1, 1e300, 0.1], [0.0, 0.0, 9.8]), no_step)
             .unwrap_err();
         assert!(matches!(
             err,
@@ -204,7 +258,7 @@ mod tests {
         ));
         // One axis beyond twice its range (the norm is within its limit): refused.
         let err = p
-            .check(&sample(0.005, [0.1; 3], [0.0, 0.0, 160.0]))
+            .check(&sample(0.005, [0.1; 3], [0.0, 0.0, 160.0]), no_step)
             .unwrap_err();
         assert!(
             matches!(err, SampleError::Implausible { field: "az_m_s2", limit, .. } if limit == 156.9),
@@ -212,11 +266,11 @@ mod tests {
         );
         // At the rail (8.6 ≥ 0.98 × 8.73): accepted and flagged.
         assert_eq!(
-            clipped(p.check(&sample(0.005, [0.0, 8.6, 0.0], [0.0, 0.0, 9.8]))),
+            clipped(p.check(&sample(0.005, [0.0, 8.6, 0.0], [0.0, 0.0, 9.8]), no_step)),
             Ok(true)
         );
         assert_eq!(
-            clipped(p.check(&sample(0.010, [0.0; 3], [0.0, 0.0, 78.0]))),
+            clipped(p.check(&sample(0.010, [0.0; 3], [0.0, 0.0, 78.0]), no_step)),
             Ok(true)
         );
         assert_eq!(p.last_t_s(), Some(0.010));
@@ -226,22 +280,23 @@ mod tests {
     fn a_time_outlier_does_not_become_the_time_base() {
         let mut p = gx5();
         let rest = |t| sample(t, [0.0; 3], [0.0, 0.0, 9.8]);
-        p.check(&rest(0.0)).unwrap();
+        p.check(&rest(0.0), no_step).unwrap();
         assert!(matches!(
-            p.check(&rest(1e30)),
+            p.check(&rest(1e30), no_step),
             Err(SampleError::TimeJump { prev_t_s: 0.0, .. })
         ));
         assert_eq!(
-            p.check(&rest(0.005)),
+            p.check(&rest(0.005), no_step),
             Ok(Accepted {
                 clipped: false,
                 replaced_first_t_s: None,
                 glitch_t_s: None,
                 provisional: false,
+                stepped_back: None,
             })
         );
         assert!(matches!(
-            p.check(&rest(f64::INFINITY)),
+            p.check(&rest(f64::INFINITY), no_step),
             Err(SampleError::NonFinite { field: "t_s", .. })
         ));
     }
@@ -250,14 +305,17 @@ mod tests {
     fn a_bad_first_time_is_replaced_when_the_next_two_agree() {
         let mut p = gx5();
         let rest = |t| sample(t, [0.0; 3], [0.0, 0.0, 9.8]);
-        p.check(&rest(1e9)).unwrap();
+        p.check(&rest(1e9), no_step).unwrap();
         assert!(matches!(
-            p.check(&rest(0.0)),
+            p.check(&rest(0.0), no_step),
             Err(SampleError::TimeNotIncreasing { prev_t_s: 1e9, .. })
         ));
-        let a = p.check(&rest(0.005)).unwrap();
+        let a = p.check(&rest(0.005), no_step).unwrap();
         assert_eq!(a.replaced_first_t_s, Some(1e9));
-        assert_eq!(p.check(&rest(0.010)).unwrap().replaced_first_t_s, None);
+        assert_eq!(
+            p.check(&rest(0.010), no_step).unwrap().replaced_first_t_s,
+            None
+        );
     }
 
     #[test]
@@ -265,25 +323,63 @@ mod tests {
         let mut p = gx5();
         let rest = |t| sample(t, [0.0; 3], [0.0, 0.0, 9.8]);
         for t in [0.0, 0.005] {
-            assert!(!p.check(&rest(t)).unwrap().provisional);
+            assert!(!p.check(&rest(t), no_step).unwrap().provisional);
         }
-        assert!(p.check(&rest(0.905)).unwrap().provisional);
-        let a = p.check(&rest(0.010)).unwrap();
+        assert!(p.check(&rest(0.905), no_step).unwrap().provisional);
+        let a = p.check(&rest(0.010), no_step).unwrap();
         assert_eq!((a.glitch_t_s, a.provisional), (Some(0.905), false));
         assert_eq!(p.last_t_s(), Some(0.010));
         // A real gap: the next sample follows its far side.
-        assert!(p.check(&rest(0.9)).unwrap().provisional);
-        let a = p.check(&rest(0.905)).unwrap();
+        assert!(p.check(&rest(0.9), no_step).unwrap().provisional);
+        let a = p.check(&rest(0.905), no_step).unwrap();
         assert_eq!((a.glitch_t_s, a.provisional), (None, false));
         // A gap right after a gap's far side is provisional too, and its glitch caught.
-        assert!(p.check(&rest(1.2)).unwrap().provisional);
-        assert!(p.check(&rest(1.5)).unwrap().provisional);
-        let a = p.check(&rest(1.205)).unwrap();
+        assert!(p.check(&rest(1.2), no_step).unwrap().provisional);
+        assert!(p.check(&rest(1.5), no_step).unwrap().provisional);
+        let a = p.check(&rest(1.205), no_step).unwrap();
         assert_eq!((a.glitch_t_s, a.provisional), (Some(1.5), false));
         // So is a glitch on the stream's second sample.
         let mut p = gx5();
-        p.check(&rest(0.0)).unwrap();
-        assert!(p.check(&rest(0.9)).unwrap().provisional);
-        assert_eq!(p.check(&rest(0.005)).unwrap().glitch_t_s, Some(0.9));
+        p.check(&rest(0.0), no_step).unwrap();
+        assert!(p.check(&rest(0.9), no_step).unwrap().provisional);
+        assert_eq!(
+            p.check(&rest(0.005), no_step).unwrap().glitch_t_s,
+            Some(0.9)
+        );
+    }
+
+    #[test]
+    fn a_step_back_is_taken_when_the_judge_says_so_and_judged_once() {
+        let rest = |t| sample(t, [0.0; 3], [0.0, 0.0, 9.8]);
+        let mut p = gx5();
+        for t in [0.0, 0.005, 0.010] {
+            p.check(&rest(t), no_step).unwrap();
+        }
+        let back = |p: &mut Plausibility, t: f64, take: bool, asked: &mut u32| {
+            p.check(&rest(t), |b| {
+                *asked += 1;
+                assert_eq!((b.last_t_s, b.first.t_s), (0.010, -0.29));
+                take
+            })
+        };
+        let mut asked = 0;
+        // The first sample after the step is refused; the judge sees it with the next one.
+        assert!(back(&mut p, -0.29, true, &mut asked).is_err());
+        assert_eq!(asked, 0);
+        let mut q = p.clone();
+        let a = back(&mut p, -0.285, true, &mut asked).unwrap();
+        assert_eq!(asked, 1);
+        assert_eq!(a.stepped_back, Some((0.010, -0.29)));
+        assert_eq!(p.last_t_s(), Some(-0.285));
+        // Refused: the judge is not asked again for the samples that run on from the step,
+        // and a sample that follows the base is accepted as before.
+        assert!(matches!(
+            back(&mut q, -0.285, false, &mut asked),
+            Err(SampleError::TimeNotIncreasing { .. })
+        ));
+        assert!(back(&mut q, -0.280, true, &mut asked).is_err());
+        assert_eq!(asked, 2);
+        let a = q.check(&rest(0.015), no_step).unwrap();
+        assert_eq!(a.stepped_back, None);
     }
 }

@@ -281,10 +281,14 @@ impl<'a> EstState<'a> {
         for n in e.notices() {
             tracing::warn!(seq = s.seq, "{n}");
         }
-        if e.replaced_first_t_s.is_some() || e.glitch_t_s.is_some() {
+        if e.replaced_first_t_s.is_some()
+            || e.glitch_t_s.is_some()
+            || e.clock_stepped_back_s.is_some()
+        {
             // Its time paced the periodic bias output (a first time in the future stopped it, a
-            // glitched stamp paused it for as long as the stamp was ahead); the attitude
-            // published for it stays published.
+            // glitched stamp paused it for as long as the stamp was ahead, a clock set back
+            // paused it for as long as it stepped); the attitude published for it stays
+            // published.
             self.last_bias_t_s = f64::NEG_INFINITY;
         }
         self.last = e;
@@ -378,6 +382,7 @@ impl<'a> EstState<'a> {
         p.gaps += c.gaps;
         p.gaps_filled += c.gaps_filled;
         p.gaps_clock_steps += c.gaps_clock_steps;
+        p.clock_steps_back += c.clock_steps_back;
         p.stances += c.stances;
         p.heading_used += c.heading_used;
         self.est = self.new_estimator(cfg);
@@ -450,7 +455,7 @@ impl<'a> EstState<'a> {
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
              σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
-             health restores {} (footprints forgotten {}), velocity resets {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), IMU head missing {}, missing at restart {}, \
+             health restores {} (footprints forgotten {}), velocity resets {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
              lost in a killed daemon {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
@@ -476,6 +481,7 @@ impl<'a> EstState<'a> {
             self.previous.gaps + self.est.counters().gaps,
             self.previous.gaps_filled + self.est.counters().gaps_filled,
             self.previous.gaps_clock_steps + self.est.counters().gaps_clock_steps,
+            self.previous.clock_steps_back + self.est.counters().clock_steps_back,
             rx.head_missing.load(Ordering::Relaxed),
             rx.missing_at_restart.load(Ordering::Relaxed),
             rx.lost_in_daemon.load(Ordering::Relaxed),

@@ -10,8 +10,10 @@ type Fix = (f64, P2);
 /// Evaluates a trajectory as it streams, in memory independent of its length: it keeps, per
 /// GCP, only the trajectory rows just before and at or after the GCP time, and the path length
 /// as it grows. [`GcpSampler::finish`] gives exactly what [`evaluate`] gives for the same rows
-/// (tested), provided the rows come in strictly increasing time, as the estimator emits them;
-/// rows with a non-finite time or position are left out, as [`evaluate`] leaves them out.
+/// (tested), provided the rows come in strictly increasing time, as the estimator emits them
+/// (but where its clock stepped back: a GCP time the rows had passed before the step is taken
+/// before it, where [`evaluate`] sorts the rows, and the report says so); rows with a
+/// non-finite time or position are left out, as [`evaluate`] leaves them out.
 #[derive(Debug, Clone)]
 pub struct GcpSampler {
     truth: Vec<TruthGcp>,
@@ -32,6 +34,11 @@ pub struct GcpSampler {
     span_len_m: f64,
     /// The first row that did not come after the previous one.
     out_of_order_s: Option<f64>,
+    /// The first row that went back before the previous one (the clock stepped back), and how
+    /// many did.
+    went_back: Option<(f64, usize)>,
+    /// The next row may go back ([`GcpSampler::clock_stepped_back`]).
+    may_go_back: bool,
 }
 
 impl GcpSampler {
@@ -58,7 +65,15 @@ impl GcpSampler {
             span_rows: 0,
             span_len_m: 0.0,
             out_of_order_s: None,
+            went_back: None,
+            may_go_back: false,
         }
+    }
+
+    /// The next row comes after the estimator's clock stepped back
+    /// (`Estimate::clock_stepped_back_s`): it may go back in time.
+    pub fn clock_stepped_back(&mut self) {
+        self.may_go_back = true;
     }
 
     /// One trajectory row.
@@ -69,9 +84,16 @@ impl GcpSampler {
         if let Some((t_last, _)) = self.last
             && t_s <= t_last
         {
-            self.out_of_order_s.get_or_insert(t_s);
-            return;
+            if !std::mem::take(&mut self.may_go_back) || t_s == t_last {
+                self.out_of_order_s.get_or_insert(t_s);
+                return;
+            }
+            // The estimator's clock stepped back: the rows run on from here, and the GCPs
+            // they pass again were sampled before the step.
+            let (_, n) = self.went_back.get_or_insert((t_s, 0));
+            *n += 1;
         }
+        self.may_go_back = false;
         let p = [x_m, y_m];
         while let Some(&i) = self.order.get(self.next)
             && self.truth[i].t_s <= t_s
@@ -156,7 +178,18 @@ impl GcpSampler {
                 0.0
             },
         };
-        report(sampled, &self.truth, &self.opts, Vec::new())
+        let warnings = self.went_back.map(|(t_s, n)| {
+            format!(
+                "trajectory time went back {n} time(s), first at t = {t_s} s (the clock stepped \
+                 back): footprint times the rows had passed were sampled before the step"
+            )
+        });
+        report(
+            sampled,
+            &self.truth,
+            &self.opts,
+            warnings.into_iter().collect(),
+        )
     }
 }
 

@@ -492,3 +492,67 @@ fn streamed_evaluation_equals_the_whole_trajectorys_at_the_edges() {
         Err(EvalError::NotIncreasing { .. })
     ));
 }
+
+#[test]
+fn a_clock_step_back_told_to_the_streamed_evaluation_samples_each_footprint_once() {
+    // The estimator's clock stepped back by 1 s at row 25 (t = 10.5 s): the rows from there
+    // run on 1 s earlier, and so do the footprint times after the step. A footprint time in
+    // the overlap (10.0 s, before the step) is taken before it.
+    let mut truth = l_walk();
+    truth.insert(
+        2,
+        TruthGcp {
+            t_s: 10.0,
+            x_m: 10.0,
+            y_m: 1.67,
+            stride: Some(9),
+        },
+    );
+    let (t, x, y) = traj_from(&l_walk(), |p| [p[0] * 1.02, p[1] + 0.1 * p[0]]);
+    let (k, back_s) = (25, 1.0);
+    assert_eq!(t[k], 10.5);
+    let stepped: Vec<f64> = (0..t.len())
+        .map(|i| if i >= k { t[i] - back_s } else { t[i] })
+        .collect();
+    let stepped_truth: Vec<TruthGcp> = truth
+        .iter()
+        .map(|g| TruthGcp {
+            t_s: if g.t_s >= t[k] { g.t_s - back_s } else { g.t_s },
+            ..*g
+        })
+        .collect();
+    let o = EvalOptions::default();
+    let whole = streamed(&t, &x, &y, &truth, &o).unwrap();
+    let mut s = GcpSampler::new(&stepped_truth, &o);
+    for i in 0..t.len() {
+        if i == k {
+            s.clock_stepped_back();
+        }
+        s.push(stepped[i], x[i], y[i]);
+    }
+    let rep = s.finish().unwrap();
+    assert!(rep.warnings[0].contains("went back 1 time(s), first at t = 9.5 s"));
+    // Every footprint sampled where the trajectory without the step samples it (the times of
+    // the footprints after the step differ by the step).
+    let at = |r: &EvalReport| -> Vec<[f64; 2]> {
+        r.gcp.as_ref().unwrap().iter().map(|g| g.est_xy).collect()
+    };
+    assert_eq!(at(&rep), at(&whole));
+    assert_eq!(
+        (
+            rep.rms_error_m,
+            rep.traj_path_length_m,
+            rep.max_time_offset_s
+        ),
+        (
+            whole.rms_error_m,
+            whole.traj_path_length_m,
+            whole.max_time_offset_s
+        )
+    );
+    // Not told, it is refused as before.
+    assert!(matches!(
+        streamed(&stepped, &x, &y, &stepped_truth, &o),
+        Err(EvalError::NotIncreasing { .. })
+    ));
+}

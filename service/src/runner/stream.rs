@@ -42,6 +42,8 @@ pub struct Summary {
     pub gaps_filled: u64,
     /// Of them, taken as the clock stepping forward with nothing lost.
     pub gaps_clock_steps: u64,
+    /// Steps back of the clock taken as a new time base (the rates ran on across them).
+    pub clock_steps_back: u64,
     /// Heading observations used.
     pub heading_observations_used: u64,
     /// Heading observations rejected, by reason.
@@ -127,6 +129,9 @@ impl Kept {
             self.converged_n += 1;
         }
         if let Some(g) = &mut self.gcps {
+            if e.clock_stepped_back_s.is_some() {
+                g.clock_stepped_back();
+            }
             g.push(e.t_s, e.p_m[0], e.p_m[1]);
         }
         if let Some(p) = &mut self.plot {
@@ -412,6 +417,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         gaps_bridged: c.gaps_bridged,
         gaps_filled: c.gaps_filled,
         gaps_clock_steps: c.gaps_clock_steps,
+        clock_steps_back: c.clock_steps_back,
         heading_observations_used: c.heading_used,
         heading_observations_rejected: BTreeMap::from([
             ("not_straight", c.heading_not_straight),

@@ -17,7 +17,9 @@
 //!
 //! Bad rows are never dropped silently. A row with the wrong number of fields, a field that is not a
 //! number, a non-finite value or a timestamp that does not increase is moved to
-//! [`ImuLog::rejected`] with its line, column, text and [`RejectReason`]. If more than
+//! [`ImuLog::rejected`] with its line, column, text and [`RejectReason`] (a row after a time jump
+//! or a step back of the clock that the next row confirms goes out, for the estimator behind the
+//! reader to refuse as a live stream's would be). If more than
 //! [`ImuCsvOptions::max_rejected_fraction`] of the data rows are rejected, the whole file is
 //! refused with [`ImuCsvError::TooManyRejected`]. Finally a units check on the accepted rows
 //! refuses accelerometers logged in g and gyroscopes logged in deg/s ([`ImuCsvError::Units`]).

@@ -45,15 +45,18 @@ pub struct ImuCsvReader<R> {
     /// the next rows contradict is the outlier: [`TimeVerdict::Rebase`]), and a row after a gap,
     /// held until the next row shows whether it was a stamp glitch ([`TimeVerdict::Glitch`]).
     pub(super) held: Option<ImuRow>,
-    /// A row refused as a time jump, held until the next row: when that row follows it, the
-    /// jump was a real gap and it goes out before it (a reader of the stream judges it as a
-    /// live stream's would be judged: `corridor run`'s estimator refuses it until the next
+    /// A row refused as a time jump or as going back, held until the next row: when that row
+    /// follows it, the jump was a real gap, or the clock stepped back
+    /// ([`TimeVerdict::StepBack`]), and it goes out before it (a reader of the stream judges it
+    /// as a live stream's would be judged: `corridor run`'s estimator refuses it until the next
     /// sample confirms it, as the daemon does); otherwise it is rejected.
     pub(super) jumped: Option<(ImuRow, RejectedRow)>,
-    /// Rows passed on as a real gap's far side, and the first of them as a rejection: the
-    /// estimator behind the reader refuses each until the next row confirms it, so they count
-    /// with the rejected rows in the checks over the whole log ([`Self::finish`]).
-    pub(super) jumps_passed: (u64, Option<RejectedRow>),
+    /// Rows passed on that way, and the first of them as a rejection: the estimator behind the
+    /// reader refuses each, so they count with the rejected rows in the checks over the whole
+    /// log ([`Self::finish`]).
+    pub(super) passed_refused: (u64, Option<RejectedRow>),
+    /// Of those, the jumps (for the time-unit hint).
+    pub(super) jumps_passed: u64,
     /// Rows to return before reading on, in order (those released with the current one).
     pub(super) ready: [Option<ImuRow>; 2],
     pub(super) rejected: Vec<RejectedRow>,
@@ -108,7 +111,8 @@ impl<R: BufRead> ImuCsvReader<R> {
             rejected_counts: [0; RejectReason::ALL.len()],
             held: None,
             jumped: None,
-            jumps_passed: (0, None),
+            passed_refused: (0, None),
+            jumps_passed: 0,
             ready: [None, None],
             rejected: Vec::new(),
             keep_rejected: REJECTED_ROWS_KEPT,
@@ -309,12 +313,21 @@ impl<R: BufRead> ImuCsvReader<R> {
                     verdict @ (TimeVerdict::Accept
                     | TimeVerdict::NewBase
                     | TimeVerdict::Rebase
-                    | TimeVerdict::Glitch) => {
-                        // The held jump was a real gap's far side: this row follows it.
+                    | TimeVerdict::Glitch
+                    | TimeVerdict::StepBack) => {
+                        // The held jump was a real gap's far side, or the held row the first
+                        // after the clock stepped back: this row follows it. (A step back is
+                        // taken here whatever the rates: the estimator judges it again.)
                         let jumped = match self.jumped.take() {
-                            Some((j, rejected)) if verdict == TimeVerdict::NewBase => {
-                                self.jumps_passed.0 += 1;
-                                self.jumps_passed.1.get_or_insert(rejected);
+                            Some((j, rejected))
+                                if matches!(
+                                    verdict,
+                                    TimeVerdict::NewBase | TimeVerdict::StepBack
+                                ) =>
+                            {
+                                self.passed_refused.0 += 1;
+                                self.passed_refused.1.get_or_insert(rejected);
+                                self.jumps_passed += u64::from(verdict == TimeVerdict::NewBase);
                                 Some(j)
                             }
                             Some((_, rejected)) => {
@@ -341,7 +354,8 @@ impl<R: BufRead> ImuCsvReader<R> {
                         Ok((row, jumped))
                     }
                     verdict => Err((
-                        (verdict == TimeVerdict::Jump).then_some(row),
+                        matches!(verdict, TimeVerdict::Jump | TimeVerdict::NotIncreasing)
+                            .then_some(row),
                         RejectedRow {
                             line: line_no,
                             column: REQUIRED_COLUMNS[0].to_string(),
@@ -397,8 +411,9 @@ impl<R: BufRead> ImuCsvReader<R> {
                     self.ready = [out.next(), out.next()];
                     return Ok(Some(self.emit(first)));
                 }
-                // A jump: held until the next row says whether it was a gap's far side (a
-                // jump held before is rejected when the next row was not judged: a jump again).
+                // A jump or a time that went back: held until the next row says whether it was
+                // a gap's far side or the clock's step back (a row held before is rejected when
+                // the next row was not judged: a jump or a going back again).
                 Err((Some(row), rejected)) => {
                     if let Some((_, before)) = self.jumped.replace((row, rejected)) {
                         self.reject(before);
@@ -422,7 +437,7 @@ impl<R: BufRead> ImuCsvReader<R> {
     /// step the time rule would take in milliseconds, microseconds or nanoseconds (the mean
     /// step over the rows that parsed, scaled); empty otherwise.
     fn time_unit_hint(&self, n_rejected: u64) -> String {
-        let jumps = self.rejected_counts[RejectReason::TimeJump.index()] + self.jumps_passed.0;
+        let jumps = self.rejected_counts[RejectReason::TimeJump.index()] + self.jumps_passed;
         let Some((first, last, n)) = self.parsed_t else {
             return String::new();
         };
@@ -457,16 +472,17 @@ impl<R: BufRead> ImuCsvReader<R> {
         } else {
             self.max_rejected_fraction
         };
-        // The rows passed on after a time jump count: the estimator refuses them.
-        let n_rejected = self.rows_rejected() + self.jumps_passed.0;
+        // The rows passed on after a time jump or before a step back count: the estimator
+        // refuses them.
+        let n_rejected = self.rows_rejected() + self.passed_refused.0;
         if n_rejected as f64 > max_fraction * self.total as f64 {
             let first = self
                 .rejected
                 .iter()
-                .chain(&self.jumps_passed.1)
+                .chain(&self.passed_refused.1)
                 .min_by_key(|r| r.line)
                 .cloned()
-                .expect("a rejected row or a row passed on after a jump");
+                .expect("a rejected row or a row passed on after a jump or before a step back");
             return Err(ImuCsvError::TooManyRejected {
                 path: path(),
                 rejected: n_rejected,

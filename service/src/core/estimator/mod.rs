@@ -65,7 +65,7 @@ use super::eskf::{
 };
 use super::heading::{FootprintLine, HeadingAid, Rejection, StraightWalk};
 use super::health::{self, HealthLimits, LastGood};
-use super::plausibility::Plausibility;
+use super::plausibility::{Plausibility, StepBack};
 use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rolling_velocity, rot_z, tilt_from_specific_force,
     wrap_pi, yaw,
@@ -340,7 +340,20 @@ impl Estimator {
         // A known accelerometer scale error (`model.accel_scale_factor`) taken out; the
         // plausibility limits are on what the sensor output.
         let f = Vector3::from(s.accel_m_s2) * self.p.cfg.model.accel_correction;
-        let accepted = match self.p.plausibility.check(s) {
+        // A step back of the clock is taken where the rates run on across it (`gaps.rs`).
+        // (Everything read only when asked: a step back is rare.)
+        let (stage, memory, last, cfg) = (&self.stage, &self.p.memory, &self.p.last, &self.p.cfg);
+        let judge = |back: &StepBack| {
+            matches!(stage, Stage::Running(_))
+                && gaps::clock_stepped_back(
+                    memory,
+                    last.map(|l| l.0),
+                    back,
+                    (&w, &f),
+                    (cfg.model.accel_correction, cfg.max_dt_s.get()),
+                )
+        };
+        let accepted = match self.p.plausibility.check(s, judge) {
             Ok(a) => a,
             Err(e) => {
                 let c = &mut self.p.counters;
@@ -379,6 +392,15 @@ impl Estimator {
         } else {
             [false; 3]
         };
+        // The clock stepped back, and the sample refused before this one came one sample
+        // step after the last: the stamps from here on are taken plus the step.
+        let stepped_back_s = accepted
+            .stepped_back
+            .map(|(last_t_s, first_t_s)| last_t_s + p.clock.period_s() - first_t_s);
+        if let Some(shift_s) = stepped_back_s {
+            p.clock.step_back(shift_s);
+            p.counters.clock_steps_back += 1;
+        }
         // Integration runs on the sample clock: the stamps, or while they jitter (host arrival
         // times) a smoothed clock.
         let mut t_clock = p.clock.push(s.t_s);
@@ -421,6 +443,7 @@ impl Estimator {
         out.heading_reacquired = None;
         out.replaced_first_t_s = accepted.replaced_first_t_s;
         out.glitch_t_s = accepted.glitch_t_s;
+        out.clock_stepped_back_s = stepped_back_s;
         out.detector_statistic = decision.statistic;
         out.zupt = None;
         out.late_footfall_t_s = None;

@@ -52,7 +52,9 @@ impl Pipeline {
                 self.stance_observation(eskf, t_s);
             }
             if self.cfg.eskf.zero_rate_updates {
-                self.stance_rest.push(t_s, f_avg, w_avg);
+                // Its blocks timed on the stamps less the clock's steps (monotonic).
+                self.stance_rest
+                    .push(t_s - self.clock.offset_s(), f_avg, w_avg);
                 // A long rest is fused as it goes: fused only at its end, the yaw integrated
                 // the difference between the filter's bias and the rest's rate for the whole
                 // rest (a 120 s pause at every walk's middle footprint, at the initial rest's

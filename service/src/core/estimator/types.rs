@@ -183,6 +183,10 @@ pub struct Counters {
     /// Of the gaps, those taken as the clock stepping forward with nothing lost (the rates
     /// ran on across it): integrated as one sample step.
     pub gaps_clock_steps: u64,
+    /// Steps back of the clock across which the rates ran on: taken as a new time base, the
+    /// sample refused before the step counted in `rejected_time` (a step back that is not
+    /// taken refuses every sample until the stamps pass the last accepted one).
+    pub clock_steps_back: u64,
     /// Stances since alignment.
     pub stances: u64,
     /// ZUPT updates.
@@ -298,6 +302,10 @@ pub struct Estimate {
     /// had jumped forward by a gap, to be a stamp glitch: that sample was dropped after the fact
     /// (the state is as if it had never come) and this one follows the time before it.
     pub glitch_t_s: Option<f64>,
+    /// Set on the first sample taken after the clock stepped back (the rates ran on across
+    /// the step): the stamps from here on are taken plus this, s (counted in
+    /// `clock_steps_back`). The estimates keep the stamps, which go back here.
+    pub clock_stepped_back_s: Option<f64>,
     /// The stance update on this sample found a velocity far beyond what the filter allowed
     /// and reset it first (counted in `velocity_resets`).
     pub velocity_reset: bool,
@@ -344,6 +352,7 @@ impl Default for Estimate {
             health_fault: None,
             replaced_first_t_s: None,
             glitch_t_s: None,
+            clock_stepped_back_s: None,
             velocity_reset: false,
             heading_reacquired: None,
             gap_s: None,
@@ -409,6 +418,8 @@ pub enum Notice {
     FirstTimeReplaced(f64),
     /// The previous sample, at this time (s) after a gap, was dropped as a stamp glitch.
     TimeGlitch(f64),
+    /// The clock stepped back: the stamps from here on are taken plus this, s.
+    ClockSteppedBack(f64),
 }
 
 impl std::fmt::Display for Notice {
@@ -450,6 +461,11 @@ impl std::fmt::Display for Notice {
                 "the previous sample's time {t_s} s was a glitch (this one goes back and follows \
                  the time before it); that sample was dropped after the fact"
             ),
+            Notice::ClockSteppedBack(shift_s) => write!(
+                f,
+                "the clock stepped back and the rates run on across the step: a new time base, \
+                 the stamps from here on taken {shift_s:.3} s later (the sample before refused)"
+            ),
         }
     }
 }
@@ -467,5 +483,6 @@ impl Estimate {
             .chain(self.heading_reacquired.map(Notice::HeadingReacquired))
             .chain(self.replaced_first_t_s.map(Notice::FirstTimeReplaced))
             .chain(self.glitch_t_s.map(Notice::TimeGlitch))
+            .chain(self.clock_stepped_back_s.map(Notice::ClockSteppedBack))
     }
 }

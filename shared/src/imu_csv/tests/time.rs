@@ -169,6 +169,37 @@ fn the_row_after_a_real_long_gap_goes_out_once_the_next_row_follows_it() {
 }
 
 #[test]
+fn a_clock_set_back_runs_on_from_the_step_and_its_first_row_goes_out() {
+    // Every row from line 100 on 0.3 s earlier (a host clock set back). Before, the 60 rows up
+    // to the old time were rejected as not increasing: 15 % of this log, so it was refused
+    // whole. Now line 100 is held until line 101 follows it, and both go out (the estimator
+    // behind the reader refuses line 100 and judges the step from the rates).
+    let log = parse_imu_csv(
+        &with_gaps(400, &[(100, -0.3)]),
+        path(),
+        &ImuCsvOptions::default(),
+    )
+    .unwrap();
+    assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
+    assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
+    // A step back beyond max_dt_s (1 s) is not one: the rows are refused until the time passes
+    // the last accepted one, as before.
+    let opts = ImuCsvOptions {
+        max_rejected_fraction: 0.5,
+        ..ImuCsvOptions::default()
+    };
+    let log = parse_imu_csv(&with_gaps(1000, &[(100, -1.5)]), path(), &opts).unwrap();
+    let before_s = log.rows[97].t_s;
+    assert_eq!(log.rows[97].line, 99);
+    let behind = log.rows[98..].iter().all(|r| r.t_s > before_s);
+    assert!(behind && log.rows[98].line > 390, "{:?}", log.rows[98]);
+    assert_eq!(
+        log.rejected_counts()["time_not_increasing"] as usize,
+        1000 - log.rows.len()
+    );
+}
+
+#[test]
 fn duplicate_timestamp_is_rejected() {
     let text = replace_line(&good_file(200), 4, &row(0.005));
     let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
