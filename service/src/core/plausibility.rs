@@ -58,11 +58,10 @@ pub struct Plausibility {
     /// Per field, in sample order: the value beyond which one axis is absurd.
     axis_limits: [f64; 6],
     time: TimeGuard,
-    /// The last sample refused for a time that did not increase (a step back's first sample).
+    /// The last sample refused for a time that did not increase (a step back's first sample),
+    /// until a step back is judged: a step refused, the samples that run on from it are refused
+    /// without asking again.
     went_back: Option<ImuInput>,
-    /// The judge refused a step back since the last accepted sample: the samples that run on
-    /// from it are refused without asking again.
-    step_back_refused: bool,
 }
 
 impl Plausibility {
@@ -78,7 +77,6 @@ impl Plausibility {
             axis_limits: [g, g, g, a, a, a],
             limits,
             went_back: None,
-            step_back_refused: false,
         }
     }
 
@@ -155,22 +153,12 @@ impl Plausibility {
             TimeVerdict::Accept | TimeVerdict::NewBase => {}
             TimeVerdict::Rebase => replaced_first_t_s = last_t_s,
             TimeVerdict::Glitch => glitch_t_s = last_t_s,
-            TimeVerdict::StepBack => {
-                let back = self
-                    .went_back
-                    .zip(last_t_s)
-                    .map(|(first, last_t_s)| StepBack { last_t_s, first });
-                match back {
-                    Some(back) if !self.step_back_refused && judge_step_back(&back) => {
-                        stepped_back = Some((back.last_t_s, back.first.t_s));
-                    }
-                    _ => {
-                        self.step_back_refused = true;
-                        self.went_back = Some(*s);
-                        return Err(not_increasing());
-                    }
+            TimeVerdict::StepBack => match self.went_back.take().zip(last_t_s) {
+                Some((first, last_t_s)) if judge_step_back(&StepBack { last_t_s, first }) => {
+                    stepped_back = Some((last_t_s, first.t_s));
                 }
-            }
+                _ => return Err(not_increasing()),
+            },
             TimeVerdict::NotIncreasing => {
                 self.went_back = Some(*s);
                 return Err(not_increasing());
@@ -184,8 +172,6 @@ impl Plausibility {
             }
         }
         self.time.accept(s.t_s);
-        // (`went_back` stays: a step back is only ever judged right after a sample went back.)
-        self.step_back_refused = false;
         let rail = |v: &[f64; 3], range: f64| v.iter().any(|x| x.abs() >= CLIP_FRACTION * range);
         Ok(Accepted {
             clipped: rail(&s.gyro_rad_s, l.gyro_range_rad_s())
