@@ -20,7 +20,7 @@
 #define CORRIDOR_ALIGNOF(t) _Alignof(t)
 #endif
 
-#define CORRIDOR_SERVICE_VERSION "v3"
+#define CORRIDOR_SERVICE_VERSION "v4"
 #define CORRIDOR_FLAG_END_OF_STREAM 1u
 #define CORRIDOR_FLAG_BIAS_CORRECTED 2u
 #define CORRIDOR_FLAG_STANCE 4u
@@ -35,11 +35,11 @@
 /* Event (no payload) the daemon notifies, with event id = the producer's publisher id
  * modulo 256, when it has taken that producer's first sample: a producer waits for it
  * before it drops its publisher (client/src/producer.rs). */
-#define CORRIDOR_IMU_ACK_EVENT "corridor/v3/imu_ack"
+#define CORRIDOR_IMU_ACK_EVENT "corridor/v4/imu_ack"
 
 /* One IMU sample, producer -> daemon. */
-#define CORRIDOR_IMU_SAMPLE_SERVICE "corridor/v3/imu"
-#define CORRIDOR_IMU_SAMPLE_TYPE_NAME "corridor_v3_ImuSample"
+#define CORRIDOR_IMU_SAMPLE_SERVICE "corridor/v4/imu"
+#define CORRIDOR_IMU_SAMPLE_TYPE_NAME "corridor_v4_ImuSample"
 typedef struct corridor_ImuSample {
     uint64_t seq;
     double t_s;
@@ -62,8 +62,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_ImuSample, reserved) == 76, "corridor_I
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_ImuSample, sent_ns) == 80, "corridor_ImuSample.sent_ns: offset");
 
 /* An external attitude observation, producer -> daemon. */
-#define CORRIDOR_ANGLE_OBSERVATION_SERVICE "corridor/v3/angles"
-#define CORRIDOR_ANGLE_OBSERVATION_TYPE_NAME "corridor_v3_AngleObservation"
+#define CORRIDOR_ANGLE_OBSERVATION_SERVICE "corridor/v4/angles"
+#define CORRIDOR_ANGLE_OBSERVATION_TYPE_NAME "corridor_v4_AngleObservation"
 typedef struct corridor_AngleObservation {
     uint64_t seq;
     double t_s;
@@ -90,8 +90,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_AngleObservation, valid) == 64, "corrid
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_AngleObservation, reserved) == 68, "corridor_AngleObservation.reserved: offset");
 
 /* The gyro-bias estimate, daemon -> clients. */
-#define CORRIDOR_BIAS_SAMPLE_SERVICE "corridor/v3/bias"
-#define CORRIDOR_BIAS_SAMPLE_TYPE_NAME "corridor_v3_BiasSample"
+#define CORRIDOR_BIAS_SAMPLE_SERVICE "corridor/v4/bias"
+#define CORRIDOR_BIAS_SAMPLE_TYPE_NAME "corridor_v4_BiasSample"
 typedef struct corridor_BiasSample {
     uint64_t seq;
     double t_s;
@@ -114,8 +114,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, converged) == 80, "corridor
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, flags) == 84, "corridor_BiasSample.flags: offset");
 
 /* The attitude after one IMU sample, daemon -> clients. */
-#define CORRIDOR_ATTITUDE_SAMPLE_SERVICE "corridor/v3/attitude"
-#define CORRIDOR_ATTITUDE_SAMPLE_TYPE_NAME "corridor_v3_AttitudeSample"
+#define CORRIDOR_ATTITUDE_SAMPLE_SERVICE "corridor/v4/attitude"
+#define CORRIDOR_ATTITUDE_SAMPLE_TYPE_NAME "corridor_v4_AttitudeSample"
 typedef struct corridor_AttitudeSample {
     uint64_t seq;
     double t_s;
@@ -146,8 +146,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_AttitudeSample, flags) == 132, "corrido
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_AttitudeSample, imu_sent_ns) == 136, "corridor_AttitudeSample.imu_sent_ns: offset");
 
 /* Position and velocity at a footfall, daemon -> clients. */
-#define CORRIDOR_NAV_SAMPLE_SERVICE "corridor/v3/nav"
-#define CORRIDOR_NAV_SAMPLE_TYPE_NAME "corridor_v3_NavSample"
+#define CORRIDOR_NAV_SAMPLE_SERVICE "corridor/v4/nav"
+#define CORRIDOR_NAV_SAMPLE_TYPE_NAME "corridor_v4_NavSample"
 typedef struct corridor_NavSample {
     uint64_t seq;
     double t_s;
@@ -172,8 +172,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_NavSample, flags) == 88, "corridor_NavS
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_NavSample, reserved) == 92, "corridor_NavSample.reserved: offset");
 
 /* Counters of the daemon, daemon -> clients. */
-#define CORRIDOR_DIAGNOSTICS_SERVICE "corridor/v3/diagnostics"
-#define CORRIDOR_DIAGNOSTICS_TYPE_NAME "corridor_v3_Diagnostics"
+#define CORRIDOR_DIAGNOSTICS_SERVICE "corridor/v4/diagnostics"
+#define CORRIDOR_DIAGNOSTICS_TYPE_NAME "corridor_v4_Diagnostics"
 typedef struct corridor_Diagnostics {
     uint64_t seq;
     double t_s;
@@ -183,6 +183,8 @@ typedef struct corridor_Diagnostics {
     uint64_t late;
     uint64_t rejected_non_finite;
     uint64_t rejected_time;
+    uint64_t rejected_implausible;
+    uint64_t rejected_time_jump;
     uint64_t dropped_overflow;
     uint64_t accepted;
     uint64_t undelivered;
@@ -200,7 +202,7 @@ typedef struct corridor_Diagnostics {
     uint32_t phase;
     uint32_t flags;
 } corridor_Diagnostics;
-CORRIDOR_STATIC_ASSERT(sizeof(corridor_Diagnostics) == 184, "corridor_Diagnostics: size");
+CORRIDOR_STATIC_ASSERT(sizeof(corridor_Diagnostics) == 200, "corridor_Diagnostics: size");
 CORRIDOR_STATIC_ASSERT(CORRIDOR_ALIGNOF(corridor_Diagnostics) == 8, "corridor_Diagnostics: alignment");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, seq) == 0, "corridor_Diagnostics.seq: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, t_s) == 8, "corridor_Diagnostics.t_s: offset");
@@ -210,21 +212,23 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, rejected_duplicate_seq) ==
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, late) == 40, "corridor_Diagnostics.late: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, rejected_non_finite) == 48, "corridor_Diagnostics.rejected_non_finite: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, rejected_time) == 56, "corridor_Diagnostics.rejected_time: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, dropped_overflow) == 64, "corridor_Diagnostics.dropped_overflow: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, accepted) == 72, "corridor_Diagnostics.accepted: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, undelivered) == 80, "corridor_Diagnostics.undelivered: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, stances) == 88, "corridor_Diagnostics.stances: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, heading_used) == 96, "corridor_Diagnostics.heading_used: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, last_nis) == 104, "corridor_Diagnostics.last_nis: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, producer_changes) == 112, "corridor_Diagnostics.producer_changes: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, latency_p50_s) == 120, "corridor_Diagnostics.latency_p50_s: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, latency_p99_s) == 128, "corridor_Diagnostics.latency_p99_s: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, head_missing) == 136, "corridor_Diagnostics.head_missing: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, missing_at_restart) == 144, "corridor_Diagnostics.missing_at_restart: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, lost_in_daemon) == 152, "corridor_Diagnostics.lost_in_daemon: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, angles_dropped) == 160, "corridor_Diagnostics.angles_dropped: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, lives) == 168, "corridor_Diagnostics.lives: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, phase) == 176, "corridor_Diagnostics.phase: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, flags) == 180, "corridor_Diagnostics.flags: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, rejected_implausible) == 64, "corridor_Diagnostics.rejected_implausible: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, rejected_time_jump) == 72, "corridor_Diagnostics.rejected_time_jump: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, dropped_overflow) == 80, "corridor_Diagnostics.dropped_overflow: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, accepted) == 88, "corridor_Diagnostics.accepted: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, undelivered) == 96, "corridor_Diagnostics.undelivered: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, stances) == 104, "corridor_Diagnostics.stances: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, heading_used) == 112, "corridor_Diagnostics.heading_used: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, last_nis) == 120, "corridor_Diagnostics.last_nis: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, producer_changes) == 128, "corridor_Diagnostics.producer_changes: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, latency_p50_s) == 136, "corridor_Diagnostics.latency_p50_s: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, latency_p99_s) == 144, "corridor_Diagnostics.latency_p99_s: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, head_missing) == 152, "corridor_Diagnostics.head_missing: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, missing_at_restart) == 160, "corridor_Diagnostics.missing_at_restart: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, lost_in_daemon) == 168, "corridor_Diagnostics.lost_in_daemon: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, angles_dropped) == 176, "corridor_Diagnostics.angles_dropped: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, lives) == 184, "corridor_Diagnostics.lives: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, phase) == 192, "corridor_Diagnostics.phase: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, flags) == 196, "corridor_Diagnostics.flags: offset");
 
 #endif /* CORRIDOR_WIRE_H */

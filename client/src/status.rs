@@ -81,8 +81,13 @@ impl Status {
         );
         let _ = writeln!(
             s,
-            "rejected:         non-finite {}, time not increasing {}, duplicate seq {}, late {}",
-            d.rejected_non_finite, d.rejected_time, d.rejected_duplicate_seq, d.late
+            "rejected:         non-finite {}, implausible {}, time not increasing {}, time jump {}, duplicate seq {}, late {}",
+            d.rejected_non_finite,
+            d.rejected_implausible,
+            d.rejected_time,
+            d.rejected_time_jump,
+            d.rejected_duplicate_seq,
+            d.late
         );
         let _ = writeln!(
             s,

@@ -12,7 +12,8 @@
 //! - `t_s`: sensor time in **seconds** (`f64`, the clock of the IMU log, not wall-clock time).
 //!   Seconds as `f64` are used rather than integer nanoseconds so that a log replayed through the
 //!   daemon reaches the estimator with bit-identical times (and so bit-identical estimates) to
-//!   the offline runner.
+//!   the offline runner. Outputs keep the sensor's stamps: where its clock stepped back and the
+//!   estimator took the step as a new time base, their `t_s` goes back too (`seq` orders them).
 //! - angles in radians, rates in rad/s, specific force in m/s², positions in m, velocities in m/s;
 //!   vectors in sensor axes (`_body`/gyro bias) or in the map frame (position, velocity), as named.
 
@@ -68,9 +69,9 @@ pub mod phase {
     }
 }
 
-/// One IMU sample, producer → daemon (`corridor/v3/imu`).
+/// One IMU sample, producer → daemon (`corridor/v4/imu`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v3_ImuSample")]
+#[type_name("corridor_v4_ImuSample")]
 #[repr(C)]
 pub struct ImuSample {
     /// Sequence number of the producer, +1 per sample (end-of-stream markers included).
@@ -114,11 +115,11 @@ impl From<&ImuRow> for ImuSample {
     }
 }
 
-/// An external attitude observation, producer → daemon (`corridor/v3/angles`), e.g. a heading
+/// An external attitude observation, producer → daemon (`corridor/v4/angles`), e.g. a heading
 /// from a map matcher or a camera. The heading is used when its bit is set in `valid` (at the
 /// next stance, instead of the map); roll and pitch are not fused (see [`ANGLE_ROLL`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v3_AngleObservation")]
+#[type_name("corridor_v4_AngleObservation")]
 #[repr(C)]
 pub struct AngleObservation {
     /// Sequence number of the producer.
@@ -143,10 +144,10 @@ pub struct AngleObservation {
     pub reserved: u32,
 }
 
-/// The gyro-bias estimate, daemon → clients (`corridor/v3/bias`): at each heading observation,
+/// The gyro-bias estimate, daemon → clients (`corridor/v4/bias`): at each heading observation,
 /// at the configured rate and at end of stream.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v3_BiasSample")]
+#[type_name("corridor_v4_BiasSample")]
 #[repr(C)]
 pub struct BiasSample {
     /// Sequence number of the daemon's bias stream.
@@ -186,10 +187,10 @@ impl Default for BiasSample {
     }
 }
 
-/// The attitude after one IMU sample, daemon → clients (`corridor/v3/attitude`): one per
+/// The attitude after one IMU sample, daemon → clients (`corridor/v4/attitude`): one per
 /// accepted IMU sample, plus one end-of-stream marker.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v3_AttitudeSample")]
+#[type_name("corridor_v4_AttitudeSample")]
 #[repr(C)]
 pub struct AttitudeSample {
     /// Sequence number of the daemon's attitude stream.
@@ -220,13 +221,13 @@ pub struct AttitudeSample {
     pub imu_sent_ns: u64,
 }
 
-/// Position and velocity at a footfall, daemon → clients (`corridor/v3/nav`): one per stance
+/// Position and velocity at a footfall, daemon → clients (`corridor/v4/nav`): one per stance
 /// (first sample of the stance), after alignment. A sample whose stamp turns out to be a glitch
 /// is dropped after its nav sample went out; its stance's real first sample then sends one
 /// again, with the same `stance` and a later `imu_seq` (`corridor_client`'s tracker takes it
 /// for the stride it replaces).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v3_NavSample")]
+#[type_name("corridor_v4_NavSample")]
 #[repr(C)]
 pub struct NavSample {
     /// Sequence number of the daemon's nav stream.
@@ -249,7 +250,7 @@ pub struct NavSample {
     pub reserved: u32,
 }
 
-/// Counters of the daemon, daemon → clients (`corridor/v3/diagnostics`): periodically (wall
+/// Counters of the daemon, daemon → clients (`corridor/v4/diagnostics`): periodically (wall
 /// clock), at end of stream and at shutdown. The input counters (`received`, `seq_gaps`,
 /// `rejected_duplicate_seq`, `late`, `dropped_overflow`, `producer_changes`) and `undelivered`
 /// are cumulative over every life of the domain's daemon (they live in its accounting file, so a
@@ -257,7 +258,7 @@ pub struct NavSample {
 /// `lost_in_daemon` and `angles_dropped`; the estimator's counts (`accepted`,
 /// `rejected_non_finite`, `rejected_time`, `stances`, `heading_used`) over the current life.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v3_Diagnostics")]
+#[type_name("corridor_v4_Diagnostics")]
 #[repr(C)]
 pub struct Diagnostics {
     /// Sequence number of the daemon's diagnostics stream.
@@ -276,6 +277,12 @@ pub struct Diagnostics {
     pub rejected_non_finite: u64,
     /// Samples refused by the estimator: time did not increase.
     pub rejected_time: u64,
+    /// Samples refused by the estimator: a magnitude beyond what the sensor can output (v4).
+    pub rejected_implausible: u64,
+    /// Samples refused by the estimator: a time jump beyond `sensor.max_dt_s` that the next
+    /// sample did not confirm, and samples dropped after the fact (a first time the samples
+    /// after it contradicted, a stamp glitch) (v4).
+    pub rejected_time_jump: u64,
     /// Samples dropped because the receive → estimator channel was full (live policy only).
     pub dropped_overflow: u64,
     /// Samples the estimator accepted.
@@ -361,7 +368,7 @@ mod tests {
         assert_eq!(size_of::<BiasSample>(), 8 * 3 + 48 + 8 + 8);
         assert_eq!(size_of::<AttitudeSample>(), 8 * 3 + 32 + 24 + 48 + 8 + 8);
         assert_eq!(size_of::<NavSample>(), 8 * 4 + 48 + 8 + 8);
-        assert_eq!(size_of::<Diagnostics>(), 8 * 22 + 8);
+        assert_eq!(size_of::<Diagnostics>(), 8 * 24 + 8);
     }
 
     #[test]

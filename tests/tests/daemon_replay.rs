@@ -328,9 +328,13 @@ fn bad_samples_over_ipc_are_rejected_and_counted() {
 
     let report = daemon.stop();
     assert_eq!(report.diagnostics.rejected_non_finite, 1);
-    // Not on the wire (v3): in the report and its JSON.
+    // On the wire since v4 (before: in the report only).
+    assert_eq!((d.rejected_implausible, d.rejected_time_jump), (1, 1));
     assert_eq!(
-        (report.rejected_implausible, report.rejected_time_jump),
+        (
+            report.diagnostics.rejected_implausible,
+            report.diagnostics.rejected_time_jump
+        ),
         (1, 1)
     );
     assert_eq!(report.streams_finished, 1);

@@ -8,7 +8,7 @@ tests/test_wire_layout.py checks them against the layout the Rust code measures
 import ctypes
 from typing import List, Tuple, Type
 
-SERVICE_VERSION = "v3"
+SERVICE_VERSION = "v4"
 
 FLAG_END_OF_STREAM = 1 << 0
 FLAG_BIAS_CORRECTED = 1 << 1
@@ -52,8 +52,8 @@ class _Wire(ctypes.Structure):
 class ImuSample(_Wire):
     """One IMU sample, producer -> daemon."""
 
-    TYPE_NAME = "corridor_v3_ImuSample"
-    SERVICE = "corridor/v3/imu"
+    TYPE_NAME = "corridor_v4_ImuSample"
+    SERVICE = "corridor/v4/imu"
     _fields_: List[Tuple[str, Type]] = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -69,8 +69,8 @@ class ImuSample(_Wire):
 class AngleObservation(_Wire):
     """An external attitude observation, producer -> daemon."""
 
-    TYPE_NAME = "corridor_v3_AngleObservation"
-    SERVICE = "corridor/v3/angles"
+    TYPE_NAME = "corridor_v4_AngleObservation"
+    SERVICE = "corridor/v4/angles"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -88,8 +88,8 @@ class AngleObservation(_Wire):
 class BiasSample(_Wire):
     """The gyro-bias estimate, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v3_BiasSample"
-    SERVICE = "corridor/v3/bias"
+    TYPE_NAME = "corridor_v4_BiasSample"
+    SERVICE = "corridor/v4/bias"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -105,8 +105,8 @@ class BiasSample(_Wire):
 class AttitudeSample(_Wire):
     """The attitude after one IMU sample, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v3_AttitudeSample"
-    SERVICE = "corridor/v3/attitude"
+    TYPE_NAME = "corridor_v4_AttitudeSample"
+    SERVICE = "corridor/v4/attitude"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -126,8 +126,8 @@ class AttitudeSample(_Wire):
 class NavSample(_Wire):
     """Position and velocity at a footfall, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v3_NavSample"
-    SERVICE = "corridor/v3/nav"
+    TYPE_NAME = "corridor_v4_NavSample"
+    SERVICE = "corridor/v4/nav"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -144,8 +144,8 @@ class NavSample(_Wire):
 class Diagnostics(_Wire):
     """Counters of the daemon, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v3_Diagnostics"
-    SERVICE = "corridor/v3/diagnostics"
+    TYPE_NAME = "corridor_v4_Diagnostics"
+    SERVICE = "corridor/v4/diagnostics"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -155,6 +155,8 @@ class Diagnostics(_Wire):
         ("late", _u64),
         ("rejected_non_finite", _u64),
         ("rejected_time", _u64),
+        ("rejected_implausible", _u64),
+        ("rejected_time_jump", _u64),
         ("dropped_overflow", _u64),
         ("accepted", _u64),
         ("undelivered", _u64),

@@ -156,6 +156,8 @@ impl<'a> EstState<'a> {
             late: rx.late.load(Ordering::Relaxed),
             rejected_non_finite: p.rejected_non_finite + c.rejected_non_finite,
             rejected_time: p.rejected_time + c.rejected_time,
+            rejected_implausible: p.rejected_implausible + c.rejected_implausible,
+            rejected_time_jump: p.rejected_time_jump + c.rejected_time_jump,
             dropped_overflow: rx.dropped.load(Ordering::Relaxed),
             accepted: p.samples + c.samples,
             undelivered: self.rec.undelivered.load(Ordering::Relaxed),
@@ -590,11 +592,6 @@ pub(super) fn estimator_thread(
     st.save_checkpoint(cfg);
     let mut diagnostics = st.diagnostics(counters, FLAG_SHUTDOWN);
     diagnostics.seq = out.diagnostics.seq.saturating_sub(1);
-    let c = st.est.counters();
-    let (rejected_implausible, rejected_time_jump) = (
-        st.previous.rejected_implausible + c.rejected_implausible,
-        st.previous.rejected_time_jump + c.rejected_time_jump,
-    );
     Ok(DaemonReport {
         diagnostics,
         streams_finished: st.streams_finished,
@@ -611,8 +608,6 @@ pub(super) fn estimator_thread(
         missing_at_restart: counters.missing_at_restart.load(Ordering::Relaxed),
         estimated: counters.taken.load(Ordering::Relaxed),
         lost_in_daemon: counters.lost_in_daemon.load(Ordering::Relaxed),
-        rejected_implausible,
-        rejected_time_jump,
         angles_dropped: counters.angles_dropped.load(Ordering::Relaxed),
         angles_ignored: counters.angles_ignored.load(Ordering::Relaxed),
         published: [

@@ -228,13 +228,6 @@ pub struct DaemonReport {
     /// dropped (killed with them in its receive thread or channel): `received = estimated +
     /// dropped_overflow + rejected_duplicate_seq + late + lost_in_daemon` after a clean stop.
     pub lost_in_daemon: u64,
-    /// Samples the estimator refused as implausible (a value beyond what the sensor can read)
-    /// and as a jump in time (a step beyond `sensor.max_dt_s` that the next sample did not
-    /// confirm), over the daemon's life. Not on the wire: `Diagnostics` carries the other
-    /// refusals, and a new field waits for the next wire version (the health line logs them).
-    pub rejected_implausible: u64,
-    /// See [`DaemonReport::rejected_implausible`].
-    pub rejected_time_jump: u64,
     /// Angle observations dropped because the estimator's channel was full (live delivery).
     pub angles_dropped: u64,
     /// Angle observations carrying roll or pitch, which are not fused (their heading is used).
