@@ -62,13 +62,19 @@ fn a_clock_set_back_mid_stream_costs_one_sample() {
     assert_eq!(last.gyro_bias_rad_s, est.last_estimate().gyro_bias_rad_s);
     let d = report.diagnostics;
     assert_eq!((d.accepted, d.rejected_time), (3999, 1), "{d:?}");
-    // The bias output goes back with the stamps once, and runs on without a pause.
+    // The bias output goes back with the stamps once, and runs on without a pause: counted in
+    // IMU samples (the stamps cannot show a pause that spans the step).
     let steps: Vec<f64> = got.windows(2).map(|w| w[1].t_s - w[0].t_s).collect();
     assert_eq!(steps.iter().filter(|&&dt| dt < 0.0).count(), 1, "{steps:?}");
-    let longest = steps.iter().copied().fold(0.0, f64::max);
+    let longest = got
+        .windows(2)
+        .map(|w| w[1].imu_seq.saturating_sub(w[0].imu_seq))
+        .max()
+        .unwrap();
+    let period = (bias_period_s * 200.0).round() as u64;
     assert!(
-        longest <= bias_period_s + 0.01,
-        "{longest} s without a bias sample at a period of {bias_period_s} s"
+        longest <= period + 2,
+        "{longest} IMU samples without a bias sample at a period of {period}"
     );
     cleanup_domain(name);
 }

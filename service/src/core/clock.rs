@@ -223,9 +223,9 @@ impl SampleClock {
         self.last_out_s -= step_s;
     }
 
-    /// The stamps stepped back by `shift_s` less one sample step before the next stamp (the
-    /// estimator's judgement, from the rates): every later stamp is taken plus it, so the
-    /// next time returned runs on from the last.
+    /// The stamps went back (the estimator's judgement, from the rates): every later stamp is
+    /// taken plus `shift_s`, the time they went back by plus one sample step (for the sample
+    /// refused after the step), so the next time returned runs on from the last.
     pub fn step_back(&mut self, shift_s: f64) {
         self.offset_s -= shift_s;
         if let Some(last) = &mut self.last_stamp_s {

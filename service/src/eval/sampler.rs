@@ -84,11 +84,12 @@ impl GcpSampler {
         if let Some((t_last, _)) = self.last
             && t_s <= t_last
         {
-            if !std::mem::take(&mut self.may_go_back) || t_s == t_last {
+            if !std::mem::take(&mut self.may_go_back) {
                 self.out_of_order_s.get_or_insert(t_s);
                 return;
             }
-            // The estimator's clock stepped back: the rows run on from here, and the GCPs
+            // The estimator's clock stepped back: the rows run on from here (from the last
+            // row's time too, on a clock that stepped back by whole periods), and the GCPs
             // they pass again were sampled before the step.
             let (_, n) = self.went_back.get_or_insert((t_s, 0));
             *n += 1;

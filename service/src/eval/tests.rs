@@ -550,6 +550,17 @@ fn a_clock_step_back_told_to_the_streamed_evaluation_samples_each_footprint_once
             whole.max_time_offset_s
         )
     );
+    // Stepped back to the last row's own time (whole periods, a review found it refused): the
+    // same footprints.
+    let mut s = GcpSampler::new(&truth, &o);
+    for i in 0..t.len() {
+        if i == k {
+            s.clock_stepped_back();
+            s.push(t[k - 1], x[k - 1], y[k - 1]);
+        }
+        s.push(t[i], x[i], y[i]);
+    }
+    assert_eq!(at(&s.finish().unwrap()), at(&whole));
     // Not told, it is refused as before.
     assert!(matches!(
         streamed(&stepped, &x, &y, &stepped_truth, &o),

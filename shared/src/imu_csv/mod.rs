@@ -75,7 +75,8 @@ const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
 /// One accepted IMU sample.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ImuRow {
-    /// Sample time in seconds (strictly increasing over the accepted rows).
+    /// Sample time in seconds (strictly increasing over the accepted rows, but where the clock
+    /// stepped back: [`crate::sensor::TimeVerdict::StepBack`]).
     pub t_s: f64,
     /// Angular rate about the body x, y, z axes in rad/s.
     pub gyro_rad_s: [f64; 3],
@@ -95,7 +96,8 @@ pub enum RejectReason {
     Malformed,
     /// A field parsed to NaN or ±infinity.
     NonFinite,
-    /// `t_s` is not greater than the previous accepted row's `t_s` (duplicates included).
+    /// `t_s` is not greater than the previous accepted row's `t_s` (duplicates included), and
+    /// not the first row after a step back of the clock.
     TimeNotIncreasing,
     /// `t_s` jumps forward by more than [`ImuCsvOptions::max_dt_s`] and the next row does not
     /// follow it (an outlier such as `1e30`). The first row after a real gap, which the next
@@ -234,7 +236,9 @@ impl fmt::Display for Located<'_> {
 pub struct ImuLog {
     /// The file the log was read from (or the name given to [`parse_imu_csv`]).
     pub path: PathBuf,
-    /// Accepted samples in file order; `t_s` is strictly increasing.
+    /// Accepted samples in file order; `t_s` is strictly increasing but where the clock stepped
+    /// back (within `max_dt_s`, a row after it confirming it), so code that searches the times
+    /// (the suite's cuts, the diagnosis) assumes a log without one, as the bundled ones are.
     pub rows: Vec<ImuRow>,
     /// Rejected data rows, each with its reason, in the order they were decided: file order,
     /// but for a row held until the next row (a first time, a gap's far side, a time jump)

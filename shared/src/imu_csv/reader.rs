@@ -414,6 +414,16 @@ impl<R: BufRead> ImuCsvReader<R> {
                 // A jump or a time that went back: held until the next row says whether it was
                 // a gap's far side or the clock's step back (a row held before is rejected when
                 // the next row was not judged: a jump or a going back again).
+                // A row that went back leaves a held jump (the time rule keeps its candidate).
+                Err((Some(_), rejected))
+                    if rejected.reason == RejectReason::TimeNotIncreasing
+                        && self
+                            .jumped
+                            .as_ref()
+                            .is_some_and(|(_, j)| j.reason == RejectReason::TimeJump) =>
+                {
+                    self.reject(rejected);
+                }
                 Err((Some(row), rejected)) => {
                     if let Some((_, before)) = self.jumped.replace((row, rejected)) {
                         self.reject(before);

@@ -343,13 +343,14 @@ impl Estimator {
         // A step back of the clock is taken where the rates run on across it (`gaps.rs`).
         // (Everything read only when asked: a step back is rare.)
         let (stage, memory, last, cfg) = (&self.stage, &self.p.memory, &self.p.last, &self.p.cfg);
+        let clock = &self.p.clock;
         let judge = |back: &StepBack| {
             matches!(stage, Stage::Running(_))
                 && gaps::clock_stepped_back(
                     memory,
-                    last.map(|l| l.0),
+                    (last.map(|l| l.0), clock),
                     back,
-                    (&w, &f),
+                    (s.t_s, &w, &f),
                     (cfg.model.accel_correction, cfg.max_dt_s.get()),
                 )
         };

@@ -184,7 +184,7 @@ pub struct Counters {
     /// ran on across it): integrated as one sample step.
     pub gaps_clock_steps: u64,
     /// Steps back of the clock across which the rates ran on: taken as a new time base, the
-    /// sample refused before the step counted in `rejected_time` (a step back that is not
+    /// first sample after the step (refused) counted in `rejected_time` (a step back that is not
     /// taken refuses every sample until the stamps pass the last accepted one).
     pub clock_steps_back: u64,
     /// Stances since alignment.
@@ -464,7 +464,7 @@ impl std::fmt::Display for Notice {
             Notice::ClockSteppedBack(shift_s) => write!(
                 f,
                 "the clock stepped back and the rates run on across the step: a new time base, \
-                 the stamps from here on taken {shift_s:.3} s later (the sample before refused)"
+                 the stamps from here on taken {shift_s:.3} s later (the first sample after the step refused)"
             ),
         }
     }

@@ -188,6 +188,13 @@ fn a_clock_set_back_runs_on_from_the_step_and_its_first_row_goes_out() {
         max_rejected_fraction: 0.5,
         ..ImuCsvOptions::default()
     };
+    // A stray earlier row between a real gap's far side and the row that confirms it: only the
+    // stray row is rejected.
+    let text = replace_line(&with_gaps(400, &[(100, 10.0)]), 101, &row(0.3));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    let rejected: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
+    assert_eq!(rejected, [(101, RejectReason::TimeNotIncreasing)]);
+    assert_eq!((log.rows.len(), log.rows[98].line), (399, 100));
     let log = parse_imu_csv(&with_gaps(1000, &[(100, -1.5)]), path(), &opts).unwrap();
     let before_s = log.rows[97].t_s;
     assert_eq!(log.rows[97].line, 99);
