@@ -18,11 +18,11 @@ refuses the rows up to the old time may stop at the reader's 1 % limit: shown as
 `JITTER=0.004` stamps every row up to that much late first (host arrival times, seeded). Needs the
 release binary (`cargo build --release -p corridor-service --bin corridor`).
 """
-import csv, json, os, random, shutil, statistics, subprocess, sys, tempfile
+import json, os, random, shutil, statistics, subprocess, sys, tempfile
 from concurrent.futures import ThreadPoolExecutor
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from suite_walks import walks
+from suite_walks import places, stamp, walks
 
 root = os.getcwd()
 binary = os.environ.get("BIN", os.path.join(root, "target/release/corridor"))
@@ -46,11 +46,6 @@ def run(imu, truth, sh, out, keep=False):
             shutil.rmtree(out, ignore_errors=True)
 
 
-def stamp(row, dt):
-    t, rest = row.split(",", 1)
-    return repr(float(t) + dt) + "," + rest
-
-
 lengths = [float(x) for x in sys.argv[1].split(",")]
 cases = []
 for n, (name, imu, truth, sh) in enumerate(recs):
@@ -68,20 +63,11 @@ for n, (name, imu, truth, sh) in enumerate(recs):
     out = os.path.join(tmp, f"{n}-base")
     run(imu, truth, sh, out, keep=True)
     ts = [float(r.split(",", 1)[0]) for r in rows]
-    est = list(csv.DictReader(open(os.path.join(out, "estimates.csv"))))
+    at_places = places(name, rows, os.path.join(out, "estimates.csv"))
     shutil.rmtree(out, ignore_errors=True)
-    ends = [float(est[i]["t_s"]) for i in range(1, len(est))
-            if est[i - 1]["stance"] == "1" and est[i]["stance"] == "0"]
-    places = []
-    for pos in (0.3, 0.5, 0.7):
-        random.seed(f"{name}/{pos}")
-        places.append((f"{pos}", int(len(rows) * pos) + random.randint(0, 200)))
-    for pos in (0.3, 0.7):
-        t_end = min(ends, key=lambda e: abs(e - (ts[0] + pos * (ts[-1] - ts[0]))))
-        places.append((f"end {pos}", min(range(len(ts)), key=lambda i: abs(ts[i] - t_end))))
     for length in lengths:
         back = round(length * 200) * 0.005
-        for at, i0 in places:
+        for at, i0 in at_places:
             d = os.path.join(tmp, f"{n}-{length}-{at}")
             os.makedirs(d, exist_ok=True)
             t0 = ts[i0 - 1]

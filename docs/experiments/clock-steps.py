@@ -14,11 +14,11 @@ often a clock step was taken (`gaps_clock_steps` in the summary; on a loss that 
 the median and worst change, and how many cases are worse by more than 0.1 % of path. Needs the
 release binary (`cargo build --release -p corridor-service --bin corridor`).
 """
-import csv, json, os, random, re, shutil, statistics, subprocess, sys, tempfile
+import json, os, shutil, statistics, subprocess, sys, tempfile
 from concurrent.futures import ThreadPoolExecutor
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from suite_walks import walks
+from suite_walks import places, stamp, walks
 
 root = os.getcwd()
 binary = os.environ.get("BIN", os.path.join(root, "target/release/corridor"))
@@ -42,11 +42,6 @@ def run(imu, truth, sh, out):
             shutil.rmtree(out, ignore_errors=True)
 
 
-def stamp(row, dt):
-    t, rest = row.split(",", 1)
-    return repr(float(t) + dt) + "," + rest
-
-
 lengths = [float(x) for x in sys.argv[1].split(",")]
 cases = []
 for n, (name, imu, truth, sh) in enumerate(recs):
@@ -56,19 +51,10 @@ for n, (name, imu, truth, sh) in enumerate(recs):
     out = os.path.join(tmp, f"{n}-base")
     base = run(imu, truth, sh, out)[0]
     ts = [float(r.split(",", 1)[0]) for r in rows]
-    est = list(csv.DictReader(open(os.path.join(out, "estimates.csv"))))
-    ends = [float(est[i]["t_s"]) for i in range(1, len(est))
-            if est[i - 1]["stance"] == "1" and est[i]["stance"] == "0"]
-    places = []
-    for pos in (0.3, 0.5, 0.7):
-        random.seed(f"{name}/{pos}")
-        places.append((f"{pos}", int(len(rows) * pos) + random.randint(0, 200)))
-    for pos in (0.3, 0.7):
-        t_end = min(ends, key=lambda e: abs(e - (ts[0] + pos * (ts[-1] - ts[0]))))
-        places.append((f"end {pos}", min(range(len(ts)), key=lambda i: abs(ts[i] - t_end))))
+    at_places = places(name, rows, os.path.join(out, "estimates.csv"))
     for length in lengths:
         k = int(round(length * 200))
-        for at, i0 in places:
+        for at, i0 in at_places:
             d = os.path.join(tmp, f"{n}-{length}-{at}")
             os.makedirs(d, exist_ok=True)
             # A clock step: the rows from i0 on (and the footprints after them) later by k steps.
