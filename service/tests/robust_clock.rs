@@ -77,19 +77,51 @@ fn a_clock_set_back_costs_one_sample_and_a_re_sent_buffer_costs_nothing() {
         // Not a clock set back (a review found both taken for one, up to 3.7 % of path): two
         // packets of two samples delivered swapped, and two bad stamps in a row (one 0.1 s
         // early, the next just before the last good one). Refused as before: two rows each.
+        // A second review: packets of eight swapped (a step back of 0.08 s into the hole the
+        // first packet left), and bad stamps 0.1 and 0.06 s early on jittered stamps.
         let mut swapped = log.clone();
         swapped.rows[k..k + 4].rotate_left(2);
+        let mut swapped8 = log.clone();
+        swapped8.rows[k..k + 16].rotate_left(8);
         let mut bad = log.clone();
         bad.rows[k].t_s -= 0.1;
         bad.rows[k + 1].t_s = log.rows[k - 1].t_s - 0.001;
-        for (what, log) in [("swapped", &swapped), ("bad stamps", &bad)] {
+        let mut jittered = log.clone();
+        let mut seed = 1u64;
+        for r in &mut jittered.rows {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            r.t_s += 0.004 * (seed >> 11) as f64 / (1u64 << 53) as f64;
+        }
+        for w in 1..jittered.rows.len() {
+            let prev = jittered.rows[w - 1].t_s;
+            let r = &mut jittered.rows[w];
+            r.t_s = r.t_s.max(prev + 1e-5);
+        }
+        let mut bad_jittered = jittered.clone();
+        bad_jittered.rows[k].t_s -= 0.1;
+        bad_jittered.rows[k + 1].t_s -= 0.06;
+        for (what, log, refused) in [
+            ("swapped", &swapped, 2),
+            ("swapped by eight", &swapped8, 8),
+            ("bad stamps", &bad, 2),
+            ("bad jittered stamps", &bad_jittered, 2),
+        ] {
             let (_, c, _) = run(log, &cfg);
             assert_eq!(
                 (c.clock_steps_back, c.rejected_time),
-                (0, 2),
+                (0, refused),
                 "k {k}, {what}"
             );
         }
+        // A clock set back on those jittered stamps is taken.
+        let mut jittered_back = jittered.clone();
+        for r in &mut jittered_back.rows[k..] {
+            r.t_s -= 0.3;
+        }
+        let (_, c, _) = run(&jittered_back, &cfg);
+        assert_eq!(c.clock_steps_back, 1, "k {k}, jittered");
 
         // The rows before row k sent a second time, same stamps and values: refused, and the
         // walk is the clean one bit for bit. (Four rows often run on from the last as a step
@@ -107,5 +139,13 @@ fn a_clock_set_back_costs_one_sample_and_a_re_sent_buffer_costs_nothing() {
             let last = |r: &[(UnitQuaternion<f64>, [f64; 3])]| r[r.len() - 1];
             assert_eq!(last(&got), last(&clean), "k {k}");
         }
+    }
+    // Where the rates alone take a swap of eight (the review's places, 2090 and 4340: 1.13
+    // and 0.53 % of path against 0.29 and 0.33 with the rows dropped), the hole does not.
+    for at in [2090, 4340] {
+        let mut swapped8 = log.clone();
+        swapped8.rows[at..at + 16].rotate_left(8);
+        let (_, c, _) = run(&swapped8, &cfg);
+        assert_eq!((c.clock_steps_back, c.rejected_time), (0, 8), "at {at}");
     }
 }

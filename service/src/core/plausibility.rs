@@ -49,7 +49,14 @@ pub struct StepBack {
     pub last_t_s: f64,
     /// The refused sample whose time went back (it stays refused).
     pub first: ImuInput,
+    /// The step between the two accepted times around `first`'s, s, when the last
+    /// [`STAMP_MEMORY`] accepted times hold them: a clock set back lands among dense times,
+    /// samples delivered out of order in the hole they left.
+    pub around_first_s: Option<f64>,
 }
+
+/// Accepted times remembered for [`StepBack::around_first_s`] (1.3 s at 200 Hz).
+pub const STAMP_MEMORY: usize = 256;
 
 /// The plausibility check of one stream.
 #[derive(Debug, Clone)]
@@ -62,6 +69,9 @@ pub struct Plausibility {
     /// until a step back is judged: a step refused, the samples that run on from it are refused
     /// without asking again.
     went_back: Option<ImuInput>,
+    /// The last [`STAMP_MEMORY`] accepted times, a ring, and how many were accepted.
+    stamps: [f64; STAMP_MEMORY],
+    accepted: usize,
 }
 
 impl Plausibility {
@@ -77,12 +87,25 @@ impl Plausibility {
             axis_limits: [g, g, g, a, a, a],
             limits,
             went_back: None,
+            stamps: [f64::NAN; STAMP_MEMORY],
+            accepted: 0,
         }
     }
 
     /// The previous accepted time.
     pub fn last_t_s(&self) -> Option<f64> {
         self.time.last_s()
+    }
+
+    /// The step between the remembered accepted times around `t_s` (newest first).
+    #[cold]
+    fn step_around(&self, t_s: f64) -> Option<f64> {
+        let n = self.accepted.min(STAMP_MEMORY);
+        let at = |k: usize| self.stamps[(self.accepted - 1 - k) % STAMP_MEMORY];
+        (1..n).find_map(|k| {
+            let (before, after) = (at(k), at(k - 1));
+            (before < t_s && t_s < after).then_some(after - before)
+        })
     }
 
     /// Checks `s`; on `Ok` the sample is accepted (its time is the new time base). On `Err`
@@ -154,7 +177,13 @@ impl Plausibility {
             TimeVerdict::Rebase => replaced_first_t_s = last_t_s,
             TimeVerdict::Glitch => glitch_t_s = last_t_s,
             TimeVerdict::StepBack => match self.went_back.take().zip(last_t_s) {
-                Some((first, last_t_s)) if judge_step_back(&StepBack { last_t_s, first }) => {
+                Some((first, last_t_s))
+                    if judge_step_back(&StepBack {
+                        last_t_s,
+                        first,
+                        around_first_s: self.step_around(first.t_s),
+                    }) =>
+                {
                     stepped_back = Some((last_t_s, first.t_s));
                 }
                 _ => return Err(not_increasing()),
@@ -172,6 +201,8 @@ impl Plausibility {
             }
         }
         self.time.accept(s.t_s);
+        self.stamps[self.accepted % STAMP_MEMORY] = s.t_s;
+        self.accepted += 1;
         let rail = |v: &[f64; 3], range: f64| v.iter().any(|x| x.abs() >= CLIP_FRACTION * range);
         Ok(Accepted {
             clipped: rail(&s.gyro_rad_s, l.gyro_range_rad_s())

@@ -45,12 +45,15 @@ pub struct ImuCsvReader<R> {
     /// the next rows contradict is the outlier: [`TimeVerdict::Rebase`]), and a row after a gap,
     /// held until the next row shows whether it was a stamp glitch ([`TimeVerdict::Glitch`]).
     pub(super) held: Option<ImuRow>,
-    /// A row refused as a time jump or as going back, held until the next row: when that row
-    /// follows it, the jump was a real gap, or the clock stepped back
-    /// ([`TimeVerdict::StepBack`]), and it goes out before it (a reader of the stream judges it
-    /// as a live stream's would be judged: `corridor run`'s estimator refuses it until the next
+    /// A row refused as a time jump, held until the next row: when that row follows it, the
+    /// jump was a real gap, and it goes out before it (a reader of the stream judges it as a
+    /// live stream's would be judged: `corridor run`'s estimator refuses it until the next
     /// sample confirms it, as the daemon does); otherwise it is rejected.
     pub(super) jumped: Option<(ImuRow, RejectedRow)>,
+    /// The same for a row refused as going back: it goes out when the next row follows it (the
+    /// clock stepped back, [`TimeVerdict::StepBack`]). Two slots, as the time rule keeps two
+    /// candidates.
+    pub(super) went_back: Option<(ImuRow, RejectedRow)>,
     /// Rows passed on that way, and the first of them as a rejection: the estimator behind the
     /// reader refuses each, so they count with the rejected rows in the checks over the whole
     /// log ([`Self::finish`]).
@@ -111,6 +114,7 @@ impl<R: BufRead> ImuCsvReader<R> {
             rejected_counts: [0; RejectReason::ALL.len()],
             held: None,
             jumped: None,
+            went_back: None,
             passed_refused: (0, None),
             jumps_passed: 0,
             ready: [None, None],
@@ -273,7 +277,10 @@ impl<R: BufRead> ImuCsvReader<R> {
             if !self.read_line()? {
                 // A jump on the last row was never confirmed. A one-row log: its only time had
                 // nothing to contradict it.
-                if let Some((_, rejected)) = self.jumped.take() {
+                for (_, rejected) in [self.jumped.take(), self.went_back.take()]
+                    .into_iter()
+                    .flatten()
+                {
                     self.reject(rejected);
                 }
                 return Ok(self.held.take().map(|row| self.emit(row)));
@@ -318,24 +325,21 @@ impl<R: BufRead> ImuCsvReader<R> {
                         // The held jump was a real gap's far side, or the held row the first
                         // after the clock stepped back: this row follows it. (A step back is
                         // taken here whatever the rates: the estimator judges it again.)
-                        let jumped = match self.jumped.take() {
-                            Some((j, rejected))
-                                if matches!(
-                                    verdict,
-                                    TimeVerdict::NewBase | TimeVerdict::StepBack
-                                ) =>
-                            {
-                                self.passed_refused.0 += 1;
-                                self.passed_refused.1.get_or_insert(rejected);
-                                self.jumps_passed += u64::from(verdict == TimeVerdict::NewBase);
-                                Some(j)
-                            }
-                            Some((_, rejected)) => {
-                                self.reject(rejected);
-                                None
-                            }
-                            None => None,
+                        let (jump, back) = (self.jumped.take(), self.went_back.take());
+                        let (passed, dropped) = match verdict {
+                            TimeVerdict::NewBase => (jump, [back, None]),
+                            TimeVerdict::StepBack => (back, [jump, None]),
+                            _ => (None, [jump, back]),
                         };
+                        for (_, rejected) in dropped.into_iter().flatten() {
+                            self.reject(rejected);
+                        }
+                        let jumped = passed.map(|(j, rejected)| {
+                            self.passed_refused.0 += 1;
+                            self.passed_refused.1.get_or_insert(rejected);
+                            self.jumps_passed += u64::from(verdict == TimeVerdict::NewBase);
+                            j
+                        });
                         self.time.accept(row.t_s);
                         if matches!(verdict, TimeVerdict::Rebase | TimeVerdict::Glitch)
                             && let Some(first) = self.held.take()
@@ -414,19 +418,18 @@ impl<R: BufRead> ImuCsvReader<R> {
                 // A jump or a time that went back: held until the next row says whether it was
                 // a gap's far side or the clock's step back (a row held before is rejected when
                 // the next row was not judged: a jump or a going back again).
-                // A row that went back leaves a held jump (the time rule keeps its candidate).
-                Err((Some(_), rejected))
-                    if rejected.reason == RejectReason::TimeNotIncreasing
-                        && self
-                            .jumped
-                            .as_ref()
-                            .is_some_and(|(_, j)| j.reason == RejectReason::TimeJump) =>
-                {
-                    self.reject(rejected);
-                }
+                // A row that went back leaves a held jump, as the time rule keeps its candidate;
+                // a jump drops a held row that went back, as the rule drops that candidate.
                 Err((Some(row), rejected)) => {
-                    if let Some((_, before)) = self.jumped.replace((row, rejected)) {
-                        self.reject(before);
+                    let jump = rejected.reason == RejectReason::TimeJump;
+                    let (slot, other) = if jump {
+                        (&mut self.jumped, self.went_back.take())
+                    } else {
+                        (&mut self.went_back, None)
+                    };
+                    let before = slot.replace((row, rejected));
+                    for (_, rejected) in [before, other].into_iter().flatten() {
+                        self.reject(rejected);
                     }
                 }
                 Err((None, rejected)) => self.reject(rejected),

@@ -49,6 +49,11 @@ const STEP_LOSS_PROBABILITY: f64 = 1e-3;
 /// the knee.
 const STEP_BACK_TOLERANCE: f64 = 2.0;
 
+/// On jittery (host arrival) stamps, a step of up to this many periods is a regular one for a
+/// step back: stamps handed over in groups of up to four are normally within it, a swap of
+/// packets of five samples or more leaves a hole beyond it.
+const JITTERY_REGULAR_PERIODS: f64 = 5.0;
+
 /// What [`Pipeline::cross_gap`] did with the step before the current sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) enum Gap {
@@ -114,12 +119,14 @@ impl Continuation {
 /// have been is not known here, and a foot still on both sides of a step back passes (a device
 /// that reset while the foot stood still, losing samples, is taken for a clock set back).
 ///
-/// And the stamps must look like a clock set back (a review found both taken for steps, costing
+/// And the stamps must look like a clock set back (reviews found these taken for steps, costing
 /// up to 3.7 % of path): `now` one regular sample step after `back.first` (at most 1.5 periods
-/// on a device clock, `regular_dt_s` on jittery stamps), else two bad stamps in a row would
-/// become a gap; and the step longer than `regular_dt_s` (`estimator.max_dt_s`, as a forward
-/// clock step), else packets of a few samples delivered out of order would be integrated out of
-/// order with a gap of a few periods (such a swap is refused as before: its rows are dropped).
+/// on a device clock, [`JITTERY_REGULAR_PERIODS`] on jittery stamps), else two bad stamps in a
+/// row would become a gap; `back.first` among dense accepted times (the step around it as
+/// regular), not in the hole that packets delivered out of order leave; and the step longer
+/// than `regular_dt_s` (`estimator.max_dt_s`, as a forward clock step), where a hole of a few
+/// periods is within a host clock's scatter. Such deliveries are refused as before: their rows
+/// are dropped.
 #[cold]
 #[inline(never)]
 pub(super) fn clock_stepped_back(
@@ -131,14 +138,16 @@ pub(super) fn clock_stepped_back(
 ) -> bool {
     let (now_t_s, gyro_now, accel_now) = now;
     let period_s = clock.period_s();
-    let regular = if clock.jittery() {
-        regular_dt_s
-    } else {
-        1.5 * period_s
-    };
+    let regular = period_s
+        * if clock.jittery() {
+            JITTERY_REGULAR_PERIODS
+        } else {
+            1.5
+        };
     let next_s = now_t_s - back.first.t_s;
     let step_s = back.last_t_s + period_s - back.first.t_s;
-    if !(next_s <= regular && step_s > regular_dt_s) {
+    let in_a_hole = back.around_first_s.is_some_and(|around| around > regular);
+    if !(next_s <= regular && step_s > regular_dt_s) || in_a_hole {
         return false;
     }
     let Some(run) = t_prev_s.and_then(|t| Continuation::of(memory, t, regular_dt_s)) else {

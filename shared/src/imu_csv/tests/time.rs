@@ -195,6 +195,14 @@ fn a_clock_set_back_runs_on_from_the_step_and_its_first_row_goes_out() {
     let rejected: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
     assert_eq!(rejected, [(101, RejectReason::TimeNotIncreasing)]);
     assert_eq!((log.rows.len(), log.rows[98].line), (399, 100));
+    // A jump held, then a step back confirmed: the jump is rejected, the row that went back
+    // goes out (a review found the jump passed on in its place).
+    let mut text = with_gaps(400, &[(101, -0.3)]);
+    text = replace_line(&text, 100, &row(1e30));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    let rejected: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
+    assert_eq!(rejected, [(100, RejectReason::TimeJump)]);
+    assert_eq!((log.rows.len(), log.rows[98].line), (399, 101));
     let log = parse_imu_csv(&with_gaps(1000, &[(100, -1.5)]), path(), &opts).unwrap();
     let before_s = log.rows[97].t_s;
     assert_eq!(log.rows[97].line, 99);
