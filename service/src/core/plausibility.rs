@@ -55,6 +55,14 @@ pub struct StepBack {
     pub around_first_s: Option<f64>,
 }
 
+impl StepBack {
+    /// What every later stamp is taken plus when the step is taken: the first sample after it
+    /// taken as one sample step (`period_s`) after the last accepted time.
+    pub fn shift_s(last_t_s: f64, first_t_s: f64, period_s: f64) -> f64 {
+        last_t_s + period_s - first_t_s
+    }
+}
+
 /// Accepted times remembered for [`StepBack::around_first_s`] (1.3 s at 200 Hz).
 pub const STAMP_MEMORY: usize = 256;
 

@@ -145,7 +145,7 @@ pub(super) fn clock_stepped_back(
             1.5
         };
     let next_s = now_t_s - back.first.t_s;
-    let step_s = back.last_t_s + period_s - back.first.t_s;
+    let step_s = StepBack::shift_s(back.last_t_s, back.first.t_s, period_s);
     let in_a_hole = back.around_first_s.is_some_and(|around| around > regular);
     if !(next_s <= regular && step_s > regular_dt_s) || in_a_hole {
         return false;

@@ -395,9 +395,9 @@ impl Estimator {
         };
         // The clock stepped back, and the sample refused before this one came one sample
         // step after the last: the stamps from here on are taken plus the step.
-        let stepped_back_s = accepted
-            .stepped_back
-            .map(|(last_t_s, first_t_s)| last_t_s + p.clock.period_s() - first_t_s);
+        let stepped_back_s = accepted.stepped_back.map(|(last_t_s, first_t_s)| {
+            StepBack::shift_s(last_t_s, first_t_s, p.clock.period_s())
+        });
         if let Some(shift_s) = stepped_back_s {
             p.clock.step_back(shift_s);
             p.counters.clock_steps_back += 1;
