@@ -94,6 +94,9 @@ impl<T: Clone> Default for LastGood<T> {
 
 impl<T: Clone> LastGood<T> {
     /// Keeps a copy of `state`.
+    /// Out of line: the copy stays out of its callers' frames (see the estimator's
+    /// `Pipeline::save_good`).
+    #[inline(never)]
     pub fn save(&mut self, state: &T) {
         match &mut self.state {
             Some(s) => s.clone_from(state),

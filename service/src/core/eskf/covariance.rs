@@ -121,7 +121,7 @@ fn propagate_base(
     }
     // Rows S of the D columns: the mirror of the first pass.
     for i in 0..D {
-        for j in BG..n {
+        for j in BG..n.min(MAX_N) {
             a[ix(j, i)] = a[ix(i, j)];
         }
     }

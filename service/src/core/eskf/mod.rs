@@ -368,7 +368,8 @@ impl Eskf {
 
     /// Copies the upper triangle of the covariance onto the lower one.
     fn mirror_upper(&mut self) {
-        for j in 0..self.layout.n {
+        // Bounded by `MAX_N` (which `n` never exceeds) so that the indexing needs no checks.
+        for j in 0..self.layout.n.min(MAX_N) {
             for i in 0..j {
                 self.p[ix(j, i)] = self.p[ix(i, j)];
             }

@@ -19,6 +19,9 @@ pub(super) struct GapCopy {
 impl GapCopy {
     /// Copies the estimator (before the sample about to be processed) into the buffer.
     /// Allocates the first time, and the first time after the alignment.
+    /// Out of line: its copies of the filter stay out of the per-sample step's frame (see
+    /// `Pipeline::save_good`).
+    #[inline(never)]
     pub(super) fn save(&mut self, stage: &Stage, p: &Pipeline) {
         match &mut self.buffer {
             Some(b) => {

@@ -324,7 +324,7 @@ impl Pipeline {
         if lag.mismatch_rad_s > FILL_MAX_MISMATCH_RAD_S || lag.from >= lag.to {
             return None;
         }
-        let mut spare = self.before.take().unwrap_or_else(|| eskf.clone());
+        let mut spare = take_spare(&mut self.before, eskf);
         let v_before = eskf.v_m_s;
         let mut turned = UnitQuaternion::identity();
         let (mut t, mut w, mut f) = (newest.t_s, newest.gyro_rad_s, newest.accel_m_s2);

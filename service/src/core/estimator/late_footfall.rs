@@ -132,6 +132,9 @@ impl LateFootfall {
 }
 
 /// Keeps the filter at the sample at `t_s` in `slot`.
+/// Out of line: its copies of the filter stay out of the per-sample step's frame (see
+/// `Pipeline::save_good`).
+#[inline(never)]
 fn keep(slot: &mut LastGood<Anchor>, eskf: &Eskf, bias: &BiasFilter, t_s: f64) {
     match slot.get_mut() {
         Some(a) => {
@@ -248,7 +251,7 @@ impl Pipeline {
             self.counters.late_footfalls_dropped += 1;
             return;
         };
-        let mut replay = self.before.take().unwrap_or_else(|| eskf.clone());
+        let mut replay = take_spare(&mut self.before, eskf);
         replay.copy_state_from(&start.eskf);
         self.bias = start.bias.clone();
         let mut spare = std::mem::replace(eskf, replay);

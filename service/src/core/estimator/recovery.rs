@@ -52,6 +52,9 @@ impl Estimator {
     /// sample had followed), so nothing but that sample is lost. Kept: the counters, the time
     /// rule's state (which accepted the current time), a warm start and an external heading not
     /// yet used. Allocates (a new estimator), once at most per stream.
+    /// Out of line: its copies of the filter stay out of the per-sample step's frame (see
+    /// `Pipeline::save_good`).
+    #[inline(never)]
     pub(super) fn restart_after_time_outlier(&mut self) {
         let mut fresh = Estimator::new(self.p.cfg.clone(), (*self.p.aid).clone());
         fresh.p.plausibility = self.p.plausibility.clone();
@@ -72,6 +75,9 @@ impl Estimator {
     /// current time), the refusals counted since, an external heading handed in since (one
     /// handed in before and used by the dropped sample is pending again), and a warm start
     /// handed in since (applied again to the restored filter when it was running).
+    /// Out of line: its copies of the filter stay out of the per-sample step's frame (see
+    /// `Pipeline::save_good`).
+    #[inline(never)]
     pub(super) fn drop_glitched_sample(&mut self) {
         // `now`: the pipeline that took the dropped sample; `self.p` the copy from before it.
         let Some(now) = self.before_gap.swap_in(&mut self.stage, &mut self.p) else {
@@ -116,7 +122,7 @@ impl Pipeline {
             Ok(()) => {
                 self.consecutive_faults = 0;
                 if stance && !self.good_saved_this_stance {
-                    self.good.save(&(eskf.clone(), self.bias.clone()));
+                    self.save_good(eskf);
                     self.good_saved_this_stance = true;
                 }
                 false
