@@ -15,7 +15,8 @@
 //! With a number of passes (`core_once 200`) it also times each pass and prints the samples per
 //! second of the fastest, the 10th percentile and the median: on a shared machine whose speed
 //! varies from second to second, the fastest passes of two builds run back to back compare
-//! them better than a mean does.
+//! them better than a mean does. A second argument names another configuration file
+//! (`core_once 60 my.toml`; default `configs/gdins.toml`).
 
 use corridor_service::core::{Estimator, ImuInput};
 use corridor_service::runner::heading_aid;
@@ -38,7 +39,11 @@ fn main() -> anyhow::Result<()> {
         &ImuCsvOptions::default(),
     )?;
     let inputs: Vec<ImuInput> = log.rows.iter().map(ImuInput::from).collect();
-    let path = root.join("configs/gdins.toml");
+    // A second argument: another configuration (e.g. one with a model extension off, to see
+    // what it costs).
+    let path = std::env::args()
+        .nth(2)
+        .map_or_else(|| root.join("configs/gdins.toml"), Into::into);
     let cfg = ConfigOverrides {
         start_heading_deg: Some(90.0),
         ..Default::default()
