@@ -239,6 +239,10 @@ pub enum HoldError {
 /// reads the token or makes one (also when a `global_mgmt` of the token belongs to another
 /// user).
 pub fn hold(runtime_dir: &Path, domain: &str) -> Result<DaemonHold, HoldError> {
+    // Every token has the same length, so a directory too long for iceoryx2's socket paths is
+    // refused before anything is made in it (it used to be refused after the domain directory,
+    // its lock and a token were made, and those were left behind).
+    check_socket_paths(runtime_dir, &"0".repeat(2 * TOKEN_BYTES))?;
     own_dir(runtime_dir, 0o700)?;
     let dir = domain_dir(runtime_dir, domain);
     own_dir(&dir, 0o700)?;
@@ -269,7 +273,6 @@ pub fn hold(runtime_dir: &Path, domain: &str) -> Result<DaemonHold, HoldError> {
         }
         Err(_) => hold.rotate(domain, None)?,
     }
-    check_socket_paths(runtime_dir, &hold.token)?;
     own_dir(&hold.iox2_root(), 0o700)?;
     Ok(hold)
 }
@@ -353,6 +356,20 @@ mod tests {
         let token = h.token.clone();
         drop(h);
         assert_eq!(hold(&t.0, "lab").unwrap().token, token);
+    }
+
+    #[test]
+    fn a_runtime_directory_too_long_for_the_sockets_is_refused_before_anything_is_made() {
+        let t = Tmp::new("long");
+        std::fs::create_dir(&t.0).unwrap();
+        std::fs::set_permissions(&t.0, std::fs::Permissions::from_mode(0o700)).unwrap();
+        let long = t.0.join("x".repeat(80));
+        std::fs::create_dir(&long).unwrap();
+        std::fs::set_permissions(&long, std::fs::Permissions::from_mode(0o700)).unwrap();
+        let e = hold(&long, "lab").unwrap_err().to_string();
+        assert!(e.contains("too long") && e.contains("at most"), "{e}");
+        let left: Vec<_> = std::fs::read_dir(&long).unwrap().collect();
+        assert!(left.is_empty(), "made in a refused directory: {left:?}");
     }
 
     #[test]
