@@ -1,0 +1,213 @@
+//! A stream tortured at random: a real walk with losses, re-sent runs, swapped packets, stamp
+//! glitches, clock steps both ways, stamps that do not move, jitter and absurd or missing values
+//! mixed in, many at once, from a fixed seed per case. The faults the other robustness tests
+//! place one at a time are here combined, which is where the time rule, the plausibility check,
+//! the gap handling and the recovery paths meet.
+//!
+//! Whatever arrives, the estimator must not panic, must account for every sample (accepted or
+//! refused under one of the counted reasons), and must never output a state that is not finite
+//! or a speed beyond its own limit.
+
+use corridor_service::core::{Estimator, ImuInput};
+use corridor_service::runner::heading_aid;
+use corridor_shared::config::Config;
+use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
+use std::path::Path;
+
+/// xorshift64* seeded through splitmix64: the same cases on every machine.
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: u64) -> Self {
+        let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        Self((z ^ (z >> 31)) | 1)
+    }
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in [0, 1).
+    fn uniform(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Uniform in `lo..hi`.
+    fn below(&mut self, lo: usize, hi: usize) -> usize {
+        lo + (self.next() % (hi - lo) as u64) as usize
+    }
+}
+
+/// One fault at a random place of `rows`; its name, for the failure message.
+fn damage(rows: &mut Vec<ImuInput>, rng: &mut Rng) -> &'static str {
+    let n = rows.len();
+    let at = rng.below(10, n - 10);
+    let period = 0.005;
+    match rng.below(0, 12) {
+        0 => {
+            let len = rng.below(1, 120).min(n - at - 1);
+            rows.drain(at..at + len);
+            "loss"
+        }
+        1 => {
+            // A driver that re-sends what it sent (exact copies).
+            let len = rng.below(1, 40).min(at);
+            let copy: Vec<_> = rows[at - len..at].to_vec();
+            rows.splice(at..at, copy);
+            "re-sent run"
+        }
+        2 => {
+            let k = rng.below(1, 4);
+            if at + 2 * k < n {
+                let (a, b) = rows[at..at + 2 * k].split_at_mut(k);
+                a.swap_with_slice(b);
+            }
+            "swapped packets"
+        }
+        3 => {
+            rows[at].t_s += [0.02, 0.3, 0.9, 5.0, 1e9][rng.below(0, 5)];
+            "stamp glitch ahead"
+        }
+        4 => {
+            rows[at].t_s -= [0.002, 0.05, 0.4, 3.0, 1e9][rng.below(0, 5)];
+            "stamp glitch behind"
+        }
+        5 => {
+            let d = [0.03, 0.2, 0.6, 2.0, 15.0, 600.0][rng.below(0, 6)];
+            rows[at..].iter_mut().for_each(|r| r.t_s += d);
+            "clock step forward"
+        }
+        6 => {
+            // Up to a device that restarts its clock from zero.
+            let d = [0.03, 0.1, 0.3, 0.9, 2.0, rows[at].t_s][rng.below(0, 6)];
+            rows[at..].iter_mut().for_each(|r| r.t_s -= d);
+            "clock step back"
+        }
+        7 => {
+            let len = rng.below(2, 6).min(n - at);
+            let t = rows[at].t_s;
+            rows[at..at + len].iter_mut().for_each(|r| r.t_s = t);
+            "stamps that do not move"
+        }
+        8 => {
+            let len = rng.below(50, 400).min(n - at);
+            for r in &mut rows[at..at + len] {
+                r.t_s += (rng.uniform() - 0.5) * 0.8 * period;
+            }
+            "jitter"
+        }
+        9 => {
+            let k = rng.below(0, 6);
+            let v = [f64::NAN, f64::INFINITY, -f64::INFINITY][rng.below(0, 3)];
+            if k < 3 {
+                rows[at].gyro_rad_s[k] = v;
+            } else {
+                rows[at].accel_m_s2[k - 3] = v;
+            }
+            "value not finite"
+        }
+        10 => {
+            let len = rng.below(1, 30).min(n - at);
+            let v = [25.0, 1e3, 1e30, -1e300][rng.below(0, 4)];
+            for r in &mut rows[at..at + len] {
+                r.accel_m_s2[rng.below(0, 3)] = v;
+                r.gyro_rad_s[rng.below(0, 3)] = v * 0.1;
+            }
+            "absurd values"
+        }
+        _ => {
+            rows[at].t_s = f64::NAN;
+            "time not finite"
+        }
+    }
+}
+
+#[test]
+fn a_stream_with_many_faults_at_once_is_accounted_for_and_never_gives_an_impossible_state() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let log = read_imu_csv(
+        &root.join("tests/data/gdins_exp17_rect_loop_small/imu.csv"),
+        &ImuCsvOptions::default(),
+    )
+    .unwrap();
+    let clean: Vec<ImuInput> = log.rows.iter().map(ImuInput::from).collect();
+    let cfg = Config::from_file(&root.join("configs/gdins.toml")).unwrap();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let max_speed = cfg.max_speed_m_s.get();
+    let max_bias = cfg.sensor.max_gyro_bias_rad_s();
+    let mut faults_seen = std::collections::BTreeMap::new();
+    // `TORTURE_CASES=5000` for a longer search (release: about 15 s per 1000).
+    let cases: u64 = std::env::var("TORTURE_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(48);
+    for case in 0..cases {
+        let mut rng = Rng::new(case);
+        let mut rows = clean.clone();
+        let mut applied = Vec::new();
+        for _ in 0..rng.below(1, 9) {
+            let name = damage(&mut rows, &mut rng);
+            *faults_seen.entry(name).or_insert(0) += 1;
+            applied.push(name);
+        }
+        let mut est = Estimator::new(cfg.clone(), aid.clone());
+        let mut refused = 0u64;
+        for (i, s) in rows.iter().enumerate() {
+            match est.step(s) {
+                Ok(e) => {
+                    let state = e
+                        .p_m
+                        .iter()
+                        .chain(&e.v_m_s)
+                        .chain(&e.nav_from_body)
+                        .chain(&e.gyro_bias_rad_s);
+                    assert!(
+                        state.clone().all(|v| v.is_finite()),
+                        "case {case} ({applied:?}), sample {i} (t {}): a state not finite: \
+                         p {:?} v {:?} q {:?} b {:?}",
+                        s.t_s,
+                        e.p_m,
+                        e.v_m_s,
+                        e.nav_from_body,
+                        e.gyro_bias_rad_s
+                    );
+                    let speed = e.v_m_s.iter().map(|v| v * v).sum::<f64>().sqrt();
+                    assert!(
+                        speed <= max_speed,
+                        "case {case} ({applied:?}), sample {i} (t {}): speed {speed} m/s",
+                        s.t_s
+                    );
+                    assert!(
+                        e.gyro_bias_rad_s.iter().all(|b| b.abs() <= max_bias),
+                        "case {case} ({applied:?}), sample {i}: bias {:?}",
+                        e.gyro_bias_rad_s
+                    );
+                }
+                Err(_) => refused += 1,
+            }
+        }
+        let c = est.counters();
+        let counted = c.samples
+            + c.rejected_non_finite
+            + c.rejected_time
+            + c.rejected_implausible
+            + c.rejected_time_jump;
+        assert_eq!(
+            counted,
+            rows.len() as u64,
+            "case {case} ({applied:?}): {} samples in, {counted} accounted for ({c:?})",
+            rows.len()
+        );
+        // A sample dropped after the fact (a first time or a glitch the next ones expose) was
+        // returned as accepted, so the refusals counted are at least those returned.
+        assert!(
+            counted - c.samples >= refused,
+            "case {case} ({applied:?}): {refused} refused, {} counted",
+            counted - c.samples
+        );
+    }
+    // The cases cover every kind of fault.
+    assert_eq!(faults_seen.len(), 12, "{faults_seen:?}");
+}
