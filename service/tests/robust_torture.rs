@@ -11,7 +11,7 @@
 use corridor_service::core::{Estimator, ImuInput};
 use corridor_service::runner::heading_aid;
 use corridor_shared::config::Config;
-use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
+use corridor_shared::imu_csv::{ImuCsvOptions, parse_imu_csv, read_imu_csv};
 use std::path::Path;
 
 /// xorshift64* seeded through splitmix64: the same cases on every machine.
@@ -124,33 +124,51 @@ fn damage(rows: &mut Vec<ImuInput>, rng: &mut Rng) -> &'static str {
     }
 }
 
-#[test]
-fn a_stream_with_many_faults_at_once_is_accounted_for_and_never_gives_an_impossible_state() {
+/// exp17's samples and the sensor's configuration.
+fn exp17() -> (Vec<ImuInput>, Config) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let log = read_imu_csv(
         &root.join("tests/data/gdins_exp17_rect_loop_small/imu.csv"),
         &ImuCsvOptions::default(),
     )
     .unwrap();
-    let clean: Vec<ImuInput> = log.rows.iter().map(ImuInput::from).collect();
-    let cfg = Config::from_file(&root.join("configs/gdins.toml")).unwrap();
+    let clean = log.rows.iter().map(ImuInput::from).collect();
+    (
+        clean,
+        Config::from_file(&root.join("configs/gdins.toml")).unwrap(),
+    )
+}
+
+/// The number of cases: `TORTURE_CASES=6000` for a longer search (release: about 10 s per 1000
+/// for the two tests).
+fn cases() -> u64 {
+    std::env::var("TORTURE_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(48)
+}
+
+/// Case `case`: exp17 with one to eight faults, and their names.
+fn tortured(clean: &[ImuInput], case: u64) -> (Vec<ImuInput>, Vec<&'static str>) {
+    let mut rng = Rng::new(case);
+    let mut rows = clean.to_vec();
+    let applied = (0..rng.below(1, 9))
+        .map(|_| damage(&mut rows, &mut rng))
+        .collect();
+    (rows, applied)
+}
+
+#[test]
+fn a_stream_with_many_faults_at_once_is_accounted_for_and_never_gives_an_impossible_state() {
+    let (clean, cfg) = exp17();
     let aid = heading_aid(&cfg, None).unwrap();
     let max_speed = cfg.max_speed_m_s.get();
     let max_bias = cfg.sensor.max_gyro_bias_rad_s();
     let mut faults_seen = std::collections::BTreeMap::new();
-    // `TORTURE_CASES=5000` for a longer search (release: about 15 s per 1000).
-    let cases: u64 = std::env::var("TORTURE_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(48);
-    for case in 0..cases {
-        let mut rng = Rng::new(case);
-        let mut rows = clean.clone();
-        let mut applied = Vec::new();
-        for _ in 0..rng.below(1, 9) {
-            let name = damage(&mut rows, &mut rng);
-            *faults_seen.entry(name).or_insert(0) += 1;
-            applied.push(name);
+    for case in 0..cases() {
+        let (rows, applied) = tortured(&clean, case);
+        for name in &applied {
+            *faults_seen.entry(*name).or_insert(0) += 1;
         }
         let mut est = Estimator::new(cfg.clone(), aid.clone());
         let mut refused = 0u64;
@@ -210,4 +228,58 @@ fn a_stream_with_many_faults_at_once_is_accounted_for_and_never_gives_an_impossi
     }
     // The cases cover every kind of fault.
     assert_eq!(faults_seen.len(), 12, "{faults_seen:?}");
+}
+
+/// The same cases written to a CSV file and read back as `corridor run` reads a log: every data
+/// row is either accepted or rejected with a reason (none is lost between the two), and what the
+/// reader accepts the estimator takes as it would a live stream, its own refusals counted.
+#[test]
+fn a_log_with_many_faults_at_once_is_read_with_every_row_accounted_for() {
+    let (clean, cfg) = exp17();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let opts = ImuCsvOptions {
+        max_rejected_fraction: 1.0,
+        check_units: false,
+        min_dt_s: cfg.sensor.min_dt_s(),
+        max_dt_s: cfg.sensor.max_dt_s(),
+        ..ImuCsvOptions::default()
+    };
+    for case in 0..cases() {
+        let (rows, applied) = tortured(&clean, case);
+        let mut text = String::from("t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2\n");
+        for r in &rows {
+            let [gx, gy, gz] = r.gyro_rad_s;
+            let [ax, ay, az] = r.accel_m_s2;
+            text += &format!("{},{gx},{gy},{gz},{ax},{ay},{az}\n", r.t_s);
+        }
+        let log = parse_imu_csv(&text, Path::new("tortured.csv"), &opts)
+            .unwrap_or_else(|e| panic!("case {case} ({applied:?}): {e}"));
+        assert_eq!(
+            log.rows.len() + log.rejected.len(),
+            rows.len(),
+            "case {case} ({applied:?}): {} rows in, {} accepted and {} rejected",
+            rows.len(),
+            log.rows.len(),
+            log.rejected.len()
+        );
+        let mut est = Estimator::new(cfg.clone(), aid.clone());
+        for r in &log.rows {
+            if let Ok(e) = est.step(&ImuInput::from(r)) {
+                assert!(
+                    e.p_m.iter().chain(&e.v_m_s).all(|v| v.is_finite()),
+                    "case {case} ({applied:?}), line {}: {:?} {:?}",
+                    r.line,
+                    e.p_m,
+                    e.v_m_s
+                );
+            }
+        }
+        let c = est.counters();
+        let counted = c.samples
+            + c.rejected_non_finite
+            + c.rejected_time
+            + c.rejected_implausible
+            + c.rejected_time_jump;
+        assert_eq!(counted, log.rows.len() as u64, "case {case} ({applied:?})");
+    }
 }
