@@ -267,11 +267,7 @@ impl<'a> EstState<'a> {
                 }
                 // Counted by the estimator (Diagnostics and the health line); the first few of
                 // each stream are named with their sequence number.
-                let c = self.est.counters();
-                let refused = c.rejected_non_finite
-                    + c.rejected_time
-                    + c.rejected_implausible
-                    + c.rejected_time_jump;
+                let refused = self.est.counters().refused();
                 if refused <= REFUSED_WARNINGS_PER_STREAM {
                     tracing::warn!(seq = s.seq, reason = err.reason(), "sample refused: {err}");
                 } else {

@@ -346,8 +346,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     inn_w.flush().map_err(io_at(&inn_path))?;
     drop((est_w, inn_w));
     let c = *feed.est.counters();
-    let refused =
-        c.rejected_non_finite + c.rejected_time + c.rejected_implausible + c.rejected_time_jump;
+    let refused = c.refused();
     if refused > MAX_REFUSED_EXAMPLES as u64 {
         tracing::warn!(
             "{} more refused samples (counts in summary.json)",

@@ -246,6 +246,17 @@ pub struct Counters {
     pub headings_refused: u64,
 }
 
+impl Counters {
+    /// Samples refused, for any reason (what was neither accepted nor lost elsewhere): with
+    /// `samples` they account for every sample handed to the estimator.
+    pub fn refused(&self) -> u64 {
+        self.rejected_non_finite
+            + self.rejected_time
+            + self.rejected_implausible
+            + self.rejected_time_jump
+    }
+}
+
 /// The estimate after one sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Estimate {
