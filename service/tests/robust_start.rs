@@ -106,3 +106,65 @@ fn a_rest_through_which_the_foot_pivots_is_not_the_bias_prior() {
     assert!(pct < 1.0, "footprint RMS {pct:.2} % of path");
     assert!(out.counters.rest_prior_refused);
 }
+
+/// A loss that begins in the initial rest and ends in the walk (2.25 s of exp17 from 0.395 s:
+/// 0.4 s of rest, then the walk's first stance). The rest used to be timed across the loss,
+/// so the first stance after it was taken for the rest's last 2 s: its mean rate became a bias
+/// prior of [−0.033, −0.076, 0.030] rad/s, the stance updates pushed the bias beyond
+/// `sensor.max_gyro_bias_rad_s`, and the health check restored the same prior again and again
+/// for the rest of the walk (1,256 restores; found by a review's torture runs, session 28).
+/// A loss while aligning starts the alignment again after it (here on the walk's first stance,
+/// as a start without a rest).
+#[test]
+fn a_loss_from_the_initial_rest_into_the_walk_starts_the_alignment_again() {
+    let dir = root().join("tests/data/gdins_exp17_rect_loop_small");
+    let mut log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
+    let (first, last) = (log.rows[79].t_s, log.rows[528].t_s);
+    assert!(first > 0.39 && last > 2.6, "{first} {last}");
+    log.rows.drain(79..529);
+    // Scored on the footprints after the loss, as a walk started there (see the test above).
+    let truth: Vec<_> = read_truth_csv(&dir.join("ground_truth.csv"))
+        .unwrap()
+        .into_iter()
+        .filter(|p| p.t_s > last)
+        .collect();
+    let path = root().join("configs/gdins.toml");
+    let cfg = ConfigOverrides {
+        start_heading_deg: Some(0.0),
+        ..Default::default()
+    }
+    .validate(&ConfigFile::read(&path).unwrap(), &path)
+    .unwrap();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let mut largest_bias = 0.0f64;
+    let out = run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+        largest_bias = e
+            .gyro_bias_rad_s
+            .iter()
+            .fold(largest_bias, |m, v| m.max(v.abs()));
+    });
+    assert_eq!(out.counters.health_restores, 0, "{:?}", out.counters);
+    assert!(largest_bias < 0.02, "bias {largest_bias} rad/s");
+    assert!(
+        out.counters.started_without_rest && out.counters.alignment_restarts >= 1,
+        "{:?}",
+        out.counters
+    );
+    // It navigates as the walk started after the loss does (0.137 % of path; 7.6 % with the
+    // filter started on the rest before the loss).
+    let mut cut = log.clone();
+    cut.rows.drain(..79);
+    let cut = run_log(&cut, &cfg, &aid, &BiasInjection::default(), |_, _| {});
+    let pct = |o: &corridor_service::runner::RunOutcome| {
+        o.trace
+            .evaluate(&truth, &EvalOptions::default())
+            .unwrap()
+            .rms_error_pct_of_path
+            .unwrap()
+    };
+    let (lossy, started_after) = (pct(&out), pct(&cut));
+    assert!(
+        (lossy - started_after).abs() < 0.01 && lossy < 0.5,
+        "{lossy} % of path, started after the loss {started_after} %"
+    );
+}

@@ -452,6 +452,21 @@ impl Estimator {
         out.stride = None;
 
         if let Stage::Aligning(rest) = &mut self.stage {
+            // A loss longer than a bridgeable gap (`estimator.max_bridge_s`, at least `max_dt_s`:
+            // a few lost samples or a driver's stall stay within the rest) while aligning starts the alignment
+            // again from the samples after it: what the foot did in it is unknown. Timed across
+            // a loss into the walk, the rest took the first stance after it for its last
+            // seconds, and that stance's rate for the bias prior (exp17 with 2.25 s lost from
+            // 0.4 s: a prior of 0.08 rad/s, the health check failing for the rest of the walk);
+            // ended at the loss instead, the filter started on the rest's attitude and met the
+            // walk after it a radian off in pitch, which the stance updates put into the bias
+            // (0.16 rad/s).
+            let bridgeable_s = p.cfg.max_bridge_s.max(p.cfg.max_dt_s.get());
+            if prev.is_some_and(|(t_prev, ..)| t_clock - t_prev > bridgeable_s) && !rest.is_empty()
+            {
+                rest.clear();
+                p.counters.alignment_restarts += 1;
+            }
             let Some(eskf) = p.align_step(rest, s.t_s, &w, &f, decision.stance) else {
                 return Ok(&self.p.out);
             };
