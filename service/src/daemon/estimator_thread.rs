@@ -376,6 +376,7 @@ impl<'a> EstState<'a> {
         p.health_restores += c.health_restores;
         p.footprints_forgotten += c.footprints_forgotten;
         p.velocity_resets += c.velocity_resets;
+        p.relevels += c.relevels;
         p.heading_reacquisitions += c.heading_reacquisitions;
         p.gaps += c.gaps;
         p.gaps_filled += c.gaps_filled;
@@ -453,7 +454,7 @@ impl<'a> EstState<'a> {
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
              σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
-             health restores {} (footprints forgotten {}), velocity resets {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
+             health restores {} (footprints forgotten {}), velocity resets {}, tilts levelled again {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
              lost in a killed daemon {}",
             d.received,
             d.seq_gaps - h.seq_gaps,
@@ -475,6 +476,7 @@ impl<'a> EstState<'a> {
             self.previous.health_restores + self.est.counters().health_restores,
             self.previous.footprints_forgotten + self.est.counters().footprints_forgotten,
             self.previous.velocity_resets + self.est.counters().velocity_resets,
+            self.previous.relevels + self.est.counters().relevels,
             self.previous.heading_reacquisitions + self.est.counters().heading_reacquisitions,
             self.previous.gaps + self.est.counters().gaps,
             self.previous.gaps_filled + self.est.counters().gaps_filled,

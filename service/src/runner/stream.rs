@@ -68,6 +68,8 @@ pub struct Summary {
     pub footprints_forgotten: u64,
     /// Stance updates that found a velocity far beyond what the filter allowed and reset it.
     pub velocity_resets: u64,
+    /// Stances at which the tilt was levelled again from gravity (see `Counters`).
+    pub relevels: u64,
     /// Times the heading was taken as lost and its variance widened (straight strides in a row
     /// off every direction: `heading.reacquire_strides`).
     pub heading_reacquisitions: u64,
@@ -445,6 +447,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         health_restores: c.health_restores,
         footprints_forgotten: c.footprints_forgotten,
         velocity_resets: c.velocity_resets,
+        relevels: c.relevels,
         heading_reacquisitions: c.heading_reacquisitions,
         jittery_clock_samples: c.jittery_clock_samples,
         started_without_rest: c.started_without_rest,

@@ -81,12 +81,13 @@ impl Pipeline {
     fn copy_from(&mut self, src: &Self) {
         copy_pipeline!(self, src;
             clone_from: cfg, aid, phase, counters, plausibility, last, bias, good,
-                good_saved_this_stance, before, before_bias, consecutive_faults, tilt0,
+                good_saved_this_stance, before, before_bias, consecutive_faults,
+                restores_in_a_row, relevel_next_stance, tilt0,
                 mount_yaw_rad, forward_body, mount_sum, last_footprint, footprint_yaw_rad,
                 prev_footprint_yaw_rad, footprint_t_s, line_before, heading_suspect,
                 off_direction, reacquiring, line, stance_events, stance_edge, stances_seen,
-                resumed_look, was_stance, clock, late, zero_rate_applied, clipped_gyro_axes,
-                stance_obs_done, stance_f_sum, pending_heading, warm_start, converged_at_s, out;
+                resumed_look, was_stance, clock, late, undo, zero_rate_applied, clipped_gyro_axes,
+                stance_obs_done, stance_f_sum, stance_tilt_checked, pending_heading, warm_start, converged_at_s, out;
             copy_from: detector, straight, memory, stance_rest);
     }
 }

@@ -7,6 +7,7 @@
 //! clock that steps back and runs on from there (`TimeVerdict::StepBack`) is taken as a new
 //! time base when the rates run on across the step as if it had not happened.
 
+use super::late_footfall::{keep, restore};
 use super::stride_memory::{Remembered, StrideMemory};
 use super::*;
 use crate::core::plausibility::StepBack;
@@ -301,10 +302,10 @@ impl Pipeline {
     /// filter through them and widens its attitude and velocity variance by
     /// [`FILL_RELATIVE_SD`] of the rotation and velocity change they made; the filled samples
     /// are remembered in turn. Returns the last filled sample, on the current clock; `None`
-    /// (nothing changed) when the memory cannot fill it. The fill is not health-checked on its
-    /// own: the check after the next sample judges it (and undoes that sample's update back to
-    /// the state after the fill, or from the fourth failure in a row restores the last healthy
-    /// stance, before the gap).
+    /// (nothing changed) when the memory cannot fill it, or when the filled state fails the
+    /// health check (the stride before held samples at the rails: a review's case drove the
+    /// speed to 18.7 m/s, output for three samples, whose updates were undone back to it): the
+    /// gap is then a new segment.
     fn fill_gap(
         &mut self,
         eskf: &mut Box<Eskf>,
@@ -324,6 +325,7 @@ impl Pipeline {
         if lag.mismatch_rad_s > FILL_MAX_MISMATCH_RAD_S || lag.from >= lag.to {
             return None;
         }
+        keep(&mut self.undo, eskf, &self.bias, t_prev_s);
         let mut spare = take_spare(&mut self.before, eskf);
         let v_before = eskf.v_m_s;
         let mut turned = UnitQuaternion::identity();
@@ -337,6 +339,10 @@ impl Pipeline {
             (t, w, f) = (t_s, s.gyro_rad_s, s.accel_m_s2);
         }
         self.before = Some(spare);
+        if !self.healthy(eskf) {
+            restore(&self.undo, eskf, &mut self.bias);
+            return None;
+        }
         self.memory.push_filled(lag.from, lag.to, lag.lag_s);
         let var = (FILL_RELATIVE_SD * turned.angle()).powi(2);
         for k in 0..3 {

@@ -135,7 +135,7 @@ impl LateFootfall {
 /// Out of line: its copies of the filter stay out of the per-sample step's frame (see
 /// `Pipeline::save_good`).
 #[inline(never)]
-fn keep(slot: &mut LastGood<Anchor>, eskf: &Eskf, bias: &BiasFilter, t_s: f64) {
+pub(super) fn keep(slot: &mut LastGood<Anchor>, eskf: &Eskf, bias: &BiasFilter, t_s: f64) {
     match slot.get_mut() {
         Some(a) => {
             a.eskf.copy_state_from(eskf);
@@ -147,6 +147,15 @@ fn keep(slot: &mut LastGood<Anchor>, eskf: &Eskf, bias: &BiasFilter, t_s: f64) {
             bias: bias.clone(),
             t_s,
         }),
+    }
+}
+
+/// The filter and bias filter kept in `slot` put back into `eskf` and `bias`.
+#[inline(never)]
+pub(super) fn restore(slot: &LastGood<Anchor>, eskf: &mut Eskf, bias: &mut BiasFilter) {
+    if let Some(a) = slot.get() {
+        eskf.copy_state_from(&a.eskf);
+        bias.clone_from(&a.bias);
     }
 }
 
@@ -251,6 +260,8 @@ impl Pipeline {
             self.counters.late_footfalls_dropped += 1;
             return;
         };
+        // The filter as it is, to go back to: this sample's health check is made already.
+        keep(&mut self.undo, eskf, &self.bias, f64::NAN);
         let mut replay = take_spare(&mut self.before, eskf);
         replay.copy_state_from(&start.eskf);
         self.bias = start.bias.clone();
@@ -261,7 +272,11 @@ impl Pipeline {
         let updated = self.stance_velocity_update(eskf, &omega, false).is_some();
         self.propagate_remembered(eskf, &mut spare, quiet_at, n - 1);
         self.before = Some(spare);
-        if !updated {
+        // A replay that breaks the state (through samples at the rails, or times that are not
+        // the foot's) is not kept: it was output as it was, with no fault, for a sample and
+        // then undone back to itself (a review's case: a z bias of −1.93 rad/s).
+        if !updated || !self.healthy(eskf) {
+            restore(&self.undo, eskf, &mut self.bias);
             self.counters.late_footfalls_dropped += 1;
             return;
         }

@@ -145,6 +145,12 @@ struct Pipeline {
     /// The bias filter before the current update.
     before_bias: LastGood<BiasFilter>,
     consecutive_faults: u32,
+    /// The time of the last restore of the healthy stance's state, and how many came within
+    /// `RESTORE_LOOP_S` of each other (`recovery.rs`).
+    restores_in_a_row: (f64, u32),
+    /// The tilt is levelled again at the next stance whatever its angle (after restores that
+    /// did not hold).
+    relevel_next_stance: bool,
     /// Tilt of the sensor on the flat foot: `R_y(pitch)·R_x(roll)` of the initial rest.
     tilt0: UnitQuaternion<f64>,
     /// Sensor yaw minus foot heading.
@@ -189,6 +195,9 @@ struct Pipeline {
     /// Short dips of the detector's statistic and stride cycles without a stance that may be a
     /// missed footfall (`late_footfall.rs`).
     late: late_footfall::LateFootfall,
+    /// The filter before a gap's fill or a late footfall's replay, to go back to when the
+    /// result fails the health check (`late_footfall::keep`; allocated at the first).
+    undo: LastGood<late_footfall::Anchor>,
     /// The current stance's sums, for the zero-rate update when it turns out to be a rest.
     stance_rest: RestSums,
     /// A rest was fused by a zero-rate update with the current sample (see `step_running`).
@@ -197,6 +206,8 @@ struct Pipeline {
     clipped_gyro_axes: [bool; 3],
     stance_obs_done: bool,
     stance_f_sum: (Vector3<f64>, u64),
+    /// The current stance was looked at for a relevel that is due (`relevel_if_due`).
+    stance_tilt_checked: bool,
     pending_heading: Option<(f64, f64)>,
     warm_start: Option<WarmStart>,
     converged_at_s: Option<f64>,
@@ -231,6 +242,8 @@ impl Estimator {
             before: None,
             before_bias: LastGood::default(),
             consecutive_faults: 0,
+            restores_in_a_row: (f64::NEG_INFINITY, 0),
+            relevel_next_stance: false,
             tilt0: UnitQuaternion::identity(),
             mount_yaw_rad: 0.0,
             forward_body: Vector3::x(),
@@ -252,6 +265,7 @@ impl Estimator {
             clock: SampleClock::default(),
             memory: stride_memory::StrideMemory::default(),
             late: late_footfall::LateFootfall::new(&cfg.detector),
+            undo: LastGood::default(),
             // Without the motion test: a later rest begins with a landing, which the test,
             // anchored on the first block, would take as the reference and leave every quiet
             // block out (the zero-rate update then never came). The landing is left out as
@@ -262,6 +276,7 @@ impl Estimator {
             zero_rate_applied: false,
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
+            stance_tilt_checked: false,
             pending_heading: None,
             warm_start: None,
             converged_at_s: None,
@@ -620,7 +635,7 @@ impl Pipeline {
     /// Keeps the filter and the bias filter as the last healthy state.
     ///
     /// Out of line, as every copy of the filter on this path: a copy built in the per-sample
-    /// step's own frame made that frame 74 KB (each an `Eskf` of 7 KB on the stack), whose
+    /// step's own frame made that frame 70 KB (each an `Eskf` of 7 KB on the stack), whose
     /// pages the step touched at every sample (`Estimator::step` 3.5 % of the instructions but
     /// 12 % of the time).
     #[cold]
@@ -647,6 +662,15 @@ impl Pipeline {
     }
 
     /// The gyro bias in sensor axes, without its σ (the per-sample paths need only this).
+    /// Whether `eskf` (with the bias filter) passes the health check (see `guard_health`).
+    pub(super) fn healthy(&self, eskf: &Eskf) -> bool {
+        let limits = HealthLimits {
+            max_speed_m_s: self.cfg.max_speed_m_s.get(),
+            max_gyro_bias_rad_s: self.cfg.sensor.max_gyro_bias_rad_s(),
+        };
+        health::check(eskf, &self.bias_only(eskf), &limits).is_ok()
+    }
+
     fn bias_only(&self, eskf: &Eskf) -> Vector3<f64> {
         match &self.bias {
             BiasFilter::InEskf => eskf.gyro_bias_rad_s,

@@ -8,7 +8,40 @@ use super::*;
 /// observed one, rad (its logarithm wraps at π).
 const PAPER_EPOCH_MAX_ANGLE_RAD: f64 = 2.0;
 
+/// A stance is levelled again (after restores that did not hold, `recovery.rs`) once it has
+/// lasted this long, s: its mean force is then the standing foot's more than the landing's ...
+pub(super) const RELEVEL_MIN_STANCE_S: f64 = 0.1;
+
+/// ... and when that mean force lies within this fraction of gravity.
+const RELEVEL_FORCE_TOLERANCE: f64 = 0.1;
+
 impl Pipeline {
+    /// Levels the tilt again from the stance's mean specific force, when restores that did not
+    /// hold asked for it (`relevel_next_stance`): the heading kept, the bias started again from
+    /// zero with its initial σ. Once per stance, [`RELEVEL_MIN_STANCE_S`] into it; a stance whose
+    /// force is not a standing foot's leaves it to the next. True when it did.
+    pub(super) fn relevel_if_due(&mut self, eskf: &mut Eskf) -> bool {
+        let (sum, n) = self.stance_f_sum;
+        let f = sum / n.max(1) as f64;
+        let g = eskf.gravity_m_s2();
+        if !self.relevel_next_stance || n == 0 || (f.norm() - g).abs() > RELEVEL_FORCE_TOLERANCE * g
+        {
+            return false;
+        }
+        self.relevel_next_stance = false;
+        let up = f.normalize();
+        let e = &self.cfg.eskf;
+        eskf.relevel(
+            &up,
+            e.initial_tilt_sd_rad.get().powi(2),
+            e.zupt_sd_m_s.get().powi(2),
+            Vector3::zeros(),
+            e.gyro_bias_initial_sd_rad_s.get().powi(2),
+        );
+        self.counters.relevels += 1;
+        true
+    }
+
     /// Once per stance: calibration or a heading observation.
     pub(super) fn stance_observation(&mut self, eskf: &mut Eskf, t_s: f64) {
         let h = self.cfg.heading.clone();

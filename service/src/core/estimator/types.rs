@@ -171,6 +171,9 @@ pub struct Counters {
     /// Stance updates that found a velocity far beyond what the filter allowed (garbage samples
     /// since the last stance) and reset the velocity first.
     pub velocity_resets: u64,
+    /// Stances at which the tilt was levelled again from gravity and the bias started again
+    /// from zero: after restores of the last healthy stance that did not hold (`recovery.rs`).
+    pub relevels: u64,
     /// Steps longer than `estimator.max_dt_s`: up to `estimator.max_bridge_s` bridged (one step
     /// across the gap, covariance widened by what the interpolation misses), longer ones up to
     /// `estimator.max_fill_s` filled from the stride before when it matches, the others start a
