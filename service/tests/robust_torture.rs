@@ -307,15 +307,16 @@ fn a_stream_with_many_faults_at_once_is_accounted_for_and_never_gives_an_impossi
     assert!(faults_seen.len() >= FAULT_KINDS, "{faults_seen:?}");
 }
 
-/// The cases of 40,000 searched (session 28) that broke an invariant before the mend they led
-/// to: a state restored again and again for the rest of the walk (a tilt a radian off after a
-/// long loss or samples at the rails; a walking stance after a loss taken for the rest, its rate
-/// for the bias prior; see `RESTORE_LOOP_S` in `recovery.rs`).
+/// The cases of 40,000 searched (session 28) that restored a bad state again and again for the
+/// rest of the walk (a tilt a radian off after samples at the rails or a long loss; a pause
+/// taken for the rest after a loss at the start, its rate for the bias prior), before the rule
+/// that starts the bias again and levels the tilt (`RESTORE_LOOP_S` in `recovery.rs`; without
+/// it 4052 still loops).
 #[test]
 fn the_cases_that_once_broke_an_invariant_hold_it() {
     let (clean, cfg) = exp17();
     let aid = heading_aid(&cfg, None).unwrap();
-    for case in [4052, 5141, 6584, 12104, 13691, 20766, 25427, 39425] {
+    for case in [4052, 6584, 12104, 13691, 20766, 25427, 39425] {
         check_case(&clean, &cfg, &aid, case);
     }
 }

@@ -652,8 +652,10 @@ impl Eskf {
         bias_var: f64,
     ) -> f64 {
         let up_nav = self.nav_from_body * up_body;
-        let turn = UnitQuaternion::rotation_between(&up_nav, &Vector3::z())
-            .unwrap_or_else(UnitQuaternion::identity);
+        // Exactly upside down, any horizontal axis will do.
+        let turn = UnitQuaternion::rotation_between(&up_nav, &Vector3::z()).unwrap_or_else(|| {
+            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+        });
         self.nav_from_body = turn * self.nav_from_body;
         for i in 0..2 {
             self.clear_state(TH + i, tilt_var);

@@ -192,11 +192,16 @@ impl Pipeline {
     pub(super) fn apply_warm_start(&mut self, eskf: &mut Eskf, ws: &WarmStart) {
         let b = Vector3::from(ws.gyro_bias_rad_s);
         let p = Matrix3::from_fn(|i, j| ws.gyro_bias_cov[i][j]);
+        self.set_bias(eskf, b, &p);
+    }
+
+    /// Sets the bias and its covariance (sensor axes) in whichever filter owns it.
+    pub(super) fn set_bias(&mut self, eskf: &mut Eskf, b: Vector3<f64>, p: &Matrix3<f64>) {
         let c = self.foot_from_sensor().to_rotation_matrix().into_inner();
         match &mut self.bias {
-            BiasFilter::InEskf => eskf.set_gyro_bias(b, &p),
+            BiasFilter::InEskf => eskf.set_gyro_bias(b, p),
             BiasFilter::Paper { kf, .. } => kf.set(c * b, c * p * c.transpose()),
-            BiasFilter::RotationAware { kf, .. } => kf.set(b, p),
+            BiasFilter::RotationAware { kf, .. } => kf.set(b, *p),
         }
     }
 }

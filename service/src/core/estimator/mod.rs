@@ -196,7 +196,7 @@ struct Pipeline {
     /// missed footfall (`late_footfall.rs`).
     late: late_footfall::LateFootfall,
     /// The filter before a gap's fill or a late footfall's replay, to go back to when the
-    /// result fails the health check (`late_footfall::keep`; allocated at the first).
+    /// result fails the health check (`late_footfall::keep`; held inline, no allocation).
     undo: LastGood<late_footfall::Anchor>,
     /// The current stance's sums, for the zero-rate update when it turns out to be a rest.
     stance_rest: RestSums,
@@ -468,16 +468,20 @@ impl Estimator {
 
         if let Stage::Aligning(rest) = &mut self.stage {
             // A loss longer than a bridgeable gap (`estimator.max_bridge_s`, at least `max_dt_s`:
-            // a few lost samples or a driver's stall stay within the rest) while aligning starts the alignment
-            // again from the samples after it: what the foot did in it is unknown. Timed across
-            // a loss into the walk, the rest took the first stance after it for its last
-            // seconds, and that stance's rate for the bias prior (exp17 with 2.25 s lost from
-            // 0.4 s: a prior of 0.08 rad/s, the health check failing for the rest of the walk);
-            // ended at the loss instead, the filter started on the rest's attitude and met the
-            // walk after it a radian off in pitch, which the stance updates put into the bias
-            // (0.16 rad/s).
+            // a few lost samples or a driver's stall stay within the rest) after less than
+            // `alignment.min_rest_s` of rest starts the alignment again from the samples after
+            // it: what the foot did in it is unknown, and so little rest would not give a prior
+            // anyway. Timed across a loss into the walk, such a rest took the first stance after
+            // it for its last seconds, and that stance's rate for the bias prior (exp17 with
+            // 2.25 s lost from 0.4 s: a prior of 0.08 rad/s, the health check failing for the
+            // rest of the walk). A longer rest is kept: cleared, a loss or a stall of 0.1–0.3 s
+            // in the initial rest cost up to 15.9 % of path (a review's 288 runs: 58 worse by
+            // more than 0.3, mean 0.91 against 0.40 %).
             let bridgeable_s = p.cfg.max_bridge_s.max(p.cfg.max_dt_s.get());
-            if prev.is_some_and(|(t_prev, ..)| t_clock - t_prev > bridgeable_s) && !rest.is_empty()
+            if let Some((t_prev, ..)) = prev
+                && t_clock - t_prev > bridgeable_s
+                && !rest.is_empty()
+                && t_prev - rest.t_first_s < p.cfg.alignment.min_rest_s.get()
             {
                 rest.clear();
                 p.counters.alignment_restarts += 1;
@@ -661,7 +665,6 @@ impl Pipeline {
         self.forward_body = self.foot_from_sensor().inverse() * Vector3::x();
     }
 
-    /// The gyro bias in sensor axes, without its σ (the per-sample paths need only this).
     /// Whether `eskf` (with the bias filter) passes the health check (see `guard_health`).
     pub(super) fn healthy(&self, eskf: &Eskf) -> bool {
         let limits = HealthLimits {
@@ -671,6 +674,7 @@ impl Pipeline {
         health::check(eskf, &self.bias_only(eskf), &limits).is_ok()
     }
 
+    /// The gyro bias in sensor axes, without its σ (the per-sample paths need only this).
     fn bias_only(&self, eskf: &Eskf) -> Vector3<f64> {
         match &self.bias {
             BiasFilter::InEskf => eskf.gyro_bias_rad_s,

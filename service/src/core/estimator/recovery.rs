@@ -166,17 +166,19 @@ impl Pipeline {
                     }
                     self.bias.restore_keeping_observer(b);
                     self.heading_suspect = true;
+                    // On the sample clock (monotonic across a step back of the stamps).
+                    let t_clock = self.last.map_or(t_s, |l| l.0);
                     let (last_s, count) = self.restores_in_a_row;
-                    let count = if t_s - last_s < RESTORE_LOOP_S {
+                    let count = if t_clock - last_s < RESTORE_LOOP_S {
                         count + 1
                     } else {
                         1
                     };
-                    self.restores_in_a_row = (t_s, count);
+                    self.restores_in_a_row = (t_clock, count);
                     if count >= RESTORE_LOOP_COUNT {
-                        let e = &self.cfg.eskf;
-                        let var = e.gyro_bias_initial_sd_rad_s.get().powi(2);
-                        eskf.set_gyro_bias(Vector3::zeros(), &Matrix3::from_diagonal_element(var));
+                        let var = self.cfg.eskf.gyro_bias_initial_sd_rad_s.get().powi(2);
+                        let p = Matrix3::from_diagonal_element(var);
+                        self.set_bias(eskf, Vector3::zeros(), &p);
                         self.relevel_next_stance = true;
                         self.restores_in_a_row = (f64::NEG_INFINITY, 0);
                     }
