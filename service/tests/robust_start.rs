@@ -7,12 +7,26 @@
 //! walk at 30 % of its footprints, session 21).
 
 use corridor_service::eval::EvalOptions;
-use corridor_service::runner::{heading_aid, run_log};
-use corridor_shared::config::{BiasPrior, ConfigFile, ConfigOverrides};
-use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
+use corridor_service::runner::{RunOutcome, heading_aid, run_log};
+use corridor_shared::config::{BiasPrior, Config, ConfigFile, ConfigOverrides};
+use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::truth_csv::read_truth_csv;
 use std::path::{Path, PathBuf};
+
+/// The run of `log`, and the largest finite bias it output on any axis, rad/s.
+fn run_with_largest_bias(log: &ImuLog, cfg: &Config) -> (RunOutcome, f64) {
+    let aid = heading_aid(cfg, None).unwrap();
+    let mut largest_bias = 0.0f64;
+    let out = run_log(log, cfg, &aid, &BiasInjection::default(), |_, e| {
+        largest_bias = e
+            .gyro_bias_rad_s
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(largest_bias, |m, v| m.max(v.abs()));
+    });
+    (out, largest_bias)
+}
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -42,15 +56,7 @@ fn a_rest_that_turns_faster_than_any_bias_is_not_the_bias_prior() {
     }
     .validate(&ConfigFile::read(&path).unwrap(), &path)
     .unwrap();
-    let aid = heading_aid(&cfg, None).unwrap();
-    let mut largest_bias = 0.0f64;
-    let out = run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
-        largest_bias = e
-            .gyro_bias_rad_s
-            .iter()
-            .filter(|v| v.is_finite())
-            .fold(largest_bias, |m, v| m.max(v.abs()));
-    });
+    let (out, largest_bias) = run_with_largest_bias(&log, &cfg);
     assert_eq!(out.counters.health_restores, 0, "the state was refused");
     assert!(
         largest_bias <= cfg.sensor.max_gyro_bias_rad_s(),
@@ -135,14 +141,8 @@ fn a_loss_from_the_initial_rest_into_the_walk_starts_the_alignment_again() {
     }
     .validate(&ConfigFile::read(&path).unwrap(), &path)
     .unwrap();
+    let (out, largest_bias) = run_with_largest_bias(&log, &cfg);
     let aid = heading_aid(&cfg, None).unwrap();
-    let mut largest_bias = 0.0f64;
-    let out = run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
-        largest_bias = e
-            .gyro_bias_rad_s
-            .iter()
-            .fold(largest_bias, |m, v| m.max(v.abs()));
-    });
     assert_eq!(out.counters.health_restores, 0, "{:?}", out.counters);
     assert!(largest_bias < 0.02, "bias {largest_bias} rad/s");
     assert!(
@@ -155,7 +155,7 @@ fn a_loss_from_the_initial_rest_into_the_walk_starts_the_alignment_again() {
     let mut cut = log.clone();
     cut.rows.drain(..79);
     let cut = run_log(&cut, &cfg, &aid, &BiasInjection::default(), |_, _| {});
-    let pct = |o: &corridor_service::runner::RunOutcome| {
+    let pct = |o: &RunOutcome| {
         o.trace
             .evaluate(&truth, &EvalOptions::default())
             .unwrap()
