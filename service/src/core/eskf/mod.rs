@@ -637,37 +637,6 @@ impl Eskf {
         }
     }
 
-    /// The tilt is levelled again from `up_body` (the direction of the specific force of a
-    /// standing foot, body axes): the smallest rotation that takes it to the vertical, the
-    /// heading kept. The tilt's error becomes independent with variance `tilt_var`, the velocity
-    /// zero with variance `vel_var` (the foot stands), and the bias `bias_rad_s` with variance
-    /// `bias_var` (what the filter made of a wrong tilt went into it). Returns the angle the
-    /// attitude turned by, rad.
-    pub fn relevel(
-        &mut self,
-        up_body: &Vector3<f64>,
-        tilt_var: f64,
-        vel_var: f64,
-        bias_rad_s: Vector3<f64>,
-        bias_var: f64,
-    ) -> f64 {
-        let up_nav = self.nav_from_body * up_body;
-        // Exactly upside down, any horizontal axis will do.
-        let turn = UnitQuaternion::rotation_between(&up_nav, &Vector3::z()).unwrap_or_else(|| {
-            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
-        });
-        self.nav_from_body = turn * self.nav_from_body;
-        for i in 0..2 {
-            self.clear_state(TH + i, tilt_var);
-        }
-        self.v_m_s = Vector3::zeros();
-        for i in 0..3 {
-            self.clear_state(V0 + i, vel_var);
-        }
-        self.set_gyro_bias(bias_rad_s, &Matrix3::from_diagonal_element(bias_var));
-        turn.angle()
-    }
-
     /// Sets the gyro bias and its covariance block (clearing its correlations), when the filter
     /// owns the bias. The bias-error response starts again from here.
     pub fn set_gyro_bias(&mut self, bias_rad_s: Vector3<f64>, cov: &Matrix3<f64>) {

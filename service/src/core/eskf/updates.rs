@@ -186,6 +186,26 @@ impl Eskf {
         (0..3).any(|a| r[a] * r[a] > max_z2 * (self.p[ix(V0 + a, V0 + a)] + rv))
     }
 
+    /// The tilt is levelled again from `up_body` (the direction of the specific force of a
+    /// standing foot, body axes): the smallest rotation that takes it to the vertical, the
+    /// heading kept. The tilt's error becomes independent with variance `tilt_var`, and the
+    /// velocity zero with variance `vel_var` (the foot stands).
+    pub fn relevel(&mut self, up_body: &Vector3<f64>, tilt_var: f64, vel_var: f64) {
+        let up_nav = self.nav_from_body * up_body;
+        // Exactly upside down, any horizontal axis will do.
+        let turn = UnitQuaternion::rotation_between(&up_nav, &Vector3::z()).unwrap_or_else(|| {
+            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+        });
+        self.nav_from_body = turn * self.nav_from_body;
+        for i in 0..2 {
+            self.clear_state(TH + i, tilt_var);
+        }
+        self.v_m_s = Vector3::zeros();
+        for i in 0..3 {
+            self.clear_state(V0 + i, vel_var);
+        }
+    }
+
     /// The velocity is not what the filter holds (garbage samples since the last stance): its
     /// error becomes independent of every other state with variance `var_m2_s2` per axis, so
     /// the next stance update sets it without moving the attitude or the bias.

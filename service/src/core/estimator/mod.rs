@@ -53,7 +53,7 @@ pub use types::{
 };
 
 use gaps::Gap;
-use recovery::VELOCITY_RESET_Z2;
+use recovery::{VELOCITY_RESET_Z2, take_spare};
 pub use rest::REST_BLOCK_S;
 use rest::{RestMeans, RestSums};
 
@@ -206,8 +206,6 @@ struct Pipeline {
     clipped_gyro_axes: [bool; 3],
     stance_obs_done: bool,
     stance_f_sum: (Vector3<f64>, u64),
-    /// The current stance was looked at for a relevel that is due (`relevel_if_due`).
-    stance_tilt_checked: bool,
     pending_heading: Option<(f64, f64)>,
     warm_start: Option<WarmStart>,
     converged_at_s: Option<f64>,
@@ -276,7 +274,6 @@ impl Estimator {
             zero_rate_applied: false,
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
-            stance_tilt_checked: false,
             pending_heading: None,
             warm_start: None,
             converged_at_s: None,
@@ -636,18 +633,6 @@ impl Pipeline {
         self.fill_output(eskf);
     }
 
-    /// Keeps the filter and the bias filter as the last healthy state.
-    ///
-    /// Out of line, as every copy of the filter on this path: a copy built in the per-sample
-    /// step's own frame made that frame 70 KB (each an `Eskf` of 7 KB on the stack), whose
-    /// pages the step touched at every sample (`Estimator::step` 3.5 % of the instructions but
-    /// 12 % of the time).
-    #[cold]
-    #[inline(never)]
-    pub(super) fn save_good(&mut self, eskf: &Eskf) {
-        self.good.save(&(eskf.clone(), self.bias.clone()));
-    }
-
     /// Foot-from-sensor rotation: `R_z(mount_yaw)·tilt0`.
     fn foot_from_sensor(&self) -> UnitQuaternion<f64> {
         rot_z(self.mount_yaw_rad) * self.tilt0
@@ -663,15 +648,6 @@ impl Pipeline {
     /// Recomputes [`Self::foot_forward_body`] after the tilt or the mounting yaw changed.
     pub(super) fn update_forward_body(&mut self) {
         self.forward_body = self.foot_from_sensor().inverse() * Vector3::x();
-    }
-
-    /// Whether `eskf` (with the bias filter) passes the health check (see `guard_health`).
-    pub(super) fn healthy(&self, eskf: &Eskf) -> bool {
-        let limits = HealthLimits {
-            max_speed_m_s: self.cfg.max_speed_m_s.get(),
-            max_gyro_bias_rad_s: self.cfg.sensor.max_gyro_bias_rad_s(),
-        };
-        health::check(eskf, &self.bias_only(eskf), &limits).is_ok()
     }
 
     /// The gyro bias in sensor axes, without its σ (the per-sample paths need only this).
@@ -729,22 +705,6 @@ impl Pipeline {
             self.converged_at_s = Some(out.t_s);
         }
     }
-}
-
-/// The spare filter buffer (`Pipeline::before`), a copy of `eskf` the first time.
-#[inline]
-fn take_spare(before: &mut Option<Box<Eskf>>, eskf: &Eskf) -> Box<Eskf> {
-    match before.take() {
-        Some(b) => b,
-        None => boxed_copy(eskf),
-    }
-}
-
-/// A boxed copy of the filter, built out of line (see [`Pipeline::save_good`]).
-#[cold]
-#[inline(never)]
-fn boxed_copy(eskf: &Eskf) -> Box<Eskf> {
-    Box::new(eskf.clone())
 }
 
 #[cfg(test)]

@@ -33,7 +33,6 @@ impl Pipeline {
             self.stance_obs_done = false;
             self.resumed_look = false;
             self.stance_f_sum = (Vector3::zeros(), 0);
-            self.stance_tilt_checked = false;
             self.counters.stances += 1;
             self.out.stance_counted = true;
         } else if self.stance_edge == StanceEdge::Resumed {
@@ -48,8 +47,7 @@ impl Pipeline {
         if stance {
             self.stance_f_sum.0 += f_now;
             self.stance_f_sum.1 += 1;
-            if !self.stance_tilt_checked && stance_age_s >= observations::RELEVEL_MIN_STANCE_S {
-                self.stance_tilt_checked = true;
+            if self.relevel_next_stance && stance_age_s >= observations::RELEVEL_MIN_STANCE_S {
                 self.relevel_if_due(eskf);
             }
             if !self.stance_obs_done && stance_age_s >= self.cfg.heading.obs_delay_s {

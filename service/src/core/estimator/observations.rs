@@ -23,8 +23,8 @@ const RELEVEL_TILT_SD_RAD: f64 = 0.05;
 impl Pipeline {
     /// Levels the tilt again from the stance's mean specific force, when restores that did not
     /// hold asked for it (`relevel_next_stance`): the heading kept, the bias started again from
-    /// zero with its initial σ. Once per stance, [`RELEVEL_MIN_STANCE_S`] into it; a stance whose
-    /// force is not a standing foot's leaves it to the next. True when it did.
+    /// zero with its initial σ. From [`RELEVEL_MIN_STANCE_S`] into a stance, at the first sample
+    /// at which the stance's mean force is a standing foot's. True when it did.
     pub(super) fn relevel_if_due(&mut self, eskf: &mut Eskf) -> bool {
         let (sum, n) = self.stance_f_sum;
         let f = sum / n.max(1) as f64;
@@ -41,15 +41,10 @@ impl Pipeline {
             &up,
             RELEVEL_TILT_SD_RAD.powi(2),
             e.zupt_sd_m_s.get().powi(2),
-            Vector3::zeros(),
-            bias_var,
         );
-        // The bias filter of the paper's and the rotation-aware modes too.
-        self.set_bias(
-            eskf,
-            Vector3::zeros(),
-            &Matrix3::from_diagonal_element(bias_var),
-        );
+        // What the filter made of a wrong tilt went into the bias, whichever filter owns it.
+        let p = Matrix3::from_diagonal_element(bias_var);
+        self.set_bias(eskf, Vector3::zeros(), &p);
         self.counters.relevels += 1;
         true
     }
