@@ -198,9 +198,11 @@ pub struct EskfFile {
     pub gyro_noise_rad_s: Option<f64>,
     /// Gyro-bias random walk σ per √s (default 1e-4 rad/s/√s).
     pub gyro_bias_rw_rad_s_sqrt_s: Option<f64>,
-    /// Initial gyro-bias σ without a prior (default 0.01 rad/s).
+    /// Initial gyro-bias σ without a prior, about zero: the sensor's spread of biases (default
+    /// 0.01 rad/s). The rest-mean prior is fused with it.
     pub gyro_bias_initial_sd_rad_s: Option<f64>,
-    /// Initial gyro-bias σ with the rest-mean prior (default 5e-4 rad/s).
+    /// The floor of the rest-mean prior's σ, added to the rest's own standard error (default
+    /// 5e-4 rad/s).
     pub gyro_bias_prior_sd_rad_s: Option<f64>,
     /// Zero-velocity pseudo-measurement σ (default 0.01 m/s).
     pub zupt_sd_m_s: Option<f64>,

@@ -137,9 +137,9 @@ pub struct EskfConfig {
     pub gyro_noise_rad_s: Positive,
     /// Gyro-bias random walk.
     pub gyro_bias_rw_rad_s_sqrt_s: f64,
-    /// Initial bias σ without prior.
+    /// Initial bias σ without prior (about zero); the rest-mean prior is fused with it.
     pub gyro_bias_initial_sd_rad_s: Positive,
-    /// Initial bias σ with the rest-mean prior.
+    /// Floor of the rest-mean prior's σ.
     pub gyro_bias_prior_sd_rad_s: Positive,
     /// ZUPT σ.
     pub zupt_sd_m_s: Positive,

@@ -53,7 +53,7 @@ impl Pipeline {
         };
         // The prior's σ: √(floor² + spread²), the bias instability floor and the rest's rate
         // spread over √(number of 50 ms blocks) (a rest during which the foot still sways).
-        let prior_sd = rest
+        let rest_sd = rest
             .rate_sd_of_mean()
             .map(|v| v.hypot(self.cfg.eskf.gyro_bias_prior_sd_rad_s.get()));
         // Gravity from the rest's mean specific force, but not from a walking stance (its
@@ -86,13 +86,23 @@ impl Pipeline {
         let wants_prior = self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean;
         self.counters.rest_prior_refused = wants_prior && turning;
         let rest_prior = wants_prior && !short_start && !turning;
-        let (b0, sd0) = if rest_prior {
-            (mean_w, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
+        // The rest's mean rate is a measurement of the bias with the σ above; the sensor's own
+        // spread of biases (`eskf.gyro_bias_initial_sd_rad_s` about zero, the prior without a
+        // rest) is what is known before it, and the two are fused per axis. A quiet rest's σ
+        // (5e-4–2.5e-3 rad/s) is far below 0.01 and its mean is taken nearly whole; a "rest"
+        // that is mostly motion (a foot that shifts before its first step, a rest cut short by a
+        // loss so that only its moving tail is left) has a wide σ and its mean, tens of mrad/s
+        // off, no longer starts the filter there.
+        let initial_sd = self.cfg.eskf.gyro_bias_initial_sd_rad_s.get();
+        let (b0, prior_sd) = if rest_prior {
+            fuse_with_zero_prior(&mean_w, &rest_sd, initial_sd)
         } else {
-            (
-                Vector3::zeros(),
-                self.cfg.eskf.gyro_bias_initial_sd_rad_s.get(),
-            )
+            (Vector3::zeros(), rest_sd)
+        };
+        let sd0 = if rest_prior {
+            self.cfg.eskf.gyro_bias_prior_sd_rad_s.get()
+        } else {
+            initial_sd
         };
         let e = &self.cfg.eskf;
         let own_bias = matches!(self.cfg.mode, Mode::Zupt | Mode::Eskf);
@@ -178,7 +188,7 @@ impl Pipeline {
             // down (hours, another temperature), and the rest is the measurement of now.
             if own_bias
                 && rest_prior
-                && let Some(Err(_)) = eskf.zero_rate_update(&mean_w, &mean_f, &prior_sd)
+                && let Some(Err(_)) = eskf.zero_rate_update(&mean_w, &mean_f, &rest_sd)
             {
                 self.counters.zero_rate_refused += 1;
                 eskf.set_gyro_bias(b0, &prior_cov);
@@ -204,4 +214,17 @@ impl Pipeline {
             BiasFilter::RotationAware { kf, .. } => kf.set(b, *p),
         }
     }
+}
+
+/// The bias measured as `mean` with σ `sd` (per axis), fused with a prior of zero and σ
+/// `prior_sd`: the posterior mean and σ, per axis.
+fn fuse_with_zero_prior(
+    mean: &Vector3<f64>,
+    sd: &Vector3<f64>,
+    prior_sd: f64,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let p2 = prior_sd * prior_sd;
+    let gain = sd.map(|s| p2 / (p2 + s * s));
+    let post_sd = sd.map(|s| (p2 * s * s / (p2 + s * s)).sqrt());
+    (mean.component_mul(&gain), post_sd)
 }
