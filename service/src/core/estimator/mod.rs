@@ -55,7 +55,7 @@ pub use types::{
 use gaps::Gap;
 use recovery::{VELOCITY_RESET_Z2, take_spare};
 pub use rest::REST_BLOCK_S;
-use rest::{RestMeans, RestSums};
+use rest::{InitialRest, RestMeans, RestSums};
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::clock::SampleClock;
@@ -101,7 +101,7 @@ enum BiasFilter {
 enum Stage {
     /// Accumulating the initial rest until motion starts after enough of it
     /// ([`Phase::Aligning`]).
-    Aligning(Box<RestSums>),
+    Aligning(Box<InitialRest>),
     /// Aligned: the filter runs ([`Phase::Calibrating`], then [`Phase::Tracking`]). Boxed: the
     /// filter's covariance is stored inline.
     Running(Box<Eskf>),
@@ -281,9 +281,9 @@ impl Estimator {
             cfg,
         };
         Self {
-            stage: Stage::Aligning(Box::new(RestSums::new(
+            stage: Stage::Aligning(Box::new(InitialRest::new(
                 p.cfg.alignment.rest_tail_s,
-                Some(p.cfg.alignment.rest_max_rate_change_rad_s.get()),
+                p.cfg.alignment.rest_max_rate_change_rad_s.get(),
             ))),
             p,
             before_gap: gap_copy::GapCopy::default(),
@@ -466,24 +466,41 @@ impl Estimator {
         if let Stage::Aligning(rest) = &mut self.stage {
             // A loss longer than a bridgeable gap (`estimator.max_bridge_s`, at least `max_dt_s`:
             // a few lost samples or a driver's stall stay within the rest) after less than
-            // `alignment.min_rest_s` of rest starts the alignment again from the samples after
-            // it: what the foot did in it is unknown, and so little rest would not give a prior
-            // anyway. Timed across a loss into the walk, such a rest took the first stance after
-            // it for its last seconds, and that stance's rate for the bias prior (exp17 with
-            // 2.25 s lost from 0.4 s: a prior of 0.08 rad/s, the health check failing for the
-            // rest of the walk). A longer rest is kept: cleared, a loss or a stall of 0.1–0.3 s
-            // in the initial rest cost up to 15.9 % of path (a review's 288 runs: 58 worse by
-            // more than 0.3, mean 0.91 against 0.40 %).
+            // `alignment.min_rest_s` of rest is remembered, and the rest since it kept apart.
+            // When the rest ends with less than `min_rest_s` of it after the loss as well, the
+            // alignment starts again from the loss: what the foot did in it is unknown, and
+            // neither side is a rest by itself. Timed across a loss into the walk, such a rest
+            // took the first stance after it for its last seconds, and that stance's rate for
+            // the bias prior (exp17 with 2.25 s lost from 0.4 s: a prior of 0.08 rad/s, the
+            // health check failing for the rest of the walk). A rest that goes on after its
+            // loss is kept whole: started again at the loss, a loss or a stall of 0.2–0.3 s
+            // 0.43 s into exp40's rest (then 0.8 s of it rocking) cost up to 9.5 % of path;
+            // started again at any loss, 58 of a review's 288 runs were worse by more than
+            // 0.3 % of path.
             let bridgeable_s = p.cfg.max_bridge_s.max(p.cfg.max_dt_s.get());
+            let min_rest_s = p.cfg.alignment.min_rest_s.get();
             if let Some((t_prev, ..)) = prev
                 && t_clock - t_prev > bridgeable_s
-                && !rest.is_empty()
-                && t_prev - rest.t_first_s < p.cfg.alignment.min_rest_s.get()
             {
-                rest.clear();
+                rest.lose(t_prev, min_rest_s);
+            }
+            if decision.stance {
+                rest.push_since_loss(s.t_s, &f, &w);
+            } else if rest.end(s.t_s, min_rest_s) {
                 p.counters.alignment_restarts += 1;
             }
+            let rest = &mut rest.whole;
             let Some(eskf) = p.align_step(rest, s.t_s, &w, &f, decision.stance) else {
+                // A gap the rest spans is counted here; one the alignment ends at, where the
+                // filter crosses it (as a new segment).
+                if let Some((t_prev, ..)) = prev
+                    && t_clock - t_prev > p.cfg.max_dt_s.get()
+                    && p.out.gap_s.is_none()
+                {
+                    p.counters.gaps += 1;
+                    p.out.gap_s = Some(t_clock - t_prev);
+                    p.out.gap_crossing = Some(GapCrossing::InRest);
+                }
                 return Ok(&self.p.out);
             };
             self.stage = Stage::Running(eskf);

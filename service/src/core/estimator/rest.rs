@@ -233,6 +233,63 @@ impl RestSums {
     }
 }
 
+/// The initial rest, and its part since a loss that came after less than
+/// `alignment.min_rest_s` of it (see `Estimator::step`): which of the two aligns is decided
+/// when the rest ends.
+#[derive(Debug, Clone)]
+pub(super) struct InitialRest {
+    pub(super) whole: RestSums,
+    since_loss: RestSums,
+    /// A loss came after less than `min_rest_s` of rest, and the rest has not ended since.
+    lost: bool,
+}
+
+impl InitialRest {
+    pub(super) fn new(tail_s: f64, max_rate_change_rad_s: f64) -> Self {
+        let rest = RestSums::new(tail_s, Some(max_rate_change_rad_s));
+        Self {
+            since_loss: rest.clone(),
+            whole: rest,
+            lost: false,
+        }
+    }
+
+    /// Becomes a copy of `src` in its own blocks: no allocation.
+    pub(super) fn copy_from(&mut self, src: &Self) {
+        self.whole.copy_from(&src.whole);
+        self.since_loss.copy_from(&src.since_loss);
+        self.lost = src.lost;
+    }
+
+    /// A loss in the rest: remembered when less than `min_rest_s` of rest came before it.
+    pub(super) fn lose(&mut self, t_before_s: f64, min_rest_s: f64) {
+        if !self.whole.is_empty() && t_before_s - self.whole.t_first_s < min_rest_s {
+            self.since_loss.clear();
+            self.lost = true;
+        }
+    }
+
+    /// One sample of the rest after such a loss (the whole rest takes it in the alignment).
+    pub(super) fn push_since_loss(&mut self, t_s: f64, f: &Vector3<f64>, w: &Vector3<f64>) {
+        if self.lost {
+            self.since_loss.push(t_s, f, w);
+        }
+    }
+
+    /// The rest ends at `t_s`: when less than `min_rest_s` of it came after such a loss as
+    /// well, only that part is kept (the alignment starts again from the loss). True then.
+    pub(super) fn end(&mut self, t_s: f64, min_rest_s: f64) -> bool {
+        let lost = std::mem::take(&mut self.lost);
+        let short_after =
+            self.since_loss.is_empty() || t_s - self.since_loss.t_first_s < min_rest_s;
+        if lost && short_after {
+            std::mem::swap(&mut self.whole, &mut self.since_loss);
+        }
+        self.since_loss.clear();
+        lost && short_after
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

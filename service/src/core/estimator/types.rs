@@ -408,6 +408,9 @@ pub enum GapCrossing {
     /// changed them: the clock stepped forward with no sample lost, and one sample step is
     /// integrated (up to `estimator.max_fill_s`).
     ClockStep,
+    /// In the initial rest, before the filter starts: nothing to integrate. The rest goes on
+    /// after it, or the alignment starts again (`Counters::alignment_restarts`).
+    InRest,
 }
 
 /// Something an estimate reports that a log should say, once per event (see
@@ -448,6 +451,7 @@ impl std::fmt::Display for Notice {
                     GapCrossing::NewSegment => "a new segment starts here",
                     GapCrossing::ClockStep =>
                         "the rates run on across it: a clock step, integrated as one sample step",
+                    GapCrossing::InRest => "in the initial rest, before the filter starts",
                 }
             ),
             Notice::HealthFault(fault) => write!(
