@@ -20,10 +20,10 @@ of path. The figures of `estimator.max_bridge_s` and `estimator.max_fill_s` in
 bridge's figures, in a copy of the config for the "new segment" column). Needs the
 release binary (`cargo build --release -p corridor-service --bin corridor`).
 """
-import csv, json, os, random, re, statistics, subprocess, sys, tempfile
+import csv, os, random, statistics, sys, tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from suite_walks import walks
+from suite_walks import footprint_rms, walks
 
 root = os.getcwd()
 binary = os.environ.get("BIN", os.path.join(root, "target/release/corridor"))
@@ -34,12 +34,7 @@ tmp = tempfile.mkdtemp(prefix="gap-cuts-")
 
 
 def rms_pct(imu, truth, sh, out=os.path.join(tmp, "out")):
-    subprocess.run([binary, "run", "--imu", imu, "--truth", truth, "--config", config,
-                    "--start-heading-deg", str(sh), "--out", out], capture_output=True)
-    try:
-        return json.load(open(os.path.join(out, "summary.json")))["eval"]["rms_error_pct_of_path"]
-    except (OSError, KeyError, TypeError, ValueError):
-        return None
+    return footprint_rms(binary, config, imu, truth, sh, out)
 
 
 lengths = [float(x) for x in sys.argv[1].split(",")]

@@ -15,10 +15,10 @@ then per kind and length the median and worst change and how many runs are worse
 0.3 % of path. Needs the release binary (`cargo build --release -p corridor-service --bin
 corridor`).
 """
-import csv, json, os, statistics, subprocess, sys, tempfile
+import csv, os, statistics, sys, tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from suite_walks import walks, stamp
+from suite_walks import footprint_rms, stamp, walks
 
 root = os.getcwd()
 binary = os.environ.get("BIN", os.path.join(root, "target/release/corridor"))
@@ -27,12 +27,7 @@ tmp = tempfile.mkdtemp(prefix="rest-faults-")
 
 
 def run(imu, truth, sh, out=os.path.join(tmp, "out")):
-    subprocess.run([binary, "run", "--imu", imu, "--truth", truth, "--config", config,
-                    "--start-heading-deg", str(sh), "--out", out], capture_output=True)
-    try:
-        return json.load(open(os.path.join(out, "summary.json")))["eval"]["rms_error_pct_of_path"]
-    except (OSError, KeyError, TypeError, ValueError):
-        return None
+    return footprint_rms(binary, config, imu, truth, sh, out)
 
 
 lengths = [float(x) for x in sys.argv[1].split(",")]

@@ -1,7 +1,7 @@
 """The walks of `configs/eval/gdins.toml`, for the experiment scripts in this folder (run from the
 repository root): (name, IMU CSV, truth CSV, start heading in degrees) of each recording, the
 fast-gait ones left out unless asked for; and the helpers the clock-step scripts share."""
-import csv, os, random, re
+import csv, json, os, random, re, subprocess
 
 
 def walks(root, fast=False):
@@ -40,3 +40,14 @@ def places(name, rows, estimates_csv):
         t_end = min(ends, key=lambda e: abs(e - (ts[0] + pos * (ts[-1] - ts[0]))))
         out.append((f"end {pos}", min(range(len(ts)), key=lambda i: abs(ts[i] - t_end))))
     return out
+
+
+def footprint_rms(binary, config, imu, truth, sh, out):
+    """`corridor run` of one log: its footprint RMS, % of path (None when it failed); its
+    estimates are left in `out`."""
+    subprocess.run([binary, "run", "--imu", imu, "--truth", truth, "--config", config,
+                    "--start-heading-deg", str(sh), "--out", out], capture_output=True)
+    try:
+        return json.load(open(os.path.join(out, "summary.json")))["eval"]["rms_error_pct_of_path"]
+    except (OSError, KeyError, TypeError, ValueError):
+        return None

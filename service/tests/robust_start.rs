@@ -32,6 +32,17 @@ fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// `configs/gdins.toml`, the walks starting along the map's x axis.
+fn shipped_config() -> Config {
+    let path = root().join("configs/gdins.toml");
+    ConfigOverrides {
+        start_heading_deg: Some(0.0),
+        ..Default::default()
+    }
+    .validate(&ConfigFile::read(&path).unwrap(), &path)
+    .unwrap()
+}
+
 /// The cut: between exp29's first two surveyed corners after the start (11.70 s).
 const CUT_S: f64 = 11.7;
 
@@ -134,13 +145,7 @@ fn a_loss_from_the_initial_rest_into_the_walk_starts_the_alignment_again() {
         .into_iter()
         .filter(|p| p.t_s > last)
         .collect();
-    let path = root().join("configs/gdins.toml");
-    let cfg = ConfigOverrides {
-        start_heading_deg: Some(0.0),
-        ..Default::default()
-    }
-    .validate(&ConfigFile::read(&path).unwrap(), &path)
-    .unwrap();
+    let cfg = shipped_config();
     let (out, largest_bias) = run_with_largest_bias(&log, &cfg);
     let aid = heading_aid(&cfg, None).unwrap();
     assert_eq!(out.counters.health_restores, 0, "{:?}", out.counters);
@@ -181,13 +186,7 @@ fn a_rest_that_is_mostly_motion_does_not_set_the_bias() {
     let mut log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
     log.rows.retain(|r| r.t_s >= 0.55);
     let truth = read_truth_csv(&dir.join("ground_truth.csv")).unwrap();
-    let path = root().join("configs/gdins.toml");
-    let cfg = ConfigOverrides {
-        start_heading_deg: Some(0.0),
-        ..Default::default()
-    }
-    .validate(&ConfigFile::read(&path).unwrap(), &path)
-    .unwrap();
+    let cfg = shipped_config();
     let (out, largest_bias) = run_with_largest_bias(&log, &cfg);
     assert!(
         !out.counters.started_without_rest && out.counters.initial_rest_moving_blocks > 0,
@@ -213,13 +212,7 @@ fn a_loss_early_in_the_initial_rest_keeps_the_rest_that_goes_on_after_it() {
     let dir = root().join("tests/data/gdins_exp40_serpentine_return");
     let mut log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
     let truth = read_truth_csv(&dir.join("ground_truth.csv")).unwrap();
-    let path = root().join("configs/gdins.toml");
-    let cfg = ConfigOverrides {
-        start_heading_deg: Some(0.0),
-        ..Default::default()
-    }
-    .validate(&ConfigFile::read(&path).unwrap(), &path)
-    .unwrap();
+    let cfg = shipped_config();
     let aid = heading_aid(&cfg, None).unwrap();
     let pct = |log: &ImuLog| {
         let out = run_log(log, &cfg, &aid, &BiasInjection::default(), |_, _| {});
