@@ -8,7 +8,8 @@ without the fault.
     python3 docs/experiments/rest-faults.py 0.1,0.2,0.3 0.5,0.55,0.6,0.7
 
 With a second list, also each walk with only its last `KEPT` seconds of initial rest (a short
-rest, nothing lost after it).
+rest, nothing lost after it); with a third, a loss and a stall of that length (s) in the middle of
+each such short rest as well.
 
 The initial rest is the uncut run's alignment phase (`estimates.csv`). Prints one line per run,
 then per kind and length the median and worst change and how many runs are worse by more than
@@ -32,6 +33,7 @@ def run(imu, truth, sh, out=os.path.join(tmp, "out")):
 
 lengths = [float(x) for x in sys.argv[1].split(",")]
 kept = [float(x) for x in sys.argv[2].split(",")] if len(sys.argv) > 2 else []
+mid_fault_s = float(sys.argv[3]) if len(sys.argv) > 3 else None
 res = []
 for name, imu, truth, sh in walks(root, fast=True):
     lines = open(imu).read().splitlines()
@@ -49,6 +51,27 @@ for name, imu, truth, sh in walks(root, fast=True):
         res.append(("short", length, base, v))
         print(name[:5], "short", length, "-", f"rest {t_end - t0:.2f} s", f"{base:.2f}",
               "—" if v is None else f"{v:.2f}", flush=True)
+        if mid_fault_s is None:
+            continue
+        short = rows[i0:]
+        im = min(range(len(ts)), key=lambda i: abs(ts[i] - (t_end - length / 2))) - i0
+        k = int(round(mid_fault_s * 200))
+        for kind in ("short+loss", "short+stall"):
+            cut_truth = truth
+            if kind == "short+loss":
+                cut_rows = short[:im] + short[im + k:]
+            else:
+                cut_rows = short[:im] + [stamp(r, mid_fault_s) for r in short[im:]]
+                cut_truth = os.path.join(tmp, "truth.csv")
+                tl = open(truth).read().splitlines()
+                open(cut_truth, "w").write("\n".join(
+                    [tl[0]] + [stamp(r, mid_fault_s) if float(r.split(",", 1)[0]) >= ts[i0 + im]
+                               else r for r in tl[1:]]) + "\n")
+            open(cut, "w").write("\n".join([header] + cut_rows) + "\n")
+            v = run(cut, cut_truth, sh)
+            res.append((kind, length, base, v))
+            print(name[:5], kind, length, "-", f"rest {t_end - t0:.2f} s", f"{base:.2f}",
+                  "—" if v is None else f"{v:.2f}", flush=True)
     for length in lengths:
         k = int(round(length * 200))
         for pos in (0.3, 0.6, 0.85):
@@ -72,9 +95,11 @@ for name, imu, truth, sh in walks(root, fast=True):
                 res.append((kind, length, base, v))
                 print(name[:5], kind, length, pos, f"rest {t_end - t0:.2f} s", f"{base:.2f}",
                       "—" if v is None else f"{v:.2f}", flush=True)
-for kind in ("loss", "stall", "short"):
-    for length in kept if kind == "short" else lengths:
+for kind in ("loss", "stall", "short", "short+loss", "short+stall"):
+    for length in kept if kind.startswith("short") else lengths:
         d = [v - b for (K, L, b, v) in res if K == kind and L == length and v is not None]
+        if not d:
+            continue
         failed = sum(v is None for (K, L, b, v) in res if K == kind and L == length)
         print(f"{kind} {length} s: median {statistics.median(d):+.3f}, worst {max(d):+.2f} % of "
               f"path; {sum(x > 0.3 for x in d)} of {len(d)} worse by more than 0.3"

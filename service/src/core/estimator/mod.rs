@@ -469,7 +469,8 @@ impl Estimator {
             // `alignment.min_rest_s` of rest is remembered, and the rest since it kept apart.
             // When the rest ends with less than `min_rest_s` of it after the loss as well, the
             // alignment starts again from the loss: what the foot did in it is unknown, and
-            // neither side is a rest by itself. Timed across a loss into the walk, such a rest
+            // neither side is a rest by itself, unless the two together are one rest (see
+            // `InitialRest::end`: a short rest with a pause in it). Timed across a loss into the walk, such a rest
             // took the first stance after it for its last seconds, and that stance's rate for
             // the bias prior (exp17 with 2.25 s lost from 0.4 s: a prior of 0.08 rad/s, the
             // health check failing for the rest of the walk). A rest that goes on after its
@@ -482,15 +483,22 @@ impl Estimator {
             if let Some((t_prev, ..)) = prev
                 && t_clock - t_prev > bridgeable_s
             {
-                rest.lose(t_prev, min_rest_s);
+                rest.lose(min_rest_s);
             }
+            let mut restarted = false;
             if decision.stance {
-                rest.push_since_loss(s.t_s, &f, &w);
-            } else if rest.end(s.t_s, min_rest_s) {
+                rest.push(s.t_s, &f, &w);
+            } else {
+                restarted = rest.end(s.t_s, min_rest_s);
+            }
+            // One restart, counted once: the alignment counts it as well when what is left
+            // after the loss is too short to start from.
+            let restarts = p.counters.alignment_restarts;
+            let aligned = p.align_step(&mut rest.whole, s.t_s, &w, &f, decision.stance);
+            if restarted && p.counters.alignment_restarts == restarts {
                 p.counters.alignment_restarts += 1;
             }
-            let rest = &mut rest.whole;
-            let Some(eskf) = p.align_step(rest, s.t_s, &w, &f, decision.stance) else {
+            let Some(eskf) = aligned else {
                 // A gap the rest spans is counted here; one the alignment ends at, where the
                 // filter crosses it (as a new segment).
                 if let Some((t_prev, ..)) = prev

@@ -240,9 +240,19 @@ impl RestSums {
 pub(super) struct InitialRest {
     pub(super) whole: RestSums,
     since_loss: RestSums,
-    /// A loss came after less than `min_rest_s` of rest, and the rest has not ended since.
-    lost: bool,
+    /// Such a loss, and the rest has not ended since: how long the rest had lasted before it,
+    /// s (on the sample stamps), and its mean specific force and rate then.
+    lost: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+    /// The last stamp pushed, s.
+    last_t_s: f64,
+    /// The largest change of mean rate between two parts of one rest, rad/s
+    /// (`alignment.rest_max_rate_change_rad_s`).
+    max_rate_change_rad_s: f64,
 }
+
+/// Two parts of a rest split by a loss are one rest when their mean forces lie within this
+/// angle, rad (1°: the foot has not moved; a walking stance's flat foot differs by more)...
+const REST_PARTS_MAX_ANGLE_RAD: f64 = 0.017_453_292_519_943_295;
 
 impl InitialRest {
     pub(super) fn new(tail_s: f64, max_rate_change_rad_s: f64) -> Self {
@@ -250,7 +260,9 @@ impl InitialRest {
         Self {
             since_loss: rest.clone(),
             whole: rest,
-            lost: false,
+            lost: None,
+            last_t_s: f64::NAN,
+            max_rate_change_rad_s,
         }
     }
 
@@ -259,34 +271,58 @@ impl InitialRest {
         self.whole.copy_from(&src.whole);
         self.since_loss.copy_from(&src.since_loss);
         self.lost = src.lost;
+        self.last_t_s = src.last_t_s;
+        self.max_rate_change_rad_s = src.max_rate_change_rad_s;
     }
 
-    /// A loss in the rest: remembered when less than `min_rest_s` of rest came before it.
-    pub(super) fn lose(&mut self, t_before_s: f64, min_rest_s: f64) {
-        if !self.whole.is_empty() && t_before_s - self.whole.t_first_s < min_rest_s {
+    /// A loss in the rest (the samples come back after more than a bridgeable gap):
+    /// remembered when less than `min_rest_s` of rest came before it.
+    pub(super) fn lose(&mut self, min_rest_s: f64) {
+        let before_s = self.last_t_s - self.whole.t_first_s;
+        if !self.whole.is_empty() && before_s < min_rest_s {
+            let (f, w) = self.whole.means();
             self.since_loss.clear();
-            self.lost = true;
+            self.lost = Some((before_s, f, w));
         }
     }
 
-    /// One sample of the rest after such a loss (the whole rest takes it in the alignment).
-    pub(super) fn push_since_loss(&mut self, t_s: f64, f: &Vector3<f64>, w: &Vector3<f64>) {
-        if self.lost {
+    /// One sample of the rest: the whole rest takes it in the alignment, the part since a loss
+    /// here.
+    pub(super) fn push(&mut self, t_s: f64, f: &Vector3<f64>, w: &Vector3<f64>) {
+        self.last_t_s = t_s;
+        if self.lost.is_some() {
             self.since_loss.push(t_s, f, w);
         }
     }
 
-    /// The rest ends at `t_s`: when less than `min_rest_s` of it came after such a loss as
-    /// well, only that part is kept (the alignment starts again from the loss). True then.
+    /// The rest ends at `t_s`. After such a loss, when less than `min_rest_s` of rest came
+    /// after it as well, only that part is kept (the alignment starts again from the loss;
+    /// true then), unless the two parts last `min_rest_s` together and are one rest: the same
+    /// mean force within [`REST_PARTS_MAX_ANGLE_RAD`] and the same mean rate within
+    /// `alignment.rest_max_rate_change_rad_s`, over their still blocks (a stream that paused,
+    /// or lost a few tenths of a second, in a short rest).
     pub(super) fn end(&mut self, t_s: f64, min_rest_s: f64) -> bool {
-        let lost = std::mem::take(&mut self.lost);
-        let short_after =
-            self.since_loss.is_empty() || t_s - self.since_loss.t_first_s < min_rest_s;
-        if lost && short_after {
+        let restart = self.lost.take().is_some_and(|(before_s, f, w)| {
+            if self.since_loss.is_empty() {
+                return true;
+            }
+            let after_s = t_s - self.since_loss.t_first_s;
+            if after_s >= min_rest_s {
+                return false;
+            }
+            // The parts' still blocks: the part after the loss is mostly the rest's tail,
+            // where the foot may already be starting its first step.
+            let (f_after, w_after) = self.since_loss.means();
+            let one_rest = before_s + after_s >= min_rest_s
+                && f.angle(&f_after) <= REST_PARTS_MAX_ANGLE_RAD
+                && (w - w_after).norm() <= self.max_rate_change_rad_s;
+            !one_rest
+        });
+        if restart {
             std::mem::swap(&mut self.whole, &mut self.since_loss);
         }
         self.since_loss.clear();
-        lost && short_after
+        restart
     }
 }
 

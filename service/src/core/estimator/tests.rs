@@ -120,6 +120,27 @@ fn a_short_first_stance_aligns_without_a_bias_prior_unless_switched_off() {
     }
 }
 
+/// A rest that ends too soon after a loss that came too soon starts the alignment again
+/// once: the part after the loss, too short to start from as well, is not a second restart (it
+/// was counted twice, a review found).
+#[test]
+fn an_alignment_started_again_after_a_loss_is_counted_once() {
+    let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
+    let mut est = Estimator::new(Config::default(), HeadingAid::None);
+    // 0.3 s of rest, 0.5 s lost, 0.05 s of rest (shorter than min_start_stance_s), then motion.
+    let t = feed(&mut est, 0.0, 60, [0.0; 3], level);
+    let t = feed(&mut est, t + 0.5, 10, [0.0; 3], level);
+    assert_eq!(est.phase(), Phase::Aligning);
+    assert_eq!(est.counters().gaps, 1, "the loss is counted");
+    feed(&mut est, t, 1, [0.0, 3.0, 0.0], pushed);
+    assert_eq!(
+        est.phase(),
+        Phase::Aligning,
+        "waits for a stance to start from"
+    );
+    assert_eq!(est.counters().alignment_restarts, 1);
+}
+
 #[test]
 fn a_later_rest_observes_the_bias_with_a_zero_rate_update() {
     let bias = [0.004, -0.002, 0.006];

@@ -178,6 +178,8 @@ pub struct Counters {
     /// across the gap, covariance widened by what the interpolation misses), longer ones up to
     /// `estimator.max_fill_s` filled from the stride before when it matches, the others start a
     /// new segment (nothing integrated over the gap, velocity and attitude covariance widened).
+    /// Those before the filter starts (in the initial rest, or while waiting for one) are in
+    /// none of the sub-counts below: nothing is integrated over them.
     pub gaps: u64,
     /// Of the gaps, those bridged.
     pub gaps_bridged: u64,
@@ -408,8 +410,9 @@ pub enum GapCrossing {
     /// changed them: the clock stepped forward with no sample lost, and one sample step is
     /// integrated (up to `estimator.max_fill_s`).
     ClockStep,
-    /// In the initial rest, before the filter starts: nothing to integrate. The rest goes on
-    /// after it, or the alignment starts again (`Counters::alignment_restarts`).
+    /// Before the filter starts (in the initial rest, or while waiting for one): nothing to
+    /// integrate. A rest goes on after it, or the alignment starts again
+    /// (`Counters::alignment_restarts`).
     InRest,
 }
 
@@ -451,7 +454,7 @@ impl std::fmt::Display for Notice {
                     GapCrossing::NewSegment => "a new segment starts here",
                     GapCrossing::ClockStep =>
                         "the rates run on across it: a clock step, integrated as one sample step",
-                    GapCrossing::InRest => "in the initial rest, before the filter starts",
+                    GapCrossing::InRest => "before the filter starts (aligning)",
                 }
             ),
             Notice::HealthFault(fault) => write!(
