@@ -94,15 +94,11 @@ impl Pipeline {
         // loss so that only its moving tail is left) has a wide σ and its mean, tens of mrad/s
         // off, no longer starts the filter there.
         let initial_sd = self.cfg.eskf.gyro_bias_initial_sd_rad_s.get();
-        let (b0, prior_sd) = if rest_prior {
-            fuse_with_zero_prior(&mean_w, &rest_sd, initial_sd)
+        let (b0, prior_sd, sd0) = if rest_prior {
+            let (b0, prior_sd) = fuse_with_zero_prior(&mean_w, &rest_sd, initial_sd);
+            (b0, prior_sd, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
         } else {
-            (Vector3::zeros(), rest_sd)
-        };
-        let sd0 = if rest_prior {
-            self.cfg.eskf.gyro_bias_prior_sd_rad_s.get()
-        } else {
-            initial_sd
+            (Vector3::zeros(), Vector3::repeat(initial_sd), initial_sd)
         };
         let e = &self.cfg.eskf;
         let own_bias = matches!(self.cfg.mode, Mode::Zupt | Mode::Eskf);
@@ -166,8 +162,7 @@ impl Pipeline {
                 obs: None,
             },
         };
-        // The prior's covariance per axis (floor and the rest's own spread), in each filter's
-        // axes.
+        // The rest-mean prior's covariance per axis (fused as above), in each filter's axes.
         let prior_cov = Matrix3::from_diagonal(&prior_sd.map(|v| v * v));
         match &mut self.bias {
             BiasFilter::Paper { kf, .. } if rest_prior => {
