@@ -469,15 +469,15 @@ impl Estimator {
             // `alignment.min_rest_s` of rest is remembered, and the rest since it kept apart.
             // When the rest ends with less than `min_rest_s` of it after the loss as well, the
             // alignment starts again from the loss: what the foot did in it is unknown, and
-            // neither side is a rest by itself, unless the two together are one rest (see
-            // `InitialRest::end`: a short rest with a pause in it). Timed across a loss into the walk, such a rest
-            // took the first stance after it for its last seconds, and that stance's rate for
-            // the bias prior (exp17 with 2.25 s lost from 0.4 s: a prior of 0.08 rad/s, the
-            // health check failing for the rest of the walk). A rest that goes on after its
-            // loss is kept whole: started again at the loss, a loss or a stall of 0.2–0.3 s
-            // 0.43 s into exp40's rest (then 0.8 s of it rocking) cost up to 9.5 % of path;
-            // started again at any loss, 58 of a review's 288 runs were worse by more than
-            // 0.3 % of path.
+            // neither side is a rest by itself, unless the two together are one rest
+            // (`InitialRest::end`: a short rest with a pause in it). Timed across a loss into
+            // the walk, such a rest took the first stance after it for its last seconds, and
+            // that stance's rate for the bias prior (exp17 with 2.25 s lost from 0.4 s: a prior
+            // of 0.08 rad/s, the health check failing for the rest of the walk). A rest that
+            // goes on after its loss is kept whole: started again at the loss, a loss or a
+            // stall of 0.2–0.3 s 0.43 s into exp40's rest (then 0.8 s of it rocking) cost up to
+            // 9.5 % of path; started again at any loss, 58 of a review's 288 runs were worse by
+            // more than 0.3 % of path.
             let bridgeable_s = p.cfg.max_bridge_s.max(p.cfg.max_dt_s.get());
             let min_rest_s = p.cfg.alignment.min_rest_s.get();
             if let Some((t_prev, ..)) = prev
