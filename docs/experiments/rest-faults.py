@@ -31,6 +31,25 @@ def run(imu, truth, sh, out=os.path.join(tmp, "out")):
     return footprint_rms(binary, config, imu, truth, sh, out)
 
 
+def damaged(header, rows, i, length_s, kind, truth):
+    """`rows` with `length_s` lost (`kind` "loss": the samples removed) or stalled ("stall":
+    every stamp from row `i` on `length_s` later, and the footprints' with them, since they are
+    matched by time) at row `i`, written out: (IMU CSV, truth CSV)."""
+    imu, cut_truth = os.path.join(tmp, "cut.csv"), truth
+    if kind == "loss":
+        out = rows[:i] + rows[i + int(round(length_s * 200)):]
+    else:
+        out = rows[:i] + [stamp(r, length_s) for r in rows[i:]]
+        t_cut = float(rows[i].split(",", 1)[0])
+        lines = open(truth).read().splitlines()
+        cut_truth = os.path.join(tmp, "truth.csv")
+        open(cut_truth, "w").write("\n".join(
+            [lines[0]] + [stamp(r, length_s) if float(r.split(",", 1)[0]) >= t_cut else r
+                          for r in lines[1:]]) + "\n")
+    open(imu, "w").write("\n".join([header] + out) + "\n")
+    return imu, cut_truth
+
+
 lengths = [float(x) for x in sys.argv[1].split(",")]
 kept = [float(x) for x in sys.argv[2].split(",")] if len(sys.argv) > 2 else []
 mid_fault_s = float(sys.argv[3]) if len(sys.argv) > 3 else None
@@ -55,43 +74,16 @@ for name, imu, truth, sh in walks(root, fast=True):
             continue
         short = rows[i0:]
         im = min(range(len(ts)), key=lambda i: abs(ts[i] - (t_end - length / 2))) - i0
-        k = int(round(mid_fault_s * 200))
         for kind in ("short+loss", "short+stall"):
-            cut_truth = truth
-            if kind == "short+loss":
-                cut_rows = short[:im] + short[im + k:]
-            else:
-                cut_rows = short[:im] + [stamp(r, mid_fault_s) for r in short[im:]]
-                cut_truth = os.path.join(tmp, "truth.csv")
-                tl = open(truth).read().splitlines()
-                open(cut_truth, "w").write("\n".join(
-                    [tl[0]] + [stamp(r, mid_fault_s) if float(r.split(",", 1)[0]) >= ts[i0 + im]
-                               else r for r in tl[1:]]) + "\n")
-            open(cut, "w").write("\n".join([header] + cut_rows) + "\n")
-            v = run(cut, cut_truth, sh)
+            v = run(*damaged(header, short, im, mid_fault_s, kind.split("+")[1], truth), sh)
             res.append((kind, length, base, v))
             print(name[:5], kind, length, "-", f"rest {t_end - t0:.2f} s", f"{base:.2f}",
                   "—" if v is None else f"{v:.2f}", flush=True)
     for length in lengths:
-        k = int(round(length * 200))
         for pos in (0.3, 0.6, 0.85):
             i0 = min(range(len(ts)), key=lambda i: abs(ts[i] - (t0 + pos * (t_end - t0))))
             for kind in ("loss", "stall"):
-                cut_truth = truth
-                if kind == "loss":
-                    cut_rows = rows[:i0] + rows[i0 + k:]
-                else:
-                    cut_rows = rows[:i0] + [stamp(r, length) for r in rows[i0:]]
-                    # The footprints are matched by time: theirs move with the stamps.
-                    cut_truth = os.path.join(tmp, "truth.csv")
-                    t_cut = ts[i0]
-                    tl = open(truth).read().splitlines()
-                    open(cut_truth, "w").write("\n".join(
-                        [tl[0]] + [stamp(r, length) if float(r.split(",", 1)[0]) >= t_cut else r
-                                   for r in tl[1:]]) + "\n")
-                cut = os.path.join(tmp, "cut.csv")
-                open(cut, "w").write("\n".join([header] + cut_rows) + "\n")
-                v = run(cut, cut_truth, sh)
+                v = run(*damaged(header, rows, i0, length, kind, truth), sh)
                 res.append((kind, length, base, v))
                 print(name[:5], kind, length, pos, f"rest {t_end - t0:.2f} s", f"{base:.2f}",
                       "—" if v is None else f"{v:.2f}", flush=True)

@@ -6,12 +6,13 @@
 //! stayed at the origin for the remaining 93 s, with no error (found by cutting every bundled
 //! walk at 30 % of its footprints, session 21).
 
+use corridor_service::core::estimator::Counters;
 use corridor_service::eval::EvalOptions;
 use corridor_service::runner::{RunOutcome, heading_aid, run_log};
 use corridor_shared::config::{BiasPrior, Config, ConfigFile, ConfigOverrides};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
-use corridor_shared::truth_csv::read_truth_csv;
+use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
 use std::path::{Path, PathBuf};
 
 /// The run of `log`, and the largest finite bias it output on any axis, rad/s.
@@ -30,6 +31,14 @@ fn run_with_largest_bias(log: &ImuLog, cfg: &Config) -> (RunOutcome, f64) {
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The run of `log`: its footprint RMS against `truth`, % of path, and its counters.
+fn scored(log: &ImuLog, cfg: &Config, truth: &[TruthPoint]) -> (f64, Counters) {
+    let aid = heading_aid(cfg, None).unwrap();
+    let out = run_log(log, cfg, &aid, &BiasInjection::default(), |_, _| {});
+    let report = out.trace.evaluate(truth, &EvalOptions::default()).unwrap();
+    (report.rms_error_pct_of_path.unwrap(), out.counters)
 }
 
 /// `configs/gdins.toml`, the walks starting along the map's x axis.
@@ -213,12 +222,7 @@ fn a_loss_early_in_the_initial_rest_keeps_the_rest_that_goes_on_after_it() {
     let mut log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
     let truth = read_truth_csv(&dir.join("ground_truth.csv")).unwrap();
     let cfg = shipped_config();
-    let aid = heading_aid(&cfg, None).unwrap();
-    let pct = |log: &ImuLog| {
-        let out = run_log(log, &cfg, &aid, &BiasInjection::default(), |_, _| {});
-        let report = out.trace.evaluate(&truth, &EvalOptions::default()).unwrap();
-        (report.rms_error_pct_of_path.unwrap(), out.counters)
-    };
+    let pct = |log: &ImuLog| scored(log, &cfg, &truth);
     let (clean, clean_counters) = pct(&log);
     let first = log.rows.partition_point(|r| r.t_s < 0.43);
     log.rows.drain(first..first + 40);
@@ -249,12 +253,7 @@ fn a_short_rest_with_a_loss_in_its_middle_is_one_rest() {
     let cfg = shipped_config();
     // The rest ends at 5.15 s (its alignment phase in the whole walk).
     log.rows.retain(|r| r.t_s >= 5.15 - 0.95);
-    let aid = heading_aid(&cfg, None).unwrap();
-    let run = |log: &ImuLog| {
-        let out = run_log(log, &cfg, &aid, &BiasInjection::default(), |_, _| {});
-        let report = out.trace.evaluate(&truth, &EvalOptions::default()).unwrap();
-        (report.rms_error_pct_of_path.unwrap(), out.counters)
-    };
+    let run = |log: &ImuLog| scored(log, &cfg, &truth);
     let (short, _) = run(&log);
     let middle = log.rows.partition_point(|r| r.t_s < 5.15 - 0.95 / 2.0);
     log.rows.drain(middle..middle + 40);

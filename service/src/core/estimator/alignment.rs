@@ -4,6 +4,67 @@
 use super::*;
 
 impl Pipeline {
+    /// One sample while aligning (`Estimator::step`): the initial rest's bookkeeping of
+    /// losses, then [`Pipeline::align_step`]. `t_prev` and `t_clock` are the sample clock's
+    /// times of the previous sample and this one; the filter when the alignment ends here.
+    pub(super) fn align_sample(
+        &mut self,
+        rest: &mut InitialRest,
+        t_prev: Option<f64>,
+        t_clock: f64,
+        t_s: f64,
+        (w, f): (&Vector3<f64>, &Vector3<f64>),
+        stance: bool,
+    ) -> Option<Box<Eskf>> {
+        // A loss longer than a bridgeable gap (`estimator.max_bridge_s`, at least `max_dt_s`:
+        // a few lost samples or a driver's stall stay within the rest) after less than
+        // `alignment.min_rest_s` of rest is remembered, and the rest since it kept apart.
+        // When the rest ends with less than `min_rest_s` of it after the loss as well, the
+        // alignment starts again from the loss: what the foot did in it is unknown, and
+        // neither side is a rest by itself, unless the two together are one rest
+        // (`InitialRest::end`: a short rest with a pause in it). Timed across a loss into
+        // the walk, such a rest took the first stance after it for its last seconds, and
+        // that stance's rate for the bias prior (exp17 with 2.25 s lost from 0.4 s: a prior
+        // of 0.08 rad/s, the health check failing for the rest of the walk). A rest that
+        // goes on after its loss is kept whole: started again at the loss, a loss or a
+        // stall of 0.2–0.3 s 0.43 s into exp40's rest (then 0.8 s of it rocking) cost up to
+        // 9.5 % of path; started again at any loss, 58 of a review's 288 runs were worse by
+        // more than 0.3 % of path.
+        let bridgeable_s = self.cfg.max_bridge_s.max(self.cfg.max_dt_s.get());
+        let min_rest_s = self.cfg.alignment.min_rest_s.get();
+        if let Some(t_prev) = t_prev
+            && t_clock - t_prev > bridgeable_s
+        {
+            rest.lose(min_rest_s);
+        }
+        let mut restarted = false;
+        if stance {
+            rest.push(t_s, f, w);
+        } else {
+            restarted = rest.end(t_s, min_rest_s);
+        }
+        // One restart, counted once: the alignment counts it as well when what is left
+        // after the loss is too short to start from.
+        let restarts = self.counters.alignment_restarts;
+        let aligned = self.align_step(&mut rest.whole, t_s, w, f, stance);
+        if restarted && self.counters.alignment_restarts == restarts {
+            self.counters.alignment_restarts += 1;
+        }
+        if aligned.is_none() {
+            // A gap the rest spans is counted here; one the alignment ends at, where the
+            // filter crosses it (as a new segment).
+            if let Some(t_prev) = t_prev
+                && t_clock - t_prev > self.cfg.max_dt_s.get()
+                && self.out.gap_s.is_none()
+            {
+                self.counters.gaps += 1;
+                self.out.gap_s = Some(t_clock - t_prev);
+                self.out.gap_crossing = Some(GapCrossing::InRest);
+            }
+        }
+        aligned
+    }
+
     /// One sample of the initial rest; the filter when the alignment ends with it (boxed here,
     /// out of line: an `Eskf` returned by value took 7 KB of the per-sample step's frame).
     #[inline(never)]

@@ -464,51 +464,10 @@ impl Estimator {
         out.stride = None;
 
         if let Stage::Aligning(rest) = &mut self.stage {
-            // A loss longer than a bridgeable gap (`estimator.max_bridge_s`, at least `max_dt_s`:
-            // a few lost samples or a driver's stall stay within the rest) after less than
-            // `alignment.min_rest_s` of rest is remembered, and the rest since it kept apart.
-            // When the rest ends with less than `min_rest_s` of it after the loss as well, the
-            // alignment starts again from the loss: what the foot did in it is unknown, and
-            // neither side is a rest by itself, unless the two together are one rest
-            // (`InitialRest::end`: a short rest with a pause in it). Timed across a loss into
-            // the walk, such a rest took the first stance after it for its last seconds, and
-            // that stance's rate for the bias prior (exp17 with 2.25 s lost from 0.4 s: a prior
-            // of 0.08 rad/s, the health check failing for the rest of the walk). A rest that
-            // goes on after its loss is kept whole: started again at the loss, a loss or a
-            // stall of 0.2–0.3 s 0.43 s into exp40's rest (then 0.8 s of it rocking) cost up to
-            // 9.5 % of path; started again at any loss, 58 of a review's 288 runs were worse by
-            // more than 0.3 % of path.
-            let bridgeable_s = p.cfg.max_bridge_s.max(p.cfg.max_dt_s.get());
-            let min_rest_s = p.cfg.alignment.min_rest_s.get();
-            if let Some((t_prev, ..)) = prev
-                && t_clock - t_prev > bridgeable_s
-            {
-                rest.lose(min_rest_s);
-            }
-            let mut restarted = false;
-            if decision.stance {
-                rest.push(s.t_s, &f, &w);
-            } else {
-                restarted = rest.end(s.t_s, min_rest_s);
-            }
-            // One restart, counted once: the alignment counts it as well when what is left
-            // after the loss is too short to start from.
-            let restarts = p.counters.alignment_restarts;
-            let aligned = p.align_step(&mut rest.whole, s.t_s, &w, &f, decision.stance);
-            if restarted && p.counters.alignment_restarts == restarts {
-                p.counters.alignment_restarts += 1;
-            }
-            let Some(eskf) = aligned else {
-                // A gap the rest spans is counted here; one the alignment ends at, where the
-                // filter crosses it (as a new segment).
-                if let Some((t_prev, ..)) = prev
-                    && t_clock - t_prev > p.cfg.max_dt_s.get()
-                    && p.out.gap_s.is_none()
-                {
-                    p.counters.gaps += 1;
-                    p.out.gap_s = Some(t_clock - t_prev);
-                    p.out.gap_crossing = Some(GapCrossing::InRest);
-                }
+            let t_prev = prev.map(|(t_prev, ..)| t_prev);
+            let Some(eskf) =
+                p.align_sample(rest, t_prev, t_clock, s.t_s, (&w, &f), decision.stance)
+            else {
                 return Ok(&self.p.out);
             };
             self.stage = Stage::Running(eskf);
