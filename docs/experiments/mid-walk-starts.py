@@ -4,13 +4,14 @@
 after the cut (places with fewer than 4 left out), the start heading the first surveyed stride
 of at least 0.5 m after the cut turned to the building's grid (as the suite chooses every start
 heading). Prints, per cut, how long after the cut the filter started (its first sample not
-"aligning") and the footprint RMS, % of path; "None" where it never started (the evaluation then
-fails). Needs the release binary.
+"aligning") and the footprint RMS, % of path; "None" where the evaluation failed (the filter
+started after the first legs the footprints are aligned on; its start then from a run without
+them) or the filter never started. Needs the release binary.
 
     python3 docs/experiments/mid-walk-starts.py                      # from the repository root
     CONFIG=my.toml python3 docs/experiments/mid-walk-starts.py
 """
-import csv, math, os, statistics, sys, tempfile
+import csv, math, os, statistics, subprocess, sys, tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from suite_walks import footprint_rms, walks
@@ -42,6 +43,10 @@ for name, imu, truth, sh in walks(root, fast=True):
         ct = os.path.join(tmp, "truth.csv"); open(ct, "w").write("\n".join([tl[0]] + [r for r in tl[1:] if float(r.split(",")[0]) > t_cut + 0.05]) + "\n")
         o = os.path.join(tmp, "cutout%s%s" % (name[:5], pos))
         v = footprint_rms(binary, config, cut, ct, hd, o)
+        if v is None:
+            # A run whose evaluation failed writes no estimates: when it started, without it.
+            subprocess.run([binary, "run", "--imu", cut, "--config", config,
+                            "--start-heading-deg", str(hd), "--out", o], capture_output=True)
         try:
             e2 = list(csv.DictReader(open(os.path.join(o, "estimates.csv"))))
             t_al = next((float(e["t_s"]) for e in e2 if e["phase"] != "aligning"), None)
@@ -50,7 +55,7 @@ for name, imu, truth, sh in walks(root, fast=True):
         res.append((name[:5], pos, v, (t_al - t_cut) if t_al else None))
         print(name[:5], pos, "started after", None if t_al is None else round(t_al - t_cut, 2),
               "s;", None if v is None else round(v, 2), "%", flush=True)
-print("failed (never aligned or no estimate):", [(r[0], r[1]) for r in res if r[2] is None])
+print("not scored (started too late or never):", [(r[0], r[1]) for r in res if r[2] is None])
 d = [r[2] for r in res if r[2] is not None]
 started = [r[3] for r in res if r[3] is not None]
 print(f"{len(d)} of {len(res)} cuts scored: median {statistics.median(d):.2f} %, worst "
