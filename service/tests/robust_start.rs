@@ -6,7 +6,7 @@
 //! stayed at the origin for the remaining 93 s, with no error (found by cutting every bundled
 //! walk at 30 % of its footprints, session 21).
 
-use corridor_service::core::estimator::Counters;
+use corridor_service::core::estimator::{Counters, Phase};
 use corridor_service::eval::EvalOptions;
 use corridor_service::runner::{RunOutcome, heading_aid, run_log};
 use corridor_shared::config::{BiasPrior, Config, ConfigFile, ConfigOverrides};
@@ -266,4 +266,96 @@ fn a_short_rest_with_a_loss_in_its_middle_is_one_rest() {
         lossy < short + 0.1,
         "{lossy:.2} % of path, {short:.2} % without the loss"
     );
+}
+
+/// `configs/gdins.toml` with `edit` applied to the file, the walks starting along x.
+fn edited_config(edit: impl FnOnce(&mut ConfigFile)) -> Config {
+    let path = root().join("configs/gdins.toml");
+    let mut file = ConfigFile::read(&path).unwrap();
+    edit(&mut file);
+    ConfigOverrides {
+        start_heading_deg: Some(0.0),
+        ..Default::default()
+    }
+    .validate(&file, &path)
+    .unwrap()
+}
+
+/// `dir`'s log from `t_s` on, and its footprints after it.
+fn cut_at(dir: &Path, t_s: f64) -> (ImuLog, Vec<TruthPoint>) {
+    let mut log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
+    log.rows.retain(|r| r.t_s >= t_s);
+    let truth = read_truth_csv(&dir.join("ground_truth.csv"))
+        .unwrap()
+        .into_iter()
+        .filter(|p| p.t_s > t_s + 0.05)
+        .collect();
+    (log, truth)
+}
+
+/// A log that starts with the wearer's first step: exp24 from 2.0 s, where its initial rest
+/// ends. The first stance of the walk aligns, without a rest. Its mean specific force holds
+/// what the foot still accelerates (the tilt of the walking stances of 0.1–0.2 s lies a median
+/// 1.4° off the filter's converged attitude, of the 0.2–0.4 s ones 0.7°), and that tilt used
+/// to be trusted as a rest's, to 0.5°: the ZUPTs put the difference into the horizontal bias,
+/// which the health check refused, and the filter was restored 12 times (in 10 of 1,600 starts
+/// of `docs/experiments/start-cuts.py`, 4 of its 960 losses). Known to
+/// `alignment.start_stance_tilt_sd_rad`, the tilt is what the ZUPTs correct.
+#[test]
+fn a_walking_stance_that_aligns_is_not_trusted_as_a_rest() {
+    let dir = root().join("tests/data/gdins_exp24_square_two_laps");
+    let (log, truth) = cut_at(&dir, 2.0);
+    let (pct, counters) = scored(&log, &shipped_config(), &truth);
+    assert!(
+        counters.started_without_rest && counters.health_restores == 0,
+        "{counters:?}"
+    );
+    assert!(pct < 0.5, "footprint RMS {pct:.2} % of path");
+    let as_a_rest = edited_config(|f| {
+        f.alignment.start_stance_tilt_sd_rad = f.eskf.initial_tilt_sd_rad;
+    });
+    let (_, counters) = scored(&log, &as_a_rest, &truth);
+    assert!(counters.health_restores > 0, "{counters:?}");
+}
+
+/// The time of the first estimate after the alignment, when there is one.
+fn started_at_s(log: &ImuLog, cfg: &Config) -> Option<f64> {
+    let aid = heading_aid(cfg, None).unwrap();
+    let mut started = None;
+    run_log(log, cfg, &aid, &BiasInjection::default(), |_, e| {
+        if e.phase != Phase::Aligning {
+            started.get_or_insert(e.t_s);
+        }
+    });
+    started
+}
+
+/// A daemon started while the wearer walks fast: exp38 from 19.08 s (the stance end nearest 30 %
+/// of its footprints' time). Its stances last 0.03–0.1 s, all shorter than
+/// `alignment.min_start_stance_s` (a normal walk's short stances are splits and shuffles, whose
+/// tilt lies 3–5° off), and the filter started only 14.8 s after the cut, at a rare longer
+/// stance (everything the foot did before it lost: the footprint evaluation failed). A stance that the
+/// detector saw whole, in which it had raised its threshold over a whole look-back (the gait
+/// it adapts to is fast), may be as short as `alignment.fast_gait_start_stance_s`.
+#[test]
+fn a_fast_walk_without_a_rest_starts() {
+    const CUT_S: f64 = 19.084;
+    let dir = root().join("tests/data/gdins_exp38_zigzag_extreme");
+    let (log, truth) = cut_at(&dir, CUT_S);
+    let cfg = shipped_config();
+    let t_s = started_at_s(&log, &cfg).expect("never started");
+    // 1.72 s: the detector's look-back (`detector.adaptive_window_s`, 1.5 s) first.
+    assert!(
+        t_s - CUT_S < 2.5,
+        "started {:.2} s after the cut",
+        t_s - CUT_S
+    );
+    let (pct, counters) = scored(&log, &cfg, &truth);
+    assert_eq!(counters.health_restores, 0, "{counters:?}");
+    assert!(pct < 10.0, "footprint RMS {pct:.2} % of path");
+    let waiting = edited_config(|f| {
+        f.alignment.fast_gait_start_stance_s = f.alignment.min_start_stance_s;
+    });
+    let waited_s = started_at_s(&log, &waiting).map_or(f64::INFINITY, |t| t - CUT_S);
+    assert!(waited_s > 10.0, "started {waited_s:.2} s after the cut");
 }

@@ -24,6 +24,8 @@ struct RecentMinimum {
     minima: [f64; MIN_BLOCKS],
     current: usize,
     current_start_s: f64,
+    /// The first sample of the look-back's history (since it began or was cleared by a gap).
+    since_s: f64,
 }
 
 impl RecentMinimum {
@@ -33,17 +35,25 @@ impl RecentMinimum {
             minima: [f64::INFINITY; MIN_BLOCKS],
             current: 0,
             current_start_s: f64::NAN,
+            since_s: f64::NAN,
         }
+    }
+
+    /// The look-back holds a whole window of samples (a stride cycle at least).
+    fn full(&self, t_s: f64) -> bool {
+        t_s - self.since_s >= self.block_s * MIN_BLOCKS as f64
     }
 
     fn push(&mut self, t_s: f64, statistic: f64) -> f64 {
         if self.current_start_s.is_nan() {
             self.current_start_s = t_s;
+            self.since_s = t_s;
         }
         // A gap longer than the look-back clears it.
         if t_s - self.current_start_s >= self.block_s * MIN_BLOCKS as f64 {
             self.minima = [f64::INFINITY; MIN_BLOCKS];
             self.current_start_s = t_s;
+            self.since_s = t_s;
         }
         while t_s - self.current_start_s >= self.block_s {
             self.current = (self.current + 1) % MIN_BLOCKS;
@@ -89,6 +99,13 @@ pub struct StanceDecision {
     pub raw: bool,
     /// A stance that has lasted at least the minimum length.
     pub stance: bool,
+    /// The foot moves on this sample: a full window whose statistic is at or above the
+    /// threshold (not a sample of the first window, of which the detector can say nothing).
+    pub moving: bool,
+    /// The adaptive threshold lies above the fixed one on this sample: the quietest moment of
+    /// the last stride cycle (a whole look-back of it: not in the first `adaptive_window_s` of
+    /// a log or after a gap) was not quiet (fast or varying gait).
+    pub raised: bool,
     /// Seconds since the stance began (0 when not in stance).
     pub stance_age_s: f64,
 }
@@ -210,14 +227,16 @@ impl StanceDetector {
         // Fast or varying gait: the foot never stops rotating, and the quietest moment of a
         // stride lies above a fixed threshold. A sample within `factor` of the quietest statistic
         // of the last stride cycle counts too (capped), so the threshold follows the gait.
-        let threshold = match &mut self.adaptive {
+        let (threshold, raised) = match &mut self.adaptive {
             Some((factor, max, recent)) => {
                 let quietest = recent.push(t_s, statistic);
-                self.threshold.max((*factor * quietest).min(*max))
+                let threshold = self.threshold.max((*factor * quietest).min(*max));
+                (threshold, threshold > self.threshold && recent.full(t_s))
             }
-            None => self.threshold,
+            None => (self.threshold, false),
         };
-        let raw = self.filled == w && statistic < threshold;
+        let full = self.filled == w;
+        let raw = full && statistic < threshold;
         if raw {
             self.raw_since_s.get_or_insert(t_s);
         } else {
@@ -229,6 +248,8 @@ impl StanceDetector {
             statistic,
             raw,
             stance,
+            moving: full && !raw,
+            raised,
             stance_age_s: if stance { age } else { 0.0 },
         }
     }

@@ -13,6 +13,13 @@ pub const ESTIMATOR_MAX_SPEED_M_S: f64 = 15.0;
 /// quiet foot gives roll and pitch to a few tenths of a degree (0: wait for a rest).
 pub const ALIGNMENT_MIN_START_STANCE_S: f64 = 0.1;
 
+/// `alignment.fast_gait_start_stance_s`: six samples at 200 Hz.
+pub const ALIGNMENT_FAST_GAIT_START_STANCE_S: f64 = 0.03;
+
+/// `alignment.start_stance_tilt_sd_rad`: 2°, what a walking stance's mean specific force says
+/// of roll and pitch.
+pub const ALIGNMENT_START_STANCE_TILT_SD_RAD: f64 = 0.035;
+
 /// `eskf.clipped_rate_sd_rad_s`: the RMS excess of the peaks reconstructed (a parabola through
 /// the samples around each clipped run) in the 110 clipped runs of the 16 gdins walks was
 /// 0.44 rad/s.

@@ -143,6 +143,13 @@ pub struct AlignmentFile {
     /// Without an initial rest of `min_rest_s`, the first stance at least this long aligns the
     /// filter, without a rest-mean bias prior (default 0.1 s; 0 waits for a rest).
     pub min_start_stance_s: Option<f64>,
+    /// Fast gait: a stance seen whole (its landing seen) in which the stance detector had
+    /// raised its threshold over a whole look-back aligns when at least this long (default
+    /// 0.03 s).
+    pub fast_gait_start_stance_s: Option<f64>,
+    /// The σ of roll and pitch when a walking stance aligns (no rest), rad: its mean specific
+    /// force holds what the foot still accelerates (default 0.035 rad).
+    pub start_stance_tilt_sd_rad: Option<f64>,
     /// The largest initial-rest mean rate (its magnitude) taken as the bias prior, rad/s (left
     /// out: only `sensor.max_gyro_bias_rad_s`, per axis). A rest through which the foot pivots
     /// slowly about the vertical shows no other sign of motion, and its mean rate would be a

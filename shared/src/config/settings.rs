@@ -94,6 +94,10 @@ pub struct AlignmentConfig {
     pub rest_max_rate_change_rad_s: Positive,
     /// Shortest first stance that aligns without a rest (0: wait for a rest).
     pub min_start_stance_s: f64,
+    /// Shortest stance seen whole that aligns in fast gait (the detector's threshold raised).
+    pub fast_gait_start_stance_s: f64,
+    /// σ of roll and pitch when a walking stance aligns (no rest), rad.
+    pub start_stance_tilt_sd_rad: Positive,
     /// The largest initial-rest mean rate (magnitude) taken as the bias prior, rad/s (`None`:
     /// only the sensor's largest bias, per axis).
     pub max_prior_rate_rad_s: Option<Positive>,

@@ -330,6 +330,22 @@ impl ConfigFile {
                     60.0,
                     "must be in [0, 60] s",
                 )?,
+                fast_gait_start_stance_s: in_range(
+                    "alignment.fast_gait_start_stance_s",
+                    a.fast_gait_start_stance_s
+                        .unwrap_or(ALIGNMENT_FAST_GAIT_START_STANCE_S),
+                    0.0,
+                    60.0,
+                    "must be in [0, 60] s",
+                )?,
+                start_stance_tilt_sd_rad: Positive::in_range(
+                    "alignment.start_stance_tilt_sd_rad",
+                    a.start_stance_tilt_sd_rad
+                        .unwrap_or(ALIGNMENT_START_STANCE_TILT_SD_RAD),
+                    0.0,
+                    1.0,
+                    "must be in (0, 1] rad",
+                )?,
                 max_prior_rate_rad_s: a
                     .max_prior_rate_rad_s
                     .map(|v| {

@@ -14,8 +14,9 @@ impl Pipeline {
         t_clock: f64,
         t_s: f64,
         (w, f): (&Vector3<f64>, &Vector3<f64>),
-        stance: bool,
+        decision: &StanceDecision,
     ) -> Option<Box<Eskf>> {
+        let stance = decision.stance;
         // A loss longer than a bridgeable gap (`estimator.max_bridge_s`, at least `max_dt_s`:
         // a few lost samples or a driver's stall stay within the rest) after less than
         // `alignment.min_rest_s` of rest is remembered, and the rest since it kept apart.
@@ -37,6 +38,7 @@ impl Pipeline {
         {
             rest.lose(min_rest_s);
         }
+        rest.observe(decision, self.cfg.detector.window);
         let mut restarted = false;
         if stance {
             rest.push(t_s, f, w);
@@ -46,7 +48,9 @@ impl Pipeline {
         // One restart, counted once: the alignment counts it as well when what is left
         // after the loss is too short to start from.
         let restarts = self.counters.alignment_restarts;
-        let aligned = self.align_step(&mut rest.whole, t_s, w, f, stance);
+        let a = &self.cfg.alignment;
+        let min_start_s = rest.min_start_s(a.min_start_stance_s, a.fast_gait_start_stance_s);
+        let aligned = self.align_step(&mut rest.whole, t_s, (w, f), stance, min_start_s);
         if restarted && self.counters.alignment_restarts == restarts {
             self.counters.alignment_restarts += 1;
         }
@@ -67,14 +71,16 @@ impl Pipeline {
 
     /// One sample of the initial rest; the filter when the alignment ends with it (boxed here,
     /// out of line: an `Eskf` returned by value took 7 KB of the per-sample step's frame).
+    /// `min_start_s`: the shortest stance that may start the filter without a rest here
+    /// ([`InitialRest::min_start_s`]).
     #[inline(never)]
     pub(super) fn align_step(
         &mut self,
         rest: &mut RestSums,
         t_s: f64,
-        w: &Vector3<f64>,
-        f: &Vector3<f64>,
+        (w, f): (&Vector3<f64>, &Vector3<f64>),
         stance: bool,
+        min_start_s: f64,
     ) -> Option<Box<Eskf>> {
         if stance {
             rest.push(t_s, f, w);
@@ -92,11 +98,12 @@ impl Pipeline {
             t_s - rest.t_first_s
         };
         let a = &self.cfg.alignment;
-        // Without a rest, the first stance of at least `min_start_stance_s` aligns: roll and
-        // pitch from its mean specific force (the ZUPTs refine them), no bias prior (the later
-        // rests' zero-rate updates and the heading observations give the bias).
+        // Without a rest, the first stance of at least `min_start_s` aligns: roll and pitch
+        // from its mean specific force, known to `alignment.start_stance_tilt_sd_rad` (the
+        // ZUPTs refine them), no bias prior (the later rests' zero-rate updates and the
+        // heading observations give the bias).
         let short_start = rest_s < a.min_rest_s.get();
-        if short_start && (a.min_start_stance_s <= 0.0 || rest_s < a.min_start_stance_s) {
+        if short_start && (a.min_start_stance_s <= 0.0 || rest_s < min_start_s) {
             if !rest.is_empty() {
                 self.counters.alignment_restarts += 1;
             }
@@ -196,7 +203,15 @@ impl Pipeline {
             EskfInit {
                 nav_from_body: self.tilt0,
                 gyro_bias_rad_s: if own_bias { b0 } else { Vector3::zeros() },
-                tilt_sd_rad: e.initial_tilt_sd_rad.get(),
+                // A walking stance's mean force holds what the foot still accelerates: its
+                // tilt is known to `alignment.start_stance_tilt_sd_rad`, and the ZUPTs of the
+                // next stances refine it. Trusted as a rest's, the tilt error goes into the
+                // horizontal bias instead.
+                tilt_sd_rad: if short_start {
+                    self.cfg.alignment.start_stance_tilt_sd_rad.get()
+                } else {
+                    e.initial_tilt_sd_rad.get()
+                },
                 bias_sd_rad_s: sd0,
                 gravity_m_s2: g,
                 bias: if own_bias {

@@ -465,8 +465,7 @@ impl Estimator {
 
         if let Stage::Aligning(rest) = &mut self.stage {
             let t_prev = prev.map(|(t_prev, ..)| t_prev);
-            let Some(eskf) =
-                p.align_sample(rest, t_prev, t_clock, s.t_s, (&w, &f), decision.stance)
+            let Some(eskf) = p.align_sample(rest, t_prev, t_clock, s.t_s, (&w, &f), &decision)
             else {
                 return Ok(&self.p.out);
             };
