@@ -87,6 +87,8 @@ pub struct StanceDetector {
     since_resum: usize,
     raw_since_s: Option<f64>,
     last_statistic: f64,
+    /// The threshold the last sample was compared with.
+    last_threshold: f64,
     adaptive: Option<(f64, f64, RecentMinimum)>,
 }
 
@@ -102,10 +104,6 @@ pub struct StanceDecision {
     /// The foot moves on this sample: a full window whose statistic is at or above the
     /// threshold (not a sample of the first window, of which the detector can say nothing).
     pub moving: bool,
-    /// The adaptive threshold lies above the fixed one on this sample: the quietest moment of
-    /// the last stride cycle (a whole look-back of it: not in the first `adaptive_window_s` of
-    /// a log or after a gap) was not quiet (fast or varying gait).
-    pub raised: bool,
     /// Seconds since the stance began (0 when not in stance).
     pub stance_age_s: f64,
 }
@@ -149,6 +147,7 @@ impl StanceDetector {
             since_resum: 0,
             raw_since_s: None,
             last_statistic: f64::INFINITY,
+            last_threshold: cfg.threshold.get(),
             adaptive: cfg.adaptive_factor.map(|k| {
                 (
                     k.get(),
@@ -181,6 +180,17 @@ impl StanceDetector {
     /// The threshold.
     pub fn threshold(&self) -> f64 {
         self.threshold
+    }
+
+    /// The adaptive threshold lay above the fixed one on the last sample (at `t_s`), over a
+    /// whole look-back (not in the first `adaptive_window_s` of a log or after a gap): the
+    /// quietest moment of the last stride cycle was not quiet, the gait is fast or varying.
+    pub fn raised(&self, t_s: f64) -> bool {
+        self.last_threshold > self.threshold
+            && self
+                .adaptive
+                .as_ref()
+                .is_some_and(|(_, _, recent)| recent.full(t_s))
     }
 
     /// Adds one sample and decides.
@@ -227,14 +237,14 @@ impl StanceDetector {
         // Fast or varying gait: the foot never stops rotating, and the quietest moment of a
         // stride lies above a fixed threshold. A sample within `factor` of the quietest statistic
         // of the last stride cycle counts too (capped), so the threshold follows the gait.
-        let (threshold, raised) = match &mut self.adaptive {
+        let threshold = match &mut self.adaptive {
             Some((factor, max, recent)) => {
                 let quietest = recent.push(t_s, statistic);
-                let threshold = self.threshold.max((*factor * quietest).min(*max));
-                (threshold, threshold > self.threshold && recent.full(t_s))
+                self.threshold.max((*factor * quietest).min(*max))
             }
-            None => (self.threshold, false),
+            None => self.threshold,
         };
+        self.last_threshold = threshold;
         let full = self.filled == w;
         let raw = full && statistic < threshold;
         if raw {
@@ -249,7 +259,6 @@ impl StanceDetector {
             raw,
             stance,
             moving: full && !raw,
-            raised,
             stance_age_s: if stance { age } else { 0.0 },
         }
     }

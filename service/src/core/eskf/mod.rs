@@ -407,6 +407,7 @@ impl Eskf {
     /// The body rate corrected for the filter's own error model (scale factor, g-sensitivity
     /// and the cross-coupling into z) and for `bias_rad_s` (the filter's own bias, or an
     /// external one).
+    #[inline]
     pub fn corrected_rate(
         &self,
         omega_meas_rad_s: &Vector3<f64>,

@@ -38,7 +38,8 @@ impl Pipeline {
         {
             rest.lose(min_rest_s);
         }
-        rest.observe(decision, self.cfg.detector.window);
+        let raised = self.detector.raised(t_clock);
+        rest.observe(decision, raised, self.cfg.detector.window);
         let mut restarted = false;
         if stance {
             rest.push(t_s, f, w);

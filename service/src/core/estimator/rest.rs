@@ -2,6 +2,8 @@
 //! when it begins with a landing, and without the blocks in which the foot moved.
 
 use crate::core::stance::StanceDecision;
+#[cfg(doc)]
+use crate::core::stance::StanceDetector;
 use nalgebra::Vector3;
 
 /// Sums of specific force and rate over part of the rest.
@@ -306,7 +308,8 @@ impl InitialRest {
     /// of one: a log that starts as the foot rolls onto its toes, or a loss that ends in a
     /// swing while the detector's window still holds the rest before it, whose "stance" is
     /// the swing's first samples.
-    pub(super) fn observe(&mut self, decision: &StanceDecision, window: usize) {
+    /// `raised`: the detector's threshold was raised by the gait ([`StanceDetector::raised`]).
+    pub(super) fn observe(&mut self, decision: &StanceDecision, raised: bool, window: usize) {
         self.samples_since_loss = self.samples_since_loss.saturating_add(1);
         if decision.moving && self.samples_since_loss >= window {
             self.moved = true;
@@ -315,7 +318,7 @@ impl InitialRest {
             self.stance_seen_whole = self.moved;
             self.stance_raised = false;
         }
-        self.stance_raised |= decision.stance && decision.raised;
+        self.stance_raised |= decision.stance && raised;
     }
 
     /// The shortest stance that may start the filter without a rest (`alignment.min_rest_s`)
@@ -421,15 +424,15 @@ mod tests {
 
     /// What the detector says of one sample: stance, moving (a full window above its
     /// threshold), or neither (its first window).
-    fn said(stance: bool, moving: bool, raised: bool) -> StanceDecision {
-        StanceDecision {
+    fn said(stance: bool, moving: bool, raised: bool) -> (StanceDecision, bool) {
+        let decision = StanceDecision {
             statistic: 0.0,
             raw: stance,
             stance,
             moving,
-            raised,
             stance_age_s: 0.0,
-        }
+        };
+        (decision, raised)
     }
 
     #[test]
@@ -438,9 +441,9 @@ mod tests {
         let g = Vector3::new(0.0, 0.0, 9.81);
         let mut rest = InitialRest::new(0.5, 0.05);
         let mut t_s = 0.0;
-        let mut feed = |rest: &mut InitialRest, d: StanceDecision, n: usize| {
+        let mut feed = |rest: &mut InitialRest, (d, raised): (StanceDecision, bool), n: usize| {
             for _ in 0..n {
-                rest.observe(&d, window);
+                rest.observe(&d, raised, window);
                 if d.stance {
                     rest.push(t_s, &g, &Vector3::zeros());
                     rest.whole.push(t_s, &g, &Vector3::zeros());
