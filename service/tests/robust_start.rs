@@ -299,7 +299,7 @@ fn cut_at(dir: &Path, t_s: f64) -> (ImuLog, Vec<TruthPoint>) {
 /// 1.4° off the filter's converged attitude, of the 0.2–0.4 s ones 0.7°), and that tilt used
 /// to be trusted as a rest's, to 0.5°: the ZUPTs put the difference into the horizontal bias,
 /// which the health check refused, and the filter was restored 12 times (in 10 of 1,600 starts
-/// of `docs/experiments/start-cuts.py`, 4 of its 960 losses). Known to
+/// of `docs/experiments/start-cuts.py`, 8 of its 960 losses). Known to
 /// `alignment.start_stance_tilt_sd_rad`, the tilt is what the ZUPTs correct.
 #[test]
 fn a_walking_stance_that_aligns_is_not_trusted_as_a_rest() {

@@ -24,8 +24,12 @@ struct RecentMinimum {
     minima: [f64; MIN_BLOCKS],
     current: usize,
     current_start_s: f64,
-    /// The first sample of the look-back's history (since it began or was cleared by a gap).
+    /// The first sample of the look-back's continuous history: since it began, or since the
+    /// last step of more than half a block (a loss or a stall: the look-back no longer holds
+    /// the whole stride cycle before it, though its blocks still hold what came before).
     since_s: f64,
+    /// The last sample's time.
+    last_s: f64,
 }
 
 impl RecentMinimum {
@@ -36,10 +40,11 @@ impl RecentMinimum {
             current: 0,
             current_start_s: f64::NAN,
             since_s: f64::NAN,
+            last_s: f64::NAN,
         }
     }
 
-    /// The look-back holds a whole window of samples (a stride cycle at least).
+    /// The look-back holds a whole window of continuous samples (a stride cycle at least).
     fn full(&self, t_s: f64) -> bool {
         t_s - self.since_s >= self.block_s * MIN_BLOCKS as f64
     }
@@ -49,6 +54,10 @@ impl RecentMinimum {
             self.current_start_s = t_s;
             self.since_s = t_s;
         }
+        if t_s - self.last_s > 0.5 * self.block_s {
+            self.since_s = t_s;
+        }
+        self.last_s = t_s;
         // A gap longer than the look-back clears it.
         if t_s - self.current_start_s >= self.block_s * MIN_BLOCKS as f64 {
             self.minima = [f64::INFINITY; MIN_BLOCKS];
@@ -417,6 +426,45 @@ mod tests {
         assert_eq!(count(false), 0);
         // 10 cycles; the first needs one stride of history.
         assert!((9..=10).contains(&count(true)), "{}", count(true));
+    }
+
+    /// A gait that never stops rotating (0.8 rad/s "stances", 6 rad/s swings, 0.8 s cycles):
+    /// the threshold is raised by the gait, and `raised` says so once the look-back holds a
+    /// whole window (1.5 s) of continuous samples: not in the first 1.5 s, and not again until
+    /// 1.5 s after a 0.3 s loss, which leaves the look-back's blocks holding the stride before.
+    #[test]
+    fn raised_needs_a_whole_look_back_of_continuous_samples() {
+        let g = Vector3::new(0.0, 0.0, 9.81);
+        let mut cfg = Config::default().detector;
+        cfg.adaptive_factor = Some(corridor_shared::config::Positive::new("f", 3.0).unwrap());
+        cfg.adaptive_max_threshold = corridor_shared::config::Positive::new("m", 3e5).unwrap();
+        cfg.adaptive_window_s = corridor_shared::config::Positive::new("w", 1.5).unwrap();
+        let mut d = StanceDetector::new(&cfg, 9.81);
+        let mut raised_at = Vec::new();
+        let mut moving = 0;
+        for i in 0..1600 {
+            // 0.3 s lost from 4.0 s.
+            if (800..860).contains(&i) {
+                continue;
+            }
+            let t = i as f64 * 0.005;
+            let w = if t % 0.8 < 0.3 { 0.8 } else { 6.0 };
+            let decision = d.push(t, &Vector3::new(0.0, w, 0.0), &g);
+            moving += usize::from(decision.moving);
+            if d.raised(t) {
+                raised_at.push(t);
+            }
+        }
+        assert!(moving > 0);
+        let first = raised_at[0];
+        assert!((1.5..2.0).contains(&first), "first raised at {first}");
+        // Nothing between the loss and a whole look-back after it.
+        assert!(
+            raised_at.iter().all(|&t| !(4.0..5.8).contains(&t)),
+            "raised at {:?}",
+            raised_at.iter().find(|&&t| (4.0..5.8).contains(&t))
+        );
+        assert!(raised_at.iter().any(|&t| t >= 5.8));
     }
 
     #[test]

@@ -145,7 +145,8 @@ pub struct AlignmentFile {
     pub min_start_stance_s: Option<f64>,
     /// Fast gait: a stance seen whole (its landing seen) in which the stance detector had
     /// raised its threshold over a whole look-back aligns when at least this long (default
-    /// 0.03 s).
+    /// 0.03 s; 0: any such stance; above `min_start_stance_s` it changes nothing). Needs the
+    /// adaptive detector (`detector.adaptive_factor`).
     pub fast_gait_start_stance_s: Option<f64>,
     /// The σ of roll and pitch when a walking stance aligns (no rest), rad: its mean specific
     /// force holds what the foot still accelerates (default 0.035 rad).

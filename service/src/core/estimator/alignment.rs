@@ -207,8 +207,11 @@ impl Pipeline {
                 // A walking stance's mean force holds what the foot still accelerates: its
                 // tilt is known to `alignment.start_stance_tilt_sd_rad`, and the ZUPTs of the
                 // next stances refine it. Trusted as a rest's, the tilt error goes into the
-                // horizontal bias instead.
-                tilt_sd_rad: if short_start {
+                // horizontal bias instead. The bias-filter modes' filter has no bias states
+                // for it to go to, and keeps the rest's σ (the wider one made 12 and 13 of a
+                // review's 400 starts worse by more than 0.3 % of path there, and no restores
+                // either way).
+                tilt_sd_rad: if short_start && own_bias {
                     self.cfg.alignment.start_stance_tilt_sd_rad.get()
                 } else {
                     e.initial_tilt_sd_rad.get()
