@@ -43,13 +43,35 @@ fn scored(log: &ImuLog, cfg: &Config, truth: &[TruthPoint]) -> (f64, Counters) {
 
 /// `configs/gdins.toml`, the walks starting along the map's x axis.
 fn shipped_config() -> Config {
+    edited_config(|_| {})
+}
+
+/// `configs/gdins.toml` with `edit` applied to the file, the walks starting along x.
+fn edited_config(edit: impl FnOnce(&mut ConfigFile)) -> Config {
     let path = root().join("configs/gdins.toml");
+    let mut file = ConfigFile::read(&path).unwrap();
+    edit(&mut file);
     ConfigOverrides {
         start_heading_deg: Some(0.0),
         ..Default::default()
     }
-    .validate(&ConfigFile::read(&path).unwrap(), &path)
+    .validate(&file, &path)
     .unwrap()
+}
+
+/// A bundled walk (`tests/data/<name>`): its log and its footprints.
+fn walk(name: &str) -> (ImuLog, Vec<TruthPoint>) {
+    let dir = root().join("tests/data").join(name);
+    let log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
+    (log, read_truth_csv(&dir.join("ground_truth.csv")).unwrap())
+}
+
+/// A bundled walk's log from `t_s` on, and its footprints after it.
+fn cut_at(name: &str, t_s: f64) -> (ImuLog, Vec<TruthPoint>) {
+    let (mut log, mut truth) = walk(name);
+    log.rows.retain(|r| r.t_s >= t_s);
+    truth.retain(|p| p.t_s > t_s + 0.05);
+    (log, truth)
 }
 
 /// The cut: between exp29's first two surveyed corners after the start (11.70 s).
@@ -102,9 +124,7 @@ const MAX_PRIOR_RATE_RAD_S: f64 = 0.03;
 
 #[test]
 fn a_rest_through_which_the_foot_pivots_is_not_the_bias_prior() {
-    let dir = root().join("tests/data/gdins_exp36_corridor_out_and_back");
-    let mut log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
-    let truth = read_truth_csv(&dir.join("ground_truth.csv")).unwrap();
+    let (mut log, truth) = walk("gdins_exp36_corridor_out_and_back");
     // The rest's up axis in the sensor frame, from its first half second.
     let rest: Vec<_> = log.rows.iter().filter(|r| r.t_s < 0.5).collect();
     let up: [f64; 3] = std::array::from_fn(|i| rest.iter().map(|r| r.accel_m_s2[i]).sum::<f64>());
@@ -191,10 +211,8 @@ fn a_loss_from_the_initial_rest_into_the_walk_starts_the_alignment_again() {
 /// (`eskf.gyro_bias_initial_sd_rad_s` about zero), which a mean that uncertain barely moves.
 #[test]
 fn a_rest_that_is_mostly_motion_does_not_set_the_bias() {
-    let dir = root().join("tests/data/gdins_exp17_rect_loop_small");
-    let mut log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
+    let (mut log, truth) = walk("gdins_exp17_rect_loop_small");
     log.rows.retain(|r| r.t_s >= 0.55);
-    let truth = read_truth_csv(&dir.join("ground_truth.csv")).unwrap();
     let cfg = shipped_config();
     let (out, largest_bias) = run_with_largest_bias(&log, &cfg);
     assert!(
@@ -218,9 +236,7 @@ fn a_rest_that_is_mostly_motion_does_not_set_the_bias() {
 /// quiet first part anchors the motion test that leaves the rocking out.
 #[test]
 fn a_loss_early_in_the_initial_rest_keeps_the_rest_that_goes_on_after_it() {
-    let dir = root().join("tests/data/gdins_exp40_serpentine_return");
-    let mut log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
-    let truth = read_truth_csv(&dir.join("ground_truth.csv")).unwrap();
+    let (mut log, truth) = walk("gdins_exp40_serpentine_return");
     let cfg = shipped_config();
     let pct = |log: &ImuLog| scored(log, &cfg, &truth);
     let (clean, clean_counters) = pct(&log);
@@ -247,9 +263,7 @@ fn a_loss_early_in_the_initial_rest_keeps_the_rest_that_goes_on_after_it() {
 /// 1°, still rate within `alignment.rest_max_rate_change_rad_s`): one rest, kept whole.
 #[test]
 fn a_short_rest_with_a_loss_in_its_middle_is_one_rest() {
-    let dir = root().join("tests/data/gdins_exp37_spiral_and_corridor");
-    let mut log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
-    let truth = read_truth_csv(&dir.join("ground_truth.csv")).unwrap();
+    let (mut log, truth) = walk("gdins_exp37_spiral_and_corridor");
     let cfg = shipped_config();
     // The rest ends at 5.15 s (its alignment phase in the whole walk).
     log.rows.retain(|r| r.t_s >= 5.15 - 0.95);
@@ -268,31 +282,6 @@ fn a_short_rest_with_a_loss_in_its_middle_is_one_rest() {
     );
 }
 
-/// `configs/gdins.toml` with `edit` applied to the file, the walks starting along x.
-fn edited_config(edit: impl FnOnce(&mut ConfigFile)) -> Config {
-    let path = root().join("configs/gdins.toml");
-    let mut file = ConfigFile::read(&path).unwrap();
-    edit(&mut file);
-    ConfigOverrides {
-        start_heading_deg: Some(0.0),
-        ..Default::default()
-    }
-    .validate(&file, &path)
-    .unwrap()
-}
-
-/// `dir`'s log from `t_s` on, and its footprints after it.
-fn cut_at(dir: &Path, t_s: f64) -> (ImuLog, Vec<TruthPoint>) {
-    let mut log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
-    log.rows.retain(|r| r.t_s >= t_s);
-    let truth = read_truth_csv(&dir.join("ground_truth.csv"))
-        .unwrap()
-        .into_iter()
-        .filter(|p| p.t_s > t_s + 0.05)
-        .collect();
-    (log, truth)
-}
-
 /// A log that starts with the wearer's first step: exp24 from 2.0 s, where its initial rest
 /// ends. The first stance of the walk aligns, without a rest. Its mean specific force holds
 /// what the foot still accelerates (the tilt of the walking stances of 0.1–0.2 s lies a median
@@ -303,8 +292,7 @@ fn cut_at(dir: &Path, t_s: f64) -> (ImuLog, Vec<TruthPoint>) {
 /// `alignment.start_stance_tilt_sd_rad`, the tilt is what the ZUPTs correct.
 #[test]
 fn a_walking_stance_that_aligns_is_not_trusted_as_a_rest() {
-    let dir = root().join("tests/data/gdins_exp24_square_two_laps");
-    let (log, truth) = cut_at(&dir, 2.0);
+    let (log, truth) = cut_at("gdins_exp24_square_two_laps", 2.0);
     let (pct, counters) = scored(&log, &shipped_config(), &truth);
     assert!(
         counters.started_without_rest && counters.health_restores == 0,
@@ -340,8 +328,7 @@ fn started_at_s(log: &ImuLog, cfg: &Config) -> Option<f64> {
 #[test]
 fn a_fast_walk_without_a_rest_starts() {
     const CUT_S: f64 = 19.084;
-    let dir = root().join("tests/data/gdins_exp38_zigzag_extreme");
-    let (log, truth) = cut_at(&dir, CUT_S);
+    let (log, truth) = cut_at("gdins_exp38_zigzag_extreme", CUT_S);
     let cfg = shipped_config();
     let t_s = started_at_s(&log, &cfg).expect("never started");
     // 1.72 s: the detector's look-back (`detector.adaptive_window_s`, 1.5 s) first.
