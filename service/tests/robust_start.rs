@@ -308,14 +308,20 @@ fn a_walking_stance_that_aligns_is_not_trusted_as_a_rest() {
 
 /// The time of the first estimate after the alignment, when there is one.
 fn started_at_s(log: &ImuLog, cfg: &Config) -> Option<f64> {
+    first_estimate(log, cfg).0.map(|(t_s, _)| t_s)
+}
+
+/// The first estimate after the alignment (its time and position), when there is one, and the
+/// run's counters.
+fn first_estimate(log: &ImuLog, cfg: &Config) -> (Option<(f64, [f64; 3])>, Counters) {
     let aid = heading_aid(cfg, None).unwrap();
-    let mut started = None;
-    run_log(log, cfg, &aid, &BiasInjection::default(), |_, e| {
+    let mut first = None;
+    let out = run_log(log, cfg, &aid, &BiasInjection::default(), |_, e| {
         if e.phase != Phase::Aligning {
-            started.get_or_insert(e.t_s);
+            first.get_or_insert((e.t_s, e.p_m));
         }
     });
-    started
+    (first, out.counters)
 }
 
 /// A daemon started while the wearer walks fast: exp38 from 19.08 s (the stance end nearest 30 %
@@ -345,4 +351,43 @@ fn a_fast_walk_without_a_rest_starts() {
     });
     let waited_s = started_at_s(&log, &waiting).map_or(f64::INFINITY, |t| t - CUT_S);
     assert!(waited_s > 10.0, "started {waited_s:.2} s after the cut");
+}
+
+/// The same cut: the gait is known to be fast only a look-back after it, and the filter starts
+/// 1.72 s after the cut. It used to start from there, the stride and a half since the cut lost
+/// (and with them where the foot was when the daemon started). It now goes back to the first
+/// stance the fast-gait rule takes (`alignment.fast_gait_replay_s`), here the first footfall
+/// after the cut, aligns there and runs over the samples since: its first estimate is as far
+/// from its origin as the footprints say the foot walked in between.
+#[test]
+fn a_start_in_fast_gait_goes_back_to_the_first_footfall_after_the_cut() {
+    const CUT_S: f64 = 19.084;
+    let (log, truth) = cut_at("gdins_exp38_zigzag_extreme", CUT_S);
+    let (first, counters) = first_estimate(&log, &shipped_config());
+    let (t_s, p_m) = first.expect("never started");
+    let back_s = counters.start_replayed_ms as f64 * 1e-3;
+    // The start went back to the stance whose end is the first listed footprint (19.91 s).
+    let start_s = t_s - back_s;
+    assert!(
+        (start_s - truth[0].t_s).abs() < 0.1,
+        "started at {start_s:.2} s (went back {back_s:.2} s), first footprint {:.2} s",
+        truth[0].t_s
+    );
+    // What the foot walked from there to the footprint nearest the first estimate.
+    let reached = truth
+        .iter()
+        .min_by(|a, b| (a.t_s - t_s).abs().total_cmp(&(b.t_s - t_s).abs()))
+        .unwrap();
+    let walked_m = (reached.x_m - truth[0].x_m).hypot(reached.y_m - truth[0].y_m);
+    let moved_m = p_m[0].hypot(p_m[1]);
+    assert!(
+        walked_m > 1.0 && (moved_m - walked_m).abs() < 0.2,
+        "first estimate {moved_m:.2} m from its origin, the footprints {walked_m:.2} m"
+    );
+    // Without going back, the filter starts where it aligns: nothing of that walk in it.
+    let live = edited_config(|f| f.alignment.fast_gait_replay_s = Some(0.0));
+    let (first, counters) = first_estimate(&log, &live);
+    let (t_live_s, p_m) = first.expect("never started");
+    assert_eq!((t_live_s, counters.start_replayed_ms), (t_s, 0));
+    assert!(p_m[0].hypot(p_m[1]) < 0.1, "{p_m:?}");
 }

@@ -89,6 +89,12 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
                 .into(),
         );
     }
+    if s.start_replayed_ms > 0 {
+        notes.push(format!(
+            "fast gait: the start went back {:.2} s, to the first stance the fast-gait rule takes (alignment.fast_gait_replay_s)",
+            s.start_replayed_ms as f64 * 1e-3
+        ));
+    }
     if s.rest_prior_refused {
         notes.push(
             "the initial rest turned faster than a bias of this sensor can be (alignment.max_prior_rate_rad_s, sensor.max_gyro_bias_rad_s): a pivoting foot, no rest-mean bias prior"

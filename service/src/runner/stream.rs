@@ -77,6 +77,8 @@ pub struct Summary {
     pub jittery_clock_samples: u64,
     /// Alignment came from a short first stance (no initial rest, no rest-mean prior).
     pub started_without_rest: bool,
+    /// A start in fast gait went back this far, ms, to an earlier stance (see `Counters`).
+    pub start_replayed_ms: u64,
     /// The initial rest turned faster than a bias of the sensor can be
     /// (`alignment.max_prior_rate_rad_s`, `sensor.max_gyro_bias_rad_s`): no rest-mean prior.
     pub rest_prior_refused: bool,
@@ -451,6 +453,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         heading_reacquisitions: c.heading_reacquisitions,
         jittery_clock_samples: c.jittery_clock_samples,
         started_without_rest: c.started_without_rest,
+        start_replayed_ms: c.start_replayed_ms,
         rest_prior_refused: c.rest_prior_refused,
         initial_rest_moving_blocks: c.initial_rest_moving_blocks,
         zero_rate_updates: c.zero_rate_updates,

@@ -16,6 +16,11 @@ pub const ALIGNMENT_MIN_START_STANCE_S: f64 = 0.1;
 /// `alignment.fast_gait_start_stance_s`: six samples at 200 Hz.
 pub const ALIGNMENT_FAST_GAIT_START_STANCE_S: f64 = 0.03;
 
+/// `alignment.fast_gait_replay_s`: two of the stance detector's look-backs
+/// (`detector.adaptive_window_s`): the fast-gait rule needs one whole look-back of raised
+/// threshold, and a start found by it came 1.7-2.1 s after a cut into a fast walk.
+pub const ALIGNMENT_FAST_GAIT_REPLAY_S: f64 = 3.0;
+
 /// `alignment.start_stance_tilt_sd_rad`: 2°, what a walking stance's mean specific force says
 /// of roll and pitch.
 pub const ALIGNMENT_START_STANCE_TILT_SD_RAD: f64 = 0.035;

@@ -148,6 +148,11 @@ pub struct AlignmentFile {
     /// 0.03 s; 0: any such stance; above `min_start_stance_s` it changes nothing). Needs the
     /// adaptive detector (`detector.adaptive_factor`).
     pub fast_gait_start_stance_s: Option<f64>,
+    /// A start in fast gait goes back to the first stance of the last this many seconds that
+    /// the fast-gait rule would have taken, and the filter runs over the samples since it: the
+    /// gait is known to be fast only a look-back after the walk is first seen (default 3 s; cut
+    /// to the 1,024 samples the estimator keeps while it aligns, 5.1 s at 200 Hz; 0: off).
+    pub fast_gait_replay_s: Option<f64>,
     /// The σ of roll and pitch when a walking stance aligns (no rest), rad: its mean specific
     /// force holds what the foot still accelerates (default 0.035 rad).
     pub start_stance_tilt_sd_rad: Option<f64>,

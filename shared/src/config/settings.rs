@@ -96,6 +96,8 @@ pub struct AlignmentConfig {
     pub min_start_stance_s: f64,
     /// Shortest stance seen whole that aligns in fast gait (the detector's threshold raised).
     pub fast_gait_start_stance_s: f64,
+    /// How far back a start in fast gait may go, s (0: off).
+    pub fast_gait_replay_s: f64,
     /// σ of roll and pitch when a walking stance aligns (no rest), rad.
     pub start_stance_tilt_sd_rad: Positive,
     /// The largest initial-rest mean rate (magnitude) taken as the bias prior, rad/s (`None`:

@@ -338,6 +338,13 @@ impl ConfigFile {
                     60.0,
                     "must be in [0, 60] s",
                 )?,
+                fast_gait_replay_s: in_range(
+                    "alignment.fast_gait_replay_s",
+                    a.fast_gait_replay_s.unwrap_or(ALIGNMENT_FAST_GAIT_REPLAY_S),
+                    0.0,
+                    60.0,
+                    "must be in [0, 60] s",
+                )?,
                 start_stance_tilt_sd_rad: Positive::in_range(
                     "alignment.start_stance_tilt_sd_rad",
                     a.start_stance_tilt_sd_rad

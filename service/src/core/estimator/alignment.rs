@@ -16,7 +16,6 @@ impl Pipeline {
         (w, f): (&Vector3<f64>, &Vector3<f64>),
         decision: &StanceDecision,
     ) -> Option<Box<Eskf>> {
-        let stance = decision.stance;
         // A loss longer than a bridgeable gap (`estimator.max_bridge_s`, at least `max_dt_s`:
         // a few lost samples or a driver's stall stay within the rest) after less than
         // `alignment.min_rest_s` of rest is remembered, and the rest since it kept apart.
@@ -38,7 +37,41 @@ impl Pipeline {
         {
             rest.lose(min_rest_s);
         }
+        self.record(&mut rest.recent, (t_clock, t_s), (w, f), decision);
         let raised = self.detector.raised(t_clock);
+        let mut aligned = self.align_on(rest, t_s, (w, f), decision, raised);
+        if aligned.is_none() {
+            // A gap the rest spans is counted here; one the alignment ends at, where the
+            // filter crosses it (as a new segment).
+            if let Some(t_prev) = t_prev
+                && t_clock - t_prev > self.cfg.max_dt_s.get()
+                && self.out.gap_s.is_none()
+            {
+                self.counters.gaps += 1;
+                self.out.gap_s = Some(t_clock - t_prev);
+                self.out.gap_crossing = Some(GapCrossing::InRest);
+            }
+        } else if self.counters.started_without_rest && rest.fast_gait() {
+            // The gait was known to be fast only now: the start goes back to the first stance
+            // the fast-gait rule takes (`fast_start.rs`).
+            aligned = aligned.map(|live| self.start_earlier(&rest.recent, live));
+        }
+        aligned
+    }
+
+    /// One sample of the rest or of a stance that may align: the filter when the alignment
+    /// ends with it. `raised`: the stance detector's threshold was raised by the gait on this
+    /// sample (a replay in fast gait takes it as raised: `fast_start.rs`).
+    pub(super) fn align_on(
+        &mut self,
+        rest: &mut InitialRest,
+        t_s: f64,
+        (w, f): (&Vector3<f64>, &Vector3<f64>),
+        decision: &StanceDecision,
+        raised: bool,
+    ) -> Option<Box<Eskf>> {
+        let stance = decision.stance;
+        let min_rest_s = self.cfg.alignment.min_rest_s.get();
         rest.observe(decision, raised, self.cfg.detector.window);
         let mut restarted = false;
         if stance {
@@ -54,18 +87,6 @@ impl Pipeline {
         let aligned = self.align_step(&mut rest.whole, t_s, (w, f), stance, min_start_s);
         if restarted && self.counters.alignment_restarts == restarts {
             self.counters.alignment_restarts += 1;
-        }
-        if aligned.is_none() {
-            // A gap the rest spans is counted here; one the alignment ends at, where the
-            // filter crosses it (as a new segment).
-            if let Some(t_prev) = t_prev
-                && t_clock - t_prev > self.cfg.max_dt_s.get()
-                && self.out.gap_s.is_none()
-            {
-                self.counters.gaps += 1;
-                self.out.gap_s = Some(t_clock - t_prev);
-                self.out.gap_crossing = Some(GapCrossing::InRest);
-            }
         }
         aligned
     }

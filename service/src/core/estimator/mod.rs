@@ -20,7 +20,8 @@
 //!
 //! Files: this one holds [`Estimator`] and its per-sample pipeline; `types.rs` the data it
 //! takes and gives (samples, estimates, counters, warm start); `alignment.rs` the initial rest
-//! (or first stance) that starts the filter, and a warm start; `observations.rs` what happens
+//! (or first stance) that starts the filter, and a warm start; `fast_start.rs` a start in fast
+//! gait taken back to the first stance it could have started on; `observations.rs` what happens
 //! once per stance (calibration and heading observations); `association.rs` the weighted
 //! association with the dominant directions; `navigation.rs` one sample's strapdown step and
 //! stance updates; `reacquire.rs` a heading lost beyond the association's reach, and the way
@@ -35,6 +36,7 @@
 
 mod alignment;
 mod association;
+mod fast_start;
 mod gap_copy;
 mod gaps;
 mod late_footfall;
@@ -284,6 +286,11 @@ impl Estimator {
             stage: Stage::Aligning(Box::new(InitialRest::new(
                 p.cfg.alignment.rest_tail_s,
                 p.cfg.alignment.rest_max_rate_change_rad_s.get(),
+                if p.cfg.alignment.fast_gait_replay_s > 0.0 {
+                    fast_start::REPLAY_SAMPLES
+                } else {
+                    0
+                },
             ))),
             p,
             before_gap: gap_copy::GapCopy::default(),
@@ -437,31 +444,17 @@ impl Estimator {
             // Whatever the filter makes of this sample: the stride clock of a gap's fill.
             p.memory.footfall(t_clock);
         }
+        p.out.begin_sample(s.t_s, &decision, p.stance_edge, clipped);
         let out = &mut p.out;
-        out.t_s = s.t_s;
-        out.stance = decision.stance;
-        out.stance_began = p.stance_edge == StanceEdge::Began;
-        out.stance_counted = false;
-        out.clipped = clipped;
-        out.health_fault = None;
-        out.gap_s = None;
-        out.gap_crossing = None;
         if let Some((gap_s, _)) = clock_step {
             out.gap_s = Some(gap_s);
             out.gap_crossing = Some(GapCrossing::ClockStep);
             p.counters.gaps += 1;
             p.counters.gaps_clock_steps += 1;
         }
-        out.velocity_reset = false;
-        out.heading_reacquired = None;
         out.replaced_first_t_s = accepted.replaced_first_t_s;
         out.glitch_t_s = accepted.glitch_t_s;
         out.clock_stepped_back_s = stepped_back_s;
-        out.detector_statistic = decision.statistic;
-        out.zupt = None;
-        out.late_footfall_t_s = None;
-        out.heading = None;
-        out.stride = None;
 
         if let Stage::Aligning(rest) = &mut self.stage {
             let t_prev = prev.map(|(t_prev, ..)| t_prev);

@@ -1,6 +1,7 @@
 //! A rest's means of specific force and rate, without its last part, without its first part
 //! when it begins with a landing, and without the blocks in which the foot moved.
 
+use super::fast_start::RecentSamples;
 use crate::core::stance::StanceDecision;
 #[cfg(doc)]
 use crate::core::stance::StanceDetector;
@@ -262,6 +263,8 @@ pub(super) struct InitialRest {
     /// The stance detector's threshold was raised by the gait (fast or varying gait) on a
     /// sample of the current stance.
     stance_raised: bool,
+    /// The last samples, for a start in fast gait to go back over (`fast_start.rs`).
+    pub(super) recent: RecentSamples,
 }
 
 /// Two parts of a rest split by a loss are one rest when their mean forces lie within this
@@ -273,7 +276,8 @@ pub(super) struct InitialRest {
 const REST_PARTS_MAX_ANGLE_RAD: f64 = 0.017_453_292_519_943_295;
 
 impl InitialRest {
-    pub(super) fn new(tail_s: f64, max_rate_change_rad_s: f64) -> Self {
+    /// `replay_samples`: how many of the last samples it keeps (0: none).
+    pub(super) fn new(tail_s: f64, max_rate_change_rad_s: f64, replay_samples: usize) -> Self {
         let rest = RestSums::new(tail_s, Some(max_rate_change_rad_s));
         Self {
             since_loss: rest.clone(),
@@ -285,6 +289,7 @@ impl InitialRest {
             samples_since_loss: 0,
             stance_seen_whole: false,
             stance_raised: false,
+            recent: RecentSamples::new(replay_samples),
         }
     }
 
@@ -299,6 +304,7 @@ impl InitialRest {
         self.samples_since_loss = src.samples_since_loss;
         self.stance_seen_whole = src.stance_seen_whole;
         self.stance_raised = src.stance_raised;
+        self.recent.copy_from(&src.recent);
     }
 
     /// What the stance detector said about a sample (before [`InitialRest::push`] or
@@ -334,11 +340,16 @@ impl InitialRest {
     /// aligned the filter on a moving foot's tilt: health restores in 274 of 5,824 starts
     /// after a loss).
     pub(super) fn min_start_s(&self, min_start_stance_s: f64, fast_gait_s: f64) -> f64 {
-        if self.stance_seen_whole && self.stance_raised {
+        if self.fast_gait() {
             fast_gait_s.min(min_start_stance_s)
         } else {
             min_start_stance_s
         }
+    }
+
+    /// The current stance was seen whole, in fast gait: the fast-gait rule applies to it.
+    pub(super) fn fast_gait(&self) -> bool {
+        self.stance_seen_whole && self.stance_raised
     }
 
     /// A loss in the rest (the samples come back after more than a bridgeable gap):
@@ -439,7 +450,7 @@ mod tests {
     fn a_short_start_stance_must_be_seen_whole_and_in_fast_gait() {
         let (min_s, fast_s, window) = (0.1, 0.03, 5);
         let g = Vector3::new(0.0, 0.0, 9.81);
-        let mut rest = InitialRest::new(0.5, 0.05);
+        let mut rest = InitialRest::new(0.5, 0.05, 0);
         let mut t_s = 0.0;
         let mut feed = |rest: &mut InitialRest, (d, raised): (StanceDecision, bool), n: usize| {
             for _ in 0..n {

@@ -232,6 +232,10 @@ pub struct Counters {
     /// Alignment came from a first stance shorter than `alignment.min_rest_s` (no rest-mean
     /// bias prior).
     pub started_without_rest: bool,
+    /// A start in fast gait went back this far, ms, to the first stance the fast-gait rule
+    /// took once the gait was known, and the filter ran over the samples since
+    /// (`alignment.fast_gait_replay_s`); 0 when it did not.
+    pub start_replayed_ms: u64,
     /// The initial "rest" turned faster than any bias of the sensor can be
     /// (`sensor.max_gyro_bias_rad_s` on some axis, or `alignment.max_prior_rate_rad_s` in
     /// magnitude: a foot pivoting, or a log started mid-walk), so its mean rate was not taken
@@ -345,6 +349,38 @@ pub struct Estimate {
     /// Stride-direction observation event, when one was taken on this sample
     /// (`foot_heading_rad` then holds the stride direction).
     pub stride: Option<HeadingEvent>,
+}
+
+impl Estimate {
+    /// Starts the estimate of a new sample: its stamp and what the stance detector and the
+    /// input said of it; every event of the previous sample cleared (the state fields stay
+    /// until the filter fills them).
+    pub(super) fn begin_sample(
+        &mut self,
+        t_s: f64,
+        decision: &crate::core::stance::StanceDecision,
+        edge: crate::core::stance::StanceEdge,
+        clipped: bool,
+    ) {
+        self.t_s = t_s;
+        self.stance = decision.stance;
+        self.stance_began = edge == crate::core::stance::StanceEdge::Began;
+        self.stance_counted = false;
+        self.clipped = clipped;
+        self.health_fault = None;
+        self.gap_s = None;
+        self.gap_crossing = None;
+        self.velocity_reset = false;
+        self.heading_reacquired = None;
+        self.replaced_first_t_s = None;
+        self.glitch_t_s = None;
+        self.clock_stepped_back_s = None;
+        self.detector_statistic = decision.statistic;
+        self.zupt = None;
+        self.late_footfall_t_s = None;
+        self.heading = None;
+        self.stride = None;
+    }
 }
 
 impl Default for Estimate {
