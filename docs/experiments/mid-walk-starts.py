@@ -6,12 +6,14 @@ of at least 0.5 m after the cut turned to the building's grid (as the suite choo
 heading). Prints, per cut, how long after the cut the filter started (its first sample not
 "aligning") and the footprint RMS, % of path; "None" where the evaluation failed (the filter
 started after the first legs the footprints are aligned on; its start then from a run without
-them) or the filter never started. Needs the release binary.
+them) or the filter never started; and how far a start in fast gait went back
+(`alignment.fast_gait_replay_s`: the filter then started on an earlier stance, and ran over the
+samples since). Needs the release binary.
 
     python3 docs/experiments/mid-walk-starts.py                      # from the repository root
     CONFIG=my.toml python3 docs/experiments/mid-walk-starts.py
 """
-import csv, math, os, statistics, subprocess, sys, tempfile
+import csv, json, math, os, statistics, subprocess, sys, tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from suite_walks import footprint_rms, walks
@@ -52,9 +54,14 @@ for name, imu, truth, sh in walks(root, fast=True):
             t_al = next((float(e["t_s"]) for e in e2 if e["phase"] != "aligning"), None)
         except OSError:
             t_al = None
+        try:
+            back_s = json.load(open(os.path.join(o, "summary.json"))).get("start_replayed_ms", 0) / 1e3
+        except OSError:
+            back_s = 0
         res.append((name[:5], pos, v, (t_al - t_cut) if t_al else None))
         print(name[:5], pos, "started after", None if t_al is None else round(t_al - t_cut, 2),
-              "s;", None if v is None else round(v, 2), "%", flush=True)
+              "s" + (f" (went back {back_s:.2f} s)" if back_s else "") + ";",
+              None if v is None else round(v, 2), "%", flush=True)
 print("not scored (started too late or never):", [(r[0], r[1]) for r in res if r[2] is None])
 d = [r[2] for r in res if r[2] is not None]
 started = [r[3] for r in res if r[3] is not None]
