@@ -236,7 +236,10 @@ pub struct NavSample {
     pub t_s: f64,
     /// `seq` of the IMU sample.
     pub imu_seq: u64,
-    /// Stance count since alignment (1 for the first footfall).
+    /// Stance count since alignment (1 for the first footfall). A start in fast gait that went
+    /// back to an earlier stance (`alignment.fast_gait_replay_s`) counts the stances it ran
+    /// over, whose nav samples were never published (they came while it aligned): the first
+    /// nav sample of such a stream has a larger number, and its position holds those strides.
     pub stance: u64,
     /// Position, m, map frame.
     pub p_m: [f64; 3],
