@@ -3,10 +3,29 @@
 
 use super::*;
 
+#[cfg(test)]
+thread_local! {
+    /// Tests only: the gait taken as fast from the first sample on, as a start in fast gait
+    /// that goes back takes it over its window: a live start on the stance such a start goes
+    /// back to (`tests.rs`).
+    pub(super) static GAIT_TAKEN_AS_FAST: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+#[cfg(test)]
+fn gait_taken_as_fast() -> bool {
+    GAIT_TAKEN_AS_FAST.with(std::cell::Cell::get)
+}
+
+#[cfg(not(test))]
+fn gait_taken_as_fast() -> bool {
+    false
+}
+
 impl Pipeline {
     /// One sample while aligning (`Estimator::step`): the initial rest's bookkeeping of
     /// losses, then [`Pipeline::align_step`]. `t_prev` and `t_clock` are the sample clock's
-    /// times of the previous sample and this one; the filter when the alignment ends here.
+    /// times of the previous sample and this one; the filter when the alignment ends here,
+    /// and whether it has run this sample already (a start in fast gait that went back).
     pub(super) fn align_sample(
         &mut self,
         rest: &mut InitialRest,
@@ -15,7 +34,7 @@ impl Pipeline {
         t_s: f64,
         (w, f): (&Vector3<f64>, &Vector3<f64>),
         decision: &StanceDecision,
-    ) -> Option<Box<Eskf>> {
+    ) -> Option<Start> {
         // A loss longer than a bridgeable gap (`estimator.max_bridge_s`, at least `max_dt_s`:
         // a few lost samples or a driver's stall stay within the rest) after less than
         // `alignment.min_rest_s` of rest is remembered, and the rest since it kept apart.
@@ -38,8 +57,8 @@ impl Pipeline {
             rest.lose(min_rest_s);
         }
         self.record(&mut rest.recent, (t_clock, t_s), (w, f), decision);
-        let raised = self.detector.raised(t_clock);
-        let mut aligned = self.align_on(rest, t_s, (w, f), decision, raised);
+        let raised = self.detector.raised(t_clock) || gait_taken_as_fast();
+        let aligned = self.align_on(rest, t_s, (w, f), decision, raised);
         if aligned.is_none() {
             // A gap the rest spans is counted here; one the alignment ends at, where the
             // filter crosses it (as a new segment).
@@ -51,12 +70,16 @@ impl Pipeline {
                 self.out.gap_s = Some(t_clock - t_prev);
                 self.out.gap_crossing = Some(GapCrossing::InRest);
             }
-        } else if self.counters.started_without_rest && rest.fast_gait() {
-            // The gait was known to be fast only now: the start goes back to the first stance
-            // the fast-gait rule takes (`fast_start.rs`).
-            aligned = aligned.map(|live| self.start_earlier(&rest.recent, live));
         }
-        aligned
+        aligned.map(|live| {
+            if self.counters.started_without_rest && rest.fast_gait() {
+                // The gait was known to be fast only now: the start goes back to the first
+                // stance the fast-gait rule takes (`fast_start.rs`).
+                self.start_earlier(&rest.recent, live)
+            } else {
+                Start::Here(live)
+            }
+        })
     }
 
     /// One sample of the rest or of a stance that may align: the filter when the alignment

@@ -31,8 +31,28 @@ pub(super) struct Recorded {
     f: Vector3<f64>,
     decision: StanceDecision,
     edge: StanceEdge,
+    /// The stance events after this sample's edge (the running step counts a stance when
+    /// their count moves).
+    stance_events: StanceEvents,
     clipped: bool,
     clipped_gyro_axes: [bool; 3],
+    /// `Counters::alignment_restarts` before this sample.
+    alignment_restarts: u64,
+}
+
+impl Recorded {
+    /// Time, rate and specific force, as the step keeps the last sample (`Pipeline::last`).
+    fn sample(&self) -> (f64, Vector3<f64>, Vector3<f64>) {
+        (self.t_clock, self.w, self.f)
+    }
+}
+
+/// How the filter started on the current sample.
+pub(super) enum Start {
+    /// On the current sample's stance: the step runs the sample.
+    Here(Box<Eskf>),
+    /// On an earlier stance, and it has run over every sample since, the current one included.
+    Earlier(Box<Eskf>),
 }
 
 /// The samples since the last step longer than `estimator.max_dt_s`, the newest
@@ -109,78 +129,73 @@ impl Pipeline {
             f: *f,
             decision: *decision,
             edge: self.stance_edge,
+            stance_events: self.stance_events,
             clipped: self.out.clipped,
             clipped_gyro_axes: self.clipped_gyro_axes,
+            alignment_restarts: self.counters.alignment_restarts,
         };
         recent.push(r, self.cfg.max_dt_s.get());
     }
 
     /// The filter `live` has just aligned on the current sample (the newest in `recent`), on
     /// a stance taken by the fast-gait rule. Goes back over the last
-    /// `alignment.fast_gait_replay_s` of `recent` (the current sample left out) with the
-    /// gait known to be fast: the first stance the alignment takes there starts a filter,
-    /// which then runs over the samples from it to the one before the current (the step runs
-    /// the current one). `live` when no earlier stance is taken. What the live alignment
-    /// counted is not counted again; the output is the current sample's, as the step set it.
+    /// `alignment.fast_gait_replay_s` of `recent` (the current sample left out of the search)
+    /// with the gait known to be fast: the first stance the alignment takes there starts a filter,
+    /// which then runs over every sample from it to the current one, as it would have had it
+    /// started there (the same estimates from here on, bit for bit: test
+    /// `a_replayed_start_is_a_live_start_on_the_same_stance`). What the live alignment counted
+    /// is not counted again; the output is the current sample's. A heading handed in while
+    /// aligning is observed from the current sample on, as without the replay. `Here(live)`
+    /// when no earlier stance is taken.
     #[inline(never)]
-    pub(super) fn start_earlier(&mut self, recent: &RecentSamples, live: Box<Eskf>) -> Box<Eskf> {
+    pub(super) fn start_earlier(&mut self, recent: &RecentSamples, live: Box<Eskf>) -> Start {
         let a = &self.cfg.alignment;
         let (Some(now), true) = (recent.ring.back(), a.fast_gait_replay_s > 0.0) else {
-            return live;
+            return Start::Here(live);
         };
         let from = recent
             .ring
             .partition_point(|r| r.t_clock < now.t_clock - a.fast_gait_replay_s);
         let mut rest = InitialRest::new(a.rest_tail_s, a.rest_max_rate_change_rad_s.get(), 0);
-        let (out, last, edge, axes) = (
-            self.out,
-            self.last,
-            self.stance_edge,
-            self.clipped_gyro_axes,
-        );
-        let restarts = self.counters.alignment_restarts;
-        let before = recent.ring.len() - 1;
-        let start = (from..before).find_map(|k| {
+        let (out, restarts) = (self.out, self.counters.alignment_restarts);
+        // The restarts are counted as the live start on that stance would have counted them:
+        // those before the window, and the replay's own.
+        self.counters.alignment_restarts = recent.ring[from].alignment_restarts;
+        let current = recent.ring.len() - 1;
+        let start = (from..current).find_map(|k| {
             let r = &recent.ring[k];
             let xs = (&r.w, &r.f);
             self.align_on(&mut rest, r.t_s, xs, &r.decision, true)
                 .map(|e| (k, e))
         });
-        self.counters.alignment_restarts = restarts;
         let Some((first, mut eskf)) = start else {
-            self.out = out;
-            return live;
+            (self.out, self.counters.alignment_restarts) = (out, restarts);
+            return Start::Here(live);
         };
-        // The stride memory's footfalls from the replayed samples on, in their order (its
-        // samples are remembered from the filter's first step: none while aligning).
-        self.memory.clear();
-        for k in from..before {
-            let r = recent.ring[k];
-            if r.edge == StanceEdge::Began {
-                self.memory.footfall(r.t_clock);
-            }
-            if k < first {
-                continue;
-            }
-            let p = recent.ring[k - 1];
-            self.last = Some((r.t_clock, r.w, r.f));
+        let pending_heading = self.pending_heading.take();
+        // Each sample as the step gave it to the running step. The stride memory keeps the
+        // footfalls the step gave it while aligning: they are read only across a gap, and the
+        // ring holds none.
+        self.last = first.checked_sub(1).map(|k| recent.ring[k].sample());
+        for k in first..=current {
+            let r = &recent.ring[k];
+            // After a failed health check the step integrates from the sample before
+            // (`step_running` takes `last` back), as here.
+            let prev = self.last;
+            self.last = Some(r.sample());
             self.stance_edge = r.edge;
+            self.stance_events = r.stance_events;
             self.clipped_gyro_axes = r.clipped_gyro_axes;
-            self.out.begin_sample(r.t_s, &r.decision, r.edge, r.clipped);
-            let prev = Some((p.t_clock, p.w, p.f));
+            if k == current {
+                self.out = out;
+                self.pending_heading = pending_heading;
+            } else {
+                self.out.begin_sample(r.t_s, &r.decision, r.edge, r.clipped);
+            }
             self.step_running(&mut eskf, r.t_s, prev, (&r.w, &r.f), &r.decision);
         }
-        if edge == StanceEdge::Began {
-            self.memory.footfall(now.t_clock);
-        }
         self.counters.start_replayed_ms = ((now.t_clock - recent.ring[first].t_clock) * 1e3) as u64;
-        (
-            self.out,
-            self.last,
-            self.stance_edge,
-            self.clipped_gyro_axes,
-        ) = (out, last, edge, axes);
-        eskf
+        Start::Earlier(eskf)
     }
 }
 
@@ -202,8 +217,10 @@ mod tests {
                 stance_age_s: 0.0,
             },
             edge: StanceEdge::None,
+            stance_events: StanceEvents::new(0.3, 0.05),
             clipped: false,
             clipped_gyro_axes: [false; 3],
+            alignment_restarts: 0,
         }
     }
 

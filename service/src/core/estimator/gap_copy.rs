@@ -2,9 +2,10 @@
 //! provisional (`corridor_shared::sensor::TimeGuard`): the next sample may show that time to be
 //! a glitched stamp, and the estimator then goes back to the copy (`recovery.rs`). The copy
 //! lives in one buffer, allocated at the first gap and reused: a gap costs a copy of about
-//! 160 KB (the stride memory most of it) and no allocation after the first gap and the first
-//! after the alignment (the filter's boxes are made then), also on a stream whose every step is
-//! a gap (a producer slower than 1 / `estimator.max_dt_s`).
+//! 160 KB (the stride memory most of it; while aligning, about 150 KB more: the samples a
+//! start in fast gait may go back over, `fast_start.rs`) and no allocation after the first gap
+//! and the first after the alignment (the filter's boxes are made then), also on a stream whose
+//! every step is a gap (a producer slower than 1 / `estimator.max_dt_s`).
 
 use super::*;
 

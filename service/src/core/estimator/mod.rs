@@ -54,6 +54,7 @@ pub use types::{
     SampleError, WarmStart, WarmStartError,
 };
 
+use fast_start::Start;
 use gaps::Gap;
 use recovery::{VELOCITY_RESET_Z2, take_spare};
 pub use rest::REST_BLOCK_S;
@@ -458,11 +459,17 @@ impl Estimator {
 
         if let Stage::Aligning(rest) = &mut self.stage {
             let t_prev = prev.map(|(t_prev, ..)| t_prev);
-            let Some(eskf) = p.align_sample(rest, t_prev, t_clock, s.t_s, (&w, &f), &decision)
+            let Some(start) = p.align_sample(rest, t_prev, t_clock, s.t_s, (&w, &f), &decision)
             else {
                 return Ok(&self.p.out);
             };
-            self.stage = Stage::Running(eskf);
+            match start {
+                Start::Here(eskf) => self.stage = Stage::Running(eskf),
+                Start::Earlier(eskf) => {
+                    self.stage = Stage::Running(eskf);
+                    return Ok(&self.p.out);
+                }
+            }
         }
         let Stage::Running(eskf) = &mut self.stage else {
             return Ok(&self.p.out); // not reached: aligned just above

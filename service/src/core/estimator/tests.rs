@@ -520,3 +520,76 @@ fn an_estimate_says_its_events_once_in_one_wording() {
         said[1]
     );
 }
+
+/// A start in fast gait that goes back to an earlier stance (`fast_start.rs`) leaves the
+/// estimator as a live start on that stance would have: from the first estimate it gives on,
+/// every estimate is the live start's, bit for bit, and so are the counts. The live start is
+/// made by taking the gait as fast from the first sample (as the replay takes it over its
+/// window), with the replay off. Both fast walks, cut where a daemon might have started while
+/// the wearer walks (exp38 at 19.084 s is the stance end nearest 30 % of its footprints). A
+/// replay that counted its stances by the current sample's stance events, not the replayed
+/// sample's, took every replayed stance after the first for part of it (exp38 from 18.0 s:
+/// estimates metres apart, a stance fewer).
+#[test]
+fn a_replayed_start_is_a_live_start_on_the_same_stance() {
+    use corridor_shared::config::ConfigOverrides;
+    use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let config = |replay_s: f64| {
+        let path = root.join("configs/gdins.toml");
+        let mut file = ConfigFile::read(&path).unwrap();
+        file.alignment.fast_gait_replay_s = Some(replay_s);
+        let o = ConfigOverrides {
+            start_heading_deg: Some(0.0),
+            ..Default::default()
+        };
+        o.validate(&file, &path).unwrap()
+    };
+    for (walk, cut_s) in [
+        ("gdins_exp38_zigzag_extreme", 19.084),
+        ("gdins_exp38_zigzag_extreme", 18.0),
+        ("gdins_exp34_fast_out_and_back", 18.2),
+    ] {
+        let path = root.join("tests/data").join(walk).join("imu.csv");
+        let log = read_imu_csv(&path, &ImuCsvOptions::default()).unwrap();
+        let run = |cfg: Config, fast: bool| {
+            let aid = crate::runner::heading_aid(&cfg, None).unwrap();
+            let mut est = Estimator::new(cfg, aid);
+            alignment::GAIT_TAKEN_AS_FAST.with(|c| c.set(fast));
+            let out: Vec<Estimate> = (log.rows.iter())
+                .filter(|r| r.t_s >= cut_s)
+                .map(|r| *est.step(&ImuInput::from(r)).unwrap())
+                .collect();
+            alignment::GAIT_TAKEN_AS_FAST.with(|c| c.set(false));
+            (out, *est.counters())
+        };
+        let (replayed, mut replayed_counts) = run(config(3.0), false);
+        let (live, live_counts) = run(config(0.0), true);
+        let started = |out: &[Estimate]| out.iter().position(|e| e.phase != Phase::Aligning);
+        let (k, k_live) = (started(&replayed).unwrap(), started(&live).unwrap());
+        let back_s = replayed_counts.start_replayed_ms as f64 * 1e-3;
+        assert!(
+            back_s > 0.3,
+            "{walk} from {cut_s} s: went back {back_s:.3} s"
+        );
+        assert!(
+            (replayed[k].t_s - live[k_live].t_s - back_s).abs() < 0.01,
+            "{walk} from {cut_s} s: went back {back_s:.3} s from {:.3} s, the live start is at \
+             {:.3} s",
+            replayed[k].t_s,
+            live[k_live].t_s
+        );
+        // The first estimate that differs, if any (the whole vectors are too long to print),
+        // by their printed values: a rejected heading event's direction is NaN, never equal to
+        // itself.
+        let same = |a: &Estimate, b: &Estimate| format!("{a:?}") == format!("{b:?}");
+        let differs = (k..replayed.len()).find(|&i| !same(&replayed[i], &live[i]));
+        assert_eq!(
+            differs.map(|i| (&replayed[i], &live[i])),
+            None,
+            "{walk} from {cut_s} s: replayed, then live"
+        );
+        replayed_counts.start_replayed_ms = 0;
+        assert_eq!(replayed_counts, live_counts, "{walk} from {cut_s} s");
+    }
+}
