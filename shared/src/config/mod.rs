@@ -8,7 +8,8 @@
 //!
 //! Files: this one holds the error, the checked number types and the enums; `file.rs` the
 //! TOML mirror ([`ConfigFile`]); `settings.rs` the validated types ([`Config`]);
-//! `validate.rs` the one validation pass between them; `defaults.rs` every default, as a
+//! `validate.rs` the one validation pass between them (`validate_daemon.rs` the `[daemon]`
+//! section's); `defaults.rs` every default, as a
 //! named constant; `overrides.rs`
 //! [`ConfigOverrides`], the one way to replace a file's values (command line, suite, tests).
 
@@ -17,6 +18,7 @@ mod file;
 mod overrides;
 mod settings;
 mod validate;
+mod validate_daemon;
 
 pub use file::*;
 pub use overrides::ConfigOverrides;
