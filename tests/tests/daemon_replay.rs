@@ -6,7 +6,9 @@
 //!   `a_gap_filled_from_the_stride_before_is_the_same_through_the_daemon` the same with 0.3 s cut
 //!   out of a swing; `late_footfalls_are_the_same_through_the_daemon` the same on the fast exp38,
 //!   whose missed footfalls are updated late (the filter propagated again from the stride
-//!   memory inside one step).
+//!   memory inside one step); `a_start_in_fast_gait_that_goes_back_is_the_same_through_the_daemon`
+//!   the same on exp38 started mid-walk, whose start goes back to an earlier stance and runs
+//!   the filter over the samples kept while aligning.
 //! - `bad_samples_over_ipc_are_rejected_and_counted`: NaN, time going backwards, a duplicate and a
 //!   late `seq` are refused and counted in `Diagnostics`; a second daemon on the domain is
 //!   refused.
@@ -122,6 +124,24 @@ fn late_footfalls_are_the_same_through_the_daemon() {
         .filter(|e| e.late_footfall_t_s.is_some())
         .count();
     assert_eq!(late as u64, counters.late_footfalls);
+}
+
+#[test]
+fn a_start_in_fast_gait_that_goes_back_is_the_same_through_the_daemon() {
+    // A daemon started while the wearer walks fast (issue 9; `alignment.fast_gait_replay_s`):
+    // the start goes back to the first stance the fast-gait rule takes, and the filter runs
+    // over the samples kept since inside one step, in the daemon as offline.
+    let _one = one_daemon_at_a_time();
+    let mut log = bundled_walk("gdins_exp38_zigzag_extreme");
+    log.rows.retain(|r| r.t_s >= 19.084);
+    let (offline, counters, _) = replay_and_compare(&log, "test_daemon_replay_fast_start");
+    assert!(counters.start_replayed_ms > 500, "{counters:?}");
+    // The first estimate already holds the strides walked since the stance it started on.
+    let first = offline
+        .iter()
+        .find(|e| e.phase != corridor_service::core::estimator::Phase::Aligning)
+        .unwrap();
+    assert!(first.p_m[0].hypot(first.p_m[1]) > 1.0, "{first:?}");
 }
 
 /// Runs `log` offline and through an in-process daemon on domain `domain_name` (lossless, at
