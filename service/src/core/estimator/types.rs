@@ -4,6 +4,7 @@
 use crate::core::eskf::Innovation;
 use crate::core::heading::Rejection;
 use crate::core::health::HealthFault;
+use crate::core::stance::{StanceDecision, StanceEdge};
 
 /// One IMU sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -358,13 +359,13 @@ impl Estimate {
     pub(super) fn begin_sample(
         &mut self,
         t_s: f64,
-        decision: &crate::core::stance::StanceDecision,
-        edge: crate::core::stance::StanceEdge,
+        decision: &StanceDecision,
+        edge: StanceEdge,
         clipped: bool,
     ) {
         self.t_s = t_s;
         self.stance = decision.stance;
-        self.stance_began = edge == crate::core::stance::StanceEdge::Began;
+        self.stance_began = edge == StanceEdge::Began;
         self.stance_counted = false;
         self.clipped = clipped;
         self.health_fault = None;
