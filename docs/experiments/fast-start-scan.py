@@ -7,7 +7,7 @@ filter's start, found by the fast-gait rule), how far the start went back from t
 samples since), and so how long after the cut the filter's origin lies; and the footprint RMS
 on the footprints after the cut (first-leg alignment, % of path; the rows before the first
 estimate say "aligning" at the origin, and their footprints count). Prints percentiles per walk.
-Needs the release binary; about 2 min on 2 cores.
+Needs the release binary; about 30 s on 2 cores.
 
     python3 docs/experiments/fast-start-scan.py            # from the repository root
     CONFIG=my.toml STEP=0.2 python3 docs/experiments/fast-start-scan.py
