@@ -6,8 +6,10 @@ filter's start, found by the fast-gait rule), how far the start went back from t
 (`alignment.fast_gait_replay_s`: the filter started on an earlier stance and ran over the
 samples since), and so how long after the cut the filter's origin lies; and the footprint RMS
 on the footprints after the cut (first-leg alignment, % of path; the rows before the first
-estimate say "aligning" at the origin, and their footprints count). Prints percentiles per walk.
-Needs the release binary; about 30 s on 2 cores.
+estimate say "aligning" at the origin, and their footprints count). With `AFTER_FIRST=1` only
+the footprints after the first estimate are scored: the first-leg alignment then takes the
+origin out, and what is left is the filter itself. Prints percentiles per walk. Needs the
+release binary; about 30 s on 2 cores (twice that with `AFTER_FIRST`).
 
     python3 docs/experiments/fast-start-scan.py            # from the repository root
     CONFIG=my.toml STEP=0.2 python3 docs/experiments/fast-start-scan.py
@@ -21,6 +23,7 @@ root = os.getcwd()
 binary = os.environ.get("BIN", os.path.join(root, "target/release/corridor"))
 config = os.environ.get("CONFIG", os.path.join(root, "configs/gdins.toml"))
 step_s = float(os.environ.get("STEP", "0.1"))
+after_first = os.environ.get("AFTER_FIRST") == "1"
 tmp = tempfile.mkdtemp(prefix="fast-start-")
 
 
@@ -33,8 +36,18 @@ def run(job):
     open(imu, "w").write("\n".join([header] + rows) + "\n")
     open(truth, "w").write("\n".join(truth_lines) + "\n")
     args = [binary, "run", "--imu", imu, "--config", config, "--start-heading-deg", str(sh)]
-    subprocess.run(args + ["--truth", truth, "--out", d], capture_output=True)
-    if not os.path.exists(os.path.join(d, "estimates.csv")):
+    if after_first:
+        # When the first estimate came, then the footprints after it.
+        subprocess.run(args + ["--out", d], capture_output=True)
+        first = next((float(e["t_s"]) for e in csv.DictReader(open(os.path.join(d, "estimates.csv")))
+                      if e["phase"] != "aligning"), None)
+        later = [r for r in truth_lines[1:] if first is not None and float(r.split(",", 1)[0]) > first + 0.05]
+        open(truth, "w").write("\n".join(truth_lines[:1] + later) + "\n")
+        if len(later) < 4:
+            truth = None
+    if truth:
+        subprocess.run(args + ["--truth", truth, "--out", d], capture_output=True)
+    if not os.path.exists(os.path.join(d, "estimates.csv")) or not truth:
         # A run whose evaluation failed (it started after the legs the footprints are aligned
         # on) writes nothing: when it started, without the footprints.
         subprocess.run(args + ["--out", d], capture_output=True)
