@@ -149,10 +149,11 @@ impl Pipeline {
     /// when no earlier stance is taken.
     #[inline(never)]
     pub(super) fn start_earlier(&mut self, recent: &RecentSamples, live: Box<Eskf>) -> Start {
-        let a = &self.cfg.alignment;
-        let (Some(now), true) = (recent.ring.back(), a.fast_gait_replay_s > 0.0) else {
+        // Nothing kept when the replay is off (`alignment.fast_gait_replay_s` 0: a ring of none).
+        let Some(now) = recent.ring.back() else {
             return Start::Here(live);
         };
+        let a = &self.cfg.alignment;
         let from = recent
             .ring
             .partition_point(|r| r.t_clock < now.t_clock - a.fast_gait_replay_s);
