@@ -3,7 +3,9 @@
 //! must have a lower footprint error than the one it started from. On the clean recordings it
 //! must not invent an effect beyond the real one it documents (a heading offset on exp25).
 
-use corridor_service::diagnose::{Effect, Fix, Report, SIGNIFICANT, apply_fix, run_diagnosis};
+use corridor_service::diagnose::{
+    DriftProbe, Effect, Fix, Report, SIGNIFICANT, analyse, apply_fix, run_diagnosis,
+};
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::{ConfigFile, ConfigOverrides, HeadingObservations};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
@@ -402,6 +404,40 @@ fn nothing_named_comes_with_the_detectable_sizes() {
             p.variant,
             r.verdict
         );
+    }
+    // and so has a bias step or ramp, in the filter's own test
+    let c = r.bias_change.as_ref().expect("70 s: three blocks");
+    for kind in DriftProbe::ALL {
+        let m = kind.mde_of(c).expect("measured");
+        assert!(m <= kind.plausible_max(), "{kind:?} {m}");
+        assert!(r.verdict.contains(&kind.words(m)), "{}", r.verdict);
+    }
+}
+
+/// The bias step and ramp the bias-change test detects on a walk, predicted from one probe
+/// injection each: twice the predicted size is detected by the test, half of it is not (the
+/// detection matrix's scan checks the same at ¼–4× on every walk: `docs/results/detection.md`).
+#[test]
+fn the_detectable_bias_step_and_ramp_are_what_the_test_shows() {
+    let (log, truth) = load("gdins_exp36_corridor_out_and_back");
+    let cfg = config(0.0, false);
+    let r = run_diagnosis(&log, &cfg, Some(&truth), None)
+        .unwrap()
+        .report;
+    let c = r.bias_change.expect("70 s: three blocks");
+    for kind in DriftProbe::ALL {
+        let m = kind.mde_of(&c).expect("measured");
+        let score = |factor: f64| {
+            let mut injected = log.clone();
+            kind.injection(&injected.rows, factor * m)
+                .apply(&mut injected.rows);
+            let a = analyse(&injected, &cfg, None, None).unwrap();
+            a.bias_change.map_or(0.0, |c| c.score)
+        };
+        let (half, twice) = (score(0.5), score(2.0));
+        eprintln!("{kind:?}: predicted {m:.2e}, score at 0.5× {half:.1}, at 2× {twice:.1}");
+        assert!(twice >= SIGNIFICANT, "{kind:?}: {twice}");
+        assert!(half < SIGNIFICANT, "{kind:?}: {half}");
     }
 }
 

@@ -148,6 +148,9 @@ pub struct Analysis {
     /// The test of the filter's bias estimate against its random walk (error-state modes
     /// without bias-rate states).
     pub bias_change: Option<super::bias_change::BiasChange>,
+    /// The model is one whose bias the test above applies to (a random walk in the error-state
+    /// filter), and tracking began: without a test then, the walk was too short for it.
+    pub bias_change_applies: bool,
     /// The bias change that came with the onset of walking (see
     /// [`super::bias_change::onset_change`]).
     pub onset: Option<super::bias_change::OnsetChange>,
@@ -428,6 +431,7 @@ pub fn analyse(
         stances,
         power,
         bias_change,
+        bias_change_applies: trace.is_some(),
         onset,
     })
 }

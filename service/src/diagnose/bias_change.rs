@@ -60,6 +60,46 @@ pub struct BiasChange {
     pub largest_share: f64,
     /// The first block's change on every axis, for the onset test ([`onset_change`]).
     pub first_block: FirstBlock,
+    /// The directions tested (sensor axes, unit vectors).
+    #[serde(skip)]
+    pub directions: Vec<[f64; 3]>,
+    /// Every block's change and its variance under the model, per axis: the test along any
+    /// direction, for the detectable step ([`super::drift_power`]).
+    #[serde(skip)]
+    pub blocks_per_axis: Vec<BlockChange>,
+    /// The bias step on the sensor's z axis at the middle of the walk that this test detects
+    /// half the time, rad/s (from a probe injection: [`super::drift_power::drift_mde`]);
+    /// `None` until measured, or when the probe did not move the test.
+    pub step_mde: Option<f64>,
+    /// The same for a bias ramp on z from a tenth of the walk, rad/s².
+    pub ramp_mde: Option<f64>,
+}
+
+/// One block's change of the bias estimate and the variance the model allows it, per axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlockChange {
+    /// Change, rad/s, sensor axes.
+    pub change_rad_s: [f64; 3],
+    /// Its variance under the random walk, (rad/s)².
+    pub var_rad2_s2: [f64; 3],
+}
+
+impl BlockChange {
+    /// The standardised change along `dir` (unit vector, sensor axes; the axes' variances
+    /// combined as if independent, only the axes the direction has: a NaN σ elsewhere does not
+    /// matter); `None` where the variance is not positive.
+    pub fn z_along(&self, dir: &[f64; 3]) -> Option<f64> {
+        let (mut change, mut var) = (0.0, 0.0);
+        for a in (0..3).filter(|&a| dir[a] != 0.0) {
+            change += dir[a] * self.change_rad_s[a];
+            var += dir[a] * dir[a] * self.var_rad2_s2[a];
+        }
+        if var.is_nan() || var <= 0.0 {
+            return None;
+        }
+        let z = change / var.sqrt();
+        z.is_finite().then_some(z)
+    }
 }
 
 /// The change of the bias estimate over the first block after tracking began, every axis.
@@ -146,27 +186,28 @@ impl BiasTrace<'_> {
             change_rad_s: std::array::from_fn(|a| bias_rad_s[i1][a] - bias_rad_s[i0][a]),
             var_rad2_s2: std::array::from_fn(|a| change_var(t_s, bias_sd_rad_s, q, i0, i1, a)),
         };
+        let blocks_per_axis: Vec<BlockChange> = edges
+            .windows(2)
+            .map(|w| {
+                let (i, j) = (w[0], w[1]);
+                BlockChange {
+                    change_rad_s: std::array::from_fn(|a| bias_rad_s[j][a] - bias_rad_s[i][a]),
+                    var_rad2_s2: std::array::from_fn(|a| {
+                        change_var(t_s, bias_sd_rad_s, q, i, j, a)
+                    }),
+                }
+            })
+            .collect();
         let mut best: Option<BiasChange> = None;
         for dir in dirs {
             let mut chi2 = 0.0;
             let mut largest = (0.0_f64, t_s[edges[1]]);
             let mut largest_sq = 0.0;
             let mut blocks = 0;
-            for w in edges.windows(2) {
-                let (i, j) = (w[0], w[1]);
-                // only the axes the direction has (a NaN σ elsewhere does not matter)
-                let (mut change, mut var) = (0.0, 0.0);
-                for a in (0..3).filter(|&a| dir[a] != 0.0) {
-                    change += dir[a] * (bias_rad_s[j][a] - bias_rad_s[i][a]);
-                    var += dir[a] * dir[a] * change_var(t_s, bias_sd_rad_s, q, i, j, a);
-                }
-                if var.is_nan() || var <= 0.0 {
+            for (b, &j) in blocks_per_axis.iter().zip(&edges[1..]) {
+                let Some(z) = b.z_along(dir) else {
                     continue;
-                }
-                let z = change / var.sqrt();
-                if !z.is_finite() {
-                    continue;
-                }
+                };
                 chi2 += z * z;
                 blocks += 1;
                 if z * z > largest_sq {
@@ -193,6 +234,10 @@ impl BiasTrace<'_> {
                 largest,
                 largest_share: if chi2 > 0.0 { largest_sq / chi2 } else { 0.0 },
                 first_block,
+                directions: dirs.to_vec(),
+                blocks_per_axis: blocks_per_axis.clone(),
+                step_mde: None,
+                ramp_mde: None,
             };
             if best.as_ref().is_none_or(|b| c.score > b.score) {
                 best = Some(c);

@@ -30,7 +30,8 @@
 //!   ANOVA across directions must not reject equal means);
 //! - `bias_drift`: a trend of `r` in time (regression) or a drift/step in its cumulative sum
 //!   (CUSUM), or the filter's bias estimate moving faster than its random walk allows
-//!   (`bias_change`: a bias the filter followed leaves no trend in the residuals); the fix is
+//!   (`bias_change`: a bias the filter followed leaves no trend in the residuals; its detectable
+//!   step and ramp from probe injections, `drift_power`); the fix is
 //!   bias-rate states for a ramp, a faster bias random walk for a step;
 //! - `gyro_scale_factor`: `r` proportional to the signed turn since the last used observation;
 //! - `g_sensitivity`: `r` proportional to ∫| |f| − g |, or the g-sensitivity signature, or the
@@ -59,6 +60,8 @@
 //! - `bias_change`: whether the filter's own bias estimate moved more than its random walk
 //!   allows ([`BiasChange`]), a second test of `bias_drift`, and whether it moved along the
 //!   specific force of walking as walking began ([`OnsetChange`]), a test of `g_sensitivity`;
+//! - `drift_power`: the smallest bias step and ramp the bias-change test detects on the walk,
+//!   from probe injections ([`drift_mde`]);
 //! - `clipping`: rails in the data below the configured gyro range ([`Rail`]);
 //! - `power`: the power of the walk for each effect: every stance's residual fitted on the
 //!   effect's signature ([`Power`]);
@@ -72,6 +75,7 @@ mod analysis;
 mod bias_change;
 mod catalogue;
 mod clipping;
+mod drift_power;
 mod power;
 mod ranking;
 mod report;
@@ -82,9 +86,10 @@ pub use analysis::{
     Analysis, Consistency, DIAGNOSIS_ALIGNED_PRIOR, HeadingResidual, ResidualKind, StanceResidual,
     analyse,
 };
-pub use bias_change::{BLOCK_S, BiasChange, BiasTrace, OnsetChange, onset_change};
+pub use bias_change::{BLOCK_S, BiasChange, BiasTrace, BlockChange, OnsetChange, onset_change};
 pub use catalogue::{Effect, Fix, RAIL_OF_RANGE, apply_fix};
 pub use clipping::{Rail, find_rails};
+pub use drift_power::{DriftProbe, drift_mde, noncentral_chi2_median};
 pub use power::{
     MDE_Z, MIN_RESPONSE, N_REFERENCES, PLACEBO_SHIFTS, Power, REFERENCES, Reference,
     calibrate_by_injection, format_unit, placebo_z, quarter_turns,
@@ -145,6 +150,9 @@ pub struct Report {
     /// The bias change that came with the onset of walking, on the starting model, with its
     /// detectable g-sensitivity.
     pub onset: Option<OnsetChange>,
+    /// The test of the filter's bias against its random walk, on the starting model, with the
+    /// bias step and ramp it detects on this walk.
+    pub bias_change: Option<BiasChange>,
     /// The stride length against the footprints (with truth only), on the model the heading
     /// effects left: the line the loop's last step acted on.
     pub stride_length: Option<StrideLine>,
@@ -319,11 +327,20 @@ pub fn run_diagnosis(
     let report = Report {
         top_effect: top.map_or("none".to_string(), |e| e.name.to_string()),
         verdict: top.map_or_else(
-            || power::nothing_found(&first.power, &first.effects, first.onset.as_ref()),
+            || {
+                power::nothing_found(
+                    &first.power,
+                    &first.effects,
+                    first.onset.as_ref(),
+                    first.bias_change.as_ref(),
+                    first.bias_change_applies,
+                )
+            },
             |e| format!("{} (score {:.1})", e.name, e.score),
         ),
         power: first.power.clone(),
         onset: first.onset,
+        bias_change: first.bias_change.clone(),
         stride_length: stride_line,
         effects: first.effects.clone(),
         before: first.consistency.clone(),

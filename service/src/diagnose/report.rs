@@ -74,6 +74,27 @@ pub fn write_report(
             .collect();
         let detectable = if !variants.is_empty() {
             variants.join("; ")
+        } else if e.name == Effect::BiasDrift {
+            let sizes: Vec<String> = super::DriftProbe::ALL
+                .into_iter()
+                .filter_map(|kind| {
+                    let m = report.bias_change.as_ref().and_then(|c| kind.mde_of(c))?;
+                    Some(if m <= kind.plausible_max() {
+                        format!(
+                            "{} ≥ {}",
+                            kind.variant(),
+                            super::format_unit(kind.unit(), m)
+                        )
+                    } else {
+                        format!("{}: cannot show", kind.variant())
+                    })
+                })
+                .collect();
+            if sizes.is_empty() {
+                "—".to_string()
+            } else {
+                sizes.join("; ")
+            }
         } else if let Some(m) = e.mde {
             format!("≥ {:.2}°", m.to_degrees())
         } else {

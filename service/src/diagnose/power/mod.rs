@@ -29,6 +29,7 @@ use super::SIGNIFICANT;
 use super::analysis::{Analysis, analyse};
 use super::analysis::{ResidualKind, StanceResidual};
 use super::catalogue::Effect;
+use super::drift_power::DriftProbe;
 use super::ranking::Finding;
 use super::signature_fit::{HAC_LAGS, Row, SignatureFit, fit_signature};
 use crate::runner::RunError;
@@ -110,8 +111,9 @@ pub struct Reference {
     pub probe: fn(size: f64) -> LogInjection,
 }
 
-/// The effects whose power is measured (bias drift and heading offset keep their own tests: the
-/// bias state follows a drift, and an offset is constant, like the intercept).
+/// The effects whose power is measured by a signature (bias drift and heading offset keep their
+/// own tests and sizes: the bias state follows a drift, whose sizes are the bias-change test's,
+/// [`super::drift_power`]; an offset is constant, like the intercept).
 pub const REFERENCES: [Reference; 5] = [
     Reference {
         effect: Effect::GyroScaleFactor,
@@ -430,7 +432,30 @@ pub fn calibrate_by_injection(
             }
         }
     }
+    // The bias-change test's detectable step and ramp, from their own probes on z.
+    if let Some(clean) = a.bias_change.as_mut() {
+        for kind in DriftProbe::ALL {
+            let mut injected = log.clone();
+            kind.injection(&injected.rows, kind.probe_size())
+                .apply(&mut injected.rows);
+            if let Some(probe) = analyse(&injected, file, None, map)?.bias_change {
+                let m = super::drift_power::drift_mde(clean, &probe, kind.probe_size());
+                match kind {
+                    DriftProbe::Step => clean.step_mde = m,
+                    DriftProbe::Ramp => clean.ramp_mde = m,
+                }
+            }
+        }
+    }
+    let step_mde = a
+        .bias_change
+        .as_ref()
+        .and_then(|c| c.step_mde)
+        .filter(|&m| m <= DriftProbe::Step.plausible_max());
     for f in &mut a.effects {
+        if f.name == Effect::BiasDrift {
+            f.mde = step_mde;
+        }
         if let Some(best) = a
             .power
             .iter()
@@ -598,12 +623,16 @@ pub fn apply_power(effects: &mut Vec<Finding>, power: &[Power], score: bool) {
 }
 
 /// The verdict when nothing is significant: the detectable sizes of the effects the walk can
-/// show, and the ones it cannot with the reason.
+/// show, and the ones it cannot with the reason (the bias-change test's step and ramp where it
+/// applies to the model: `bias_change_applies`).
 pub fn nothing_found(
     power: &[Power],
     effects: &[Finding],
     onset: Option<&super::bias_change::OnsetChange>,
+    bias_change: Option<&super::bias_change::BiasChange>,
+    bias_change_applies: bool,
 ) -> String {
+    let drift = |kind: DriftProbe| bias_change.and_then(|c| kind.mde_of(c));
     // a g-sensitivity the onset test shows (within the plausible sizes)
     let onset_mde = onset.and_then(|o| o.mde).filter(|&m| {
         REFERENCES
@@ -628,6 +657,11 @@ pub fn nothing_found(
                         .map(|m| format!("heading offset {:.2}°", m.to_degrees()))
                 }),
         )
+        .chain(DriftProbe::ALL.into_iter().filter_map(|kind| {
+            drift(kind)
+                .filter(|&m| m <= kind.plausible_max())
+                .map(|m| format!("{} (the filter's bias)", kind.words(m)))
+        }))
         .collect();
     let cannot: Vec<String> = power
         .iter()
@@ -637,6 +671,25 @@ pub fn nothing_found(
                 .as_ref()
                 .map(|why| format!("{} ({why})", p.variant))
         })
+        .chain((bias_change.is_none() && bias_change_applies).then(|| {
+            format!(
+                "a bias step or ramp in the filter's bias (its test needs two blocks of {:.0} s \
+                 after tracking began)",
+                super::bias_change::BLOCK_S
+            )
+        }))
+        .chain(DriftProbe::ALL.into_iter().filter_map(|kind| {
+            drift(kind).filter(|&m| m > kind.plausible_max()).map(|m| {
+                format!(
+                    "a {} in the filter's bias (the smallest it shows would be {}, beyond any \
+                         plausible {:.1e} {})",
+                    kind.variant(),
+                    kind.words(m),
+                    kind.plausible_max(),
+                    kind.unit()
+                )
+            })
+        }))
         .collect();
     let mut s = format!(
         "nothing significant (score < {SIGNIFICANT}): nothing above the detectable sizes {}",
