@@ -9,7 +9,7 @@
 
 use super::mde_scan::{ScanRow, already_modelled, scan_walk};
 use super::{Gait, SuiteError, SuiteRecording, read_suite};
-use crate::diagnose::{Effect, SIGNIFICANT, run_diagnosis};
+use crate::diagnose::{DriftProbe, Effect, SIGNIFICANT, run_diagnosis};
 use crate::runner::RunError;
 use corridor_shared::config::{ConfigFile, HeadingObservations};
 use corridor_shared::imu_csv::ImuLog;
@@ -42,7 +42,8 @@ pub struct MatrixCase {
     /// Size in the unit of the expected effect's detectable size (fraction, rad, rad/s …).
     pub size: f64,
     /// The power variant of the diagnosis that measures this injection
-    /// ([`Power::variant`](crate::diagnose::Power)).
+    /// ([`Power::variant`](crate::diagnose::Power)), or the bias-change test's probe
+    /// ([`DriftProbe::variant`]).
     pub variant: Option<&'static str>,
 }
 
@@ -164,7 +165,7 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
                 after_s: 0.1,
             }),
             size: 2e-4,
-            variant: Some("z bias ramp"),
+            variant: Some(DriftProbe::Ramp.variant()),
         },
         MatrixCase {
             label: "bias step 0.01 rad/s",
@@ -175,7 +176,7 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
                 at_s: 0.5,
             }),
             size: 0.01,
-            variant: None,
+            variant: Some(DriftProbe::Step.variant()),
         },
         MatrixCase {
             // The foot axis off the walking direction from early on (a mounting yaw that the
@@ -442,6 +443,11 @@ fn run_cell(
         already_modelled,
         expected_score: expected.map(|f| f.score),
         expected_mde: match case.variant {
+            // the bias-change test's own sizes (a step's is also the finding's)
+            Some(v) if power.is_none() => DriftProbe::ALL
+                .into_iter()
+                .find(|k| k.variant() == v)
+                .and_then(|k| report.bias_change.as_ref().and_then(|c| k.mde_of(c))),
             Some(_) => power.and_then(|p| p.mde),
             None => expected.and_then(|f| f.mde),
         },

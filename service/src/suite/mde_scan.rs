@@ -7,7 +7,9 @@
 //! score (the matched filter's `β̂/se`, the figure the prediction is about) and whether the
 //! ranking names it at all. The onset test of a g-sensitivity (the bias change when walking
 //! begins, [`crate::diagnose::onset_change`]) has its own row, [`ONSET_VARIANT`]: its
-//! prediction comes from the same probe injection, its score is the test's own.
+//! prediction comes from the same probe injection, its score is the test's own. So have the
+//! bias-change test's step and ramp on z ([`crate::diagnose::DriftProbe`]), each predicted from
+//! its own probe.
 //!
 //! A prediction is right when the walk shows the effect from about the predicted size on: at
 //! that size the score reaches the threshold half the time, at twice it almost always (an
@@ -17,14 +19,16 @@
 
 use super::SuiteRecording;
 use super::detection::injected_walk;
+use crate::diagnose::BLOCK_S;
 use crate::diagnose::{
-    Analysis, Effect, MDE_Z, OnsetChange, PLACEBO_SHIFTS, REFERENCES, Reference, SIGNIFICANT,
-    apply_fix, format_unit, judge, placebo_z,
+    Analysis, DriftProbe, Effect, MDE_Z, OnsetChange, PLACEBO_SHIFTS, REFERENCES, Reference,
+    SIGNIFICANT, apply_fix, format_unit, judge, placebo_z,
 };
 use crate::runner::RunError;
 use crate::stats::normal_cdf;
 use corridor_shared::config::ConfigFile;
 use corridor_shared::imu_csv::ImuLog;
+use corridor_shared::injection::LogInjection;
 use corridor_shared::truth_csv::TruthPoint;
 use serde::Serialize;
 
@@ -195,13 +199,21 @@ pub fn scan_walk(
         } else if let Some(predicted) = row.predicted {
             // Sizes beyond any plausible one of a working sensor are not injected: there the
             // filter itself fails (a g-sensitivity of 0.04 rad/s per m/s² leaves no fit).
-            scan_points(&mut row, log, truth, model, reference, predicted, |a| {
-                let fit = a.power.iter().find(|p| p.variant == reference.variant);
-                (
-                    fit.map_or(f64::NAN, |p| p.estimate),
-                    fit.map_or(0.0, |p| p.score),
-                )
-            })?;
+            scan_points(
+                &mut row,
+                log,
+                truth,
+                model,
+                &Probe::of(reference),
+                predicted,
+                |a| {
+                    let fit = a.power.iter().find(|p| p.variant == reference.variant);
+                    (
+                        fit.map_or(f64::NAN, |p| p.estimate),
+                        fit.map_or(0.0, |p| p.score),
+                    )
+                },
+            )?;
         } else {
             row.skipped = Some(
                 power
@@ -215,6 +227,11 @@ pub fn scan_walk(
     let row = scan_onset(r, log, truth, model, &clean)?;
     progress(&row);
     rows.push(row);
+    for kind in DriftProbe::ALL {
+        let row = scan_drift(kind, r, log, truth, model, &clean)?;
+        progress(&row);
+        rows.push(row);
+    }
     Ok(rows)
 }
 
@@ -249,16 +266,89 @@ fn scan_onset(
         row.skipped = Some("no onset test (no rest before the walk, or too short)".into());
         return Ok(row);
     };
-    scan_points(&mut row, log, truth, model, reference, predicted, |a| {
-        (
-            a.onset.map_or(f64::NAN, |o| o.k_taken_up),
-            test_score(a.onset.as_ref()),
-        )
+    scan_points(
+        &mut row,
+        log,
+        truth,
+        model,
+        &Probe::of(reference),
+        predicted,
+        |a| {
+            (
+                a.onset.map_or(f64::NAN, |o| o.k_taken_up),
+                test_score(a.onset.as_ref()),
+            )
+        },
+    )?;
+    Ok(row)
+}
+
+/// The scan of the bias-change test's detectable step or ramp ([`crate::diagnose::drift_mde`]):
+/// the probe's change on z injected at [`MDE_FACTORS`] times it, the test's own score and the
+/// ranking's naming of a bias drift.
+fn scan_drift(
+    kind: DriftProbe,
+    r: &SuiteRecording,
+    log: &ImuLog,
+    truth: &[TruthPoint],
+    model: &ConfigFile,
+    clean: &Analysis,
+) -> Result<ScanRow, RunError> {
+    let test_score = |a: &Analysis| a.bias_change.as_ref().map_or(0.0, |c| c.score);
+    let mut row = ScanRow {
+        recording: r.name.clone(),
+        variant: kind.variant().to_string(),
+        unit: kind.unit().to_string(),
+        predicted: clean.bias_change.as_ref().and_then(|c| kind.mde_of(c)),
+        clean_score: clean.bias_change.as_ref().map(|_| test_score(clean)),
+        ..ScanRow::default()
+    };
+    if already_modelled(Effect::BiasDrift, model) {
+        row.skipped = Some(MODELLED.into());
+        return Ok(row);
+    }
+    let Some(predicted) = row.predicted else {
+        row.skipped = Some(
+            if clean.bias_change.is_none() {
+                "no bias-change test (fewer than two blocks after tracking began)"
+            } else {
+                "the probe did not move the test"
+            }
+            .into(),
+        );
+        return Ok(row);
+    };
+    let inject = |size| kind.injection(&log.rows, size);
+    let probe = Probe {
+        effect: Effect::BiasDrift,
+        inject: &inject,
+        plausible_max: kind.plausible_max(),
+    };
+    scan_points(&mut row, log, truth, model, &probe, predicted, |a| {
+        (f64::NAN, test_score(a))
     })?;
     Ok(row)
 }
 
-/// Injects `reference` at [`MDE_FACTORS`] × `predicted` (up to its plausible limit), judges each
+/// What a scan injects: the effect the ranking should name, the injection of a size, and the
+/// largest size a working sensor could have.
+struct Probe<'a> {
+    effect: Effect,
+    inject: &'a dyn Fn(f64) -> LogInjection,
+    plausible_max: f64,
+}
+
+impl<'a> Probe<'a> {
+    fn of(reference: &'a Reference) -> Self {
+        Probe {
+            effect: reference.effect,
+            inject: &reference.probe,
+            plausible_max: reference.plausible_max,
+        }
+    }
+}
+
+/// Injects `probe` at [`MDE_FACTORS`] × `predicted` (up to its plausible limit), judges each
 /// afresh, and fills `row`'s points and the factors its test (`test`: the estimate and score of
 /// the judged walk) and the ranking's naming hold from.
 fn scan_points(
@@ -266,16 +356,16 @@ fn scan_points(
     log: &ImuLog,
     truth: &[TruthPoint],
     model: &ConfigFile,
-    reference: &Reference,
+    probe: &Probe,
     predicted: f64,
     test: impl Fn(&Analysis) -> (f64, f64),
 ) -> Result<(), RunError> {
     for factor in MDE_FACTORS
         .into_iter()
-        .filter(|f| f * predicted <= reference.plausible_max)
+        .filter(|f| f * predicted <= probe.plausible_max)
     {
         let size = factor * predicted;
-        let (injected, truth) = injected_walk(log, truth, &(reference.probe)(size));
+        let (injected, truth) = injected_walk(log, truth, &(probe.inject)(size));
         let (a, _) = judge(&injected, model, Some(&truth), None)?;
         let (estimate, power_score) = test(&a);
         row.points.push(ScanPoint {
@@ -286,7 +376,7 @@ fn scan_points(
             named: a
                 .effects
                 .iter()
-                .any(|f| f.name == reference.effect && f.score >= SIGNIFICANT),
+                .any(|f| f.name == probe.effect && f.score >= SIGNIFICANT),
         });
     }
     let flags = |hit: fn(&ScanPoint) -> bool| -> Vec<(f64, bool)> {
@@ -309,6 +399,7 @@ pub fn scan_markdown(rows: &[ScanRow]) -> String {
         .iter()
         .map(|r| r.variant)
         .chain([ONSET_VARIANT])
+        .chain(DriftProbe::ALL.map(DriftProbe::variant))
         .collect();
     let mut recordings: Vec<&str> = Vec::new();
     for r in rows {
@@ -318,12 +409,14 @@ pub fn scan_markdown(rows: &[ScanRow]) -> String {
     }
     let mut md = format!(
         "
-Predicted detectable sizes checked by injection: each effect injected into the clean walk at {} × the size the diagnosis predicts there (the walk's starting model, as in the injected columns), judged afresh; sizes beyond any plausible one of a working sensor are left out (`to k×`: the largest injected). `power from`: the smallest factor from which the power fit's score reaches {SIGNIFICANT} at every larger one (the figure the prediction is about: reached half the time at 1×, almost always at 2×); `named from`: the same for the ranking naming the effect. The prediction agrees within a factor of 2 when that factor is in [½, 2]. `(clean s)`: the clean walk's own power score s is already significant, so every injection is detected and the prediction is not checked there. `cannot`: the diagnosis says the walk cannot show the effect; `modelled`: the starting model has its state. `{ONSET_VARIANT}`: the onset test of a g-sensitivity (the filter's bias moving along the specific force walking adds, as walking begins), its prediction from the same probe injection, its `power from` the test's own score (`cannot`: no test, the walk has no rest before it or too few blocks).\n\n| recording |",
+Predicted detectable sizes checked by injection: each effect injected into the clean walk at {} × the size the diagnosis predicts there (the walk's starting model, as in the injected columns), judged afresh; sizes beyond any plausible one of a working sensor are left out (`to k×`: the largest injected). `power from`: the smallest factor from which the power fit's score reaches {SIGNIFICANT} at every larger one (the figure the prediction is about: reached half the time at 1×, almost always at 2×); `named from`: the same for the ranking naming the effect. The prediction agrees within a factor of 2 when that factor is in [½, 2]. `(clean s)`: the clean walk's own power score s is already significant, so every injection is detected and the prediction is not checked there. `cannot`: the diagnosis says the walk cannot show the effect; `modelled`: the starting model has its state. `{ONSET_VARIANT}`: the onset test of a g-sensitivity (the filter's bias moving along the specific force walking adds, as walking begins), its prediction from the same probe injection, its `power from` the test's own score (`cannot`: no test, the walk has no rest before it or too few blocks). `{}` and `{}`: the bias-change test (the filter's bias against its random walk, a χ² over its {BLOCK_S:.0} s blocks) on a step on z at mid-walk and a ramp on z from a tenth of the walk, each predicted from its own probe injection (the size at which the blocks' noncentral χ² reaches the critical value at its median), its `power from` the test's own score, its `named from` the ranking naming a bias drift (whose residual tests may see it first); `cannot`: the walk has fewer than two blocks after tracking began.\n\n| recording |",
         MDE_FACTORS
             .iter()
             .map(|f| format!("{f:.2}"))
             .collect::<Vec<_>>()
-            .join(", ")
+            .join(", "),
+        DriftProbe::Step.variant(),
+        DriftProbe::Ramp.variant(),
     );
     for v in &variants {
         md.push_str(&format!(" {v}: predicted | power from | named from |"));
