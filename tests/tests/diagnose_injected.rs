@@ -4,7 +4,8 @@
 //! must not invent an effect beyond the real one it documents (a heading offset on exp25).
 
 use corridor_service::diagnose::{
-    DriftProbe, Effect, Fix, Report, SIGNIFICANT, analyse, apply_fix, run_diagnosis,
+    DriftProbe, Effect, Fix, Report, SIGNIFICANT, analyse, apply_fix, calibrate_drift,
+    run_diagnosis,
 };
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::{ConfigFile, ConfigOverrides, HeadingObservations};
@@ -421,10 +422,9 @@ fn nothing_named_comes_with_the_detectable_sizes() {
 fn the_detectable_bias_step_and_ramp_are_what_the_test_shows() {
     let (log, truth) = load("gdins_exp36_corridor_out_and_back");
     let cfg = config(0.0, false);
-    let r = run_diagnosis(&log, &cfg, Some(&truth), None)
-        .unwrap()
-        .report;
-    let c = r.bias_change.expect("70 s: three blocks");
+    let mut clean = analyse(&log, &cfg, Some(&truth), None).unwrap();
+    calibrate_drift(&log, &cfg, None, &mut clean).unwrap();
+    let c = clean.bias_change.expect("70 s: three blocks");
     for kind in DriftProbe::ALL {
         let m = kind.mde_of(&c).expect("measured");
         let score = |factor: f64| {

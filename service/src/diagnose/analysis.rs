@@ -149,7 +149,8 @@ pub struct Analysis {
     /// without bias-rate states).
     pub bias_change: Option<super::bias_change::BiasChange>,
     /// The model is one whose bias the test above applies to (a random walk in the error-state
-    /// filter), and tracking began: without a test then, the walk was too short for it.
+    /// filter), and tracking began: without a test then, the walk was too short for it (or no
+    /// block had a usable σ).
     pub bias_change_applies: bool,
     /// The bias change that came with the onset of walking (see
     /// [`super::bias_change::onset_change`]).

@@ -64,15 +64,18 @@ pub struct BiasChange {
     #[serde(skip)]
     pub directions: Vec<[f64; 3]>,
     /// Every block's change and its variance under the model, per axis: the test along any
-    /// direction, for the detectable step ([`super::drift_power`]).
+    /// direction, for the detectable step and ramp ([`super::drift_power`]).
     #[serde(skip)]
     pub blocks_per_axis: Vec<BlockChange>,
+    /// The time each block ends, s (the probe's blocks must be the same ones).
+    #[serde(skip)]
+    pub block_end_s: Vec<f64>,
     /// The bias step on the sensor's z axis at the middle of the walk that this test detects
     /// half the time, rad/s (from a probe injection: [`super::drift_power::drift_mde`]);
-    /// `None` until measured, or when the probe did not move the test.
-    pub step_mde: Option<f64>,
+    /// `None` until measured, or when the probe's run gave no comparable test.
+    pub step_mde_rad_s: Option<f64>,
     /// The same for a bias ramp on z from a tenth of the walk, rad/s².
-    pub ramp_mde: Option<f64>,
+    pub ramp_mde_rad_s2: Option<f64>,
 }
 
 /// One block's change of the bias estimate and the variance the model allows it, per axis.
@@ -88,7 +91,7 @@ impl BlockChange {
     /// The standardised change along `dir` (unit vector, sensor axes; the axes' variances
     /// combined as if independent, only the axes the direction has: a NaN σ elsewhere does not
     /// matter); `None` where the variance is not positive.
-    pub fn z_along(&self, dir: &[f64; 3]) -> Option<f64> {
+    pub fn standardised_along(&self, dir: &[f64; 3]) -> Option<f64> {
         let (mut change, mut var) = (0.0, 0.0);
         for a in (0..3).filter(|&a| dir[a] != 0.0) {
             change += dir[a] * self.change_rad_s[a];
@@ -205,7 +208,7 @@ impl BiasTrace<'_> {
             let mut largest_sq = 0.0;
             let mut blocks = 0;
             for (b, &j) in blocks_per_axis.iter().zip(&edges[1..]) {
-                let Some(z) = b.z_along(dir) else {
+                let Some(z) = b.standardised_along(dir) else {
                     continue;
                 };
                 chi2 += z * z;
@@ -218,14 +221,7 @@ impl BiasTrace<'_> {
             if blocks == 0 {
                 continue;
             }
-            let p = crate::stats::chi2_sf(chi2, blocks as f64);
-            // Šidák over the directions: 1 − (1 − p)ⁿ, kept accurate for small p
-            let pn = -(dirs.len() as f64 * (-p).ln_1p()).exp_m1();
-            let score = if pn > 0.0 {
-                (-pn.log10()).clamp(0.0, 30.0)
-            } else {
-                30.0
-            };
+            let score = sidak_score(crate::stats::chi2_sf(chi2, blocks as f64), dirs.len());
             let c = BiasChange {
                 score,
                 direction: *dir,
@@ -236,14 +232,26 @@ impl BiasTrace<'_> {
                 first_block,
                 directions: dirs.to_vec(),
                 blocks_per_axis: blocks_per_axis.clone(),
-                step_mde: None,
-                ramp_mde: None,
+                block_end_s: edges[1..].iter().map(|&j| t_s[j]).collect(),
+                step_mde_rad_s: None,
+                ramp_mde_rad_s2: None,
             };
             if best.as_ref().is_none_or(|b| c.score > b.score) {
                 best = Some(c);
             }
         }
         best
+    }
+}
+
+/// The test's score from one direction's p-value, Šidák over `n` directions: −log₁₀ of
+/// 1 − (1 − p)ⁿ (kept accurate for small p), capped at 30.
+pub fn sidak_score(p: f64, n: usize) -> f64 {
+    let pn = -(n as f64 * (-p).ln_1p()).exp_m1();
+    if pn > 0.0 {
+        (-pn.log10()).clamp(0.0, 30.0)
+    } else {
+        30.0
     }
 }
 

@@ -6,12 +6,13 @@
 //! tested direction (B blocks; Šidák over the directions). A bias change of size `s` that the
 //! filter follows moves block `k`'s standardised change by `s·δₖ`, so along a direction the
 //! statistic is a noncentral χ² with B degrees and noncentrality `λ = s²·Σδₖ²`. The detectable
-//! size is the `s` whose χ² reaches the test's critical value half the time (its median there),
-//! as the power fits' sizes are the ones whose expected score is the threshold
+//! size is the `s` at which the test (any direction beyond its critical value) fires half the
+//! time, as the power fits' sizes are the ones whose expected score is the threshold
 //! ([`super::power::MDE_Z`]). The slopes `δₖ` come from a probe ([`DriftProbe`]): the walk run
 //! again with a step on the sensor's z axis at the middle of the walk, or a ramp from a tenth of
 //! it (the detection matrix's injections), its block changes against the clean run's, along
-//! the directions the clean run's test took.
+//! the directions the clean run's test took. (On walks whose tracking begins late the ramp has
+//! already begun when the test's first block starts.)
 //!
 //! Why the z axis: it lies nearest the vertical on the suite's mountings, the part of a bias
 //! only the heading observations see (a horizontal change tilts the sensor, which the
@@ -20,10 +21,16 @@
 //! and CUSUM), which these sizes do not cover: they are the sizes of the filter's own test.
 
 use super::SIGNIFICANT;
-use super::bias_change::BiasChange;
-use crate::stats::chi2_quantile;
-use corridor_shared::imu_csv::ImuRow;
+use super::analysis::{Analysis, analyse};
+use super::bias_change::{BLOCK_S, BiasChange};
+use super::catalogue::Effect;
+use super::power::format_unit;
+use crate::runner::RunError;
+use crate::stats::{chi2_quantile, noncentral_chi2_sf};
+use corridor_shared::config::ConfigFile;
+use corridor_shared::imu_csv::{ImuLog, ImuRow};
 use corridor_shared::injection::LogInjection;
+use std::path::Path;
 
 /// A bias change on the sensor's z axis whose detectable size is measured.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -77,11 +84,12 @@ impl DriftProbe {
         }
     }
 
-    /// A size in words: `z bias step at mid-walk 1.2e-2 rad/s`.
+    /// A size in words: `z bias step at mid-walk 1.20e-2 rad/s`.
     pub fn words(self, size: f64) -> String {
+        let size = format_unit(self.unit(), size);
         match self {
-            DriftProbe::Step => format!("z bias step at mid-walk {size:.1e} rad/s"),
-            DriftProbe::Ramp => format!("z bias ramp from a tenth of the walk {size:.1e} rad/s²"),
+            DriftProbe::Step => format!("z bias step at mid-walk {size}"),
+            DriftProbe::Ramp => format!("z bias ramp from a tenth of the walk {size}"),
         }
     }
 
@@ -106,34 +114,10 @@ impl DriftProbe {
     /// The detectable size the test of `c` holds for this probe (`None` until measured).
     pub fn mde_of(self, c: &BiasChange) -> Option<f64> {
         match self {
-            DriftProbe::Step => c.step_mde,
-            DriftProbe::Ramp => c.ramp_mde,
+            DriftProbe::Step => c.step_mde_rad_s,
+            DriftProbe::Ramp => c.ramp_mde_rad_s2,
         }
     }
-}
-
-/// Median of a noncentral χ² with `k` degrees and noncentrality `lambda` (Patnaik's scaled
-/// χ² with the Wilson–Hilferty median): `(k + λ)·(1 − 2(k + 2λ) / (9(k + λ)²))³`.
-pub fn noncentral_chi2_median(k: f64, lambda: f64) -> f64 {
-    let m = k + lambda;
-    m * (1.0 - 2.0 * (k + 2.0 * lambda) / (9.0 * m * m)).powi(3)
-}
-
-/// The noncentrality at which a χ² with `k` degrees reaches `critical` half the time.
-fn noncentrality_for_median(k: f64, critical: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0_f64, critical.max(1.0) * 4.0);
-    while noncentral_chi2_median(k, hi) < critical {
-        hi *= 2.0;
-    }
-    for _ in 0..100 {
-        let mid = 0.5 * (lo + hi);
-        if noncentral_chi2_median(k, mid) < critical {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
 }
 
 /// The per-direction false-alarm rate that makes the test's Šidák-combined rate over `n`
@@ -143,17 +127,36 @@ fn per_direction_alpha(n: usize) -> f64 {
     -((-alpha).ln_1p() / n as f64).exp_m1()
 }
 
+/// One direction of the test under a change of unit size: its degrees (blocks), the
+/// noncentrality per unit² (`Σδₖ²`) and its critical χ².
+#[derive(Debug, Clone, Copy)]
+struct DirectionPower {
+    blocks: f64,
+    lambda_per_unit2: f64,
+    critical: f64,
+}
+
+/// The probability that the test fires on a change of `size`: any of its directions, each a
+/// noncentral χ² (taken as independent, as the test's Šidák combination takes them).
+fn detection_probability(dirs: &[DirectionPower], size: f64) -> f64 {
+    1.0 - dirs
+        .iter()
+        .map(|d| 1.0 - noncentral_chi2_sf(d.critical, d.blocks, size * size * d.lambda_per_unit2))
+        .product::<f64>()
+}
+
 /// The size detectable half the time on this walk, from the clean run's test and the probe run's
 /// (the same log with a [`DriftProbe`] of `probe_size`): along each of the clean test's
-/// directions, the slopes of the blocks' standardised changes per unit of the probe, and the
-/// size at which their noncentral χ² reaches the critical value at its median; the smallest over
-/// the directions. `None` when the runs' blocks differ or the probe moved nothing.
+/// directions, the slopes of the blocks' standardised changes per unit of the probe, each
+/// direction's χ² noncentral with `size²·Σδₖ²`, and the size at which the test (any direction
+/// beyond its Šidák critical value) fires with probability ½. `None` when the runs' blocks are
+/// not the same ones (count and end times) or the probe moved nothing.
 pub fn drift_mde(clean: &BiasChange, probe: &BiasChange, probe_size: f64) -> Option<f64> {
-    if clean.blocks_per_axis.len() != probe.blocks_per_axis.len() || clean.directions.is_empty() {
+    if clean.block_end_s != probe.block_end_s || clean.directions.is_empty() {
         return None;
     }
     let alpha = per_direction_alpha(clean.directions.len());
-    clean
+    let dirs: Vec<DirectionPower> = clean
         .directions
         .iter()
         .filter_map(|dir| {
@@ -161,33 +164,131 @@ pub fn drift_mde(clean: &BiasChange, probe: &BiasChange, probe_size: f64) -> Opt
                 .blocks_per_axis
                 .iter()
                 .zip(&probe.blocks_per_axis)
-                .filter_map(|(c, p)| Some((p.z_along(dir)? - c.z_along(dir)?) / probe_size))
+                .filter_map(|(c, p)| {
+                    Some((p.standardised_along(dir)? - c.standardised_along(dir)?) / probe_size)
+                })
                 .collect();
-            let sum_sq: f64 = slopes.iter().map(|d| d * d).sum();
-            if slopes.is_empty() || sum_sq.is_nan() || sum_sq <= 0.0 {
+            let lambda_per_unit2: f64 = slopes.iter().map(|d| d * d).sum();
+            if slopes.is_empty() || lambda_per_unit2.is_nan() || lambda_per_unit2 <= 0.0 {
                 return None;
             }
-            let k = slopes.len() as f64;
-            let critical = chi2_quantile(1.0 - alpha, k);
-            let lambda = noncentrality_for_median(k, critical);
-            Some((lambda / sum_sq).sqrt())
+            let blocks = slopes.len() as f64;
+            Some(DirectionPower {
+                blocks,
+                lambda_per_unit2,
+                critical: chi2_quantile(1.0 - alpha, blocks),
+            })
         })
-        .filter(|m| m.is_finite())
-        .min_by(f64::total_cmp)
+        .collect();
+    if dirs.is_empty() {
+        return None;
+    }
+    // bracket the size from the most responsive direction's own scale, then bisect
+    let scale = dirs
+        .iter()
+        .map(|d| (d.critical / d.lambda_per_unit2).sqrt())
+        .fold(f64::INFINITY, f64::min);
+    let (mut lo, mut hi) = (0.0, scale);
+    while detection_probability(&dirs, hi) < 0.5 {
+        hi *= 2.0;
+        if !hi.is_finite() {
+            return None;
+        }
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if detection_probability(&dirs, mid) < 0.5 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(0.5 * (lo + hi))
+}
+
+/// Measures the detectable step and ramp of `a`'s bias-change test: the log run again with each
+/// probe, on the model of `file` ([`drift_mde`]); the bias drift's finding takes the step's size
+/// where it is plausible.
+pub fn calibrate_drift(
+    log: &ImuLog,
+    file: &ConfigFile,
+    map: Option<&Path>,
+    a: &mut Analysis,
+) -> Result<(), RunError> {
+    let Some(clean) = a.bias_change.as_mut() else {
+        return Ok(());
+    };
+    for kind in DriftProbe::ALL {
+        let mut injected = log.clone();
+        kind.injection(&injected.rows, kind.probe_size())
+            .apply(&mut injected.rows);
+        let m = analyse(&injected, file, None, map)?
+            .bias_change
+            .and_then(|probe| drift_mde(clean, &probe, kind.probe_size()));
+        match kind {
+            DriftProbe::Step => clean.step_mde_rad_s = m,
+            DriftProbe::Ramp => clean.ramp_mde_rad_s2 = m,
+        }
+    }
+    let step = clean
+        .step_mde_rad_s
+        .filter(|&m| m <= DriftProbe::Step.plausible_max());
+    if let Some(f) = a.effects.iter_mut().find(|f| f.name == Effect::BiasDrift) {
+        f.mde = step;
+    }
+    Ok(())
+}
+
+/// The drift's part of a verdict without a significant effect: the sizes the walk shows
+/// (`nothing above …`) and what it cannot show with the reason. `applies`: the model's bias is
+/// one the test is made for (a random walk in the error-state filter, tracking began); without
+/// it nothing is said (the residual tests stand for the drift there).
+pub fn drift_words(c: Option<&BiasChange>, applies: bool) -> (Vec<String>, Vec<String>) {
+    let (mut shown, mut cannot) = (Vec::new(), Vec::new());
+    let Some(c) = c else {
+        if applies {
+            cannot.push(format!(
+                "a bias step or ramp in the filter's bias (its test needs two blocks of \
+                 {BLOCK_S:.0} s, with a usable σ, after tracking began)"
+            ));
+        }
+        return (shown, cannot);
+    };
+    for kind in DriftProbe::ALL {
+        match kind.mde_of(c) {
+            Some(m) if m <= kind.plausible_max() => {
+                shown.push(format!("{} (the filter's bias)", kind.words(m)));
+            }
+            Some(m) => cannot.push(format!(
+                "a {} in the filter's bias (the smallest it shows would be {}, beyond any \
+                 plausible {})",
+                kind.variant(),
+                format_unit(kind.unit(), m),
+                format_unit(kind.unit(), kind.plausible_max())
+            )),
+            None => cannot.push(format!(
+                "a {} in the filter's bias (not measured: the probe injection's run gave no test \
+                 with the same blocks, or did not move it)",
+                kind.variant()
+            )),
+        }
+    }
+    (shown, cannot)
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::bias_change::{BiasChange, BlockChange, FirstBlock};
+    use super::super::bias_change::{BlockChange, FirstBlock, sidak_score};
     use super::*;
     use crate::stats::chi2_sf;
 
-    fn change(blocks: Vec<BlockChange>, directions: Vec<[f64; 3]>) -> BiasChange {
+    fn change(blocks: Vec<BlockChange>) -> BiasChange {
+        let n = blocks.len();
         BiasChange {
             score: 0.0,
-            direction: directions[0],
+            direction: AXES[0],
             chi2: 0.0,
-            blocks: blocks.len(),
+            blocks: n,
             largest: (0.0, 0.0),
             largest_share: 0.0,
             first_block: FirstBlock {
@@ -195,14 +296,24 @@ mod tests {
                 change_rad_s: [0.0; 3],
                 var_rad2_s2: [1.0; 3],
             },
-            directions,
+            directions: AXES.to_vec(),
             blocks_per_axis: blocks,
-            step_mde: None,
-            ramp_mde: None,
+            block_end_s: (1..=n).map(|k| 20.0 * k as f64).collect(),
+            step_mde_rad_s: None,
+            ramp_mde_rad_s2: None,
         }
     }
 
     const AXES: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    const SD: f64 = 1e-3;
+
+    /// A block whose standardised change is `z` per axis.
+    fn block(z: [f64; 3]) -> BlockChange {
+        BlockChange {
+            change_rad_s: z.map(|z| z * SD),
+            var_rad2_s2: [SD * SD; 3],
+        }
+    }
 
     /// A deterministic standard normal (xorshift and Box–Muller).
     struct Normal(u64);
@@ -220,64 +331,94 @@ mod tests {
     }
 
     #[test]
-    fn the_noncentral_median_matches_a_simulation() {
+    fn the_detectable_change_fires_the_test_half_the_time() {
+        // The clean walk's own block changes, and a probe of 0.01 that moves z's second block by
+        // 4σ and x's first by 3σ: two directions respond, and the size is where the test (any
+        // of the three, Šidák at 10⁻³) fires in half of the draws.
+        let clean_z = [
+            [0.3, -1.1, 0.4],
+            [-0.7, 0.2, 1.2],
+            [1.5, 0.6, -0.2],
+            [0.1, -0.4, 0.9],
+        ];
+        let response = [
+            [3.0, 0.0, 0.0],
+            [0.0, 0.0, 4.0],
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0],
+        ];
+        let clean = change(clean_z.iter().map(|&z| block(z)).collect());
+        let probe = change(
+            clean_z
+                .iter()
+                .zip(&response)
+                .map(|(c, r)| block(std::array::from_fn(|a| c[a] + r[a])))
+                .collect(),
+        );
+        let m = drift_mde(&clean, &probe, 0.01).unwrap();
         let mut n = Normal(0x9e37_79b9_7f4a_7c15);
-        for (k, lambda) in [(1usize, 0.0_f64), (3, 10.0), (3, 25.0), (6, 16.0)] {
-            let mut draws: Vec<f64> = (0..20_000)
-                .map(|_| {
-                    (0..k)
-                        .map(|i| {
-                            let mean = if i == 0 { lambda.sqrt() } else { 0.0 };
-                            (n.next() + mean).powi(2)
-                        })
-                        .sum()
+        let trials = 20_000;
+        let fired = (0..trials)
+            .filter(|_| {
+                (0..3).any(|a| {
+                    let chi2: f64 = response
+                        .iter()
+                        .map(|r| (n.next() + m / 0.01 * r[a]).powi(2))
+                        .sum();
+                    sidak_score(chi2_sf(chi2, 4.0), 3) >= SIGNIFICANT
                 })
-                .collect();
-            draws.sort_by(f64::total_cmp);
-            let simulated = draws[draws.len() / 2];
-            let m = noncentral_chi2_median(k as f64, lambda);
-            assert!(
-                (m - simulated).abs() < 0.03 * simulated.max(1.0),
-                "k {k} λ {lambda}: {m} against {simulated}"
-            );
-        }
+            })
+            .count();
+        let share = fired as f64 / trials as f64;
+        assert!((share - 0.5).abs() < 0.015, "{share}");
+        // the probe moved the blocks twice as far: half the size
+        let probe2 = change(
+            clean_z
+                .iter()
+                .zip(&response)
+                .map(|(c, r)| block(std::array::from_fn(|a| c[a] + 2.0 * r[a])))
+                .collect(),
+        );
+        let m2 = drift_mde(&clean, &probe2, 0.01).unwrap();
+        assert!((m2 - m / 2.0).abs() < 1e-9 * m, "{m2} {m}");
+        // nothing moved: no size; other blocks (later ones, or fewer): not compared
+        assert!(drift_mde(&clean, &clean, 0.01).is_none());
+        let mut later = probe.clone();
+        later.block_end_s.iter_mut().for_each(|t| *t += 0.5);
+        assert!(drift_mde(&clean, &later, 0.01).is_none());
+        let mut fewer = probe.clone();
+        fewer.blocks_per_axis.pop();
+        fewer.block_end_s.pop();
+        assert!(drift_mde(&clean, &fewer, 0.01).is_none());
     }
 
     #[test]
-    fn the_detectable_step_is_detected_half_the_time() {
-        // Three blocks of one σ each; the probe's step moves the second block by 4σ on z.
-        let sd = 1e-3;
-        let block = |z: f64| BlockChange {
-            change_rad_s: [0.0, 0.0, z * sd],
-            var_rad2_s2: [sd * sd; 3],
-        };
-        let clean = change(vec![block(0.0); 3], AXES.to_vec());
-        let probe = change(vec![block(0.0), block(4.0), block(0.0)], AXES.to_vec());
-        let m = drift_mde(&clean, &probe, 0.01).unwrap();
-        // at that size the z axis's χ² (3 degrees) is detected (Šidák over the 3 axes at 10⁻³)
-        // in about half of the draws
-        let shift = 4.0 * m / 0.01;
-        let mut n = Normal(7);
-        let trials = 20_000;
-        let detected = (0..trials)
-            .filter(|_| {
-                let chi2: f64 = (0..3)
-                    .map(|k| (n.next() + if k == 1 { shift } else { 0.0 }).powi(2))
-                    .sum();
-                let p = chi2_sf(chi2, 3.0);
-                1.0 - (1.0 - p).powi(3) <= 1e-3
-            })
-            .count();
-        let share = detected as f64 / trials as f64;
-        assert!((share - 0.5).abs() < 0.03, "{share}");
-        // twice the step moves the blocks twice as far: half the size
-        let probe2 = change(vec![block(0.0), block(8.0), block(0.0)], AXES.to_vec());
-        let m2 = drift_mde(&clean, &probe2, 0.01).unwrap();
-        assert!((m2 - m / 2.0).abs() < 1e-12 * m, "{m2} {m}");
-        // a probe that moved nothing predicts nothing; blocks that differ are not compared
-        assert!(drift_mde(&clean, &clean, 0.01).is_none());
-        let short = change(vec![block(0.0); 2], AXES.to_vec());
-        assert!(drift_mde(&clean, &short, 0.01).is_none());
+    fn the_verdict_says_what_the_walk_shows_and_why_not() {
+        let mut c = change(vec![block([0.0; 3]); 3]);
+        c.step_mde_rad_s = Some(0.012);
+        c.ramp_mde_rad_s2 = Some(2e-3);
+        let (shown, cannot) = drift_words(Some(&c), true);
+        assert_eq!(
+            shown,
+            ["z bias step at mid-walk 1.20e-2 rad/s (the filter's bias)"]
+        );
+        assert!(
+            cannot.len() == 1 && cannot[0].contains("beyond any plausible 1.00e-3 rad/s²"),
+            "{cannot:?}"
+        );
+        c.step_mde_rad_s = None;
+        let (_, cannot) = drift_words(Some(&c), true);
+        assert!(
+            cannot[0].contains("z bias step in the filter's bias (not measured"),
+            "{cannot:?}"
+        );
+        let (shown, cannot) = drift_words(None, true);
+        assert!(
+            shown.is_empty() && cannot[0].contains("needs two blocks"),
+            "{cannot:?}"
+        );
+        // a model the test is not made for (the paper's): nothing said
+        assert_eq!(drift_words(None, false), (vec![], vec![]));
     }
 
     #[test]

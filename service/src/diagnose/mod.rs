@@ -89,7 +89,9 @@ pub use analysis::{
 pub use bias_change::{BLOCK_S, BiasChange, BiasTrace, BlockChange, OnsetChange, onset_change};
 pub use catalogue::{Effect, Fix, RAIL_OF_RANGE, apply_fix};
 pub use clipping::{Rail, find_rails};
-pub use drift_power::{DriftProbe, drift_mde, noncentral_chi2_median};
+pub use drift_power::{
+    DriftProbe, RAMP_FROM_FRACTION, STEP_AT_FRACTION, calibrate_drift, drift_mde, drift_words,
+};
 pub use power::{
     MDE_Z, MIN_RESPONSE, N_REFERENCES, PLACEBO_SHIFTS, Power, REFERENCES, Reference,
     calibrate_by_injection, format_unit, placebo_z, quarter_turns,

@@ -194,6 +194,43 @@ pub fn chi2_sf(x: f64, k: f64) -> f64 {
     gamma_q(0.5 * k, 0.5 * x)
 }
 
+/// Survival function P(X > x) of a noncentral χ² with `k` degrees and noncentrality `lambda`:
+/// the Poisson(λ/2) mixture of central χ²(k + 2j) tails, summed outward from the Poisson mode
+/// until the remaining weight is below 1e-15. NaN for k ≤ 0 or λ < 0.
+pub fn noncentral_chi2_sf(x: f64, k: f64, lambda: f64) -> f64 {
+    if k.is_nan() || k <= 0.0 || lambda.is_nan() || lambda < 0.0 {
+        return f64::NAN;
+    }
+    if lambda == 0.0 {
+        return chi2_sf(x, k);
+    }
+    let mu = 0.5 * lambda;
+    let mode = mu.floor();
+    let weight = |j: f64| (j * mu.ln() - mu - ln_gamma(j + 1.0)).exp();
+    let mut sum = 0.0;
+    let mut taken = 0.0;
+    // the mode and above
+    let mut j = mode;
+    loop {
+        let w = weight(j);
+        sum += w * chi2_sf(x, k + 2.0 * j);
+        taken += w;
+        if w < 1e-17 && j > mode {
+            break;
+        }
+        j += 1.0;
+    }
+    // below the mode
+    let mut j = mode - 1.0;
+    while j >= 0.0 && taken < 1.0 - 1e-15 {
+        let w = weight(j);
+        sum += w * chi2_sf(x, k + 2.0 * j);
+        taken += w;
+        j -= 1.0;
+    }
+    sum.clamp(0.0, 1.0)
+}
+
 fn chi2_pdf(x: f64, k: f64) -> f64 {
     if x <= 0.0 {
         return 0.0;
@@ -402,6 +439,30 @@ mod tests {
         ));
         assert!(close(ln_gamma(0.1), 9.513_507_698_668_732_f64.ln(), 1e-12));
         assert!(ln_gamma(0.0).is_nan() && ln_gamma(-1.0).is_nan());
+    }
+
+    #[test]
+    fn noncentral_chi2_tail_matches_its_known_values() {
+        // λ = 0 is the central χ²
+        assert_eq!(noncentral_chi2_sf(7.0, 3.0, 0.0), chi2_sf(7.0, 3.0));
+        // one degree: X = (Z + √λ)², so P(X > x) = Φ(√λ − √x) + Φ(−√λ − √x)
+        for (x, lambda) in [(1.0, 4.0), (10.8, 9.0), (20.0, 30.0), (3.0, 200.0)] {
+            let (a, b) = (f64::sqrt(lambda), f64::sqrt(x));
+            let exact = normal_cdf(a - b) + normal_cdf(-a - b);
+            let got = noncentral_chi2_sf(x, 1.0, lambda);
+            assert!(
+                (got - exact).abs() < 1e-10,
+                "x {x} λ {lambda}: {got} {exact}"
+            );
+        }
+        // two degrees with λ: the tail grows with λ
+        let tails: Vec<f64> = [0.0, 1.0, 5.0, 25.0]
+            .iter()
+            .map(|&l| noncentral_chi2_sf(12.0, 2.0, l))
+            .collect();
+        assert!(tails.windows(2).all(|w| w[0] < w[1]), "{tails:?}");
+        assert!(noncentral_chi2_sf(1.0, 0.0, 1.0).is_nan());
+        assert!(noncentral_chi2_sf(1.0, 2.0, -1.0).is_nan());
     }
 
     #[test]

@@ -40,7 +40,7 @@ mod whiteness;
 pub use cusum::{Cusum, cusum, sliding_mean};
 pub use distributions::{
     beta_reg, chi2_cdf, chi2_quantile, chi2_sf, f_sf, gamma_p, gamma_q, kolmogorov_sf, ln_gamma,
-    normal_cdf, normal_quantile, student_t_two_sided_p,
+    noncentral_chi2_sf, normal_cdf, normal_quantile, student_t_two_sided_p,
 };
 pub use groups::{Anova, GroupStat, anova_oneway, group_means};
 pub use nis::{NisTest, NisVerdict, nis_consistency};

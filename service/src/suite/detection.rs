@@ -9,7 +9,9 @@
 
 use super::mde_scan::{ScanRow, already_modelled, scan_walk};
 use super::{Gait, SuiteError, SuiteRecording, read_suite};
-use crate::diagnose::{DriftProbe, Effect, SIGNIFICANT, run_diagnosis};
+use crate::diagnose::{
+    DriftProbe, Effect, RAMP_FROM_FRACTION, SIGNIFICANT, STEP_AT_FRACTION, run_diagnosis,
+};
 use crate::runner::RunError;
 use corridor_shared::config::{ConfigFile, HeadingObservations};
 use corridor_shared::imu_csv::ImuLog;
@@ -159,12 +161,13 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
         MatrixCase {
             label: "bias ramp 2e-4 rad/s²",
             expected: Some(BiasDrift),
+            // the bias-change test's probes are these injections (`DriftProbe`)
             injection: Log(BiasRamp {
                 axis: 2,
-                rate_rad_s2: 2e-4,
-                after_s: 0.1,
+                rate_rad_s2: DriftProbe::Ramp.probe_size(),
+                after_s: RAMP_FROM_FRACTION,
             }),
-            size: 2e-4,
+            size: DriftProbe::Ramp.probe_size(),
             variant: Some(DriftProbe::Ramp.variant()),
         },
         MatrixCase {
@@ -172,10 +175,10 @@ pub fn matrix_cases() -> Vec<MatrixCase> {
             expected: Some(BiasDrift),
             injection: Log(BiasStep {
                 axis: 2,
-                step_rad_s: 0.01,
-                at_s: 0.5,
+                step_rad_s: DriftProbe::Step.probe_size(),
+                at_s: STEP_AT_FRACTION,
             }),
-            size: 0.01,
+            size: DriftProbe::Step.probe_size(),
             variant: Some(DriftProbe::Step.variant()),
         },
         MatrixCase {
@@ -447,7 +450,13 @@ fn run_cell(
             Some(v) if power.is_none() => DriftProbe::ALL
                 .into_iter()
                 .find(|k| k.variant() == v)
-                .and_then(|k| report.bias_change.as_ref().and_then(|c| k.mde_of(c))),
+                .and_then(|k| {
+                    report
+                        .bias_change
+                        .as_ref()
+                        .and_then(|c| k.mde_of(c))
+                        .filter(|&m| m <= k.plausible_max())
+                }),
             Some(_) => power.and_then(|p| p.mde),
             None => expected.and_then(|f| f.mde),
         },

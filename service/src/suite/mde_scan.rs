@@ -307,17 +307,26 @@ fn scan_drift(
         row.skipped = Some(MODELLED.into());
         return Ok(row);
     }
-    let Some(predicted) = row.predicted else {
-        row.skipped = Some(
-            if clean.bias_change.is_none() {
-                "no bias-change test (fewer than two blocks after tracking began)"
-            } else {
-                "the probe did not move the test"
-            }
-            .into(),
-        );
-        return Ok(row);
+    let why_not = if !clean.bias_change_applies {
+        Some(
+            "no bias-change test for this model (its bias is no random walk of the error-state filter, or it never tracked)",
+        )
+    } else if clean.bias_change.is_none() {
+        Some("no bias-change test (fewer than two blocks with a usable σ after tracking began)")
+    } else {
+        match row.predicted {
+            None => Some(
+                "not measured (the probe's run gave no test with the same blocks, or did not move it)",
+            ),
+            Some(m) if m > kind.plausible_max() => Some("beyond any plausible size"),
+            Some(_) => None,
+        }
     };
+    if let Some(why) = why_not {
+        row.skipped = Some(why.into());
+        return Ok(row);
+    }
+    let predicted = row.predicted.expect("measured above");
     let inject = |size| kind.injection(&log.rows, size);
     let probe = Probe {
         effect: Effect::BiasDrift,
@@ -409,7 +418,7 @@ pub fn scan_markdown(rows: &[ScanRow]) -> String {
     }
     let mut md = format!(
         "
-Predicted detectable sizes checked by injection: each effect injected into the clean walk at {} × the size the diagnosis predicts there (the walk's starting model, as in the injected columns), judged afresh; sizes beyond any plausible one of a working sensor are left out (`to k×`: the largest injected). `power from`: the smallest factor from which the power fit's score reaches {SIGNIFICANT} at every larger one (the figure the prediction is about: reached half the time at 1×, almost always at 2×); `named from`: the same for the ranking naming the effect. The prediction agrees within a factor of 2 when that factor is in [½, 2]. `(clean s)`: the clean walk's own power score s is already significant, so every injection is detected and the prediction is not checked there. `cannot`: the diagnosis says the walk cannot show the effect; `modelled`: the starting model has its state. `{ONSET_VARIANT}`: the onset test of a g-sensitivity (the filter's bias moving along the specific force walking adds, as walking begins), its prediction from the same probe injection, its `power from` the test's own score (`cannot`: no test, the walk has no rest before it or too few blocks). `{}` and `{}`: the bias-change test (the filter's bias against its random walk, a χ² over its {BLOCK_S:.0} s blocks) on a step on z at mid-walk and a ramp on z from a tenth of the walk, each predicted from its own probe injection (the size at which the blocks' noncentral χ² reaches the critical value at its median), its `power from` the test's own score, its `named from` the ranking naming a bias drift (whose residual tests may see it first); `cannot`: the walk has fewer than two blocks after tracking began.\n\n| recording |",
+Predicted detectable sizes checked by injection: each effect injected into the clean walk at {} × the size the diagnosis predicts there (the walk's starting model, as in the injected columns), judged afresh; sizes beyond any plausible one of a working sensor are left out (`to k×`: the largest injected). `power from`: the smallest factor from which the power fit's score reaches {SIGNIFICANT} at every larger one (the figure the prediction is about: reached half the time at 1×, almost always at 2×); `named from`: the same for the ranking naming the effect. The prediction agrees within a factor of 2 when that factor is in [½, 2]. `(clean s)`: the clean walk's own power score s is already significant, so every injection is detected and the prediction is not checked there. `cannot`: the diagnosis says the walk cannot show the effect; `modelled`: the starting model has its state. `{ONSET_VARIANT}`: the onset test of a g-sensitivity (the filter's bias moving along the specific force walking adds, as walking begins), its prediction from the same probe injection, its `power from` the test's own score (`cannot`: no test, the walk has no rest before it or too few blocks). `{}` and `{}`: the bias-change test (the filter's bias against its random walk, a χ² over its {BLOCK_S:.0} s blocks) on a step on z at mid-walk and a ramp on z from a tenth of the walk, each predicted from its own probe injection (the size at which the blocks' noncentral χ² reaches the critical value at its median), its `power from` the test's own score, its `named from` the ranking naming a bias drift (whose residual tests may see it first); `cannot`: the walk has fewer than two blocks after tracking began (or the size was not measured, or lies beyond any plausible one: `detection.json` says which).\n\n| recording |",
         MDE_FACTORS
             .iter()
             .map(|f| format!("{f:.2}"))

@@ -29,7 +29,6 @@ use super::SIGNIFICANT;
 use super::analysis::{Analysis, analyse};
 use super::analysis::{ResidualKind, StanceResidual};
 use super::catalogue::Effect;
-use super::drift_power::DriftProbe;
 use super::ranking::Finding;
 use super::signature_fit::{HAC_LAGS, Row, SignatureFit, fit_signature};
 use crate::runner::RunError;
@@ -432,30 +431,7 @@ pub fn calibrate_by_injection(
             }
         }
     }
-    // The bias-change test's detectable step and ramp, from their own probes on z.
-    if let Some(clean) = a.bias_change.as_mut() {
-        for kind in DriftProbe::ALL {
-            let mut injected = log.clone();
-            kind.injection(&injected.rows, kind.probe_size())
-                .apply(&mut injected.rows);
-            if let Some(probe) = analyse(&injected, file, None, map)?.bias_change {
-                let m = super::drift_power::drift_mde(clean, &probe, kind.probe_size());
-                match kind {
-                    DriftProbe::Step => clean.step_mde = m,
-                    DriftProbe::Ramp => clean.ramp_mde = m,
-                }
-            }
-        }
-    }
-    let step_mde = a
-        .bias_change
-        .as_ref()
-        .and_then(|c| c.step_mde)
-        .filter(|&m| m <= DriftProbe::Step.plausible_max());
     for f in &mut a.effects {
-        if f.name == Effect::BiasDrift {
-            f.mde = step_mde;
-        }
         if let Some(best) = a
             .power
             .iter()
@@ -471,7 +447,8 @@ pub fn calibrate_by_injection(
             f.mde = Some(f.mde.map_or(m, |p| p.min(m)));
         }
     }
-    Ok(())
+    // the bias-change test's own sizes: a step and a ramp on z
+    super::drift_power::calibrate_drift(log, file, map, a)
 }
 
 /// Effects tested beyond the first reference (the z scale factor): their signature and the
@@ -632,7 +609,8 @@ pub fn nothing_found(
     bias_change: Option<&super::bias_change::BiasChange>,
     bias_change_applies: bool,
 ) -> String {
-    let drift = |kind: DriftProbe| bias_change.and_then(|c| kind.mde_of(c));
+    let (drift_shown, drift_cannot) =
+        super::drift_power::drift_words(bias_change, bias_change_applies);
     // a g-sensitivity the onset test shows (within the plausible sizes)
     let onset_mde = onset.and_then(|o| o.mde).filter(|&m| {
         REFERENCES
@@ -657,11 +635,7 @@ pub fn nothing_found(
                         .map(|m| format!("heading offset {:.2}°", m.to_degrees()))
                 }),
         )
-        .chain(DriftProbe::ALL.into_iter().filter_map(|kind| {
-            drift(kind)
-                .filter(|&m| m <= kind.plausible_max())
-                .map(|m| format!("{} (the filter's bias)", kind.words(m)))
-        }))
+        .chain(drift_shown)
         .collect();
     let cannot: Vec<String> = power
         .iter()
@@ -671,25 +645,7 @@ pub fn nothing_found(
                 .as_ref()
                 .map(|why| format!("{} ({why})", p.variant))
         })
-        .chain((bias_change.is_none() && bias_change_applies).then(|| {
-            format!(
-                "a bias step or ramp in the filter's bias (its test needs two blocks of {:.0} s \
-                 after tracking began)",
-                super::bias_change::BLOCK_S
-            )
-        }))
-        .chain(DriftProbe::ALL.into_iter().filter_map(|kind| {
-            drift(kind).filter(|&m| m > kind.plausible_max()).map(|m| {
-                format!(
-                    "a {} in the filter's bias (the smallest it shows would be {}, beyond any \
-                         plausible {:.1e} {})",
-                    kind.variant(),
-                    kind.words(m),
-                    kind.plausible_max(),
-                    kind.unit()
-                )
-            })
-        }))
+        .chain(drift_cannot)
         .collect();
     let mut s = format!(
         "nothing significant (score < {SIGNIFICANT}): nothing above the detectable sizes {}",
