@@ -4,8 +4,8 @@
 //! must not invent an effect beyond the real one it documents (a heading offset on exp25).
 
 use corridor_service::diagnose::{
-    DriftProbe, Effect, Fix, Report, SIGNIFICANT, analyse, apply_fix, calibrate_drift,
-    run_diagnosis,
+    DriftProbe, Effect, Fix, Report, SIGNIFICANT, analyse, apply_fix, calibrate_drift, judge,
+    judge_names, run_diagnosis,
 };
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::{ConfigFile, ConfigOverrides, HeadingObservations};
@@ -413,6 +413,31 @@ fn nothing_named_comes_with_the_detectable_sizes() {
         assert!(m <= kind.plausible_max(), "{kind:?} {m}");
         assert!(r.verdict.contains(&kind.words(m)), "{}", r.verdict);
     }
+}
+
+/// The detection matrix's scan judges its injected walks without the probes that only measure
+/// detectable sizes (`judge_names`): what it names must be what the loop's first step names.
+#[test]
+fn the_scan_names_what_the_loop_names() {
+    let (mut log, truth) = load("gdins_exp36_corridor_out_and_back");
+    LogInjection::BiasStep {
+        axis: 2,
+        step_rad_s: 0.025,
+        at_s: 35.0,
+    }
+    .apply(&mut log.rows);
+    let cfg = config(0.0, false);
+    let (full, _) = judge(&log, &cfg, Some(&truth), None).unwrap();
+    let names = judge_names(&log, &cfg, Some(&truth), None).unwrap();
+    let scores = |a: &corridor_service::diagnose::Analysis| -> Vec<(Effect, f64)> {
+        a.effects.iter().map(|f| (f.name, f.score)).collect()
+    };
+    assert_eq!(scores(&full), scores(&names));
+    assert!(
+        full.effects[0].name == Effect::BiasDrift && full.effects[0].score >= SIGNIFICANT,
+        "{:?}",
+        scores(&full)
+    );
 }
 
 /// The bias step and ramp the bias-change test detects on a walk, predicted from one probe

@@ -239,6 +239,20 @@ pub fn judge(
     Ok((first, candidates))
 }
 
+/// What [`judge`] names, without the detectable sizes: `start` analysed and every fixable
+/// effect scored, the probe injections that only measure sizes left out (the scores do not
+/// depend on them). The detection matrix's scan judges its injected walks so.
+pub fn judge_names(
+    log: &ImuLog,
+    start: &ConfigFile,
+    truth: Option<&[TruthPoint]>,
+    map: Option<&Path>,
+) -> Result<Analysis, RunError> {
+    let mut first = analyse(log, start, truth, map)?;
+    score_by_likelihood(log, start, &mut first, truth, map)?;
+    Ok(first)
+}
+
 /// The whole loop: analyse `start`, add the top significant effect while one has a fix and
 /// the model improves (at most [`MAX_ITERATIONS`] times); then, with footprints, the stride
 /// length's fix when it is significant (kept when the footprint error falls).

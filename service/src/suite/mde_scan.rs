@@ -22,7 +22,7 @@ use super::detection::injected_walk;
 use crate::diagnose::BLOCK_S;
 use crate::diagnose::{
     Analysis, DriftProbe, Effect, MDE_Z, OnsetChange, PLACEBO_SHIFTS, REFERENCES, Reference,
-    SIGNIFICANT, apply_fix, format_unit, judge, placebo_z,
+    SIGNIFICANT, apply_fix, format_unit, judge, judge_names, placebo_z,
 };
 use crate::runner::RunError;
 use crate::stats::normal_cdf;
@@ -375,7 +375,7 @@ fn scan_points(
     {
         let size = factor * predicted;
         let (injected, truth) = injected_walk(log, truth, &(probe.inject)(size));
-        let (a, _) = judge(&injected, model, Some(&truth), None)?;
+        let a = judge_names(&injected, model, Some(&truth), None)?;
         let (estimate, power_score) = test(&a);
         row.points.push(ScanPoint {
             factor,
