@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""The suite on its own walks seen in a mirror: a check that nothing in the configuration or the
-estimator prefers one side (left turns over right ones, a foot that toes out one way, a bias of
-one sign).
+"""The suite on its own walks seen in a mirror, or with the sensor mounted otherwise: a check that
+nothing in the configuration or the estimator prefers one side (left turns over right ones, a
+foot that toes out one way, a bias of one sign) or one mounting.
 
     python3 docs/experiments/mirror-walks.py      # from the repository root, release binary built
 
@@ -14,6 +14,12 @@ a misalignment), so a side-free estimator scores it as it scores the walk itself
 arithmetic. `corridor eval` runs the mirrored suite (a copy of configs/eval/gdins.toml pointing
 at mirrored copies of the logs, meta.json kept) and the script prints both suites' rows and
 summaries side by side. OUT=dir keeps the mirrored suite's output.
+
+TURN=1 turns the sensor on the shoe by 90° about its own z axis instead (every vector's
+components in the new axes: x' = y, y' = -x; the gyro's rails stay on axes), and ROTATE=axis,deg
+(e.g. ROTATE=x,30) by any angle about any of its axes, on the walks without samples at the
+gyro's rail only (a rotated rail is no real sensor's): a mounting the walks were not recorded
+with. The footprints and the start heading stay as they are.
 """
 import json, os, re, shutil, subprocess, sys, tempfile
 
@@ -25,19 +31,61 @@ suite_path = os.path.join(root, "configs/eval/gdins.toml")
 suite = open(suite_path).read()
 
 
+TURN = os.environ.get("TURN") == "1"
+# ROTATE=axis,deg: the sensor mounted turned by deg about its own axis (x, y or z): every vector
+# and pseudovector alike, v' = Rᵀ·v. Walks with samples at the gyro's rail are left out (their
+# clipping would lie on other axes than the sensor's rails, which no real sensor does).
+ROTATE = os.environ.get("ROTATE")
+if ROTATE:
+    import math
+    axis, deg = ROTATE.split(",")
+    c, s_ = math.cos(math.radians(float(deg))), math.sin(math.radians(float(deg)))
+    i = "xyz".index(axis)
+    j, k = (i + 1) % 3, (i + 2) % 3
+    R = [[0.0] * 3 for _ in range(3)]
+    R[i][i] = 1.0
+    R[j][j], R[j][k], R[k][j], R[k][k] = c, -s_, s_, c
+
+
+def rotated(vals):
+    # Rᵀ·v, printed with full precision
+    v = [float(x) for x in vals]
+    return [repr(sum(R[r][q] * v[r] for r in range(3))) for q in range(3)]
+
+
+def clipped(src):
+    with open(src) as f:
+        cols = f.readline().strip().split(",")
+        g = [cols.index(c) for c in ("gx_rad_s", "gy_rad_s", "gz_rad_s")]
+        return any(abs(float(line.split(",")[i])) >= 8.5 for line in f for i in g)
+
+
+def neg(x):
+    return x if x in ("", "NaN") else (x[1:] if x.startswith("-") else "-" + x)
+
+
 def mirror_imu(src, dst):
     with open(src) as f, open(dst, "w") as g:
         header = f.readline()
         g.write(header)
         cols = header.strip().split(",")
-        flip = [cols.index(c) for c in ("gx_rad_s", "gz_rad_s", "ay_m_s2")]
-        # a magnetometer is a pseudovector's kin too (a field): mirrored as the rates
-        flip += [cols.index(c) for c in ("mx_gauss", "mz_gauss") if c in cols]
+        triples = [[cols.index(c) for c in ("gx_rad_s", "gy_rad_s", "gz_rad_s")],
+                   [cols.index(c) for c in ("ax_m_s2", "ay_m_s2", "az_m_s2")]]
+        if "mx_gauss" in cols:
+            triples.append([cols.index(c) for c in ("mx_gauss", "my_gauss", "mz_gauss")])
         for line in f:
             v = line.rstrip("\n").split(",")
-            for i in flip:
-                if v[i] not in ("", "NaN"):
-                    v[i] = v[i][1:] if v[i].startswith("-") else "-" + v[i]
+            for k, (x, y, z) in enumerate(triples):
+                if ROTATE:
+                    v[x], v[y], v[z] = rotated([v[x], v[y], v[z]])
+                elif TURN:
+                    # the sensor mounted turned 90° about its z axis: every vector's components
+                    # in the new axes (x' = y, y' = −x)
+                    v[x], v[y] = v[y], neg(v[x])
+                elif k == 1:
+                    v[y] = neg(v[y])  # the specific force, a vector
+                else:
+                    v[x], v[z] = neg(v[x]), neg(v[z])  # rates and field, pseudovectors
             g.write(",".join(v) + "\n")
 
 
@@ -48,15 +96,19 @@ def mirror_truth(src, dst):
         y = header.strip().split(",").index("y_m")
         for line in f:
             v = line.rstrip("\n").split(",")
-            v[y] = repr(-float(v[y]))
+            if not (TURN or ROTATE):
+                v[y] = repr(-float(v[y]))
             g.write(",".join(v) + "\n")
 
 
 blocks = suite.split("[[recording]]")
 mirrored = [blocks[0]]
+kept = [blocks[0]]
 for block in blocks[1:]:
     path = lambda key: re.search(key + r' = "([^"]+)"', block).group(1)
     imu, truth = path("imu"), path("truth")
+    if ROTATE and clipped(os.path.normpath(os.path.join(os.path.dirname(suite_path), imu))):
+        continue
     walk = os.path.basename(os.path.dirname(imu))
     d = os.path.join(tmp, walk)
     os.makedirs(d)
@@ -72,13 +124,24 @@ for block in blocks[1:]:
         if rel:
             b = b.replace(rel.group(0), f'{key} = "{os.path.normpath(os.path.join(base, rel.group(1)))}"')
     sh = re.search(r"start_heading_deg = ([-\d.]+)", b)
-    b = b.replace(sh.group(0), f"start_heading_deg = {-float(sh.group(1))}")
+    if not (TURN or ROTATE):
+        b = b.replace(sh.group(0), f"start_heading_deg = {-float(sh.group(1))}")
     mirrored.append(b)
+    # the walk as recorded, paths made absolute as above
+    a = block.replace(imu, os.path.normpath(os.path.join(base, imu))).replace(truth, os.path.normpath(os.path.join(base, truth)))
+    for key in ("config", "baseline_config"):
+        rel = re.search(key + r' = "([^"]+)"', a)
+        if rel:
+            a = a.replace(rel.group(0), f'{key} = "{os.path.normpath(os.path.join(base, rel.group(1)))}"')
+    kept.append(a)
 mirrored_suite = os.path.join(tmp, "mirrored.toml")
 open(mirrored_suite, "w").write("[[recording]]".join(mirrored))
+plain_suite = os.path.join(tmp, "plain.toml")
+open(plain_suite, "w").write("[[recording]]".join(kept))
 
 runs = {}
-for label, s, o in (("as recorded", suite_path, os.path.join(tmp, "plain")), ("mirrored", mirrored_suite, out)):
+for label, s, o in (("as recorded", plain_suite, os.path.join(tmp, "plain")), ("mirrored", mirrored_suite, out)):
+    # (with TURN=1 "mirrored" is the walk with its sensor turned on the shoe)
     subprocess.run([binary, "eval", "--suite", s, "--out", o], check=True, capture_output=True)
     runs[label] = {r["recording"]: r for r in json.load(open(os.path.join(o, "results.json")))}
 
