@@ -368,7 +368,8 @@ pub const MIN_RESPONSE: f64 = 0.1;
 /// the residuals move as the signature says); the detectable size becomes `z·se / response`.
 /// The score is not changed: a re-run also changes which observations the filter accepts, which
 /// makes the change of the residuals a poor regressor but leaves its slope on the signature
-/// (the response) unbiased. Updates the power of `a` and the detectable sizes of its findings.
+/// (the response) unbiased. Updates the power of `a` and the detectable sizes of its findings,
+/// the bias drift's from the bias-change test's own probes ([`super::drift_power::calibrate_drift`]).
 pub fn calibrate_by_injection(
     log: &ImuLog,
     file: &ConfigFile,
