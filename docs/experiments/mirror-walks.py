@@ -13,12 +13,13 @@ This is a physically valid walk (the sensor's own errors mirror with it: a bias,
 a misalignment), so a side-free estimator scores it as it scores the walk itself, up to its
 arithmetic. `corridor eval` runs the mirrored suite (a copy of configs/eval/gdins.toml pointing
 at mirrored copies of the logs, meta.json kept) and the script prints both suites' rows and
-summaries side by side. OUT=dir keeps the mirrored suite's output.
+summaries side by side. OUT=dir keeps the mirrored suite's output (the temporary copies are
+removed otherwise); BIN= another build's binary.
 
 TURN=1 turns the sensor on the shoe by 90° about its own z axis instead (every vector's
 components in the new axes: x' = y, y' = -x; the gyro's rails stay on axes), and ROTATE=axis,deg
-(e.g. ROTATE=x,30) by any angle about any of its axes, on the walks without samples at the
-gyro's rail only (a rotated rail is no real sensor's): a mounting the walks were not recorded
+(e.g. ROTATE=x,30) by any angle about any of its axes, on the walks without samples at a rail of
+the gyro or the accelerometer only (a rotated rail is no real sensor's): a mounting the walks were not recorded
 with. The footprints and the start heading stay as they are.
 """
 import json, os, re, shutil, subprocess, sys, tempfile
@@ -54,10 +55,13 @@ def rotated(vals):
 
 
 def clipped(src):
+    """A sample at a rail of the gdins sensor (gyro about 8.7 rad/s, accelerometer 8 g = 78.45 m/s²;
+    within 2 % of either)."""
     with open(src) as f:
         cols = f.readline().strip().split(",")
-        g = [cols.index(c) for c in ("gx_rad_s", "gy_rad_s", "gz_rad_s")]
-        return any(abs(float(line.split(",")[i])) >= 8.5 for line in f for i in g)
+        rails = [(cols.index(c), 0.98 * 8.727) for c in ("gx_rad_s", "gy_rad_s", "gz_rad_s")]
+        rails += [(cols.index(c), 0.98 * 78.45) for c in ("ax_m_s2", "ay_m_s2", "az_m_s2")]
+        return any(abs(float(line.split(",")[i])) >= r for line in f for i, r in rails)
 
 
 def neg(x):
@@ -126,6 +130,9 @@ for block in blocks[1:]:
     sh = re.search(r"start_heading_deg = ([-\d.]+)", b)
     if not (TURN or ROTATE):
         b = b.replace(sh.group(0), f"start_heading_deg = {-float(sh.group(1))}")
+        grid = re.search(r"grid_deg = ([-\d.]+)", b)
+        if grid:
+            b = b.replace(grid.group(0), f"grid_deg = {-float(grid.group(1))}")
     mirrored.append(b)
     # the walk as recorded, paths made absolute as above
     a = block.replace(imu, os.path.normpath(os.path.join(base, imu))).replace(truth, os.path.normpath(os.path.join(base, truth)))
@@ -140,8 +147,8 @@ plain_suite = os.path.join(tmp, "plain.toml")
 open(plain_suite, "w").write("[[recording]]".join(kept))
 
 runs = {}
-for label, s, o in (("as recorded", plain_suite, os.path.join(tmp, "plain")), ("mirrored", mirrored_suite, out)):
-    # (with TURN=1 "mirrored" is the walk with its sensor turned on the shoe)
+other = "turned" if (TURN or ROTATE) else "mirrored"
+for label, s, o in (("as recorded", plain_suite, os.path.join(tmp, "plain")), (other, mirrored_suite, out)):
     subprocess.run([binary, "eval", "--suite", s, "--out", o], check=True, capture_output=True)
     runs[label] = {r["recording"]: r for r in json.load(open(os.path.join(o, "results.json")))}
 
@@ -150,14 +157,14 @@ def pct(r, mode):
     return r[mode]["rms_pct"]
 
 
-print("| recording | gait | baseline | baseline mirrored | default | default mirrored |")
+print(f"| recording | gait | baseline | baseline {other} | default | default {other} |")
 print("|---|---|---|---|---|---|")
 summary = {k: {"zupt_rest": [], "best_rest": []} for k in runs}
 for name, r in runs["as recorded"].items():
-    m = runs["mirrored"][name]
+    m = runs[other][name]
     cells = []
     for mode in ("zupt_rest", "best_rest"):
-        for label, x in (("as recorded", r), ("mirrored", m)):
+        for label, x in (("as recorded", r), (other, m)):
             v = pct(x, mode)
             cells.append(f"{v:.2f} %")
             if x["gait"] == "normal":
@@ -177,3 +184,6 @@ for label in runs:
     print(f"{label}: normal gait ({len(d)}) default median {med(d):.3f} %, worst {max(d):.2f} %; "
           f"baseline median {med(b):.3f} %, worst {max(b):.2f} %; default worse than the baseline "
           f"by > 0.05 on {worse}")
+
+if "OUT" not in os.environ:
+    shutil.rmtree(tmp, ignore_errors=True)

@@ -87,8 +87,9 @@ fn a_sensor_turned_on_the_shoe_gives_the_same_walk() {
             .max((a.2[2] - b.2[2]).abs());
         largest_m = largest_m.max(d_p);
         largest_bias = largest_bias.max(d_bias);
-        // sums over axes taken in another order: differences in the last bits, which the
-        // filter carries along
+        // not exact: the mounting-yaw calibration takes the ZYX yaw of a stance whose tilt is
+        // not the rest's, which differs with the mounting by 0.03–0.06° of the forward axis
+        // (3.8 mm, 3.7e-6 rad/s here; README, "No side and no mounting is preferred")
         assert!(
             d_p < LOOSE_M && d_bias < LOOSE_RAD_S,
             "estimate {k}: {a:?} against {b:?}"
