@@ -9,7 +9,7 @@
 
 use corridor_service::core::Phase;
 use corridor_service::runner::{heading_aid, run_log};
-use corridor_shared::config::Config;
+use corridor_shared::config::{Config, ConfigFile, ConfigOverrides};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
 use std::path::{Path, PathBuf};
@@ -98,15 +98,24 @@ fn a_sensor_turned_on_the_shoe_gives_the_same_walk() {
     eprintln!("largest differences {largest_m:.1e} m, {largest_bias:.1e} rad/s");
 }
 
-#[test]
-fn a_mirrored_walk_is_estimated_as_the_walk_mirrored() {
-    // exp37: a square spiral of left turns, then a corridor out and back with weaving strides
-    let dir = root().join("tests/data/gdins_exp37_spiral_and_corridor");
+/// The configuration with the walk's start heading (map frame, degrees).
+fn config_heading(start_heading_deg: f64) -> Config {
+    let mut f = ConfigFile::read(&root().join("configs/gdins.toml")).unwrap();
+    ConfigOverrides {
+        start_heading_deg: Some(start_heading_deg),
+        ..Default::default()
+    }
+    .apply(&mut f);
+    f.validate().unwrap()
+}
+
+/// `walk` and its mirror image, started along `start_heading_deg` and its mirror image: every
+/// estimate mirrored, the counters equal.
+fn assert_mirrored(walk: &str, start_heading_deg: f64) {
+    let dir = root().join("tests/data").join(walk);
     let log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
-    // start heading 0°: its mirror image is itself
-    let cfg = Config::from_file(&root().join("configs/gdins.toml")).unwrap();
-    let (plain, plain_counters) = trace(&log, &cfg);
-    let (mirror, mirror_counters) = trace(&mirrored(&log), &cfg);
+    let (plain, plain_counters) = trace(&log, &config_heading(start_heading_deg));
+    let (mirror, mirror_counters) = trace(&mirrored(&log), &config_heading(-start_heading_deg));
     assert_eq!(plain_counters, mirror_counters);
     assert_eq!(plain.len(), mirror.len());
     let mut largest_m: f64 = 0.0;
@@ -125,13 +134,23 @@ fn a_mirrored_walk_is_estimated_as_the_walk_mirrored() {
         // the arithmetic of the two runs differs in the last bits only
         assert!(
             d_p < 1e-6 && d_yaw < 1e-9 && d_bias < 1e-12,
-            "estimate {k}: {a:?} against {b:?}"
+            "{walk}, estimate {k}: {a:?} against {b:?}"
         );
     }
-    let end = plain.last().unwrap().0;
-    assert!(
-        end[0].hypot(end[1]) > 1.0,
-        "the walk goes somewhere: {end:?}"
-    );
-    eprintln!("largest position difference {largest_m:.1e} m");
+    let farthest = plain
+        .iter()
+        .map(|e| e.0[0].hypot(e.0[1]))
+        .fold(0.0, f64::max);
+    assert!(farthest > 5.0, "the walk goes somewhere: {farthest} m");
+    eprintln!("{walk}: largest position difference {largest_m:.1e} m");
+}
+
+#[test]
+fn a_mirrored_walk_is_estimated_as_the_walk_mirrored() {
+    // exp37: a square spiral of left turns, then a corridor out and back with weaving strides;
+    // it starts along 0°, its own mirror image
+    assert_mirrored("gdins_exp37_spiral_and_corridor", 0.0);
+    // exp29: a circuit started along 90°, mirrored to −90° (a sign slip in the start heading's
+    // handling would show here)
+    assert_mirrored("gdins_exp29_corridor_circuit", 90.0);
 }
