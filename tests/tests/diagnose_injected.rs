@@ -416,7 +416,8 @@ fn nothing_named_comes_with_the_detectable_sizes() {
 }
 
 /// The detection matrix's scan judges its injected walks without the probes that only measure
-/// detectable sizes (`judge_names`): what it names must be what the loop's first step names.
+/// detectable sizes (`judge_names`; `judge` adds them): measuring the sizes must change no name
+/// or score of the loop's first step.
 #[test]
 fn the_scan_names_what_the_loop_names() {
     let (mut log, truth) = load("gdins_exp36_corridor_out_and_back");
@@ -428,7 +429,7 @@ fn the_scan_names_what_the_loop_names() {
     .apply(&mut log.rows);
     let cfg = config(0.0, false);
     let (full, _) = judge(&log, &cfg, Some(&truth), None).unwrap();
-    let names = judge_names(&log, &cfg, Some(&truth), None).unwrap();
+    let (names, _) = judge_names(&log, &cfg, Some(&truth), None).unwrap();
     let scores = |a: &corridor_service::diagnose::Analysis| -> Vec<(Effect, f64)> {
         a.effects.iter().map(|f| (f.name, f.score)).collect()
     };

@@ -224,18 +224,18 @@ fn stride_scale_out_of_sample(
     Ok(rms(file)?.zip(rms(&fixed)?).map(|(b, a)| (fix, [b, a])))
 }
 
-/// The first step of the loop: `start` analysed, the power of each effect with its response
-/// measured by injection, every fixable effect scored (and its candidate model). What the
-/// loop starts from, and all that a check of what is named, and of the detectable sizes, needs.
+/// The first step of the loop: `start` analysed, every fixable effect scored (and its
+/// candidate model), and the power of each effect with its response measured by injection.
+/// What the loop starts from, and all that a check of what is named, and of the detectable
+/// sizes, needs.
 pub fn judge(
     log: &ImuLog,
     start: &ConfigFile,
     truth: Option<&[TruthPoint]>,
     map: Option<&Path>,
 ) -> Result<(Analysis, Vec<Candidate>), RunError> {
-    let mut first = analyse(log, start, truth, map)?;
+    let (mut first, candidates) = judge_names(log, start, truth, map)?;
     power::calibrate_by_injection(log, start, map, &mut first)?;
-    let candidates = score_by_likelihood(log, start, &mut first, truth, map)?;
     Ok((first, candidates))
 }
 
@@ -247,10 +247,10 @@ pub fn judge_names(
     start: &ConfigFile,
     truth: Option<&[TruthPoint]>,
     map: Option<&Path>,
-) -> Result<Analysis, RunError> {
+) -> Result<(Analysis, Vec<Candidate>), RunError> {
     let mut first = analyse(log, start, truth, map)?;
-    score_by_likelihood(log, start, &mut first, truth, map)?;
-    Ok(first)
+    let candidates = score_by_likelihood(log, start, &mut first, truth, map)?;
+    Ok((first, candidates))
 }
 
 /// The whole loop: analyse `start`, add the top significant effect while one has a fix and

@@ -375,7 +375,7 @@ fn scan_points(
     {
         let size = factor * predicted;
         let (injected, truth) = injected_walk(log, truth, &(probe.inject)(size));
-        let a = judge_names(&injected, model, Some(&truth), None)?;
+        let (a, _) = judge_names(&injected, model, Some(&truth), None)?;
         let (estimate, power_score) = test(&a);
         row.points.push(ScanPoint {
             factor,
