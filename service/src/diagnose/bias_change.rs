@@ -222,25 +222,30 @@ impl BiasTrace<'_> {
                 continue;
             }
             let score = sidak_score(crate::stats::chi2_sf(chi2, blocks as f64), dirs.len());
-            let c = BiasChange {
-                score,
-                direction: *dir,
-                chi2,
-                blocks,
-                largest,
-                largest_share: if chi2 > 0.0 { largest_sq / chi2 } else { 0.0 },
-                first_block,
-                directions: dirs.to_vec(),
-                blocks_per_axis: blocks_per_axis.clone(),
-                block_end_s: edges[1..].iter().map(|&j| t_s[j]).collect(),
-                step_mde_rad_s: None,
-                ramp_mde_rad_s2: None,
-            };
-            if best.as_ref().is_none_or(|b| c.score > b.score) {
-                best = Some(c);
+            if best.as_ref().is_none_or(|b| score > b.score) {
+                best = Some(BiasChange {
+                    score,
+                    direction: *dir,
+                    chi2,
+                    blocks,
+                    largest,
+                    largest_share: if chi2 > 0.0 { largest_sq / chi2 } else { 0.0 },
+                    first_block,
+                    directions: Vec::new(),
+                    blocks_per_axis: Vec::new(),
+                    block_end_s: Vec::new(),
+                    step_mde_rad_s: None,
+                    ramp_mde_rad_s2: None,
+                });
             }
         }
-        best
+        // the blocks and directions, for the detectable sizes, once for the best direction
+        best.map(|c| BiasChange {
+            directions: dirs.to_vec(),
+            block_end_s: edges[1..].iter().map(|&j| t_s[j]).collect(),
+            blocks_per_axis,
+            ..c
+        })
     }
 }
 
