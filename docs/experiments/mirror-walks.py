@@ -22,7 +22,7 @@ components in the new axes: x' = y, y' = -x; the gyro's rails stay on axes), and
 the gyro or the accelerometer only (a rotated rail is no real sensor's): a mounting the walks were not recorded
 with. The footprints and the start heading stay as they are.
 """
-import json, os, re, shutil, subprocess, sys, tempfile
+import json, math, os, re, shutil, subprocess, sys, tempfile
 
 root = os.getcwd()
 binary = os.environ.get("BIN", os.path.join(root, "target/release/corridor"))
@@ -38,7 +38,6 @@ TURN = os.environ.get("TURN") == "1"
 # clipping would lie on other axes than the sensor's rails, which no real sensor does).
 ROTATE = os.environ.get("ROTATE")
 if ROTATE:
-    import math
     axis, deg = ROTATE.split(",")
     c, s_ = math.cos(math.radians(float(deg))), math.sin(math.radians(float(deg)))
     i = "xyz".index(axis)
@@ -105,42 +104,47 @@ def mirror_truth(src, dst):
             g.write(",".join(v) + "\n")
 
 
-blocks = suite.split("[[recording]]")
-mirrored = [blocks[0]]
-kept = [blocks[0]]
-for block in blocks[1:]:
-    path = lambda key: re.search(key + r' = "([^"]+)"', block).group(1)
-    imu, truth = path("imu"), path("truth")
-    if ROTATE and clipped(os.path.normpath(os.path.join(os.path.dirname(suite_path), imu))):
-        continue
-    walk = os.path.basename(os.path.dirname(imu))
-    d = os.path.join(tmp, walk)
-    os.makedirs(d)
-    base = os.path.dirname(suite_path)
-    mirror_imu(os.path.normpath(os.path.join(base, imu)), os.path.join(d, "imu.csv"))
-    mirror_truth(os.path.normpath(os.path.join(base, truth)), os.path.join(d, "ground_truth.csv"))
-    meta = os.path.normpath(os.path.join(base, os.path.dirname(truth), "meta.json"))
-    if os.path.exists(meta):
-        shutil.copy(meta, d)
-    b = block.replace(imu, os.path.join(d, "imu.csv")).replace(truth, os.path.join(d, "ground_truth.csv"))
+base = os.path.dirname(suite_path)
+
+
+def absolute(block, imu, truth):
+    """A recording's block with its log, truth and configurations at `imu`, `truth` and their
+    absolute paths (the suite's own are relative to it)."""
+    b = block.replace(path_of(block, "imu"), imu).replace(path_of(block, "truth"), truth)
     for key in ("config", "baseline_config"):
         rel = re.search(key + r' = "([^"]+)"', b)
         if rel:
             b = b.replace(rel.group(0), f'{key} = "{os.path.normpath(os.path.join(base, rel.group(1)))}"')
-    sh = re.search(r"start_heading_deg = ([-\d.]+)", b)
+    return b
+
+
+def path_of(block, key):
+    return re.search(key + r' = "([^"]+)"', block).group(1)
+
+
+blocks = suite.split("[[recording]]")
+mirrored = [blocks[0]]
+kept = [blocks[0]]
+for block in blocks[1:]:
+    imu = os.path.normpath(os.path.join(base, path_of(block, "imu")))
+    truth = os.path.normpath(os.path.join(base, path_of(block, "truth")))
+    if ROTATE and clipped(imu):
+        continue
+    d = os.path.join(tmp, os.path.basename(os.path.dirname(imu)))
+    os.makedirs(d)
+    mirror_imu(imu, os.path.join(d, "imu.csv"))
+    mirror_truth(truth, os.path.join(d, "ground_truth.csv"))
+    meta = os.path.join(os.path.dirname(truth), "meta.json")
+    if os.path.exists(meta):
+        shutil.copy(meta, d)
+    b = absolute(block, os.path.join(d, "imu.csv"), os.path.join(d, "ground_truth.csv"))
     if not (TURN or ROTATE):
-        b = b.replace(sh.group(0), f"start_heading_deg = {-float(sh.group(1))}")
-        grid = re.search(r"grid_deg = ([-\d.]+)", b)
-        if grid:
-            b = b.replace(grid.group(0), f"grid_deg = {-float(grid.group(1))}")
+        for key in ("start_heading_deg", "grid_deg"):
+            m = re.search(key + r" = ([-\d.]+)", b)
+            if m:
+                b = b.replace(m.group(0), f"{key} = {-float(m.group(1))}")
     mirrored.append(b)
-    # the walk as recorded, paths made absolute as above
-    a = block.replace(imu, os.path.normpath(os.path.join(base, imu))).replace(truth, os.path.normpath(os.path.join(base, truth)))
-    for key in ("config", "baseline_config"):
-        rel = re.search(key + r' = "([^"]+)"', a)
-        if rel:
-            a = a.replace(rel.group(0), f'{key} = "{os.path.normpath(os.path.join(base, rel.group(1)))}"')
-    kept.append(a)
+    kept.append(absolute(block, imu, truth))
 mirrored_suite = os.path.join(tmp, "mirrored.toml")
 open(mirrored_suite, "w").write("[[recording]]".join(mirrored))
 plain_suite = os.path.join(tmp, "plain.toml")
