@@ -86,8 +86,12 @@ impl Pipeline {
             if !straight {
                 return;
             }
-            // Heading of the sensor's levelled x axis: ≈ walking direction + mounting yaw.
-            let m = wrap_pi(self.levelled_yaw(eskf) - stride_dir);
+            // The sensor's yaw on the foot: the stride's direction seen in the levelled sensor
+            // frame (the attitude with the rest's tilt taken out) lies at −m there. Not the ZYX
+            // yaw of that attitude less the stride's direction: the two agree only where the
+            // stance's tilt is the rest's, and differ by an angle that depends on how the
+            // sensor sits on the shoe.
+            let m = self.mount_yaw_of_stride(eskf, stride_dir);
             self.mount_sum.0 += m.cos();
             self.mount_sum.1 += m.sin();
             self.mount_sum.2 += 1;
@@ -431,6 +435,15 @@ impl Pipeline {
     /// Yaw of the sensor's levelled x axis (the attitude with the initial tilt taken out).
     fn levelled_yaw(&self, eskf: &Eskf) -> f64 {
         yaw(&(eskf.nav_from_body * self.tilt0.inverse()))
+    }
+
+    /// The sensor's yaw on the foot from one stride, rad: minus the azimuth of the stride's
+    /// direction `stride_dir_rad` (navigation frame) in the levelled sensor frame, where
+    /// [`Self::foot_forward_body`]'s `R_z(mount_yaw)·tilt0` puts the foot's forward axis.
+    fn mount_yaw_of_stride(&self, eskf: &Eskf, stride_dir_rad: f64) -> f64 {
+        let levelled_from_nav = (eskf.nav_from_body * self.tilt0.inverse()).inverse();
+        let u = levelled_from_nav * Vector3::new(stride_dir_rad.cos(), stride_dir_rad.sin(), 0.0);
+        -u.y.atan2(u.x)
     }
 
     fn count_rejection(&mut self, r: Rejection) {
