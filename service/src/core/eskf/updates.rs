@@ -5,16 +5,15 @@ use super::*;
 
 impl Eskf {
     /// A measurement update with an `m × n` Jacobian given by rows of (index, value) pairs over
-    /// at most 4 columns each, innovation `r` and independent noises of variances `r_var`.
-    /// Joseph-free symmetric form: `P ← P − K·H·P` on one triangle, mirrored.
+    /// at most 4 columns each, innovation `r` and noise variances `r_var`. Joseph-free
+    /// symmetric form: `P ← P − K·H·P` on one triangle, mirrored.
     fn update<const M: usize>(
         &mut self,
         h: &[[(usize, f64); 4]; M],
         r: [f64; M],
         r_var: [f64; M],
     ) -> Innovation {
-        let r_cov = nalgebra::SMatrix::<f64, M, M>::from_diagonal(&r_var.into());
-        self.gated_update(h, r, &r_cov, f64::INFINITY)
+        self.gated_update(h, r, r_var, f64::INFINITY)
             .unwrap_or_else(|i| i)
     }
 
@@ -24,7 +23,7 @@ impl Eskf {
         &mut self,
         h: &[[(usize, f64); 4]; M],
         r: [f64; M],
-        r_cov: &nalgebra::SMatrix<f64, M, M>,
+        r_var: [f64; M],
         gate_nis: f64,
     ) -> Result<Innovation, Innovation> {
         let n = self.layout.n;
@@ -36,11 +35,12 @@ impl Eskf {
             }
         }
         // S = H P Hᵀ + R
-        let mut s = *r_cov;
+        let mut s = nalgebra::SMatrix::<f64, M, M>::zeros();
         for a in 0..M {
             for b in 0..M {
-                s[(a, b)] += h[a].iter().map(|&(c, v)| v * pht[c][b]).sum::<f64>();
+                s[(a, b)] = h[a].iter().map(|&(c, v)| v * pht[c][b]).sum::<f64>();
             }
+            s[(a, a)] += r_var[a];
         }
         let Some(s_inv) = s.try_inverse() else {
             return Ok(Innovation::default());
@@ -217,7 +217,7 @@ impl Eskf {
 
     /// Zero-rate update: during a rest the gyro reads its bias (plus its g-sensitivity times the
     /// specific force, when that is a state). `mean_rate_rad_s` and `mean_f_m_s2` are the means
-    /// over the rest (sensor axes); `cov` the covariance of the mean rate, rad²/s². `None` when
+    /// over the rest (sensor axes); `sd_rad_s` the σ of the mean rate, per axis. `None` when
     /// the bias is not estimated (the paper's and the rotation-aware modes keep their own).
     /// `Err` (nothing changed) when the mean rate lies beyond the χ² gate [`ZERO_RATE_GATE_NIS`]
     /// of the bias the filter holds: a foot that turned slowly and steadily through a "rest"
@@ -226,7 +226,7 @@ impl Eskf {
         &mut self,
         mean_rate_rad_s: &Vector3<f64>,
         mean_f_m_s2: &Vector3<f64>,
-        cov: &Matrix3<f64>,
+        sd_rad_s: &Vector3<f64>,
     ) -> Option<Result<Innovation, Innovation>> {
         if !self.estimate_bias {
             return None;
@@ -241,7 +241,13 @@ impl Eskf {
             }
         }
         let r = mean_rate_rad_s - predicted;
-        Some(self.gated_update(&h, [r.x, r.y, r.z], cov, ZERO_RATE_GATE_NIS))
+        let var = sd_rad_s.map(|v| v * v);
+        Some(self.gated_update(
+            &h,
+            [r.x, r.y, r.z],
+            [var.x, var.y, var.z],
+            ZERO_RATE_GATE_NIS,
+        ))
     }
 
     /// The heading of the body-frame direction `axis_body` (the foot's forward axis) as the

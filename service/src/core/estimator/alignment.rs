@@ -164,11 +164,11 @@ impl Pipeline {
             self.counters.initial_rest_moving_blocks = rest.moving_blocks();
             rest.means()
         };
-        // The prior's covariance: floor²·I + spread, the bias instability floor and the rest's
-        // rate covariance over the number of 50 ms blocks (a rest during which the foot still
-        // sways); a full matrix, so that it turns with the sensor (`rest.rs`).
-        let rest_cov = rest.rate_cov_of_mean()
-            + Matrix3::identity() * self.cfg.eskf.gyro_bias_prior_sd_rad_s.get().powi(2);
+        // The prior's σ: √(floor² + spread²), the bias instability floor and the rest's rate
+        // spread over √(number of 50 ms blocks) (a rest during which the foot still sways).
+        let rest_sd = rest
+            .rate_sd_of_mean()
+            .map(|v| v.hypot(self.cfg.eskf.gyro_bias_prior_sd_rad_s.get()));
         // Gravity from the rest's mean specific force, but not from a walking stance (its
         // push-off would bias it): standard gravity then, unless configured.
         let g = self.cfg.alignment.gravity_m_s2.map_or(
@@ -201,21 +201,17 @@ impl Pipeline {
         let rest_prior = wants_prior && !short_start && !turning;
         // The rest's mean rate is a measurement of the bias with the σ above; the sensor's own
         // spread of biases (`eskf.gyro_bias_initial_sd_rad_s` about zero, the prior without a
-        // rest) is what is known before it, and the two are fused. A quiet rest's σ
+        // rest) is what is known before it, and the two are fused per axis. A quiet rest's σ
         // (5e-4–2.5e-3 rad/s) is far below 0.01 and its mean is taken nearly whole; a "rest"
         // that is mostly motion (a foot that shifts before its first step, a rest cut short by a
         // loss so that only its moving tail is left) has a wide σ and its mean, tens of mrad/s
         // off, no longer starts the filter there.
         let initial_sd = self.cfg.eskf.gyro_bias_initial_sd_rad_s.get();
-        let (b0, prior_cov, sd0) = if rest_prior {
-            let (b0, prior_cov) = fuse_with_zero_prior(&mean_w, &rest_cov, initial_sd);
-            (b0, prior_cov, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
+        let (b0, prior_sd, sd0) = if rest_prior {
+            let (b0, prior_sd) = fuse_with_zero_prior(&mean_w, &rest_sd, initial_sd);
+            (b0, prior_sd, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
         } else {
-            (
-                Vector3::zeros(),
-                Matrix3::identity() * initial_sd.powi(2),
-                initial_sd,
-            )
+            (Vector3::zeros(), Vector3::repeat(initial_sd), initial_sd)
         };
         let e = &self.cfg.eskf;
         let own_bias = matches!(self.cfg.mode, Mode::Zupt | Mode::Eskf);
@@ -290,7 +286,8 @@ impl Pipeline {
                 obs: None,
             },
         };
-        // The rest-mean prior's covariance (fused as above), in each filter's axes.
+        // The rest-mean prior's covariance per axis (fused as above), in each filter's axes.
+        let prior_cov = Matrix3::from_diagonal(&prior_sd.map(|v| v * v));
         match &mut self.bias {
             BiasFilter::Paper { kf, .. } if rest_prior => {
                 let c = self.tilt0.to_rotation_matrix().into_inner();
@@ -310,7 +307,7 @@ impl Pipeline {
             // down (hours, another temperature), and the rest is the measurement of now.
             if own_bias
                 && rest_prior
-                && let Some(Err(_)) = eskf.zero_rate_update(&mean_w, &mean_f, &rest_cov)
+                && let Some(Err(_)) = eskf.zero_rate_update(&mean_w, &mean_f, &rest_sd)
             {
                 self.counters.zero_rate_refused += 1;
                 eskf.set_gyro_bias(b0, &prior_cov);
@@ -338,52 +335,15 @@ impl Pipeline {
     }
 }
 
-/// The bias measured as `mean` with covariance `cov`, fused with a prior of zero and σ
-/// `prior_sd` on every axis: the posterior mean and covariance.
+/// The bias measured as `mean` with σ `sd` (per axis), fused with a prior of zero and σ
+/// `prior_sd`: the posterior mean and σ, per axis.
 fn fuse_with_zero_prior(
     mean: &Vector3<f64>,
-    cov: &Matrix3<f64>,
+    sd: &Vector3<f64>,
     prior_sd: f64,
-) -> (Vector3<f64>, Matrix3<f64>) {
+) -> (Vector3<f64>, Vector3<f64>) {
     let p2 = prior_sd * prior_sd;
-    let inv = (Matrix3::identity() * p2 + cov)
-        .try_inverse()
-        .unwrap_or_else(Matrix3::zeros);
-    let gain = inv * p2;
-    let post = cov * gain;
-    (gain * mean, (post + post.transpose()) / 2.0)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_fused_prior_is_the_per_axis_one_for_independent_axes_and_turns_with_the_sensor() {
-        let mean = Vector3::new(0.004, -0.012, 0.02);
-        let prior_sd: f64 = 0.01;
-        let p2 = prior_sd.powi(2);
-        // Independent axes: each axis fused alone.
-        let var = Vector3::new(1e-6, 4e-5, 2.5e-4);
-        let (b, p) = fuse_with_zero_prior(&mean, &Matrix3::from_diagonal(&var), prior_sd);
-        for i in 0..3 {
-            assert!((b[i] - mean[i] * p2 / (p2 + var[i])).abs() < 1e-15, "{b}");
-            assert!(
-                (p[(i, i)] - p2 * var[i] / (p2 + var[i])).abs() < 1e-18,
-                "{p}"
-            );
-        }
-        assert_eq!(p.transpose(), p);
-        // Correlated axes, seen from a sensor mounted otherwise: the same bias, turned.
-        let a = Matrix3::new(1.0, 0.5, -0.2, 0.0, 2.0, 0.7, 0.3, 0.0, 1.5) * 0.004;
-        let cov = a * a.transpose();
-        let r = nalgebra::Rotation3::from_euler_angles(0.4, 1.1, -0.8).into_inner();
-        let (b, p) = fuse_with_zero_prior(&mean, &cov, prior_sd);
-        let (b_r, p_r) = fuse_with_zero_prior(&(r * mean), &(r * cov * r.transpose()), prior_sd);
-        assert!((b_r - r * b).norm() < 1e-15, "{b_r} against {}", r * b);
-        assert!((p_r - r * p * r.transpose()).norm() < 1e-18, "{p_r}");
-        // The posterior is tighter than either the measurement or the prior.
-        let tight = (cov - p).symmetric_eigenvalues().min();
-        assert!(tight > 0.0 && p.symmetric_eigenvalues().max() < p2, "{p}");
-    }
+    let gain = sd.map(|s| p2 / (p2 + s * s));
+    let post_sd = sd.map(|s| (p2 * s * s / (p2 + s * s)).sqrt());
+    (mean.component_mul(&gain), post_sd)
 }

@@ -172,15 +172,15 @@ impl Pipeline {
 
     /// At the end of a stance that was a rest (its part before the last `alignment.rest_tail_s`
     /// lasts `alignment.min_rest_s`), and every `eskf.zero_rate_interval_s` of a long one: the
-    /// mean rate over that part observes the gyro bias with the covariance of the rest-mean
-    /// prior (floor²·I + the spread's, see `rest.rs`), as the initial rest does. Counted once the health
+    /// mean rate over that part observes the gyro bias with the σ of the rest-mean prior
+    /// (√(floor² + spread²), see `rest.rs`), as the initial rest does. Counted once the health
     /// check has passed (`step_running`). Says whether the update was made (not refused by its
     /// gate: a slow turn).
     fn fuse_rest(&mut self, eskf: &mut Eskf, rest: RestMeans) -> bool {
-        let (mean_f, mean_w, cov_of_mean) = rest;
+        let (mean_f, mean_w, sem) = rest;
         let floor = self.cfg.eskf.gyro_bias_prior_sd_rad_s.get();
-        let cov = cov_of_mean + Matrix3::identity() * floor.powi(2);
-        match eskf.zero_rate_update(&mean_w, &mean_f, &cov) {
+        let sd = sem.map(|v| v.hypot(floor));
+        match eskf.zero_rate_update(&mean_w, &mean_f, &sd) {
             Some(Ok(_)) => {
                 self.zero_rate_applied = true;
                 return true;

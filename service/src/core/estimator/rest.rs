@@ -5,7 +5,7 @@ use super::fast_start::RecentSamples;
 use crate::core::stance::StanceDecision;
 #[cfg(doc)]
 use crate::core::stance::StanceDetector;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 /// Sums of specific force and rate over part of the rest.
 #[derive(Debug, Clone, Copy, Default)]
@@ -15,8 +15,8 @@ struct Sums {
     blocks: u64,
     f: Vector3<f64>,
     w: Vector3<f64>,
-    /// Sum of the rates' outer products.
-    ww: Matrix3<f64>,
+    /// Sum of the squared rates, per axis.
+    w2: Vector3<f64>,
     /// The block moved: its mean rate left the rest's (see [`RestSums::push`]); not summed.
     moving: bool,
 }
@@ -27,13 +27,13 @@ impl Sums {
         self.blocks += 1;
         self.f += o.f;
         self.w += o.w;
-        self.ww += o.ww;
+        self.w2 += o.w2;
     }
 }
 
-/// A rest's mean specific force (m/s²) and mean rate (rad/s), and the covariance of the mean
-/// rate (rad²/s²), sensor axes.
-pub(super) type RestMeans = (Vector3<f64>, Vector3<f64>, Matrix3<f64>);
+/// A rest's mean specific force (m/s²) and mean rate (rad/s), and the standard error of the mean
+/// rate (rad/s), sensor axes.
+pub(super) type RestMeans = (Vector3<f64>, Vector3<f64>, Vector3<f64>);
 
 /// A rest, in blocks, so that its last `tail_s` (the foot already starting to move while the
 /// detector still says "stance") can be left out of the means, and so can any block whose mean
@@ -162,16 +162,16 @@ impl RestSums {
         self.current.n += 1;
         self.current.f += f;
         self.current.w += w;
-        self.current.ww += w * w.transpose();
+        self.current.w2 += w.component_mul(w);
     }
 
     /// Means of specific force and rate over the settled part (the rest without its tail), when
     /// that part lasts at least `min_s`.
-    /// With the standard error of the mean rate ([`RestSums::rate_cov_of_mean`]).
+    /// With the standard error of the mean rate ([`RestSums::rate_sd_of_mean`]).
     pub(super) fn settled_means(&self, min_s: f64) -> Option<RestMeans> {
         let s = &self.settled;
         (s.n > 0 && s.blocks as f64 * REST_BLOCK_S >= min_s)
-            .then(|| (s.f / s.n as f64, s.w / s.n as f64, self.rate_cov_of_mean()))
+            .then(|| (s.f / s.n as f64, s.w / s.n as f64, self.rate_sd_of_mean()))
     }
 
     /// Means over the settled part, or over everything when the rest was too short for that.
@@ -194,22 +194,17 @@ impl RestSums {
         (s.f / n, s.w / n)
     }
 
-    /// A conservative covariance of the mean rate of [`RestSums::means`], rad²/s²: the rate's
-    /// per-sample covariance over the number of 50 ms blocks, not of samples (samples within a
-    /// block are not independent when the foot sways; for white noise alone this overstates the
-    /// error by √(samples per block) in σ). A rest that is not one (a foot that still moves)
-    /// gives a mean rate far from the bias, and says so here. A full matrix, not a σ per axis:
-    /// a sway moves several axes together, and a diagonal covariance would not turn with the
-    /// sensor (the same walk, the sensor mounted otherwise, would be estimated otherwise).
-    pub(super) fn rate_cov_of_mean(&self) -> Matrix3<f64> {
+    /// A conservative standard error of the mean rate of [`RestSums::means`], per axis: the
+    /// rate's per-sample spread over the square root of the number of 50 ms blocks, not of
+    /// samples (samples within a block are not independent when the foot sways; for white noise
+    /// alone this overstates the error by √(samples per block)). A rest that is not one (a foot that still moves) gives
+    /// a mean rate far from the bias, and says so here.
+    pub(super) fn rate_sd_of_mean(&self) -> Vector3<f64> {
         let s = self.used();
         let n = s.n.max(1) as f64;
         let mean = s.w / n;
-        let mut cov = s.ww / n - mean * mean.transpose();
-        for i in 0..3 {
-            cov[(i, i)] = cov[(i, i)].max(0.0);
-        }
-        cov / s.blocks.max(1) as f64
+        let var = (s.w2 / n - mean.component_mul(&mean)).map(|v| v.max(0.0));
+        var.map(|v| (v / s.blocks.max(1) as f64).sqrt())
     }
 
     /// Blocks left out of [`RestSums::means`] because the foot moved in them (not those of the
@@ -438,40 +433,6 @@ mod tests {
         rest
     }
 
-    #[test]
-    fn the_covariance_of_the_mean_rate_turns_with_the_sensor() {
-        // The sway moves x and −z together: their errors are one error, which a σ per axis (a
-        // diagonal covariance) cannot say, and which a sensor mounted otherwise would spread
-        // over other axes.
-        let plain = rocking_rest(Some(0.05));
-        let cov = plain.rate_cov_of_mean();
-        assert!(cov[(0, 0)] > 0.0, "{cov}");
-        assert!(
-            (cov[(0, 2)] + cov[(0, 0)]).abs() < 1e-9 * cov[(0, 0)],
-            "{cov}"
-        );
-        let r = nalgebra::Rotation3::from_euler_angles(0.5, -0.3, 1.2);
-        let mut turned = RestSums::new(0.5, Some(0.05));
-        for i in 0..360 {
-            let t = i as f64 * 0.005;
-            let sway = 0.003 * (40.0 * t).sin();
-            let rock = if t < 0.6 {
-                0.0
-            } else {
-                0.15 * (std::f64::consts::TAU * (t - 0.6)).sin()
-            };
-            let w = Vector3::new(0.001, -0.005, 0.008) + Vector3::new(sway, sway + rock, -sway);
-            turned.push(t, &(r * Vector3::new(0.0, 0.0, 9.81)), &(r * w));
-        }
-        let want = r.matrix() * cov * r.matrix().transpose();
-        let got = turned.rate_cov_of_mean();
-        assert!(
-            (got - want).norm() < 1e-12 * want.norm().max(1e-12),
-            "{got} against {want}"
-        );
-        assert_eq!(turned.moving_blocks(), plain.moving_blocks());
-    }
-
     /// What the detector says of one sample: stance, moving (a full window above its
     /// threshold), or neither (its first window).
     fn said(stance: bool, moving: bool, raised: bool) -> (StanceDecision, bool) {
@@ -536,9 +497,8 @@ mod tests {
     fn blocks_in_which_the_foot_rocks_are_left_out_of_the_rest_means() {
         let b = Vector3::new(0.001, -0.005, 0.008);
         let rest = rocking_rest(Some(0.05));
-        let (_, w, cov) = rest.settled_means(0.5).expect("0.6 s of quiet settles");
+        let (_, w, sem) = rest.settled_means(0.5).expect("0.6 s of quiet settles");
         assert!((w - b).norm() < 1e-3, "{w}");
-        let sem = cov.diagonal().map(f64::sqrt);
         assert!(sem.norm() < 3e-3, "{sem}");
         assert!(rest.moving_blocks() >= 8, "{}", rest.moving_blocks());
         // Every block counted, the rocking ones included, the mean is the rocking's.
