@@ -164,8 +164,9 @@ fn a_sensor_tilted_on_the_shoe_gives_nearly_the_same_walk() {
     // about its x axis: the same decisions, the estimates 9.0 mm and 3.5e-4 rad/s apart. Not
     // exact: the rest-mean prior takes a σ per sensor axis, which does not turn with the sensor
     // (README, "No side and no mounting is preferred", for the variants measured; tilted 20°
-    // about y instead, one foot axis of 39 is taken otherwise); a sign or an axis slipped
-    // anywhere else moves the walk by metres.
+    // about y instead, one foot axis of 39 is taken otherwise). The bounds are under twice
+    // those: a lever-arm σ without the rate about y moves the walk by 3.5 cm, a bias compared
+    // without turning it differs by 1.8e-3 rad/s.
     let dir = root().join("tests/data/gdins_exp32_box_and_corridor");
     let log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
     let cfg = config_heading(0.0);
@@ -181,7 +182,7 @@ fn a_sensor_tilted_on_the_shoe_gives_nearly_the_same_walk() {
         true,
     );
     eprintln!("largest differences {d_m:.1e} m, {d_bias:.1e} rad/s");
-    assert!(d_m < 0.03 && d_bias < 1e-3, "{d_m} m, {d_bias} rad/s");
+    assert!(d_m < 0.015 && d_bias < 6e-4, "{d_m} m, {d_bias} rad/s");
 }
 
 /// `walk` and its mirror image, started along `start_heading_deg` and its mirror image: every

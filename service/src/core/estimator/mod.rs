@@ -71,7 +71,7 @@ use super::health::{self, HealthLimits, LastGood};
 use super::plausibility::{Plausibility, StepBack};
 use super::rotation::{
     euler_zyx, from_euler_zyx, heading_of_axis, rolling_velocity, rot_z, tilt_from_specific_force,
-    wrap_pi, yaw,
+    wrap_pi, yaw, yaw_of_axis_with_heading,
 };
 use super::stance::{StanceDecision, StanceDetector, StanceEdge, StanceEvents};
 use corridor_shared::config::{BiasPrior, Config, DetectorConfig, Mode, Positive};

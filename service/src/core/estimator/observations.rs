@@ -86,9 +86,9 @@ impl Pipeline {
             if !straight {
                 return;
             }
-            // The sensor's yaw on the foot: the stride's direction seen in the levelled sensor
-            // frame (the attitude with the rest's tilt taken out) lies at −m there. Not the ZYX
-            // yaw of that attitude less the stride's direction: the two agree only where the
+            // The sensor's yaw on the foot: the one that gives the foot's forward axis the
+            // stride's direction as its heading at this stance. Not the ZYX yaw of the attitude
+            // less the rest's tilt, less the stride's direction: the two agree only where the
             // stance's tilt is the rest's, and differ by an angle that depends on how the
             // sensor sits on the shoe.
             let m = self.mount_yaw_of_stride(eskf, stride_dir);
@@ -437,13 +437,12 @@ impl Pipeline {
         yaw(&(eskf.nav_from_body * self.tilt0.inverse()))
     }
 
-    /// The sensor's yaw on the foot from one stride, rad: minus the azimuth of the stride's
-    /// direction `stride_dir_rad` (navigation frame) in the levelled sensor frame, where
-    /// [`Self::foot_forward_body`]'s `R_z(mount_yaw)·tilt0` puts the foot's forward axis.
+    /// The sensor's yaw on the foot from one stride, rad: the `m` for which the foot's forward
+    /// axis ([`Self::foot_forward_body`], `(R_z(m)·tilt0)⁻¹·x̂`: `(cos m, −sin m, 0)` in the
+    /// levelled sensor frame) has the stride's direction `stride_dir_rad` for its heading in
+    /// this stance's attitude, as the foot-axis observation measures the heading.
     fn mount_yaw_of_stride(&self, eskf: &Eskf, stride_dir_rad: f64) -> f64 {
-        let levelled_from_nav = (eskf.nav_from_body * self.tilt0.inverse()).inverse();
-        let u = levelled_from_nav * Vector3::new(stride_dir_rad.cos(), stride_dir_rad.sin(), 0.0);
-        -u.y.atan2(u.x)
+        yaw_of_axis_with_heading(&(eskf.nav_from_body * self.tilt0.inverse()), stride_dir_rad)
     }
 
     fn count_rejection(&mut self, r: Rejection) {
