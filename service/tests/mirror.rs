@@ -152,9 +152,9 @@ fn a_sensor_turned_on_the_shoe_gives_the_same_walk() {
         true,
     );
     eprintln!("largest differences {d_m:.1e} m, {d_bias:.1e} rad/s");
-    // equal to rounding: the mounting yaw is the stride's azimuth in the levelled sensor frame
-    // (with the ZYX yaw of the stance's attitude instead, 3.8 mm and 3.7e-6 rad/s here: README,
-    // "No side and no mounting is preferred")
+    // equal to rounding: the mounting yaw is the one that gives the foot's forward axis the
+    // stride's heading (`yaw_of_axis_with_heading`); with the ZYX yaw of the stance's attitude
+    // instead, 3.8 mm and 3.7e-6 rad/s here (README, "No side and no mounting is preferred")
     assert!(d_m < 1e-6 && d_bias < 1e-9, "{d_m} m, {d_bias} rad/s");
 }
 
@@ -166,7 +166,7 @@ fn a_sensor_tilted_on_the_shoe_gives_nearly_the_same_walk() {
     // (README, "No side and no mounting is preferred", for the variants measured; tilted 20°
     // about y instead, one foot axis of 39 is taken otherwise). The bounds are under twice
     // those: a lever-arm σ without the rate about y moves the walk by 3.5 cm, a bias compared
-    // without turning it differs by 1.8e-3 rad/s.
+    // without turning it differs by 2.2e-3 rad/s.
     let dir = root().join("tests/data/gdins_exp32_box_and_corridor");
     let log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
     let cfg = config_heading(0.0);
