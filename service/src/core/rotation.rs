@@ -221,7 +221,8 @@ mod tests {
 
     #[test]
     fn the_axis_with_a_heading_has_that_heading_at_any_tilt() {
-        // Frames tilted up to 25° and turned every way, headings all round: the axis found has
+        // Frames rolled and pitched up to 25° each (tilted up to 35°) and turned every way,
+        // headings all round: the axis found has
         // the heading asked for (as the foot-axis observation measures it), and where the frame
         // is a pure yaw it is the difference of yaws the calibration took before.
         let mut worst: f64 = 0.0;

@@ -441,7 +441,7 @@ impl Pipeline {
     /// axis ([`Self::foot_forward_body`], `(R_z(m)·tilt0)⁻¹·x̂`: `(cos m, −sin m, 0)` in the
     /// levelled sensor frame) has the stride's direction `stride_dir_rad` for its heading in
     /// this stance's attitude, as the foot-axis observation measures the heading.
-    fn mount_yaw_of_stride(&self, eskf: &Eskf, stride_dir_rad: f64) -> f64 {
+    pub(super) fn mount_yaw_of_stride(&self, eskf: &Eskf, stride_dir_rad: f64) -> f64 {
         yaw_of_axis_with_heading(&(eskf.nav_from_body * self.tilt0.inverse()), stride_dir_rad)
     }
 
