@@ -12,7 +12,7 @@ use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::{Config, ConfigFile, ConfigOverrides};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
-use nalgebra::{Rotation3, Unit, Vector3};
+use nalgebra::{Rotation3, Vector3};
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
@@ -41,10 +41,9 @@ fn turned(log: &ImuLog) -> ImuLog {
     m
 }
 
-/// The sensor mounted turned by `angle_rad` about its own `axis`: every vector's components in
-/// the new axes, v' = Rᵀ·v (on walks without samples at a rail: a rotated rail is no sensor's).
-fn rotated(log: &ImuLog, axis: Vector3<f64>, angle_rad: f64) -> ImuLog {
-    let r_t = Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle_rad).inverse();
+/// The sensor mounted turned by R: every vector's components in the new axes, v' = `r_t`·v with
+/// `r_t` = Rᵀ (on walks without samples at a rail: a rotated rail is no sensor's).
+fn rotated(log: &ImuLog, r_t: &Rotation3<f64>) -> ImuLog {
     let mut m = log.clone();
     for r in &mut m.rows {
         for v in [&mut r.gyro_rad_s, &mut r.accel_m_s2] {
@@ -170,11 +169,10 @@ fn a_sensor_tilted_on_the_shoe_gives_nearly_the_same_walk() {
     let dir = root().join("tests/data/gdins_exp32_box_and_corridor");
     let log = read_imu_csv(&dir.join("imu.csv"), &ImuCsvOptions::default()).unwrap();
     let cfg = config_heading(0.0);
-    let angle_rad = 30f64.to_radians();
-    let r_t = Rotation3::from_axis_angle(&Vector3::x_axis(), angle_rad).inverse();
+    let r_t = Rotation3::from_axis_angle(&Vector3::x_axis(), 30f64.to_radians()).inverse();
     let [d_m, _, d_bias] = largest_differences(
         &trace(&log, &cfg),
-        &trace(&rotated(&log, Vector3::x(), angle_rad), &cfg),
+        &trace(&rotated(&log, &r_t), &cfg),
         |a| {
             let bias_rad_s = (r_t * Vector3::from(a.bias_rad_s)).into();
             (Row { bias_rad_s, ..*a }, false)

@@ -222,9 +222,9 @@ mod tests {
     #[test]
     fn the_axis_with_a_heading_has_that_heading_at_any_tilt() {
         // Frames rolled and pitched up to 25° each (tilted up to 35°) and turned every way,
-        // headings all round: the axis found has
-        // the heading asked for (as the foot-axis observation measures it), and where the frame
-        // is a pure yaw it is the difference of yaws the calibration took before.
+        // headings all round: the axis found has the heading asked for (as the foot-axis
+        // observation measures it), and where the frame is a pure yaw it is the difference of
+        // yaws the calibration took before.
         let mut worst: f64 = 0.0;
         for k in 0..2000 {
             let t = f64::from(k);
