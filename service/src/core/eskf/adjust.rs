@@ -44,6 +44,9 @@ impl Eskf {
                 }
             }
         }
+        // The two passes round differently on the two sides of the diagonal: P is kept symmetric
+        // to the bit (the propagation computes from one side and mirrors).
+        self.mirror_upper();
         self.rotate_bias_response(&m);
     }
 
@@ -85,6 +88,7 @@ impl Eskf {
         for c in 0..3 {
             response::rotate_block(&mut self.response[c * MAX_N..][..MAX_N], TH, &m);
         }
+        self.mirror_upper();
         self.p[ix(TH + 2, TH + 2)] += sd_rad * sd_rad;
     }
 
@@ -101,8 +105,13 @@ impl Eskf {
     pub fn widen_attitude_about(&mut self, axis_body: &Vector3<f64>, var_rad2: f64) {
         let a = self.nav_from_body * axis_body;
         for i in 0..3 {
-            for j in 0..3 {
-                self.p[ix(TH + i, TH + j)] += var_rad2 * a[i] * a[j];
+            for j in i..3 {
+                // One product for both sides of the diagonal: P stays symmetric to the bit.
+                let d = var_rad2 * a[i] * a[j];
+                self.p[ix(TH + i, TH + j)] += d;
+                if i != j {
+                    self.p[ix(TH + j, TH + i)] += d;
+                }
             }
         }
     }
