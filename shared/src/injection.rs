@@ -222,6 +222,35 @@ pub fn parse_vec3(text: &str) -> Result<[f64; 3], String> {
     Ok(out)
 }
 
+/// Largest constant bias an injection may add, rad/s: a bias the estimator's health check
+/// allows (`sensor.max_gyro_bias_rad_s` of the shipped configurations). A larger one made every
+/// sample implausible, and the refusal then named the log's line, not the flag.
+pub const MAX_INJECTED_BIAS_RAD_S: f64 = 0.2;
+
+/// Largest bias ramp an injection may add, rad/s²: it reaches [`MAX_INJECTED_BIAS_RAD_S`] in
+/// 20 s (the detection matrix injects 2e-4).
+pub const MAX_INJECTED_RAMP_RAD_S2: f64 = 0.01;
+
+/// [`parse_vec3`] for `--inject-gyro-bias`: each component within ±[`MAX_INJECTED_BIAS_RAD_S`].
+pub fn parse_injected_bias_rad_s(text: &str) -> Result<[f64; 3], String> {
+    within(parse_vec3(text)?, text, MAX_INJECTED_BIAS_RAD_S, "rad/s")
+}
+
+/// [`parse_vec3`] for `--inject-gyro-bias-ramp`: each component within
+/// ±[`MAX_INJECTED_RAMP_RAD_S2`].
+pub fn parse_injected_ramp_rad_s2(text: &str) -> Result<[f64; 3], String> {
+    within(parse_vec3(text)?, text, MAX_INJECTED_RAMP_RAD_S2, "rad/s²")
+}
+
+fn within(v: [f64; 3], text: &str, limit: f64, unit: &str) -> Result<[f64; 3], String> {
+    match v.iter().find(|x| x.abs() > limit) {
+        Some(x) => Err(format!(
+            "{x:e} in {text:?} is beyond ±{limit} {unit} (the largest injection allowed)"
+        )),
+        None => Ok(v),
+    }
+}
+
 /// Parses a time in seconds that must be finite, ≥ 0 and at most [`MAX_TIME_S`], for
 /// command-line flags such as `--inject-after-s` (a NaN there used to run with 0 samples and
 /// exit 0; a wait of 1e300 s panicked converting it to a duration).
@@ -336,6 +365,20 @@ mod tests {
         assert!(parse_vec3("1,2").unwrap_err().contains("three"));
         assert!(parse_vec3("1,x,3").unwrap_err().contains("\"x\""));
         assert!(parse_vec3("1,nan,3").is_err());
+    }
+
+    #[test]
+    fn an_injection_beyond_any_bias_names_the_flag_value_not_the_log() {
+        assert_eq!(
+            parse_injected_bias_rad_s("-0.2,0,0.005").unwrap(),
+            [-0.2, 0.0, 0.005]
+        );
+        let e = parse_injected_bias_rad_s("1e6,0,0").unwrap_err();
+        assert!(e.contains("1e6") && e.contains("0.2 rad/s"), "{e}");
+        assert!(parse_injected_bias_rad_s("0,0,-0.21").is_err());
+        assert_eq!(parse_injected_ramp_rad_s2("2e-4,0,0").unwrap()[0], 2e-4);
+        let e = parse_injected_ramp_rad_s2("0,1e308,0").unwrap_err();
+        assert!(e.contains("1e308") && e.contains("rad/s²"), "{e}");
     }
 
     #[test]

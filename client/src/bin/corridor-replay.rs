@@ -8,7 +8,7 @@ use clap::Parser;
 use corridor_client::replay::{ReplayOptions, Speed, replay};
 use corridor_client::{Delivery, Domain};
 use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
-use corridor_shared::injection::{BiasInjection, parse_time_s, parse_vec3};
+use corridor_shared::injection::{BiasInjection, parse_injected_bias_rad_s, parse_time_s};
 use corridor_shared::services::DEFAULT_DOMAIN;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -37,8 +37,8 @@ struct Args {
     /// fails unless the daemon uses it.
     #[arg(long)]
     delivery: Option<Delivery>,
-    /// Constant gyro bias to add, X,Y,Z in rad/s.
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    /// Constant gyro bias to add, X,Y,Z in rad/s (each within ±0.2).
+    #[arg(long, value_parser = parse_injected_bias_rad_s, allow_hyphen_values = true)]
     inject_gyro_bias: Option<[f64; 3]>,
     /// Start the injection at this sensor time, s.
     #[arg(

@@ -6,7 +6,9 @@ use clap::Args;
 use corridor_service::checkpoint;
 use corridor_service::runner::{self, RunOptions};
 use corridor_shared::imu_csv::ImuCsvOptions;
-use corridor_shared::injection::{BiasInjection, parse_time_s, parse_vec3};
+use corridor_shared::injection::{
+    BiasInjection, parse_injected_bias_rad_s, parse_injected_ramp_rad_s2, parse_time_s,
+};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -19,11 +21,11 @@ pub(super) struct RunArgs {
     /// Footprint ground truth (ground_truth.csv) to evaluate against.
     #[arg(long)]
     pub(super) truth: Option<PathBuf>,
-    /// Constant gyro bias to add, X,Y,Z in rad/s.
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    /// Constant gyro bias to add, X,Y,Z in rad/s (each within ±0.2).
+    #[arg(long, value_parser = parse_injected_bias_rad_s, allow_hyphen_values = true)]
     pub(super) inject_gyro_bias: Option<[f64; 3]>,
-    /// Linearly growing gyro bias to add, X,Y,Z in rad/s².
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    /// Linearly growing gyro bias to add, X,Y,Z in rad/s² (each within ±0.01).
+    #[arg(long, value_parser = parse_injected_ramp_rad_s2, allow_hyphen_values = true)]
     pub(super) inject_gyro_bias_ramp: Option<[f64; 3]>,
     /// Start the injection at this time instead of 0, s.
     #[arg(

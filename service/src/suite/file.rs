@@ -110,9 +110,8 @@ impl SuiteRecording {
     }
 }
 
-/// Largest injected bias a suite may ask for, rad/s: a bias the estimator's health check
-/// allows (`sensor.max_gyro_bias_rad_s` of the shipped configurations).
-pub const MAX_INJECTED_BIAS_RAD_S: f64 = 0.2;
+// The largest injected bias a suite may ask for is the command line's.
+use corridor_shared::injection::MAX_INJECTED_BIAS_RAD_S;
 
 /// The suite file as written.
 #[derive(Deserialize)]
