@@ -47,6 +47,10 @@ pub(super) fn diagnose(a: &DiagnoseArgs) -> Result<()> {
         truth.as_deref(),
         a.model.map.as_deref(),
     )?;
+    // Every model of the loop runs the same rows, and no run logs per sample: said once.
+    if let Some(input) = &d.before.input {
+        tracing::warn!("{}: {input}", imu.display());
+    }
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     corridor_service::diagnose::write_report(&a.out, &d.report, &d.before, &d.after)?;
     print!("{}", std::fs::read_to_string(a.out.join("report.md"))?);

@@ -126,6 +126,9 @@ pub struct Consistency {
 pub struct Analysis {
     /// Model extensions in force (config keys).
     pub model: Vec<String>,
+    /// What the input cost the run, when anything ([`crate::runner::RunOutcome::input_report`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub input: Option<String>,
     /// Consistency figures.
     pub consistency: Consistency,
     /// Effects, best first.
@@ -423,6 +426,7 @@ pub fn analyse(
     });
     Ok(Analysis {
         model: model_keys(file),
+        input: outcome.input_report(),
         consistency,
         effects,
         scale_factor,

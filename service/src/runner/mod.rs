@@ -12,7 +12,9 @@
 //! them named `.partial`), and earlier outputs in the directory stay as they were.
 //!
 //! [`run_log`] runs a log already in memory and keeps the whole per-sample [`Trace`]: the
-//! suite, the diagnosis and the tests use it on the bundled recordings.
+//! suite, the diagnosis and the tests use it on the bundled recordings. It logs nothing per
+//! sample (a suite runs each log a dozen times): what the input cost is counted in the
+//! outcome, and [`RunOutcome::input_report`] says it in one line, once, where the caller wants.
 
 use crate::core::heading::HeadingAid;
 use crate::core::{Counters, Estimate, Estimator, ImuInput, WarmStart, WarmStartError};
@@ -142,6 +144,58 @@ pub struct RunOutcome {
     )>,
 }
 
+impl RunOutcome {
+    /// What the input cost this run, in one line, when it cost anything: samples the estimator
+    /// refused (by reason, with the first one's place), gaps and how they were crossed, clock
+    /// steps, and restores of the health check. `None` for a clean log.
+    pub fn input_report(&self) -> Option<String> {
+        let c = &self.counters;
+        let mut parts = Vec::new();
+        if c.refused() > 0 {
+            let reasons = [
+                (c.rejected_non_finite, "not finite"),
+                (c.rejected_time, "time"),
+                (c.rejected_implausible, "implausible"),
+                (c.rejected_time_jump, "time jump"),
+            ]
+            .iter()
+            .filter(|(n, _)| *n > 0)
+            .map(|(n, why)| format!("{why} {n}"))
+            .collect::<Vec<_>>()
+            .join(", ");
+            let first = self
+                .refused
+                .first()
+                .map_or(String::new(), |f| format!("; the first: {f}"));
+            parts.push(format!(
+                "{} refused ({reasons}{first})",
+                count(c.refused(), "sample")
+            ));
+        }
+        if c.gaps > 0 {
+            parts.push(format!(
+                "{} ({} bridged, {} filled, {} taken for clock steps)",
+                count(c.gaps, "gap"),
+                c.gaps_bridged,
+                c.gaps_filled,
+                c.gaps_clock_steps
+            ));
+        }
+        if c.clock_steps_back > 0 {
+            parts.push(count(c.clock_steps_back, "clock step back"));
+        }
+        if c.health_restores > 0 {
+            parts.push(count(c.health_restores, "health-check restore"));
+        }
+        (!parts.is_empty()).then(|| parts.join("; "))
+    }
+}
+
+/// "1 gap", "2 gaps".
+pub(crate) fn count(n: u64, what: &str) -> String {
+    format!("{n} {what}{}", if n == 1 { "" } else { "s" })
+}
+
 /// How many refused samples `summary.json` names (and the log prints), and how many gaps and
 /// health faults the log prints one by one (the rest are counted in `summary.json`).
 pub const MAX_REFUSED_EXAMPLES: usize = 10;
@@ -155,6 +209,9 @@ struct Feed<'a> {
     refused: Vec<String>,
     /// Gap and health-fault warnings printed so far.
     warned: usize,
+    /// Log nothing per sample (count only): the in-memory runs, and `corridor run`'s second,
+    /// "before" filter, which reads the same rows.
+    quiet: bool,
 }
 
 impl<'a> Feed<'a> {
@@ -165,6 +222,15 @@ impl<'a> Feed<'a> {
             path,
             refused: Vec::new(),
             warned: 0,
+            quiet: false,
+        }
+    }
+
+    /// The same, logging nothing per sample.
+    fn quiet(self) -> Self {
+        Self {
+            quiet: true,
+            ..self
         }
     }
 
@@ -183,7 +249,7 @@ impl<'a> Feed<'a> {
                 let mut notices = e.notices().peekable();
                 if notices.peek().is_some() {
                     self.warned += 1;
-                    if self.warned <= MAX_REFUSED_EXAMPLES {
+                    if self.warned <= MAX_REFUSED_EXAMPLES && !self.quiet {
                         for n in notices {
                             tracing::warn!("{}:{}: {n}", self.path.display(), row.line);
                         }
@@ -193,7 +259,9 @@ impl<'a> Feed<'a> {
             Err(err) => {
                 if self.refused.len() < MAX_REFUSED_EXAMPLES {
                     let at = format!("{}:{}: {err}", self.path.display(), row.line);
-                    tracing::warn!("refused sample: {at}");
+                    if !self.quiet {
+                        tracing::warn!("refused sample: {at}");
+                    }
                     self.refused.push(at);
                 }
                 return None;
@@ -221,15 +289,27 @@ pub(crate) const REJECTED_ROWS_LOGGED: usize = 20;
 /// Reads a whole log with the time-step limits and gap threshold of `config` (as `corridor run`
 /// streams one), and says which rows it rejected: the first [`REJECTED_ROWS_LOGGED`] with their
 /// place, then their number (the in-memory paths, `corridor diagnose` and the suite, used to
-/// drop them without a word).
+/// drop them without a word). [`read_log_counted`] reads it without saying so.
 pub fn read_log(path: &Path, config: &Config) -> Result<ImuLog, ImuCsvError> {
+    let log = read_log_counted(path, config)?;
+    say_rejected(&log);
+    Ok(log)
+}
+
+/// [`read_log`] without the warnings: the rows rejected are in the log (`ImuLog::rejected`),
+/// for a caller that reads the same log again (the suite's later passes).
+pub fn read_log_counted(path: &Path, config: &Config) -> Result<ImuLog, ImuCsvError> {
     let opts = corridor_shared::imu_csv::ImuCsvOptions {
         min_dt_s: config.sensor.min_dt_s(),
         max_dt_s: config.sensor.max_dt_s(),
         gap_dt_s: config.max_dt_s.get(),
         ..Default::default()
     };
-    let log = corridor_shared::imu_csv::read_imu_csv(path, &opts)?;
+    corridor_shared::imu_csv::read_imu_csv(path, &opts)
+}
+
+/// Logs the rows the reader rejected: the first [`REJECTED_ROWS_LOGGED`], then their number.
+fn say_rejected(log: &ImuLog) {
     for r in log.rejected.iter().take(REJECTED_ROWS_LOGGED) {
         tracing::warn!("rejected input row: {}", r.located(&log.path));
     }
@@ -241,7 +321,6 @@ pub fn read_log(path: &Path, config: &Config) -> Result<ImuLog, ImuCsvError> {
             total - REJECTED_ROWS_LOGGED as u64
         );
     }
-    Ok(log)
 }
 
 /// Runs `log` (in memory) through a new estimator and keeps the whole per-sample trace; `sink`
@@ -253,7 +332,7 @@ pub fn run_log(
     injection: &BiasInjection,
     sink: impl FnMut(&ImuInput, &Estimate),
 ) -> RunOutcome {
-    run_feed(Feed::new(cfg, aid, injection, &log.path), log, sink)
+    run_feed(Feed::new(cfg, aid, injection, &log.path).quiet(), log, sink)
 }
 
 /// [`run_log`] from a saved bias state, as the daemon starts from its checkpoint.
@@ -268,7 +347,7 @@ pub fn run_log_warm(
     warm: WarmStart,
     sink: impl FnMut(&ImuInput, &Estimate),
 ) -> Result<RunOutcome, WarmStartError> {
-    let mut feed = Feed::new(cfg, aid, injection, &log.path);
+    let mut feed = Feed::new(cfg, aid, injection, &log.path).quiet();
     feed.est.set_warm_start(warm)?;
     Ok(run_feed(feed, log, sink))
 }
@@ -385,6 +464,29 @@ mod tests {
             .validate()
             .expect("valid");
         (log, cfg)
+    }
+
+    #[test]
+    fn an_in_memory_run_says_what_its_input_cost_in_one_line() {
+        let (mut log, cfg) = walk_without_rest();
+        let aid = heading_aid(&cfg, None).expect("aid");
+        let clean = run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, _| {});
+        assert_eq!(clean.input_report(), None);
+        // 0.1 s of absurd rates mid-walk: refused, counted, and the first one named.
+        let first_line = log.rows[3000].line;
+        for r in &mut log.rows[3000..3020] {
+            r.gyro_rad_s[1] = 1e6;
+        }
+        let out = run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, _| {});
+        assert_eq!(out.counters.rejected_implausible, 20);
+        let report = out.input_report().expect("a report");
+        assert!(
+            report.starts_with("20 samples refused (implausible 20; the first: ")
+                && report.contains(&format!(":{first_line}: "))
+                && report.contains("is beyond the plausible"),
+            "{report}"
+        );
+        assert_eq!(out.counters.gaps > 0, report.contains("gap"), "{report}");
     }
 
     #[test]

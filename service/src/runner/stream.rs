@@ -310,7 +310,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         base.mode = corridor_shared::config::Mode::Zupt;
         base.alignment.gyro_bias_prior = corridor_shared::config::BiasPrior::None;
         (
-            Feed::new(&base, &HeadingAid::None, &opts.injection, &opts.imu),
+            Feed::new(&base, &HeadingAid::None, &opts.injection, &opts.imu).quiet(),
             Kept::new(gcps.as_deref(), true),
         )
     });
@@ -339,38 +339,47 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
             kept.push(e, converged_at_s);
         }
     }
-    if reader.rows_rejected() > logged as u64 {
-        tracing::warn!(
-            "{} more rejected rows (counts in summary.json)",
-            reader.rows_rejected() - logged as u64
-        );
-    }
     progress.finish();
     est_w.flush().map_err(io_at(&est_path))?;
     inn_w.flush().map_err(io_at(&inn_path))?;
     drop((est_w, inn_w));
     let c = *feed.est.counters();
     let refused = c.refused();
+    // The counts go to summary.json only when the run succeeds (below): a failed run says them
+    // here without pointing at a summary it does not write.
+    let nothing_accepted = c.samples == 0 && refused > 0;
+    let never_aligned = c.samples > 0 && feed.est.mount_yaw_rad().is_none() && c.stances == 0;
+    let where_counted = if nothing_accepted || never_aligned {
+        ""
+    } else {
+        " (counts in summary.json)"
+    };
+    if reader.rows_rejected() > logged as u64 {
+        tracing::warn!(
+            "{} more rejected rows{where_counted}",
+            reader.rows_rejected() - logged as u64
+        );
+    }
     if refused > MAX_REFUSED_EXAMPLES as u64 {
         tracing::warn!(
-            "{} more refused samples (counts in summary.json)",
+            "{} more refused samples{where_counted}",
             refused - MAX_REFUSED_EXAMPLES as u64
         );
     }
     if feed.warned > MAX_REFUSED_EXAMPLES {
         tracing::warn!(
-            "{} more gaps and health-check failures (counts in summary.json)",
+            "{} more gaps and health-check failures{where_counted}",
             feed.warned - MAX_REFUSED_EXAMPLES
         );
     }
-    if c.samples == 0 && refused > 0 {
+    if nothing_accepted {
         return Err(RunError::NothingAccepted {
             path: opts.imu.clone(),
             samples: refused,
             first: feed.refused.first().cloned().unwrap_or_default(),
         });
     }
-    if c.samples > 0 && feed.est.mount_yaw_rad().is_none() && c.stances == 0 {
+    if never_aligned {
         return Err(RunError::NeverAligned {
             path: opts.imu.clone(),
             min_rest_s: opts.config.alignment.min_rest_s.get(),

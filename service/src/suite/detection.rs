@@ -345,7 +345,7 @@ pub fn detection_matrix(
             name: r.name.clone(),
             source: Box::new(source),
         };
-        let (log, truth) = super::read_recording(base, r).map_err(wrap)?;
+        let (log, truth) = super::read_recording(base, r, super::Rejected::Said).map_err(wrap)?;
         let model = diagnosis_model(base, r).map_err(wrap)?;
         out.recordings.push(r.name.clone());
         // The clean column first: the effects it names are the walk's own (documented in that
@@ -405,6 +405,12 @@ fn run_cell(
         }
     };
     let diagnosis = run_diagnosis(&log, &model, Some(&truth), None)?;
+    // The injected columns run the same rows again: what the input cost is said with the clean.
+    if matches!(case.resolve(t0, duration), CaseInjection::Clean)
+        && let Some(input) = &diagnosis.before.input
+    {
+        tracing::warn!("{}: {input}", r.name);
+    }
     let report = &diagnosis.report;
     // The stride length has its own line (position information): it is "named first" there.
     let on_own_line = case.expected == Some(Effect::StrideLength);

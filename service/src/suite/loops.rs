@@ -7,7 +7,8 @@ use std::path::Path;
 
 /// The residual-diagnosis loop on every recording of a suite, starting from the paper's model
 /// (the sensor configuration without its `[model]` extensions, `mode = paper`). Writes each
-/// report under `out/<recording>/` and returns the summary table (Markdown).
+/// report under `out/<recording>/` and returns the summary table (Markdown). Runs after
+/// [`super::run_suite`], which said what each log's input cost (`eval --loops`, the demo).
 pub fn run_loops(path: &Path, out: &Path) -> Result<String, SuiteError> {
     let suite = read_suite(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
@@ -19,7 +20,8 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<String, SuiteError> {
             name: r.name.clone(),
             source: Box::new(source),
         };
-        let (log, truth) = super::read_recording(base, r).map_err(wrap)?;
+        let (log, truth) =
+            super::read_recording(base, r, super::Rejected::AlreadySaid).map_err(wrap)?;
         let mut file = ConfigFile::read(&base.join(&r.config)).map_err(|e| wrap(e.into()))?;
         // The paper's model: no extension states (a model change, not an override).
         file.model = Default::default();

@@ -195,10 +195,50 @@ pub struct SuiteRow {
     pub front_end: FrontEnd,
     /// The bias the default run ended with, sensor axes, rad/s.
     pub final_bias_rad_s: [f64; 3],
+    /// What the input cost: the rows the reader rejected and what the default run refused,
+    /// crossed or restored (every other run reads the same rows; the suite logs this once).
+    pub input: InputCounts,
     /// The footprint figures before the first leg the data set flags (recordings with one).
     pub before_suspect: Option<BeforeSuspect>,
     /// The footprint figures in the map frame (no first-leg rotation).
     pub map_frame: MapFrame,
+}
+
+/// The input a recording's default run did not take as it came (see [`SuiteRow::input`]).
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct InputCounts {
+    /// Rows the CSV reader rejected (malformed, not finite, time).
+    pub rows_rejected: u64,
+    /// Samples the estimator refused (implausible, time).
+    pub samples_refused: u64,
+    /// Gaps (longer than `estimator.max_dt_s`), however crossed.
+    pub gaps: u64,
+    /// Clock steps back taken.
+    pub clock_steps_back: u64,
+    /// Restores of the health check.
+    pub health_restores: u64,
+}
+
+impl InputCounts {
+    fn of(log: &ImuLog, run: &RunOutcome) -> Self {
+        let c = &run.counters;
+        Self {
+            rows_rejected: log.rejected_counts().values().sum(),
+            samples_refused: c.refused(),
+            gaps: c.gaps,
+            clock_steps_back: c.clock_steps_back,
+            health_restores: c.health_restores,
+        }
+    }
+
+    /// Nothing rejected, refused, crossed or restored.
+    pub fn is_clean(&self) -> bool {
+        self.rows_rejected == 0
+            && self.samples_refused == 0
+            && self.gaps == 0
+            && self.clock_steps_back == 0
+            && self.health_restores == 0
+    }
 }
 
 /// Runs the suite (the table's rows).
@@ -249,7 +289,8 @@ fn without_rest_from_checkpoint(
     best: Mode,
     others: &[[f64; 3]],
 ) -> Result<Option<Footprint>, RunError> {
-    let ctx = Ctx::open(base, r)?;
+    // The second pass over the log: its rejected rows were said in the first.
+    let ctx = Ctx::open(base, r, Rejected::AlreadySaid)?;
     let cfg = ctx.default_config(best)?;
     let Some(ws) = front_end::checkpoint_from(others, cfg.eskf.gyro_bias_prior_sd_rad_s.get())
     else {
@@ -290,23 +331,34 @@ struct Ctx<'a> {
     truth: Vec<TruthPoint>,
 }
 
-/// A recording's log, read with its configuration's time-step limits and gap threshold (rejected rows said, see
-/// [`crate::runner::read_log`]), and its truth.
+/// Whether a reading of a recording's log says the rows it rejected: the first reading in a
+/// command does, a later pass over the same log does not.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Rejected {
+    Said,
+    AlreadySaid,
+}
+
+/// A recording's log, read with its configuration's time-step limits and gap threshold (rejected
+/// rows said when `said`, see [`crate::runner::read_log`]), and its truth.
 pub(crate) fn read_recording(
     base: &Path,
     r: &SuiteRecording,
+    said: Rejected,
 ) -> Result<(ImuLog, Vec<TruthPoint>), RunError> {
     let config = ConfigFile::read(&base.join(&r.config))?.validate()?;
-    Ok((
-        crate::runner::read_log(&base.join(&r.imu), &config)?,
-        read_truth_csv(&base.join(&r.truth))?,
-    ))
+    let path = base.join(&r.imu);
+    let log = match said {
+        Rejected::Said => crate::runner::read_log(&path, &config)?,
+        Rejected::AlreadySaid => crate::runner::read_log_counted(&path, &config)?,
+    };
+    Ok((log, read_truth_csv(&base.join(&r.truth))?))
 }
 
 impl<'a> Ctx<'a> {
     /// Reads a recording's log, truth and configurations.
-    fn open(base: &'a Path, r: &'a SuiteRecording) -> Result<Self, RunError> {
-        let (log, truth) = read_recording(base, r)?;
+    fn open(base: &'a Path, r: &'a SuiteRecording, said: Rejected) -> Result<Self, RunError> {
+        let (log, truth) = read_recording(base, r, said)?;
         Ok(Ctx {
             base,
             rec: r,
@@ -510,7 +562,7 @@ fn run_recording(
     inj: [f64; 3],
     best: Mode,
 ) -> Result<SuiteRow, RunError> {
-    let ctx = Ctx::open(base, r)?;
+    let ctx = Ctx::open(base, r, Rejected::Said)?;
     let path_m = ctx
         .truth
         .windows(2)
@@ -530,6 +582,10 @@ fn run_recording(
     let (best1, best_inj) = ctx.run(best, BiasPrior::None, injected)?;
     let (best_r0, best_rest) = ctx.run(best, BiasPrior::RestMean, none)?;
     let fig = ctx.default_figures(best)?;
+    // The runs log nothing per sample (`runner::run_log`): what the input cost is said once.
+    if let Some(report) = best_r0.input_report() {
+        tracing::warn!("{}: {report} (the default run)", r.name);
+    }
     let c = best_r0.counters;
     let (stances, heading_used, stride_used) = (c.stances, c.heading_used, c.stride_used);
     // The injection starts when the initial rest ends (the alignment instant of the clean run).
@@ -598,6 +654,7 @@ fn run_recording(
             .last()
             .copied()
             .unwrap_or([f64::NAN; 3]),
+        input: InputCounts::of(&ctx.log, &best_r0),
         before_suspect,
         map_frame,
     })

@@ -141,7 +141,7 @@ pub fn run_sweep(suite_path: &Path, sweep_path: &Path) -> Result<Vec<SweepResult
             name: r.name.clone(),
             source: Box::new(source),
         };
-        let ctx = Ctx::open(base, r).map_err(wrap)?;
+        let ctx = Ctx::open(base, r, super::Rejected::Said).map_err(wrap)?;
         for (p, res) in sweep.parameters.iter().zip(&mut out) {
             res.configured = configured(&ctx.config, &p.key).map_err(&file_err)?;
             for (v, value) in p.values.iter().enumerate() {

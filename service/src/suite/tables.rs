@@ -163,6 +163,41 @@ pub fn headline_markdown(rows: &[SuiteRow]) -> String {
         NOT_WORSE_TOLERANCE_PCT,
         m.default_worse
     ));
+    let input: Vec<String> = rows
+        .iter()
+        .filter(|r| !r.input.is_clean())
+        .map(|r| {
+            let i = r.input;
+            let parts = [
+                (i.rows_rejected, "row rejected", "rows rejected"),
+                (i.samples_refused, "sample refused", "samples refused"),
+                (i.gaps, "gap", "gaps"),
+                (i.clock_steps_back, "clock step back", "clock steps back"),
+                (
+                    i.health_restores,
+                    "health-check restore",
+                    "health-check restores",
+                ),
+            ]
+            .iter()
+            .filter(|(n, _, _)| *n > 0)
+            .map(|&(n, one, many)| format!("{n} {}", if n == 1 { one } else { many }))
+            .collect::<Vec<_>>();
+            format!("{} ({})", r.recording, parts.join(", "))
+        })
+        .collect();
+    s.push_str(&if input.is_empty() {
+        "
+Input: every row read and every sample taken, no gap, clock step or health-check restore (the default runs).
+".to_string()
+    } else {
+        format!(
+            "
+Input not taken as it came (the default runs; `results.json`'s `input`): {}.
+",
+            input.join("; ")
+        )
+    });
     let derived: Vec<String> = rows
         .iter()
         .filter(|r| r.start_heading == StartHeading::FirstStride)
