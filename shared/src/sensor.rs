@@ -89,8 +89,8 @@ pub struct SensorLimits {
 pub struct SensorKeyError {
     /// Dotted key.
     pub key: &'static str,
-    /// Value found.
-    pub value: f64,
+    /// Value found (with the other key's, for a rule between two keys).
+    pub value: String,
     /// What it must satisfy.
     pub rule: &'static str,
 }
@@ -113,7 +113,7 @@ impl SensorFile {
             } else {
                 Err(SensorKeyError {
                     key,
-                    value: v,
+                    value: format!("{v:?}"),
                     rule: "must be a finite number > 0",
                 })
             }
@@ -147,23 +147,47 @@ impl SensorFile {
             min_dt_s: pos("sensor.min_dt_s", self.min_dt_s, DEFAULT_MIN_DT_S)?,
             max_dt_s: pos("sensor.max_dt_s", self.max_dt_s, DEFAULT_MAX_DT_S)?,
         };
-        let rule = |key, value, rule| Err(SensorKeyError { key, value, rule });
+        let rule = |key, value: f64, rule| {
+            Err(SensorKeyError {
+                key,
+                value: format!("{value:?}"),
+                rule,
+            })
+        };
+        // A rule between two keys names both values: either may be the one mistyped.
+        let between = |key, value: f64, other: &str, other_value: f64, rule| {
+            Err(SensorKeyError {
+                key,
+                value: format!("{value:?} (with {other} = {other_value:?})"),
+                rule,
+            })
+        };
         if l.max_gyro_rad_s < l.gyro_range_rad_s {
-            return rule(
+            return between(
                 "sensor.max_gyro_rad_s",
                 l.max_gyro_rad_s,
+                "sensor.gyro_range_rad_s",
+                l.gyro_range_rad_s,
                 "must be >= sensor.gyro_range_rad_s",
             );
         }
         if l.max_accel_m_s2 < l.accel_range_m_s2 {
-            return rule(
+            return between(
                 "sensor.max_accel_m_s2",
                 l.max_accel_m_s2,
+                "sensor.accel_range_m_s2",
+                l.accel_range_m_s2,
                 "must be >= sensor.accel_range_m_s2",
             );
         }
         if l.min_dt_s >= l.max_dt_s {
-            return rule("sensor.min_dt_s", l.min_dt_s, "must be < sensor.max_dt_s");
+            return between(
+                "sensor.min_dt_s",
+                l.min_dt_s,
+                "sensor.max_dt_s",
+                l.max_dt_s,
+                "must be < sensor.max_dt_s",
+            );
         }
         // A limit below any real bias fails the health check at every sample (1e-12 froze the
         // estimate); one above 10 rad/s checks nothing.

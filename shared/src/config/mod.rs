@@ -316,6 +316,27 @@ mod tests {
     }
 
     #[test]
+    fn a_rule_between_two_keys_names_both_values() {
+        // The range given as 1e300: the error is the maximum's rule, and it shows the 1e300.
+        for (text, key, other) in [
+            (
+                "[sensor]\ngyro_range_rad_s = 1e300\n",
+                "sensor.max_gyro_rad_s",
+                "sensor.gyro_range_rad_s = 1e300",
+            ),
+            (
+                "[sensor]\nmax_dt_s = 1e-9\n",
+                "sensor.min_dt_s",
+                "sensor.max_dt_s = 1e-9",
+            ),
+        ] {
+            let f = ConfigFile::parse(text, Path::new("a.toml")).unwrap();
+            let err = f.validate().unwrap_err().to_string();
+            assert!(err.contains(key) && err.contains(other), "{err}");
+        }
+    }
+
+    #[test]
     fn bad_values_name_key_and_value() {
         let f = ConfigFile::parse("[eskf]\nzupt_sd_m_s = -1.0\n", Path::new("a.toml")).unwrap();
         let err = with_path(f.validate().unwrap_err(), Path::new("a.toml")).to_string();
