@@ -337,6 +337,35 @@ mod tests {
     }
 
     #[test]
+    fn a_gap_threshold_beyond_any_foot_imu_and_a_fill_the_bridge_hides_are_refused() {
+        for (text, key, shown) in [
+            ("[estimator]\nmax_dt_s = 1e9\n", "estimator.max_dt_s", "1e9"),
+            (
+                "[estimator]\nmax_dt_s = 1e-9\n",
+                "estimator.max_dt_s",
+                "1e-9",
+            ),
+            (
+                "[estimator]\nmax_bridge_s = 0.9\nmax_fill_s = 0.45\n",
+                "estimator.max_fill_s",
+                "estimator.max_bridge_s = 0.9",
+            ),
+        ] {
+            let f = ConfigFile::parse(text, Path::new("a.toml")).unwrap();
+            let err = f.validate().unwrap_err().to_string();
+            assert!(err.contains(key) && err.contains(shown), "{text}: {err}");
+        }
+        // Either off, or the fill above the bridge: valid.
+        for text in [
+            "[estimator]\nmax_bridge_s = 0.0\nmax_fill_s = 0.45\n",
+            "[estimator]\nmax_bridge_s = 0.9\nmax_fill_s = 0.0\n",
+        ] {
+            let f = ConfigFile::parse(text, Path::new("a.toml")).unwrap();
+            assert!(f.validate().is_ok(), "{text}");
+        }
+    }
+
+    #[test]
     fn bad_values_name_key_and_value() {
         let f = ConfigFile::parse("[eskf]\nzupt_sd_m_s = -1.0\n", Path::new("a.toml")).unwrap();
         let err = with_path(f.validate().unwrap_err(), Path::new("a.toml")).to_string();

@@ -189,9 +189,15 @@ impl ConfigFile {
                 e.converged_unabsorbed
                     .unwrap_or(ESTIMATOR_CONVERGED_UNABSORBED),
             )?,
-            max_dt_s: Positive::new(
+            // A foot IMU samples at 100 Hz or faster (a swing lasts 0.4 s): a regular step longer
+            // than 0.1 s integrates a quarter of a swing as one (1e9 took a 10 s hole for a
+            // step), and one under 1 ms would make every sample's step a gap.
+            max_dt_s: Positive::in_range(
                 "estimator.max_dt_s",
                 e.max_dt_s.unwrap_or(ESTIMATOR_MAX_DT_S),
+                0.001,
+                0.1,
+                "must be in [0.001, 0.1] s",
             )?,
             // Interpolating across a second of walking is worse than starting anew.
             max_bridge_s: in_range(
@@ -201,14 +207,27 @@ impl ConfigFile {
                 1.0,
                 "must be in [0, 1] s",
             )?,
-            // Half of the slowest stride: a longer gap loses a footfall.
-            max_fill_s: in_range(
+            // Half of the slowest stride: a longer gap loses a footfall. A fill takes the gaps
+            // longer than the bridge's: one shorter than the bridge would never be used.
+            max_fill_s: match in_range(
                 "estimator.max_fill_s",
                 e.max_fill_s.unwrap_or(ESTIMATOR_MAX_FILL_S),
                 0.0,
                 1.0,
                 "must be in [0, 1] s",
-            )?,
+            )? {
+                f if f > 0.0 && f < e.max_bridge_s.unwrap_or(ESTIMATOR_MAX_BRIDGE_S) => {
+                    return Err(invalid(
+                        "estimator.max_fill_s",
+                        format!(
+                            "{f:?} (with estimator.max_bridge_s = {:?})",
+                            e.max_bridge_s.unwrap_or(ESTIMATOR_MAX_BRIDGE_S)
+                        ),
+                        "must be 0 (no fill) or at least estimator.max_bridge_s",
+                    ));
+                }
+                f => f,
+            },
             max_speed_m_s: Positive::in_range(
                 "estimator.max_speed_m_s",
                 e.max_speed_m_s.unwrap_or(ESTIMATOR_MAX_SPEED_M_S),
