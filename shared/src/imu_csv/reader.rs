@@ -11,7 +11,8 @@ use super::*;
 /// [`ImuCsvOptions::max_rejected_fraction`] rejected, no sample, the units) are made at its end,
 /// where the iterator yields the error as its last item instead of ending. A consumer must
 /// therefore treat what it did with the rows as provisional until the iterator has ended
-/// without an error. An unreadable line (IO error, invalid UTF-8) is an error naming the line.
+/// without an error. An unreadable source (an IO error) is an error; a line that is not UTF-8
+/// is read with U+FFFD in place of its bad bytes (see `line_str`).
 #[derive(Debug)]
 pub struct ImuCsvReader<R> {
     pub(super) src: R,
@@ -197,21 +198,15 @@ impl<R: BufRead> ImuCsvReader<R> {
         if self.line_no == 1 && self.line.starts_with("\u{feff}".as_bytes()) {
             self.line.drain(..3);
         }
-        if std::str::from_utf8(&self.line).is_err() {
-            return Err(ImuCsvError::Io {
-                path: self.path.clone(),
-                source: std::io::Error::new(
-                    std::io::ErrorKind::InvalidData,
-                    format!("line {}: not valid UTF-8", self.line_no),
-                ),
-            });
-        }
         Ok(true)
     }
 
-    /// The current line as text (checked by [`Self::read_line`]).
-    pub(super) fn line_str(line: &[u8]) -> &str {
-        std::str::from_utf8(line).expect("read_line checked the UTF-8")
+    /// A line as text: bytes that are not UTF-8 become U+FFFD, so that a field holding one is
+    /// not a number (the row is rejected, counted and named) and one in a column the reader
+    /// does not use costs nothing (a stray byte used to stop the whole run). Borrowed, not
+    /// copied, when the line is valid.
+    pub(super) fn line_str(line: &[u8]) -> std::borrow::Cow<'_, str> {
+        String::from_utf8_lossy(line)
     }
 
     /// Reads and checks line 1.
@@ -227,7 +222,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                 return Err(empty());
             }
         }
-        let header = strip_cr(Self::line_str(&self.line)).to_string();
+        let header = strip_cr(&Self::line_str(&self.line)).to_string();
         let names: Vec<&str> = header.split(',').map(unquote).collect();
         let problem = if names.len() < REQUIRED_COLUMNS.len()
             || !names.iter().zip(REQUIRED_COLUMNS).all(|(a, b)| *a == b)
@@ -307,7 +302,8 @@ impl<R: BufRead> ImuCsvReader<R> {
                 self.first_row_bytes = self.line.len() as u64 + 1;
             }
             let line = std::mem::take(&mut self.line);
-            let text = strip_cr(Self::line_str(&line));
+            let raw = Self::line_str(&line);
+            let text = strip_cr(&raw);
             let parsed = parse_row(text, line_no, n_fields, self.temp_index);
             if let Ok(row) = &parsed {
                 let (first, _, n) = self.parsed_t.unwrap_or((row.t_s, row.t_s, 0));
