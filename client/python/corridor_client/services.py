@@ -1,4 +1,4 @@
-"""Domains, QoS and service opening, mirroring shared/src/services.rs.
+"""Domains, QoS and service opening, mirroring shared/src/services/.
 
 Every service is opened with the same QoS as the Rust side (iceoryx2 refuses an opener that
 asks for more than the creator gave). Event services of the same name carry the wake-ups.

@@ -91,7 +91,7 @@ impl Positive {
     pub fn from_degrees(key: &str, degrees: f64) -> Result<Self, ConfigError> {
         Self::new(key, degrees).map(|p| Self(p.0.to_radians()))
     }
-    /// [`Positive::new`] within `[lo, hi]` as well (see [`in_range`]).
+    /// [`Positive::new`] within `[lo, hi]` as well (see the crate-private `in_range`).
     pub fn in_range(
         key: &str,
         value: f64,
