@@ -224,7 +224,10 @@ impl<R: BufRead> ImuCsvReader<R> {
         }
         let header = strip_cr(&Self::line_str(&self.line)).to_string();
         let names: Vec<&str> = header.split(',').map(unquote).collect();
-        let problem = if names.len() < REQUIRED_COLUMNS.len()
+        let problem = if header.contains('\r') {
+            // Every line of the file, read as one: its lines end in CR alone (old Mac files).
+            Some("holds a CR inside it: the file's lines end in CR alone, not LF or CRLF")
+        } else if names.len() < REQUIRED_COLUMNS.len()
             || !names.iter().zip(REQUIRED_COLUMNS).all(|(a, b)| *a == b)
         {
             Some("does not start with the required columns")

@@ -593,6 +593,13 @@ fn io_errors_name_the_file() {
 }
 
 #[test]
+fn lines_that_end_in_cr_alone_are_named_as_such() {
+    let text = good_file(3).replace('\n', "\r");
+    let err = ImuCsvReader::new(text.as_bytes(), path(), &lenient()).unwrap_err();
+    assert!(err.to_string().contains("end in CR alone"), "{err}");
+}
+
+#[test]
 fn a_byte_that_is_not_utf8_costs_its_row_at_most() {
     // In a number: that row is rejected as malformed, named by line and column, and counted;
     // the rows around it are read (a stray byte used to stop the whole run).
