@@ -193,6 +193,25 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
 
 /// One recording as written → checked, with its start heading.
 fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
+    // Every file named, before any run: a missing one is named by its key here, not by its
+    // path alone after the recordings before it have run.
+    for (key, file) in [
+        ("imu", Some(&r.imu)),
+        ("truth", Some(&r.truth)),
+        ("config", Some(&r.config)),
+        ("baseline_config", r.baseline_config.as_ref()),
+    ] {
+        if let Some(file) = file
+            && !base.join(file).is_file()
+        {
+            return Err(format!(
+                "recording {}: {key} = {:?}: no such file (relative paths are to the suite file's folder, {})",
+                r.name,
+                file.display().to_string(),
+                base.display()
+            ));
+        }
+    }
     // Where the legs came from, for an error about them.
     let meta = base.join(&r.truth).with_file_name("meta.json");
     let (suspect_legs, source) = match r.suspect_legs {
@@ -365,6 +384,9 @@ mod tests {
     fn write_suite(dir: &Path, truth: &str, recording_extra: &str) -> PathBuf {
         std::fs::create_dir_all(dir).unwrap();
         std::fs::write(dir.join("truth.csv"), truth).unwrap();
+        // Named files must exist (their contents are not read here).
+        std::fs::write(dir.join("imu.csv"), "").unwrap();
+        std::fs::write(dir.join("c.toml"), "").unwrap();
         let suite = dir.join("suite.toml");
         std::fs::write(
             &suite,
@@ -382,6 +404,24 @@ mod tests {
         read_suite(&write_suite(dir, truth, extra))
             .map(|f| f.recordings[0].clone())
             .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn a_missing_file_is_named_by_its_key_before_any_run() {
+        let dir =
+            std::env::temp_dir().join(format!("corridor-suite-missing-{}", std::process::id()));
+        let truth = "t_s,x_m,y_m,z_m\n0.0,0.0,0.0,0.0\n1.0,0.1,0.9,0.0\n";
+        let err = read_one(
+            &dir,
+            truth,
+            "start_heading_deg = 0.0\nbaseline_config = \"nope.toml\"\n",
+        )
+        .unwrap_err();
+        assert!(
+            err.contains("baseline_config = \"nope.toml\": no such file"),
+            "{err}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
