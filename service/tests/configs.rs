@@ -69,6 +69,16 @@ fn a_layered_file_takes_its_base_and_replaces_only_the_keys_it_sets() {
         e.contains("sensor.toml") && e.contains("eskf.zupt_sd_m_s"),
         "{e}"
     );
+    // A base that cannot be read is named from the file that asks for it.
+    std::fs::remove_file(dir.join("sensor.toml")).unwrap();
+    let e = ConfigFile::read(&dir.join("daemon.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with(&dir.join("daemon.toml").display().to_string())
+            && e.contains("base = \"sensor.toml\": cannot read"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -37,9 +37,13 @@ impl ConfigFile {
             ));
         };
         let base_path = path.parent().unwrap_or(Path::new(".")).join(name);
-        let base_text = std::fs::read_to_string(&base_path).map_err(|source| ConfigError::Io {
-            path: base_path.clone(),
-            source,
+        // Named from the file that names it: the base's own path alone did not say where it
+        // was asked for.
+        let base_text = std::fs::read_to_string(&base_path).map_err(|e| {
+            toml_err(
+                path,
+                format!("base = {name:?}: cannot read {}: {e}", base_path.display()),
+            )
         })?;
         let mut merged: toml::Table =
             toml::from_str(&base_text).map_err(|e| toml_err(&base_path, e.to_string()))?;
