@@ -3,7 +3,7 @@
 //! Map of the modules:
 //! - [`csv_rows`]: the CSV rows of the attitude and bias streams (logger tool and demo).
 //! - [`record`]: [`Recorder`], the attitude and bias streams to `attitude.csv` and `bias.csv`.
-//! - [`replay`]: [`replay()`], a recorded IMU log sent as a live sensor (paced, looped, with an
+//! - [`replay`](mod@replay): [`replay()`], a recorded IMU log sent as a live sensor (paced, looped, with an
 //!   injected gyro bias).
 //! - [`track`]: [`Tracker`], the stride-by-stride positions of the nav stream.
 //! - [`producer`]: [`Producer`], publishes [`ImuSample`]s and [`AngleObservation`]s (and the
@@ -15,7 +15,7 @@
 //!   [`Subscriber::recv_timeout`].
 //!
 //! Binaries (`src/bin/`), thin wrappers around the three tool modules (which `corridor demo`
-//! uses too): `corridor-replay` ([`replay`]), `corridor-log` ([`record`]), `corridor-pdr`
+//! uses too): `corridor-replay` ([`replay`](mod@replay)), `corridor-log` ([`record`]), `corridor-pdr`
 //! ([`track`]). [`init_tracing`] is the log setup of every corridor binary.
 //!
 //! Service names, QoS and domains are defined once in [`corridor_shared::services`]; the wire

@@ -1,6 +1,9 @@
 //! corridor-service: the gyro-bias and attitude estimator for foot-mounted IMUs, its offline
 //! runner and its daemon.
 //!
+//! The module docs link to private items too: the documentation is for maintainers, read with
+//! `cargo doc --document-private-items`.
+//!
 //! Map of the modules:
 //! - [`checkpoint`]: atomic save/load of the bias, its covariance and the attitude (the only
 //!   user of bincode).
@@ -15,6 +18,9 @@
 //! - [`stats`]: the statistics of the residual diagnosis (distributions, NIS, whiteness, CUSUM,
 //!   regression, group means), each group with its unit tests.
 //! - [`suite`]: the results table over several recordings (`corridor eval`).
+
+#![allow(rustdoc::private_intra_doc_links)]
+
 pub mod checkpoint;
 pub mod core;
 pub mod daemon;

@@ -1,5 +1,5 @@
 //! `corridor-replay`: publishes a CSV IMU log to the daemon as if it were a live sensor
-//! ([`corridor_client::replay`]).
+//! ([`corridor_client::replay()`]).
 //!
 //! Reports what it sent and how many samples reached no subscriber.
 

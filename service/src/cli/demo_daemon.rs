@@ -237,7 +237,7 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
 }
 
 /// Sends `log` with `injection` added to the gyro through a lossless producer
-/// ([`corridor_client::replay`]), as fast as the daemon takes it, then the end-of-stream marker.
+/// ([`corridor_client::replay()`]), as fast as the daemon takes it, then the end-of-stream marker.
 fn demo_replay(domain: &Domain, log: &ImuLog, injection: &BiasInjection) -> Result<ProducerStats> {
     let opts = ReplayOptions {
         node_name: "corridor-demo-replay".into(),

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub(super) struct EvalArgs {
-    /// Suite file (TOML with [[recording]] tables).
+    /// Suite file (TOML with `[[recording]]` tables).
     #[arg(long)]
     pub(super) suite: PathBuf,
     /// Also write the table (Markdown) and the rows (JSON) into this directory.
@@ -17,7 +17,7 @@ pub(super) struct EvalArgs {
     #[arg(long)]
     pub(super) loops: bool,
     /// Instead of the table: the leave-one-walk-out check of the parameters listed in this
-    /// sweep file (TOML with [[parameter]] tables: key = "section.key", values = [...]); with
+    /// sweep file (TOML with `[[parameter]]` tables: key = "section.key", values = [...]); with
     /// --out it is written to OUT/sweep.md.
     #[arg(long, conflicts_with = "loops")]
     pub(super) sweep: Option<PathBuf>,

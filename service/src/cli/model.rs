@@ -13,7 +13,7 @@ pub struct ModelArgs {
     /// Configuration file (TOML); built-in defaults when absent.
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Corridor map (TOML with [[corridor]] tables); switches the heading source to the map.
+    /// Corridor map (TOML with `[[corridor]]` tables); switches the heading source to the map.
     #[arg(long)]
     pub map: Option<PathBuf>,
     /// Walking direction at the start, degrees in the map frame (overrides the config).

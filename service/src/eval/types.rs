@@ -106,7 +106,7 @@ impl FromStr for Interp {
     }
 }
 
-/// Options of [`evaluate`]; [`Default`] gives the script's defaults.
+/// Options of [`evaluate`](super::evaluate); [`Default`] gives the script's defaults.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EvalOptions {
     /// Alignment method (`--align`, default first-leg).
@@ -216,7 +216,7 @@ pub struct EvalReport {
     /// Lsq: translation applied after the rotation, metres.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub translation_m: Option<[f64; 2]>,
-    /// Heading error of each leg at least [`LEG_MIN_DIST_M`] long (absent for a
+    /// Heading error of each leg at least [`LEG_MIN_DIST_M`](super::LEG_MIN_DIST_M) long (absent for a
     /// loop-closure-only truth; may be empty).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub legs: Option<Vec<Leg>>,
@@ -313,7 +313,7 @@ pub enum EvalError {
         /// GCPs within the trajectory's span.
         inside: usize,
     },
-    /// A streamed trajectory row did not come after the previous one ([`GcpSampler`]).
+    /// A streamed trajectory row did not come after the previous one ([`GcpSampler`](super::GcpSampler)).
     #[error("trajectory row at t = {t_s} s is not after the previous row")]
     NotIncreasing {
         /// The row's time, seconds.

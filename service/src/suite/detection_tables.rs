@@ -157,7 +157,7 @@ fn median(v: &mut [f64]) -> Option<f64> {
 }
 
 /// Predicted against shown: per walk and injected family (z scale, clock, couplings, the
-/// sizes of [`matrix_cases`]), the detectable size the diagnosis predicts on the clean walk and
+/// sizes of [`matrix_cases`](super::matrix_cases)), the detectable size the diagnosis predicts on the clean walk and
 /// the sizes at which the injection was named at all. The shown threshold lies between the
 /// largest size missed below the smallest named and that size; the prediction agrees within a
 /// factor of 2 when that interval meets [MDE/2, 2·MDE].
