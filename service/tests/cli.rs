@@ -644,6 +644,15 @@ fn a_bad_mode_is_said_once_and_clamped_footprints_are_said_on_the_terminal() {
     assert!(String::from_utf8_lossy(&relative.stderr).contains("must be an absolute path"));
     let no_log = corridor(&["diagnose", "--out", out.join("d").to_str().unwrap()]);
     assert_eq!(no_log.status.code(), Some(2));
+    // A domain name iceoryx2 cannot use, named with its flag (it exited with 1 as `domain`).
+    for args in [
+        &["serve", "--domain", "a b"][..],
+        &["status", "--domain", ""],
+    ] {
+        let bad = corridor(args);
+        assert_eq!(bad.status.code(), Some(2), "{args:?}");
+        assert!(String::from_utf8_lossy(&bad.stderr).contains("'--domain <DOMAIN>'"));
+    }
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         err.matches("kalman").count() == 1 && !err.contains("unknown variant"),

@@ -25,7 +25,7 @@ use std::time::Duration;
 )]
 struct Args {
     /// iceoryx2 domain of the daemon.
-    #[arg(long, default_value = DEFAULT_DOMAIN)]
+    #[arg(long, default_value = DEFAULT_DOMAIN, value_parser = Domain::parse_name)]
     domain: String,
     /// Output directory (attitude.csv, bias.csv).
     #[arg(long)]

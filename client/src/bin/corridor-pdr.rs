@@ -19,7 +19,7 @@ use std::time::Duration;
 )]
 struct Args {
     /// iceoryx2 domain of the daemon.
-    #[arg(long, default_value = DEFAULT_DOMAIN)]
+    #[arg(long, default_value = DEFAULT_DOMAIN, value_parser = Domain::parse_name)]
     domain: String,
     /// How long to wait for the daemon, s.
     #[arg(long, default_value_t = 30.0, value_parser = parse_time_s)]

@@ -31,7 +31,7 @@ struct Args {
     #[arg(long = "loop", default_value_t = 1)]
     loops: u32,
     /// iceoryx2 domain of the daemon.
-    #[arg(long, default_value = DEFAULT_DOMAIN)]
+    #[arg(long, default_value = DEFAULT_DOMAIN, value_parser = Domain::parse_name)]
     domain: String,
     /// Delivery policy, live or lossless: the daemon's when left out; when given, the replay
     /// fails unless the daemon uses it.

@@ -12,7 +12,7 @@ pub(super) struct ServeArgs {
     pub(super) model: ModelArgs,
     /// iceoryx2 domain to serve (overrides `daemon.domain`); processes on other domains never
     /// see this daemon.
-    #[arg(long)]
+    #[arg(long, value_parser = corridor_shared::services::Domain::parse_name)]
     pub(super) domain: Option<String>,
     /// live (a lagging reader loses the oldest samples, counted) or lossless (the producer
     /// waits); overrides `daemon.delivery`.

@@ -17,7 +17,7 @@ pub(super) const EXIT_NO_DAEMON: u8 = 2;
 #[derive(Args, Debug)]
 pub(super) struct StatusArgs {
     /// iceoryx2 domain of the daemon.
-    #[arg(long, default_value = DEFAULT_DOMAIN)]
+    #[arg(long, default_value = DEFAULT_DOMAIN, value_parser = Domain::parse_name)]
     pub(super) domain: String,
     /// How long to wait for the daemon's answer, s (it publishes diagnostics every
     /// `daemon.diagnostics_period_s`, 1 s by default).

@@ -73,6 +73,14 @@ impl Domain {
         Ok(())
     }
 
+    /// [`Domain::check_name`] as a command-line parser (`--domain`): a bad name is a usage
+    /// error (exit 2) that names the flag, not a failure after start-up.
+    pub fn parse_name(text: &str) -> Result<String, String> {
+        Self::check_name(text)
+            .map(|()| text.to_owned())
+            .map_err(|e| e.to_string())
+    }
+
     /// The domain `name` for a client: the secured domain of the runtime directory in
     /// [`RUNTIME_DIR_ENV`] when it is set, else the open one ([`Domain::unsecured`]).
     pub fn new(name: &str) -> Result<Self, ServiceError> {
