@@ -593,10 +593,24 @@ fn io_errors_name_the_file() {
 }
 
 #[test]
-fn lines_that_end_in_cr_alone_are_named_as_such() {
+fn lines_that_end_in_cr_alone_and_utf16_are_named_as_such() {
     let text = good_file(3).replace('\n', "\r");
-    let err = ImuCsvReader::new(text.as_bytes(), path(), &lenient()).unwrap_err();
-    assert!(err.to_string().contains("end in CR alone"), "{err}");
+    let err = ImuCsvReader::new(text.as_bytes(), path(), &lenient())
+        .unwrap_err()
+        .to_string();
+    // The header shown stops at its CR: a terminal would return to the line's start there.
+    assert!(
+        err.contains("end in CR alone") && !err.contains('\r'),
+        "{err}"
+    );
+    let utf16: Vec<u8> = [0xff, 0xfe]
+        .into_iter()
+        .chain(good_file(3).encode_utf16().flat_map(u16::to_le_bytes))
+        .collect();
+    let err = ImuCsvReader::new(utf16.as_slice(), path(), &lenient())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("UTF-16") && !err.contains('\0'), "{err}");
 }
 
 #[test]
