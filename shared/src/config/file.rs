@@ -116,7 +116,8 @@ pub struct EstimatorFile {
     pub max_bridge_s: Option<f64>,
     /// A longer gap up to this long, within half a stride, is filled with the samples of the
     /// same phase one stride earlier when the rates around it match them (default 0.45 s;
-    /// 0: off).
+    /// 0: off). Also the longest step the estimator may take for a clock step rather than a
+    /// loss (so a value at or under `max_bridge_s` keeps that test and fills nothing).
     pub max_fill_s: Option<f64>,
     /// Largest plausible foot speed, m/s; a faster estimate fails the health check (default 15).
     pub max_speed_m_s: Option<f64>,

@@ -211,27 +211,14 @@ impl ConfigFile {
                 1.0,
                 "must be in [0, 1] s",
             )?,
-            // Half of the slowest stride: a longer gap loses a footfall. A fill takes the gaps
-            // longer than the bridge's: one shorter than the bridge would never be used.
-            max_fill_s: match in_range(
+            // Half of the slowest stride: a longer gap loses a footfall.
+            max_fill_s: in_range(
                 "estimator.max_fill_s",
                 e.max_fill_s.unwrap_or(ESTIMATOR_MAX_FILL_S),
                 0.0,
                 1.0,
                 "must be in [0, 1] s",
-            )? {
-                f if f > 0.0 && f < e.max_bridge_s.unwrap_or(ESTIMATOR_MAX_BRIDGE_S) => {
-                    return Err(invalid(
-                        "estimator.max_fill_s",
-                        format!(
-                            "{f:?} (with estimator.max_bridge_s = {:?})",
-                            e.max_bridge_s.unwrap_or(ESTIMATOR_MAX_BRIDGE_S)
-                        ),
-                        "must be 0 (no fill) or at least estimator.max_bridge_s",
-                    ));
-                }
-                f => f,
-            },
+            )?,
             max_speed_m_s: Positive::in_range(
                 "estimator.max_speed_m_s",
                 e.max_speed_m_s.unwrap_or(ESTIMATOR_MAX_SPEED_M_S),
