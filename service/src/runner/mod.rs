@@ -147,7 +147,8 @@ pub struct RunOutcome {
 impl RunOutcome {
     /// What the input cost this run, in one line, when it cost anything: samples the estimator
     /// refused (by reason, with the first one's place), gaps and how they were crossed, clock
-    /// steps, and restores of the health check. `None` for a clean log.
+    /// steps, restores of the health check, and the other events `corridor run` warns of
+    /// (velocity resets, a heading reacquired). `None` for a clean log.
     pub fn input_report(&self) -> Option<String> {
         let c = &self.counters;
         let mut parts = Vec::new();
@@ -186,6 +187,13 @@ impl RunOutcome {
         }
         if c.health_restores > 0 {
             parts.push(count(c.health_restores, "health-check restore"));
+        }
+        // Not the input's doing, but what `corridor run` warns of besides: said too.
+        if c.velocity_resets > 0 {
+            parts.push(count(c.velocity_resets, "velocity reset"));
+        }
+        if c.heading_reacquisitions > 0 {
+            parts.push(count(c.heading_reacquisitions, "heading reacquisition"));
         }
         (!parts.is_empty()).then(|| parts.join("; "))
     }

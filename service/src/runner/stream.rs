@@ -345,34 +345,35 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     drop((est_w, inn_w));
     let c = *feed.est.counters();
     let refused = c.refused();
-    // The counts go to summary.json only when the run succeeds (below): a failed run says them
-    // here without pointing at a summary it does not write.
+    // The counts go to summary.json only when the run succeeds: these lines point at it then,
+    // and a run that fails says them without the pointer.
     let nothing_accepted = c.samples == 0 && refused > 0;
     let never_aligned = c.samples > 0 && feed.est.mount_yaw_rad().is_none() && c.stances == 0;
-    let where_counted = if nothing_accepted || never_aligned {
-        ""
-    } else {
-        " (counts in summary.json)"
+    let more: Vec<String> = [
+        (
+            reader.rows_rejected().saturating_sub(logged as u64),
+            "rejected rows",
+        ),
+        (
+            refused.saturating_sub(MAX_REFUSED_EXAMPLES as u64),
+            "refused samples",
+        ),
+        (
+            feed.warned.saturating_sub(MAX_REFUSED_EXAMPLES) as u64,
+            "gaps and health-check failures",
+        ),
+    ]
+    .iter()
+    .filter(|(n, _)| *n > 0)
+    .map(|(n, what)| format!("{n} more {what}"))
+    .collect();
+    let say_more = |where_counted: &str| {
+        for m in &more {
+            tracing::warn!("{m}{where_counted}");
+        }
     };
-    if reader.rows_rejected() > logged as u64 {
-        tracing::warn!(
-            "{} more rejected rows{where_counted}",
-            reader.rows_rejected() - logged as u64
-        );
-    }
-    if refused > MAX_REFUSED_EXAMPLES as u64 {
-        tracing::warn!(
-            "{} more refused samples{where_counted}",
-            refused - MAX_REFUSED_EXAMPLES as u64
-        );
-    }
-    if feed.warned > MAX_REFUSED_EXAMPLES {
-        tracing::warn!(
-            "{} more gaps and health-check failures{where_counted}",
-            feed.warned - MAX_REFUSED_EXAMPLES
-        );
-    }
     if nothing_accepted {
+        say_more("");
         return Err(RunError::NothingAccepted {
             path: opts.imu.clone(),
             samples: refused,
@@ -380,16 +381,21 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         });
     }
     if never_aligned {
+        say_more("");
         return Err(RunError::NeverAligned {
             path: opts.imu.clone(),
             min_rest_s: opts.config.alignment.min_rest_s.get(),
         });
     }
     let eval = match (&kept.gcps, &opts.truth) {
-        (Some(g), Some(path)) => Some(g.finish().map_err(|source| RunError::Eval {
-            truth: path.clone(),
-            source,
-        })?),
+        (Some(g), Some(path)) => Some(
+            g.finish()
+                .map_err(|source| RunError::Eval {
+                    truth: path.clone(),
+                    source,
+                })
+                .inspect_err(|_| say_more(""))?,
+        ),
         _ => None,
     };
     // What the evaluation had to do (footprints outside the log's time span clamped, as the
@@ -408,7 +414,8 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
             &after.trace,
             truth.as_deref(),
             (eval_before.as_ref(), eval.as_ref()),
-        )?;
+        )
+        .inspect_err(|_| say_more(""))?;
     }
     let summary = Summary {
         imu: opts.imu.display().to_string(),
@@ -473,8 +480,11 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     };
     let sum_path = staged.stage(opts.out_dir.join("summary.json"));
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
-    std::fs::write(&sum_path, json + "\n").map_err(io_at(&sum_path))?;
-    staged.commit()?;
+    std::fs::write(&sum_path, json + "\n")
+        .map_err(io_at(&sum_path))
+        .and_then(|()| staged.commit())
+        .inspect_err(|_| say_more(""))?;
+    say_more(" (counts in summary.json)");
     Ok(summary)
 }
 

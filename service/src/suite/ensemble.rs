@@ -68,7 +68,8 @@ pub fn run_ensemble(suite_path: &Path) -> Result<Vec<EnsembleRow>, SuiteError> {
         let mut rms_pct = Vec::with_capacity(START_OFFSETS_DEG.len());
         for offset in START_OFFSETS_DEG {
             let cfg = ctx.default_config_turned(best, offset).map_err(wrap)?;
-            rms_pct.push(ctx.footprint_at(&cfg).map_err(wrap)?.rms_pct);
+            let say = (offset == 0.0).then_some("the default run");
+            rms_pct.push(ctx.footprint_at(&cfg, say).map_err(wrap)?.rms_pct);
         }
         rows.push(EnsembleRow {
             name: r.name.clone(),

@@ -389,11 +389,23 @@ impl<'a> Ctx<'a> {
         })
     }
 
-    /// The footprint figures of a run without injection at configuration `cfg`.
-    fn footprint_at(&self, cfg: &Config) -> Result<Footprint, RunError> {
+    /// The footprint figures of a run without injection at configuration `cfg`; with `say`,
+    /// what the input cost that run is logged (once per recording: the runs log nothing per
+    /// sample, see [`runner::run_log`]).
+    fn footprint_at(&self, cfg: &Config, say: Option<&str>) -> Result<Footprint, RunError> {
         let aid = heading_aid(cfg, None)?;
         let run = runner::run_log(&self.log, cfg, &aid, &BiasInjection::default(), |_, _| {});
+        if let Some(which) = say {
+            self.say_input(&run, which);
+        }
         self.footprint(&run)
+    }
+
+    /// Logs what the input cost `run` ([`RunOutcome::input_report`]), when it cost anything.
+    fn say_input(&self, run: &RunOutcome, which: &str) {
+        if let Some(report) = run.input_report() {
+            tracing::warn!("{}: {report} ({which})", self.rec.name);
+        }
     }
 
     /// The footprint figures of a run against the recording's truth.
@@ -583,9 +595,7 @@ fn run_recording(
     let (best_r0, best_rest) = ctx.run(best, BiasPrior::RestMean, none)?;
     let fig = ctx.default_figures(best)?;
     // The runs log nothing per sample (`runner::run_log`): what the input cost is said once.
-    if let Some(report) = best_r0.input_report() {
-        tracing::warn!("{}: {report} (the default run)", r.name);
-    }
+    ctx.say_input(&best_r0, "the default run");
     let c = best_r0.counters;
     let (stances, heading_used, stride_used) = (c.stances, c.heading_used, c.stride_used);
     // The injection starts when the initial rest ends (the alignment instant of the clean run).

@@ -142,13 +142,16 @@ pub fn run_sweep(suite_path: &Path, sweep_path: &Path) -> Result<Vec<SweepResult
             source: Box::new(source),
         };
         let ctx = Ctx::open(base, r, super::Rejected::Said).map_err(wrap)?;
+        // What the input cost is said with the recording's first run.
+        let mut say = Some("its first run of the sweep");
         for (p, res) in sweep.parameters.iter().zip(&mut out) {
             res.configured = configured(&ctx.config, &p.key).map_err(&file_err)?;
             for (v, value) in p.values.iter().enumerate() {
                 let file = with_value(&ctx.config, &p.key, value).map_err(&file_err)?;
                 let path = base.join(&r.config);
                 let cfg = config_for(&file, &path, r, best, BiasPrior::RestMean).map_err(wrap)?;
-                res.rms_pct[v].push(ctx.footprint_at(&cfg).map_err(wrap)?.rms_pct);
+                let fp = ctx.footprint_at(&cfg, say.take()).map_err(wrap)?;
+                res.rms_pct[v].push(fp.rms_pct);
             }
         }
     }
