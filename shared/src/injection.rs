@@ -227,8 +227,9 @@ pub fn parse_vec3(text: &str) -> Result<[f64; 3], String> {
 /// sample implausible, and the refusal then named the log's line, not the flag.
 pub const MAX_INJECTED_BIAS_RAD_S: f64 = 0.2;
 
-/// Largest bias ramp an injection may add, rad/s²: it reaches [`MAX_INJECTED_BIAS_RAD_S`] in
-/// 20 s (the detection matrix injects 2e-4).
+/// Largest bias ramp an injection may add, rad/s² (the detection matrix injects 2e-4). A ramp
+/// grows without bound: at this one the injected bias passes [`MAX_INJECTED_BIAS_RAD_S`], a bias
+/// the health check allows, 20 s after the injection starts, so a longer log wants a slower one.
 pub const MAX_INJECTED_RAMP_RAD_S2: f64 = 0.01;
 
 /// [`parse_vec3`] for `--inject-gyro-bias`: each component within ±[`MAX_INJECTED_BIAS_RAD_S`].
