@@ -200,7 +200,7 @@ impl RunOutcome {
 }
 
 /// "1 gap", "2 gaps".
-pub(crate) fn count(n: u64, what: &str) -> String {
+fn count(n: u64, what: &str) -> String {
     format!("{n} {what}{}", if n == 1 { "" } else { "s" })
 }
 

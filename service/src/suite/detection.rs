@@ -345,7 +345,8 @@ pub fn detection_matrix(
             name: r.name.clone(),
             source: Box::new(source),
         };
-        let (log, truth) = super::read_recording(base, r, super::Rejected::Said).map_err(wrap)?;
+        let (log, truth) =
+            super::read_recording(base, r, super::RejectedRows::Say).map_err(wrap)?;
         let model = diagnosis_model(base, r).map_err(wrap)?;
         out.recordings.push(r.name.clone());
         // The clean column first: the effects it names are the walk's own (documented in that

@@ -64,7 +64,7 @@ pub fn run_ensemble(suite_path: &Path) -> Result<Vec<EnsembleRow>, SuiteError> {
             name: r.name.clone(),
             source: Box::new(source),
         };
-        let ctx = Ctx::open(base, r, super::Rejected::Said).map_err(wrap)?;
+        let ctx = Ctx::open(base, r, super::RejectedRows::Say).map_err(wrap)?;
         let mut rms_pct = Vec::with_capacity(START_OFFSETS_DEG.len());
         for offset in START_OFFSETS_DEG {
             let cfg = ctx.default_config_turned(best, offset).map_err(wrap)?;

@@ -21,7 +21,7 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<String, SuiteError> {
             source: Box::new(source),
         };
         let (log, truth) =
-            super::read_recording(base, r, super::Rejected::AlreadySaid).map_err(wrap)?;
+            super::read_recording(base, r, super::RejectedRows::AlreadySaid).map_err(wrap)?;
         let mut file = ConfigFile::read(&base.join(&r.config)).map_err(|e| wrap(e.into()))?;
         // The paper's model: no extension states (a model change, not an override).
         file.model = Default::default();

@@ -290,7 +290,7 @@ fn without_rest_from_checkpoint(
     others: &[[f64; 3]],
 ) -> Result<Option<Footprint>, RunError> {
     // The second pass over the log: its rejected rows were said in the first.
-    let ctx = Ctx::open(base, r, Rejected::AlreadySaid)?;
+    let ctx = Ctx::open(base, r, RejectedRows::AlreadySaid)?;
     let cfg = ctx.default_config(best)?;
     let Some(ws) = front_end::checkpoint_from(others, cfg.eskf.gyro_bias_prior_sd_rad_s.get())
     else {
@@ -334,30 +334,31 @@ struct Ctx<'a> {
 /// Whether a reading of a recording's log says the rows it rejected: the first reading in a
 /// command does, a later pass over the same log does not.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Rejected {
-    Said,
+pub(crate) enum RejectedRows {
+    Say,
     AlreadySaid,
 }
 
-/// A recording's log, read with its configuration's time-step limits and gap threshold (rejected
-/// rows said when `said`, see [`crate::runner::read_log`]), and its truth.
+/// A recording's log, read with its configuration's time-step limits and gap threshold (its
+/// rejected rows said unless `said` is [`RejectedRows::AlreadySaid`], see
+/// [`crate::runner::read_log`]), and its truth.
 pub(crate) fn read_recording(
     base: &Path,
     r: &SuiteRecording,
-    said: Rejected,
+    said: RejectedRows,
 ) -> Result<(ImuLog, Vec<TruthPoint>), RunError> {
     let config = ConfigFile::read(&base.join(&r.config))?.validate()?;
     let path = base.join(&r.imu);
     let log = match said {
-        Rejected::Said => crate::runner::read_log(&path, &config)?,
-        Rejected::AlreadySaid => crate::runner::read_log_counted(&path, &config)?,
+        RejectedRows::Say => crate::runner::read_log(&path, &config)?,
+        RejectedRows::AlreadySaid => crate::runner::read_log_counted(&path, &config)?,
     };
     Ok((log, read_truth_csv(&base.join(&r.truth))?))
 }
 
 impl<'a> Ctx<'a> {
     /// Reads a recording's log, truth and configurations.
-    fn open(base: &'a Path, r: &'a SuiteRecording, said: Rejected) -> Result<Self, RunError> {
+    fn open(base: &'a Path, r: &'a SuiteRecording, said: RejectedRows) -> Result<Self, RunError> {
         let (log, truth) = read_recording(base, r, said)?;
         Ok(Ctx {
             base,
@@ -574,7 +575,7 @@ fn run_recording(
     inj: [f64; 3],
     best: Mode,
 ) -> Result<SuiteRow, RunError> {
-    let ctx = Ctx::open(base, r, Rejected::Said)?;
+    let ctx = Ctx::open(base, r, RejectedRows::Say)?;
     let path_m = ctx
         .truth
         .windows(2)

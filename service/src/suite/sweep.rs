@@ -141,7 +141,7 @@ pub fn run_sweep(suite_path: &Path, sweep_path: &Path) -> Result<Vec<SweepResult
             name: r.name.clone(),
             source: Box::new(source),
         };
-        let ctx = Ctx::open(base, r, super::Rejected::Said).map_err(wrap)?;
+        let ctx = Ctx::open(base, r, super::RejectedRows::Say).map_err(wrap)?;
         // What the input cost is said with the recording's first run.
         let mut say = Some("its first run of the sweep");
         for (p, res) in sweep.parameters.iter().zip(&mut out) {
