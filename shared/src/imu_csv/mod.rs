@@ -9,7 +9,7 @@
 //! spaces or tabs around fields, and bytes that are not UTF-8 in columns it does not read (in a
 //! number they make the row malformed). It is a hand-rolled single pass over the bytes of each line
 //! (fields split at `,` eight bytes at a time, numbers read with [`str::parse::<f64>`]); on the
-//! 21 001-row exp29 log it parses about 2.5 million rows per second on one core
+//! 21 001-row exp29 log it parses about 3 million rows per second on one core
 //! (`cargo bench -p corridor-shared --bench csv_parse`).
 //!
 //! [`ImuCsvReader`] streams a log row by row in memory independent of its length (the offline
