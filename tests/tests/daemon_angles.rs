@@ -106,3 +106,48 @@ fn an_external_heading_moves_the_published_yaw_as_offline() {
         );
     }
 }
+
+/// An external heading further than `EXTERNAL_HEADING_MAX_NIS` from the filter's prediction is
+/// refused and counted, not fused (one 90° off with σ 1e-6 at 30 s used to throw the bias to
+/// 0.03 rad/s); one that agrees with the prediction is fused.
+#[test]
+fn an_absurd_external_heading_mid_walk_is_refused_at_its_stance() {
+    use corridor_service::runner::heading_aid;
+    let run = |heading: Option<(f64, f64)>| {
+        let cfg = config();
+        let aid = heading_aid(&cfg, None).unwrap();
+        let mut est = corridor_service::core::Estimator::new(cfg, aid);
+        // The heading queued, and whether its stance fused it.
+        let (mut queued, mut fused) = (None, None);
+        for r in exp36_rows() {
+            let e = *est.step(&(&r).into()).unwrap();
+            if let (Some(dir), Some(ev)) = (queued, e.heading)
+                && ev.direction_rad == dir
+            {
+                fused = Some(ev.outcome.is_ok());
+            }
+            if let Some((h, sd)) = heading
+                && queued.is_none()
+                && r.t_s >= 30.0
+            {
+                // The foot's heading now, roughly (the sensor's yaw less its yaw on the foot),
+                // turned by `h`, with σ `sd`.
+                let foot = e.yaw_rad - est.mount_yaw_rad().expect("calibrated by 30 s");
+                est.queue_heading(foot + h, sd).unwrap();
+                queued = Some(foot + h);
+            }
+        }
+        (*est.counters(), est.last_estimate().gyro_bias_rad_s, fused)
+    };
+    let (clean, clean_bias, _) = run(None);
+    let (absurd, absurd_bias, fused) = run(Some((std::f64::consts::FRAC_PI_2, 1e-6)));
+    assert_eq!((absurd.headings_outside_gate, fused), (1, Some(false)));
+    let moved = (0..3)
+        .map(|k| (absurd_bias[k] - clean_bias[k]).abs())
+        .fold(0.0, f64::max);
+    assert!(moved < 1e-4, "the bias moved by {moved} rad/s");
+    assert_eq!(clean.headings_outside_gate, 0);
+    // Not turned, with a σ (10°) that covers the rough foot heading: within the gate, fused.
+    let (near, _, fused) = run(Some((0.0, 0.17)));
+    assert_eq!((near.headings_outside_gate, fused), (0, Some(true)));
+}

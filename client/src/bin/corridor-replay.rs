@@ -58,6 +58,9 @@ fn main() -> std::process::ExitCode {
     corridor_client::exit(run())
 }
 
+/// Rejected rows named one by one (the rest are counted).
+const REJECTED_ROWS_NAMED: usize = 20;
+
 fn run() -> Result<()> {
     let a = Args::parse();
     if a.loops == 0 {
@@ -67,6 +70,19 @@ fn run() -> Result<()> {
     let log = read_imu_csv(&a.imu, &ImuCsvOptions::default())?;
     if log.rows.is_empty() {
         bail!("{}: no samples", a.imu.display());
+    }
+    // Rows the reader rejected are not sent: each named (the first ones), then counted, as
+    // `corridor run` names them.
+    for r in log.rejected.iter().take(REJECTED_ROWS_NAMED) {
+        tracing::warn!("rejected input row, not sent: {}", r.located(&log.path));
+    }
+    let rejected: u64 = log.rejected_counts().values().sum();
+    if rejected > REJECTED_ROWS_NAMED as u64 {
+        tracing::warn!(
+            "{}: {} more rejected rows, not sent",
+            log.path.display(),
+            rejected - REJECTED_ROWS_NAMED as u64
+        );
     }
     let domain = Domain::new(&a.domain)?;
     let opts = ReplayOptions {
@@ -117,7 +133,7 @@ fn run() -> Result<()> {
         "what the daemon did with them (dropped on a full queue, refused, estimated): corridor status --domain {}",
         a.domain
     );
-    println!("rows rejected by the CSV reader: {}", log.rejected.len());
+    println!("rows rejected by the CSV reader: {rejected}");
     println!("elapsed: {:.3} s ({rate:.0} samples/s)", r.elapsed_s);
     if s.imu_undelivered > 0 {
         eprintln!(

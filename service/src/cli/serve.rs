@@ -76,6 +76,10 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
             "estimated": report.estimated,
             "lost_in_daemon": report.lost_in_daemon,
             "angles_dropped": report.angles_dropped,
+            "angles_ignored": report.angles_ignored,
+            "headings_refused": report.headings[0],
+            "headings_superseded": report.headings[1],
+            "headings_outside_gate": report.headings[2],
             "published": {
                 "attitude": report.published[0],
                 "bias": report.published[1],

@@ -384,6 +384,9 @@ impl<'a> EstState<'a> {
         p.clock_steps_back += c.clock_steps_back;
         p.stances += c.stances;
         p.heading_used += c.heading_used;
+        p.headings_refused += c.headings_refused;
+        p.headings_superseded += c.headings_superseded;
+        p.headings_outside_gate += c.headings_outside_gate;
         self.est = self.new_estimator(cfg);
         self.last = Estimate::default();
         self.last_bias_t_s = f64::NEG_INFINITY;
@@ -455,7 +458,7 @@ impl<'a> EstState<'a> {
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
              σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
              health restores {} (footprints forgotten {}), velocity resets {}, tilts levelled again {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
-             lost in a killed daemon {}",
+             lost in a killed daemon {}, external headings refused {} (superseded {}, outside the gate {})",
             d.received,
             d.seq_gaps - h.seq_gaps,
             d.seq_gaps,
@@ -485,6 +488,9 @@ impl<'a> EstState<'a> {
             rx.head_missing.load(Ordering::Relaxed),
             rx.missing_at_restart.load(Ordering::Relaxed),
             rx.lost_in_daemon.load(Ordering::Relaxed),
+            self.previous.headings_refused + self.est.counters().headings_refused,
+            self.previous.headings_superseded + self.est.counters().headings_superseded,
+            self.previous.headings_outside_gate + self.est.counters().headings_outside_gate,
         );
         self.latency_health.clear();
         self.health = HealthMark {
@@ -608,6 +614,15 @@ pub(super) fn estimator_thread(
         lost_in_daemon: counters.lost_in_daemon.load(Ordering::Relaxed),
         angles_dropped: counters.angles_dropped.load(Ordering::Relaxed),
         angles_ignored: counters.angles_ignored.load(Ordering::Relaxed),
+        headings: {
+            let c = st.est.counters();
+            let p = &st.previous;
+            [
+                p.headings_refused + c.headings_refused,
+                p.headings_superseded + c.headings_superseded,
+                p.headings_outside_gate + c.headings_outside_gate,
+            ]
+        },
         published: [
             out.attitude.seq,
             out.bias.seq,

@@ -232,6 +232,9 @@ pub struct DaemonReport {
     pub angles_dropped: u64,
     /// Angle observations carrying roll or pitch, which are not fused (their heading is used).
     pub angles_ignored: u64,
+    /// External headings the estimator refused as absurd, replaced by a newer one before their
+    /// stance, and refused at their stance as too far from the prediction (every stream).
+    pub headings: [u64; 3],
     /// Messages published per output (attitude, bias, nav, diagnostics): the next `seq` of each,
     /// continued across daemon lives.
     pub published: [u64; 4],

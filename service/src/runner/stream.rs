@@ -75,6 +75,13 @@ pub struct Summary {
     pub heading_reacquisitions: u64,
     /// Samples integrated on the smoothed clock because the stamps jitter (host arrival times).
     pub jittery_clock_samples: u64,
+    /// External heading observations refused as absurd (an offline run has none; the daemon
+    /// takes them from its angle stream).
+    pub headings_refused: u64,
+    /// External heading observations replaced by a newer one before their stance.
+    pub headings_superseded: u64,
+    /// External heading observations refused at their stance as too far from the prediction.
+    pub headings_outside_gate: u64,
     /// Alignment came from a short first stance (no initial rest, no rest-mean prior).
     pub started_without_rest: bool,
     /// A start in fast gait went back this far, ms, to an earlier stance (see `Counters`).
@@ -468,6 +475,9 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         relevels: c.relevels,
         heading_reacquisitions: c.heading_reacquisitions,
         jittery_clock_samples: c.jittery_clock_samples,
+        headings_refused: c.headings_refused,
+        headings_superseded: c.headings_superseded,
+        headings_outside_gate: c.headings_outside_gate,
         started_without_rest: c.started_without_rest,
         start_replayed_ms: c.start_replayed_ms,
         rest_prior_refused: c.rest_prior_refused,

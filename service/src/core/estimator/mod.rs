@@ -50,8 +50,8 @@ mod types;
 
 pub use association::association_weight;
 pub use types::{
-    Counters, Estimate, GapCrossing, HeadingEvent, HeadingRefused, ImuInput, Notice, Phase,
-    SampleError, WarmStart, WarmStartError,
+    Counters, EXTERNAL_HEADING_MAX_NIS, Estimate, GapCrossing, HeadingEvent, HeadingRefused,
+    ImuInput, Notice, Phase, SampleError, WarmStart, WarmStartError,
 };
 
 use fast_start::Start;
@@ -340,7 +340,10 @@ impl Estimator {
 
     /// An external observation of the walking (foot) heading in the map frame with its σ; it is
     /// used at the next stance instead of the map. A heading that is not finite, or a σ that is
-    /// not in (0, π], is refused and counted (`headings_refused`): nothing absurd is fused.
+    /// not in (0, π], is refused and counted (`headings_refused`); at the stance, one further
+    /// than [`EXTERNAL_HEADING_MAX_NIS`] from the prediction is refused and counted
+    /// (`headings_outside_gate`): nothing absurd is fused. Of several before one stance the
+    /// newest is used, the others counted (`headings_superseded`).
     pub fn queue_heading(&mut self, heading_rad: f64, sd_rad: f64) -> Result<(), HeadingRefused> {
         let sane = heading_rad.is_finite() && sd_rad > 0.0 && sd_rad <= std::f64::consts::PI;
         if !sane {
@@ -350,7 +353,14 @@ impl Estimator {
                 sd_rad,
             });
         }
-        self.p.pending_heading = Some((heading_rad, sd_rad));
+        if self
+            .p
+            .pending_heading
+            .replace((heading_rad, sd_rad))
+            .is_some()
+        {
+            self.p.counters.headings_superseded += 1;
+        }
         Ok(())
     }
 

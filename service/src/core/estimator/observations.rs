@@ -113,6 +113,7 @@ impl Pipeline {
         let foot_heading = wrap_pi(eskf.predicted_heading(&forward));
         let straight = self.straight.push(foot_heading);
         let xy = [eskf.p_m.x, eskf.p_m.y];
+        let external = self.pending_heading.is_some();
         let (direction, sd) = match self.pending_heading.take() {
             Some((dir, sd)) => (Ok(dir), sd),
             None if self.cfg.mode == Mode::Zupt => (Err(Rejection::NoSource), h.sigma_rad.get()),
@@ -142,6 +143,11 @@ impl Pipeline {
                 // rotation they compare does (`SampleClock::take_back`).
                 let t_s = t_s - self.clock.offset_s();
                 let innovation = match &mut self.bias {
+                    BiasFilter::InEskf if external && outside_gate(eskf, dir, sd, &forward) => {
+                        self.counters.headings_outside_gate += 1;
+                        event.outcome = Err(Rejection::OutsideGate);
+                        None
+                    }
                     BiasFilter::InEskf => Some(eskf.heading_update(dir, sd, &forward)),
                     BiasFilter::Paper { kf, obs } => {
                         let q_true = rot_z(sensor_yaw) * self.tilt0;
@@ -455,4 +461,12 @@ impl Pipeline {
             Rejection::NoSource => {}
         }
     }
+}
+
+/// Whether the external heading `dir` (σ `sd`) lies further than [`EXTERNAL_HEADING_MAX_NIS`]
+/// from the filter's prediction of the foot axis's heading.
+fn outside_gate(eskf: &Eskf, dir: f64, sd: f64, forward: &Vector3<f64>) -> bool {
+    let (predicted, var) = eskf.heading_prediction(forward);
+    let r = wrap_pi(dir - predicted);
+    r * r / (var + sd * sd) > EXTERNAL_HEADING_MAX_NIS
 }

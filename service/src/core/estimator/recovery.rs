@@ -102,6 +102,7 @@ impl Estimator {
         c.rejected_implausible = now.counters.rejected_implausible;
         c.rejected_time_jump = now.counters.rejected_time_jump + 1;
         c.headings_refused = now.counters.headings_refused;
+        c.headings_superseded = now.counters.headings_superseded;
         p.pending_heading = now.pending_heading.take().or(p.pending_heading);
         let warm_start_since = now.warm_start.filter(|_| self.warm_start_since_copy);
         p.warm_start = now.warm_start.or(p.warm_start);

@@ -292,6 +292,10 @@ fn an_absurd_external_heading_is_refused_and_counted() {
     assert!(est.p.pending_heading.is_none());
     est.queue_heading(0.3, 0.01).unwrap();
     assert_eq!(est.p.pending_heading, Some((0.3, 0.01)));
+    // A newer one before the stance replaces it, counted.
+    est.queue_heading(0.4, 0.02).unwrap();
+    assert_eq!(est.p.pending_heading, Some((0.4, 0.02)));
+    assert_eq!(est.counters().headings_superseded, 1);
 }
 
 #[test]
