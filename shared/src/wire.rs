@@ -22,7 +22,8 @@ use iceoryx2::prelude::*;
 
 /// [`ImuSample::flags`] (and the output `flags`): the producer has finished; this message
 /// carries no data. The daemon answers with one output of each kind carrying the same flag (and
-/// the last state), then resets its estimator for the next stream.
+/// the last state), then resets its estimator for the next stream; its periodic diagnostics
+/// carry the flag too until the next stream's first sample.
 pub const FLAG_END_OF_STREAM: u32 = 1 << 0;
 
 /// Output `flags`: the bias is subtracted from the gyro rates the attitude was integrated from

@@ -187,6 +187,13 @@ fn consumers_come_and_go_and_a_stalled_one_does_not_stall_the_estimator() {
             .any(|x| x.latency_p50_s > 0.0 && x.latency_p99_s >= x.latency_p50_s),
         "{all:?}"
     );
+    // Between streams the periodic diagnostics say so too (a review found `corridor status`
+    // showing the next stream's aligning estimator beside the ended stream's convergence).
+    let next = diag
+        .recv_timeout(WAIT)
+        .unwrap()
+        .expect("a periodic diagnostics message");
+    assert!(next.flags & FLAG_END_OF_STREAM != 0, "{next:?}");
     drop((stalled, bias, diag));
     let report = daemon.stop();
     assert_eq!(report.streams_finished, 1);

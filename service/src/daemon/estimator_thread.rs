@@ -55,6 +55,10 @@ struct EstState<'a> {
     streams_finished: u64,
     /// The next sample comes from a new producer (see [`Msg::NewProducer`]).
     producer_changed: bool,
+    /// A stream ended and the next one has not sent a sample yet: the periodic diagnostics
+    /// carry `FLAG_END_OF_STREAM` (the estimator is already the next stream's, aligning), and
+    /// the health line says "between streams" instead of that estimator's zero bias.
+    between_streams: bool,
     /// The run of samples refused in a row because their time went back, each following the
     /// one before it (a driver whose clock restarted): its first time and its last.
     went_back: Option<(f64, f64)>,
@@ -108,6 +112,7 @@ impl<'a> EstState<'a> {
             last_nis: f64::NAN,
             streams_finished: 0,
             producer_changed: false,
+            between_streams: false,
             went_back: None,
             warm: None,
             warm_started_from: None,
@@ -256,6 +261,7 @@ impl<'a> EstState<'a> {
             gyro_rad_s: s.gyro_rad_s,
             accel_m_s2: s.accel_m_s2,
         };
+        self.between_streams = false;
         let e = match self.est.step(&input) {
             Ok(e) => {
                 self.went_back = None;
@@ -392,6 +398,7 @@ impl<'a> EstState<'a> {
         self.last_bias_t_s = f64::NEG_INFINITY;
         self.last_phase = Phase::Aligning;
         self.streams_finished += 1;
+        self.between_streams = true;
     }
 
     /// Saves the estimator's bias state (once aligned, and only if it changed since the last
@@ -453,6 +460,14 @@ impl<'a> EstState<'a> {
         let h = self.health;
         let secs = now.duration_since(h.at).as_secs_f64().max(1e-9);
         let rate = (d.received - h.received) as f64 / secs;
+        let (bias, sd) = if self.between_streams {
+            ("(between streams)".to_string(), "(none)".to_string())
+        } else {
+            (
+                Vec3Fmt(self.last.gyro_bias_rad_s).to_string(),
+                Vec3Fmt(self.last.gyro_bias_sd_rad_s).to_string(),
+            )
+        };
         tracing::info!(
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
@@ -469,10 +484,14 @@ impl<'a> EstState<'a> {
             d.producer_changes,
             MicrosFmt(self.latency_health.quantile_s(0.5)),
             MicrosFmt(self.latency_health.quantile_s(0.99)),
-            Vec3Fmt(self.last.gyro_bias_rad_s),
-            Vec3Fmt(self.last.gyro_bias_sd_rad_s),
+            bias,
+            sd,
             if self.last.converged { "yes" } else { "no" },
-            self.est.phase().name(),
+            if self.between_streams {
+                "between streams"
+            } else {
+                self.est.phase().name()
+            },
             self.previous.rejected_implausible + self.est.counters().rejected_implausible,
             self.previous.rejected_time_jump + self.est.counters().rejected_time_jump,
             self.previous.clipped_samples + self.est.counters().clipped_samples,
@@ -580,7 +599,12 @@ pub(super) fn estimator_thread(
         }
         let now = Instant::now();
         if now >= next_diag {
-            st.publish_diagnostics(&mut out, counters, 0);
+            let flags = if st.between_streams {
+                FLAG_END_OF_STREAM
+            } else {
+                0
+            };
+            st.publish_diagnostics(&mut out, counters, flags);
             next_diag = now + cfg.diagnostics_period;
         }
         if now >= next_health {
