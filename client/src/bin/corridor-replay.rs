@@ -71,19 +71,10 @@ fn run() -> Result<()> {
     if log.rows.is_empty() {
         bail!("{}: no samples", a.imu.display());
     }
-    // Rows the reader rejected are not sent: each named (the first ones), then counted, as
-    // `corridor run` names them.
-    for r in log.rejected.iter().take(REJECTED_ROWS_NAMED) {
-        tracing::warn!("rejected input row, not sent: {}", r.located(&log.path));
-    }
-    let rejected: u64 = log.rejected_counts().values().sum();
-    if rejected > REJECTED_ROWS_NAMED as u64 {
-        tracing::warn!(
-            "{}: {} more rejected rows, not sent",
-            log.path.display(),
-            rejected - REJECTED_ROWS_NAMED as u64
-        );
-    }
+    // Rows the reader rejected are not sent: the first named, then counted, as `corridor run`
+    // names them.
+    log.warn_rejected(REJECTED_ROWS_NAMED, ", not sent");
+    let rejected = log.rejected.len();
     let domain = Domain::new(&a.domain)?;
     let opts = ReplayOptions {
         node_name: "corridor-replay".into(),

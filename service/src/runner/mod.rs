@@ -200,7 +200,7 @@ impl RunOutcome {
 }
 
 /// "1 gap", "2 gaps".
-fn count(n: u64, what: &str) -> String {
+pub(crate) fn count(n: u64, what: &str) -> String {
     format!("{n} {what}{}", if n == 1 { "" } else { "s" })
 }
 
@@ -300,7 +300,7 @@ pub(crate) const REJECTED_ROWS_LOGGED: usize = 20;
 /// drop them without a word). [`read_log_counted`] reads it without saying so.
 pub fn read_log(path: &Path, config: &Config) -> Result<ImuLog, ImuCsvError> {
     let log = read_log_counted(path, config)?;
-    say_rejected(&log);
+    log.warn_rejected(REJECTED_ROWS_LOGGED, "");
     Ok(log)
 }
 
@@ -314,21 +314,6 @@ pub fn read_log_counted(path: &Path, config: &Config) -> Result<ImuLog, ImuCsvEr
         ..Default::default()
     };
     corridor_shared::imu_csv::read_imu_csv(path, &opts)
-}
-
-/// Logs the rows the reader rejected: the first [`REJECTED_ROWS_LOGGED`], then their number.
-fn say_rejected(log: &ImuLog) {
-    for r in log.rejected.iter().take(REJECTED_ROWS_LOGGED) {
-        tracing::warn!("rejected input row: {}", r.located(&log.path));
-    }
-    let total: u64 = log.rejected_counts().values().sum();
-    if total > REJECTED_ROWS_LOGGED as u64 {
-        tracing::warn!(
-            "{}: {} more rejected rows",
-            log.path.display(),
-            total - REJECTED_ROWS_LOGGED as u64
-        );
-    }
 }
 
 /// Runs `log` (in memory) through a new estimator and keeps the whole per-sample trace; `sink`

@@ -169,19 +169,15 @@ pub fn headline_markdown(rows: &[SuiteRow]) -> String {
         .map(|r| {
             let i = r.input;
             let parts = [
-                (i.rows_rejected, "row rejected", "rows rejected"),
-                (i.samples_refused, "sample refused", "samples refused"),
-                (i.gaps, "gap", "gaps"),
-                (i.clock_steps_back, "clock step back", "clock steps back"),
-                (
-                    i.health_restores,
-                    "health-check restore",
-                    "health-check restores",
-                ),
+                (i.rows_rejected, "row", " rejected"),
+                (i.samples_refused, "sample", " refused"),
+                (i.gaps, "gap", ""),
+                (i.clock_steps_back, "clock step", " back"),
+                (i.health_restores, "health-check restore", ""),
             ]
             .iter()
             .filter(|(n, _, _)| *n > 0)
-            .map(|&(n, one, many)| format!("{n} {}", if n == 1 { one } else { many }))
+            .map(|&(n, what, done)| format!("{}{done}", crate::runner::count(n, what)))
             .collect::<Vec<_>>();
             format!("{} ({})", r.recording, parts.join(", "))
         })

@@ -262,6 +262,19 @@ impl ImuLog {
         }
         counts
     }
+
+    /// Logs the rejected rows: the first `named` with their place, then how many more, each line
+    /// ending in `note` (`", not sent"`; the counts stay in the log). `corridor run`'s in-memory
+    /// paths and `corridor-replay` alike.
+    pub fn warn_rejected(&self, named: usize, note: &str) {
+        for r in self.rejected.iter().take(named) {
+            tracing::warn!("rejected input row{note}: {}", r.located(&self.path));
+        }
+        if self.rejected.len() > named {
+            let more = self.rejected.len() - named;
+            tracing::warn!("{}: {more} more rejected rows{note}", self.path.display());
+        }
+    }
 }
 
 /// Options for [`read_imu_csv`] and [`parse_imu_csv`].
