@@ -354,6 +354,63 @@ fn a_stamp_glitched_forward_is_dropped_and_the_walk_goes_on_as_without_it() {
 }
 
 #[test]
+fn stamps_glitched_far_ahead_in_a_run_are_dropped_and_the_walk_goes_on_as_without_them() {
+    // The daemon's path, as above. Two or more stamps 975 s ahead (beyond `sensor.max_dt_s`):
+    // the second confirmed the jump as a real gap, and every later sample was refused as not
+    // increasing (the daemon started a new stream after 1 s; offline, the rest of the log was
+    // lost). Now the run after a confirmed jump stays open for `sensor.max_dt_s`, and the first
+    // good time drops it.
+    let log = read_imu_csv(&data().join("imu.csv"), &ImuCsvOptions::default()).unwrap();
+    let cfg = Config::from_file(&data().join("../../../configs/gdins.toml")).unwrap();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let last_of = |log: &ImuLog| {
+        let (mut last, mut glitches, mut said) = (None, Vec::new(), Vec::new());
+        let c = run_log(log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+            last = Some(*e);
+            if let Some(t_s) = e.glitch_t_s {
+                glitches.push((t_s, e.glitch_run_dropped));
+                said.extend(e.notices().map(|n| n.to_string()));
+            }
+        })
+        .counters;
+        (last.unwrap(), c, glitches, said)
+    };
+    for (k, n) in [(5003, 2), (7010, 5), (9001, 2), (9001, 150)] {
+        let mut glitched = log.clone();
+        for r in &mut glitched.rows[k..k + n] {
+            r.t_s += 975.0;
+        }
+        let mut without = log.clone();
+        without.rows.drain(k..k + n);
+        let (g, gc, glitches, said) = last_of(&glitched);
+        let (w, wc, ..) = last_of(&without);
+        // The first of the run was refused as a jump; the others were taken, then dropped.
+        let dropped = n as u64 - 1;
+        assert_eq!(glitches, [(glitched.rows[k + 1].t_s, dropped)], "k {k}");
+        let says = format!("and the {dropped} samples from it on were glitched stamps");
+        assert!(said.iter().any(|n| n.contains(&says)), "{said:?}");
+        assert_eq!(
+            (gc.samples, gc.rejected_time_jump, gc.rejected_time, gc.gaps),
+            (wc.samples, n as u64, 0, wc.gaps),
+            "k {k}"
+        );
+        // The state as if the glitched samples had never come, bit for bit.
+        assert_eq!(g.p_m, w.p_m, "k {k}");
+        assert_eq!(g.nav_from_body, w.nav_from_body, "k {k}");
+        assert_eq!(g.gyro_bias_rad_s, w.gyro_bias_rad_s, "k {k}");
+        assert_eq!(gc.heading_used, wc.heading_used, "k {k}");
+    }
+    // A real 10 s gap is still one: the run closes after `sensor.max_dt_s` and nothing of it
+    // is dropped.
+    let mut gapped = log.clone();
+    for r in &mut gapped.rows[7010..] {
+        r.t_s += 10.0;
+    }
+    let (_, c, glitches, _) = last_of(&gapped);
+    assert_eq!((c.gaps, c.rejected_time_jump, glitches.len()), (1, 1, 0));
+}
+
+#[test]
 fn a_clock_step_forward_is_not_taken_for_a_loss() {
     // The clock steps 0.3 s forward with no sample lost, at the 16 places where
     // `a_longer_gap_in_a_swing_is_filled_from_the_stride_before` cuts 0.3 s out (none of those

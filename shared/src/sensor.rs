@@ -22,6 +22,10 @@
 //! is still a gap (beyond the guard's `gap_dt_s`) is accepted but provisional: when the next time
 //! goes back and follows the one before it, the gap's far side was a stamp glitch
 //! ([`TimeVerdict::Glitch`]) and is dropped after the fact, so the good samples after it are kept.
+//! A jump's far side that a sample confirmed stays provisional too, for as long as the new time
+//! base has run for at most `max_dt_s`: a time that goes back behind it and follows the time
+//! before the jump says the jump and the times after it were glitched stamps
+//! ([`TimeVerdict::GlitchRun`]), dropped after the fact.
 //! A time that goes back by at most `max_dt_s` and that the next one follows is a step back of the
 //! clock ([`TimeVerdict::StepBack`]): the caller may take it as the new time base (the CSV reader
 //! does; the estimator asks the rates).
@@ -264,6 +268,13 @@ pub enum TimeVerdict {
     /// the last time was a stamp glitch, not a gap. Accept this one (the time before the glitch
     /// is its base); what was taken with the glitched sample has to be dropped by the caller.
     Glitch,
+    /// A jump was confirmed as a new time base ([`TimeVerdict::NewBase`]) at most `max_dt_s`
+    /// (and [`JUMP_RUN_MAX_SAMPLES`] samples) ago, with no gap or step back since, and this time
+    /// goes back behind that base and follows the time before the jump within `max_dt_s`: the
+    /// jump and every time since were glitched stamps (two or more in a row), not a gap. Accept
+    /// this one (the time before the jump is its base); what was taken since the jump has to be
+    /// dropped by the caller ([`TimeGuard::jump_run`] says from which time).
+    GlitchRun,
     /// The time follows the previous (refused) one, which went back behind the time base by at
     /// most `max_dt_s` after a sample had followed the base: the clock stepped back (a host clock
     /// set back, a driver that re-sends what it sent) and runs on from there. The caller decides
@@ -286,7 +297,12 @@ pub enum TimeVerdict {
 /// within `gap_dt_s` says the gap's far side was a single glitched stamp
 /// ([`TimeVerdict::Glitch`]). Without that, one stamp 0.9 s ahead made every good sample of the
 /// next 0.9 s "not increasing" (180 samples at 200 Hz, and the walk's footprints 0.95 m off).
-/// A glitch of two or more samples in a row is taken for a gap, as before.
+/// A glitch of two or more samples in a row beyond `gap_dt_s` and within `max_dt_s` is taken for
+/// a gap (and the time going back after it for a step back of the clock). One of two or more
+/// samples beyond `max_dt_s` is a jump that the second sample confirms; the run from there stays
+/// open for `max_dt_s`, and a time that then goes back and follows the time before the jump
+/// ends it as glitched stamps ([`TimeVerdict::GlitchRun`]). Before, two stamps 975 s ahead in
+/// the middle of a walk made every later time "not increasing": the rest of the log was lost.
 /// A time that goes back by at most `max_dt_s` and is followed by the next one is a step back
 /// of the clock ([`TimeVerdict::StepBack`]), which the caller may take as the new time base.
 /// The caller calls [`TimeGuard::accept`] with every time it accepts.
@@ -308,6 +324,27 @@ pub struct TimeGuard {
     /// A time went back beyond `max_dt_s` since the last accepted one: no step back until a
     /// time follows the base.
     far_back: bool,
+    /// Set by `check` on [`TimeVerdict::NewBase`]: the last accepted time before the jump, for
+    /// `accept` to open the run.
+    new_base_from_s: Option<f64>,
+    /// While the run after a confirmed jump is open (see [`TimeVerdict::GlitchRun`]).
+    run: Option<JumpRun>,
+}
+
+/// Samples after a confirmed jump within which a time that goes back and follows the time
+/// before the jump makes them a glitched run ([`TimeVerdict::GlitchRun`]); with `max_dt_s`,
+/// it bounds what a caller holds to drop them (1 s at 1 kHz).
+pub const JUMP_RUN_MAX_SAMPLES: u32 = 1024;
+
+/// The open run after a confirmed jump.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JumpRun {
+    /// The last accepted time before the jump, s.
+    pub before_s: f64,
+    /// The first accepted time after it (the new base), s.
+    pub first_s: f64,
+    /// Accepted times in the run, the first included.
+    pub samples: u32,
 }
 
 impl TimeGuard {
@@ -324,6 +361,8 @@ impl TimeGuard {
             before_gap_s: None,
             back_s: None,
             far_back: false,
+            new_base_from_s: None,
+            run: None,
         }
     }
 
@@ -345,16 +384,31 @@ impl TimeGuard {
         self.last_s
     }
 
+    /// The open run after a confirmed jump, while a time that goes back may still show it to
+    /// be glitched stamps ([`TimeVerdict::GlitchRun`]); after a `GlitchRun` verdict (before
+    /// `accept`), the run it ends.
+    #[inline]
+    pub fn jump_run(&self) -> Option<JumpRun> {
+        self.run
+    }
+
     /// Judges the finite time `t_s` against the time base; a jump is remembered as the candidate
     /// for a new base.
     #[inline]
     pub fn check(&mut self, t_s: f64) -> TimeVerdict {
+        self.new_base_from_s = None;
         let Some(last) = self.last_s else {
             return TimeVerdict::Accept;
         };
         let follows = |from: f64| step_follows(t_s - from, self.min_dt_s, self.max_dt_s);
         if follows(last) {
             return TimeVerdict::Accept;
+        }
+        if let Some(run) = self.run
+            && t_s < run.first_s
+            && follows(run.before_s)
+        {
+            return TimeVerdict::GlitchRun;
         }
         if let Some(before) = self.before_gap_s
             && t_s <= last
@@ -366,6 +420,7 @@ impl TimeGuard {
             && follows(c)
         {
             return if self.confirmed {
+                self.new_base_from_s = Some(last);
                 TimeVerdict::NewBase
             } else {
                 TimeVerdict::Rebase
@@ -409,6 +464,25 @@ impl TimeGuard {
             let dt_s = t_s - last;
             dt_s > self.gap_dt_s && dt_s <= self.max_dt_s
         });
+        // The run after a confirmed jump opens at the new base and stays open while the times
+        // run on from it, within `max_dt_s` and `JUMP_RUN_MAX_SAMPLES`, without a gap.
+        self.run = match self.new_base_from_s.take() {
+            Some(before_s) => Some(JumpRun {
+                before_s,
+                first_s: t_s,
+                samples: 1,
+            }),
+            None => self.run.and_then(|run| {
+                let runs_on = self.last_s.is_some_and(|last| t_s > last)
+                    && t_s - run.first_s <= self.max_dt_s
+                    && run.samples < JUMP_RUN_MAX_SAMPLES
+                    && self.before_gap_s.is_none();
+                runs_on.then_some(JumpRun {
+                    samples: run.samples + 1,
+                    ..run
+                })
+            }),
+        };
         self.confirmed = self.last_s.is_some();
         self.last_s = Some(t_s);
         self.candidate_s = None;
@@ -439,6 +513,7 @@ mod tests {
                         | TimeVerdict::NewBase
                         | TimeVerdict::Rebase
                         | TimeVerdict::Glitch
+                        | TimeVerdict::GlitchRun
                         | TimeVerdict::StepBack
                 ) {
                     g.accept(t);
@@ -532,15 +607,66 @@ mod tests {
             run(&[0.0, 0.005, 0.5, 1.3, 0.505]),
             [Accept, Accept, Accept, Accept, Glitch]
         );
-        // A time after a refused jump, or one replacing a bad first time, is not provisional.
-        assert_eq!(
-            run(&[0.0, 0.005, 10.0, 10.005, 0.01]),
-            [Accept, Accept, Jump, NewBase, NotIncreasing]
-        );
+        // A time replacing a bad first time is not provisional (one after a confirmed jump
+        // opens a run: the next test).
         assert_eq!(
             run(&[-50.0, 0.0, 0.005, -49.99]),
             [Accept, Jump, Rebase, NotIncreasing]
         );
+    }
+
+    #[test]
+    fn two_or_more_stamps_beyond_max_dt_are_a_glitched_run_when_the_time_comes_back() {
+        use TimeVerdict::*;
+        // Two stamps 10 s ahead, then the time before them runs on. Before, the second
+        // confirmed the jump and every later time was "not increasing": the rest of a log.
+        assert_eq!(
+            run(&[0.0, 0.005, 10.0, 10.005, 0.015, 0.020]),
+            [Accept, Accept, Jump, NewBase, GlitchRun, Accept]
+        );
+        // Four ahead; and back from behind (a good time may come at most max_dt_s after the
+        // time before the jump).
+        assert_eq!(
+            run(&[0.0, 0.005, 1e6, 1e6 + 0.005, 1e6 + 0.01, 1e6 + 0.015, 0.03]),
+            [Accept, Accept, Jump, NewBase, Accept, Accept, GlitchRun]
+        );
+        assert_eq!(
+            run(&[0.0, 0.005, 10.0, 10.005, 1.2]),
+            [Accept, Accept, Jump, NewBase, NotIncreasing]
+        );
+        // A real gap: the run closes once the new base has run on for max_dt_s; a time that
+        // goes back after it is refused as before.
+        let mut times = vec![0.0, 0.005];
+        times.extend((0..=210).map(|k| 10.0 + 0.005 * f64::from(k)));
+        times.push(0.010);
+        let verdicts = run(&times);
+        assert_eq!(verdicts[2..4], [Jump, NewBase]);
+        assert!(verdicts[4..213].iter().all(|&v| v == Accept));
+        assert_eq!(verdicts[213], NotIncreasing);
+        // ... as it closes at a gap or a step back within the run.
+        assert_eq!(
+            run(&[0.0, 0.005, 10.0, 10.005, 10.5, 0.010]),
+            [Accept, Accept, Jump, NewBase, Accept, NotIncreasing]
+        );
+        let mut g = TimeGuard::new(1e-6, 1.0, 0.05);
+        for t in [0.0, 0.005] {
+            g.check(t);
+            g.accept(t);
+        }
+        assert_eq!((g.check(10.0), g.check(10.005)), (Jump, NewBase));
+        g.accept(10.005);
+        assert_eq!(
+            g.jump_run(),
+            Some(JumpRun {
+                before_s: 0.005,
+                first_s: 10.005,
+                samples: 1
+            })
+        );
+        assert_eq!((g.check(9.9), g.check(9.905)), (NotIncreasing, StepBack));
+        g.accept(9.905);
+        assert_eq!(g.jump_run(), None);
+        assert_eq!(g.check(0.010), NotIncreasing);
     }
 
     #[test]

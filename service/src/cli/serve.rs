@@ -80,6 +80,8 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
             "headings_refused": report.headings[0],
             "headings_superseded": report.headings[1],
             "headings_outside_gate": report.headings[2],
+            "headings_expired": report.headings[3],
+            "headings_undone": report.headings[4],
             "published": {
                 "attitude": report.published[0],
                 "bias": report.published[1],

@@ -30,11 +30,19 @@ pub struct Accepted {
     pub replaced_first_t_s: Option<f64>,
     /// The previous accepted time, which jumped forward by a gap and which this sample goes
     /// back behind, following the time before it: that time was a stamp glitch
-    /// ([`TimeVerdict::Glitch`]), and what was taken with it is to be dropped.
+    /// ([`TimeVerdict::Glitch`]), and what was taken with it is to be dropped. After a run of
+    /// glitched stamps beyond `sensor.max_dt_s` ([`TimeVerdict::GlitchRun`]): the first time
+    /// accepted in the run, and what was taken since is to be dropped.
     pub glitch_t_s: Option<f64>,
-    /// This sample's time came after a gap (beyond `estimator.max_dt_s`) and stays provisional
-    /// until the next accepted sample: the caller keeps what it needs to drop it after the fact.
+    /// With `glitch_t_s`: a run after a jump, not a single stamp after a gap.
+    pub glitch_run: bool,
+    /// This sample's time came after a gap (beyond `estimator.max_dt_s`), or after a jump that
+    /// it confirms, and stays provisional: the caller keeps what it needs to drop it after the
+    /// fact (a gap's until the next accepted sample, a jump's while `in_jump_run`).
     pub provisional: bool,
+    /// This sample is in the run after a confirmed jump, which a later time may still show to
+    /// be glitched stamps ([`TimeVerdict::GlitchRun`]): the copy taken before the run is kept.
+    pub in_jump_run: bool,
     /// The clock stepped back before this sample, and the caller's judge took the step
     /// ([`TimeVerdict::StepBack`]): the last accepted time before it, and the time of the
     /// sample refused after it, s.
@@ -176,6 +184,7 @@ impl Plausibility {
         }
         let last_t_s = self.time.last_s();
         let (mut replaced_first_t_s, mut glitch_t_s, mut stepped_back) = (None, None, None);
+        let mut glitch_run = false;
         let not_increasing = || SampleError::TimeNotIncreasing {
             t_s: s.t_s,
             prev_t_s: last_t_s.unwrap_or(f64::NAN),
@@ -184,6 +193,10 @@ impl Plausibility {
             TimeVerdict::Accept | TimeVerdict::NewBase => {}
             TimeVerdict::Rebase => replaced_first_t_s = last_t_s,
             TimeVerdict::Glitch => glitch_t_s = last_t_s,
+            TimeVerdict::GlitchRun => {
+                glitch_t_s = self.time.jump_run().map(|r| r.first_s);
+                glitch_run = true;
+            }
             TimeVerdict::StepBack => match self.went_back.take().zip(last_t_s) {
                 Some((first, last_t_s))
                     if judge_step_back(&StepBack {
@@ -217,7 +230,10 @@ impl Plausibility {
                 || rail(&s.accel_m_s2, l.accel_range_m_s2()),
             replaced_first_t_s,
             glitch_t_s,
-            provisional: self.time.provisional(),
+            glitch_run,
+            provisional: self.time.provisional()
+                || self.time.jump_run().is_some_and(|r| r.samples == 1),
+            in_jump_run: self.time.jump_run().is_some(),
             stepped_back,
         })
     }
@@ -316,7 +332,9 @@ mod tests {
                 clipped: false,
                 replaced_first_t_s: None,
                 glitch_t_s: None,
+                glitch_run: false,
                 provisional: false,
+                in_jump_run: false,
                 stepped_back: None,
             })
         );

@@ -369,6 +369,7 @@ impl<'a> EstState<'a> {
         self.count(ok);
         self.publish_diagnostics(out, rx, FLAG_END_OF_STREAM);
         self.save_checkpoint(cfg);
+        self.est.expire_pending_heading();
         // A new stream: fresh estimator (warm-started from the state just saved), counters
         // carried over.
         let c = *self.est.counters();
@@ -393,6 +394,8 @@ impl<'a> EstState<'a> {
         p.headings_refused += c.headings_refused;
         p.headings_superseded += c.headings_superseded;
         p.headings_outside_gate += c.headings_outside_gate;
+        p.headings_expired += c.headings_expired;
+        p.headings_undone += c.headings_undone;
         self.est = self.new_estimator(cfg);
         self.last = Estimate::default();
         self.last_bias_t_s = f64::NEG_INFINITY;
@@ -473,7 +476,7 @@ impl<'a> EstState<'a> {
              dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
              σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
              health restores {} (footprints forgotten {}), velocity resets {}, tilts levelled again {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
-             lost in a killed daemon {}, external headings refused {} (superseded {}, outside the gate {})",
+             lost in a killed daemon {}, external headings refused {} (superseded {}, outside the gate {}, expired at a stream's end {}, undone by the health check {})",
             d.received,
             d.seq_gaps - h.seq_gaps,
             d.seq_gaps,
@@ -510,6 +513,8 @@ impl<'a> EstState<'a> {
             self.previous.headings_refused + self.est.counters().headings_refused,
             self.previous.headings_superseded + self.est.counters().headings_superseded,
             self.previous.headings_outside_gate + self.est.counters().headings_outside_gate,
+            self.previous.headings_expired + self.est.counters().headings_expired,
+            self.previous.headings_undone + self.est.counters().headings_undone,
         );
         self.latency_health.clear();
         self.health = HealthMark {
@@ -616,6 +621,8 @@ pub(super) fn estimator_thread(
             next_checkpoint = Instant::now() + cfg.checkpoint_period;
         }
     }
+    // A heading still waiting for a stance will not be used.
+    st.est.expire_pending_heading();
     st.publish_diagnostics(&mut out, counters, FLAG_SHUTDOWN);
     st.save_checkpoint(cfg);
     let mut diagnostics = st.diagnostics(counters, FLAG_SHUTDOWN);
@@ -645,6 +652,8 @@ pub(super) fn estimator_thread(
                 p.headings_refused + c.headings_refused,
                 p.headings_superseded + c.headings_superseded,
                 p.headings_outside_gate + c.headings_outside_gate,
+                p.headings_expired + c.headings_expired,
+                p.headings_undone + c.headings_undone,
             ]
         },
         published: [

@@ -233,8 +233,10 @@ pub struct DaemonReport {
     /// Angle observations carrying roll or pitch, which are not fused (their heading is used).
     pub angles_ignored: u64,
     /// External headings the estimator refused as absurd, replaced by a newer one before their
-    /// stance, and refused at their stance as too far from the prediction (every stream).
-    pub headings: [u64; 3],
+    /// stance, refused at their stance as too far from the prediction, still waiting when their
+    /// stream ended or the daemon stopped, and fused in an update the health check undid (every
+    /// stream).
+    pub headings: [u64; 5],
     /// Messages published per output (attitude, bias, nav, diagnostics): the next `seq` of each,
     /// continued across daemon lives.
     pub published: [u64; 4],

@@ -82,6 +82,10 @@ pub struct Summary {
     pub headings_superseded: u64,
     /// External heading observations refused at their stance as too far from the prediction.
     pub headings_outside_gate: u64,
+    /// External heading observations still waiting for a stance when the stream ended.
+    pub headings_expired: u64,
+    /// External heading observations whose update the health check undid.
+    pub headings_undone: u64,
     /// Alignment came from a short first stance (no initial rest, no rest-mean prior).
     pub started_without_rest: bool,
     /// A start in fast gait went back this far, ms, to an earlier stance (see `Counters`).
@@ -478,6 +482,8 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         headings_refused: c.headings_refused,
         headings_superseded: c.headings_superseded,
         headings_outside_gate: c.headings_outside_gate,
+        headings_expired: c.headings_expired,
+        headings_undone: c.headings_undone,
         started_without_rest: c.started_without_rest,
         start_replayed_ms: c.start_replayed_ms,
         rest_prior_refused: c.rest_prior_refused,

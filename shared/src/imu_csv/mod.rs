@@ -30,7 +30,7 @@
 
 use crate::sensor::{TimeGuard, TimeVerdict};
 use serde::Serialize;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 use std::fmt;
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
@@ -112,7 +112,9 @@ pub enum RejectReason {
     TimeOutlier,
     /// A row after a gap (a step beyond [`ImuCsvOptions::gap_dt_s`]) that the next row
     /// contradicts by going back and following the row before the gap: the gap was one glitched
-    /// stamp (found only when that next row was read).
+    /// stamp (found only when that next row was read). Also each row of a run after a jump
+    /// (two or more rows beyond [`ImuCsvOptions::max_dt_s`]) that a row within `max_dt_s` of
+    /// it contradicts in the same way ([`crate::sensor::TimeVerdict::GlitchRun`]).
     TimeGlitch,
 }
 
@@ -164,8 +166,8 @@ impl fmt::Display for RejectReason {
                  each other)"
             }
             RejectReason::TimeGlitch => {
-                "came after a gap, and the next row goes back and follows the row before it (a \
-                 glitched stamp)"
+                "came after a gap or a jump, and a later row goes back and follows the row \
+                 before it (a glitched stamp)"
             }
         })
     }

@@ -62,7 +62,15 @@ pub struct ImuCsvReader<R> {
     /// Of those, the jumps (for the time-unit hint).
     pub(super) jumps_passed: u64,
     /// Rows to return before reading on, in order (those released with the current one).
-    pub(super) ready: [Option<ImuRow>; 2],
+    pub(super) ready: VecDeque<ImuRow>,
+    /// The rows since a jump that the next row confirmed, while the time rule's run after it
+    /// is open ([`TimeGuard::jump_run`]): a later row that goes back and follows the row before
+    /// the jump shows them to be glitched stamps ([`TimeVerdict::GlitchRun`]), and they are
+    /// rejected; otherwise they go out when the run closes (at most `max_dt_s` of rows, and
+    /// [`crate::sensor::JUMP_RUN_MAX_SAMPLES`]). The first is the jumped row, whose rejection
+    /// is `run_jump` (an estimator behind the reader refuses it, as it does on a live stream).
+    pub(super) run: Vec<ImuRow>,
+    pub(super) run_jump: Option<RejectedRow>,
     pub(super) rejected: Vec<RejectedRow>,
     pub(super) keep_rejected: usize,
     pub(super) accepted: u64,
@@ -118,7 +126,9 @@ impl<R: BufRead> ImuCsvReader<R> {
             went_back: None,
             passed_refused: (0, None),
             jumps_passed: 0,
-            ready: [None, None],
+            ready: VecDeque::new(),
+            run: Vec::new(),
+            run_jump: None,
             rejected: Vec::new(),
             keep_rejected: REJECTED_ROWS_KEPT,
             accepted: 0,
@@ -276,24 +286,60 @@ impl<R: BufRead> ImuCsvReader<R> {
         }
     }
 
+    /// The run after a confirmed jump goes out: nothing showed it to be glitched stamps.
+    fn release_run(&mut self) {
+        if let Some(rejected) = self.run_jump.take() {
+            self.passed_refused.0 += 1;
+            self.passed_refused.1.get_or_insert(rejected);
+            self.jumps_passed += 1;
+        }
+        self.ready.extend(self.run.drain(..));
+    }
+
+    /// The run after a confirmed jump was glitched stamps: each of its rows is rejected.
+    #[cold]
+    fn reject_run(&mut self) {
+        let mut run = std::mem::take(&mut self.run);
+        let jumped = self.run_jump.take();
+        for row in run.drain(..) {
+            let rejected = RejectedRow {
+                line: row.line,
+                column: REQUIRED_COLUMNS[0].to_string(),
+                value: row.t_s.to_string(),
+                reason: RejectReason::TimeGlitch,
+            };
+            // The jumped row with the value as it was read.
+            let rejected = match &jumped {
+                Some(j) if j.line == row.line => RejectedRow {
+                    reason: RejectReason::TimeGlitch,
+                    ..j.clone()
+                },
+                _ => rejected,
+            };
+            self.reject(rejected);
+        }
+        self.run = run;
+    }
+
     /// The next accepted row, or an error, or `None` at the end of the source.
     pub(super) fn next_row(&mut self) -> Result<Option<ImuRow>, ImuCsvError> {
-        if let Some(row) = self.ready[0].take() {
-            self.ready = [self.ready[1].take(), None];
+        if let Some(row) = self.ready.pop_front() {
             return Ok(Some(self.emit(row)));
         }
         let n_fields = self.names.len();
         loop {
             if !self.read_line()? {
                 // A jump on the last row was never confirmed. A one-row log: its only time had
-                // nothing to contradict it.
+                // nothing to contradict it. A run after a confirmed jump goes out.
                 for (_, rejected) in [self.jumped.take(), self.went_back.take()]
                     .into_iter()
                     .flatten()
                 {
                     self.reject(rejected);
                 }
-                return Ok(self.held.take().map(|row| self.emit(row)));
+                self.release_run();
+                self.ready.extend(self.held.take());
+                return Ok(self.ready.pop_front().map(|row| self.emit(row)));
             }
             let line_no = self.line_no;
             if self.line.iter().all(u8::is_ascii_whitespace) {
@@ -332,6 +378,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                     | TimeVerdict::NewBase
                     | TimeVerdict::Rebase
                     | TimeVerdict::Glitch
+                    | TimeVerdict::GlitchRun
                     | TimeVerdict::StepBack) => {
                         // The held jump was a real gap's far side, or the held row the first
                         // after the clock stepped back: this row follows it. (A step back is
@@ -345,10 +392,19 @@ impl<R: BufRead> ImuCsvReader<R> {
                         for (_, rejected) in dropped.into_iter().flatten() {
                             self.reject(rejected);
                         }
+                        if verdict == TimeVerdict::GlitchRun {
+                            self.reject_run();
+                        }
+                        // A confirmed jump's row opens the run after it (see `run`); this row,
+                        // the first after a step back, is passed on now.
                         let jumped = passed.map(|(j, rejected)| {
-                            self.passed_refused.0 += 1;
-                            self.passed_refused.1.get_or_insert(rejected);
-                            self.jumps_passed += u64::from(verdict == TimeVerdict::NewBase);
+                            if verdict == TimeVerdict::NewBase {
+                                self.release_run();
+                                self.run_jump = Some(rejected);
+                            } else {
+                                self.passed_refused.0 += 1;
+                                self.passed_refused.1.get_or_insert(rejected);
+                            }
                             j
                         });
                         self.time.accept(row.t_s);
@@ -411,20 +467,26 @@ impl<R: BufRead> ImuCsvReader<R> {
             };
             self.line = line;
             match verdict {
+                // The run after a confirmed jump, while it is open: held (a row held before it,
+                // a gap's far side, goes out).
+                Ok((row, jumped)) if self.time.jump_run().is_some() => {
+                    self.ready.extend(self.held.take());
+                    self.run.extend(jumped);
+                    self.run.push(row);
+                }
                 // The very first time, or a time after a gap: held until a row follows it. A
                 // row held before (the first row, or a gap's far side, now followed by a gap)
-                // goes out.
+                // goes out, after a run that closed.
                 Ok((row, None)) if !self.time.confirmed() || self.time.provisional() => {
-                    if let Some(before) = self.held.replace(row) {
-                        return Ok(Some(self.emit(before)));
-                    }
+                    self.release_run();
+                    self.ready.extend(self.held.replace(row));
                 }
-                // Out in order: a held row, a jumped one this row confirmed, this row.
+                // Out in order: a run that closed, a held row, a jumped one this row confirmed,
+                // this row.
                 Ok((row, jumped)) => {
-                    let mut out = [self.held.take(), jumped, Some(row)].into_iter().flatten();
-                    let first = out.next().unwrap_or(row);
-                    self.ready = [out.next(), out.next()];
-                    return Ok(Some(self.emit(first)));
+                    self.release_run();
+                    self.ready
+                        .extend([self.held.take(), jumped, Some(row)].into_iter().flatten());
                 }
                 // A jump or a time that went back: held until the next row says whether it was
                 // a gap's far side or the clock's step back (a row held before is rejected when
@@ -444,6 +506,9 @@ impl<R: BufRead> ImuCsvReader<R> {
                     }
                 }
                 Err((None, rejected)) => self.reject(rejected),
+            }
+            if let Some(row) = self.ready.pop_front() {
+                return Ok(Some(self.emit(row)));
             }
         }
     }

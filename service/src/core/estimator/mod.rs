@@ -117,8 +117,10 @@ pub struct Estimator {
     p: Pipeline,
     /// The estimator before the last accepted sample, while that sample's time came after a
     /// gap and is provisional: the next sample may show it to be a stamp glitch, and it is then
-    /// dropped after the fact (`recovery.rs`). A copy per gap, in a buffer reused from the
-    /// second gap on (`gap_copy.rs`).
+    /// dropped after the fact (`recovery.rs`). After a jump that a sample confirmed, the copy
+    /// before that sample, kept while the run after the jump is open: a time that goes back to
+    /// before the jump drops the run. A copy per gap, in a buffer reused from the second gap on
+    /// (`gap_copy.rs`).
     before_gap: gap_copy::GapCopy,
     /// A warm start was handed in since `before_gap` was taken: applied again to the filter
     /// restored from it.
@@ -210,6 +212,9 @@ struct Pipeline {
     stance_obs_done: bool,
     stance_f_sum: (Vector3<f64>, u64),
     pending_heading: Option<(f64, f64)>,
+    /// External headings taken in (`queue_heading`), for the count of those that dropped
+    /// samples had used (`drop_glitched_samples`).
+    headings_queued: u64,
     warm_start: Option<WarmStart>,
     converged_at_s: Option<f64>,
     out: Estimate,
@@ -278,6 +283,7 @@ impl Estimator {
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
             pending_heading: None,
+            headings_queued: 0,
             warm_start: None,
             converged_at_s: None,
             out: Estimate::default(),
@@ -353,6 +359,7 @@ impl Estimator {
                 sd_rad,
             });
         }
+        self.p.headings_queued += 1;
         if self
             .p
             .pending_heading
@@ -362,6 +369,14 @@ impl Estimator {
             self.p.counters.headings_superseded += 1;
         }
         Ok(())
+    }
+
+    /// The stream has ended: an external heading still waiting for a stance will not be used,
+    /// and is counted (`headings_expired`; before, it went uncounted).
+    pub fn expire_pending_heading(&mut self) {
+        if self.p.pending_heading.take().is_some() {
+            self.p.counters.headings_expired += 1;
+        }
     }
 
     /// Processes one sample. On error nothing changed and the sample is counted as rejected.
@@ -400,16 +415,20 @@ impl Estimator {
         if accepted.replaced_first_t_s.is_some() {
             self.restart_after_time_outlier();
         }
-        if accepted.glitch_t_s.is_some() {
-            self.drop_glitched_sample();
-        }
+        let glitch_dropped = if accepted.glitch_t_s.is_some() {
+            self.drop_glitched_samples()
+        } else {
+            0
+        };
         // Allocates at the first gap and the first after the alignment (see `before_gap`).
+        // A warm start handed in since the copy is applied again if the copy is swapped in.
         if accepted.provisional {
             self.before_gap.save(&self.stage, &self.p);
-        } else {
+            self.warm_start_since_copy = false;
+        } else if !accepted.in_jump_run {
             self.before_gap.forget();
+            self.warm_start_since_copy = false;
         }
-        self.warm_start_since_copy = false;
         let clipped = accepted.clipped;
         let p = &mut self.p;
         let prev = p.last;
@@ -465,6 +484,11 @@ impl Estimator {
         }
         out.replaced_first_t_s = accepted.replaced_first_t_s;
         out.glitch_t_s = accepted.glitch_t_s;
+        out.glitch_run_dropped = if accepted.glitch_run {
+            glitch_dropped
+        } else {
+            0
+        };
         out.clock_stepped_back_s = stepped_back_s;
 
         if let Stage::Aligning(rest) = &mut self.stage {
@@ -583,6 +607,8 @@ impl Pipeline {
             _ => self.before_bias.save(&self.bias),
         }
         let mut before = take_spare(&mut self.before, eskf);
+        let used_before = (self.counters.heading_used, self.counters.stride_used);
+        let external_pending = self.pending_heading.is_some();
         let omega = self.navigate(
             eskf,
             &mut before,
@@ -610,6 +636,15 @@ impl Pipeline {
             // So is a heading taken as lost (its widened variance): the run starts over.
             self.out.velocity_reset = false;
             self.out.heading_reacquired = None;
+            // A stance observation made in it was not used (it was counted as used, and an
+            // external heading it took was lost uncounted: a review); the stance is not
+            // observed again, as the zero-rate update is not made again.
+            let c = &mut self.counters;
+            let external_used = external_pending
+                && self.pending_heading.is_none()
+                && c.heading_used > used_before.0;
+            c.headings_undone += u64::from(external_used);
+            (c.heading_used, c.stride_used) = used_before;
         } else if applied {
             self.counters.zero_rate_updates += 1;
         }

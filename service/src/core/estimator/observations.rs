@@ -142,12 +142,17 @@ impl Pipeline {
                 // The bias filters' time runs on the stamps less the clock's steps, as the
                 // rotation they compare does (`SampleClock::take_back`).
                 let t_s = t_s - self.clock.offset_s();
+                // An external heading far from the filter's prediction is refused in every
+                // mode: the attitude filter runs in each, whichever filter owns the bias (the
+                // gate was the eskf mode's alone, and one absurd heading moved the paper
+                // filter's bias by 0.05 rad/s: a review).
+                let gated = external && outside_gate(eskf, dir, sd, &forward);
+                if gated {
+                    self.counters.headings_outside_gate += 1;
+                    event.outcome = Err(Rejection::OutsideGate);
+                }
                 let innovation = match &mut self.bias {
-                    BiasFilter::InEskf if external && outside_gate(eskf, dir, sd, &forward) => {
-                        self.counters.headings_outside_gate += 1;
-                        event.outcome = Err(Rejection::OutsideGate);
-                        None
-                    }
+                    _ if gated => None,
                     BiasFilter::InEskf => Some(eskf.heading_update(dir, sd, &forward)),
                     BiasFilter::Paper { kf, obs } => {
                         let q_true = rot_z(sensor_yaw) * self.tilt0;

@@ -82,33 +82,52 @@ impl Estimator {
     /// The previous sample's time had jumped forward by a gap, and the current sample goes back
     /// and follows the time before it ([`corridor_shared::sensor::TimeVerdict::Glitch`]): that
     /// sample is dropped after the fact, counted as a refused time jump, and the estimator goes
-    /// back to the copy taken before it. Kept from now: the time rule (which accepted the
-    /// current time), the refusals counted since, an external heading handed in since (one
-    /// handed in before and used by the dropped sample is pending again), and a warm start
-    /// handed in since (applied again to the restored filter when it was running).
+    /// back to the copy taken before it. The same for every sample since a confirmed jump whose
+    /// run the current sample shows to be glitched stamps
+    /// ([`corridor_shared::sensor::TimeVerdict::GlitchRun`]; the jumped sample itself was
+    /// refused and counted then). Kept from now: the time rule (which accepted the current
+    /// time), the refusals counted since, an external heading handed in since (one handed in
+    /// before and used by a dropped sample is pending again), and a warm start handed in since
+    /// (applied again to the restored filter when it was running). Returns the number of
+    /// samples dropped.
     /// Out of line: its copies of the filter stay out of the per-sample step's frame (see
     /// `Pipeline::save_good`).
     #[inline(never)]
-    pub(super) fn drop_glitched_sample(&mut self) {
-        // `now`: the pipeline that took the dropped sample; `self.p` the copy from before it.
+    pub(super) fn drop_glitched_samples(&mut self) -> u64 {
+        // `now`: the pipeline that took the dropped samples; `self.p` the copy from before them.
         let Some(now) = self.before_gap.swap_in(&mut self.stage, &mut self.p) else {
-            return; // not reached: every provisional sample leaves its copy
+            return 0; // not reached: every provisional sample leaves its copy
         };
         let p = &mut self.p;
+        let dropped = now.counters.samples - p.counters.samples;
         std::mem::swap(&mut p.plausibility, &mut now.plausibility);
         let c = &mut p.counters;
         c.rejected_non_finite = now.counters.rejected_non_finite;
         c.rejected_time = now.counters.rejected_time;
         c.rejected_implausible = now.counters.rejected_implausible;
-        c.rejected_time_jump = now.counters.rejected_time_jump + 1;
+        c.rejected_time_jump = now.counters.rejected_time_jump + dropped;
         c.headings_refused = now.counters.headings_refused;
-        c.headings_superseded = now.counters.headings_superseded;
+        c.headings_expired = now.counters.headings_expired;
+        c.headings_undone = now.counters.headings_undone;
+        // A heading a dropped sample used is pending again, unless one handed in since
+        // replaces it: counted as superseded then (it went uncounted: a review). Every heading
+        // pending at the copy or handed in since is now pending, superseded or refused at
+        // arrival (uses and gate refusals in the dropped samples are undone with them).
+        let in_play =
+            u64::from(p.pending_heading.is_some()) + now.headings_queued - p.headings_queued;
+        let superseded_since = now.counters.headings_superseded - c.headings_superseded;
         p.pending_heading = now.pending_heading.take().or(p.pending_heading);
+        p.headings_queued = now.headings_queued;
+        let pending = u64::from(p.pending_heading.is_some());
+        let c = &mut p.counters;
+        c.headings_superseded =
+            now.counters.headings_superseded + in_play.saturating_sub(superseded_since + pending);
         let warm_start_since = now.warm_start.filter(|_| self.warm_start_since_copy);
         p.warm_start = now.warm_start.or(p.warm_start);
         if let (Some(ws), Stage::Running(eskf)) = (warm_start_since, &mut self.stage) {
             self.p.apply_warm_start(eskf, &ws);
         }
+        dropped
     }
 }
 

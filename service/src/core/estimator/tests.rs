@@ -296,6 +296,11 @@ fn an_absurd_external_heading_is_refused_and_counted() {
     est.queue_heading(0.4, 0.02).unwrap();
     assert_eq!(est.p.pending_heading, Some((0.4, 0.02)));
     assert_eq!(est.counters().headings_superseded, 1);
+    // One still waiting when the stream ends is counted (it went uncounted).
+    est.expire_pending_heading();
+    est.expire_pending_heading();
+    assert!(est.p.pending_heading.is_none());
+    assert_eq!(est.counters().headings_expired, 1);
 }
 
 #[test]
@@ -644,4 +649,175 @@ fn the_calibrated_mounting_yaw_gives_the_foot_axis_the_stride_heading_at_a_tilte
         worst < 1e-12,
         "the foot axis reads {worst:e} rad off the stride"
     );
+}
+
+/// Runs `rows` from `*i` to the sample before the next stance observation, queues a heading
+/// `off_rad` plus `off_sd` σ (the prediction's and `sd` together) from the filter's prediction
+/// of the foot axis there, runs that stance, and says how many were used and refused by the
+/// gate, and how far the bias moved, rad/s.
+fn heading_at_next_stance(
+    est: &mut Estimator,
+    rows: &[ImuInput],
+    i: &mut usize,
+    (off_rad, off_sd, sd): (f64, f64, f64),
+) -> (u64, u64, f64) {
+    // Where the next stance takes a heading: found on a copy, with one no gate refuses.
+    let mut probe = est.clone();
+    probe.queue_heading(0.0, std::f64::consts::PI).unwrap();
+    let mut at = *i;
+    while probe.p.pending_heading.is_some() {
+        probe.step(&rows[at]).unwrap();
+        at += 1;
+    }
+    while *i + 1 < at {
+        est.step(&rows[*i]).unwrap();
+        *i += 1;
+    }
+    let Stage::Running(e) = &est.stage else {
+        panic!("not running at sample {i}")
+    };
+    let (predicted, var) = e.heading_prediction(&est.p.foot_forward_body());
+    let (c0, b0) = (*est.counters(), est.last_estimate().gyro_bias_rad_s);
+    let heading = predicted + off_rad + off_sd * (var + sd * sd).sqrt();
+    est.queue_heading(wrap_pi(heading), sd).unwrap();
+    while est.p.pending_heading.is_some() {
+        est.step(&rows[*i]).unwrap();
+        *i += 1;
+    }
+    let c = est.counters();
+    let b = est.last_estimate().gyro_bias_rad_s;
+    let moved = (0..3).map(|k| (b[k] - b0[k]).abs()).fold(0.0, f64::max);
+    (
+        c.heading_used - c0.heading_used,
+        c.headings_outside_gate - c0.headings_outside_gate,
+        moved,
+    )
+}
+
+#[test]
+fn an_external_heading_far_from_the_prediction_is_refused_in_every_mode() {
+    // A heading 90° off the prediction with σ 1e-3, at 30 s of exp36. The gate was the eskf
+    // mode's alone: in the paper and rotation-aware modes one such heading moved the bias by
+    // 0.05 rad/s, ten times its value (a review). One 2σ off is fused in each.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let log = corridor_shared::imu_csv::read_imu_csv(
+        &root.join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
+        &Default::default(),
+    )
+    .unwrap();
+    let rows: Vec<ImuInput> = log.rows.iter().map(ImuInput::from).collect();
+    for mode in [Mode::Eskf, Mode::Paper, Mode::RotationAware] {
+        let mut cfg = Config::from_file(&root.join("configs/gdins.toml")).unwrap();
+        cfg.mode = mode;
+        let aid = crate::runner::heading_aid(&cfg, None).unwrap();
+        let mut est = Estimator::new(cfg, aid);
+        let mut i = 0;
+        while est.phase() != Phase::Tracking || i < 6000 {
+            est.step(&rows[i]).unwrap();
+            i += 1;
+        }
+        let far = (std::f64::consts::FRAC_PI_2, 0.0, 1e-3);
+        let (used, gated, moved) = heading_at_next_stance(&mut est, &rows, &mut i, far);
+        assert_eq!((used, gated), (0, 1), "{mode:?}");
+        assert!(moved < 1e-4, "{mode:?}: the bias moved by {moved} rad/s");
+        let near = (0.0, 2.0, 0.05);
+        let (used, gated, _) = heading_at_next_stance(&mut est, &rows, &mut i, near);
+        assert_eq!((used, gated), (1, 0), "{mode:?}");
+    }
+}
+
+#[test]
+fn a_heading_update_the_health_check_undoes_is_not_counted_as_used() {
+    // The paper mode with a bias bound of 0.008 rad/s (the walk's z bias is 0.005), and a
+    // heading within the gate (3.5σ of the prediction and the observation together) whose σ
+    // of 1e-3 moves the bias filter's z by 0.0046 rad/s, past the bound: the health check
+    // undoes the update. It was counted as used, and
+    // the external heading it took was counted nowhere (a review).
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let log = corridor_shared::imu_csv::read_imu_csv(
+        &root.join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
+        &Default::default(),
+    )
+    .unwrap();
+    let rows: Vec<ImuInput> = log.rows.iter().map(ImuInput::from).collect();
+    let mut cfg = Config::from_file(&root.join("configs/gdins.toml")).unwrap();
+    cfg.mode = Mode::Paper;
+    cfg.sensor = corridor_shared::sensor::SensorFile {
+        gyro_range_rad_s: Some(cfg.sensor.gyro_range_rad_s()),
+        accel_range_m_s2: Some(cfg.sensor.accel_range_m_s2()),
+        max_gyro_rad_s: Some(cfg.sensor.max_gyro_rad_s()),
+        max_accel_m_s2: Some(cfg.sensor.max_accel_m_s2()),
+        max_gyro_bias_rad_s: Some(0.008),
+        ..Default::default()
+    }
+    .validate()
+    .unwrap();
+    let aid = crate::runner::heading_aid(&cfg, None).unwrap();
+    let mut est = Estimator::new(cfg, aid);
+    let mut i = 0;
+    while est.phase() != Phase::Tracking || i < 6000 {
+        est.step(&rows[i]).unwrap();
+        i += 1;
+    }
+    let c0 = *est.counters();
+    let (used, gated, _) = heading_at_next_stance(&mut est, &rows, &mut i, (0.0, 3.5, 1e-3));
+    let c = est.counters();
+    assert_eq!(
+        c.health_restores - c0.health_restores,
+        1,
+        "the update was undone"
+    );
+    assert_eq!((used, gated), (0, 0));
+    assert_eq!(c.headings_undone - c0.headings_undone, 1);
+    assert!(est.p.pending_heading.is_none());
+}
+
+#[test]
+fn a_heading_used_by_a_glitched_sample_and_replaced_since_is_counted() {
+    // H1 waits; the sample that uses it at its stance is stamped 0.1 s ahead (a gap, so
+    // provisional); H2 is handed in; the next sample shows the stamp to be a glitch. The use
+    // of H1 is undone with the sample, and H2 replaces it: H1 was counted nowhere (a review).
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let log = corridor_shared::imu_csv::read_imu_csv(
+        &root.join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
+        &Default::default(),
+    )
+    .unwrap();
+    let rows: Vec<ImuInput> = log.rows.iter().map(ImuInput::from).collect();
+    let cfg = Config::from_file(&root.join("configs/gdins.toml")).unwrap();
+    let aid = crate::runner::heading_aid(&cfg, None).unwrap();
+    let mut est = Estimator::new(cfg, aid);
+    let mut i = 0;
+    while est.phase() != Phase::Tracking {
+        est.step(&rows[i]).unwrap();
+        i += 1;
+    }
+    // The first sample that uses a heading (σ π: no gate refuses it).
+    let h1 = (0.0, std::f64::consts::PI);
+    loop {
+        let mut trial = est.clone();
+        trial.queue_heading(h1.0, h1.1).unwrap();
+        let glitched = ImuInput {
+            t_s: rows[i].t_s + 0.1,
+            ..rows[i]
+        };
+        trial.step(&glitched).unwrap();
+        if trial.p.pending_heading.is_none() {
+            est = trial;
+            break;
+        }
+        est.step(&rows[i]).unwrap();
+        i += 1;
+    }
+    // Without H2, H1 is pending again, and nothing is superseded.
+    let mut alone = est.clone();
+    assert!(alone.step(&rows[i + 1]).unwrap().glitch_t_s.is_some());
+    assert_eq!(alone.p.pending_heading, Some(h1));
+    assert_eq!(alone.counters().headings_superseded, 0);
+    let h2 = (0.5, std::f64::consts::PI);
+    est.queue_heading(h2.0, h2.1).unwrap();
+    assert!(est.step(&rows[i + 1]).unwrap().glitch_t_s.is_some());
+    assert_eq!(est.p.pending_heading, Some(h2));
+    let c = est.counters();
+    assert_eq!((c.headings_superseded, c.headings_outside_gate), (1, 0));
 }

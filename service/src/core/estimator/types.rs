@@ -260,6 +260,12 @@ pub struct Counters {
     /// External heading observations refused at their stance: further than
     /// [`EXTERNAL_HEADING_MAX_NIS`] (in NIS) from the filter's prediction.
     pub headings_outside_gate: u64,
+    /// External heading observations still waiting for a stance when their stream ended or the
+    /// daemon stopped ([`crate::core::Estimator::expire_pending_heading`]).
+    pub headings_expired: u64,
+    /// External heading observations fused at their stance in an update that the health check
+    /// then undid (not counted as used; not used again).
+    pub headings_undone: u64,
 }
 
 /// The NIS beyond which an external heading observation is refused, not fused (16: four σ of
@@ -333,8 +339,14 @@ pub struct Estimate {
     pub replaced_first_t_s: Option<f64>,
     /// Set on the sample that showed the previous accepted sample's time (this value, s), which
     /// had jumped forward by a gap, to be a stamp glitch: that sample was dropped after the fact
-    /// (the state is as if it had never come) and this one follows the time before it.
+    /// (the state is as if it had never come) and this one follows the time before it. After a
+    /// run of glitched stamps beyond `sensor.max_dt_s`: the run's first accepted time, every
+    /// sample from it on dropped (`glitch_run_dropped` of them).
     pub glitch_t_s: Option<f64>,
+    /// With `glitch_t_s`, after a run of glitched stamps: the accepted samples dropped after the
+    /// fact (counted with the refused time jumps, as the jumped sample before them was); 0 for
+    /// a single glitch. Their estimates were published before.
+    pub glitch_run_dropped: u64,
     /// Set on the first sample taken after the clock stepped back (the rates ran on across
     /// the step): the stamps from here on are taken plus this, s (counted in
     /// `clock_steps_back`). The estimates keep the stamps, which go back here.
@@ -387,6 +399,7 @@ impl Estimate {
         self.heading_reacquired = None;
         self.replaced_first_t_s = None;
         self.glitch_t_s = None;
+        self.glitch_run_dropped = 0;
         self.clock_stepped_back_s = None;
         self.detector_statistic = decision.statistic;
         self.zupt = None;
@@ -417,6 +430,7 @@ impl Default for Estimate {
             health_fault: None,
             replaced_first_t_s: None,
             glitch_t_s: None,
+            glitch_run_dropped: 0,
             clock_stepped_back_s: None,
             velocity_reset: false,
             heading_reacquired: None,
@@ -487,6 +501,8 @@ pub enum Notice {
     FirstTimeReplaced(f64),
     /// The previous sample, at this time (s) after a gap, was dropped as a stamp glitch.
     TimeGlitch(f64),
+    /// After a jump, this many samples from this time (s) on were dropped as glitched stamps.
+    GlitchRun(f64, u64),
     /// The clock stepped back: the stamps from here on are taken plus this, s.
     ClockSteppedBack(f64),
 }
@@ -531,6 +547,12 @@ impl std::fmt::Display for Notice {
                 "the previous sample's time {t_s} s was a glitch (this one goes back and follows \
                  the time before it); that sample was dropped after the fact"
             ),
+            Notice::GlitchRun(t_s, dropped) => write!(
+                f,
+                "the jump before time {t_s} s and the {dropped} samples from it on were glitched \
+                 stamps (this one goes back and follows the time before the jump); they were \
+                 dropped after the fact"
+            ),
             Notice::ClockSteppedBack(shift_s) => write!(
                 f,
                 "the clock stepped back and the rates run on across the step: a new time base, \
@@ -552,7 +574,10 @@ impl Estimate {
             .chain(self.velocity_reset.then_some(Notice::VelocityReset))
             .chain(self.heading_reacquired.map(Notice::HeadingReacquired))
             .chain(self.replaced_first_t_s.map(Notice::FirstTimeReplaced))
-            .chain(self.glitch_t_s.map(Notice::TimeGlitch))
+            .chain(self.glitch_t_s.map(|t_s| match self.glitch_run_dropped {
+                0 => Notice::TimeGlitch(t_s),
+                n => Notice::GlitchRun(t_s, n),
+            }))
             .chain(self.clock_stepped_back_s.map(Notice::ClockSteppedBack))
     }
 }

@@ -101,8 +101,8 @@ fn a_stamp_glitched_forward_by_less_than_a_jump_is_rejected_and_the_rows_after_i
     assert_eq!(log.rejected_counts()["time_glitch"], 1);
     assert_eq!(
         r.to_string(),
-        "line 100 column t_s: value \"1.39\" came after a gap, and the next row goes back and \
-         follows the row before it (a glitched stamp)"
+        "line 100 column t_s: value \"1.39\" came after a gap or a jump, and a later row goes \
+         back and follows the row before it (a glitched stamp)"
     );
     assert_eq!((log.rows[97].line, log.rows[98].line), (99, 101));
     // A real gap at the same place (every row from line 100 on 0.9 s later): the row after it
@@ -166,6 +166,51 @@ fn the_row_after_a_real_long_gap_goes_out_once_the_next_row_follows_it() {
     let text = replace_line(&good_file(200), n, &row(50.0));
     let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
     assert_eq!((log.rows.len(), log.rejected[0].line), (199, n as u64));
+}
+
+#[test]
+fn stamps_glitched_far_ahead_two_or_more_in_a_row_are_rejected_and_the_rows_after_them_kept() {
+    // Lines 100 and 101 (t = 0.49, 0.495) put 975 s ahead, as a review did to exp36: the
+    // second followed the first, so both were taken for a real gap's far side and every later
+    // row was rejected as not increasing (the log refused at the 1 % rule).
+    for n_glitched in [2u64, 3, 40] {
+        let mut text = good_file(5000);
+        for line in 100..100 + n_glitched {
+            text = replace_line(&text, line as usize, &row(975.0 + line as f64 * 0.005));
+        }
+        let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+        let rejected: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
+        let expected: Vec<_> = (100..100 + n_glitched)
+            .map(|line| (line, RejectReason::TimeGlitch))
+            .collect();
+        assert_eq!(rejected, expected, "{n_glitched} glitched");
+        assert_eq!(log.rows.len() as u64, 5000 - n_glitched);
+        assert!(log.rows.windows(2).all(|w| w[1].t_s > w[0].t_s));
+        assert_eq!(log.rows[98].line, 100 + n_glitched);
+    }
+    // The jumped row is named with its value as written.
+    let text = replace_line(&good_file(400), 100, "9.75e2,0.01,0.02,0.03,0.1,0.2,9.8");
+    let text = replace_line(&text, 101, &row(975.005));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(log.rejected[0].value, "9.75e2");
+    // A real gap of 10 s: the rows after it are held for the run's 1 s, then go out, in order
+    // and all of them, also when the log ends within that second.
+    for n in [400, 150] {
+        let log = parse_imu_csv(
+            &with_gaps(n, &[(100, 10.0)]),
+            path(),
+            &ImuCsvOptions::default(),
+        )
+        .unwrap();
+        assert_eq!((log.rows.len(), log.rejected.len()), (n, 0));
+        assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
+    }
+    // A row that goes back to the time before the jump after that second is refused, as
+    // before (line 350 is 1.25 s after line 100).
+    let text = replace_line(&with_gaps(400, &[(100, 10.0)]), 350, &row(0.5));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    let rejected: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
+    assert_eq!(rejected, [(350, RejectReason::TimeNotIncreasing)]);
 }
 
 #[test]
