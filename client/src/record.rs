@@ -118,9 +118,13 @@ fn file_err(path: &Path) -> impl FnOnce(std::io::Error) -> ClientError + '_ {
 }
 
 impl Recorder {
-    /// Creates `dir` (if needed) with `attitude.csv` and `bias.csv` and their headers, and
-    /// attaches to the daemon's attitude and bias streams in `domain`.
+    /// Attaches to the daemon's attitude and bias streams in `domain`, then creates `dir` (if
+    /// needed) with `attitude.csv` and `bias.csv` and their headers (in that order: a logger
+    /// that could not attach used to leave an earlier recording's files emptied).
     pub fn open(domain: &Domain, dir: &Path, opts: &RecordOptions) -> Result<Self, ClientError> {
+        let name = &opts.node_name;
+        let attitude = Subscriber::open(domain, &format!("{name}-attitude"), opts.wait)?;
+        let bias = Subscriber::open(domain, &format!("{name}-bias"), opts.wait)?;
         std::fs::create_dir_all(dir).map_err(file_err(dir))?;
         let attitude_path = dir.join("attitude.csv");
         let bias_path = dir.join("bias.csv");
@@ -128,9 +132,6 @@ impl Recorder {
         let mut bias_w = create(&bias_path)?;
         writeln!(att_w, "{ATTITUDE_HEADER}").map_err(file_err(&attitude_path))?;
         writeln!(bias_w, "{BIAS_HEADER}").map_err(file_err(&bias_path))?;
-        let name = &opts.node_name;
-        let attitude = Subscriber::open(domain, &format!("{name}-attitude"), opts.wait)?;
-        let bias = Subscriber::open(domain, &format!("{name}-bias"), opts.wait)?;
         Ok(Self {
             attitude,
             bias,
@@ -169,10 +170,14 @@ impl Recorder {
     /// Records until the end-of-stream attitude and bias messages (unless
     /// [`Recorder::following_new_streams`]), the idle timeout,
     /// SIGINT/SIGTERM or `abort`; flushes the files and says what it got. The end-of-stream
-    /// messages are not written as rows.
+    /// messages are not written as rows. An end of stream as the bias reader's first message is
+    /// the daemon's history (the bias stream keeps its last message for late readers) of a
+    /// stream that ended before the recorder attached: it is passed over (it ended the
+    /// recording of a logger started between two streams, and the next stream went unlogged).
     pub fn run(mut self, abort: &AtomicBool) -> Result<Recorded, ClientError> {
         let poll = self.opts.poll;
         let (mut attitude_done, mut bias_done) = (false, false);
+        let mut first_bias = true;
         let mut any = false;
         let mut last_rx = Instant::now();
         let stopped = loop {
@@ -197,8 +202,12 @@ impl Recorder {
                 b => b?,
             };
             if let Some(b) = b {
+                let end = b.flags & FLAG_END_OF_STREAM != 0;
+                if std::mem::take(&mut first_bias) && end {
+                    continue; // a stream that ended before the recorder attached
+                }
                 (last_rx, any) = (Instant::now(), true);
-                if b.flags & FLAG_END_OF_STREAM != 0 {
+                if end {
                     self.got.final_bias_rad_s = Some(b.gyro_bias_rad_s);
                     bias_done = true;
                 } else {

@@ -69,8 +69,35 @@ pub struct Replayed {
     pub elapsed_s: f64,
 }
 
+/// Longest single sleep of the pacing: SIGINT/SIGTERM are seen within it during a gap of the
+/// log (they used to wait for the gap's end: a 60 s gap held a Ctrl-C for 59 s).
+const PACING_SLICE: Duration = Duration::from_millis(100);
+
+/// Sleeps until `offset_s` after `start`, in slices that ask `interrupted` (SIGINT/SIGTERM);
+/// true when it said so. A time beyond what the clock can hold (a replay speed of 1e-300
+/// panicked) is not waited for.
+fn wait_until_due(start: Instant, offset_s: f64, interrupted: impl Fn() -> bool) -> bool {
+    let Some(due) = Duration::try_from_secs_f64(offset_s.max(0.0))
+        .ok()
+        .and_then(|d| start.checked_add(d))
+    else {
+        return false;
+    };
+    loop {
+        let now = Instant::now();
+        if due <= now {
+            return false;
+        }
+        std::thread::sleep((due - now).min(PACING_SLICE));
+        if Instant::now() < due && interrupted() {
+            return true;
+        }
+    }
+}
+
 /// Sends `rows` to the daemon of `domain` as `opts` says, then the end-of-stream marker.
-/// SIGINT/SIGTERM end the replay early (checked every 64 samples), still with the marker.
+/// SIGINT/SIGTERM end the replay early (checked every 64 samples, and during the pacing's
+/// waits), still with the marker.
 pub fn replay(
     domain: &Domain,
     rows: &[ImuRow],
@@ -96,12 +123,11 @@ pub fn replay(
         let shift = f64::from(k) * loop_shift_s;
         for (i, r) in rows.iter().enumerate() {
             let t_s = r.t_s + shift;
-            if let Speed::Factor(f) = opts.speed {
-                let due = start + Duration::from_secs_f64(((t_s - first_t_s) / f).max(0.0));
-                let now = Instant::now();
-                if due > now {
-                    std::thread::sleep(due - now);
-                }
+            if let Speed::Factor(f) = opts.speed
+                && wait_until_due(start, (t_s - first_t_s) / f, || p.termination_requested())
+            {
+                interrupted = true;
+                break 'outer;
             }
             if i % 64 == 0 && p.termination_requested() {
                 interrupted = true;
@@ -129,6 +155,20 @@ pub fn replay(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_pacing_sees_an_interruption_within_a_slice_and_never_waits_for_the_impossible() {
+        // A gap of 60 s in the log: a Ctrl-C is seen within a slice (it waited the whole gap).
+        let start = Instant::now();
+        assert!(wait_until_due(start, 60.0, || true));
+        assert!(start.elapsed() < Duration::from_secs(30));
+        // A due time the clock cannot hold (speed 1e-300: it panicked) is not waited for.
+        assert!(!wait_until_due(start, f64::INFINITY, || true));
+        assert!(!wait_until_due(start, 1e300, || true));
+        // Otherwise it waits until the due time.
+        assert!(!wait_until_due(start, 0.25, || false));
+        assert!(start.elapsed() >= Duration::from_millis(250));
+    }
 
     #[test]
     fn speeds_parse() {

@@ -26,12 +26,14 @@ impl Status {
     }
 
     /// Accepted samples per second of sensor time between the last two diagnostics; `None`
-    /// when idle (sensor time did not advance) or with one diagnostics only.
+    /// when idle (sensor time did not advance), with one diagnostics only, or across a daemon
+    /// restart (the count starts again: the difference wrapped, and `--watch` showed 8e17 Hz).
     pub fn sample_rate_hz(&self) -> Option<f64> {
         let p = self.previous?;
         let d = &self.diagnostics;
         let dt_s = d.t_s - p.t_s;
-        (dt_s.is_finite() && dt_s > 0.0).then(|| (d.accepted - p.accepted) as f64 / dt_s)
+        let accepted = d.accepted.checked_sub(p.accepted)?;
+        (dt_s.is_finite() && dt_s > 0.0).then(|| accepted as f64 / dt_s)
     }
 
     /// The status as a screen of text.
@@ -237,6 +239,34 @@ impl StatusReader {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_sample_rate_is_not_made_up_across_a_daemon_restart() {
+        let diag = |t_s: f64, accepted: u64| Diagnostics {
+            t_s,
+            accepted,
+            ..Diagnostics::default()
+        };
+        let status = |previous, now| Status {
+            diagnostics: now,
+            previous: Some(previous),
+            bias: None,
+            missed: 0,
+        };
+        assert_eq!(
+            status(diag(10.0, 1000), diag(11.0, 1200)).sample_rate_hz(),
+            Some(200.0)
+        );
+        // The new daemon life counts from 0 (the difference wrapped: 8e17 Hz in `--watch`).
+        assert_eq!(
+            status(diag(10.0, 1000), diag(11.0, 150)).sample_rate_hz(),
+            None
+        );
+        assert_eq!(
+            status(diag(10.0, 1000), diag(10.0, 1000)).sample_rate_hz(),
+            None
+        );
+    }
 
     #[test]
     fn a_screen_between_streams_says_so_and_no_nan_sigma() {

@@ -106,6 +106,7 @@ impl Tracker {
 
     /// Follows one stream until its end-of-stream nav sample, SIGINT/SIGTERM, `abort`, or
     /// (when `idle_timeout` is set) nothing for that long; calls `on_stride` for every stride.
+    /// A stream that had ended before the reader attached is not followed.
     /// `poll` is the longest single wait, so it sees `abort`.
     pub fn run(
         &self,
@@ -124,6 +125,7 @@ impl Tracker {
         };
         let mut strides = Strides::default();
         let mut last_rx = Instant::now();
+        let mut first = true;
         t.stopped = loop {
             if abort.load(Ordering::Relaxed) {
                 break TrackStop::Aborted;
@@ -140,6 +142,13 @@ impl Tracker {
                 Err(e) => return Err(e),
             };
             last_rx = Instant::now();
+            // An end of stream as the first message is the daemon's history (the nav stream
+            // keeps its last message for late readers) of a stream that ended before this
+            // reader attached: passed over (it ended a track started between two streams at
+            // once, with the previous stream's stride count).
+            if std::mem::take(&mut first) && n.flags & FLAG_END_OF_STREAM != 0 {
+                continue;
+            }
             if n.flags & FLAG_END_OF_STREAM != 0 {
                 t.end_stances = Some(n.stance);
                 break TrackStop::EndOfStream;

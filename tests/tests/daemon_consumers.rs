@@ -348,10 +348,29 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
     let name = "test_daemon_tools";
     cleanup_domain(name);
     let domain = Domain::new(name).unwrap();
+    let poll = Duration::from_millis(50);
+    let record_opts = |node: &str| RecordOptions {
+        node_name: node.into(),
+        wait: WAIT,
+        idle_timeout: WAIT,
+        idle_before_first: true,
+        poll,
+    };
+    // A logger that cannot attach leaves an earlier recording as it was (it emptied it).
+    let earlier = temp_dir("test-daemon-tools-earlier");
+    std::fs::write(earlier.join("attitude.csv"), "an earlier recording\n").unwrap();
+    let no_daemon = RecordOptions {
+        wait: Duration::from_millis(200),
+        ..record_opts("test-log-early")
+    };
+    assert!(Recorder::open(&domain, &earlier, &no_daemon).is_err());
+    assert_eq!(
+        std::fs::read_to_string(earlier.join("attitude.csv")).unwrap(),
+        "an earlier recording\n"
+    );
     let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
     let dir = temp_dir("test-daemon-tools");
     let rows = exp36_rows();
-    let poll = Duration::from_millis(50);
     let never = Arc::new(AtomicBool::new(false));
     let (ready_tx, ready_rx) = std::sync::mpsc::channel();
 
@@ -362,14 +381,8 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
             ready_tx.clone(),
             Arc::clone(&never),
         );
+        let opts = record_opts("test-log");
         std::thread::spawn(move || {
-            let opts = RecordOptions {
-                node_name: "test-log".into(),
-                wait: WAIT,
-                idle_timeout: WAIT,
-                idle_before_first: true,
-                poll,
-            };
             let r = Recorder::open(&domain, &dir, &opts).unwrap();
             ready.send(()).unwrap();
             r.run(&never).unwrap()
@@ -401,7 +414,52 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
     let sent = replay(&domain, &rows, &opts).unwrap();
     let rec = recorder.join().unwrap();
     let (track, strides) = tracker.join().unwrap();
-    let d = daemon.stop().diagnostics;
+
+    // A logger and a tracker started between two streams record the next one. The bias and
+    // nav streams keep their last message, the first stream's end, for late readers: it ended
+    // both at once (a review: "end of stream: 58 strides" for a tracker started after it, and
+    // a logger that then stopped idle with 0 rows while the next stream went unlogged).
+    let dir2 = temp_dir("test-daemon-tools-2");
+    let (rec2, track2) = std::thread::scope(|scope| {
+        let (ready, attached) = std::sync::mpsc::channel();
+        let ready2 = ready.clone();
+        let (domain, dir2, never) = (&domain, &dir2, &never);
+        // As `corridor-log` runs by default: the idle timeout only after a first message.
+        let opts2 = RecordOptions {
+            idle_timeout: Duration::from_secs(1),
+            idle_before_first: false,
+            ..record_opts("test-log-2")
+        };
+        let rec2 = scope.spawn(move || {
+            let r = Recorder::open(domain, dir2, &opts2).unwrap();
+            ready.send(()).unwrap();
+            r.run(never).unwrap()
+        });
+        let track2 = scope.spawn(move || {
+            let t = Tracker::open(domain, "test-pdr-2", WAIT).unwrap();
+            ready2.send(()).unwrap();
+            t.run(poll, Some(WAIT), never, |_| {}).unwrap()
+        });
+        for _ in 0..2 {
+            attached.recv_timeout(WAIT).expect("consumer attached");
+        }
+        // The next stream comes later: after the daemon's idle refresh of its readers (every
+        // diagnostics period, 1 s), which hands them the history, and the idle timeout.
+        std::thread::sleep(Duration::from_millis(3000));
+        replay(domain, &rows[..4000], &opts).unwrap();
+        (rec2.join().unwrap(), track2.join().unwrap())
+    });
+    let both = daemon.stop().diagnostics;
+    assert_eq!(rec2.stopped, RecordStop::EndOfStream);
+    assert_eq!(track2.stopped, TrackStop::EndOfStream);
+    assert!(rec2.attitude_rows > 3900, "{} rows", rec2.attitude_rows);
+    assert!(track2.strides > 0 && Some(track2.strides) == track2.end_stances);
+    // The daemon's counts are the two streams'; the first stream's are checked below.
+    let d = Diagnostics {
+        accepted: both.accepted - rec2.attitude_rows,
+        stances: both.stances - track2.strides,
+        ..both
+    };
 
     assert_eq!(sent.samples, rows.len() as u64);
     assert_eq!(sent.stats.imu_sent, rows.len() as u64 + 1, "and the marker");

@@ -7,7 +7,8 @@ use corridor_client::Domain;
 use corridor_client::track::{TrackStop, Tracker};
 use corridor_shared::injection::parse_time_s;
 use corridor_shared::services::DEFAULT_DOMAIN;
-use std::sync::atomic::AtomicBool;
+use std::io::Write;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 #[derive(Parser, Debug)]
@@ -38,39 +39,69 @@ fn run() -> Result<()> {
     let a = Args::parse();
     let domain = Domain::new(&a.domain)?;
     let tracker = Tracker::open(&domain, "corridor-pdr", Duration::from_secs_f64(a.wait_s))?;
-    println!(
-        "{:>6} {:>10} {:>9} {:>9} {:>9} {:>8} {:>9}",
-        "stride", "t_s", "x_m", "y_m", "z_m", "yaw_deg", "step_m"
+    // Standard output closed (a pipe whose reader left, `| head`): stop quietly, as a filter
+    // does (`println!` panicked with a backtrace).
+    let mut out = std::io::stdout().lock();
+    let closed = AtomicBool::new(false);
+    let say = |out: &mut std::io::StdoutLock, line: std::fmt::Arguments| {
+        if writeln!(out, "{line}").is_err() {
+            closed.store(true, Ordering::Relaxed);
+        }
+    };
+    say(
+        &mut out,
+        format_args!(
+            "{:>6} {:>10} {:>9} {:>9} {:>9} {:>8} {:>9}",
+            "stride", "t_s", "x_m", "y_m", "z_m", "yaw_deg", "step_m"
+        ),
     );
-    let never = AtomicBool::new(false);
     loop {
-        let t = tracker.run(Duration::from_millis(500), None, &never, |s| {
+        let t = tracker.run(Duration::from_millis(500), None, &closed, |s| {
             let (n, p) = (s.nav, s.nav.p_m);
-            println!(
-                "{:>6} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>8.1} {:>9.3}{}",
-                n.stance,
-                n.t_s,
-                p[0],
-                p[1],
-                p[2],
-                n.yaw_rad.to_degrees(),
-                s.step_m,
-                if s.replaces_previous {
-                    "  (again: replaces the line above, whose first sample had a glitched stamp)"
-                } else {
-                    ""
-                }
+            say(
+                &mut out,
+                format_args!(
+                    "{:>6} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>8.1} {:>9.3}{}",
+                    n.stance,
+                    n.t_s,
+                    p[0],
+                    p[1],
+                    p[2],
+                    n.yaw_rad.to_degrees(),
+                    s.step_m,
+                    if s.replaces_previous {
+                        "  (again: replaces the line above, whose first sample had a glitched stamp)"
+                    } else {
+                        ""
+                    }
+                ),
             );
         })?;
-        if t.stopped != TrackStop::EndOfStream {
-            break;
+        if closed.load(Ordering::Relaxed) {
+            return Ok(());
         }
-        println!(
-            "end of stream: {} strides, path {:.2} m",
-            t.end_stances.unwrap_or(t.strides),
-            t.path_m
+        // What was received, and what was not: the daemon's count at the end of stream, the
+        // nav messages this reader missed (it fell behind; before, neither was said, and the
+        // daemon's count was printed as if every stride had been received).
+        let ended = t.stopped == TrackStop::EndOfStream;
+        let daemon = match t.end_stances {
+            Some(n) if n != t.strides => format!(" of the daemon's {n}"),
+            _ => String::new(),
+        };
+        let missed = match t.missed {
+            0 => String::new(),
+            n => format!(", {n} nav messages missed (this reader fell behind)"),
+        };
+        say(
+            &mut out,
+            format_args!(
+                "{}: {} strides received{daemon}, path {:.2} m over them{missed}",
+                if ended { "end of stream" } else { "stopped" },
+                t.strides,
+                t.path_m
+            ),
         );
-        if !a.follow {
+        if !ended || !a.follow {
             break;
         }
     }

@@ -3,6 +3,7 @@
 //! prints the sizes, alignments and field offsets as JSON (checked by the Python client's test).
 
 use clap::{Parser, Subcommand};
+use std::io::Write;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -29,6 +30,14 @@ fn main() -> std::process::ExitCode {
         What::CHeader => corridor_shared::wire_layout::c_header(),
         What::Layout => corridor_shared::wire_layout::layout_json(),
     };
-    print!("{text}");
-    std::process::ExitCode::SUCCESS
+    // A write error (a full disk, a closed pipe) is said once, not a panic (`print!` panicked
+    // with a backtrace on `> /dev/full`).
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: writing to standard output: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
 }
