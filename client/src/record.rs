@@ -65,6 +65,9 @@ pub struct Recorded {
     pub streams_ended: u64,
     /// Rows written to `attitude.csv`.
     pub attitude_rows: u64,
+    /// Of those, the rows of a stream whose end had not arrived when the recording stopped
+    /// (0 when it stopped at or between ends of stream): that stream may have gone on.
+    pub open_stream_rows: u64,
     /// Rows written to `bias.csv`.
     pub bias_rows: u64,
     /// Attitude messages received (end-of-stream messages included).
@@ -143,6 +146,7 @@ impl Recorder {
                 stopped: RecordStop::EndOfStream,
                 streams_ended: 0,
                 attitude_rows: 0,
+                open_stream_rows: 0,
                 bias_rows: 0,
                 attitude_received: 0,
                 attitude_missed: 0,
@@ -225,10 +229,12 @@ impl Recorder {
                     (last_rx, any) = (Instant::now(), true);
                     if x.flags & FLAG_END_OF_STREAM != 0 {
                         attitude_done = true;
+                        self.got.open_stream_rows = 0;
                     } else {
                         write_attitude_row(&mut self.att_w, &x)
                             .map_err(file_err(&self.got.attitude_path))?;
                         self.got.attitude_rows += 1;
+                        self.got.open_stream_rows += 1;
                         self.got.last_attitude_bias_rad_s = x.gyro_bias_rad_s;
                     }
                     continue;

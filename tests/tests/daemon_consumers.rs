@@ -449,11 +449,13 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
         replay(domain, &rows[..4000], &opts).unwrap();
         (rec2.join().unwrap(), track2.join().unwrap())
     });
+
     let both = daemon.stop().diagnostics;
     assert_eq!(rec2.stopped, RecordStop::EndOfStream);
     assert_eq!(track2.stopped, TrackStop::EndOfStream);
     assert!(rec2.attitude_rows > 3900, "{} rows", rec2.attitude_rows);
     assert!(track2.strides > 0 && Some(track2.strides) == track2.end_stances);
+    assert_eq!((rec.open_stream_rows, rec2.open_stream_rows), (0, 0));
     // The daemon's counts are the two streams'; the first stream's are checked below.
     let d = Diagnostics {
         accepted: both.accepted - rec2.attitude_rows,
@@ -488,5 +490,59 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
     assert_eq!(strides.first().map(|s| s.step_m), Some(0.0));
     assert_eq!(track.path_m, strides.iter().map(|s| s.step_m).sum::<f64>());
     assert_eq!(track.last.map(|n| n.stance), Some(d.stances));
+    cleanup_domain(name);
+}
+
+/// A stream that pauses longer than the logger's idle timeout: the logger says it stopped
+/// within a stream, with the rows it has of it (`corridor-log` said nothing and exited with 0:
+/// a review).
+#[test]
+fn a_logger_that_times_out_within_a_stream_says_so() {
+    use corridor_client::record::{RecordOptions, RecordStop, Recorder};
+    use std::sync::atomic::AtomicBool;
+
+    let _one = one_daemon_at_a_time();
+    let name = "test_daemon_log_pause";
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
+    let rows = exp36_rows();
+    let dir = temp_dir("test-daemon-log-pause");
+    let never = AtomicBool::new(false);
+    let paused = 500;
+    let rec = std::thread::scope(|scope| {
+        let (ready, attached) = std::sync::mpsc::channel();
+        let (domain, dir, never) = (&domain, &dir, &never);
+        let opts = RecordOptions {
+            node_name: "test-log-pause".into(),
+            wait: WAIT,
+            idle_timeout: Duration::from_secs(1),
+            idle_before_first: false,
+            poll: Duration::from_millis(50),
+        };
+        let rec = scope.spawn(move || {
+            let r = Recorder::open(domain, dir, &opts)
+                .unwrap()
+                .following_new_streams();
+            ready.send(()).unwrap();
+            r.run(never).unwrap()
+        });
+        attached.recv_timeout(WAIT).expect("logger attached");
+        let mut p = Producer::new(domain, "test-pause", Delivery::Lossless).unwrap();
+        p.wait_for_daemon(WAIT).unwrap();
+        for r in &rows[..paused] {
+            p.send_imu(ImuSample::from(r)).unwrap();
+        }
+        let rec = rec.join().unwrap();
+        p.finish().unwrap();
+        rec
+    });
+    daemon.stop();
+    assert_eq!(rec.stopped, RecordStop::IdleTimeout);
+    assert_eq!(rec.streams_ended, 0);
+    assert_eq!(
+        (rec.attitude_rows, rec.open_stream_rows),
+        (paused as u64, paused as u64)
+    );
     cleanup_domain(name);
 }

@@ -9,7 +9,7 @@
 use anyhow::Result;
 use clap::Parser;
 use corridor_client::Domain;
-use corridor_client::record::{RecordOptions, Recorder};
+use corridor_client::record::{RecordOptions, RecordStop, Recorder};
 use corridor_shared::injection::parse_time_s;
 use corridor_shared::services::DEFAULT_DOMAIN;
 use std::path::PathBuf;
@@ -78,6 +78,19 @@ fn run() -> Result<()> {
         r.attitude_path.display()
     );
     println!("bias rows: {} ({})", r.bias_rows, r.bias_path.display());
+    // A stream whose end never came: what followed the last row received is unknown here (it
+    // used to stop with exit code 0 and nothing said, after a pause in the data longer than
+    // the idle timeout, or after the daemon discarded a stalled logger's messages).
+    let open_stream = r.open_stream_rows > 0;
+    if open_stream {
+        println!(
+            "open stream: its end never arrived; {} attitude rows of it recorded, what the \
+             daemon published after them not received (a pause in the data longer than \
+             --idle-timeout-s, messages the daemon discarded while this logger stalled, or a \
+             producer that stopped without its end-of-stream marker)",
+            r.open_stream_rows
+        );
+    }
     // Every attitude message the daemon published up to the last one received is here:
     // published = before start + received + missing.
     println!(
@@ -88,5 +101,8 @@ fn run() -> Result<()> {
         "bias messages: {} received, {} missing (seq gaps), {} published before the first",
         r.bias_received, r.bias_missed, r.bias_missed_at_start
     );
+    if open_stream && r.stopped == RecordStop::IdleTimeout {
+        anyhow::bail!("the recording is incomplete: it timed out within a stream");
+    }
     Ok(())
 }
