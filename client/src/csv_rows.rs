@@ -1,16 +1,20 @@
 //! The CSV rows of the daemon's attitude and bias streams, shared by `corridor-log` and the
 //! `corridor demo` logger. The attitude columns are those of `corridor run`'s `estimates.csv`
 //! that apply (no position or velocity: those are in the nav stream), preceded by
-//! `seq,imu_seq`.
+//! `seq,imu_seq`. Both end in `retracts`: 1 on a row whose sample showed earlier ones to come
+//! from glitched stamps ([`FLAG_RETRACTS`]): the rows before it with a later `t_s` are to be
+//! dropped (the files are written as the rows come).
 
-use corridor_shared::wire::{AttitudeSample, BiasSample, FLAG_CONVERGED, FLAG_STANCE, phase};
+use corridor_shared::wire::{
+    AttitudeSample, BiasSample, FLAG_CONVERGED, FLAG_RETRACTS, FLAG_STANCE, phase,
+};
 use std::io::Write;
 
 /// Header of `attitude.csv`.
-pub const ATTITUDE_HEADER: &str = "seq,imu_seq,t_s,roll_rad,pitch_rad,yaw_rad,qw,qx,qy,qz,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,stance,converged,phase";
+pub const ATTITUDE_HEADER: &str = "seq,imu_seq,t_s,roll_rad,pitch_rad,yaw_rad,qw,qx,qy,qz,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,stance,converged,phase,retracts";
 
 /// Header of `bias.csv`.
-pub const BIAS_HEADER: &str = "seq,imu_seq,t_s,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,bias_unabsorbed,converged";
+pub const BIAS_HEADER: &str = "seq,imu_seq,t_s,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,bias_unabsorbed,converged,retracts";
 
 /// Writes one `attitude.csv` row.
 pub fn write_attitude_row(w: &mut impl Write, x: &AttitudeSample) -> std::io::Result<()> {
@@ -21,7 +25,7 @@ pub fn write_attitude_row(w: &mut impl Write, x: &AttitudeSample) -> std::io::Re
     );
     writeln!(
         w,
-        "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         x.seq,
         x.imu_seq,
         x.t_s,
@@ -40,7 +44,8 @@ pub fn write_attitude_row(w: &mut impl Write, x: &AttitudeSample) -> std::io::Re
         s[2],
         u8::from(x.flags & FLAG_STANCE != 0),
         u8::from(x.flags & FLAG_CONVERGED != 0),
-        phase::name(x.phase)
+        phase::name(x.phase),
+        u8::from(x.flags & FLAG_RETRACTS != 0)
     )
 }
 
@@ -49,8 +54,19 @@ pub fn write_bias_row(w: &mut impl Write, b: &BiasSample) -> std::io::Result<()>
     let (v, s) = (b.gyro_bias_rad_s, b.gyro_bias_sd_rad_s);
     writeln!(
         w,
-        "{},{},{},{},{},{},{},{},{},{},{}",
-        b.seq, b.imu_seq, b.t_s, v[0], v[1], v[2], s[0], s[1], s[2], b.bias_unabsorbed, b.converged
+        "{},{},{},{},{},{},{},{},{},{},{},{}",
+        b.seq,
+        b.imu_seq,
+        b.t_s,
+        v[0],
+        v[1],
+        v[2],
+        s[0],
+        s[1],
+        s[2],
+        b.bias_unabsorbed,
+        b.converged,
+        u8::from(b.flags & FLAG_RETRACTS != 0)
     )
 }
 
@@ -67,7 +83,7 @@ mod tests {
             a.trim_end().split(',').count(),
             ATTITUDE_HEADER.split(',').count()
         );
-        assert!(a.trim_end().ends_with(",0,0,aligning"), "{a}");
+        assert!(a.trim_end().ends_with(",0,0,aligning,0"), "{a}");
         let mut b = Vec::new();
         write_bias_row(&mut b, &BiasSample::default()).unwrap();
         let b = String::from_utf8(b).unwrap();
@@ -89,8 +105,9 @@ mod tests {
             write_attitude_row(&mut w, &x).unwrap();
             String::from_utf8(w).unwrap().trim_end().to_owned()
         };
-        assert!(row(FLAG_STANCE, phase::CALIBRATING).ends_with(",1,0,calibrating"));
-        assert!(row(FLAG_CONVERGED, phase::TRACKING).ends_with(",0,1,tracking"));
-        assert!(row(FLAG_STANCE | FLAG_CONVERGED, 7).ends_with(",1,1,unknown"));
+        assert!(row(FLAG_STANCE, phase::CALIBRATING).ends_with(",1,0,calibrating,0"));
+        assert!(row(FLAG_CONVERGED, phase::TRACKING).ends_with(",0,1,tracking,0"));
+        assert!(row(FLAG_STANCE | FLAG_CONVERGED, 7).ends_with(",1,1,unknown,0"));
+        assert!(row(FLAG_RETRACTS, phase::TRACKING).ends_with(",0,0,tracking,1"));
     }
 }

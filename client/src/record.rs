@@ -7,7 +7,7 @@
 
 use crate::csv_rows::{ATTITUDE_HEADER, BIAS_HEADER, write_attitude_row, write_bias_row};
 use crate::{ClientError, Domain, Subscriber};
-use corridor_shared::wire::{AttitudeSample, BiasSample, FLAG_END_OF_STREAM};
+use corridor_shared::wire::{AttitudeSample, BiasSample, FLAG_END_OF_STREAM, FLAG_RETRACTS};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -70,6 +70,9 @@ pub struct Recorded {
     pub open_stream_rows: u64,
     /// Rows written to `bias.csv`.
     pub bias_rows: u64,
+    /// Attitude rows that retract earlier ones (`retracts` 1: the rows before them with a
+    /// later `t_s` came from glitched stamps; [`corridor_shared::wire::FLAG_RETRACTS`]).
+    pub retracting_rows: u64,
     /// Attitude messages received (end-of-stream messages included).
     pub attitude_received: u64,
     /// Attitude messages missing from the `seq` numbering after the first one received.
@@ -148,6 +151,7 @@ impl Recorder {
                 attitude_rows: 0,
                 open_stream_rows: 0,
                 bias_rows: 0,
+                retracting_rows: 0,
                 attitude_received: 0,
                 attitude_missed: 0,
                 attitude_missed_at_start: 0,
@@ -235,6 +239,7 @@ impl Recorder {
                             .map_err(file_err(&self.got.attitude_path))?;
                         self.got.attitude_rows += 1;
                         self.got.open_stream_rows += 1;
+                        self.got.retracting_rows += u64::from(x.flags & FLAG_RETRACTS != 0);
                         self.got.last_attitude_bias_rad_s = x.gyro_bias_rad_s;
                     }
                     continue;

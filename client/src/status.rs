@@ -168,6 +168,71 @@ fn fmt_opt(x: f64, decimals: usize, unit: &str) -> String {
     }
 }
 
+/// What the daemon did with the samples it was sent between two of its diagnostics (of one
+/// daemon life): a producer sees only its side, and its summary said nothing of a daemon that
+/// dropped 41 % of a replay on a full queue (a review).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DaemonAccount {
+    /// IMU messages received (end-of-stream markers included).
+    pub received: u64,
+    /// Samples missing from the producers' numbering (overwritten in the live input buffer,
+    /// or never sent).
+    pub seq_gaps: u64,
+    /// Samples a producer sent before the daemon's first message from it (before its
+    /// connection was up).
+    pub head_missing: u64,
+    /// Samples dropped on a full estimator queue (live delivery).
+    pub dropped_overflow: u64,
+    /// Samples the estimator refused (any reason) or refused as duplicates or late.
+    pub refused: u64,
+    /// Samples the estimator accepted.
+    pub accepted: u64,
+    /// Producer changes (another producer's samples in between).
+    pub producer_changes: u64,
+}
+
+impl DaemonAccount {
+    /// Every one of `sent` messages (samples and the end-of-stream marker) received or known
+    /// missing.
+    pub fn accounts_for(&self, sent: u64) -> bool {
+        self.received + self.seq_gaps + self.head_missing >= sent
+    }
+
+    /// Samples sent that the estimator never saw: missing from the numbering, sent before the
+    /// daemon's connection, dropped on a full queue.
+    pub fn lost(&self) -> u64 {
+        self.seq_gaps + self.head_missing + self.dropped_overflow
+    }
+}
+
+impl DaemonAccount {
+    /// The counts from `before` to `after`; `None` across a daemon restart (the estimator's
+    /// counts start again) or when a count went back.
+    pub fn between(before: &Diagnostics, after: &Diagnostics) -> Option<Self> {
+        if before.lives != after.lives {
+            return None;
+        }
+        let d = |a: u64, b: u64| b.checked_sub(a);
+        let refused = |x: &Diagnostics| {
+            x.rejected_duplicate_seq
+                + x.late
+                + x.rejected_non_finite
+                + x.rejected_time
+                + x.rejected_implausible
+                + x.rejected_time_jump
+        };
+        Some(Self {
+            received: d(before.received, after.received)?,
+            seq_gaps: d(before.seq_gaps, after.seq_gaps)?,
+            head_missing: d(before.head_missing, after.head_missing)?,
+            dropped_overflow: d(before.dropped_overflow, after.dropped_overflow)?,
+            refused: d(refused(before), refused(after))?,
+            accepted: d(before.accepted, after.accepted)?,
+            producer_changes: d(before.producer_changes, after.producer_changes)?,
+        })
+    }
+}
+
 /// Reads the daemon's diagnostics and bias streams of a domain.
 #[derive(Debug)]
 pub struct StatusReader {
@@ -239,6 +304,46 @@ impl StatusReader {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_daemon_account_is_the_difference_within_one_life() {
+        let before = Diagnostics {
+            received: 100,
+            seq_gaps: 3,
+            accepted: 90,
+            rejected_time: 2,
+            lives: 1,
+            ..Diagnostics::default()
+        };
+        let after = Diagnostics {
+            received: 14101,
+            seq_gaps: 4793,
+            dropped_overflow: 1019,
+            accepted: 8280,
+            rejected_time: 2,
+            rejected_time_jump: 1,
+            lives: 1,
+            ..Diagnostics::default()
+        };
+        assert_eq!(
+            DaemonAccount::between(&before, &after),
+            Some(DaemonAccount {
+                received: 14001,
+                seq_gaps: 4790,
+                head_missing: 0,
+                dropped_overflow: 1019,
+                refused: 1,
+                accepted: 8190,
+                producer_changes: 0,
+            })
+        );
+        let account = DaemonAccount::between(&before, &after).unwrap();
+        assert_eq!(account.lost(), 4790 + 1019);
+        assert!(account.accounts_for(14001 + 4790) && !account.accounts_for(14001 + 4791));
+        let restarted = Diagnostics { lives: 2, ..after };
+        assert_eq!(DaemonAccount::between(&before, &restarted), None);
+        assert_eq!(DaemonAccount::between(&after, &before), None);
+    }
 
     #[test]
     fn the_sample_rate_is_not_made_up_across_a_daemon_restart() {

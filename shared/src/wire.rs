@@ -40,6 +40,13 @@ pub const FLAG_CONVERGED: u32 = 1 << 3;
 /// [`Diagnostics::flags`]: published because the daemon is shutting down.
 pub const FLAG_SHUTDOWN: u32 = 1 << 4;
 
+/// Output `flags`: the outputs published earlier in this stream with a `t_s` later than this
+/// one's came from samples whose stamps this sample showed to be glitched (it goes back and
+/// follows the time before them); the estimator dropped those samples after the fact, and its
+/// state is as if they had never come. A consumer that keeps outputs should drop those (one
+/// sample after a gap, or up to `sensor.max_dt_s` of a run after a jump).
+pub const FLAG_RETRACTS: u32 = 1 << 5;
+
 /// [`AngleObservation::valid`] bit: `roll_rad` is valid. The daemon does not fuse an external
 /// roll (its tilt comes from gravity at every stance): such observations are counted
 /// (`angles_ignored` in its report) and their heading, if any, is used.

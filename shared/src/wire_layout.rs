@@ -164,6 +164,7 @@ pub fn constants() -> Vec<(&'static str, u32)> {
         ("FLAG_STANCE", FLAG_STANCE),
         ("FLAG_CONVERGED", FLAG_CONVERGED),
         ("FLAG_SHUTDOWN", FLAG_SHUTDOWN),
+        ("FLAG_RETRACTS", FLAG_RETRACTS),
         ("ANGLE_ROLL", ANGLE_ROLL),
         ("ANGLE_PITCH", ANGLE_PITCH),
         ("ANGLE_HEADING", ANGLE_HEADING),

@@ -456,6 +456,7 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
     assert!(rec2.attitude_rows > 3900, "{} rows", rec2.attitude_rows);
     assert!(track2.strides > 0 && Some(track2.strides) == track2.end_stances);
     assert_eq!((rec.open_stream_rows, rec2.open_stream_rows), (0, 0));
+    assert_eq!((rec.retracting_rows, rec2.retracting_rows), (0, 0));
     // The daemon's counts are the two streams'; the first stream's are checked below.
     let d = Diagnostics {
         accepted: both.accepted - rec2.attitude_rows,

@@ -15,6 +15,10 @@
 //! for the real footfall (before, the dropped sample's stance count was taken for the real one
 //! and the real footfall was never published).
 //!
+//! And three stamps 975 s ahead in a row (a jump that the second confirms): the next good time
+//! drops all three after the fact. The outputs of each sample that drops glitched ones carry
+//! `FLAG_RETRACTS`.
+//!
 //! One daemon test per binary (see `one_daemon_at_a_time`).
 
 mod daemon_common;
@@ -23,7 +27,7 @@ use corridor_client::{Delivery, Domain, Subscriber};
 use corridor_service::core::{Estimator, ImuInput};
 use corridor_service::runner::heading_aid;
 use corridor_shared::imu_csv::ImuRow;
-use corridor_shared::wire::{BiasSample, NavSample};
+use corridor_shared::wire::{BiasSample, FLAG_RETRACTS, NavSample};
 use daemon_common::*;
 
 #[test]
@@ -42,6 +46,10 @@ fn a_bad_first_time_stamp_costs_two_samples_and_each_glitched_one_costs_one() {
     rows[0].t_s = 1e9;
     let glitch_t_s = rows[2000].t_s + 0.99;
     rows[2000].t_s = glitch_t_s;
+    // Three stamps 975 s ahead (a jump the second confirms): the next good time drops them.
+    for r in &mut rows[2500..2503] {
+        r.t_s += 975.0;
+    }
     let cfg = config();
     let run = |rows: &[ImuRow]| {
         let mut est = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
@@ -84,11 +92,25 @@ fn a_bad_first_time_stamp_costs_two_samples_and_each_glitched_one_costs_one() {
     let (est, _) = run(&rows);
     let c = est.counters();
     // The second sample refused (not increasing), the first and the two glitched ones dropped
-    // after the fact.
+    // after the fact, and the run of three (the first refused as a jump, two dropped).
     assert_eq!(
         (c.samples, c.rejected_time, c.rejected_time_jump, c.gaps),
-        (3996, 1, 3, 0)
+        (3993, 1, 6, 0)
     );
+    // The outputs of the samples that dropped glitched ones say so (`FLAG_RETRACTS`): the bias
+    // is published at each (its pacing starts again there).
+    let retracting: Vec<f64> = got
+        .iter()
+        .filter(|b| b.flags & FLAG_RETRACTS != 0)
+        .map(|b| b.t_s)
+        .collect();
+    assert_eq!(
+        retracting,
+        [rows[2001].t_s, rows[2503].t_s, rows[footfall + 1].t_s],
+        "{retracting:?}"
+    );
+    // What they retract: the outputs before them with a later time.
+    assert!(got.iter().any(|b| b.t_s > 975.0));
     // The footfall's nav sample: the glitched sample's (it began the stance too), then the real
     // one's.
     let at_footfall: Vec<f64> = navs
@@ -117,7 +139,7 @@ fn a_bad_first_time_stamp_costs_two_samples_and_each_glitched_one_costs_one() {
     let times: Vec<f64> = got
         .iter()
         .map(|b| b.t_s)
-        .filter(|&t| t < 1e8 && t != glitch_t_s)
+        .filter(|&t| t < 900.0 && t != glitch_t_s) // not the dropped ones
         .collect();
     let longest = times
         .windows(2)
@@ -128,6 +150,6 @@ fn a_bad_first_time_stamp_costs_two_samples_and_each_glitched_one_costs_one() {
         "{longest} s without a bias sample at a period of {bias_period_s} s"
     );
     let d = report.diagnostics;
-    assert_eq!((d.accepted, d.rejected_time), (3996, 1), "{d:?}");
+    assert_eq!((d.accepted, d.rejected_time), (3993, 1), "{d:?}");
     cleanup_domain(name);
 }

@@ -15,6 +15,8 @@ FLAG_BIAS_CORRECTED = 1 << 1
 FLAG_STANCE = 1 << 2
 FLAG_CONVERGED = 1 << 3
 FLAG_SHUTDOWN = 1 << 4
+# Outputs published earlier in the stream with a later t_s came from glitched stamps: drop them.
+FLAG_RETRACTS = 1 << 5
 # Roll and pitch are not fused by the daemon (its tilt comes from gravity at every stance):
 # observations carrying them are counted (angles_ignored); their heading, if any, is used.
 ANGLE_ROLL = 1 << 0

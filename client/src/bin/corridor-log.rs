@@ -78,6 +78,13 @@ fn run() -> Result<()> {
         r.attitude_path.display()
     );
     println!("bias rows: {} ({})", r.bias_rows, r.bias_path.display());
+    if r.retracting_rows > 0 {
+        println!(
+            "retracting rows: {} (retracts 1: the rows before each with a later t_s came from \
+             glitched stamps the daemon dropped after the fact)",
+            r.retracting_rows
+        );
+    }
     // A stream whose end never came: what followed the last row received is unknown here (it
     // used to stop with exit code 0 and nothing said, after a pause in the data longer than
     // the idle timeout, or after the daemon discarded a stalled logger's messages).

@@ -6,10 +6,12 @@
 use anyhow::{Result, bail};
 use clap::Parser;
 use corridor_client::replay::{ReplayOptions, Speed, replay};
+use corridor_client::status::{DaemonAccount, StatusReader};
 use corridor_client::{Delivery, Domain};
 use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
 use corridor_shared::injection::{BiasInjection, parse_injected_bias_rad_s, parse_time_s};
 use corridor_shared::services::DEFAULT_DOMAIN;
+use corridor_shared::wire::FLAG_END_OF_STREAM;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -58,6 +60,15 @@ fn main() -> std::process::ExitCode {
     corridor_client::exit(run())
 }
 
+/// How long to wait for the daemon's diagnostics before the replay, and after it for those of
+/// the stream's end (it publishes them every `daemon.diagnostics_period_s`, 1 s by default,
+/// and at the end of a stream).
+const DIAGNOSTICS_WAIT: Duration = Duration::from_secs(10);
+
+/// How long to wait for the daemon's diagnostics service before the replay (a running daemon
+/// has it at once).
+const DIAGNOSTICS_OPEN_WAIT: Duration = Duration::from_secs(1);
+
 /// Rejected rows named one by one (the rest are counted).
 const REJECTED_ROWS_NAMED: usize = 20;
 
@@ -88,7 +99,35 @@ fn run() -> Result<()> {
         },
         wait: Duration::from_secs_f64(a.wait_s.max(0.0)),
     };
+    // The daemon's counts before and after: what it did with the samples (a producer sees only
+    // its side). Its diagnostics stream keeps the latest for a late reader. Not there (a daemon
+    // not yet started, a stand-in without diagnostics): not known, the replay goes on.
+    let mut status = StatusReader::open(&domain, DIAGNOSTICS_OPEN_WAIT).ok();
+    let before = match &mut status {
+        Some(s) => s.next(DIAGNOSTICS_WAIT, false)?,
+        None => None,
+    };
     let r = replay(&domain, &log.rows, &opts)?;
+    // The daemon's diagnostics once its estimator has taken the whole stream: those it
+    // publishes at the end of a stream, with every sample sent received or known missing (the
+    // ones read right after the replay still lacked thousands of samples of a fast replay).
+    let deadline = std::time::Instant::now() + DIAGNOSTICS_WAIT;
+    let mut account = None;
+    let mut complete = false;
+    while let (Some(b), Some(status)) = (before, &mut status)
+        && let Some(now) = status.next(
+            deadline.saturating_duration_since(std::time::Instant::now()),
+            false,
+        )?
+    {
+        account = DaemonAccount::between(&b.diagnostics, &now.diagnostics);
+        complete = account.is_some_and(|d| {
+            now.diagnostics.flags & FLAG_END_OF_STREAM != 0 && d.accounts_for(r.samples + 1)
+        });
+        if complete || account.is_none() {
+            break;
+        }
+    }
     let s = r.stats;
     let rate = if r.elapsed_s > 0.0 {
         r.samples as f64 / r.elapsed_s
@@ -118,12 +157,36 @@ fn run() -> Result<()> {
             "no"
         }
     );
-    // The producer sees only its side: what the daemon dropped after receiving (a full queue
-    // under live delivery, refused samples) is in the daemon's counters.
-    println!(
-        "what the daemon did with them (dropped on a full queue, refused, estimated): corridor status --domain {}",
-        a.domain
-    );
+    // What the daemon did with them, from its counters (another producer at the same time is
+    // counted in them too: `producer changes`).
+    let mut lost = 0;
+    match account {
+        Some(d) => {
+            println!(
+                "the daemon, over the replay{}: received {}, missing from the numbering {} \
+                 (overwritten in its live input buffer), sent before its connection {}, dropped \
+                 on a full queue {}, refused {}, estimated {}, producer changes {}",
+                if complete {
+                    ""
+                } else {
+                    " (not finished: it had not taken the whole stream)"
+                },
+                d.received,
+                d.seq_gaps,
+                d.head_missing,
+                d.dropped_overflow,
+                d.refused,
+                d.accepted,
+                d.producer_changes
+            );
+            lost = d.lost();
+        }
+        None => println!(
+            "the daemon, over the replay: not known (no diagnostics, or the daemon restarted); \
+             corridor status --domain {}",
+            a.domain
+        ),
+    }
     println!("rows rejected by the CSV reader: {rejected}");
     println!("elapsed: {:.3} s ({rate:.0} samples/s)", r.elapsed_s);
     if s.imu_undelivered > 0 {
@@ -132,6 +195,13 @@ fn run() -> Result<()> {
             s.imu_undelivered,
             s.imu_sent,
             domain.name()
+        );
+    }
+    if lost > 0 {
+        eprintln!(
+            "warning: the daemon lost {lost} of the {} samples sent (live delivery drops what \
+             it cannot keep up with: --delivery lossless, or a lower --speed)",
+            r.samples
         );
     }
     if s.closes_unconfirmed > 0 {

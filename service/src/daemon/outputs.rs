@@ -7,8 +7,8 @@ use super::{DaemonConfig, DaemonError};
 use crate::core::{Estimate, Phase};
 use corridor_shared::services::{Access, ServiceError, Topic};
 use corridor_shared::wire::{
-    AttitudeSample, BiasSample, Diagnostics, FLAG_BIAS_CORRECTED, FLAG_CONVERGED, FLAG_STANCE,
-    NavSample, phase,
+    AttitudeSample, BiasSample, Diagnostics, FLAG_BIAS_CORRECTED, FLAG_CONVERGED, FLAG_RETRACTS,
+    FLAG_STANCE, NavSample, phase,
 };
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
@@ -129,6 +129,9 @@ pub(super) fn flags_of(e: &Estimate) -> u32 {
     if e.converged {
         f |= FLAG_CONVERGED;
     }
+    if e.glitch_t_s.is_some() {
+        f |= FLAG_RETRACTS;
+    }
     f
 }
 
@@ -158,6 +161,6 @@ pub(super) fn bias_of(e: &Estimate, imu_seq: u64) -> BiasSample {
         gyro_bias_sd_rad_s: e.gyro_bias_sd_rad_s,
         bias_unabsorbed: e.bias_unabsorbed,
         converged: u32::from(e.converged),
-        flags: flags_of(e) & FLAG_CONVERGED,
+        flags: flags_of(e) & (FLAG_CONVERGED | FLAG_RETRACTS),
     }
 }
