@@ -19,18 +19,26 @@ pub struct Stride {
     pub step_m: f64,
     /// The daemon sent this stance again: the sample that began it carried a glitched stamp
     /// and was dropped after the fact, and this stride replaces the previous one (the same
-    /// `stance`, a later `imu_seq`); it is not counted again.
+    /// `stance`, a later `imu_seq`; or earlier ones, when a run of glitched stamps held
+    /// several stances); it is not counted again.
     pub replaces_previous: bool,
+    /// The daemon's estimator started again (its stance count went back to 1: a daemon that
+    /// restarted within the stream): this stride starts a new track from the new origin (it
+    /// was joined to the last one, a step of tens of metres that never happened: a review).
+    pub new_track: bool,
 }
 
-/// The strides of one stream so far: their count, the path over them, and the last two (a
-/// stance sent again replaces the last).
-#[derive(Debug, Clone, Copy, Default)]
+/// Strides remembered to be replaced when the daemon sends earlier stances again.
+const STRIDES_KEPT: usize = 8;
+
+/// The strides of one stream so far: their count, the path over them, and the last few with
+/// the step to each (a stance sent again replaces them from that stance on).
+#[derive(Debug, Clone, Default)]
 struct Strides {
     count: u64,
     path_m: f64,
     last: Option<NavSample>,
-    before_last: Option<NavSample>,
+    recent: std::collections::VecDeque<(NavSample, f64)>,
 }
 
 /// Horizontal distance from `from` to `to`, m (0 from nothing).
@@ -40,21 +48,37 @@ fn step_m(from: Option<NavSample>, to: &NavSample) -> f64 {
 
 impl Strides {
     fn add(&mut self, n: NavSample) -> Stride {
-        let replaced = self.last.filter(|q| q.stance == n.stance);
-        if let Some(r) = replaced {
-            self.path_m -= step_m(self.before_last, &r);
-            self.last = self.before_last;
-        } else {
-            self.count += 1;
+        let new_track = n.stance == 1 && self.last.is_some_and(|q| q.stance > 1);
+        if new_track {
+            self.recent.clear();
+            self.last = None;
         }
+        // Strides from this stance on, sent before, are replaced (not counted again).
+        let mut replaced = false;
+        while let Some(&(q, step)) = self.recent.back()
+            && q.stance >= n.stance
+        {
+            self.recent.pop_back();
+            self.path_m -= step;
+            self.count -= 1;
+            replaced = true;
+        }
+        if replaced {
+            self.last = self.recent.back().map(|&(q, _)| q);
+        }
+        self.count += 1;
         let step_m = step_m(self.last, &n);
         self.path_m += step_m;
-        self.before_last = self.last;
         self.last = Some(n);
+        if self.recent.len() == STRIDES_KEPT {
+            self.recent.pop_front();
+        }
+        self.recent.push_back((n, step_m));
         Stride {
             nav: n,
             step_m,
-            replaces_previous: replaced.is_some(),
+            replaces_previous: replaced,
+            new_track,
         }
     }
 }
@@ -204,5 +228,29 @@ mod tests {
         assert_eq!(s.count, 3);
         assert!((s.path_m - 2.0).abs() < 1e-12, "{}", s.path_m);
         assert_eq!(s.last.map(|n| n.imu_seq), Some(30));
+        // A run of glitched stamps that held two stances: both are replaced from the first.
+        s.add(nav(4, 3.0, 40));
+        let again = s.add(nav(3, 2.1, 41));
+        assert!(again.replaces_previous && (again.step_m - 0.9).abs() < 1e-12);
+        assert_eq!(s.count, 3);
+        assert!((s.path_m - 2.1).abs() < 1e-12, "{}", s.path_m);
+    }
+
+    #[test]
+    fn a_daemon_that_restarted_within_the_stream_starts_a_new_track() {
+        // The new daemon life's estimator counts stances from 1 again, from its own origin:
+        // before, its first stride was joined to the last one (a 24 m step in a review).
+        let mut s = Strides::default();
+        for (k, x) in [(1, 0.0), (2, 1.0), (44, 40.0)] {
+            s.add(nav(k, x, k * 10));
+        }
+        let path_before = s.path_m;
+        let first = s.add(nav(1, 0.0, 500));
+        assert!(first.new_track && !first.replaces_previous);
+        assert_eq!(first.step_m, 0.0);
+        let second = s.add(nav(2, 0.7, 510));
+        assert!(!second.new_track && (second.step_m - 0.7).abs() < 1e-12);
+        assert_eq!(s.count, 5);
+        assert!((s.path_m - path_before - 0.7).abs() < 1e-12);
     }
 }

@@ -70,7 +70,9 @@ fn run() -> Result<()> {
                     n.yaw_rad.to_degrees(),
                     s.step_m,
                     if s.replaces_previous {
-                        "  (again: replaces the line above, whose first sample had a glitched stamp)"
+                        "  (again: replaces the lines above from this stride on, whose samples had glitched stamps)"
+                    } else if s.new_track {
+                        "  (the daemon's estimator started again: a new track from its own origin)"
                     } else {
                         ""
                     }
