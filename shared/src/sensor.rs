@@ -396,14 +396,24 @@ impl TimeGuard {
     /// for a new base.
     #[inline]
     pub fn check(&mut self, t_s: f64) -> TimeVerdict {
-        self.new_base_from_s = None;
-        let Some(last) = self.last_s else {
-            return TimeVerdict::Accept;
-        };
-        let follows = |from: f64| step_follows(t_s - from, self.min_dt_s, self.max_dt_s);
-        if follows(last) {
-            return TimeVerdict::Accept;
+        // Every time but the rare ones: a time that follows the base (`new_base_from_s` is
+        // empty then: `accept` took it).
+        match self.last_s {
+            None => TimeVerdict::Accept,
+            Some(last) if step_follows(t_s - last, self.min_dt_s, self.max_dt_s) => {
+                TimeVerdict::Accept
+            }
+            Some(last) => self.check_rare(t_s, last),
         }
+    }
+
+    /// [`Self::check`] for a time that does not follow the base. Out of line: the rules grew,
+    /// and inlined whole they were no longer inlined at all (27 instructions per sample more).
+    #[cold]
+    #[inline(never)]
+    fn check_rare(&mut self, t_s: f64, last: f64) -> TimeVerdict {
+        self.new_base_from_s = None;
+        let follows = |from: f64| step_follows(t_s - from, self.min_dt_s, self.max_dt_s);
         if let Some(run) = self.run
             && t_s < run.first_s
             && follows(run.before_s)
@@ -464,8 +474,22 @@ impl TimeGuard {
             let dt_s = t_s - last;
             dt_s > self.gap_dt_s && dt_s <= self.max_dt_s
         });
-        // The run after a confirmed jump opens at the new base and stays open while the times
-        // run on from it, within `max_dt_s` and `JUMP_RUN_MAX_SAMPLES`, without a gap.
+        if self.new_base_from_s.is_some() || self.run.is_some() {
+            self.update_run(t_s);
+        }
+        self.confirmed = self.last_s.is_some();
+        self.last_s = Some(t_s);
+        self.candidate_s = None;
+        self.back_s = None;
+        self.far_back = false;
+    }
+
+    /// The run after a confirmed jump opens at the new base and stays open while the times run
+    /// on from it, within `max_dt_s` and [`JUMP_RUN_MAX_SAMPLES`], without a gap (called by
+    /// `accept` before the base moves to `t_s`, after `before_gap_s` is set).
+    #[cold]
+    #[inline(never)]
+    fn update_run(&mut self, t_s: f64) {
         self.run = match self.new_base_from_s.take() {
             Some(before_s) => Some(JumpRun {
                 before_s,
@@ -483,11 +507,6 @@ impl TimeGuard {
                 })
             }),
         };
-        self.confirmed = self.last_s.is_some();
-        self.last_s = Some(t_s);
-        self.candidate_s = None;
-        self.back_s = None;
-        self.far_back = false;
     }
 
     /// Whether a sample has followed the time base (false for the very first time).
