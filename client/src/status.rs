@@ -27,9 +27,11 @@ impl Status {
 
     /// Accepted samples per second of sensor time between the last two diagnostics; `None`
     /// when idle (sensor time did not advance), with one diagnostics only, or across a daemon
-    /// restart (the count starts again: the difference wrapped, and `--watch` showed 8e17 Hz).
+    /// restart (its count starts again: the difference wrapped, and `--watch` showed 8e17 Hz).
     pub fn sample_rate_hz(&self) -> Option<f64> {
-        let p = self.previous?;
+        let p = self
+            .previous
+            .filter(|p| p.lives == self.diagnostics.lives)?;
         let d = &self.diagnostics;
         let dt_s = d.t_s - p.t_s;
         let accepted = d.accepted.checked_sub(p.accepted)?;
@@ -362,11 +364,17 @@ mod tests {
             status(diag(10.0, 1000), diag(11.0, 1200)).sample_rate_hz(),
             Some(200.0)
         );
-        // The new daemon life counts from 0 (the difference wrapped: 8e17 Hz in `--watch`).
+        // The new daemon life counts from 0 (the difference wrapped: 8e17 Hz in `--watch`),
+        // also once its count has passed the old one's (a review).
         assert_eq!(
             status(diag(10.0, 1000), diag(11.0, 150)).sample_rate_hz(),
             None
         );
+        let next_life = Diagnostics {
+            lives: 2,
+            ..diag(11.0, 1600)
+        };
+        assert_eq!(status(diag(10.0, 1000), next_life).sample_rate_hz(), None);
         assert_eq!(
             status(diag(10.0, 1000), diag(10.0, 1000)).sample_rate_hz(),
             None

@@ -48,15 +48,23 @@ fn step_m(from: Option<NavSample>, to: &NavSample) -> f64 {
 
 impl Strides {
     fn add(&mut self, n: NavSample) -> Stride {
-        let new_track = n.stance == 1 && self.last.is_some_and(|q| q.stance > 1);
+        // A stance count that does not go on: stances sent again after glitched stamps, which
+        // the dropped samples had stamped ahead of this one, or else an estimator that started
+        // again (a daemon restarted within the stream), whose times go on (a review: telling
+        // them apart by the count alone took a glitched run over stances 1 and 2 for a
+        // restart, and a restart whose stance 1 was missed for a glitch).
+        let goes_back = self.last.is_some_and(|q| n.stance <= q.stance);
+        let new_track = goes_back && self.last.is_some_and(|q| q.t_s <= n.t_s);
         if new_track {
             self.recent.clear();
             self.last = None;
         }
-        // Strides from this stance on, sent before, are replaced (not counted again).
+        // Strides from this stance on, sent before with a later time, are replaced (not
+        // counted again).
         let mut replaced = false;
         while let Some(&(q, step)) = self.recent.back()
             && q.stance >= n.stance
+            && q.t_s > n.t_s
         {
             self.recent.pop_back();
             self.path_m -= step;
@@ -190,13 +198,20 @@ impl Tracker {
 mod tests {
     use super::*;
 
-    fn nav(stance: u64, x_m: f64, imu_seq: u64) -> NavSample {
+    /// The nav sample of `stance` at `x_m`, sent for IMU sample `imu_seq` at `t_s`.
+    fn nav_at(stance: u64, x_m: f64, imu_seq: u64, t_s: f64) -> NavSample {
         NavSample {
             stance,
             p_m: [x_m, 0.0, 0.0],
             imu_seq,
+            t_s,
             ..NavSample::default()
         }
+    }
+
+    /// [`nav_at`] at 0.01 s per IMU sample.
+    fn nav(stance: u64, x_m: f64, imu_seq: u64) -> NavSample {
+        nav_at(stance, x_m, imu_seq, imu_seq as f64 * 0.01)
     }
 
     #[test]
@@ -204,7 +219,7 @@ mod tests {
         let mut s = Strides::default();
         let got: Vec<(f64, bool)> = [
             nav(1, 0.0, 10),
-            nav(2, 1.0, 20),
+            nav_at(2, 1.0, 20, 0.30), // its sample stamped 0.1 s ahead, dropped after it
             nav(2, 1.2, 21),
             nav(3, 2.0, 30),
         ]
@@ -228,18 +243,29 @@ mod tests {
         assert_eq!(s.count, 3);
         assert!((s.path_m - 2.0).abs() < 1e-12, "{}", s.path_m);
         assert_eq!(s.last.map(|n| n.imu_seq), Some(30));
-        // A run of glitched stamps that held two stances: both are replaced from the first.
-        s.add(nav(4, 3.0, 40));
-        let again = s.add(nav(3, 2.1, 41));
-        assert!(again.replaces_previous && (again.step_m - 0.9).abs() < 1e-12);
-        assert_eq!(s.count, 3);
-        assert!((s.path_m - 2.1).abs() < 1e-12, "{}", s.path_m);
+        // A run of glitched stamps (975 s ahead) that held two stances: both are replaced from
+        // the first.
+        s.add(nav_at(4, 3.0, 40, 975.4));
+        s.add(nav_at(5, 4.0, 50, 975.5));
+        let again = s.add(nav(4, 2.9, 60));
+        assert!(again.replaces_previous && !again.new_track);
+        assert!((again.step_m - 0.9).abs() < 1e-12);
+        assert_eq!(s.count, 4);
+        assert!((s.path_m - 2.9).abs() < 1e-12, "{}", s.path_m);
+        // ... also over stances 1 and 2 (a review: taken for a restart).
+        let mut s = Strides::default();
+        s.add(nav_at(1, 0.0, 10, 975.1));
+        s.add(nav_at(2, 0.7, 20, 975.2));
+        let again = s.add(nav(1, 0.1, 30));
+        assert!(again.replaces_previous && !again.new_track);
+        assert_eq!((s.count, s.path_m), (1, 0.0));
     }
 
     #[test]
     fn a_daemon_that_restarted_within_the_stream_starts_a_new_track() {
-        // The new daemon life's estimator counts stances from 1 again, from its own origin:
-        // before, its first stride was joined to the last one (a 24 m step in a review).
+        // The new daemon life's estimator counts stances from 1 again, from its own origin,
+        // while the times go on: before, its first stride was joined to the last one (a 24 m
+        // step in a review).
         let mut s = Strides::default();
         for (k, x) in [(1, 0.0), (2, 1.0), (44, 40.0)] {
             s.add(nav(k, x, k * 10));
@@ -252,5 +278,11 @@ mod tests {
         assert!(!second.new_track && (second.step_m - 0.7).abs() < 1e-12);
         assert_eq!(s.count, 5);
         assert!((s.path_m - path_before - 0.7).abs() < 1e-12);
+        // A restart whose stance 1 was missed: a new track too, nothing replaced (a review:
+        // seven real strides were taken back).
+        let (count, path) = (s.count, s.path_m);
+        let after = s.add(nav(2, 0.5, 900));
+        assert!(after.new_track && !after.replaces_previous);
+        assert_eq!((s.count, s.path_m), (count + 1, path));
     }
 }

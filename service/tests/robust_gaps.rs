@@ -400,6 +400,22 @@ fn stamps_glitched_far_ahead_in_a_run_are_dropped_and_the_walk_goes_on_as_withou
         assert_eq!(g.gyro_bias_rad_s, w.gyro_bias_rad_s, "k {k}");
         assert_eq!(gc.heading_used, wc.heading_used, "k {k}");
     }
+    // A second jump within the run (two stamps 975 s ahead, two 1950 s): one run of four (a
+    // review: the second opened a run of its own and the good samples after it were refused).
+    let mut glitched = log.clone();
+    for (i, r) in glitched.rows[7010..7014].iter_mut().enumerate() {
+        r.t_s += if i < 2 { 975.0 } else { 1950.0 };
+    }
+    let mut without = log.clone();
+    without.rows.drain(7010..7014);
+    let (g, gc, glitches, _) = last_of(&glitched);
+    let (w, wc, ..) = last_of(&without);
+    assert_eq!(glitches, [(glitched.rows[7011].t_s, 2)]);
+    assert_eq!((gc.samples, gc.rejected_time_jump), (wc.samples, 4));
+    assert_eq!(
+        (g.p_m, g.nav_from_body, g.gyro_bias_rad_s),
+        (w.p_m, w.nav_from_body, w.gyro_bias_rad_s)
+    );
     // A real 10 s gap is still one: the run closes after `sensor.max_dt_s` and nothing of it
     // is dropped.
     let mut gapped = log.clone();

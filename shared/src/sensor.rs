@@ -343,6 +343,9 @@ pub struct JumpRun {
     pub before_s: f64,
     /// The first accepted time after it (the new base), s.
     pub first_s: f64,
+    /// The first accepted time after the latest jump in the run (`first_s` unless a second
+    /// jump came within it: the run goes on, from the time before the first), s.
+    pub base_s: f64,
     /// Accepted times in the run, the first included.
     pub samples: u32,
 }
@@ -415,7 +418,7 @@ impl TimeGuard {
         self.new_base_from_s = None;
         let follows = |from: f64| step_follows(t_s - from, self.min_dt_s, self.max_dt_s);
         if let Some(run) = self.run
-            && t_s < run.first_s
+            && t_s < run.first_s.min(run.base_s)
             && follows(run.before_s)
         {
             return TimeVerdict::GlitchRun;
@@ -490,15 +493,24 @@ impl TimeGuard {
     #[cold]
     #[inline(never)]
     fn update_run(&mut self, t_s: f64) {
-        self.run = match self.new_base_from_s.take() {
-            Some(before_s) => Some(JumpRun {
+        self.run = match (self.new_base_from_s.take(), self.run) {
+            // A second jump within the run: the run goes on from the time before the first (a
+            // review: it opened a new run from the glitched time, and the good times after it
+            // were refused again).
+            (Some(_), Some(run)) => Some(JumpRun {
+                base_s: t_s,
+                samples: run.samples.saturating_add(1),
+                ..run
+            }),
+            (Some(before_s), None) => Some(JumpRun {
                 before_s,
                 first_s: t_s,
+                base_s: t_s,
                 samples: 1,
             }),
-            None => self.run.and_then(|run| {
+            (None, run) => run.and_then(|run| {
                 let runs_on = self.last_s.is_some_and(|last| t_s > last)
-                    && t_s - run.first_s <= self.max_dt_s
+                    && t_s - run.base_s <= self.max_dt_s
                     && run.samples < JUMP_RUN_MAX_SAMPLES
                     && self.before_gap_s.is_none();
                 runs_on.then_some(JumpRun {
@@ -662,6 +674,14 @@ mod tests {
         assert_eq!(verdicts[2..4], [Jump, NewBase]);
         assert!(verdicts[4..213].iter().all(|&v| v == Accept));
         assert_eq!(verdicts[213], NotIncreasing);
+        // A second jump within the run: still one run, from the time before the first (a
+        // review: the second opened a run of its own, from a glitched time).
+        assert_eq!(
+            run(&[0.0, 0.005, 10.0, 10.005, 20.0, 20.005, 0.03, 0.035]),
+            [
+                Accept, Accept, Jump, NewBase, Jump, NewBase, GlitchRun, Accept
+            ]
+        );
         // ... as it closes at a gap or a step back within the run.
         assert_eq!(
             run(&[0.0, 0.005, 10.0, 10.005, 10.5, 0.010]),
@@ -679,6 +699,7 @@ mod tests {
             Some(JumpRun {
                 before_s: 0.005,
                 first_s: 10.005,
+                base_s: 10.005,
                 samples: 1
             })
         );

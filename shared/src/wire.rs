@@ -44,7 +44,9 @@ pub const FLAG_SHUTDOWN: u32 = 1 << 4;
 /// one's came from samples whose stamps this sample showed to be glitched (it goes back and
 /// follows the time before them); the estimator dropped those samples after the fact, and its
 /// state is as if they had never come. A consumer that keeps outputs should drop those (one
-/// sample after a gap, or up to `sensor.max_dt_s` of a run after a jump).
+/// sample after a gap, or up to `sensor.max_dt_s` of a run after a jump; a clock that stepped
+/// back within that time also leaves earlier outputs with a later `t_s`, which this rule
+/// cannot tell apart: the glitched time is not on the wire).
 pub const FLAG_RETRACTS: u32 = 1 << 5;
 
 /// [`AngleObservation::valid`] bit: `roll_rad` is valid. The daemon does not fuse an external

@@ -68,9 +68,10 @@ pub struct ImuCsvReader<R> {
     /// the jump shows them to be glitched stamps ([`TimeVerdict::GlitchRun`]), and they are
     /// rejected; otherwise they go out when the run closes (at most `max_dt_s` of rows, and
     /// [`crate::sensor::JUMP_RUN_MAX_SAMPLES`]). The first is the jumped row, whose rejection
-    /// is `run_jump` (an estimator behind the reader refuses it, as it does on a live stream).
+    /// is in `run_jumps` (an estimator behind the reader refuses it, as it does on a live
+    /// stream), with that of a second jump within the run.
     pub(super) run: Vec<ImuRow>,
-    pub(super) run_jump: Option<RejectedRow>,
+    pub(super) run_jumps: Vec<RejectedRow>,
     pub(super) rejected: Vec<RejectedRow>,
     pub(super) keep_rejected: usize,
     pub(super) accepted: u64,
@@ -128,7 +129,7 @@ impl<R: BufRead> ImuCsvReader<R> {
             jumps_passed: 0,
             ready: VecDeque::new(),
             run: Vec::new(),
-            run_jump: None,
+            run_jumps: Vec::new(),
             rejected: Vec::new(),
             keep_rejected: REJECTED_ROWS_KEPT,
             accepted: 0,
@@ -288,7 +289,7 @@ impl<R: BufRead> ImuCsvReader<R> {
 
     /// The run after a confirmed jump goes out: nothing showed it to be glitched stamps.
     fn release_run(&mut self) {
-        if let Some(rejected) = self.run_jump.take() {
+        for rejected in self.run_jumps.drain(..) {
             self.passed_refused.0 += 1;
             self.passed_refused.1.get_or_insert(rejected);
             self.jumps_passed += 1;
@@ -300,7 +301,7 @@ impl<R: BufRead> ImuCsvReader<R> {
     #[cold]
     fn reject_run(&mut self) {
         let mut run = std::mem::take(&mut self.run);
-        let jumped = self.run_jump.take();
+        let jumped = std::mem::take(&mut self.run_jumps);
         for row in run.drain(..) {
             let rejected = RejectedRow {
                 line: row.line,
@@ -308,13 +309,13 @@ impl<R: BufRead> ImuCsvReader<R> {
                 value: row.t_s.to_string(),
                 reason: RejectReason::TimeGlitch,
             };
-            // The jumped row with the value as it was read.
-            let rejected = match &jumped {
-                Some(j) if j.line == row.line => RejectedRow {
+            // A jumped row with the value as it was read.
+            let rejected = match jumped.iter().find(|j| j.line == row.line) {
+                Some(j) => RejectedRow {
                     reason: RejectReason::TimeGlitch,
                     ..j.clone()
                 },
-                _ => rejected,
+                None => rejected,
             };
             self.reject(rejected);
         }
@@ -389,18 +390,19 @@ impl<R: BufRead> ImuCsvReader<R> {
                             TimeVerdict::StepBack => (back, [jump, None]),
                             _ => (None, [jump, back]),
                         };
-                        for (_, rejected) in dropped.into_iter().flatten() {
-                            self.reject(rejected);
-                        }
+                        // In line order: the run's rows came before those held in the slots.
                         if verdict == TimeVerdict::GlitchRun {
                             self.reject_run();
                         }
-                        // A confirmed jump's row opens the run after it (see `run`); this row,
-                        // the first after a step back, is passed on now.
+                        for (_, rejected) in dropped.into_iter().flatten() {
+                            self.reject(rejected);
+                        }
+                        // A confirmed jump's row opens the run after it, or joins the run
+                        // within which it came (see `run`); this row, the first after a step
+                        // back, is passed on now.
                         let jumped = passed.map(|(j, rejected)| {
                             if verdict == TimeVerdict::NewBase {
-                                self.release_run();
-                                self.run_jump = Some(rejected);
+                                self.run_jumps.push(rejected);
                             } else {
                                 self.passed_refused.0 += 1;
                                 self.passed_refused.1.get_or_insert(rejected);

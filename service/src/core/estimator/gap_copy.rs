@@ -88,7 +88,8 @@ impl Pipeline {
                 prev_footprint_yaw_rad, footprint_t_s, line_before, heading_suspect,
                 off_direction, reacquiring, line, stance_events, stance_edge, stances_seen,
                 resumed_look, was_stance, clock, late, undo, zero_rate_applied, clipped_gyro_axes,
-                stance_obs_done, stance_f_sum, pending_heading, headings_queued, warm_start, converged_at_s, out;
+                stance_obs_done, stance_f_sum, pending_heading, headings_queued, last_queued,
+                warm_start, converged_at_s, out;
             copy_from: detector, straight, memory, stance_rest);
     }
 }

@@ -212,9 +212,10 @@ struct Pipeline {
     stance_obs_done: bool,
     stance_f_sum: (Vector3<f64>, u64),
     pending_heading: Option<(f64, f64)>,
-    /// External headings taken in (`queue_heading`), for the count of those that dropped
-    /// samples had used (`drop_glitched_samples`).
+    /// External headings taken in (`queue_heading`), and the newest: what was handed in while
+    /// samples that are dropped later ran (`drop_glitched_samples`).
     headings_queued: u64,
+    last_queued: Option<(f64, f64)>,
     warm_start: Option<WarmStart>,
     converged_at_s: Option<f64>,
     out: Estimate,
@@ -284,6 +285,7 @@ impl Estimator {
             stance_f_sum: (Vector3::zeros(), 0),
             pending_heading: None,
             headings_queued: 0,
+            last_queued: None,
             warm_start: None,
             converged_at_s: None,
             out: Estimate::default(),
@@ -360,6 +362,7 @@ impl Estimator {
             });
         }
         self.p.headings_queued += 1;
+        self.p.last_queued = Some((heading_rad, sd_rad));
         if self
             .p
             .pending_heading

@@ -108,16 +108,22 @@ impl Estimator {
         c.rejected_time_jump = now.counters.rejected_time_jump + dropped;
         c.headings_refused = now.counters.headings_refused;
         c.headings_expired = now.counters.headings_expired;
-        c.headings_undone = now.counters.headings_undone;
-        // A heading a dropped sample used is pending again, unless one handed in since
-        // replaces it: counted as superseded then (it went uncounted: a review). Every heading
-        // pending at the copy or handed in since is now pending, superseded or refused at
-        // arrival (uses and gate refusals in the dropped samples are undone with them).
+        // (`headings_undone` stays the copy's: an undo in a dropped sample is dropped with it,
+        // as its uses and gate refusals are; a review found it counted with the heading
+        // pending again.)
+        // The newest heading handed in since the copy is pending (a dropped sample may have
+        // used it: a review found it lost), or else the copy's (used by a dropped sample, it
+        // is pending again). Every heading pending at the copy or handed in since is now
+        // pending, superseded or refused at arrival: the others were replaced by a newer one
+        // and are counted as superseded (they went uncounted: a review).
         let in_play =
             u64::from(p.pending_heading.is_some()) + now.headings_queued - p.headings_queued;
         let superseded_since = now.counters.headings_superseded - c.headings_superseded;
-        p.pending_heading = now.pending_heading.take().or(p.pending_heading);
+        if now.headings_queued > p.headings_queued {
+            p.pending_heading = now.last_queued;
+        }
         p.headings_queued = now.headings_queued;
+        p.last_queued = now.last_queued;
         let pending = u64::from(p.pending_heading.is_some());
         let c = &mut p.counters;
         c.headings_superseded =

@@ -821,3 +821,100 @@ fn a_heading_used_by_a_glitched_sample_and_replaced_since_is_counted() {
     let c = est.counters();
     assert_eq!((c.headings_superseded, c.headings_outside_gate), (1, 0));
 }
+
+/// exp36's samples and the shipped configuration.
+fn exp36_inputs() -> (Config, Vec<ImuInput>) {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let log = corridor_shared::imu_csv::read_imu_csv(
+        &root.join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
+        &Default::default(),
+    )
+    .unwrap();
+    let cfg = Config::from_file(&root.join("configs/gdins.toml")).unwrap();
+    (cfg, log.rows.iter().map(ImuInput::from).collect())
+}
+
+#[test]
+fn a_heading_handed_in_during_a_glitched_run_is_pending_after_the_drop() {
+    // A run of 150 stamps 975 s ahead. H2 is handed in after the run's first sample, and a
+    // stance in the run uses it; the first good time drops the run. H2 was lost (the copy from
+    // before the run had no pending heading) and counted as superseded (a review).
+    let (cfg, rows) = exp36_inputs();
+    let h2 = (0.5, std::f64::consts::PI);
+    let n = 150;
+    for k in (7000..12000).step_by(97) {
+        let mut glitched = rows.clone();
+        for r in &mut glitched[k..k + n] {
+            r.t_s += 975.0;
+        }
+        let aid = crate::runner::heading_aid(&cfg, None).unwrap();
+        let mut est = Estimator::new(cfg.clone(), aid);
+        for s in &glitched[..k + 2] {
+            let _ = est.step(s);
+        }
+        assert!(est.p.pending_heading.is_none());
+        est.queue_heading(h2.0, h2.1).unwrap();
+        for s in &glitched[k + 2..k + n] {
+            est.step(s).unwrap();
+        }
+        if est.p.pending_heading.is_some() {
+            continue; // no stance in the run used it
+        }
+        let e = *est.step(&glitched[k + n]).unwrap();
+        assert_eq!(e.glitch_run_dropped, n as u64 - 1);
+        assert_eq!(est.p.pending_heading, Some(h2), "k {k}");
+        assert_eq!(est.counters().headings_superseded, 0, "k {k}");
+        return;
+    }
+    panic!("no stance of a run used the heading");
+}
+
+#[test]
+fn a_heading_update_undone_in_a_glitched_sample_is_pending_again_not_undone() {
+    // As `a_heading_update_the_health_check_undoes_is_not_counted_as_used`, with the sample
+    // whose update the health check undoes stamped 0.1 s ahead: the next sample drops it. The
+    // heading was counted as undone and pending again, twice (a review).
+    let (mut cfg, rows) = exp36_inputs();
+    cfg.mode = Mode::Paper;
+    cfg.sensor = corridor_shared::sensor::SensorFile {
+        gyro_range_rad_s: Some(cfg.sensor.gyro_range_rad_s()),
+        accel_range_m_s2: Some(cfg.sensor.accel_range_m_s2()),
+        max_gyro_rad_s: Some(cfg.sensor.max_gyro_rad_s()),
+        max_accel_m_s2: Some(cfg.sensor.max_accel_m_s2()),
+        max_gyro_bias_rad_s: Some(0.008),
+        ..Default::default()
+    }
+    .validate()
+    .unwrap();
+    let aid = crate::runner::heading_aid(&cfg, None).unwrap();
+    let mut est = Estimator::new(cfg, aid);
+    let mut i = 0;
+    while est.phase() != Phase::Tracking || i < 6000 {
+        est.step(&rows[i]).unwrap();
+        i += 1;
+    }
+    for _ in 0..5000 {
+        let mut trial = est.clone();
+        let Stage::Running(e) = &trial.stage else {
+            unreachable!("tracking")
+        };
+        let (predicted, var) = e.heading_prediction(&trial.p.foot_forward_body());
+        let sd: f64 = 1e-3;
+        let heading = wrap_pi(predicted + 3.5 * (var + sd * sd).sqrt());
+        trial.queue_heading(heading, sd).unwrap();
+        let glitched = ImuInput {
+            t_s: rows[i].t_s + 0.1,
+            ..rows[i]
+        };
+        trial.step(&glitched).unwrap();
+        if trial.counters().headings_undone == 1 {
+            assert!(trial.step(&rows[i + 1]).unwrap().glitch_t_s.is_some());
+            assert_eq!(trial.counters().headings_undone, 0);
+            assert_eq!(trial.p.pending_heading, Some((heading, sd)));
+            return;
+        }
+        est.step(&rows[i]).unwrap();
+        i += 1;
+    }
+    panic!("no undone heading update found");
+}

@@ -188,6 +188,22 @@ fn stamps_glitched_far_ahead_two_or_more_in_a_row_are_rejected_and_the_rows_afte
         assert!(log.rows.windows(2).all(|w| w[1].t_s > w[0].t_s));
         assert_eq!(log.rows[98].line, 100 + n_glitched);
     }
+    // A second jump within the run (lines 102 and 103 a further 975 s ahead): one run, all
+    // four rejected (a review: the second opened a run of its own, and every later row was
+    // rejected as not increasing).
+    let mut text = good_file(5000);
+    for (line, ahead) in [(100, 975.0), (101, 975.0), (102, 1950.0), (103, 1950.0)] {
+        text = replace_line(&text, line, &row(ahead + line as f64 * 0.005));
+    }
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    let rejected: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
+    assert_eq!(
+        rejected,
+        (100..104)
+            .map(|line| (line, RejectReason::TimeGlitch))
+            .collect::<Vec<_>>()
+    );
+    assert_eq!(log.rows.len(), 4996);
     // The jumped row is named with its value as written.
     let text = replace_line(&good_file(400), 100, "9.75e2,0.01,0.02,0.03,0.1,0.2,9.8");
     let text = replace_line(&text, 101, &row(975.005));
