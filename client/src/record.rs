@@ -131,6 +131,16 @@ impl Recorder {
         let name = &opts.node_name;
         let attitude = Subscriber::open(domain, &format!("{name}-attitude"), opts.wait)?;
         let bias = Subscriber::open(domain, &format!("{name}-bias"), opts.wait)?;
+        if dir.exists() && !dir.is_dir() {
+            // Said as such (it read "File exists (os error 17)").
+            return Err(ClientError::File {
+                path: dir.to_owned(),
+                source: std::io::Error::other(
+                    "exists and is not a directory (the output is a directory for \
+                     attitude.csv and bias.csv)",
+                ),
+            });
+        }
         std::fs::create_dir_all(dir).map_err(file_err(dir))?;
         let attitude_path = dir.join("attitude.csv");
         let bias_path = dir.join("bias.csv");
@@ -167,7 +177,7 @@ impl Recorder {
     }
 
     /// Goes on after an end of stream: the rows of the next stream (a restarted producer, the
-    /// next loop of a replay) are appended to the same files, and only the idle timeout,
+    /// next replay; the loops of one replay are one stream) are appended to the same files, and only the idle timeout,
     /// SIGINT/SIGTERM or `abort` stop the recording. Before, a producer restart ended the
     /// recording and the new stream went unlogged.
     pub fn following_new_streams(mut self) -> Self {

@@ -509,6 +509,20 @@ fn a_logger_that_times_out_within_a_stream_says_so() {
     let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
     let rows = exp36_rows();
     let dir = temp_dir("test-daemon-log-pause");
+    // An output that is a file: said as such (it read "File exists (os error 17)").
+    let file = dir.join("a-file");
+    std::fs::write(&file, "").unwrap();
+    let opts = RecordOptions {
+        node_name: "test-log-file".into(),
+        wait: WAIT,
+        idle_timeout: WAIT,
+        idle_before_first: false,
+        poll: Duration::from_millis(50),
+    };
+    let err = Recorder::open(&domain, &file, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("not a directory"), "{err}");
     let never = AtomicBool::new(false);
     let paused = 500;
     let rec = std::thread::scope(|scope| {

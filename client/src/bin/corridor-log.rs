@@ -37,7 +37,7 @@ struct Args {
     #[arg(long, default_value_t = 30.0, value_parser = parse_time_s)]
     wait_s: f64,
     /// Stop at the first end of stream instead of following the next stream (a restarted
-    /// producer, the next loop of a replay) into the same files.
+    /// producer, the next replay; the loops of one replay are one stream) into the same files.
     #[arg(long)]
     stop_at_end_of_stream: bool,
 }
