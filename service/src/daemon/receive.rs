@@ -13,6 +13,10 @@ use iceoryx2::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
+/// Producer changes per stream that are logged as warnings (the rest at debug level; all
+/// counted in `producer_changes`).
+const PRODUCER_CHANGE_WARNINGS_PER_STREAM: u64 = 3;
+
 /// Counters of the receive thread, read by the estimator thread: the daemon's accounting file
 /// ([`super::state::Record`]), so they continue across daemon lives.
 pub(super) type RxCounters = super::state::Record;
@@ -91,6 +95,8 @@ pub(super) fn rx_thread(
     // True until this life's first sample: a gap before it, in the numbering of the producer an
     // earlier life was receiving, is counted in `missing_at_restart`.
     let mut first_of_life = true;
+    // Producer changes warned of in the current stream (the rest at debug level; all counted).
+    let mut changes_warned = 0u64;
     // Tells a producer that its samples were taken (see `IMU_ACK_SERVICE`); a producer that
     // misses it waits its timeout and counts it.
     let acknowledge = |producer: u128| {
@@ -162,11 +168,24 @@ pub(super) fn rx_thread(
                 // A restarted or replaced producer: its numbering starts afresh unless it
                 // continues the old one (then the gap is real and counted below).
                 counters.producer_changes.fetch_add(1, Ordering::Relaxed);
-                tracing::warn!(
-                    seq = s.seq,
-                    last_seq = ?last_seq,
-                    "IMU producer changed mid-stream"
-                );
+                // Two producers at once change at every sample: a warning each flooded the log
+                // (a review: one per sample); the count is `producer_changes`.
+                changes_warned += 1;
+                if changes_warned <= PRODUCER_CHANGE_WARNINGS_PER_STREAM {
+                    tracing::warn!(
+                        seq = s.seq,
+                        last_seq = ?last_seq,
+                        "IMU producer changed mid-stream{}",
+                        if changes_warned == PRODUCER_CHANGE_WARNINGS_PER_STREAM {
+                            " (further changes in this stream are counted in producer_changes, \
+                             not logged: two producers at once?)"
+                        } else {
+                            ""
+                        }
+                    );
+                } else {
+                    tracing::debug!(seq = s.seq, "IMU producer changed mid-stream");
+                }
                 if last_seq.is_some_and(|l| s.seq <= l) {
                     last_seq = None;
                 }
@@ -186,6 +205,7 @@ pub(super) fn rx_thread(
                 counters.set_producer(producer);
             }
             if s.is_end_of_stream() {
+                changes_warned = 0;
                 if let Some(l) = last_seq
                     && s.seq > l
                 {
