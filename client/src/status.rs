@@ -194,10 +194,12 @@ pub struct DaemonAccount {
 }
 
 impl DaemonAccount {
-    /// Every one of `sent` messages (samples and the end-of-stream marker) received or known
-    /// missing.
+    /// Every one of `sent` samples (the end-of-stream marker not included) estimated, refused,
+    /// dropped or known missing: the estimator's side has taken them all (the receive side
+    /// alone can run ahead of it).
     pub fn accounts_for(&self, sent: u64) -> bool {
-        self.received + self.seq_gaps + self.head_missing >= sent
+        self.accepted + self.refused + self.dropped_overflow + self.seq_gaps + self.head_missing
+            >= sent
     }
 
     /// Samples sent that the estimator never saw: missing from the numbering, sent before the
@@ -232,6 +234,83 @@ impl DaemonAccount {
             accepted: d(before.accepted, after.accepted)?,
             producer_changes: d(before.producer_changes, after.producer_changes)?,
         })
+    }
+}
+
+/// A reader of the daemon's diagnostics on its own thread, for the account of one producer's
+/// stream ([`DaemonAccount`]): started before the first sample, it keeps the first
+/// diagnostics it gets (the daemon's latest before the stream, from the stream's history) and
+/// reads on, so that it never fills (a reader left unread stalled a lossless daemon: a
+/// review), until [`DaemonWatch::finish`] says how many samples were sent.
+#[derive(Debug)]
+pub struct DaemonWatch {
+    sent: std::sync::mpsc::Sender<u64>,
+    thread: std::thread::JoinHandle<Option<(DaemonAccount, bool)>>,
+}
+
+/// Longest single wait of [`DaemonWatch`]'s reader.
+const WATCH_POLL: Duration = Duration::from_millis(50);
+
+impl DaemonWatch {
+    /// Attaches to the diagnostics of `domain`'s daemon (waiting up to `open_wait` for it);
+    /// `None` when it is not there (no daemon yet, a stand-in without diagnostics).
+    pub fn start(
+        domain: &crate::Domain,
+        open_wait: Duration,
+        finish_wait: Duration,
+    ) -> Option<Self> {
+        let (attached_tx, attached) = std::sync::mpsc::channel();
+        let (sent, sent_rx) = std::sync::mpsc::channel::<u64>();
+        let domain = domain.clone();
+        let thread = std::thread::Builder::new()
+            .name("daemon-watch".into())
+            .spawn(move || {
+                let sub = Subscriber::<Diagnostics>::open(&domain, "corridor-watch", open_wait);
+                let _ = attached_tx.send(sub.is_ok());
+                let sub = sub.ok()?;
+                let (mut before, mut last) = (None::<Diagnostics>, None::<Diagnostics>);
+                let mut until: Option<(u64, Instant)> = None;
+                loop {
+                    while let Ok(Some(d)) = sub.recv_timeout(WATCH_POLL) {
+                        before.get_or_insert(d);
+                        last = Some(d);
+                    }
+                    if until.is_none() {
+                        match sent_rx.try_recv() {
+                            Ok(n) => until = Some((n, Instant::now() + finish_wait)),
+                            Err(std::sync::mpsc::TryRecvError::Disconnected) => return None,
+                            Err(std::sync::mpsc::TryRecvError::Empty) => {}
+                        }
+                    }
+                    let Some((n, deadline)) = until else { continue };
+                    let account = before
+                        .zip(last)
+                        .map(|(b, l)| (DaemonAccount::between(&b, &l), l.flags));
+                    match account {
+                        Some((None, _)) => return None, // the daemon restarted
+                        Some((Some(a), flags))
+                            if flags & FLAG_END_OF_STREAM != 0 && a.accounts_for(n) =>
+                        {
+                            return Some((a, true));
+                        }
+                        _ if Instant::now() >= deadline => {
+                            return account.and_then(|(a, _)| a).map(|a| (a, false));
+                        }
+                        _ => {}
+                    }
+                }
+            })
+            .ok()?;
+        // Attached before the first sample goes: its first diagnostics are from before it.
+        attached.recv().ok()?.then_some(Self { sent, thread })
+    }
+
+    /// The account of the `samples` sent since [`Self::start`]: once the daemon's diagnostics
+    /// at the end of the stream account for them all (`true`), or what it had counted when
+    /// `finish_wait` ran out (`false`); `None` without diagnostics or across a restart.
+    pub fn finish(self, samples: u64) -> Option<(DaemonAccount, bool)> {
+        self.sent.send(samples).ok()?;
+        self.thread.join().ok()?
     }
 }
 
@@ -341,7 +420,8 @@ mod tests {
         );
         let account = DaemonAccount::between(&before, &after).unwrap();
         assert_eq!(account.lost(), 4790 + 1019);
-        assert!(account.accounts_for(14001 + 4790) && !account.accounts_for(14001 + 4791));
+        // 8190 estimated, 1 refused, 1019 dropped, 4790 missing.
+        assert!(account.accounts_for(14000) && !account.accounts_for(14001));
         let restarted = Diagnostics { lives: 2, ..after };
         assert_eq!(DaemonAccount::between(&before, &restarted), None);
         assert_eq!(DaemonAccount::between(&after, &before), None);

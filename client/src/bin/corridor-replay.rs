@@ -6,12 +6,11 @@
 use anyhow::{Result, bail};
 use clap::Parser;
 use corridor_client::replay::{ReplayOptions, Speed, replay};
-use corridor_client::status::{DaemonAccount, StatusReader};
+use corridor_client::status::DaemonWatch;
 use corridor_client::{Delivery, Domain};
 use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
 use corridor_shared::injection::{BiasInjection, parse_injected_bias_rad_s, parse_time_s};
 use corridor_shared::services::DEFAULT_DOMAIN;
-use corridor_shared::wire::FLAG_END_OF_STREAM;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -60,9 +59,8 @@ fn main() -> std::process::ExitCode {
     corridor_client::exit(run())
 }
 
-/// How long to wait for the daemon's diagnostics before the replay, and after it for those of
-/// the stream's end (it publishes them every `daemon.diagnostics_period_s`, 1 s by default,
-/// and at the end of a stream).
+/// How long to wait after the replay for the daemon's diagnostics of the stream's end (it
+/// publishes them at the end of a stream, and every `daemon.diagnostics_period_s`).
 const DIAGNOSTICS_WAIT: Duration = Duration::from_secs(10);
 
 /// How long to wait for the daemon's diagnostics service before the replay (a running daemon
@@ -99,35 +97,16 @@ fn run() -> Result<()> {
         },
         wait: Duration::from_secs_f64(a.wait_s.max(0.0)),
     };
-    // The daemon's counts before and after: what it did with the samples (a producer sees only
-    // its side). Its diagnostics stream keeps the latest for a late reader. Not there (a daemon
-    // not yet started, a stand-in without diagnostics): not known, the replay goes on.
-    let mut status = StatusReader::open(&domain, DIAGNOSTICS_OPEN_WAIT).ok();
-    let before = match &mut status {
-        Some(s) => s.next(DIAGNOSTICS_WAIT, false)?,
-        None => None,
-    };
+    // The daemon's counts over the replay: what it did with the samples (a producer sees only
+    // its side), from its diagnostics, read on their own thread from before the first sample
+    // to those of the stream's end. Not there (a daemon not yet started, a stand-in without
+    // diagnostics): not known, and the replay goes on.
+    let watch = DaemonWatch::start(&domain, DIAGNOSTICS_OPEN_WAIT, DIAGNOSTICS_WAIT);
     let r = replay(&domain, &log.rows, &opts)?;
-    // The daemon's diagnostics once its estimator has taken the whole stream: those it
-    // publishes at the end of a stream, with every sample sent received or known missing (the
-    // ones read right after the replay still lacked thousands of samples of a fast replay).
-    let deadline = std::time::Instant::now() + DIAGNOSTICS_WAIT;
-    let mut account = None;
-    let mut complete = false;
-    while let (Some(b), Some(status)) = (before, &mut status)
-        && let Some(now) = status.next(
-            deadline.saturating_duration_since(std::time::Instant::now()),
-            false,
-        )?
-    {
-        account = DaemonAccount::between(&b.diagnostics, &now.diagnostics);
-        complete = account.is_some_and(|d| {
-            now.diagnostics.flags & FLAG_END_OF_STREAM != 0 && d.accounts_for(r.samples + 1)
-        });
-        if complete || account.is_none() {
-            break;
-        }
-    }
+    let (account, complete) = match watch.and_then(|w| w.finish(r.samples)) {
+        Some((a, complete)) => (Some(a), complete),
+        None => (None, false),
+    };
     let s = r.stats;
     let rate = if r.elapsed_s > 0.0 {
         r.samples as f64 / r.elapsed_s
@@ -164,8 +143,8 @@ fn run() -> Result<()> {
         Some(d) => {
             println!(
                 "the daemon, over the replay{}: received {}, missing from the numbering {} \
-                 (overwritten in its live input buffer), sent before its connection {}, dropped \
-                 on a full queue {}, refused {}, estimated {}, producer changes {}",
+                 (overwritten in its live input buffer), before its first read of them {}, \
+                 dropped on a full queue {}, refused {}, estimated {}, producer changes {}",
                 if complete {
                     ""
                 } else {
