@@ -699,23 +699,13 @@ fn an_external_heading_far_from_the_prediction_is_refused_in_every_mode() {
     // A heading 90° off the prediction with σ 1e-3, at 30 s of exp36. The gate was the eskf
     // mode's alone: in the paper and rotation-aware modes one such heading moved the bias by
     // 0.05 rad/s, ten times its value (a review). One 2σ off is fused in each.
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let log = corridor_shared::imu_csv::read_imu_csv(
-        &root.join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
-        &Default::default(),
-    )
-    .unwrap();
-    let rows: Vec<ImuInput> = log.rows.iter().map(ImuInput::from).collect();
+    let (shipped, rows) = exp36_inputs();
     for mode in [Mode::Eskf, Mode::Paper, Mode::RotationAware] {
-        let mut cfg = Config::from_file(&root.join("configs/gdins.toml")).unwrap();
-        cfg.mode = mode;
-        let aid = crate::runner::heading_aid(&cfg, None).unwrap();
-        let mut est = Estimator::new(cfg, aid);
-        let mut i = 0;
-        while est.phase() != Phase::Tracking || i < 6000 {
-            est.step(&rows[i]).unwrap();
-            i += 1;
-        }
+        let cfg = Config {
+            mode,
+            ..shipped.clone()
+        };
+        let (mut est, mut i) = tracking_at_30_s(cfg, &rows);
         let far = (std::f64::consts::FRAC_PI_2, 0.0, 1e-3);
         let (used, gated, moved) = heading_at_next_stance(&mut est, &rows, &mut i, far);
         assert_eq!((used, gated), (0, 1), "{mode:?}");
@@ -731,34 +721,10 @@ fn a_heading_update_the_health_check_undoes_is_not_counted_as_used() {
     // The paper mode with a bias bound of 0.008 rad/s (the walk's z bias is 0.005), and a
     // heading within the gate (3.5σ of the prediction and the observation together) whose σ
     // of 1e-3 moves the bias filter's z by 0.0046 rad/s, past the bound: the health check
-    // undoes the update. It was counted as used, and
-    // the external heading it took was counted nowhere (a review).
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let log = corridor_shared::imu_csv::read_imu_csv(
-        &root.join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
-        &Default::default(),
-    )
-    .unwrap();
-    let rows: Vec<ImuInput> = log.rows.iter().map(ImuInput::from).collect();
-    let mut cfg = Config::from_file(&root.join("configs/gdins.toml")).unwrap();
-    cfg.mode = Mode::Paper;
-    cfg.sensor = corridor_shared::sensor::SensorFile {
-        gyro_range_rad_s: Some(cfg.sensor.gyro_range_rad_s()),
-        accel_range_m_s2: Some(cfg.sensor.accel_range_m_s2()),
-        max_gyro_rad_s: Some(cfg.sensor.max_gyro_rad_s()),
-        max_accel_m_s2: Some(cfg.sensor.max_accel_m_s2()),
-        max_gyro_bias_rad_s: Some(0.008),
-        ..Default::default()
-    }
-    .validate()
-    .unwrap();
-    let aid = crate::runner::heading_aid(&cfg, None).unwrap();
-    let mut est = Estimator::new(cfg, aid);
-    let mut i = 0;
-    while est.phase() != Phase::Tracking || i < 6000 {
-        est.step(&rows[i]).unwrap();
-        i += 1;
-    }
+    // undoes the update. It was counted as used, and the external heading it took was
+    // counted nowhere (a review).
+    let (cfg, rows) = exp36_inputs();
+    let (mut est, mut i) = tracking_at_30_s(paper_with_bias_bound(cfg, 0.008), &rows);
     let c0 = *est.counters();
     let (used, gated, _) = heading_at_next_stance(&mut est, &rows, &mut i, (0.0, 3.5, 1e-3));
     let c = est.counters();
@@ -777,14 +743,7 @@ fn a_heading_used_by_a_glitched_sample_and_replaced_since_is_counted() {
     // H1 waits; the sample that uses it at its stance is stamped 0.1 s ahead (a gap, so
     // provisional); H2 is handed in; the next sample shows the stamp to be a glitch. The use
     // of H1 is undone with the sample, and H2 replaces it: H1 was counted nowhere (a review).
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let log = corridor_shared::imu_csv::read_imu_csv(
-        &root.join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
-        &Default::default(),
-    )
-    .unwrap();
-    let rows: Vec<ImuInput> = log.rows.iter().map(ImuInput::from).collect();
-    let cfg = Config::from_file(&root.join("configs/gdins.toml")).unwrap();
+    let (cfg, rows) = exp36_inputs();
     let aid = crate::runner::heading_aid(&cfg, None).unwrap();
     let mut est = Estimator::new(cfg, aid);
     let mut i = 0;
@@ -834,6 +793,39 @@ fn exp36_inputs() -> (Config, Vec<ImuInput>) {
     (cfg, log.rows.iter().map(ImuInput::from).collect())
 }
 
+/// An estimator with `cfg` run over `rows` until it tracks and 30 s have passed, and the
+/// index of the next row.
+fn tracking_at_30_s(cfg: Config, rows: &[ImuInput]) -> (Estimator, usize) {
+    let aid = crate::runner::heading_aid(&cfg, None).unwrap();
+    let mut est = Estimator::new(cfg, aid);
+    let mut i = 0;
+    while est.phase() != Phase::Tracking || i < 6000 {
+        est.step(&rows[i]).unwrap();
+        i += 1;
+    }
+    (est, i)
+}
+
+/// `cfg` in the paper mode with the plausible gyro bias bounded by `bound_rad_s`.
+fn paper_with_bias_bound(cfg: Config, bound_rad_s: f64) -> Config {
+    let s = &cfg.sensor;
+    let sensor = corridor_shared::sensor::SensorFile {
+        gyro_range_rad_s: Some(s.gyro_range_rad_s()),
+        accel_range_m_s2: Some(s.accel_range_m_s2()),
+        max_gyro_rad_s: Some(s.max_gyro_rad_s()),
+        max_accel_m_s2: Some(s.max_accel_m_s2()),
+        max_gyro_bias_rad_s: Some(bound_rad_s),
+        ..Default::default()
+    }
+    .validate()
+    .unwrap();
+    Config {
+        mode: Mode::Paper,
+        sensor,
+        ..cfg
+    }
+}
+
 #[test]
 fn a_heading_handed_in_during_a_glitched_run_is_pending_after_the_drop() {
     // A run of 150 stamps 975 s ahead. H2 is handed in after the run's first sample, and a
@@ -874,25 +866,8 @@ fn a_heading_update_undone_in_a_glitched_sample_is_pending_again_not_undone() {
     // As `a_heading_update_the_health_check_undoes_is_not_counted_as_used`, with the sample
     // whose update the health check undoes stamped 0.1 s ahead: the next sample drops it. The
     // heading was counted as undone and pending again, twice (a review).
-    let (mut cfg, rows) = exp36_inputs();
-    cfg.mode = Mode::Paper;
-    cfg.sensor = corridor_shared::sensor::SensorFile {
-        gyro_range_rad_s: Some(cfg.sensor.gyro_range_rad_s()),
-        accel_range_m_s2: Some(cfg.sensor.accel_range_m_s2()),
-        max_gyro_rad_s: Some(cfg.sensor.max_gyro_rad_s()),
-        max_accel_m_s2: Some(cfg.sensor.max_accel_m_s2()),
-        max_gyro_bias_rad_s: Some(0.008),
-        ..Default::default()
-    }
-    .validate()
-    .unwrap();
-    let aid = crate::runner::heading_aid(&cfg, None).unwrap();
-    let mut est = Estimator::new(cfg, aid);
-    let mut i = 0;
-    while est.phase() != Phase::Tracking || i < 6000 {
-        est.step(&rows[i]).unwrap();
-        i += 1;
-    }
+    let (cfg, rows) = exp36_inputs();
+    let (mut est, mut i) = tracking_at_30_s(paper_with_bias_bound(cfg, 0.008), &rows);
     for _ in 0..5000 {
         let mut trial = est.clone();
         let Stage::Running(e) = &trial.stage else {
