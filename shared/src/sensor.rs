@@ -418,7 +418,7 @@ impl TimeGuard {
         self.new_base_from_s = None;
         let follows = |from: f64| step_follows(t_s - from, self.min_dt_s, self.max_dt_s);
         if let Some(run) = self.run
-            && t_s < run.first_s.min(run.base_s)
+            && t_s < run.first_s
             && follows(run.before_s)
         {
             return TimeVerdict::GlitchRun;
