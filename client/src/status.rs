@@ -180,8 +180,8 @@ pub struct DaemonAccount {
     /// Samples missing from the producers' numbering (overwritten in the live input buffer,
     /// or never sent).
     pub seq_gaps: u64,
-    /// Samples a producer sent before the daemon's first message from it (before its
-    /// connection was up).
+    /// Samples a producer numbered before the daemon's first read of it (sent before its
+    /// connection was up, or overwritten in its live input buffer before that read).
     pub head_missing: u64,
     /// Samples dropped on a full estimator queue (live delivery).
     pub dropped_overflow: u64,
@@ -207,9 +207,7 @@ impl DaemonAccount {
     pub fn lost(&self) -> u64 {
         self.seq_gaps + self.head_missing + self.dropped_overflow
     }
-}
 
-impl DaemonAccount {
     /// The counts from `before` to `after`; `None` across a daemon restart (the estimator's
     /// counts start again) or when a count went back.
     pub fn between(before: &Diagnostics, after: &Diagnostics) -> Option<Self> {
