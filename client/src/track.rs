@@ -37,7 +37,6 @@ const STRIDES_KEPT: usize = 8;
 struct Strides {
     count: u64,
     path_m: f64,
-    last: Option<NavSample>,
     recent: std::collections::VecDeque<(NavSample, f64)>,
 }
 
@@ -47,17 +46,22 @@ fn step_m(from: Option<NavSample>, to: &NavSample) -> f64 {
 }
 
 impl Strides {
+    /// The last stride's nav sample.
+    fn last(&self) -> Option<NavSample> {
+        self.recent.back().map(|&(q, _)| q)
+    }
+
     fn add(&mut self, n: NavSample) -> Stride {
         // A stance count that does not go on: stances sent again after glitched stamps, which
         // the dropped samples had stamped ahead of this one, or else an estimator that started
         // again (a daemon restarted within the stream), whose times go on (a review: telling
         // them apart by the count alone took a glitched run over stances 1 and 2 for a
         // restart, and a restart whose stance 1 was missed for a glitch).
-        let goes_back = self.last.is_some_and(|q| n.stance <= q.stance);
-        let new_track = goes_back && self.last.is_some_and(|q| q.t_s <= n.t_s);
+        let last = self.last();
+        let goes_back = last.is_some_and(|q| n.stance <= q.stance);
+        let new_track = goes_back && last.is_some_and(|q| q.t_s <= n.t_s);
         if new_track {
             self.recent.clear();
-            self.last = None;
         }
         // Strides from this stance on, sent before with a later time, are replaced (not
         // counted again).
@@ -71,13 +75,9 @@ impl Strides {
             self.count -= 1;
             replaced = true;
         }
-        if replaced {
-            self.last = self.recent.back().map(|&(q, _)| q);
-        }
         self.count += 1;
-        let step_m = step_m(self.last, &n);
+        let step_m = step_m(self.last(), &n);
         self.path_m += step_m;
-        self.last = Some(n);
         if self.recent.len() == STRIDES_KEPT {
             self.recent.pop_front();
         }
@@ -186,7 +186,7 @@ impl Tracker {
                 break TrackStop::EndOfStream;
             }
             let stride = strides.add(n);
-            (t.strides, t.path_m, t.last) = (strides.count, strides.path_m, strides.last);
+            (t.strides, t.path_m, t.last) = (strides.count, strides.path_m, strides.last());
             on_stride(&stride);
         };
         t.missed = self.nav.missed();
@@ -242,7 +242,7 @@ mod tests {
         );
         assert_eq!(s.count, 3);
         assert!((s.path_m - 2.0).abs() < 1e-12, "{}", s.path_m);
-        assert_eq!(s.last.map(|n| n.imu_seq), Some(30));
+        assert_eq!(s.last().map(|n| n.imu_seq), Some(30));
         // A run of glitched stamps (975 s ahead) that held two stances: both are replaced from
         // the first.
         s.add(nav_at(4, 3.0, 40, 975.4));
