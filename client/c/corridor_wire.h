@@ -20,7 +20,7 @@
 #define CORRIDOR_ALIGNOF(t) _Alignof(t)
 #endif
 
-#define CORRIDOR_SERVICE_VERSION "v4"
+#define CORRIDOR_SERVICE_VERSION "v5"
 #define CORRIDOR_FLAG_END_OF_STREAM 1u
 #define CORRIDOR_FLAG_BIAS_CORRECTED 2u
 #define CORRIDOR_FLAG_STANCE 4u
@@ -36,11 +36,11 @@
 /* Event (no payload) the daemon notifies, with event id = the producer's publisher id
  * modulo 256, when it has taken that producer's first sample: a producer waits for it
  * before it drops its publisher (client/src/producer.rs). */
-#define CORRIDOR_IMU_ACK_EVENT "corridor/v4/imu_ack"
+#define CORRIDOR_IMU_ACK_EVENT "corridor/v5/imu_ack"
 
 /* One IMU sample, producer -> daemon. */
-#define CORRIDOR_IMU_SAMPLE_SERVICE "corridor/v4/imu"
-#define CORRIDOR_IMU_SAMPLE_TYPE_NAME "corridor_v4_ImuSample"
+#define CORRIDOR_IMU_SAMPLE_SERVICE "corridor/v5/imu"
+#define CORRIDOR_IMU_SAMPLE_TYPE_NAME "corridor_v5_ImuSample"
 typedef struct corridor_ImuSample {
     uint64_t seq;
     double t_s;
@@ -63,8 +63,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_ImuSample, reserved) == 76, "corridor_I
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_ImuSample, sent_ns) == 80, "corridor_ImuSample.sent_ns: offset");
 
 /* An external attitude observation, producer -> daemon. */
-#define CORRIDOR_ANGLE_OBSERVATION_SERVICE "corridor/v4/angles"
-#define CORRIDOR_ANGLE_OBSERVATION_TYPE_NAME "corridor_v4_AngleObservation"
+#define CORRIDOR_ANGLE_OBSERVATION_SERVICE "corridor/v5/angles"
+#define CORRIDOR_ANGLE_OBSERVATION_TYPE_NAME "corridor_v5_AngleObservation"
 typedef struct corridor_AngleObservation {
     uint64_t seq;
     double t_s;
@@ -91,8 +91,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_AngleObservation, valid) == 64, "corrid
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_AngleObservation, reserved) == 68, "corridor_AngleObservation.reserved: offset");
 
 /* The gyro-bias estimate, daemon -> clients. */
-#define CORRIDOR_BIAS_SAMPLE_SERVICE "corridor/v4/bias"
-#define CORRIDOR_BIAS_SAMPLE_TYPE_NAME "corridor_v4_BiasSample"
+#define CORRIDOR_BIAS_SAMPLE_SERVICE "corridor/v5/bias"
+#define CORRIDOR_BIAS_SAMPLE_TYPE_NAME "corridor_v5_BiasSample"
 typedef struct corridor_BiasSample {
     uint64_t seq;
     double t_s;
@@ -115,8 +115,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, converged) == 80, "corridor
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, flags) == 84, "corridor_BiasSample.flags: offset");
 
 /* The attitude after one IMU sample, daemon -> clients. */
-#define CORRIDOR_ATTITUDE_SAMPLE_SERVICE "corridor/v4/attitude"
-#define CORRIDOR_ATTITUDE_SAMPLE_TYPE_NAME "corridor_v4_AttitudeSample"
+#define CORRIDOR_ATTITUDE_SAMPLE_SERVICE "corridor/v5/attitude"
+#define CORRIDOR_ATTITUDE_SAMPLE_TYPE_NAME "corridor_v5_AttitudeSample"
 typedef struct corridor_AttitudeSample {
     uint64_t seq;
     double t_s;
@@ -147,8 +147,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_AttitudeSample, flags) == 132, "corrido
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_AttitudeSample, imu_sent_ns) == 136, "corridor_AttitudeSample.imu_sent_ns: offset");
 
 /* Position and velocity at a footfall, daemon -> clients. */
-#define CORRIDOR_NAV_SAMPLE_SERVICE "corridor/v4/nav"
-#define CORRIDOR_NAV_SAMPLE_TYPE_NAME "corridor_v4_NavSample"
+#define CORRIDOR_NAV_SAMPLE_SERVICE "corridor/v5/nav"
+#define CORRIDOR_NAV_SAMPLE_TYPE_NAME "corridor_v5_NavSample"
 typedef struct corridor_NavSample {
     uint64_t seq;
     double t_s;
@@ -173,8 +173,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_NavSample, flags) == 88, "corridor_NavS
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_NavSample, reserved) == 92, "corridor_NavSample.reserved: offset");
 
 /* Counters of the daemon, daemon -> clients. */
-#define CORRIDOR_DIAGNOSTICS_SERVICE "corridor/v4/diagnostics"
-#define CORRIDOR_DIAGNOSTICS_TYPE_NAME "corridor_v4_Diagnostics"
+#define CORRIDOR_DIAGNOSTICS_SERVICE "corridor/v5/diagnostics"
+#define CORRIDOR_DIAGNOSTICS_TYPE_NAME "corridor_v5_Diagnostics"
 typedef struct corridor_Diagnostics {
     uint64_t seq;
     double t_s;
@@ -200,10 +200,17 @@ typedef struct corridor_Diagnostics {
     uint64_t lost_in_daemon;
     uint64_t angles_dropped;
     uint64_t lives;
+    uint64_t foreign_samples;
+    uint64_t angles_ignored;
+    uint64_t headings_refused;
+    uint64_t headings_superseded;
+    uint64_t headings_outside_gate;
+    uint64_t headings_expired;
+    uint64_t headings_undone;
     uint32_t phase;
     uint32_t flags;
 } corridor_Diagnostics;
-CORRIDOR_STATIC_ASSERT(sizeof(corridor_Diagnostics) == 200, "corridor_Diagnostics: size");
+CORRIDOR_STATIC_ASSERT(sizeof(corridor_Diagnostics) == 256, "corridor_Diagnostics: size");
 CORRIDOR_STATIC_ASSERT(CORRIDOR_ALIGNOF(corridor_Diagnostics) == 8, "corridor_Diagnostics: alignment");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, seq) == 0, "corridor_Diagnostics.seq: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, t_s) == 8, "corridor_Diagnostics.t_s: offset");
@@ -229,7 +236,14 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, missing_at_restart) == 160
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, lost_in_daemon) == 168, "corridor_Diagnostics.lost_in_daemon: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, angles_dropped) == 176, "corridor_Diagnostics.angles_dropped: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, lives) == 184, "corridor_Diagnostics.lives: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, phase) == 192, "corridor_Diagnostics.phase: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, flags) == 196, "corridor_Diagnostics.flags: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, foreign_samples) == 192, "corridor_Diagnostics.foreign_samples: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, angles_ignored) == 200, "corridor_Diagnostics.angles_ignored: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, headings_refused) == 208, "corridor_Diagnostics.headings_refused: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, headings_superseded) == 216, "corridor_Diagnostics.headings_superseded: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, headings_outside_gate) == 224, "corridor_Diagnostics.headings_outside_gate: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, headings_expired) == 232, "corridor_Diagnostics.headings_expired: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, headings_undone) == 240, "corridor_Diagnostics.headings_undone: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, phase) == 248, "corridor_Diagnostics.phase: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, flags) == 252, "corridor_Diagnostics.flags: offset");
 
 #endif /* CORRIDOR_WIRE_H */

@@ -100,8 +100,20 @@ impl Status {
         );
         let _ = writeln!(
             s,
-            "producer changes: {}, angle observations dropped {}, daemon life {}",
-            d.producer_changes, d.angles_dropped, d.lives
+            "producers:        changes {}, samples of a second producer refused {}, daemon life {}",
+            d.producer_changes, d.foreign_samples, d.lives
+        );
+        let _ = writeln!(
+            s,
+            "angles:           dropped {}, with roll or pitch (not fused) {}; external headings \
+             refused {}, superseded {}, outside the gate {}, expired {}, undone {}",
+            d.angles_dropped,
+            d.angles_ignored,
+            d.headings_refused,
+            d.headings_superseded,
+            d.headings_outside_gate,
+            d.headings_expired,
+            d.headings_undone
         );
         let _ = writeln!(
             s,
@@ -189,8 +201,11 @@ pub struct DaemonAccount {
     pub refused: u64,
     /// Samples the estimator accepted.
     pub accepted: u64,
-    /// Producer changes (another producer's samples in between).
+    /// Producer changes (another producer took over).
     pub producer_changes: u64,
+    /// Samples refused because another producer was followed (this stream's, when it was not
+    /// the one followed; or a second producer's while it was).
+    pub foreign: u64,
 }
 
 impl DaemonAccount {
@@ -198,7 +213,12 @@ impl DaemonAccount {
     /// dropped or known missing: the estimator's side has taken them all (the receive side
     /// alone can run ahead of it).
     pub fn accounts_for(&self, sent: u64) -> bool {
-        self.accepted + self.refused + self.dropped_overflow + self.seq_gaps + self.head_missing
+        self.accepted
+            + self.refused
+            + self.dropped_overflow
+            + self.seq_gaps
+            + self.head_missing
+            + self.foreign
             >= sent
     }
 
@@ -231,6 +251,7 @@ impl DaemonAccount {
             refused: d(refused(before), refused(after))?,
             accepted: d(before.accepted, after.accepted)?,
             producer_changes: d(before.producer_changes, after.producer_changes)?,
+            foreign: d(before.foreign_samples, after.foreign_samples)?,
         })
     }
 }
@@ -414,6 +435,7 @@ mod tests {
                 refused: 1,
                 accepted: 8190,
                 producer_changes: 0,
+                foreign: 0,
             })
         );
         let account = DaemonAccount::between(&before, &after).unwrap();

@@ -79,9 +79,9 @@ pub mod phase {
     }
 }
 
-/// One IMU sample, producer → daemon (`corridor/v4/imu`).
+/// One IMU sample, producer → daemon (`corridor/v5/imu`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v4_ImuSample")]
+#[type_name("corridor_v5_ImuSample")]
 #[repr(C)]
 pub struct ImuSample {
     /// Sequence number of the producer, +1 per sample (end-of-stream markers included).
@@ -125,11 +125,11 @@ impl From<&ImuRow> for ImuSample {
     }
 }
 
-/// An external attitude observation, producer → daemon (`corridor/v4/angles`), e.g. a heading
+/// An external attitude observation, producer → daemon (`corridor/v5/angles`), e.g. a heading
 /// from a map matcher or a camera. The heading is used when its bit is set in `valid` (at the
 /// next stance, instead of the map); roll and pitch are not fused (see [`ANGLE_ROLL`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v4_AngleObservation")]
+#[type_name("corridor_v5_AngleObservation")]
 #[repr(C)]
 pub struct AngleObservation {
     /// Sequence number of the producer.
@@ -154,10 +154,10 @@ pub struct AngleObservation {
     pub reserved: u32,
 }
 
-/// The gyro-bias estimate, daemon → clients (`corridor/v4/bias`): at each heading observation,
+/// The gyro-bias estimate, daemon → clients (`corridor/v5/bias`): at each heading observation,
 /// at the configured rate and at end of stream.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v4_BiasSample")]
+#[type_name("corridor_v5_BiasSample")]
 #[repr(C)]
 pub struct BiasSample {
     /// Sequence number of the daemon's bias stream.
@@ -197,10 +197,10 @@ impl Default for BiasSample {
     }
 }
 
-/// The attitude after one IMU sample, daemon → clients (`corridor/v4/attitude`): one per
+/// The attitude after one IMU sample, daemon → clients (`corridor/v5/attitude`): one per
 /// accepted IMU sample, plus one end-of-stream marker.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v4_AttitudeSample")]
+#[type_name("corridor_v5_AttitudeSample")]
 #[repr(C)]
 pub struct AttitudeSample {
     /// Sequence number of the daemon's attitude stream.
@@ -231,13 +231,13 @@ pub struct AttitudeSample {
     pub imu_sent_ns: u64,
 }
 
-/// Position and velocity at a footfall, daemon → clients (`corridor/v4/nav`): one per stance
+/// Position and velocity at a footfall, daemon → clients (`corridor/v5/nav`): one per stance
 /// (first sample of the stance), after alignment. A sample whose stamp turns out to be a glitch
 /// is dropped after its nav sample went out; its stance's real first sample then sends one
 /// again, with the same `stance` and a later `imu_seq` (`corridor_client`'s tracker takes it
 /// for the stride it replaces).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v4_NavSample")]
+#[type_name("corridor_v5_NavSample")]
 #[repr(C)]
 pub struct NavSample {
     /// Sequence number of the daemon's nav stream.
@@ -263,15 +263,16 @@ pub struct NavSample {
     pub reserved: u32,
 }
 
-/// Counters of the daemon, daemon → clients (`corridor/v4/diagnostics`): periodically (wall
+/// Counters of the daemon, daemon → clients (`corridor/v5/diagnostics`): periodically (wall
 /// clock), at end of stream and at shutdown. The input counters (`received`, `seq_gaps`,
 /// `rejected_duplicate_seq`, `late`, `dropped_overflow`, `producer_changes`) and `undelivered`
 /// are cumulative over every life of the domain's daemon (they live in its accounting file, so a
 /// restarted daemon continues them), as are `head_missing`, `missing_at_restart`,
-/// `lost_in_daemon` and `angles_dropped`; the estimator's counts (`accepted`,
-/// `rejected_non_finite`, `rejected_time`, `stances`, `heading_used`) over the current life.
+/// `lost_in_daemon`, `angles_dropped`, `foreign_samples` and `angles_ignored`; the estimator's
+/// counts (`accepted`, `rejected_non_finite`, `rejected_time`, `stances`, `heading_used`, the
+/// `headings_*`) over the current life.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v4_Diagnostics")]
+#[type_name("corridor_v5_Diagnostics")]
 #[repr(C)]
 pub struct Diagnostics {
     /// Sequence number of the daemon's diagnostics stream.
@@ -331,6 +332,28 @@ pub struct Diagnostics {
     /// Daemon lives that used the domain's accounting file, this one included (the counters
     /// above and `received` … `dropped_overflow` continue across them).
     pub lives: u64,
+    /// IMU messages refused because they came from another producer than the one the daemon
+    /// follows, while that one was live (one producer at a time; `daemon.producer_takeover_s`)
+    /// (v5; cumulative, as `received`).
+    pub foreign_samples: u64,
+    /// Angle observations carrying roll or pitch, which are not fused (their heading, if any, is
+    /// used) (v5; cumulative, as `received`).
+    pub angles_ignored: u64,
+    /// External headings refused on arrival: not finite, or σ not in (0, π] (v5; this life,
+    /// every stream).
+    pub headings_refused: u64,
+    /// External headings replaced by a newer one before the stance that would have used them
+    /// (v5; this life).
+    pub headings_superseded: u64,
+    /// External headings refused at their stance: too far from the filter's prediction (NIS
+    /// beyond 16) (v5; this life).
+    pub headings_outside_gate: u64,
+    /// External headings still waiting for a stance when their stream ended or the daemon
+    /// stopped (v5; this life).
+    pub headings_expired: u64,
+    /// External headings fused in an update the estimator's health check then undid (v5; this
+    /// life).
+    pub headings_undone: u64,
     /// Estimator phase ([`phase`]).
     pub phase: u32,
     /// Bit set of `FLAG_*` ([`FLAG_END_OF_STREAM`], [`FLAG_SHUTDOWN`]).
@@ -381,7 +404,7 @@ mod tests {
         assert_eq!(size_of::<BiasSample>(), 8 * 3 + 48 + 8 + 8);
         assert_eq!(size_of::<AttitudeSample>(), 8 * 3 + 32 + 24 + 48 + 8 + 8);
         assert_eq!(size_of::<NavSample>(), 8 * 4 + 48 + 8 + 8);
-        assert_eq!(size_of::<Diagnostics>(), 8 * 24 + 8);
+        assert_eq!(size_of::<Diagnostics>(), 8 * 31 + 8);
     }
 
     #[test]

@@ -151,7 +151,9 @@ pub fn layouts() -> Vec<TypeLayout> {
             accepted: u64, undelivered: u64, stances: u64, heading_used: u64, last_nis: f64,
             producer_changes: u64, latency_p50_s: f64, latency_p99_s: f64, head_missing: u64,
             missing_at_restart: u64, lost_in_daemon: u64, angles_dropped: u64, lives: u64,
-            phase: u32, flags: u32),
+            foreign_samples: u64, angles_ignored: u64, headings_refused: u64,
+            headings_superseded: u64, headings_outside_gate: u64, headings_expired: u64,
+            headings_undone: u64, phase: u32, flags: u32),
     ]
 }
 

@@ -1,4 +1,4 @@
-//! An external heading (`AngleObservation` over `corridor/v4/angles`, e.g. from a map matcher)
+//! An external heading (`AngleObservation` over `corridor/v5/angles`, e.g. from a map matcher)
 //! reaches the estimator end to end: the daemon's attitude stream is the offline run's with the
 //! same heading queued (to 1e-12, as the replay test compares), and differs in yaw from the run
 //! without it. Its own binary:
@@ -89,7 +89,10 @@ fn an_external_heading_moves_the_published_yaw_as_offline() {
     let got = until_end(&attitude, |a| a.flags);
     let stats = producer.join().unwrap();
     let report = daemon.stop();
-    assert_eq!(report.angles_ignored, 1, "the roll observation is counted");
+    assert_eq!(
+        report.diagnostics.angles_ignored, 1,
+        "the roll observation is counted"
+    );
     assert_eq!(
         stats.angles_sent - stats.angles_undelivered,
         2,

@@ -8,7 +8,7 @@ tests/test_wire_layout.py checks them against the layout the Rust code measures
 import ctypes
 from typing import List, Tuple, Type
 
-SERVICE_VERSION = "v4"
+SERVICE_VERSION = "v5"
 
 FLAG_END_OF_STREAM = 1 << 0
 FLAG_BIAS_CORRECTED = 1 << 1
@@ -54,8 +54,8 @@ class _Wire(ctypes.Structure):
 class ImuSample(_Wire):
     """One IMU sample, producer -> daemon."""
 
-    TYPE_NAME = "corridor_v4_ImuSample"
-    SERVICE = "corridor/v4/imu"
+    TYPE_NAME = "corridor_v5_ImuSample"
+    SERVICE = "corridor/v5/imu"
     _fields_: List[Tuple[str, Type]] = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -71,8 +71,8 @@ class ImuSample(_Wire):
 class AngleObservation(_Wire):
     """An external attitude observation, producer -> daemon."""
 
-    TYPE_NAME = "corridor_v4_AngleObservation"
-    SERVICE = "corridor/v4/angles"
+    TYPE_NAME = "corridor_v5_AngleObservation"
+    SERVICE = "corridor/v5/angles"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -90,8 +90,8 @@ class AngleObservation(_Wire):
 class BiasSample(_Wire):
     """The gyro-bias estimate, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v4_BiasSample"
-    SERVICE = "corridor/v4/bias"
+    TYPE_NAME = "corridor_v5_BiasSample"
+    SERVICE = "corridor/v5/bias"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -107,8 +107,8 @@ class BiasSample(_Wire):
 class AttitudeSample(_Wire):
     """The attitude after one IMU sample, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v4_AttitudeSample"
-    SERVICE = "corridor/v4/attitude"
+    TYPE_NAME = "corridor_v5_AttitudeSample"
+    SERVICE = "corridor/v5/attitude"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -128,8 +128,8 @@ class AttitudeSample(_Wire):
 class NavSample(_Wire):
     """Position and velocity at a footfall, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v4_NavSample"
-    SERVICE = "corridor/v4/nav"
+    TYPE_NAME = "corridor_v5_NavSample"
+    SERVICE = "corridor/v5/nav"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -146,8 +146,8 @@ class NavSample(_Wire):
 class Diagnostics(_Wire):
     """Counters of the daemon, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v4_Diagnostics"
-    SERVICE = "corridor/v4/diagnostics"
+    TYPE_NAME = "corridor_v5_Diagnostics"
+    SERVICE = "corridor/v5/diagnostics"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -173,6 +173,13 @@ class Diagnostics(_Wire):
         ("lost_in_daemon", _u64),
         ("angles_dropped", _u64),
         ("lives", _u64),
+        ("foreign_samples", _u64),
+        ("angles_ignored", _u64),
+        ("headings_refused", _u64),
+        ("headings_superseded", _u64),
+        ("headings_outside_gate", _u64),
+        ("headings_expired", _u64),
+        ("headings_undone", _u64),
         ("phase", _u32),
         ("flags", _u32),
     ]

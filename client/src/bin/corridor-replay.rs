@@ -137,14 +137,16 @@ fn run() -> Result<()> {
         }
     );
     // What the daemon did with them, from its counters (another producer at the same time is
-    // counted in them too: `producer changes`).
-    let mut lost = 0;
+    // counted in them too: `refused as another producer's`).
+    let (mut lost, mut foreign) = (0, 0);
     match account {
         Some(d) => {
+            foreign = d.foreign;
             println!(
                 "the daemon, over the replay{}: received {}, missing from the numbering {} \
                  (overwritten in its live input buffer), before its first read of them {}, \
-                 dropped on a full queue {}, refused {}, estimated {}, producer changes {}",
+                 dropped on a full queue {}, refused {}, estimated {}, producer changes {}, \
+                 refused as another producer's {}",
                 if complete {
                     ""
                 } else {
@@ -156,7 +158,8 @@ fn run() -> Result<()> {
                 d.dropped_overflow,
                 d.refused,
                 d.accepted,
-                d.producer_changes
+                d.producer_changes,
+                d.foreign
             );
             lost = d.lost();
         }
@@ -181,6 +184,14 @@ fn run() -> Result<()> {
             "warning: the daemon lost {lost} of the {} samples sent (live delivery drops what \
              it cannot keep up with: --delivery lossless, or a lower --speed)",
             r.samples
+        );
+    }
+    if foreign > 0 {
+        eprintln!(
+            "warning: the daemon refused {foreign} samples during the replay because they came \
+             from another producer than the one it followed (one producer at a time: was \
+             another driver or replay sending on domain {:?}?)",
+            domain.name()
         );
     }
     if s.closes_unconfirmed > 0 {

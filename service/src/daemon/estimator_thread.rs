@@ -177,6 +177,13 @@ impl<'a> EstState<'a> {
             lost_in_daemon: rx.lost_in_daemon.load(Ordering::Relaxed),
             angles_dropped: rx.angles_dropped.load(Ordering::Relaxed),
             lives: rx.lives.load(Ordering::Relaxed),
+            foreign_samples: rx.foreign.load(Ordering::Relaxed),
+            angles_ignored: rx.angles_ignored.load(Ordering::Relaxed),
+            headings_refused: p.headings_refused + c.headings_refused,
+            headings_superseded: p.headings_superseded + c.headings_superseded,
+            headings_outside_gate: p.headings_outside_gate + c.headings_outside_gate,
+            headings_expired: p.headings_expired + c.headings_expired,
+            headings_undone: p.headings_undone + c.headings_undone,
             phase: phase_code(self.est.phase()),
             flags,
         }
@@ -473,7 +480,7 @@ impl<'a> EstState<'a> {
         };
         tracing::info!(
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
-             dropped +{} ({}), producer changes {}, latency p50 {} p99 {}, bias {} rad/s, \
+             dropped +{} ({}), producer changes {}, foreign samples {}, latency p50 {} p99 {}, bias {} rad/s, \
              σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
              health restores {} (footprints forgotten {}), velocity resets {}, tilts levelled again {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
              lost in a killed daemon {}, external headings refused {} (superseded {}, outside the gate {}, expired at a stream's end {}, undone by the health check {})",
@@ -485,6 +492,7 @@ impl<'a> EstState<'a> {
             d.dropped_overflow - h.dropped,
             d.dropped_overflow,
             d.producer_changes,
+            d.foreign_samples,
             MicrosFmt(self.latency_health.quantile_s(0.5)),
             MicrosFmt(self.latency_health.quantile_s(0.99)),
             bias,
@@ -510,11 +518,11 @@ impl<'a> EstState<'a> {
             rx.head_missing.load(Ordering::Relaxed),
             rx.missing_at_restart.load(Ordering::Relaxed),
             rx.lost_in_daemon.load(Ordering::Relaxed),
-            self.previous.headings_refused + self.est.counters().headings_refused,
-            self.previous.headings_superseded + self.est.counters().headings_superseded,
-            self.previous.headings_outside_gate + self.est.counters().headings_outside_gate,
-            self.previous.headings_expired + self.est.counters().headings_expired,
-            self.previous.headings_undone + self.est.counters().headings_undone,
+            d.headings_refused,
+            d.headings_superseded,
+            d.headings_outside_gate,
+            d.headings_expired,
+            d.headings_undone,
         );
         self.latency_health.clear();
         self.health = HealthMark {
@@ -644,18 +652,6 @@ pub(super) fn estimator_thread(
         estimated: counters.taken.load(Ordering::Relaxed),
         lost_in_daemon: counters.lost_in_daemon.load(Ordering::Relaxed),
         angles_dropped: counters.angles_dropped.load(Ordering::Relaxed),
-        angles_ignored: counters.angles_ignored.load(Ordering::Relaxed),
-        headings: {
-            let c = st.est.counters();
-            let p = &st.previous;
-            [
-                p.headings_refused + c.headings_refused,
-                p.headings_superseded + c.headings_superseded,
-                p.headings_outside_gate + c.headings_outside_gate,
-                p.headings_expired + c.headings_expired,
-                p.headings_undone + c.headings_undone,
-            ]
-        },
         published: [
             out.attitude.seq,
             out.bias.seq,

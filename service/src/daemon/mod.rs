@@ -5,7 +5,8 @@
 //! - `corridor-rx` owns the input subscriber ports ([`ImuSample`], [`AngleObservation`]). It
 //!   blocks on the IMU event listener (no busy poll) with [`DaemonConfig::poll_timeout`] so it
 //!   sees `shutdown`, checks `seq` (gaps, duplicates, late samples) and the producer's identity
-//!   (a restarted producer), and forwards the samples over a bounded crossbeam channel. Angle
+//!   (a restarted producer; one producer at a time, another one's samples refused and counted
+//!   while the followed one is live: `producers`), and forwards the samples over a bounded crossbeam channel. Angle
 //!   observations are drained on every wake-up (an IMU stream wakes it at the sensor rate; an
 //!   idle daemon within `poll_timeout`).
 //! - `corridor-estimator` owns the [`Estimator`] and the output publisher ports, publishes an
@@ -65,6 +66,7 @@
 //! - `estimator_thread`: the estimator thread (`corridor-estimator`): its state, the end of
 //!   stream, the checkpoint saves and the health line.
 //! - `outputs`: the output publishers and the conversion of an estimate into wire messages.
+//! - `producers`: which IMU producer the receive thread follows when several publish.
 //! - `latency`: the allocation-free latency histogram behind the diagnostics and health line.
 //! - `state`: the accounting file (the receive thread's counters, the output `seq`s).
 //!
@@ -81,6 +83,7 @@
 mod estimator_thread;
 mod latency;
 mod outputs;
+mod producers;
 mod receive;
 pub mod stall;
 mod state;
@@ -140,6 +143,10 @@ pub struct DaemonConfig {
     /// Longest a lossless publish waits on one consumer's full buffer; beyond it the consumer
     /// counts as stalled and loses (counted) what its buffer cannot take.
     pub stall_timeout: Duration,
+    /// While the followed IMU producer is connected and has sent within this, another
+    /// producer's samples are refused and counted ([`Diagnostics::foreign_samples`]); after it
+    /// the other takes over (`daemon.producer_takeover_s`).
+    pub producer_takeover: Duration,
 }
 
 impl DaemonConfig {
@@ -188,6 +195,7 @@ impl DaemonConfig {
             checkpoint: d.checkpoint_path,
             checkpoint_period: Duration::from_secs_f64(d.checkpoint_period_s.get()),
             stall_timeout: Duration::from_secs_f64(d.stall_timeout_s.get()),
+            producer_takeover: Duration::from_secs_f64(d.producer_takeover_s.get()),
         }
     }
 }
@@ -226,17 +234,11 @@ pub struct DaemonReport {
     pub estimated: u64,
     /// IMU samples an earlier daemon life received but neither estimated, refused by `seq` nor
     /// dropped (killed with them in its receive thread or channel): `received = estimated +
-    /// dropped_overflow + rejected_duplicate_seq + late + lost_in_daemon` after a clean stop.
+    /// dropped_overflow + rejected_duplicate_seq + late + foreign_samples + lost_in_daemon`
+    /// after a clean stop.
     pub lost_in_daemon: u64,
     /// Angle observations dropped because the estimator's channel was full (live delivery).
     pub angles_dropped: u64,
-    /// Angle observations carrying roll or pitch, which are not fused (their heading is used).
-    pub angles_ignored: u64,
-    /// External headings the estimator refused as absurd, replaced by a newer one before their
-    /// stance, refused at their stance as too far from the prediction, still waiting when their
-    /// stream ended or the daemon stopped, and fused in an update the health check undid (every
-    /// stream).
-    pub headings: [u64; 5],
     /// Messages published per output (attitude, bias, nav, diagnostics): the next `seq` of each,
     /// continued across daemon lives.
     pub published: [u64; 4],

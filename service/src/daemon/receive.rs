@@ -1,6 +1,7 @@
-//! The receive thread (`corridor-rx`): input subscribers, `seq` and producer checks, and the
-//! bounded channel to the estimator thread.
+//! The receive thread (`corridor-rx`): input subscribers, `seq` and producer checks (one
+//! producer at a time: [`super::producers`]), and the bounded channel to the estimator thread.
 
+use super::producers::{Admit, ProducerLock};
 use super::state::{load_opt, store_opt};
 use super::{DaemonConfig, DaemonError};
 use corridor_shared::services::{
@@ -11,11 +12,16 @@ use crossbeam_channel::TrySendError;
 use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// Producer changes per stream that are logged as warnings (the rest at debug level; all
 /// counted in `producer_changes`).
 const PRODUCER_CHANGE_WARNINGS_PER_STREAM: u64 = 3;
+
+/// Producers refused per stream (another producer while the followed one is live) that are
+/// logged as warnings, at their first refused sample (the rest at debug level; every sample
+/// counted in `foreign`).
+const FOREIGN_WARNINGS_PER_STREAM: u64 = 3;
 
 /// Counters of the receive thread, read by the estimator thread: the daemon's accounting file
 /// ([`super::state::Record`]), so they continue across daemon lives.
@@ -45,8 +51,8 @@ pub(super) fn rx_thread(
         let d = &cfg.domain;
         let node = d.node("corridor-daemon-rx", SignalHandlingMode::Disabled)?;
         let access = Access::Owner(cfg.delivery);
-        let imu = d
-            .open::<ImuSample>(&node, access)?
+        let imu_service = d.open::<ImuSample>(&node, access)?;
+        let imu = imu_service
             .subscriber_builder()
             .buffer_size(ImuSample::QOS.buffer_size)
             .create()
@@ -69,9 +75,9 @@ pub(super) fn rx_thread(
             .notifier_builder()
             .create()
             .map_err(|e| ServiceError::port(d, IMU_ACK_SERVICE, "notifier", e))?;
-        Ok((imu, listener, angles, _angles_event, ack, node))
+        Ok((imu_service, imu, listener, angles, _angles_event, ack, node))
     };
-    let (imu, listener, angles, _angles_event, ack, _node) = match setup() {
+    let (imu_service, imu, listener, angles, _angles_event, ack, _node) = match setup() {
         Ok(x) => {
             let _ = ready.send(Ok(()));
             x
@@ -87,7 +93,26 @@ pub(super) fn rx_thread(
     // The position in the current producer's numbering, continued from the daemon's
     // accounting file (an earlier life of the daemon, see `super::state`).
     let mut last_seq: Option<u64> = load_opt(&counters.last_seq_plus1);
-    let mut last_producer: Option<u128> = counters.producer();
+    // The producer followed (see `super::producers`), from an earlier life too.
+    let mut lock = ProducerLock::new(counters.producer(), cfg.producer_takeover, Instant::now());
+    // Whether a producer's publisher is still on the IMU service (asked only when another
+    // producer's sample comes mid-stream).
+    let connected = |producer: u128| {
+        let mut found = false;
+        imu_service.dynamic_config().list_publishers(|p| {
+            found = p.publisher_id.value() == producer;
+            if found {
+                CallbackProgression::Stop
+            } else {
+                CallbackProgression::Continue
+            }
+        });
+        found
+    };
+    // The last producer refused and its numbering (acknowledged once, warned of at most
+    // `FOREIGN_WARNINGS_PER_STREAM` times a stream).
+    let mut refused: Option<Refused> = None;
+    let mut foreign_warned = 0u64;
     // The seq the next stream of the current producer starts with (after its end marker).
     let mut next_stream_seq: Option<u64> = load_opt(&counters.next_stream_seq_plus1);
     // True between the first data sample of a stream and its end-of-stream marker.
@@ -146,6 +171,45 @@ pub(super) fn rx_thread(
             let s: ImuSample = *smp.payload();
             let producer = smp.header().publisher_id().value();
             drop(smp); // return the shared-memory slot at once
+            let last_producer = lock.followed();
+            match lock.admit(producer, mid_stream, Instant::now, connected) {
+                Admit::Followed => {}
+                Admit::TakeOver(reason) => {
+                    if mid_stream {
+                        tracing::warn!(
+                            seq = s.seq,
+                            "IMU producer taken over mid-stream: the followed one {}",
+                            reason.said()
+                        );
+                    }
+                }
+                Admit::Foreign => {
+                    counters.received.fetch_add(1, Ordering::Relaxed);
+                    counters.foreign.fetch_add(1, Ordering::Relaxed);
+                    if let Some(r) = refused.as_mut().filter(|r| r.producer == producer) {
+                        r.push(s.seq);
+                    } else {
+                        refused = Some(Refused {
+                            producer,
+                            first_seq: s.seq,
+                            last_seq: s.seq,
+                        });
+                        // Its samples were read: its close need not wait for the daemon.
+                        acknowledge(producer);
+                        foreign_warned += 1;
+                        if foreign_warned <= FOREIGN_WARNINGS_PER_STREAM {
+                            tracing::warn!(
+                                seq = s.seq,
+                                "IMU samples from a second producer while the followed one \
+                                 sends: refused, counted in foreign_samples (one producer at a \
+                                 time; another takes over after daemon.producer_takeover_s of \
+                                 silence, an end of stream or a close)"
+                            );
+                        }
+                    }
+                    continue;
+                }
+            }
             // `received` is counted next to the store of the position (`last_seq_plus1`), so a
             // SIGKILL can misplace at most the one sample between the two stores.
             let new_producer = last_producer != Some(producer);
@@ -201,11 +265,21 @@ pub(super) fn rx_thread(
                 }
             }
             if new_producer {
-                last_producer = Some(producer);
                 counters.set_producer(producer);
+                // A producer refused before it took over: its refused samples were received
+                // (counted as foreign), so its numbering goes on from the last of them, not
+                // from a head the daemon never saw.
+                if let Some(r) = refused.take_if(|r| r.producer == producer) {
+                    counters
+                        .head_missing
+                        .fetch_add(r.first_seq, Ordering::Relaxed);
+                    next_stream_seq = None;
+                    last_seq = Some(r.last_seq);
+                }
             }
             if s.is_end_of_stream() {
                 changes_warned = 0;
+                foreign_warned = 0;
                 if let Some(l) = last_seq
                     && s.seq > l
                 {
@@ -259,9 +333,33 @@ pub(super) fn rx_thread(
             if !forward(cfg.delivery, &tx, Msg::Imu(s), counters, &stopping) {
                 return Ok(());
             }
+            // Caught up: from here the followed producer is silent until its next sample.
+            lock.drained(Instant::now());
         }
     }
     Ok(())
+}
+
+/// The numbering of the producer whose samples were refused last (another one was followed):
+/// when it takes over, its numbering continues from these, so its refused samples are neither
+/// lost nor counted missing.
+#[derive(Debug, Clone, Copy)]
+struct Refused {
+    producer: u128,
+    /// Its first refused `seq` (what it numbered before it was never received).
+    first_seq: u64,
+    last_seq: u64,
+}
+
+impl Refused {
+    /// One more refused sample: a `seq` that goes back starts its numbering afresh (a restarted
+    /// numbering; its head is counted from there).
+    fn push(&mut self, seq: u64) {
+        if seq <= self.last_seq {
+            self.first_seq = seq;
+        }
+        self.last_seq = seq;
+    }
 }
 
 /// The receive thread's end of the channel, and the estimator thread to wake after a send.

@@ -77,8 +77,8 @@ pub(super) struct Record {
     pub(super) taken: AtomicU64,
     /// IMU samples a daemon life received but neither estimated, refused by `seq` nor dropped:
     /// it was killed with them in its receive thread or its estimator channel. So
-    /// `received = taken + dropped + duplicate + late + lost_in_daemon` whenever no sample is in
-    /// flight.
+    /// `received = taken + dropped + duplicate + late + foreign + lost_in_daemon` whenever no
+    /// sample is in flight.
     pub(super) lost_in_daemon: AtomicU64,
     /// The next `seq` of each output ([`OUT_ATTITUDE`], [`OUT_BIAS`], [`OUT_NAV`],
     /// [`OUT_DIAGNOSTICS`]) = messages published so far.
@@ -90,6 +90,9 @@ pub(super) struct Record {
     /// Angle observations carrying roll or pitch, which the daemon does not fuse (their heading,
     /// if any, is used).
     pub(super) angles_ignored: AtomicU64,
+    /// IMU messages refused because another producer was followed (one producer at a time,
+    /// see `super::producers`). Appended to the layout: a file written before it holds 0 here.
+    pub(super) foreign: AtomicU64,
 }
 
 const _: () = assert!(size_of::<Record>() <= FILE_LEN);
@@ -131,6 +134,7 @@ impl Record {
             &self.undelivered,
             &self.angles_dropped,
             &self.angles_ignored,
+            &self.foreign,
         ];
         for f in fields.into_iter().chain(&self.out_seq) {
             f.store(0, Ordering::Relaxed);
@@ -244,8 +248,11 @@ impl StateFile {
         // (in its receive thread or its channel when it was killed) is lost in the daemon; the
         // channel of this life starts empty.
         let load = |a: &AtomicU64| a.load(Ordering::Relaxed);
-        let accounted =
-            load(&state.taken) + load(&state.dropped) + load(&state.duplicate) + load(&state.late);
+        let accounted = load(&state.taken)
+            + load(&state.dropped)
+            + load(&state.duplicate)
+            + load(&state.late)
+            + load(&state.foreign);
         let unestimated =
             load(&state.received).saturating_sub(accounted + load(&state.lost_in_daemon));
         state
@@ -272,18 +279,20 @@ mod tests {
         {
             let s = StateFile::open(&path).unwrap();
             assert_eq!(s.lives.load(Ordering::Relaxed), 1);
-            s.received.store(10, Ordering::Relaxed);
+            s.received.store(12, Ordering::Relaxed);
             s.forwarded.store(9, Ordering::Relaxed);
             s.taken.store(6, Ordering::Relaxed);
             s.dropped.store(1, Ordering::Relaxed);
+            s.foreign.store(2, Ordering::Relaxed);
             s.set_producer(u128::MAX - 5);
             store_opt(&s.last_seq_plus1, Some(41));
             s.out_seq[OUT_ATTITUDE].store(7, Ordering::Relaxed);
         }
         let s = StateFile::open(&path).unwrap();
         assert_eq!(s.lives.load(Ordering::Relaxed), 2);
-        assert_eq!(s.received.load(Ordering::Relaxed), 10);
-        // 10 received = 6 estimated + 1 dropped + 3 lost (in the channel or the receive thread).
+        assert_eq!(s.received.load(Ordering::Relaxed), 12);
+        // 12 received = 6 estimated + 1 dropped + 2 foreign + 3 lost (in the channel or the
+        // receive thread).
         assert_eq!(s.lost_in_daemon.load(Ordering::Relaxed), 3);
         assert_eq!(s.forwarded.load(Ordering::Relaxed), 6);
         assert_eq!(s.producer(), Some(u128::MAX - 5));

@@ -54,6 +54,11 @@ pub const DAEMON_CHECKPOINT_PERIOD_S: f64 = 30.0;
 /// `daemon.stall_timeout_s`: a lossless consumer that takes nothing for this long is dropped, s.
 pub const DAEMON_STALL_TIMEOUT_S: f64 = 1.0;
 
+/// `daemon.producer_takeover_s`: another IMU producer takes over from the followed one once this
+/// has sent nothing for this long, s. A driver at 100 Hz or more sends many times within it; a
+/// replacement started by hand or by a supervisor after a hang waits at most this.
+pub const DAEMON_PRODUCER_TAKEOVER_S: f64 = 1.0;
+
 /// `detector.window`, samples.
 pub const DETECTOR_WINDOW: usize = 5;
 

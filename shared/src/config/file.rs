@@ -91,6 +91,10 @@ pub struct DaemonFile {
     /// Longest a lossless publish waits on one consumer's full buffer, s (default 1.0); beyond
     /// it the consumer counts as stalled and loses (counted) what its buffer cannot take.
     pub stall_timeout_s: Option<f64>,
+    /// While the IMU producer the daemon follows is connected and has sent within this time, s
+    /// (default 1.0), samples from another producer are refused (counted as foreign); after it,
+    /// or once the followed one has ended its stream or closed, the other takes over.
+    pub producer_takeover_s: Option<f64>,
 }
 
 /// `[estimator]` section.

@@ -531,7 +531,11 @@ mod tests {
         assert!(d.lossless);
         assert_eq!(d.channel_capacity, 8);
         // A period no duration can hold is refused here, not where the daemon starts.
-        for key in ["diagnostics_period_s", "stall_timeout_s"] {
+        for key in [
+            "diagnostics_period_s",
+            "stall_timeout_s",
+            "producer_takeover_s",
+        ] {
             let f = ConfigFile::parse(&format!("[daemon]\n{key} = 1e300\n"), Path::new("s.toml"))
                 .unwrap();
             let err = f.validate_daemon().unwrap_err().to_string();

@@ -77,6 +77,8 @@ pub struct DaemonSettings {
     pub checkpoint_period_s: Positive,
     /// Stall bound of lossless publishing.
     pub stall_timeout_s: Positive,
+    /// Silence of the followed IMU producer after which another one takes over.
+    pub producer_takeover_s: Positive,
 }
 
 /// Validated `[alignment]`.

@@ -74,6 +74,10 @@ impl ConfigFile {
                 "daemon.stall_timeout_s",
                 dm.stall_timeout_s.unwrap_or(DAEMON_STALL_TIMEOUT_S),
             )?,
+            producer_takeover_s: period(
+                "daemon.producer_takeover_s",
+                dm.producer_takeover_s.unwrap_or(DAEMON_PRODUCER_TAKEOVER_S),
+            )?,
         };
         Ok(daemon)
     }

@@ -1,0 +1,225 @@
+//! Two IMU producers on one domain at once (in-process daemon, lossless, each test on its own
+//! domain): the daemon follows one and refuses the other's samples, counting each, until the
+//! followed one is silent for `producer_takeover` (then the other takes over, its refused
+//! samples neither lost nor counted missing).
+//!
+//! - `a_second_producer_is_refused_while_the_first_sends`: a second driver sends 3,000 samples
+//!   interleaved with the first's walk. The daemon's estimates are bit for bit the offline run
+//!   of the first walk alone; all 3,000 are counted as foreign and nothing else.
+//! - `a_producer_that_falls_silent_is_taken_over`: the first driver hangs mid-walk (connected,
+//!   sending nothing); the second one's samples are refused until the first has been silent
+//!   for the take-over time (the default 1 s), then its stream is estimated as the offline run of what was taken.
+
+mod daemon_common;
+
+use corridor_client::{Delivery, Domain, Producer, Subscriber};
+use corridor_service::core::{Estimate, Estimator};
+use corridor_service::runner::heading_aid;
+use corridor_shared::imu_csv::ImuRow;
+use corridor_shared::wire::{AttitudeSample, Diagnostics, FLAG_END_OF_STREAM, ImuSample};
+use daemon_common::*;
+use std::time::Duration;
+
+/// The offline estimates of `rows`, from a fresh estimator (a daemon's stream without a
+/// checkpoint).
+fn offline(rows: &[ImuRow]) -> Vec<Estimate> {
+    let cfg = config();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let mut est = Estimator::new(cfg, aid);
+    rows.iter().map(|r| *est.step(&r.into()).unwrap()).collect()
+}
+
+/// Reads attitude on its own thread until `ends` end-of-stream markers.
+fn attitude_reader(
+    domain: &Domain,
+    ends: usize,
+) -> (
+    std::thread::JoinHandle<Vec<AttitudeSample>>,
+    std::sync::Arc<std::sync::atomic::AtomicU64>,
+) {
+    use std::sync::atomic::Ordering;
+    let progress = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+    let (ready_tx, ready) = std::sync::mpsc::sync_channel(1);
+    let handle = {
+        let domain = domain.clone();
+        let progress = std::sync::Arc::clone(&progress);
+        std::thread::spawn(move || {
+            let sub = Subscriber::<AttitudeSample>::open(&domain, "test-att", WAIT).unwrap();
+            ready_tx.send(()).unwrap();
+            let mut v = Vec::new();
+            let mut seen = 0;
+            loop {
+                let a = sub.recv_timeout(WAIT).unwrap().expect("attitude");
+                v.push(a);
+                progress.fetch_add(1, Ordering::Relaxed);
+                if a.flags & FLAG_END_OF_STREAM != 0 {
+                    seen += 1;
+                    if seen == ends {
+                        return v;
+                    }
+                }
+            }
+        })
+    };
+    ready.recv_timeout(WAIT).expect("reader connected");
+    (handle, progress)
+}
+
+fn wait_for(progress: &std::sync::atomic::AtomicU64, count: u64) {
+    let deadline = std::time::Instant::now() + WAIT;
+    while progress.load(std::sync::atomic::Ordering::Relaxed) < count {
+        assert!(std::time::Instant::now() < deadline, "daemon stuck");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// The last diagnostics with the end-of-stream flag whose `accepted` reached `accepted`.
+fn final_diagnostics(diag: &Subscriber<Diagnostics>, accepted: u64) -> Diagnostics {
+    loop {
+        let d = *until_end(diag, |d| d.flags).last().unwrap();
+        if d.accepted >= accepted {
+            return d;
+        }
+    }
+}
+
+#[test]
+fn a_second_producer_is_refused_while_the_first_sends() {
+    let _one = one_daemon_at_a_time();
+    let name = "test_two_producers_at_once";
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
+    let rows = exp36_rows();
+    let expect = offline(&rows);
+    let (reader, progress) = attitude_reader(&domain, 1);
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    let (lead, foreign) = (200usize, 3000usize);
+
+    let mut first = Producer::new(&domain, "test-first", Delivery::Lossless).unwrap();
+    first.wait_for_daemon(WAIT).unwrap();
+    // The first driver alone until the daemon has taken its samples: it is the one followed.
+    for r in &rows[..lead] {
+        first.send_imu(ImuSample::from(r)).unwrap();
+    }
+    wait_for(&progress, lead as u64);
+    // A second driver of another walk (the same recording from 30 s on, its own numbering),
+    // sample for sample between the first one's.
+    let mut second = Producer::new(&domain, "test-second", Delivery::Lossless).unwrap();
+    second.wait_for_daemon(WAIT).unwrap();
+    for (i, r) in rows[lead..].iter().enumerate() {
+        first.send_imu(ImuSample::from(r)).unwrap();
+        if i < foreign {
+            second.send_imu(ImuSample::from(&rows[6000 + i])).unwrap();
+        }
+    }
+    // The daemon has read every sample of both before the first one ends its stream (after it,
+    // the second one's would take over).
+    wait_for(&progress, rows.len() as u64);
+    first.finish().unwrap();
+    let got = reader.join().unwrap();
+    let d = final_diagnostics(&diag, rows.len() as u64);
+    let s2 = second.close().unwrap();
+    first.close().unwrap();
+    drop(diag);
+    let report = daemon.stop();
+
+    // Every estimate is the first walk's alone, bit for bit.
+    assert_eq!(got.len(), rows.len() + 1);
+    for (i, (a, e)) in got.iter().zip(&expect).enumerate() {
+        assert_eq!(a.imu_seq, i as u64);
+        assert_eq!(a.nav_from_body_wxyz, e.nav_from_body, "sample {i}");
+        assert_eq!(a.gyro_bias_rad_s, e.gyro_bias_rad_s, "sample {i}");
+    }
+    // The second one's samples: received, refused and counted, nothing else.
+    assert_eq!(d.foreign_samples, foreign as u64);
+    assert_eq!(d.received, (rows.len() + 1 + foreign) as u64);
+    assert_eq!(d.accepted, rows.len() as u64);
+    assert_eq!(
+        (
+            d.producer_changes,
+            d.seq_gaps,
+            d.head_missing,
+            d.late,
+            d.rejected_duplicate_seq,
+            d.rejected_time,
+            d.rejected_time_jump,
+        ),
+        (0, 0, 0, 0, 0, 0, 0),
+        "{d:?}"
+    );
+    // The refused producer was told its samples were read: its close did not wait.
+    assert_eq!(s2.closes_unconfirmed, 0);
+    assert_eq!(report.diagnostics.foreign_samples, foreign as u64);
+    cleanup_domain(name);
+}
+
+/// Samples the replacement sends 2 ms apart (3 s, three times the take-over time).
+const PACED: usize = 1500;
+
+#[test]
+fn a_producer_that_falls_silent_is_taken_over() {
+    let _one = one_daemon_at_a_time();
+    let name = "test_two_producers_takeover";
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
+    let rows = exp36_rows();
+    let (reader, progress) = attitude_reader(&domain, 2);
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    let k1 = 3000usize;
+
+    // The first driver sends part of the walk and hangs: connected, silent.
+    let mut first = Producer::new(&domain, "test-first", Delivery::Lossless).unwrap();
+    first.wait_for_daemon(WAIT).unwrap();
+    for r in &rows[..k1] {
+        first.send_imu(ImuSample::from(r)).unwrap();
+    }
+    wait_for(&progress, k1 as u64);
+    // A replacement sends the walk from its start, at about 500 Hz for the first 3 s (the
+    // take-over time passes while it sends), then as fast as the daemon takes it.
+    let mut second = Producer::new(&domain, "test-second", Delivery::Lossless).unwrap();
+    second.wait_for_daemon(WAIT).unwrap();
+    for (i, r) in rows.iter().enumerate() {
+        second.send_imu(ImuSample::from(r)).unwrap();
+        if i < PACED {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+    second.finish().unwrap();
+    let got = reader.join().unwrap();
+    let d = final_diagnostics(&diag, (rows.len() - PACED) as u64);
+    second.close().unwrap();
+    drop(diag);
+    drop(first);
+    let report = daemon.stop();
+
+    // Refused while the first had been silent for less than the take-over time (1 s), then
+    // taken over.
+    let refused = d.foreign_samples as usize;
+    assert!(
+        (1..PACED).contains(&refused),
+        "refused {refused} of the replacement's samples"
+    );
+    assert_eq!(d.producer_changes, 1);
+    // Its numbering goes on from its refused samples: none missing, none late.
+    assert_eq!(
+        (d.seq_gaps, d.head_missing, d.late, d.rejected_duplicate_seq),
+        (0, 0, 0, 0),
+        "{d:?}"
+    );
+    assert_eq!(d.received, (k1 + rows.len() + 1) as u64);
+    assert_eq!(d.accepted, (k1 + rows.len() - refused) as u64);
+    // The first walk's stream, ended by the daemon (the clock went back), then the replacement's
+    // from its first taken sample: the offline run of what was taken.
+    assert_eq!(got.len(), k1 + 1 + rows.len() - refused + 1);
+    assert!(got[k1].flags & FLAG_END_OF_STREAM != 0);
+    let expect = offline(&rows[refused..]);
+    for (i, (a, e)) in got[k1 + 1..].iter().zip(&expect).enumerate() {
+        assert_eq!(a.imu_seq, (refused + i) as u64);
+        assert_eq!(a.nav_from_body_wxyz, e.nav_from_body, "sample {i}");
+        assert_eq!(a.gyro_bias_rad_s, e.gyro_bias_rad_s, "sample {i}");
+    }
+    assert_eq!(report.streams_finished, 2);
+    cleanup_domain(name);
+}
