@@ -271,8 +271,9 @@ pub struct DaemonWatch {
 const WATCH_POLL: Duration = Duration::from_millis(50);
 
 impl DaemonWatch {
-    /// Attaches to the diagnostics of `domain`'s daemon (waiting up to `open_wait` for it);
-    /// `None` when it is not there (no daemon yet, a stand-in without diagnostics).
+    /// Attaches to the diagnostics of `domain`'s daemon (waiting up to `open_wait` for it, and
+    /// up to `open_wait` more for its latest diagnostics); `None` when it is not there (no
+    /// daemon yet, a stand-in without diagnostics).
     pub fn start(
         domain: &crate::Domain,
         open_wait: Duration,
@@ -285,9 +286,18 @@ impl DaemonWatch {
             .name("daemon-watch".into())
             .spawn(move || {
                 let sub = Subscriber::<Diagnostics>::open(&domain, "corridor-watch", open_wait);
-                let _ = attached_tx.send(sub.is_ok());
-                let sub = sub.ok()?;
-                let (mut before, mut last) = (None::<Diagnostics>, None::<Diagnostics>);
+                let Ok(sub) = sub else {
+                    let _ = attached_tx.send(false);
+                    return None;
+                };
+                // The daemon's latest diagnostics before the first sample goes: from the
+                // service's history, or the first one a daemon just started publishes (at once,
+                // then every period). Without it, the first one read would be from within the
+                // stream, and the account would miss what came before (a replay started within
+                // a diagnostics period of a fresh daemon said "not finished").
+                let mut before = sub.recv_timeout(open_wait).ok().flatten();
+                let _ = attached_tx.send(true);
+                let mut last = before;
                 let mut until: Option<(u64, Instant)> = None;
                 loop {
                     while let Ok(Some(d)) = sub.recv_timeout(WATCH_POLL) {
@@ -320,7 +330,8 @@ impl DaemonWatch {
                 }
             })
             .ok()?;
-        // Attached before the first sample goes: its first diagnostics are from before it.
+        // Attached, and the daemon's diagnostics from before the first sample read (or
+        // `open_wait` passed without any), before the first sample goes.
         attached.recv().ok()?.then_some(Self { sent, thread })
     }
 

@@ -561,3 +561,39 @@ fn a_logger_that_times_out_within_a_stream_says_so() {
     );
     cleanup_domain(name);
 }
+
+/// `corridor-replay`'s account of what the daemon did with its samples ([`DaemonWatch`]),
+/// against a daemon started just before it: the watch reads the daemon's diagnostics from
+/// before the first sample (the daemon publishes its first at once). Before, the first one a
+/// fresh daemon published came a period into the stream, and the account said "not finished"
+/// with 0 received (3 of 3 replays at `--speed max` right after `corridor serve`).
+#[test]
+fn the_replays_account_of_a_daemon_started_just_before_it_is_complete() {
+    use corridor_client::replay::{ReplayOptions, Speed, replay};
+    use corridor_client::status::DaemonWatch;
+    use corridor_shared::injection::BiasInjection;
+
+    let _one = one_daemon_at_a_time();
+    let name = "test_daemon_fresh_account";
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
+    let watch = DaemonWatch::start(&domain, WAIT, WAIT).expect("the daemon's diagnostics");
+    let rows = exp36_rows();
+    let opts = ReplayOptions {
+        node_name: "test-replay".into(),
+        delivery: Some(Delivery::Lossless),
+        speed: Speed::Max,
+        loops: 1,
+        injection: BiasInjection::default(),
+        wait: WAIT,
+    };
+    let sent = replay(&domain, &rows, &opts).unwrap();
+    let (account, complete) = watch.finish(sent.samples).expect("an account");
+    assert!(complete, "{account:?}");
+    assert_eq!(account.received, rows.len() as u64 + 1);
+    assert_eq!(account.accepted, rows.len() as u64);
+    assert_eq!(account.lost(), 0);
+    daemon.stop();
+    cleanup_domain(name);
+}

@@ -569,7 +569,10 @@ pub(super) fn estimator_thread(
     load_warm_start(cfg, &mut st);
     st.est = st.new_estimator(cfg);
     let start = Instant::now();
-    let mut next_diag = start + cfg.diagnostics_period;
+    // The first diagnostics at once: a reader that attaches now gets the counters before any
+    // sample of this life from the history (`corridor-replay`'s account of a replay started
+    // right after the daemon, `corridor status`), not one period into a stream.
+    let mut next_diag = start;
     let mut next_health = start + cfg.health_period;
     let mut next_checkpoint = start + cfg.checkpoint_period;
     loop {
