@@ -222,38 +222,8 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
     let rows = log.rows;
     let (k1, k2, gap, k3) = (6000usize, 5000usize, 10usize, 3000usize);
 
-    let progress = Arc::new(AtomicU64::new(0));
-    let (ready_tx, ready) = std::sync::mpsc::sync_channel(1);
-    let a = {
-        let domain = domain.clone();
-        let progress = Arc::clone(&progress);
-        std::thread::spawn(move || {
-            let sub = Subscriber::<AttitudeSample>::open(&domain, "test-att", WAIT).unwrap();
-            ready_tx.send(()).unwrap();
-            let mut v = Vec::new();
-            let mut ends = 0;
-            loop {
-                let a = sub.recv_timeout(WAIT).unwrap().expect("attitude");
-                v.push(a);
-                progress.fetch_add(1, Ordering::Relaxed);
-                if a.flags & FLAG_END_OF_STREAM != 0 {
-                    ends += 1;
-                    if ends == 2 {
-                        return v;
-                    }
-                }
-            }
-        })
-    };
-    ready.recv_timeout(WAIT).expect("reader connected");
+    let a = AttitudeReader::start(&domain, 2);
     let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
-    let wait_progress = |count: u64| {
-        let deadline = Instant::now() + WAIT;
-        while progress.load(Ordering::Relaxed) < count {
-            assert!(Instant::now() < deadline, "daemon stuck");
-            std::thread::sleep(Duration::from_millis(5));
-        }
-    };
 
     // P1 sends part of the log and vanishes (no end-of-stream marker).
     {
@@ -262,7 +232,7 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
         for r in &rows[..k1] {
             p.send_imu(ImuSample::from(r)).unwrap();
         }
-        wait_progress(k1 as u64);
+        a.wait_for(k1 as u64);
     }
     // P2: a restarted driver, seq and clock from the start.
     {
@@ -271,7 +241,7 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
         for r in &rows[..k2] {
             p.send_imu(ImuSample::from(r)).unwrap();
         }
-        wait_progress((k1 + 1 + k2) as u64);
+        a.wait_for((k1 + 1 + k2) as u64);
     }
     // P3: continues P2's numbering and clock after `gap` lost samples.
     {
@@ -285,9 +255,9 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
         p.finish().unwrap();
         // P3 stays until its stream was taken: a publisher dropped before the daemon attached
         // its side of the connection takes its queued samples with it.
-        wait_progress((k1 + 1 + k2 + k3 + 1) as u64);
+        a.wait_for((k1 + 1 + k2 + k3 + 1) as u64);
     }
-    let got = a.join().unwrap();
+    let got = a.join();
     assert_eq!(got.len(), k1 + 1 + k2 + k3 + 1);
     // P1's stream, ended by the daemon when P2's clock went back.
     let end1 = &got[k1];

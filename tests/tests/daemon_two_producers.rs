@@ -16,7 +16,7 @@ use corridor_client::{Delivery, Domain, Producer, Subscriber};
 use corridor_service::core::{Estimate, Estimator};
 use corridor_service::runner::heading_aid;
 use corridor_shared::imu_csv::ImuRow;
-use corridor_shared::wire::{AttitudeSample, Diagnostics, FLAG_END_OF_STREAM, ImuSample};
+use corridor_shared::wire::{Diagnostics, FLAG_END_OF_STREAM, ImuSample};
 use daemon_common::*;
 use std::time::Duration;
 
@@ -27,50 +27,6 @@ fn offline(rows: &[ImuRow]) -> Vec<Estimate> {
     let aid = heading_aid(&cfg, None).unwrap();
     let mut est = Estimator::new(cfg, aid);
     rows.iter().map(|r| *est.step(&r.into()).unwrap()).collect()
-}
-
-/// Reads attitude on its own thread until `ends` end-of-stream markers.
-fn attitude_reader(
-    domain: &Domain,
-    ends: usize,
-) -> (
-    std::thread::JoinHandle<Vec<AttitudeSample>>,
-    std::sync::Arc<std::sync::atomic::AtomicU64>,
-) {
-    use std::sync::atomic::Ordering;
-    let progress = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
-    let (ready_tx, ready) = std::sync::mpsc::sync_channel(1);
-    let handle = {
-        let domain = domain.clone();
-        let progress = std::sync::Arc::clone(&progress);
-        std::thread::spawn(move || {
-            let sub = Subscriber::<AttitudeSample>::open(&domain, "test-att", WAIT).unwrap();
-            ready_tx.send(()).unwrap();
-            let mut v = Vec::new();
-            let mut seen = 0;
-            loop {
-                let a = sub.recv_timeout(WAIT).unwrap().expect("attitude");
-                v.push(a);
-                progress.fetch_add(1, Ordering::Relaxed);
-                if a.flags & FLAG_END_OF_STREAM != 0 {
-                    seen += 1;
-                    if seen == ends {
-                        return v;
-                    }
-                }
-            }
-        })
-    };
-    ready.recv_timeout(WAIT).expect("reader connected");
-    (handle, progress)
-}
-
-fn wait_for(progress: &std::sync::atomic::AtomicU64, count: u64) {
-    let deadline = std::time::Instant::now() + WAIT;
-    while progress.load(std::sync::atomic::Ordering::Relaxed) < count {
-        assert!(std::time::Instant::now() < deadline, "daemon stuck");
-        std::thread::sleep(Duration::from_millis(5));
-    }
 }
 
 /// The last diagnostics with the end-of-stream flag whose `accepted` reached `accepted`.
@@ -92,7 +48,7 @@ fn a_second_producer_is_refused_while_the_first_sends() {
     let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
     let rows = exp36_rows();
     let expect = offline(&rows);
-    let (reader, progress) = attitude_reader(&domain, 1);
+    let reader = AttitudeReader::start(&domain, 1);
     let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
     let (lead, foreign) = (200usize, 3000usize);
 
@@ -102,7 +58,7 @@ fn a_second_producer_is_refused_while_the_first_sends() {
     for r in &rows[..lead] {
         first.send_imu(ImuSample::from(r)).unwrap();
     }
-    wait_for(&progress, lead as u64);
+    reader.wait_for(lead as u64);
     // A second driver of another walk (the same recording from 30 s on, its own numbering),
     // sample for sample between the first one's.
     let mut second = Producer::new(&domain, "test-second", Delivery::Lossless).unwrap();
@@ -115,9 +71,9 @@ fn a_second_producer_is_refused_while_the_first_sends() {
     }
     // The daemon has read every sample of both before the first one ends its stream (after it,
     // the second one's would take over).
-    wait_for(&progress, rows.len() as u64);
+    reader.wait_for(rows.len() as u64);
     first.finish().unwrap();
-    let got = reader.join().unwrap();
+    let got = reader.join();
     let d = final_diagnostics(&diag, rows.len() as u64);
     let s2 = second.close().unwrap();
     first.close().unwrap();
@@ -165,7 +121,7 @@ fn a_producer_that_falls_silent_is_taken_over() {
     let domain = Domain::new(name).unwrap();
     let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
     let rows = exp36_rows();
-    let (reader, progress) = attitude_reader(&domain, 2);
+    let reader = AttitudeReader::start(&domain, 2);
     let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
     let k1 = 3000usize;
 
@@ -175,7 +131,7 @@ fn a_producer_that_falls_silent_is_taken_over() {
     for r in &rows[..k1] {
         first.send_imu(ImuSample::from(r)).unwrap();
     }
-    wait_for(&progress, k1 as u64);
+    reader.wait_for(k1 as u64);
     // A replacement sends the walk from its start, at about 500 Hz for the first 3 s (the
     // take-over time passes while it sends), then as fast as the daemon takes it.
     let mut second = Producer::new(&domain, "test-second", Delivery::Lossless).unwrap();
@@ -187,7 +143,7 @@ fn a_producer_that_falls_silent_is_taken_over() {
         }
     }
     second.finish().unwrap();
-    let got = reader.join().unwrap();
+    let got = reader.join();
     let d = final_diagnostics(&diag, (rows.len() - PACED) as u64);
     second.close().unwrap();
     drop(diag);

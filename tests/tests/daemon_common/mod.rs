@@ -181,6 +181,58 @@ pub fn produce(
     Produced { handle, release }
 }
 
+/// Reads attitude on its own thread (ports are `!Send`) until `ends` end-of-stream markers, and
+/// counts what it read in [`AttitudeReader::progress`]. Connected when this returns.
+pub struct AttitudeReader {
+    handle: JoinHandle<Vec<corridor_shared::wire::AttitudeSample>>,
+    progress: Arc<std::sync::atomic::AtomicU64>,
+}
+
+impl AttitudeReader {
+    pub fn start(domain: &Domain, ends: usize) -> Self {
+        use corridor_shared::wire::AttitudeSample;
+        let progress = Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let (ready_tx, ready) = std::sync::mpsc::sync_channel(1);
+        let handle = {
+            let domain = domain.clone();
+            let progress = Arc::clone(&progress);
+            std::thread::spawn(move || {
+                let sub = Subscriber::<AttitudeSample>::open(&domain, "test-att", WAIT).unwrap();
+                ready_tx.send(()).unwrap();
+                let mut v = Vec::new();
+                let mut seen = 0;
+                loop {
+                    let a = sub.recv_timeout(WAIT).unwrap().expect("attitude");
+                    v.push(a);
+                    progress.fetch_add(1, Ordering::Relaxed);
+                    if a.flags & FLAG_END_OF_STREAM != 0 {
+                        seen += 1;
+                        if seen == ends {
+                            return v;
+                        }
+                    }
+                }
+            })
+        };
+        ready.recv_timeout(WAIT).expect("reader connected");
+        Self { handle, progress }
+    }
+
+    /// Waits until `count` messages were read (panics after [`WAIT`]).
+    pub fn wait_for(&self, count: u64) {
+        let deadline = std::time::Instant::now() + WAIT;
+        while self.progress.load(Ordering::Relaxed) < count {
+            assert!(std::time::Instant::now() < deadline, "daemon stuck");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    /// The messages, once the last end-of-stream marker was read.
+    pub fn join(self) -> Vec<corridor_shared::wire::AttitudeSample> {
+        self.handle.join().unwrap()
+    }
+}
+
 /// Receives until a message carrying [`FLAG_END_OF_STREAM`] (included in the result).
 pub fn until_end<T: Topic>(sub: &Subscriber<T>, flags: impl Fn(&T) -> u32) -> Vec<T> {
     let mut v = Vec::new();
