@@ -6,6 +6,8 @@
 //! - `a_second_producer_is_refused_while_the_first_sends`: a second driver sends 3,000 samples
 //!   interleaved with the first's walk. The daemon's estimates are bit for bit the offline run
 //!   of the first walk alone; all 3,000 are counted as foreign and nothing else.
+//! - `producers_that_take_turns_are_counted_once`: followed, refused, followed again; every
+//!   sample received or counted missing once.
 //! - `a_producer_that_falls_silent_is_taken_over`: the first driver hangs mid-walk (connected,
 //!   sending nothing); the second one's samples are refused until the first has been silent
 //!   for the take-over time (the default 1 s), then its stream is estimated as the offline run of what was taken.
@@ -177,5 +179,91 @@ fn a_producer_that_falls_silent_is_taken_over() {
         assert_eq!(a.gyro_bias_rad_s, e.gyro_bias_rad_s, "sample {i}");
     }
     assert_eq!(report.streams_finished, 2);
+    cleanup_domain(name);
+}
+
+/// The first driver hangs after repeating its last sample, a second takes over, the first comes
+/// back (refused, its first sample repeated) and takes over again after the second's end of
+/// stream: every sample of both is received or counted missing once (a review found the first
+/// one's whole earlier stream counted again as `head_missing`, a repeated refused sample taken for
+/// a restarted numbering, and a followed producer whose last sample was a repeated one never
+/// going silent).
+#[test]
+fn producers_that_take_turns_are_counted_once() {
+    let _one = one_daemon_at_a_time();
+    let name = "test_two_producers_turns";
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
+    let rows = exp36_rows();
+    let reader = AttitudeReader::start(&domain, 3);
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    let raw = |r: &ImuRow, seq: usize| ImuSample {
+        seq: seq as u64,
+        ..ImuSample::from(r)
+    };
+
+    let mut first = Producer::new(&domain, "test-first", Delivery::Lossless).unwrap();
+    first.wait_for_daemon(WAIT).unwrap();
+    for (i, r) in rows[..2000].iter().enumerate() {
+        first.send_imu_raw(raw(r, i)).unwrap();
+    }
+    // Its last sample again, then it hangs (connected).
+    first.send_imu_raw(raw(&rows[1999], 1999)).unwrap();
+    reader.wait_for(2000);
+    let mut second = Producer::new(&domain, "test-second", Delivery::Lossless).unwrap();
+    second.wait_for_daemon(WAIT).unwrap();
+    for (i, r) in rows[..2000].iter().enumerate() {
+        second.send_imu_raw(raw(r, i)).unwrap();
+        if i < PACED {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        // The first one comes back while the second is followed: refused.
+        if i >= PACED {
+            let k = 2000 + i - PACED;
+            if k == 2000 {
+                first.send_imu_raw(raw(&rows[k], k)).unwrap();
+            }
+            first.send_imu_raw(raw(&rows[k], k)).unwrap();
+        }
+    }
+    second.finish().unwrap();
+    // After the second one's end of stream the first one takes over again. The daemon must
+    // have read that end first: iceoryx2 does not order samples across publishers, and the
+    // first one's samples read before it are refused (its end marker too, when all were).
+    reader.wait_for_ends(2);
+    for (k, r) in rows.iter().enumerate().take(3000).skip(2500) {
+        first.send_imu_raw(raw(r, k)).unwrap();
+    }
+    first.finish().unwrap();
+    let got = reader.join();
+    let accepted = (got.len() - 3) as u64;
+    let d = final_diagnostics(&diag, accepted);
+    second.close().unwrap();
+    first.close().unwrap();
+    drop(diag);
+    daemon.stop();
+
+    // Sent: the first 2001 + 501 + 500 + its end marker, the second 2000 + its end marker.
+    let sent = (2001 + 501 + 500 + 1 + 2000 + 1) as u64;
+    assert_eq!(d.received, sent, "{d:?}");
+    assert_eq!(
+        (d.head_missing, d.seq_gaps, d.missing_at_restart),
+        (0, 0, 0),
+        "nothing missing: {d:?}"
+    );
+    // The second one was refused until the first had been silent for the take-over time,
+    // although the first one's last sample was a repeated one.
+    let second_refused = d.foreign_samples - 501;
+    assert!(
+        (1..PACED as u64).contains(&second_refused),
+        "refused {second_refused} of the second's samples"
+    );
+    assert_eq!(
+        d.rejected_duplicate_seq, 1,
+        "the first one's repeated sample"
+    );
+    assert_eq!(d.producer_changes, 1);
+    assert_eq!(d.accepted, 2000 + (2000 - second_refused) + 500, "{d:?}");
     cleanup_domain(name);
 }

@@ -187,10 +187,13 @@ fn run() -> Result<()> {
         );
     }
     if foreign > 0 {
+        // Whose they were cannot be told from the daemon's counters, which are the domain's
+        // (a review: the first version named the other producer's on both replays).
         eprintln!(
-            "warning: the daemon refused {foreign} samples during the replay because they came \
-             from another producer than the one it followed (one producer at a time: was \
-             another driver or replay sending on domain {:?}?)",
+            "warning: another producer sent on domain {:?} during the replay, and the daemon \
+             follows one producer at a time: it refused {foreign} samples as a second \
+             producer's (this replay's or the other's), and its counts above are both \
+             producers'",
             domain.name()
         );
     }

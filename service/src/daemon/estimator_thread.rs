@@ -34,6 +34,7 @@ const REFUSED_WARNINGS_PER_STREAM: u64 = 10;
 #[derive(Debug, Clone, Copy)]
 struct HealthMark {
     at: Instant,
+    /// Received from the followed producer (`received` less `foreign_samples`).
     received: u64,
     seq_gaps: u64,
     rejected: u64,
@@ -120,12 +121,17 @@ impl<'a> EstState<'a> {
             checkpoints_saved: 0,
             latency_diag: LatencyHistogram::new(),
             latency_health: LatencyHistogram::new(),
-            health: HealthMark {
-                at: Instant::now(),
-                received: 0,
-                seq_gaps: 0,
-                rejected: 0,
-                dropped: 0,
+            // From the accounting file's counters, which continue an earlier life's (the first
+            // health line of a restarted daemon counted them as this life's input).
+            health: {
+                let load = |a: &std::sync::atomic::AtomicU64| a.load(Ordering::Relaxed);
+                HealthMark {
+                    at: Instant::now(),
+                    received: load(&rec.received) - load(&rec.foreign),
+                    seq_gaps: load(&rec.seq_gaps),
+                    rejected: load(&rec.duplicate) + load(&rec.late),
+                    dropped: load(&rec.dropped),
+                }
             },
             warnings: Vec::new(),
             last_save_error: None,
@@ -469,7 +475,9 @@ impl<'a> EstState<'a> {
             + c.rejected_time_jump;
         let h = self.health;
         let secs = now.duration_since(h.at).as_secs_f64().max(1e-9);
-        let rate = (d.received - h.received) as f64 / secs;
+        // The followed producer's input: a second producer's refused samples are not it.
+        let received = d.received - d.foreign_samples;
+        let rate = received.saturating_sub(h.received) as f64 / secs;
         let (bias, sd) = if self.between_streams {
             ("(between streams)".to_string(), "(none)".to_string())
         } else {
@@ -527,7 +535,7 @@ impl<'a> EstState<'a> {
         self.latency_health.clear();
         self.health = HealthMark {
             at: now,
-            received: d.received,
+            received,
             seq_gaps: d.seq_gaps,
             rejected,
             dropped: d.dropped_overflow,

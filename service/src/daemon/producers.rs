@@ -17,6 +17,11 @@
 //! followed producer's last sample, not from its last sample: a receive thread held up (a full
 //! channel in lossless delivery) does not make a live producer look silent.
 //!
+//! The other producer's numbering ([`OtherNumbering`]) is kept as the followed one's is: what
+//! was missing before its first read sample, and the gaps between its read samples, refused or
+//! not, are counted (`head_missing`, `seq_gaps`, `missing_at_restart`), so every sample a
+//! producer sent is received or counted missing once, whichever producer was followed when.
+//!
 //! Pure: the caller passes the time and whether the followed producer is still connected.
 
 use std::time::{Duration, Instant};
@@ -126,6 +131,88 @@ impl ProducerLock {
     }
 }
 
+/// The numbering of the producer that is not followed: refused now, or followed before another
+/// took over. One is kept (the IMU service takes two publishers at a time).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct OtherNumbering {
+    pub(super) producer: u128,
+    /// The `seq` expected next from it; `None` before any of its samples was read (its head is
+    /// unknown).
+    pub(super) next_seq: Option<u64>,
+    /// This daemon life has read one of its samples: a gap before the first one of a life is the
+    /// restart's.
+    pub(super) seen_this_life: bool,
+}
+
+/// Samples of a numbering missing before one that was read, by where they are counted.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(super) struct Missing {
+    /// Before the first sample ever read of it (`head_missing`).
+    pub(super) head: u64,
+    /// Between two samples read by one daemon life (`seq_gaps`).
+    pub(super) gap: u64,
+    /// Between the last sample an earlier life read and the first this life read
+    /// (`missing_at_restart`).
+    pub(super) at_restart: u64,
+}
+
+impl OtherNumbering {
+    /// A producer none of whose samples was read yet.
+    pub(super) fn new(producer: u128) -> Self {
+        Self {
+            producer,
+            next_seq: None,
+            seen_this_life: false,
+        }
+    }
+
+    fn missing_before(&self, n: u64, seq: u64) -> Missing {
+        if self.seen_this_life {
+            Missing {
+                gap: seq - n,
+                ..Missing::default()
+            }
+        } else {
+            Missing {
+                at_restart: seq - n,
+                ..Missing::default()
+            }
+        }
+    }
+
+    /// A refused sample `seq` of it was read: what is missing before it. A `seq` that does not
+    /// go forward (a repeated or late sample) changes nothing (a review: it was taken for a
+    /// restarted numbering, and the whole refused run was counted as a head missing).
+    pub(super) fn read(&mut self, seq: u64) -> Missing {
+        let missing = match self.next_seq {
+            None => Missing {
+                head: seq,
+                ..Missing::default()
+            },
+            Some(n) if seq >= n => self.missing_before(n, seq),
+            Some(_) => {
+                self.seen_this_life = true;
+                return Missing::default();
+            }
+        };
+        self.next_seq = Some(seq.wrapping_add(1));
+        self.seen_this_life = true;
+        missing
+    }
+
+    /// It takes over with sample `seq`: what is missing before it, and the `last_seq` the
+    /// followed numbering goes on from (`None`: its head is unknown, and is counted as a
+    /// stream's head).
+    pub(super) fn take_over(&self, seq: u64) -> (Missing, Option<u64>) {
+        match self.next_seq {
+            None => (Missing::default(), None),
+            Some(n) if seq >= n => (self.missing_before(n, seq), seq.checked_sub(1)),
+            // Its own repeated or late sample: the followed numbering counts it so.
+            Some(n) => (Missing::default(), n.checked_sub(1)),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -220,6 +307,61 @@ mod tests {
             Admit::TakeOver(TakeOverReason::Gone)
         );
         assert_eq!(asked, Some(B), "asks about the followed producer");
+    }
+
+    #[test]
+    fn the_other_producers_numbering_counts_its_head_and_gaps_once() {
+        let mut o = OtherNumbering::new(B);
+        // Its first read sample is seq 40: 40 were sent before any was read.
+        assert_eq!(
+            o.read(40),
+            Missing {
+                head: 40,
+                ..Missing::default()
+            }
+        );
+        assert_eq!(o.read(41), Missing::default());
+        // 42..45 overwritten in a live buffer.
+        assert_eq!(
+            o.read(46),
+            Missing {
+                gap: 4,
+                ..Missing::default()
+            }
+        );
+        // Repeated and late samples change nothing (they restarted the numbering once).
+        assert_eq!(o.read(46), Missing::default());
+        assert_eq!(o.read(10), Missing::default());
+        assert_eq!(o.next_seq, Some(47));
+        // It takes over at 50: 3 missing, the followed numbering goes on from 49.
+        assert_eq!(
+            o.take_over(50),
+            (
+                Missing {
+                    gap: 3,
+                    ..Missing::default()
+                },
+                Some(49)
+            )
+        );
+        assert_eq!(o.take_over(47), (Missing::default(), Some(46)));
+        // In a new daemon life the first gap is the restart's.
+        let mut later = OtherNumbering {
+            seen_this_life: false,
+            ..o
+        };
+        assert_eq!(
+            later.read(60),
+            Missing {
+                at_restart: 13,
+                ..Missing::default()
+            }
+        );
+        // Nothing read of it yet: a take-over's head is the caller's to count.
+        assert_eq!(
+            OtherNumbering::new(A).take_over(7),
+            (Missing::default(), None)
+        );
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! The receive thread (`corridor-rx`): input subscribers, `seq` and producer checks (one
 //! producer at a time: [`super::producers`]), and the bounded channel to the estimator thread.
 
-use super::producers::{Admit, ProducerLock};
+use super::producers::{Admit, Missing, OtherNumbering, ProducerLock, TakeOverReason};
 use super::state::{load_opt, store_opt};
 use super::{DaemonConfig, DaemonError};
 use corridor_shared::services::{
@@ -109,10 +109,23 @@ pub(super) fn rx_thread(
         });
         found
     };
-    // The last producer refused and its numbering (acknowledged once, warned of at most
-    // `FOREIGN_WARNINGS_PER_STREAM` times a stream).
-    let mut refused: Option<Refused> = None;
+    // The numbering of the producer not followed (refused, or followed before), from an
+    // earlier life too.
+    let mut other: Option<OtherNumbering> = counters.other();
+    // Refused producers warned of in the current stream, and the last one.
     let mut foreign_warned = 0u64;
+    let mut warned_of: Option<u128> = None;
+    let count_missing = |m: Missing| {
+        for (n, c) in [
+            (m.head, &counters.head_missing),
+            (m.gap, &counters.seq_gaps),
+            (m.at_restart, &counters.missing_at_restart),
+        ] {
+            if n > 0 {
+                c.fetch_add(n, Ordering::Relaxed);
+            }
+        }
+    };
     // The seq the next stream of the current producer starts with (after its end marker).
     let mut next_stream_seq: Option<u64> = load_opt(&counters.next_stream_seq_plus1);
     // True between the first data sample of a stream and its end-of-stream marker.
@@ -172,42 +185,51 @@ pub(super) fn rx_thread(
             let producer = smp.header().publisher_id().value();
             drop(smp); // return the shared-memory slot at once
             let last_producer = lock.followed();
-            match lock.admit(producer, mid_stream, Instant::now, connected) {
-                Admit::Followed => {}
-                Admit::TakeOver(reason) => {
-                    if mid_stream {
+            let admit = lock.admit(producer, mid_stream, Instant::now, connected);
+            if admit == Admit::Foreign {
+                counters.received.fetch_add(1, Ordering::Relaxed);
+                counters.foreign.fetch_add(1, Ordering::Relaxed);
+                let o = match other.as_mut() {
+                    Some(o) if o.producer == producer => o,
+                    _ => other.insert(OtherNumbering::new(producer)),
+                };
+                if !o.seen_this_life {
+                    // Its samples were read: its close need not wait for the daemon.
+                    acknowledge(producer);
+                }
+                count_missing(o.read(s.seq));
+                counters.set_other(o);
+                if warned_of != Some(producer) {
+                    warned_of = Some(producer);
+                    foreign_warned += 1;
+                    if foreign_warned <= FOREIGN_WARNINGS_PER_STREAM {
                         tracing::warn!(
                             seq = s.seq,
-                            "IMU producer taken over mid-stream: the followed one {}",
-                            reason.said()
+                            "IMU samples from a second producer while the followed one sends: \
+                             refused, counted in foreign_samples (one producer at a time; \
+                             another takes over after daemon.producer_takeover_s of silence, \
+                             an end of stream or a close)"
                         );
+                    } else {
+                        tracing::debug!(seq = s.seq, "IMU samples from a second producer refused");
                     }
                 }
-                Admit::Foreign => {
-                    counters.received.fetch_add(1, Ordering::Relaxed);
-                    counters.foreign.fetch_add(1, Ordering::Relaxed);
-                    if let Some(r) = refused.as_mut().filter(|r| r.producer == producer) {
-                        r.push(s.seq);
-                    } else {
-                        refused = Some(Refused {
-                            producer,
-                            first_seq: s.seq,
-                            last_seq: s.seq,
-                        });
-                        // Its samples were read: its close need not wait for the daemon.
-                        acknowledge(producer);
-                        foreign_warned += 1;
-                        if foreign_warned <= FOREIGN_WARNINGS_PER_STREAM {
-                            tracing::warn!(
-                                seq = s.seq,
-                                "IMU samples from a second producer while the followed one \
-                                 sends: refused, counted in foreign_samples (one producer at a \
-                                 time; another takes over after daemon.producer_takeover_s of \
-                                 silence, an end of stream or a close)"
-                            );
-                        }
-                    }
-                    continue;
+                continue;
+            }
+            if let Admit::TakeOver(reason) = admit {
+                let known = other.is_some_and(|o| o.producer == producer);
+                if mid_stream {
+                    tracing::warn!(
+                        seq = s.seq,
+                        "IMU producer taken over mid-stream: the followed one {}",
+                        reason.said()
+                    );
+                } else if known && reason == TakeOverReason::StreamEnded {
+                    tracing::info!(
+                        seq = s.seq,
+                        "IMU producer whose samples were refused (or that was followed before) \
+                         takes over: the followed one had ended its stream"
+                    );
                 }
             }
             // `received` is counted next to the store of the position (`last_seq_plus1`), so a
@@ -220,11 +242,14 @@ pub(super) fn rx_thread(
             }
             // Gaps in the numbering of the producer an earlier daemon life was receiving, up to
             // this life's first sample of it, are the restart's.
-            let gaps = if std::mem::take(&mut first_of_life) && !new_producer {
+            let first_taken_of_life = std::mem::take(&mut first_of_life);
+            let gaps = if first_taken_of_life && !new_producer {
                 &counters.missing_at_restart
             } else {
                 &counters.seq_gaps
             };
+            // Where the numbering of the producer taken over from stood.
+            let (last_seq_before, next_stream_seq_before) = (last_seq, next_stream_seq);
             if new_producer {
                 next_stream_seq = None;
             }
@@ -266,20 +291,35 @@ pub(super) fn rx_thread(
             }
             if new_producer {
                 counters.set_producer(producer);
-                // A producer refused before it took over: its refused samples were received
-                // (counted as foreign), so its numbering goes on from the last of them, not
-                // from a head the daemon never saw.
-                if let Some(r) = refused.take_if(|r| r.producer == producer) {
-                    counters
-                        .head_missing
-                        .fetch_add(r.first_seq, Ordering::Relaxed);
+                // The producer taken over from becomes the other one, with where its numbering
+                // stands; one whose samples were read before (refused, or followed before) goes
+                // on from its own numbering: its head was counted when it was first read.
+                let taken_over = last_producer.map(|p| OtherNumbering {
+                    producer: p,
+                    next_seq: if mid_stream {
+                        last_seq_before.map(|l| l.wrapping_add(1))
+                    } else {
+                        next_stream_seq_before
+                    },
+                    // Not when this life's first sample is the new one's: the producer taken over
+                    // from is an earlier life's.
+                    seen_this_life: !first_taken_of_life,
+                });
+                if let Some(o) = other.filter(|o| o.producer == producer) {
+                    let (missing, from) = o.take_over(s.seq);
+                    count_missing(missing);
+                    last_seq = from;
                     next_stream_seq = None;
-                    last_seq = Some(r.last_seq);
+                }
+                other = taken_over;
+                if let Some(o) = &other {
+                    counters.set_other(o);
                 }
             }
             if s.is_end_of_stream() {
                 changes_warned = 0;
                 foreign_warned = 0;
+                warned_of = None;
                 if let Some(l) = last_seq
                     && s.seq > l
                 {
@@ -333,33 +373,13 @@ pub(super) fn rx_thread(
             if !forward(cfg.delivery, &tx, Msg::Imu(s), counters, &stopping) {
                 return Ok(());
             }
-            // Caught up: from here the followed producer is silent until its next sample.
-            lock.drained(Instant::now());
         }
+        // The input is empty: from here the followed producer is silent until its next sample
+        // (a review: this was marked after every forwarded sample instead, so a producer whose
+        // last sample before it hung was a repeated one never went silent).
+        lock.drained(Instant::now());
     }
     Ok(())
-}
-
-/// The numbering of the producer whose samples were refused last (another one was followed):
-/// when it takes over, its numbering continues from these, so its refused samples are neither
-/// lost nor counted missing.
-#[derive(Debug, Clone, Copy)]
-struct Refused {
-    producer: u128,
-    /// Its first refused `seq` (what it numbered before it was never received).
-    first_seq: u64,
-    last_seq: u64,
-}
-
-impl Refused {
-    /// One more refused sample: a `seq` that goes back starts its numbering afresh (a restarted
-    /// numbering; its head is counted from there).
-    fn push(&mut self, seq: u64) {
-        if seq <= self.last_seq {
-            self.first_seq = seq;
-        }
-        self.last_seq = seq;
-    }
 }
 
 /// The receive thread's end of the channel, and the estimator thread to wake after a send.

@@ -16,6 +16,7 @@
 //! process ends. A SIGKILL between two stores of one sample can misplace that one sample (counted
 //! twice or not at all): a window of a few instructions per sample.
 
+use super::producers::OtherNumbering;
 use std::fs::OpenOptions;
 use std::os::fd::AsRawFd;
 use std::os::unix::fs::OpenOptionsExt;
@@ -93,6 +94,13 @@ pub(super) struct Record {
     /// IMU messages refused because another producer was followed (one producer at a time,
     /// see `super::producers`). Appended to the layout: a file written before it holds 0 here.
     pub(super) foreign: AtomicU64,
+    /// The producer that is not followed (refused, or followed before another took over): its
+    /// publisher port id (high, low 64 bits; both 0: none) and the `seq` expected next from it,
+    /// plus 1 (0: none read yet), so that the next life counts its numbering on
+    /// (`super::producers::OtherNumbering`). Appended, as `foreign`.
+    other_hi: AtomicU64,
+    other_lo: AtomicU64,
+    other_next_seq_plus1: AtomicU64,
 }
 
 const _: () = assert!(size_of::<Record>() <= FILE_LEN);
@@ -109,6 +117,25 @@ impl Record {
     pub(super) fn set_producer(&self, id: u128) {
         self.producer_hi.store((id >> 64) as u64, Ordering::Relaxed);
         self.producer_lo.store(id as u64, Ordering::Relaxed);
+    }
+
+    /// The other producer's numbering recorded, if any (as not yet seen by this life).
+    pub(super) fn other(&self) -> Option<OtherNumbering> {
+        let hi = self.other_hi.load(Ordering::Relaxed);
+        let lo = self.other_lo.load(Ordering::Relaxed);
+        ((hi, lo) != (0, 0)).then(|| OtherNumbering {
+            producer: (u128::from(hi) << 64) | u128::from(lo),
+            next_seq: load_opt(&self.other_next_seq_plus1),
+            seen_this_life: false,
+        })
+    }
+
+    /// Records the other producer's numbering.
+    pub(super) fn set_other(&self, o: &OtherNumbering) {
+        self.other_hi
+            .store((o.producer >> 64) as u64, Ordering::Relaxed);
+        self.other_lo.store(o.producer as u64, Ordering::Relaxed);
+        store_opt(&self.other_next_seq_plus1, o.next_seq);
     }
 
     fn reset(&self) {
@@ -135,6 +162,9 @@ impl Record {
             &self.angles_dropped,
             &self.angles_ignored,
             &self.foreign,
+            &self.other_hi,
+            &self.other_lo,
+            &self.other_next_seq_plus1,
         ];
         for f in fields.into_iter().chain(&self.out_seq) {
             f.store(0, Ordering::Relaxed);
@@ -285,6 +315,11 @@ mod tests {
             s.dropped.store(1, Ordering::Relaxed);
             s.foreign.store(2, Ordering::Relaxed);
             s.set_producer(u128::MAX - 5);
+            s.set_other(&OtherNumbering {
+                producer: 7 << 64 | 9,
+                next_seq: Some(120),
+                seen_this_life: true,
+            });
             store_opt(&s.last_seq_plus1, Some(41));
             s.out_seq[OUT_ATTITUDE].store(7, Ordering::Relaxed);
         }
@@ -296,6 +331,14 @@ mod tests {
         assert_eq!(s.lost_in_daemon.load(Ordering::Relaxed), 3);
         assert_eq!(s.forwarded.load(Ordering::Relaxed), 6);
         assert_eq!(s.producer(), Some(u128::MAX - 5));
+        assert_eq!(
+            s.other(),
+            Some(OtherNumbering {
+                producer: 7 << 64 | 9,
+                next_seq: Some(120),
+                seen_this_life: false,
+            })
+        );
         assert_eq!(load_opt(&s.last_seq_plus1), Some(41));
         assert_eq!(load_opt(&s.next_stream_seq_plus1), None);
         assert_eq!(s.out_seq[OUT_ATTITUDE].load(Ordering::Relaxed), 7);

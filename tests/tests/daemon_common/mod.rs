@@ -182,20 +182,23 @@ pub fn produce(
 }
 
 /// Reads attitude on its own thread (ports are `!Send`) until `ends` end-of-stream markers, and
-/// counts what it read in [`AttitudeReader::progress`]. Connected when this returns.
+/// counts what it read and the ends. Connected when this returns.
 pub struct AttitudeReader {
     handle: JoinHandle<Vec<corridor_shared::wire::AttitudeSample>>,
     progress: Arc<std::sync::atomic::AtomicU64>,
+    ends: Arc<std::sync::atomic::AtomicU64>,
 }
 
 impl AttitudeReader {
     pub fn start(domain: &Domain, ends: usize) -> Self {
         use corridor_shared::wire::AttitudeSample;
         let progress = Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let ends_read = Arc::new(std::sync::atomic::AtomicU64::new(0));
         let (ready_tx, ready) = std::sync::mpsc::sync_channel(1);
         let handle = {
             let domain = domain.clone();
             let progress = Arc::clone(&progress);
+            let ends_read = Arc::clone(&ends_read);
             std::thread::spawn(move || {
                 let sub = Subscriber::<AttitudeSample>::open(&domain, "test-att", WAIT).unwrap();
                 ready_tx.send(()).unwrap();
@@ -207,6 +210,7 @@ impl AttitudeReader {
                     progress.fetch_add(1, Ordering::Relaxed);
                     if a.flags & FLAG_END_OF_STREAM != 0 {
                         seen += 1;
+                        ends_read.fetch_add(1, Ordering::Relaxed);
                         if seen == ends {
                             return v;
                         }
@@ -215,7 +219,20 @@ impl AttitudeReader {
             })
         };
         ready.recv_timeout(WAIT).expect("reader connected");
-        Self { handle, progress }
+        Self {
+            handle,
+            progress,
+            ends: ends_read,
+        }
+    }
+
+    /// Waits until `count` end-of-stream markers were read (panics after [`WAIT`]).
+    pub fn wait_for_ends(&self, count: u64) {
+        let deadline = std::time::Instant::now() + WAIT;
+        while self.ends.load(Ordering::Relaxed) < count {
+            assert!(std::time::Instant::now() < deadline, "daemon stuck");
+            std::thread::sleep(Duration::from_millis(5));
+        }
     }
 
     /// Waits until `count` messages were read (panics after [`WAIT`]).
