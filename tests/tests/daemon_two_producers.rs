@@ -267,3 +267,117 @@ fn producers_that_take_turns_are_counted_once() {
     assert_eq!(d.accepted, 2000 + (2000 - second_refused) + 500, "{d:?}");
     cleanup_domain(name);
 }
+
+/// A second producer that was never refused (it starts after the first has been silent for the
+/// take-over time) has a numbering of its own: its head is counted as such, not as a gap in the
+/// first one's numbering (a review: seq 100,000 after 2,000 gave 98,000 "gaps" and lost 2,000
+/// from the sum).
+#[test]
+fn a_producer_that_takes_over_from_a_hung_one_has_its_own_numbering() {
+    let _one = one_daemon_at_a_time();
+    let name = "test_two_producers_own_numbering";
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
+    let rows = exp36_rows();
+    let reader = AttitudeReader::start(&domain, 2);
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    let mut first = Producer::new(&domain, "test-first", Delivery::Lossless).unwrap();
+    first.wait_for_daemon(WAIT).unwrap();
+    for r in &rows[..2000] {
+        first.send_imu(ImuSample::from(r)).unwrap();
+    }
+    reader.wait_for(2000);
+    // Hung: connected, silent for longer than the take-over time.
+    std::thread::sleep(Duration::from_millis(1500));
+    let mut second = Producer::new(&domain, "test-second", Delivery::Lossless).unwrap();
+    second.wait_for_daemon(WAIT).unwrap();
+    for (i, r) in rows[..1000].iter().enumerate() {
+        second
+            .send_imu_raw(ImuSample {
+                seq: 100_000 + i as u64,
+                ..ImuSample::from(r)
+            })
+            .unwrap();
+    }
+    second.finish().unwrap();
+    let got = reader.join();
+    let d = final_diagnostics(&diag, (got.len() - 2) as u64);
+    second.close().unwrap();
+    drop(first);
+    drop(diag);
+    daemon.stop();
+    assert_eq!(d.foreign_samples, 0, "{d:?}");
+    assert_eq!((d.head_missing, d.seq_gaps), (100_000, 0), "{d:?}");
+    // Sent: 2,000 + 100,000 numbered before the second one's first + 1,000 + its end marker.
+    assert_eq!(
+        d.received + d.head_missing + d.seq_gaps + d.missing_at_restart,
+        2000 + 100_000 + 1000 + 1
+    );
+    cleanup_domain(name);
+}
+
+/// A producer refused while a driver restarts next to it (end of stream, a new publisher takes
+/// over) keeps its numbering: refused again later, its head is not counted again (a review:
+/// the restarted driver's take-over overwrote it).
+#[test]
+fn a_refused_producer_keeps_its_numbering_across_a_restart_of_the_followed_driver() {
+    let _one = one_daemon_at_a_time();
+    let name = "test_two_producers_restart_next_to";
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
+    let rows = exp36_rows();
+    let reader = AttitudeReader::start(&domain, 2);
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    let mut other = Producer::new(&domain, "test-other", Delivery::Lossless).unwrap();
+    {
+        let mut driver = Producer::new(&domain, "test-driver", Delivery::Lossless).unwrap();
+        driver.wait_for_daemon(WAIT).unwrap();
+        for r in &rows[..200] {
+            driver.send_imu(ImuSample::from(r)).unwrap();
+        }
+        reader.wait_for(200);
+        // The other one's first 200 are refused early in the driver's stream.
+        other.wait_for_daemon(WAIT).unwrap();
+        for (i, r) in rows[200..2200].iter().enumerate() {
+            driver.send_imu(ImuSample::from(r)).unwrap();
+            if i < 200 {
+                other.send_imu(ImuSample::from(&rows[6000 + i])).unwrap();
+            }
+        }
+        driver.finish().unwrap();
+        reader.wait_for_ends(1);
+        driver.close().unwrap();
+    }
+    // The driver restarted: a new publisher, which takes over after the end of stream.
+    let mut driver = Producer::new(&domain, "test-driver-2", Delivery::Lossless).unwrap();
+    driver.wait_for_daemon(WAIT).unwrap();
+    for (i, r) in rows[..1000].iter().enumerate() {
+        driver.send_imu(ImuSample::from(r)).unwrap();
+        if i == 500 {
+            reader.wait_for(2201 + 400);
+        }
+        // The other one again, refused, its numbering going on.
+        if (500..700).contains(&i) {
+            other
+                .send_imu(ImuSample::from(&rows[6200 + i - 500]))
+                .unwrap();
+        }
+    }
+    driver.finish().unwrap();
+    let got = reader.join();
+    let d = final_diagnostics(&diag, (got.len() - 2) as u64);
+    driver.close().unwrap();
+    other.close().unwrap();
+    drop(diag);
+    daemon.stop();
+    assert_eq!(d.foreign_samples, 400, "{d:?}");
+    assert_eq!(
+        (d.head_missing, d.seq_gaps, d.producer_changes),
+        (0, 0, 0),
+        "{d:?}"
+    );
+    assert_eq!(d.received, 2201 + 400 + 1001);
+    cleanup_domain(name);
+}

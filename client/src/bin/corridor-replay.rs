@@ -179,11 +179,18 @@ fn run() -> Result<()> {
             domain.name()
         );
     }
-    if lost > 0 {
+    if lost > 0 && foreign == 0 {
         eprintln!(
             "warning: the daemon lost {lost} of the {} samples sent (live delivery drops what \
              it cannot keep up with: --delivery lossless, or a lower --speed)",
             r.samples
+        );
+    } else if lost > 0 {
+        // With a second producer the counts are both producers' (a review: "lost 59370 of the
+        // 42000 samples sent").
+        eprintln!(
+            "warning: the daemon lost {lost} samples during the replay, this replay's and the \
+             other producer's together (live delivery drops what it cannot keep up with)"
         );
     }
     if foreign > 0 {

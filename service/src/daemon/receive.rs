@@ -275,7 +275,13 @@ pub(super) fn rx_thread(
                 } else {
                     tracing::debug!(seq = s.seq, "IMU producer changed mid-stream");
                 }
-                if last_seq.is_some_and(|l| s.seq <= l) {
+                // A producer that took over from a silent one that is still connected is a second
+                // producer with a numbering of its own (a review: its head was counted as a gap
+                // in the old one's numbering); a replacement of one that is gone or ended may
+                // continue the old numbering (a restarted driver that keeps its counter).
+                if last_seq.is_some_and(|l| s.seq <= l)
+                    || admit == Admit::TakeOver(TakeOverReason::Silent)
+                {
                     last_seq = None;
                 }
                 // Never dropped: the estimator must see it before the new producer's samples.
@@ -310,11 +316,23 @@ pub(super) fn rx_thread(
                     count_missing(missing);
                     last_seq = from;
                     next_stream_seq = None;
+                    other = None;
                 }
-                other = taken_over;
+                // One slot (the service takes two publishers): a producer refused while still
+                // connected keeps it over the one taken over from, which then is gone (a
+                // review: a driver restarted after its end of stream next to a refused producer
+                // overwrote the refused one's numbering, and its head was counted again).
+                let keep = other.is_some_and(|o| connected(o.producer));
+                if !keep {
+                    other = taken_over;
+                }
                 if let Some(o) = &other {
                     counters.set_other(o);
                 }
+                // Where the new producer's numbering stands, at once (the sample may still be
+                // refused as repeated or late below, before the store at the end).
+                store_opt(&counters.last_seq_plus1, last_seq);
+                store_opt(&counters.next_stream_seq_plus1, next_stream_seq);
             }
             if s.is_end_of_stream() {
                 changes_warned = 0;
