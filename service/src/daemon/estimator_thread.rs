@@ -127,7 +127,7 @@ impl<'a> EstState<'a> {
                 let load = |a: &std::sync::atomic::AtomicU64| a.load(Ordering::Relaxed);
                 HealthMark {
                     at: Instant::now(),
-                    received: load(&rec.received) - load(&rec.foreign),
+                    received: load(&rec.received).saturating_sub(load(&rec.foreign)),
                     seq_gaps: load(&rec.seq_gaps),
                     rejected: load(&rec.duplicate) + load(&rec.late),
                     dropped: load(&rec.dropped),
@@ -476,7 +476,7 @@ impl<'a> EstState<'a> {
         let h = self.health;
         let secs = now.duration_since(h.at).as_secs_f64().max(1e-9);
         // The followed producer's input: a second producer's refused samples are not it.
-        let received = d.received - d.foreign_samples;
+        let received = d.received.saturating_sub(d.foreign_samples);
         let rate = received.saturating_sub(h.received) as f64 / secs;
         let (bias, sd) = if self.between_streams {
             ("(between streams)".to_string(), "(none)".to_string())

@@ -96,7 +96,7 @@ pub(super) fn rx_thread(
     // The producer followed (see `super::producers`), from an earlier life too.
     let mut lock = ProducerLock::new(counters.producer(), cfg.producer_takeover, Instant::now());
     // Whether a producer's publisher is still on the IMU service (asked only when another
-    // producer's sample comes mid-stream).
+    // producer's sample comes mid-stream, and at a take-over).
     let connected = |producer: u128| {
         let mut found = false;
         imu_service.dynamic_config().list_publishers(|p| {
