@@ -43,12 +43,24 @@ fn samples_missing_at_the_head_of_a_stream_are_counted() {
                 seq += 1;
             }
             p.finish().unwrap();
+            // Stream 3 is its end marker alone, at 2452 (2402..2452, its data, all lost): the
+            // marker at a stream's head counts what was numbered before it too (a review: it
+            // was counted nowhere).
+            p.send_imu_raw(ImuSample {
+                seq: 2452,
+                flags: corridor_shared::wire::FLAG_END_OF_STREAM,
+                t_s: f64::NAN,
+                temp_c: f64::NAN,
+                ..ImuSample::default()
+            })
+            .unwrap();
             let _ = released.recv_timeout(WAIT);
             p.stats()
         })
     };
-    let _ = until_end(&attitude, |a| a.flags);
-    let _ = until_end(&attitude, |a| a.flags);
+    for _ in 0..3 {
+        let _ = until_end(&attitude, |a| a.flags);
+    }
     let _ = release.send(());
     let stats = producer.join().unwrap();
     let report = daemon.stop();
@@ -56,10 +68,10 @@ fn samples_missing_at_the_head_of_a_stream_are_counted() {
     assert_eq!(report.head_missing, 300);
     // The diagnostics on the wire carry the same count.
     assert_eq!(d.head_missing, 300);
-    assert_eq!(d.seq_gaps, 100);
+    assert_eq!(d.seq_gaps, 100 + 50);
     // What the producer numbered = what the daemon received + what it counts as missing.
-    let numbered = 2000 + 2 + 300 + 100;
-    assert_eq!(stats.imu_sent, 2002);
+    let numbered = 2000 + 3 + 300 + 100 + 50;
+    assert_eq!(stats.imu_sent, 2003);
     assert_eq!(d.received + report.head_missing + d.seq_gaps, numbered);
     cleanup_domain(name);
 }

@@ -130,6 +130,9 @@ pub(super) fn rx_thread(
     let mut next_stream_seq: Option<u64> = load_opt(&counters.next_stream_seq_plus1);
     // True between the first data sample of a stream and its end-of-stream marker.
     let mut mid_stream = counters.mid_stream.load(Ordering::Relaxed) != 0;
+    // The time stamp of the followed producer's last data sample taken (this life), for
+    // telling a replacement that continues its numbering and clock.
+    let mut last_t_s: Option<f64> = None;
     // True until this life's first sample: a gap before it, in the numbering of the producer an
     // earlier life was receiving, is counted in `missing_at_restart`.
     let mut first_of_life = true;
@@ -275,13 +278,17 @@ pub(super) fn rx_thread(
                 } else {
                     tracing::debug!(seq = s.seq, "IMU producer changed mid-stream");
                 }
-                // A producer that took over from a silent one that is still connected is a second
-                // producer with a numbering of its own (a review: its head was counted as a gap
-                // in the old one's numbering); a replacement of one that is gone or ended may
-                // continue the old numbering (a restarted driver that keeps its counter).
-                if last_seq.is_some_and(|l| s.seq <= l)
-                    || admit == Admit::TakeOver(TakeOverReason::Silent)
-                {
+                // The new producer continues the old numbering only when the old one is gone
+                // (not silent: still connected, it is a second producer) and both its `seq` and
+                // its clock run on from the old one's: a restarted driver that keeps its
+                // counter and its sensor's clock. Otherwise its numbering is its own, and its
+                // head is counted as such (reviews: a producer at seq 100,000 after 2,000 had
+                // its head counted as gaps in the old numbering, 2,000 short in the sum).
+                // After an end of stream (not mid-stream) a new producer always starts its own.
+                let continues = admit != Admit::TakeOver(TakeOverReason::Silent)
+                    && last_seq.is_some_and(|l| s.seq > l)
+                    && last_t_s.is_some_and(|t| s.t_s >= t);
+                if !continues {
                     last_seq = None;
                 }
                 // Never dropped: the estimator must see it before the new producer's samples.
@@ -338,10 +345,20 @@ pub(super) fn rx_thread(
                 changes_warned = 0;
                 foreign_warned = 0;
                 warned_of = None;
-                if let Some(l) = last_seq
-                    && s.seq > l
-                {
-                    gaps.fetch_add(s.seq - l - 1, Ordering::Relaxed);
+                match (last_seq, next_stream_seq) {
+                    (Some(l), _) if s.seq > l => {
+                        gaps.fetch_add(s.seq - l - 1, Ordering::Relaxed);
+                    }
+                    (Some(_), _) => {}
+                    // A marker at the head of a stream (all its data lost, or sent while no
+                    // daemon ran): what was numbered before it is missing, as before a stream's
+                    // first sample (a review: it was counted nowhere).
+                    (None, Some(first)) => {
+                        gaps.fetch_add(s.seq.saturating_sub(first), Ordering::Relaxed);
+                    }
+                    (None, None) => {
+                        counters.head_missing.fetch_add(s.seq, Ordering::Relaxed);
+                    }
                 }
                 next_stream_seq = Some(s.seq.wrapping_add(1));
                 last_seq = None;
@@ -386,6 +403,7 @@ pub(super) fn rx_thread(
                 gaps.fetch_add(s.seq - l - 1, Ordering::Relaxed);
             }
             last_seq = Some(s.seq);
+            last_t_s = Some(s.t_s);
             store_opt(&counters.last_seq_plus1, last_seq);
             counters.received.fetch_add(1, Ordering::Relaxed);
             if !forward(cfg.delivery, &tx, Msg::Imu(s), counters, &stopping) {
