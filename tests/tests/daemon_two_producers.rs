@@ -31,6 +31,29 @@ fn offline(rows: &[ImuRow]) -> Vec<Estimate> {
     rows.iter().map(|r| *est.step(&r.into()).unwrap()).collect()
 }
 
+/// What every test here starts with: the daemon lock, a lossless daemon on its own domain,
+/// exp36's rows, an attitude reader (until `ends` end-of-stream markers) and a diagnostics
+/// reader.
+fn start(
+    name: &str,
+    ends: usize,
+) -> (
+    std::sync::MutexGuard<'static, ()>,
+    Domain,
+    Running,
+    Vec<ImuRow>,
+    AttitudeReader,
+    Subscriber<Diagnostics>,
+) {
+    let one = one_daemon_at_a_time();
+    cleanup_domain(name);
+    let domain = Domain::new(name).unwrap();
+    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
+    let reader = AttitudeReader::start(&domain, ends);
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    (one, domain, daemon, exp36_rows(), reader, diag)
+}
+
 /// The last diagnostics with the end-of-stream flag whose `accepted` reached `accepted`.
 fn final_diagnostics(diag: &Subscriber<Diagnostics>, accepted: u64) -> Diagnostics {
     loop {
@@ -43,15 +66,9 @@ fn final_diagnostics(diag: &Subscriber<Diagnostics>, accepted: u64) -> Diagnosti
 
 #[test]
 fn a_second_producer_is_refused_while_the_first_sends() {
-    let _one = one_daemon_at_a_time();
     let name = "test_two_producers_at_once";
-    cleanup_domain(name);
-    let domain = Domain::new(name).unwrap();
-    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
-    let rows = exp36_rows();
+    let (_one, domain, daemon, rows, reader, diag) = start(name, 1);
     let expect = offline(&rows);
-    let reader = AttitudeReader::start(&domain, 1);
-    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
     let (lead, foreign) = (200usize, 3000usize);
 
     let mut first = Producer::new(&domain, "test-first", Delivery::Lossless).unwrap();
@@ -117,14 +134,8 @@ const PACED: usize = 1500;
 
 #[test]
 fn a_producer_that_falls_silent_is_taken_over() {
-    let _one = one_daemon_at_a_time();
     let name = "test_two_producers_takeover";
-    cleanup_domain(name);
-    let domain = Domain::new(name).unwrap();
-    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
-    let rows = exp36_rows();
-    let reader = AttitudeReader::start(&domain, 2);
-    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    let (_one, domain, daemon, rows, reader, diag) = start(name, 2);
     let k1 = 3000usize;
 
     // The first driver sends part of the walk and hangs: connected, silent.
@@ -190,14 +201,8 @@ fn a_producer_that_falls_silent_is_taken_over() {
 /// going silent).
 #[test]
 fn producers_that_take_turns_are_counted_once() {
-    let _one = one_daemon_at_a_time();
     let name = "test_two_producers_turns";
-    cleanup_domain(name);
-    let domain = Domain::new(name).unwrap();
-    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
-    let rows = exp36_rows();
-    let reader = AttitudeReader::start(&domain, 3);
-    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    let (_one, domain, daemon, rows, reader, diag) = start(name, 3);
     let raw = |r: &ImuRow, seq: usize| ImuSample {
         seq: seq as u64,
         ..ImuSample::from(r)
@@ -286,13 +291,7 @@ fn a_producer_that_takes_over_from_a_closed_one_with_another_clock_has_its_own_n
 }
 
 fn takes_over_with_its_own_numbering(name: &str, hung: bool) {
-    let _one = one_daemon_at_a_time();
-    cleanup_domain(name);
-    let domain = Domain::new(name).unwrap();
-    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
-    let rows = exp36_rows();
-    let reader = AttitudeReader::start(&domain, 2);
-    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    let (_one, domain, daemon, rows, reader, diag) = start(name, 2);
     let mut first = Producer::new(&domain, "test-first", Delivery::Lossless).unwrap();
     first.wait_for_daemon(WAIT).unwrap();
     for r in &rows[..2000] {
@@ -339,14 +338,8 @@ fn takes_over_with_its_own_numbering(name: &str, hung: bool) {
 /// the restarted driver's take-over overwrote it).
 #[test]
 fn a_refused_producer_keeps_its_numbering_across_a_restart_of_the_followed_driver() {
-    let _one = one_daemon_at_a_time();
     let name = "test_two_producers_restart_next_to";
-    cleanup_domain(name);
-    let domain = Domain::new(name).unwrap();
-    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
-    let rows = exp36_rows();
-    let reader = AttitudeReader::start(&domain, 2);
-    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag", WAIT).unwrap();
+    let (_one, domain, daemon, rows, reader, diag) = start(name, 2);
     let mut other = Producer::new(&domain, "test-other", Delivery::Lossless).unwrap();
     {
         let mut driver = Producer::new(&domain, "test-driver", Delivery::Lossless).unwrap();
