@@ -310,7 +310,7 @@ fn producer_restarted_mid_stream_is_counted_and_handled() {
 fn client_tools_replay_record_and_track_a_whole_stream() {
     use corridor_client::csv_rows::{ATTITUDE_HEADER, BIAS_HEADER};
     use corridor_client::record::{RecordOptions, RecordStop, Recorder};
-    use corridor_client::replay::{ReplayOptions, Speed, replay};
+    use corridor_client::replay::replay;
     use corridor_client::track::{TrackStop, Tracker};
     use std::sync::atomic::AtomicBool;
 
@@ -373,15 +373,7 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
     for _ in 0..2 {
         ready_rx.recv_timeout(WAIT).expect("consumer attached");
     }
-    let opts = ReplayOptions {
-        node_name: "test-replay".into(),
-        delivery: Some(Delivery::Lossless),
-        speed: Speed::Max,
-        loops: 1,
-        injection: BiasInjection::default(),
-        wait: WAIT,
-    };
-    let sent = replay(&domain, &rows, &opts).unwrap();
+    let sent = replay(&domain, &rows, &lossless_at_full_speed()).unwrap();
     let rec = recorder.join().unwrap();
     let (track, strides) = tracker.join().unwrap();
 
@@ -416,7 +408,7 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
         // The next stream comes later: after the daemon's idle refresh of its readers (every
         // diagnostics period, 1 s), which hands them the history, and the idle timeout.
         std::thread::sleep(Duration::from_millis(3000));
-        replay(domain, &rows[..4000], &opts).unwrap();
+        replay(domain, &rows[..4000], &lossless_at_full_speed()).unwrap();
         (rec2.join().unwrap(), track2.join().unwrap())
     });
 
@@ -539,9 +531,8 @@ fn a_logger_that_times_out_within_a_stream_says_so() {
 /// with 0 received (3 of 3 replays at `--speed max` right after `corridor serve`).
 #[test]
 fn the_replays_account_of_a_daemon_started_just_before_it_is_complete() {
-    use corridor_client::replay::{ReplayOptions, Speed, replay};
+    use corridor_client::replay::replay;
     use corridor_client::status::DaemonWatch;
-    use corridor_shared::injection::BiasInjection;
 
     let _one = one_daemon_at_a_time();
     let name = "test_daemon_fresh_account";
@@ -550,15 +541,7 @@ fn the_replays_account_of_a_daemon_started_just_before_it_is_complete() {
     let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
     let watch = DaemonWatch::start(&domain, WAIT, WAIT).expect("the daemon's diagnostics");
     let rows = exp36_rows();
-    let opts = ReplayOptions {
-        node_name: "test-replay".into(),
-        delivery: Some(Delivery::Lossless),
-        speed: Speed::Max,
-        loops: 1,
-        injection: BiasInjection::default(),
-        wait: WAIT,
-    };
-    let sent = replay(&domain, &rows, &opts).unwrap();
+    let sent = replay(&domain, &rows, &lossless_at_full_speed()).unwrap();
     let (account, complete) = watch.finish(sent.samples).expect("an account");
     assert!(complete, "{account:?}");
     assert_eq!(account.received, rows.len() as u64 + 1);
@@ -566,4 +549,16 @@ fn the_replays_account_of_a_daemon_started_just_before_it_is_complete() {
     assert_eq!(account.lost(), 0);
     daemon.stop();
     cleanup_domain(name);
+}
+
+/// The replay options of these tests: lossless, as fast as the daemon takes the samples.
+fn lossless_at_full_speed() -> corridor_client::replay::ReplayOptions {
+    corridor_client::replay::ReplayOptions {
+        node_name: "test-replay".into(),
+        delivery: Some(Delivery::Lossless),
+        speed: corridor_client::replay::Speed::Max,
+        loops: 1,
+        injection: corridor_shared::injection::BiasInjection::default(),
+        wait: WAIT,
+    }
 }

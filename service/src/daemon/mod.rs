@@ -64,7 +64,7 @@
 //! - `receive`: the receive thread (`corridor-rx`), its counters and the channel to the
 //!   estimator thread.
 //! - `estimator_thread`: the estimator thread (`corridor-estimator`): its state, the end of
-//!   stream, the checkpoint saves and the health line.
+//!   stream, the checkpoint saves; its `health_line` the one-line health summary.
 //! - `outputs`: the output publishers and the conversion of an estimate into wire messages.
 //! - `producers`: which IMU producer the receive thread follows when several publish.
 //! - `latency`: the allocation-free latency histogram behind the diagnostics and health line.

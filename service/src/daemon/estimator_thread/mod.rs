@@ -2,6 +2,8 @@
 //! publishes per sample, handles the end of stream, saves the checkpoint and logs the health
 //! line.
 
+mod health_line;
+
 use super::latency::LatencyHistogram;
 use super::outputs::{Out, Outputs, attitude_of, bias_of, flags_of, phase_code};
 use super::receive::{Msg, RxCounters};
@@ -13,6 +15,7 @@ use corridor_shared::wire::{
     Diagnostics, FLAG_END_OF_STREAM, FLAG_SHUTDOWN, ImuSample, NavSample, monotonic_ns,
 };
 use crossbeam_channel::{RecvTimeoutError, TryRecvError};
+use health_line::{HealthMark, Vec3Fmt};
 use iceoryx2::prelude::*;
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
@@ -29,17 +32,6 @@ use std::time::Instant;
 
 /// Refused samples per stream that are logged as warnings (the rest at debug level; all counted).
 const REFUSED_WARNINGS_PER_STREAM: u64 = 10;
-
-/// Cumulative counters at the previous health line.
-#[derive(Debug, Clone, Copy)]
-struct HealthMark {
-    at: Instant,
-    /// Received from the followed producer (`received` less `foreign_samples`).
-    received: u64,
-    seq_gaps: u64,
-    rejected: u64,
-    dropped: u64,
-}
 
 /// State of the estimator thread.
 struct EstState<'a> {
@@ -77,29 +69,6 @@ struct EstState<'a> {
     last_save_error: Option<String>,
 }
 
-/// `[x, y, z]` with 3 significant digits, for the health line.
-struct Vec3Fmt([f64; 3]);
-
-impl std::fmt::Display for Vec3Fmt {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let [x, y, z] = self.0;
-        write!(f, "[{x:.3e}, {y:.3e}, {z:.3e}]")
-    }
-}
-
-/// A latency in s as µs, or `-` when unknown.
-struct MicrosFmt(f64);
-
-impl std::fmt::Display for MicrosFmt {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        if self.0.is_finite() {
-            write!(f, "{:.0} µs", self.0 * 1e6)
-        } else {
-            f.write_str("-")
-        }
-    }
-}
-
 impl<'a> EstState<'a> {
     fn new(cfg: &DaemonConfig, rec: &'a RxCounters) -> Self {
         Self {
@@ -121,18 +90,7 @@ impl<'a> EstState<'a> {
             checkpoints_saved: 0,
             latency_diag: LatencyHistogram::new(),
             latency_health: LatencyHistogram::new(),
-            // From the accounting file's counters, which continue an earlier life's (the first
-            // health line of a restarted daemon counted them as this life's input).
-            health: {
-                let load = |a: &std::sync::atomic::AtomicU64| a.load(Ordering::Relaxed);
-                HealthMark {
-                    at: Instant::now(),
-                    received: load(&rec.received).saturating_sub(load(&rec.foreign)),
-                    seq_gaps: load(&rec.seq_gaps),
-                    rejected: load(&rec.duplicate) + load(&rec.late),
-                    dropped: load(&rec.dropped),
-                }
-            },
+            health: HealthMark::now(rec),
             warnings: Vec::new(),
             last_save_error: None,
         }
@@ -458,88 +416,6 @@ impl<'a> EstState<'a> {
                 }
             }
         }
-    }
-
-    /// Logs the one-line health summary and starts a new window.
-    fn log_health(&mut self, rx: &RxCounters) {
-        let now = Instant::now();
-        let d = self.diagnostics(rx, 0);
-        let c = self.est.counters();
-        let rejected = d.rejected_non_finite
-            + d.rejected_time
-            + d.rejected_duplicate_seq
-            + d.late
-            + self.previous.rejected_implausible
-            + c.rejected_implausible
-            + self.previous.rejected_time_jump
-            + c.rejected_time_jump;
-        let h = self.health;
-        let secs = now.duration_since(h.at).as_secs_f64().max(1e-9);
-        // The followed producer's input: a second producer's refused samples are not it.
-        let received = d.received.saturating_sub(d.foreign_samples);
-        let rate = received.saturating_sub(h.received) as f64 / secs;
-        let (bias, sd) = if self.between_streams {
-            ("(between streams)".to_string(), "(none)".to_string())
-        } else {
-            (
-                Vec3Fmt(self.last.gyro_bias_rad_s).to_string(),
-                Vec3Fmt(self.last.gyro_bias_sd_rad_s).to_string(),
-            )
-        };
-        tracing::info!(
-            "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
-             dropped +{} ({}), producer changes {}, foreign samples {}, latency p50 {} p99 {}, bias {} rad/s, \
-             σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
-             health restores {} (footprints forgotten {}), velocity resets {}, tilts levelled again {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
-             lost in a killed daemon {}, external headings refused {} (superseded {}, outside the gate {}, expired at a stream's end {}, undone by the health check {})",
-            d.received,
-            d.seq_gaps - h.seq_gaps,
-            d.seq_gaps,
-            rejected - h.rejected,
-            rejected,
-            d.dropped_overflow - h.dropped,
-            d.dropped_overflow,
-            d.producer_changes,
-            d.foreign_samples,
-            MicrosFmt(self.latency_health.quantile_s(0.5)),
-            MicrosFmt(self.latency_health.quantile_s(0.99)),
-            bias,
-            sd,
-            if self.last.converged { "yes" } else { "no" },
-            if self.between_streams {
-                "between streams"
-            } else {
-                self.est.phase().name()
-            },
-            self.previous.rejected_implausible + self.est.counters().rejected_implausible,
-            self.previous.rejected_time_jump + self.est.counters().rejected_time_jump,
-            self.previous.clipped_samples + self.est.counters().clipped_samples,
-            self.previous.health_restores + self.est.counters().health_restores,
-            self.previous.footprints_forgotten + self.est.counters().footprints_forgotten,
-            self.previous.velocity_resets + self.est.counters().velocity_resets,
-            self.previous.relevels + self.est.counters().relevels,
-            self.previous.heading_reacquisitions + self.est.counters().heading_reacquisitions,
-            self.previous.gaps + self.est.counters().gaps,
-            self.previous.gaps_filled + self.est.counters().gaps_filled,
-            self.previous.gaps_clock_steps + self.est.counters().gaps_clock_steps,
-            self.previous.clock_steps_back + self.est.counters().clock_steps_back,
-            rx.head_missing.load(Ordering::Relaxed),
-            rx.missing_at_restart.load(Ordering::Relaxed),
-            rx.lost_in_daemon.load(Ordering::Relaxed),
-            d.headings_refused,
-            d.headings_superseded,
-            d.headings_outside_gate,
-            d.headings_expired,
-            d.headings_undone,
-        );
-        self.latency_health.clear();
-        self.health = HealthMark {
-            at: now,
-            received,
-            seq_gaps: d.seq_gaps,
-            rejected,
-            dropped: d.dropped_overflow,
-        };
     }
 }
 
