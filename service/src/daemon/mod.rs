@@ -6,7 +6,8 @@
 //!   blocks on the IMU event listener (no busy poll) with [`DaemonConfig::poll_timeout`] so it
 //!   sees `shutdown`, checks `seq` (gaps, duplicates, late samples) and the producer's identity
 //!   (a restarted producer; one producer at a time, another one's samples refused and counted
-//!   while the followed one is live: `producers`), and forwards the samples over a bounded crossbeam channel. Angle
+//!   while the followed one is live: `producers`; the per-sample bookkeeping, pure and
+//!   unit-tested: `intake`), and forwards the samples over a bounded crossbeam channel. Angle
 //!   observations are drained on every wake-up (an IMU stream wakes it at the sensor rate; an
 //!   idle daemon within `poll_timeout`).
 //! - `corridor-estimator` owns the [`Estimator`] and the output publisher ports, publishes an
@@ -81,6 +82,7 @@
 //! [`FLAG_END_OF_STREAM`]: corridor_shared::wire::FLAG_END_OF_STREAM
 
 mod estimator_thread;
+mod intake;
 mod latency;
 mod outputs;
 mod producers;
