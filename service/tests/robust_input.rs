@@ -59,6 +59,38 @@ fn one_absurd_accel_and_one_absurd_gyro_are_refused_and_the_run_matches_the_clea
 }
 
 #[test]
+fn a_run_of_zero_filled_samples_is_refused_and_the_run_is_that_of_the_log_without_them() {
+    // A driver that fills what it did not get with zeros (or a sensor that died for a second):
+    // fused, 200 of them mid-swing were a free fall. Refused, the run is that of the log with
+    // those rows cut out, bit for bit: a loss, crossed as any other.
+    let (log, cfg) = exp36();
+    let (at, len) = (7546, 200);
+    let mut zeros = log.clone();
+    for r in &mut zeros.rows[at..at + len] {
+        r.gyro_rad_s = [0.0; 3];
+        r.accel_m_s2 = [0.0; 3];
+    }
+    let mut cut = log.clone();
+    cut.rows.drain(at..at + len);
+    let aid = heading_aid(&cfg, None).unwrap();
+    let with_zeros = run_log(&zeros, &cfg, &aid, &BiasInjection::default(), |_, _| {});
+    let without = run_log(&cut, &cfg, &aid, &BiasInjection::default(), |_, _| {});
+    assert_eq!(with_zeros.counters.rejected_implausible, len as u64);
+    assert_eq!(with_zeros.counters.samples, without.counters.samples);
+    assert_eq!(with_zeros.trace.xy_m, without.trace.xy_m);
+    assert_eq!(with_zeros.trace.bias_rad_s, without.trace.bias_rad_s);
+    // One zero on an axis, or five, is a measurement.
+    let mut some = log.clone();
+    some.rows[at].accel_m_s2 = [0.0; 3];
+    some.rows[at + 1].gyro_rad_s = [0.0; 3];
+    some.rows[at + 2].accel_m_s2[2] = 0.0;
+    some.rows[at + 2].gyro_rad_s = [0.0; 3];
+    let (_, _, c) = run(&some, &cfg);
+    assert_eq!(c.rejected_implausible, 0);
+    assert_eq!(c.samples, log.rows.len() as u64);
+}
+
+#[test]
 fn an_absurd_time_in_a_stream_does_not_become_the_time_base() {
     // The daemon path: no CSV reader in front of the estimator.
     let (log, cfg) = exp36();

@@ -291,7 +291,8 @@ pub struct Diagnostics {
     pub rejected_non_finite: u64,
     /// Samples refused by the estimator: time did not increase.
     pub rejected_time: u64,
-    /// Samples refused by the estimator: a magnitude beyond what the sensor can output (v4).
+    /// Samples refused by the estimator: a magnitude beyond what the sensor can output, or every
+    /// value zero (a driver's fill) (v4).
     pub rejected_implausible: u64,
     /// Samples refused by the estimator: a time jump beyond `sensor.max_dt_s` that the next
     /// sample did not confirm, and samples dropped after the fact (a first time the samples

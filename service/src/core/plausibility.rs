@@ -157,9 +157,17 @@ impl Plausibility {
         }
         let norm = |v: &[f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
         let l = &self.limits;
+        let (gyro_norm, accel_norm) = (norm(&s.gyro_rad_s), norm(&s.accel_m_s2));
+        // Every value zero: a driver's fill for a sample it did not get (or a dead sensor), not a
+        // measurement. A sensor's noise never gives six zeros, and a foot's accelerometer never
+        // reads 0 on all three axes (free fall): fused, a run of them was a free fall (the
+        // height 6–11 m off after 1 s of them). Refused, they are a loss like any other.
+        if gyro_norm == 0.0 && accel_norm == 0.0 {
+            return Err(SampleError::ZeroFill { t_s: s.t_s });
+        }
         for (field, value, limit) in [
-            ("|gyro_rad_s|", norm(&s.gyro_rad_s), l.max_gyro_rad_s()),
-            ("|accel_m_s2|", norm(&s.accel_m_s2), l.max_accel_m_s2()),
+            ("|gyro_rad_s|", gyro_norm, l.max_gyro_rad_s()),
+            ("|accel_m_s2|", accel_norm, l.max_accel_m_s2()),
         ] {
             // The components are finite here; a norm that overflowed is +inf and caught too.
             if value > limit {

@@ -411,7 +411,9 @@ impl Estimator {
                 *match e {
                     SampleError::NonFinite { .. } => &mut c.rejected_non_finite,
                     SampleError::TimeNotIncreasing { .. } => &mut c.rejected_time,
-                    SampleError::Implausible { .. } => &mut c.rejected_implausible,
+                    SampleError::Implausible { .. } | SampleError::ZeroFill { .. } => {
+                        &mut c.rejected_implausible
+                    }
                     SampleError::TimeJump { .. } => &mut c.rejected_time_jump,
                 } += 1;
                 return Err(e);

@@ -62,6 +62,15 @@ pub enum SampleError {
         /// The limit.
         limit: f64,
     },
+    /// Every gyro and accelerometer value is zero: a driver's fill for a sample it did not get,
+    /// or a dead sensor (counted with the implausible samples).
+    #[error(
+        "sample at t = {t_s} s: every gyro and accelerometer value is 0 (a driver's fill or a dead sensor, not a measurement)"
+    )]
+    ZeroFill {
+        /// Sample time.
+        t_s: f64,
+    },
     /// The time jumps forward by more than `sensor.max_dt_s` and no later sample confirmed it.
     #[error(
         "sample at t = {t_s} s jumps from the previous one at {prev_t_s} s by more than {max_dt_s} s"
@@ -82,7 +91,7 @@ impl SampleError {
         match self {
             SampleError::NonFinite { .. } => "non_finite",
             SampleError::TimeNotIncreasing { .. } => "time_not_increasing",
-            SampleError::Implausible { .. } => "implausible",
+            SampleError::Implausible { .. } | SampleError::ZeroFill { .. } => "implausible",
             SampleError::TimeJump { .. } => "time_jump",
         }
     }
@@ -154,7 +163,8 @@ pub struct Counters {
     pub rejected_non_finite: u64,
     /// Samples refused because time did not increase.
     pub rejected_time: u64,
-    /// Samples refused because a magnitude was beyond what the sensor can output.
+    /// Samples refused because a magnitude was beyond what the sensor can output, or every value
+    /// was zero (a driver's fill, [`SampleError::ZeroFill`]).
     pub rejected_implausible: u64,
     /// Samples refused because their time jumped beyond `sensor.max_dt_s` unconfirmed, and
     /// samples dropped after the fact: a first time the samples after it contradicted, a time
