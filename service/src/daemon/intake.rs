@@ -66,8 +66,8 @@ pub(super) struct Intake<'a> {
     next_stream_seq: Option<u64>,
     /// True between the first data sample of a stream and its end-of-stream marker.
     mid_stream: bool,
-    /// The time stamp of the followed producer's last data sample taken, from an earlier life
-    /// too, for telling a replacement that continues its numbering and clock.
+    /// The time stamp of the followed producer's last data sample taken (this life), for
+    /// telling a replacement that continues its numbering and clock.
     last_t_s: Option<f64>,
     /// True until this life's first sample: a gap before it, in the numbering of the producer
     /// an earlier life was receiving, is counted in `missing_at_restart`.
@@ -91,7 +91,7 @@ impl<'a> Intake<'a> {
             last_seq: load_opt(&counters.last_seq_plus1),
             next_stream_seq: load_opt(&counters.next_stream_seq_plus1),
             mid_stream: counters.mid_stream.load(Ordering::Relaxed) != 0,
-            last_t_s: counters.last_t_s(),
+            last_t_s: None,
             first_of_life: true,
             changes_warned: 0,
             foreign_warned: 0,
@@ -136,22 +136,23 @@ impl<'a> Intake<'a> {
         // The daemon's side of this producer's connection is attached now: its queued samples
         // survive the producer (`Producer::close` waits for the acknowledgement).
         let ack = new_producer || self.first_of_life;
+        // Gaps in the numbering of the producer an earlier daemon life was receiving, up to
+        // this life's first sample of it, are the restart's.
         let first_taken_of_life = std::mem::take(&mut self.first_of_life);
+        let gaps = if first_taken_of_life && !new_producer {
+            &c.missing_at_restart
+        } else {
+            &c.seq_gaps
+        };
         // Where the numbering of the producer taken over from stood.
         let (last_seq_before, next_stream_seq_before) = (self.last_seq, self.next_stream_seq);
         if new_producer {
             self.next_stream_seq = None;
         }
         let changed_mid_stream = last_producer.is_some_and(|p| p != producer) && self.mid_stream;
-        let continues = changed_mid_stream && self.producer_changed(s, admit);
-        // Gaps in the numbering an earlier daemon life was receiving (its producer's, or a
-        // replacement's that continues it), up to this life's first sample of it, are the
-        // restart's.
-        let gaps = if first_taken_of_life && (!new_producer || continues) {
-            &c.missing_at_restart
-        } else {
-            &c.seq_gaps
-        };
+        if changed_mid_stream {
+            self.producer_changed(s, admit);
+        }
         if new_producer {
             // The producer taken over from becomes the other one, with where its numbering
             // stands.
@@ -231,8 +232,7 @@ impl<'a> Intake<'a> {
 
     /// A restarted or replaced producer mid-stream: counted and warned of; its numbering
     /// starts afresh unless it continues the old one (then the gap is real and counted).
-    /// True when it continues.
-    fn producer_changed(&mut self, s: &ImuSample, admit: Admit) -> bool {
+    fn producer_changed(&mut self, s: &ImuSample, admit: Admit) {
         self.counters
             .producer_changes
             .fetch_add(1, Ordering::Relaxed);
@@ -267,7 +267,6 @@ impl<'a> Intake<'a> {
         if !continues {
             self.last_seq = None;
         }
-        continues
     }
 
     /// `producer` is followed from its sample `seq` on; `taken_over` is where the numbering of
@@ -370,7 +369,6 @@ impl<'a> Intake<'a> {
         }
         self.last_seq = Some(s.seq);
         self.last_t_s = Some(s.t_s);
-        c.set_last_t_s(s.t_s);
         store_opt(&c.last_seq_plus1, self.last_seq);
         c.received.fetch_add(1, Ordering::Relaxed);
         Take::Data

@@ -234,41 +234,6 @@ fn a_replacement_continues_the_old_numbering_only_when_the_old_producer_is_gone(
 }
 
 #[test]
-fn a_replacement_that_continues_the_numbering_across_a_daemon_restart_counts_only_the_gap() {
-    // The daemon restarts while the driver is restarted with its counter and its sensor's
-    // clock kept (the old one gone): the new life's first sample is the new driver's.
-    let r = Record::default();
-    let t0 = Instant::now();
-    {
-        let mut life = Intake::resume(&r, WAIT, t0);
-        takes(&mut life, A, &(0..100).map(data).collect::<Vec<_>>(), t0);
-    }
-    let mut life = Intake::resume(&r, WAIT, t0);
-    let v = life.take(&data(110), B, || t0, |p| p != A);
-    assert_eq!(v.take, Take::Data);
-    assert!(v.ack && v.new_producer);
-    // 100..110 went while no daemon ran (before: the whole 0..110 counted as B's head).
-    assert_eq!(get(&r.missing_at_restart), 10);
-    assert_eq!(get(&r.head_missing), 0);
-    assert_eq!(get(&r.seq_gaps), 0);
-
-    // Its clock restarted: a numbering of its own, whatever its `seq`.
-    let r = Record::default();
-    {
-        let mut life = Intake::resume(&r, WAIT, t0);
-        takes(&mut life, A, &(0..100).map(data).collect::<Vec<_>>(), t0);
-    }
-    let mut life = Intake::resume(&r, WAIT, t0);
-    let restarted = ImuSample {
-        t_s: 0.5,
-        ..data(110)
-    };
-    assert_eq!(life.take(&restarted, B, || t0, |p| p != A).take, Take::Data);
-    assert_eq!(get(&r.head_missing), 110);
-    assert_eq!(get(&r.missing_at_restart), 0);
-}
-
-#[test]
 fn an_end_marker_at_a_streams_head_counts_what_was_numbered_before_it() {
     let r = Record::default();
     let t0 = Instant::now();

@@ -101,11 +101,6 @@ pub(super) struct Record {
     other_hi: AtomicU64,
     other_lo: AtomicU64,
     other_next_seq_plus1: AtomicU64,
-    /// The time stamp of the followed producer's last data sample taken (`f64` bits), and 1
-    /// when there is one, so that the next life can tell a replacement that continues the
-    /// followed producer's clock (`super::intake`). Appended, as `foreign`.
-    last_t_s_bits: AtomicU64,
-    last_t_s_known: AtomicU64,
 }
 
 const _: () = assert!(size_of::<Record>() <= FILE_LEN);
@@ -133,18 +128,6 @@ impl Record {
             next_seq: load_opt(&self.other_next_seq_plus1),
             seen_this_life: false,
         })
-    }
-
-    /// The time stamp of the followed producer's last data sample taken, if any.
-    pub(super) fn last_t_s(&self) -> Option<f64> {
-        (self.last_t_s_known.load(Ordering::Relaxed) != 0)
-            .then(|| f64::from_bits(self.last_t_s_bits.load(Ordering::Relaxed)))
-    }
-
-    /// Records the time stamp of the followed producer's last data sample taken.
-    pub(super) fn set_last_t_s(&self, t_s: f64) {
-        self.last_t_s_bits.store(t_s.to_bits(), Ordering::Relaxed);
-        self.last_t_s_known.store(1, Ordering::Relaxed);
     }
 
     /// Records the other producer's numbering.
@@ -182,8 +165,6 @@ impl Record {
             &self.other_hi,
             &self.other_lo,
             &self.other_next_seq_plus1,
-            &self.last_t_s_bits,
-            &self.last_t_s_known,
         ];
         for f in fields.into_iter().chain(&self.out_seq) {
             f.store(0, Ordering::Relaxed);
