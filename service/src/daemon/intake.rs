@@ -9,7 +9,8 @@
 //! does what the [`Verdict`] says (acknowledge the producer, tell the estimator of a new
 //! producer, forward the sample). Every sample a producer numbered is received or counted
 //! missing once, whichever daemon life or producer was followed when (the tests below check
-//! the sums).
+//! the sums), but where a replacement producer that numbers afresh is taken for one that
+//! continues the old numbering (README, known issues).
 
 use super::producers::{Admit, Missing, OtherNumbering, ProducerLock, TakeOverReason};
 use super::receive::RxCounters;
@@ -340,6 +341,14 @@ impl<'a> Intake<'a> {
     /// A data sample of the followed producer: where it stands in the numbering.
     fn number(&mut self, s: &ImuSample, gaps: &AtomicU64) -> Take {
         let c = self.counters;
+        if self.last_seq.is_none() && self.next_stream_seq.is_some_and(|first| s.seq < first) {
+            // Numbered before the end marker just read: a late sample of the stream that ended,
+            // not the head of a new one (a review: it started one, and the marker's own `seq`
+            // was then counted missing).
+            c.received.fetch_add(1, Ordering::Relaxed);
+            c.late.fetch_add(1, Ordering::Relaxed);
+            return Take::Refused;
+        }
         if !self.mid_stream {
             self.mid_stream = true;
             c.mid_stream.store(1, Ordering::Relaxed);

@@ -89,6 +89,57 @@ fn repeated_and_late_samples_are_refused_and_counted_not_forwarded() {
 }
 
 #[test]
+fn a_sample_numbered_before_an_end_marker_and_read_after_it_is_late() {
+    let r = Record::default();
+    let t0 = Instant::now();
+    let mut intake = Intake::resume(&r, WAIT, t0);
+    let read = [data(275), data(276), marker(278), data(277), data(279)];
+    let got = takes(&mut intake, A, &read, t0);
+    use Take::{Data as D, EndOfStream as E, Refused as R};
+    assert_eq!(got, [D, D, E, R, D]);
+    assert_eq!(get(&r.late), 1);
+    // 277 counted missing at the marker, received late; 278 not missing.
+    assert_eq!((get(&r.head_missing), get(&r.seq_gaps)), (275, 1));
+}
+
+#[test]
+fn a_gap_before_a_lifes_first_sample_from_a_producer_taking_over_is_the_restarts() {
+    // Life 1 follows A and has read B's 0..10, refused; A ends. Life 2's first sample is B's
+    // 20, taking over: 10..20 went while no daemon ran.
+    let r = Record::default();
+    let t0 = Instant::now();
+    {
+        let mut life = Intake::resume(&r, WAIT, t0);
+        takes(&mut life, A, &(0..50).map(data).collect::<Vec<_>>(), t0);
+        let got = takes(&mut life, B, &(0..10).map(data).collect::<Vec<_>>(), t0);
+        assert!(got.iter().all(|t| *t == Take::Refused));
+        takes(&mut life, A, &[marker(50)], t0);
+    }
+    let mut life = Intake::resume(&r, WAIT, t0);
+    assert_eq!(life.take(&data(20), B, || t0, ALWAYS).take, Take::Data);
+    assert_eq!(get(&r.missing_at_restart), 10);
+    assert_eq!(get(&r.seq_gaps), 0);
+    assert_eq!(get(&r.head_missing), 0);
+
+    // The producer taken over from at a life's first sample is an earlier life's: its gap up
+    // to its next read sample is the restart's too. Life 1 reads A's 0..50 mid-stream; life 2's
+    // first sample is B's (A gone), then A comes back at 60, refused.
+    let r = Record::default();
+    {
+        let mut life = Intake::resume(&r, WAIT, t0);
+        takes(&mut life, A, &(0..50).map(data).collect::<Vec<_>>(), t0);
+    }
+    let mut life = Intake::resume(&r, WAIT, t0);
+    let v = life.take(&data(0), B, || t0, |p| p != A);
+    assert_eq!(v.take, Take::Data);
+    assert!(v.new_producer);
+    assert_eq!(life.take(&data(1), B, || t0, ALWAYS).take, Take::Data);
+    assert_eq!(life.take(&data(60), A, || t0, ALWAYS).take, Take::Refused);
+    assert_eq!(get(&r.missing_at_restart), 10);
+    assert_eq!(get(&r.seq_gaps), 0);
+}
+
+#[test]
 fn a_restarted_daemon_counts_what_it_missed_at_the_restart_once() {
     let r = Record::default();
     let t0 = Instant::now();
