@@ -495,3 +495,49 @@ fn a_clock_step_forward_is_not_taken_for_a_loss() {
     println!("taken for a clock step at {taken} of 16 places; the others: {off_deg:?}");
     assert!(taken >= 14, "{taken}: {off_deg:?}");
 }
+
+#[test]
+fn stamps_glitched_a_gaps_length_ahead_in_a_run_are_dropped_and_the_walk_goes_on_as_without_them() {
+    // Two or more stamps in a row 0.3–0.9 s ahead (beyond `estimator.max_dt_s`, within
+    // `sensor.max_dt_s`): before session 37 the first was a gap, the second confirmed it, and
+    // the time going back after them a step back of the clock that the rates could not judge
+    // after the new segment the gap began: the good samples were refused until the stamps
+    // caught up (up to 0.9 s of walking lost). Now the run after the gap's far side stays open
+    // like a jump's, and the first good time drops it.
+    let log = read_imu_csv(&data().join("imu.csv"), &ImuCsvOptions::default()).unwrap();
+    let cfg = Config::from_file(&data().join("../../../configs/gdins.toml")).unwrap();
+    let aid = heading_aid(&cfg, None).unwrap();
+    let last_of = |log: &ImuLog| {
+        let (mut last, mut glitches) = (None, Vec::new());
+        let c = run_log(log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+            last = Some(*e);
+            if let Some(t_s) = e.glitch_t_s {
+                glitches.push((t_s, e.glitch_run_dropped));
+            }
+        })
+        .counters;
+        (last.unwrap(), c, glitches)
+    };
+    for (k, n, ahead_s) in [(5003, 2, 0.3), (7010, 7, 0.9), (9001, 40, 0.6)] {
+        let mut glitched = log.clone();
+        for r in &mut glitched.rows[k..k + n] {
+            r.t_s += ahead_s;
+        }
+        let mut without = log.clone();
+        without.rows.drain(k..k + n);
+        let (g, gc, glitches) = last_of(&glitched);
+        let (w, wc, _) = last_of(&without);
+        // Every sample of the run was taken (the first as a gap's far side), then dropped.
+        assert_eq!(glitches, [(glitched.rows[k].t_s, n as u64)], "k {k}");
+        assert_eq!(
+            (gc.samples, gc.rejected_time_jump, gc.rejected_time, gc.gaps),
+            (wc.samples, n as u64, 0, wc.gaps),
+            "k {k}"
+        );
+        // The state as if the glitched samples had never come, bit for bit.
+        assert_eq!(g.p_m, w.p_m, "k {k}");
+        assert_eq!(g.nav_from_body, w.nav_from_body, "k {k}");
+        assert_eq!(g.gyro_bias_rad_s, w.gyro_bias_rad_s, "k {k}");
+        assert_eq!(gc.heading_used, wc.heading_used, "k {k}");
+    }
+}

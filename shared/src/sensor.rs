@@ -268,10 +268,11 @@ pub enum TimeVerdict {
     /// the last time was a stamp glitch, not a gap. Accept this one (the time before the glitch
     /// is its base); what was taken with the glitched sample has to be dropped by the caller.
     Glitch,
-    /// A jump was confirmed as a new time base ([`TimeVerdict::NewBase`]) at most `max_dt_s`
-    /// (and [`JUMP_RUN_MAX_SAMPLES`] samples) ago, with no gap or step back since, and this time
-    /// goes back behind that base and follows the time before the jump within `max_dt_s`: the
-    /// jump and every time since were glitched stamps (two or more in a row), not a gap. Accept
+    /// A jump was confirmed as a new time base ([`TimeVerdict::NewBase`]), or a gap's far side
+    /// was followed by the next time, at most `max_dt_s` (and [`JUMP_RUN_MAX_SAMPLES`] samples)
+    /// ago, with no gap or step back since, and this time goes back behind that base and
+    /// follows the time before the jump or gap within `max_dt_s`: the jump or gap and every time
+    /// since were glitched stamps (two or more in a row), not a gap. Accept
     /// this one (the time before the jump is its base); what was taken since the jump has to be
     /// dropped by the caller ([`TimeGuard::jump_run`] says from which time).
     GlitchRun,
@@ -297,8 +298,12 @@ pub enum TimeVerdict {
 /// within `gap_dt_s` says the gap's far side was a single glitched stamp
 /// ([`TimeVerdict::Glitch`]). Without that, one stamp 0.9 s ahead made every good sample of the
 /// next 0.9 s "not increasing" (180 samples at 200 Hz, and the walk's footprints 0.95 m off).
-/// A glitch of two or more samples in a row beyond `gap_dt_s` and within `max_dt_s` is taken for
-/// a gap (and the time going back after it for a step back of the clock). One of two or more
+/// A glitch of two or more samples in a row beyond `gap_dt_s` and within `max_dt_s` looks like a
+/// gap whose far side the next time follows: the run from the far side stays open as a jump's
+/// does (below), and ends as glitched stamps the same way (before session 37 it was taken for a
+/// gap, and the time going back after it for a step back of the clock, which the estimator
+/// could not judge after a gap that started a new segment, so the good samples after the run
+/// were refused until the stamps caught up: `examples/fault_scan.rs`). One of two or more
 /// samples beyond `max_dt_s` is a jump that the second sample confirms; the run from there stays
 /// open for `max_dt_s`, and a time that then goes back and follows the time before the jump
 /// ends it as glitched stamps ([`TimeVerdict::GlitchRun`]). Before, two stamps 975 s ahead in
@@ -473,12 +478,14 @@ impl TimeGuard {
         // A gap from the last accepted time stays provisional: also from the very first time, and
         // from a gap's far side (accepting the next time confirms that one). Not a time after a
         // refused jump or a replaced first time: those do not follow the last time.
+        // The time before a gap whose far side was the last accepted time, if it was.
+        let after_gap_from = self.before_gap_s;
         self.before_gap_s = self.last_s.filter(|&last| {
             let dt_s = t_s - last;
             dt_s > self.gap_dt_s && dt_s <= self.max_dt_s
         });
-        if self.new_base_from_s.is_some() || self.run.is_some() {
-            self.update_run(t_s);
+        if self.new_base_from_s.is_some() || self.run.is_some() || after_gap_from.is_some() {
+            self.update_run(t_s, after_gap_from);
         }
         self.confirmed = self.last_s.is_some();
         self.last_s = Some(t_s);
@@ -487,12 +494,14 @@ impl TimeGuard {
         self.far_back = false;
     }
 
-    /// The run after a confirmed jump opens at the new base and stays open while the times run
-    /// on from it, within `max_dt_s` and [`JUMP_RUN_MAX_SAMPLES`], without a gap (called by
-    /// `accept` before the base moves to `t_s`, after `before_gap_s` is set).
+    /// The run after a confirmed jump opens at the new base, and the run after a gap's far side
+    /// when the next time runs on from it (`after_gap_from`: the time before that gap); either
+    /// stays open while the times run on, within `max_dt_s` and [`JUMP_RUN_MAX_SAMPLES`],
+    /// without a gap (called by `accept` before the base moves to `t_s`, after `before_gap_s`
+    /// is set).
     #[cold]
     #[inline(never)]
-    fn update_run(&mut self, t_s: f64) {
+    fn update_run(&mut self, t_s: f64, after_gap_from: Option<f64>) {
         self.run = match (self.new_base_from_s.take(), self.run) {
             // A second jump within the run: the run goes on from the time before the first (a
             // review: it opened a new run from the glitched time, and the good times after it
@@ -508,6 +517,20 @@ impl TimeGuard {
                 base_s: t_s,
                 samples: 1,
             }),
+            // Two or more stamps glitched by a gap's length look like a gap whose far side the
+            // next time follows: the two stay open to being dropped, as a jump's run (found by
+            // random faults, `examples/fault_scan.rs`: the clock's return was taken for a step
+            // back, and the good samples after it refused until the stamps caught up).
+            (None, None) => after_gap_from
+                .zip(self.last_s)
+                .and_then(|(before_s, far_s)| {
+                    step_follows(t_s - far_s, self.min_dt_s, self.gap_dt_s).then_some(JumpRun {
+                        before_s,
+                        first_s: far_s,
+                        base_s: far_s,
+                        samples: 2,
+                    })
+                }),
             (None, run) => run.and_then(|run| {
                 let runs_on = self.last_s.is_some_and(|last| t_s > last)
                     && t_s - run.base_s <= self.max_dt_s

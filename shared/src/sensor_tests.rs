@@ -90,12 +90,33 @@ fn a_single_stamp_ahead_is_a_glitch_and_the_good_times_after_it_are_kept() {
         run(&[0.0, 0.005, 0.905, 0.2, 0.910]),
         [Accept, Accept, Accept, NotIncreasing, Accept]
     );
-    // Once the gap's far side is followed, going back is refused as before (so a glitch
-    // of two samples in a row is taken for a gap).
+    // Two or more stamps in a row a gap's length ahead: once the far side is followed, the
+    // run stays open, and a time that goes back and follows the one before the gap shows
+    // them to be glitched stamps (session 37; before, they were taken for a gap and the good
+    // times after them refused as not increasing, up to the glitch's length).
     assert_eq!(
         run(&[0.0, 0.005, 0.905, 0.910, 0.010]),
-        [Accept, Accept, Accept, Accept, NotIncreasing]
+        [Accept, Accept, Accept, Accept, GlitchRun]
     );
+    let mut g = TimeGuard::new(1e-6, 1.0, 0.05);
+    for t in [0.0, 0.005, 0.905, 0.910, 0.915] {
+        assert!(matches!(g.check(t), Accept));
+        g.accept(t);
+    }
+    let r = g.jump_run().expect("the run after the gap's far side");
+    assert_eq!((r.before_s, r.first_s, r.samples), (0.005, 0.905, 3));
+    assert_eq!(g.check(0.010), GlitchRun);
+    // A real gap: its run closes once the times have run on for max_dt_s, and going back
+    // after that is refused as before.
+    let mut times = vec![0.0, 0.005];
+    times.extend((0..=210).map(|k| 0.905 + 0.005 * k as f64));
+    let mut g = TimeGuard::new(1e-6, 1.0, 0.05);
+    for &t in &times {
+        assert!(matches!(g.check(t), Accept));
+        g.accept(t);
+    }
+    assert!(g.jump_run().is_none(), "closed after max_dt_s");
+    assert_eq!(g.check(0.010), NotIncreasing);
     // A step within gap_dt_s is never provisional.
     assert_eq!(
         run(&[0.0, 0.005, 0.045, 0.010]),

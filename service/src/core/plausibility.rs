@@ -31,10 +31,10 @@ pub struct Accepted {
     /// The previous accepted time, which jumped forward by a gap and which this sample goes
     /// back behind, following the time before it: that time was a stamp glitch
     /// ([`TimeVerdict::Glitch`]), and what was taken with it is to be dropped. After a run of
-    /// glitched stamps beyond `sensor.max_dt_s` ([`TimeVerdict::GlitchRun`]): the first time
-    /// accepted in the run, and what was taken since is to be dropped.
+    /// two or more glitched stamps ([`TimeVerdict::GlitchRun`]): the first time accepted in the
+    /// run, and what was taken since is to be dropped.
     pub glitch_t_s: Option<f64>,
-    /// With `glitch_t_s`: a run after a jump, not a single stamp after a gap.
+    /// With `glitch_t_s`: a run after a jump or a gap, not a single stamp after a gap.
     pub glitch_run: bool,
     /// This sample's time came after a gap (beyond `estimator.max_dt_s`), or after a jump that
     /// it confirms, and stays provisional: the caller keeps what it needs to drop it after the

@@ -481,8 +481,15 @@ impl<R: BufRead> ImuCsvReader<R> {
             match verdict {
                 // The run after a confirmed jump, while it is open: held (a row held before it,
                 // a gap's far side, goes out).
-                Ok((row, jumped)) if self.time.jump_run().is_some() => {
-                    self.ready.extend(self.held.take());
+                Ok((row, jumped)) if let Some(run) = self.time.jump_run() => {
+                    // A gap's far side that this row follows opens a run too: the held row is
+                    // its first.
+                    match self.held.take() {
+                        Some(far) if self.run.is_empty() && far.t_s == run.first_s => {
+                            self.run.push(far);
+                        }
+                        held => self.ready.extend(held),
+                    }
                     self.run.extend(jumped);
                     self.run.push(row);
                 }

@@ -350,7 +350,7 @@ pub struct Estimate {
     /// Set on the sample that showed the previous accepted sample's time (this value, s), which
     /// had jumped forward by a gap, to be a stamp glitch: that sample was dropped after the fact
     /// (the state is as if it had never come) and this one follows the time before it. After a
-    /// run of glitched stamps beyond `sensor.max_dt_s`: the run's first accepted time, every
+    /// run of two or more glitched stamps: the run's first accepted time, every
     /// sample from it on dropped (`glitch_run_dropped` of them).
     pub glitch_t_s: Option<f64>,
     /// With `glitch_t_s`, after a run of glitched stamps: the accepted samples dropped after the

@@ -285,3 +285,36 @@ fn duplicate_timestamp_is_rejected() {
     assert_eq!(log.rejected[0].reason, RejectReason::TimeNotIncreasing);
     assert_eq!(log.rejected[0].value, "0.005");
 }
+
+#[test]
+fn stamps_glitched_a_gaps_length_ahead_two_or_more_in_a_row_are_rejected_and_the_rows_after_them_kept()
+ {
+    // Lines 100.. put 0.9 s ahead (a gap's length, within `sensor.max_dt_s`): before session
+    // 37 they were a gap's far side and every row of the next 0.9 s was rejected as not
+    // increasing (180 rows).
+    for n_glitched in [2u64, 3, 40] {
+        let mut text = good_file(5000);
+        for line in 100..100 + n_glitched {
+            text = replace_line(&text, line as usize, &row(0.9 + line as f64 * 0.005));
+        }
+        let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+        let rejected: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
+        let expected: Vec<_> = (100..100 + n_glitched)
+            .map(|line| (line, RejectReason::TimeGlitch))
+            .collect();
+        assert_eq!(rejected, expected, "{n_glitched} glitched");
+        assert_eq!(log.rows.len() as u64, 5000 - n_glitched);
+        assert!(log.rows.windows(2).all(|w| w[1].t_s > w[0].t_s));
+        assert_eq!(log.rows[98].line, 100 + n_glitched);
+    }
+    // A real gap of 0.5 s: the rows after it are held for the run's 1 s, then go out, in order
+    // and all of them.
+    let log = parse_imu_csv(
+        &with_gaps(400, &[(100, 0.5)]),
+        path(),
+        &ImuCsvOptions::default(),
+    )
+    .unwrap();
+    assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
+    assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
+}
