@@ -15,7 +15,8 @@
 //! moved by up to ±2 s), `time_absurd` (one stamp NaN, 0, 1e12 or −5), `repeat` (one sample
 //! sent twice), `swap` (two samples up to 5 apart swapped), `clock_step` (every stamp from a
 //! place on moved by up to ±1 s), `zeros` (1–300 samples with all six values 0), `loss`
-//! (1–300 samples lost), `glitch_run` (1–50 stamps in a row pushed 0–3 s ahead). The same seed
+//! (1–300 samples lost), `late` (the same loss, and one of the lost samples delivered up to 100
+//! samples later), `glitch_run` (1–50 stamps in a row pushed 0–3 s ahead). The same seed
 //! gives the same places and sizes for every kind, so `zeros` and `loss` lose the same samples.
 
 use corridor_service::core::{Estimator, ImuInput};
@@ -24,7 +25,7 @@ use corridor_shared::config::Config;
 use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
 use std::path::Path;
 
-const KINDS: [&str; 11] = [
+const KINDS: [&str; 12] = [
     "gyro",
     "accel",
     "time",
@@ -35,6 +36,7 @@ const KINDS: [&str; 11] = [
     "zeros",
     "loss",
     "glitch_run",
+    "late",
     "none",
 ];
 
@@ -114,6 +116,14 @@ fn inject(kind: &str, rows: &mut Vec<ImuInput>, rng: &mut Lcg) -> String {
         "loss" => {
             rows.drain(i..end);
             format!("{} samples lost at {i}", end - i)
+        }
+        "late" => {
+            // A loss, and one of the lost samples delivered late, up to 100 samples after.
+            let lost: Vec<ImuInput> = rows.drain(i..end).collect();
+            let late = lost[pick.min(lost.len() - 1) * lost.len() / 4];
+            let at = (i + 1 + len % 100).min(rows.len() - 1);
+            rows.insert(at, late);
+            format!("{} samples lost at {i}, one of them late at {at}", end - i)
         }
         "glitch_run" => {
             let (end, d) = ((i + 1 + len % 50).min(n - 10), u * 3.0);

@@ -353,6 +353,28 @@ pub struct JumpRun {
     pub base_s: f64,
     /// Accepted times in the run, the first included.
     pub samples: u32,
+    /// The run began at a gap's far side (within `max_dt_s`), not at a jump: it ends as
+    /// glitched stamps only where the time that comes back is where the next sample after the
+    /// time before the gap would be had the run's samples been stamped right
+    /// ([`JumpRun::returns_at`]).
+    pub after_gap: bool,
+}
+
+impl JumpRun {
+    /// Whether `t_s` is where the clock comes back after this run's `samples` glitched stamps,
+    /// the last of them at `last_s`: `samples + 1` periods after the time before the gap (the
+    /// period: the run's own), within 1.5 periods. A sample lost in the gap and delivered late
+    /// lies anywhere in the gap, and is not the return (a review: after a real gap, one late
+    /// sample dropped every good sample since the gap as a glitched run, up to 1 s of walking,
+    /// and `corridor run` refused whole logs at the 1 % rule).
+    pub fn returns_at(&self, t_s: f64, last_s: f64) -> bool {
+        if self.samples < 2 {
+            return false;
+        }
+        let period_s = (last_s - self.first_s) / f64::from(self.samples - 1);
+        let expected_s = self.before_s + f64::from(self.samples + 1) * period_s;
+        (t_s - expected_s).abs() <= 1.5 * period_s
+    }
 }
 
 impl TimeGuard {
@@ -425,6 +447,7 @@ impl TimeGuard {
         if let Some(run) = self.run
             && t_s < run.first_s
             && follows(run.before_s)
+            && (!run.after_gap || run.returns_at(t_s, last))
         {
             return TimeVerdict::GlitchRun;
         }
@@ -509,6 +532,9 @@ impl TimeGuard {
             (Some(_), Some(run)) => Some(JumpRun {
                 base_s: t_s,
                 samples: run.samples.saturating_add(1),
+                // A jump within a gap's run: a jump's run from here (its return is not
+                // where the gap's count would put it).
+                after_gap: false,
                 ..run
             }),
             (Some(before_s), None) => Some(JumpRun {
@@ -516,6 +542,7 @@ impl TimeGuard {
                 first_s: t_s,
                 base_s: t_s,
                 samples: 1,
+                after_gap: false,
             }),
             // Two or more stamps glitched by a gap's length look like a gap whose far side the
             // next time follows: the two stay open to being dropped, as a jump's run (found by
@@ -529,6 +556,7 @@ impl TimeGuard {
                         first_s: far_s,
                         base_s: far_s,
                         samples: 2,
+                        after_gap: true,
                     })
                 }),
             (None, run) => run.and_then(|run| {

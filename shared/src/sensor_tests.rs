@@ -94,8 +94,9 @@ fn a_single_stamp_ahead_is_a_glitch_and_the_good_times_after_it_are_kept() {
     // run stays open, and a time that goes back and follows the one before the gap shows
     // them to be glitched stamps (session 37; before, they were taken for a gap and the good
     // times after them refused as not increasing, up to the glitch's length).
+    // The clock comes back where the sample after the two would be (0.020).
     assert_eq!(
-        run(&[0.0, 0.005, 0.905, 0.910, 0.010]),
+        run(&[0.0, 0.005, 0.905, 0.910, 0.020]),
         [Accept, Accept, Accept, Accept, GlitchRun]
     );
     let mut g = TimeGuard::new(1e-6, 1.0, 0.05);
@@ -105,7 +106,19 @@ fn a_single_stamp_ahead_is_a_glitch_and_the_good_times_after_it_are_kept() {
     }
     let r = g.jump_run().expect("the run after the gap's far side");
     assert_eq!((r.before_s, r.first_s, r.samples), (0.005, 0.905, 3));
-    assert_eq!(g.check(0.010), GlitchRun);
+    assert_eq!(g.check(0.025), GlitchRun);
+    // A sample lost in a real gap and delivered late lies anywhere in the gap: it is refused,
+    // not taken for the clock's return (a review: it dropped every good sample since the
+    // gap). Samples 0.010..0.900 lost, 0.905.. read; 0.300 comes late, 20 samples on.
+    let mut g = TimeGuard::new(1e-6, 1.0, 0.05);
+    for k in [0, 1].into_iter().chain(181..201) {
+        let t = 0.005 * k as f64;
+        assert!(matches!(g.check(t), Accept), "{t}");
+        g.accept(t);
+    }
+    assert_eq!(g.check(0.300), NotIncreasing);
+    // The return of a glitched run of 20 is one sample after the time before it plus 20.
+    assert_eq!(g.check(0.005 * 22.0), GlitchRun);
     // A real gap: its run closes once the times have run on for max_dt_s, and going back
     // after that is refused as before.
     let mut times = vec![0.0, 0.005];
@@ -191,7 +204,8 @@ fn two_or_more_stamps_beyond_max_dt_are_a_glitched_run_when_the_time_comes_back(
             before_s: 0.005,
             first_s: 10.005,
             base_s: 10.005,
-            samples: 1
+            samples: 1,
+            after_gap: false,
         })
     );
     assert_eq!((g.check(9.9), g.check(9.905)), (NotIncreasing, StepBack));
