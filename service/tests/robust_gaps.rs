@@ -3,7 +3,8 @@
 //! `estimator.max_bridge_s`) is bridged by one step; a gap of part of a stride (up to
 //! `estimator.max_fill_s`) is filled from the stride before.
 
-use corridor_service::core::GapCrossing;
+use corridor_service::core::heading::HeadingAid;
+use corridor_service::core::{Counters, Estimate, GapCrossing};
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::Config;
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
@@ -17,6 +18,35 @@ fn data() -> PathBuf {
 }
 
 /// (sample time on the original clock, position, speed) of every estimate.
+/// The daemon's path over `log` (samples straight into the estimator, no CSV reader, which
+/// rejects glitched rows before an estimator sees them): the last estimate, the counters, each
+/// glitch said (the glitched time, and the samples dropped with a run) and those samples' notices.
+fn run_glitched(
+    log: &ImuLog,
+    cfg: &Config,
+    aid: &HeadingAid,
+) -> (Estimate, Counters, Vec<(f64, u64)>, Vec<String>) {
+    let (mut last, mut glitches, mut said) = (None, Vec::new(), Vec::new());
+    let c = run_log(log, cfg, aid, &BiasInjection::default(), |_, e| {
+        last = Some(*e);
+        if let Some(t_s) = e.glitch_t_s {
+            glitches.push((t_s, e.glitch_run_dropped));
+            said.extend(e.notices().map(|n| n.to_string()));
+        }
+    })
+    .counters;
+    (last.unwrap(), c, glitches, said)
+}
+
+/// The state of a run with glitched stamps is that of the run without those samples, bit for
+/// bit (`k`: where, for the message).
+fn assert_as_without(g: &Estimate, gc: &Counters, w: &Estimate, wc: &Counters, k: usize) {
+    assert_eq!(g.p_m, w.p_m, "k {k}");
+    assert_eq!(g.nav_from_body, w.nav_from_body, "k {k}");
+    assert_eq!(g.gyro_bias_rad_s, w.gyro_bias_rad_s, "k {k}");
+    assert_eq!(gc.heading_used, wc.heading_used, "k {k}");
+}
+
 fn trace(log: &ImuLog, cfg: &Config, gap_at_s: f64, gap_s: f64) -> Vec<(f64, [f64; 3], f64)> {
     let aid = heading_aid(cfg, None).unwrap();
     let mut out = Vec::new();
@@ -322,34 +352,22 @@ fn a_stamp_glitched_forward_is_dropped_and_the_walk_goes_on_as_without_it() {
     let log = read_imu_csv(&data().join("imu.csv"), &ImuCsvOptions::default()).unwrap();
     let cfg = Config::from_file(&data().join("../../../configs/gdins.toml")).unwrap();
     let aid = heading_aid(&cfg, None).unwrap();
-    let last_of = |log: &ImuLog| {
-        let (mut last, mut glitches) = (None, Vec::new());
-        let c = run_log(log, &cfg, &aid, &BiasInjection::default(), |_, e| {
-            last = Some(*e);
-            glitches.extend(e.glitch_t_s);
-        })
-        .counters;
-        (last.unwrap(), c, glitches)
-    };
     // Mid-swing, at touchdown, at rest.
     for k in [5003, 7010, 9001] {
         let mut glitched = log.clone();
         glitched.rows[k].t_s += 0.9;
         let mut without = log.clone();
         without.rows.remove(k);
-        let (g, gc, glitches) = last_of(&glitched);
-        let (w, wc, _) = last_of(&without);
-        assert_eq!(glitches, [glitched.rows[k].t_s], "k {k}");
+        let (g, gc, glitches, _) = run_glitched(&glitched, &cfg, &aid);
+        let (w, wc, ..) = run_glitched(&without, &cfg, &aid);
+        assert_eq!(glitches, [(glitched.rows[k].t_s, 0)], "k {k}");
         assert_eq!(
             (gc.samples, gc.rejected_time_jump, gc.rejected_time, gc.gaps),
             (wc.samples, 1, 0, 0),
             "k {k}"
         );
         // The state as if the glitched sample had never come, bit for bit.
-        assert_eq!(g.p_m, w.p_m, "k {k}");
-        assert_eq!(g.nav_from_body, w.nav_from_body, "k {k}");
-        assert_eq!(g.gyro_bias_rad_s, w.gyro_bias_rad_s, "k {k}");
-        assert_eq!(gc.heading_used, wc.heading_used, "k {k}");
+        assert_as_without(&g, &gc, &w, &wc, k);
     }
 }
 
@@ -363,18 +381,6 @@ fn stamps_glitched_far_ahead_in_a_run_are_dropped_and_the_walk_goes_on_as_withou
     let log = read_imu_csv(&data().join("imu.csv"), &ImuCsvOptions::default()).unwrap();
     let cfg = Config::from_file(&data().join("../../../configs/gdins.toml")).unwrap();
     let aid = heading_aid(&cfg, None).unwrap();
-    let last_of = |log: &ImuLog| {
-        let (mut last, mut glitches, mut said) = (None, Vec::new(), Vec::new());
-        let c = run_log(log, &cfg, &aid, &BiasInjection::default(), |_, e| {
-            last = Some(*e);
-            if let Some(t_s) = e.glitch_t_s {
-                glitches.push((t_s, e.glitch_run_dropped));
-                said.extend(e.notices().map(|n| n.to_string()));
-            }
-        })
-        .counters;
-        (last.unwrap(), c, glitches, said)
-    };
     for (k, n) in [(5003, 2), (7010, 5), (9001, 2), (9001, 150)] {
         let mut glitched = log.clone();
         for r in &mut glitched.rows[k..k + n] {
@@ -382,8 +388,8 @@ fn stamps_glitched_far_ahead_in_a_run_are_dropped_and_the_walk_goes_on_as_withou
         }
         let mut without = log.clone();
         without.rows.drain(k..k + n);
-        let (g, gc, glitches, said) = last_of(&glitched);
-        let (w, wc, ..) = last_of(&without);
+        let (g, gc, glitches, said) = run_glitched(&glitched, &cfg, &aid);
+        let (w, wc, ..) = run_glitched(&without, &cfg, &aid);
         // The first of the run was refused as a jump; the others were taken, then dropped.
         let dropped = n as u64 - 1;
         assert_eq!(glitches, [(glitched.rows[k + 1].t_s, dropped)], "k {k}");
@@ -395,10 +401,7 @@ fn stamps_glitched_far_ahead_in_a_run_are_dropped_and_the_walk_goes_on_as_withou
             "k {k}"
         );
         // The state as if the glitched samples had never come, bit for bit.
-        assert_eq!(g.p_m, w.p_m, "k {k}");
-        assert_eq!(g.nav_from_body, w.nav_from_body, "k {k}");
-        assert_eq!(g.gyro_bias_rad_s, w.gyro_bias_rad_s, "k {k}");
-        assert_eq!(gc.heading_used, wc.heading_used, "k {k}");
+        assert_as_without(&g, &gc, &w, &wc, k);
     }
     // A second jump within the run (two stamps 975 s ahead, two 1950 s): one run of four (a
     // review: the second opened a run of its own and the good samples after it were refused).
@@ -408,8 +411,8 @@ fn stamps_glitched_far_ahead_in_a_run_are_dropped_and_the_walk_goes_on_as_withou
     }
     let mut without = log.clone();
     without.rows.drain(7010..7014);
-    let (g, gc, glitches, _) = last_of(&glitched);
-    let (w, wc, ..) = last_of(&without);
+    let (g, gc, glitches, _) = run_glitched(&glitched, &cfg, &aid);
+    let (w, wc, ..) = run_glitched(&without, &cfg, &aid);
     assert_eq!(glitches, [(glitched.rows[7011].t_s, 2)]);
     assert_eq!((gc.samples, gc.rejected_time_jump), (wc.samples, 4));
     assert_eq!(
@@ -422,7 +425,7 @@ fn stamps_glitched_far_ahead_in_a_run_are_dropped_and_the_walk_goes_on_as_withou
     for r in &mut gapped.rows[7010..] {
         r.t_s += 10.0;
     }
-    let (_, c, glitches, _) = last_of(&gapped);
+    let (_, c, glitches, _) = run_glitched(&gapped, &cfg, &aid);
     assert_eq!((c.gaps, c.rejected_time_jump, glitches.len()), (1, 1, 0));
 }
 
@@ -507,17 +510,6 @@ fn stamps_glitched_a_gaps_length_ahead_in_a_run_are_dropped_and_the_walk_goes_on
     let log = read_imu_csv(&data().join("imu.csv"), &ImuCsvOptions::default()).unwrap();
     let cfg = Config::from_file(&data().join("../../../configs/gdins.toml")).unwrap();
     let aid = heading_aid(&cfg, None).unwrap();
-    let last_of = |log: &ImuLog| {
-        let (mut last, mut glitches) = (None, Vec::new());
-        let c = run_log(log, &cfg, &aid, &BiasInjection::default(), |_, e| {
-            last = Some(*e);
-            if let Some(t_s) = e.glitch_t_s {
-                glitches.push((t_s, e.glitch_run_dropped));
-            }
-        })
-        .counters;
-        (last.unwrap(), c, glitches)
-    };
     for (k, n, ahead_s) in [(5003, 2, 0.3), (7010, 7, 0.9), (9001, 40, 0.6)] {
         let mut glitched = log.clone();
         for r in &mut glitched.rows[k..k + n] {
@@ -525,8 +517,8 @@ fn stamps_glitched_a_gaps_length_ahead_in_a_run_are_dropped_and_the_walk_goes_on
         }
         let mut without = log.clone();
         without.rows.drain(k..k + n);
-        let (g, gc, glitches) = last_of(&glitched);
-        let (w, wc, _) = last_of(&without);
+        let (g, gc, glitches, _) = run_glitched(&glitched, &cfg, &aid);
+        let (w, wc, ..) = run_glitched(&without, &cfg, &aid);
         // Every sample of the run was taken (the first as a gap's far side), then dropped.
         assert_eq!(glitches, [(glitched.rows[k].t_s, n as u64)], "k {k}");
         assert_eq!(
@@ -535,10 +527,7 @@ fn stamps_glitched_a_gaps_length_ahead_in_a_run_are_dropped_and_the_walk_goes_on
             "k {k}"
         );
         // The state as if the glitched samples had never come, bit for bit.
-        assert_eq!(g.p_m, w.p_m, "k {k}");
-        assert_eq!(g.nav_from_body, w.nav_from_body, "k {k}");
-        assert_eq!(g.gyro_bias_rad_s, w.gyro_bias_rad_s, "k {k}");
-        assert_eq!(gc.heading_used, wc.heading_used, "k {k}");
+        assert_as_without(&g, &gc, &w, &wc, k);
     }
     // A real gap (60 samples lost), and one of them delivered late, 20 samples after its far
     // side: refused as not increasing, the state that of the plain loss bit for bit (a review:
@@ -549,14 +538,10 @@ fn stamps_glitched_a_gaps_length_ahead_in_a_run_are_dropped_and_the_walk_goes_on
         let gone: Vec<_> = lost.rows.drain(k..k + 60).collect();
         let mut late = lost.clone();
         late.rows.insert(k + 20, gone[30]);
-        let (g, gc, glitches) = last_of(&late);
-        let (w, wc, _) = last_of(&lost);
+        let (g, gc, glitches, _) = run_glitched(&late, &cfg, &aid);
+        let (w, wc, ..) = run_glitched(&lost, &cfg, &aid);
         assert!(glitches.is_empty(), "k {k}: {glitches:?}");
         assert_eq!((gc.samples, gc.rejected_time), (wc.samples, 1), "k {k}");
-        assert_eq!(
-            (g.p_m, g.nav_from_body, g.gyro_bias_rad_s),
-            (w.p_m, w.nav_from_body, w.gyro_bias_rad_s),
-            "k {k}"
-        );
+        assert_as_without(&g, &gc, &w, &wc, k);
     }
 }

@@ -168,25 +168,34 @@ fn the_row_after_a_real_long_gap_goes_out_once_the_next_row_follows_it() {
     assert_eq!((log.rows.len(), log.rejected[0].line), (199, n as u64));
 }
 
+/// Lines 100.. of a 5,000-row log, `n_glitched` of them, stamped `ahead_s` ahead (and 5 ms
+/// apart, as they came): each is rejected as glitched, every other row kept in order.
+fn assert_glitched_rows_rejected(ahead_s: f64, n_glitched: u64) {
+    let mut text = good_file(5000);
+    for line in 100..100 + n_glitched {
+        text = replace_line(&text, line as usize, &row(ahead_s + line as f64 * 0.005));
+    }
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    let rejected: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
+    let expected: Vec<_> = (100..100 + n_glitched)
+        .map(|line| (line, RejectReason::TimeGlitch))
+        .collect();
+    assert_eq!(
+        rejected, expected,
+        "{n_glitched} glitched {ahead_s} s ahead"
+    );
+    assert_eq!(log.rows.len() as u64, 5000 - n_glitched);
+    assert!(log.rows.windows(2).all(|w| w[1].t_s > w[0].t_s));
+    assert_eq!(log.rows[98].line, 100 + n_glitched);
+}
+
 #[test]
 fn stamps_glitched_far_ahead_two_or_more_in_a_row_are_rejected_and_the_rows_after_them_kept() {
     // Lines 100 and 101 (t = 0.49, 0.495) put 975 s ahead, as a review did to exp36: the
     // second followed the first, so both were taken for a real gap's far side and every later
     // row was rejected as not increasing (the log refused at the 1 % rule).
-    for n_glitched in [2u64, 3, 40] {
-        let mut text = good_file(5000);
-        for line in 100..100 + n_glitched {
-            text = replace_line(&text, line as usize, &row(975.0 + line as f64 * 0.005));
-        }
-        let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
-        let rejected: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
-        let expected: Vec<_> = (100..100 + n_glitched)
-            .map(|line| (line, RejectReason::TimeGlitch))
-            .collect();
-        assert_eq!(rejected, expected, "{n_glitched} glitched");
-        assert_eq!(log.rows.len() as u64, 5000 - n_glitched);
-        assert!(log.rows.windows(2).all(|w| w[1].t_s > w[0].t_s));
-        assert_eq!(log.rows[98].line, 100 + n_glitched);
+    for n_glitched in [2, 3, 40] {
+        assert_glitched_rows_rejected(975.0, n_glitched);
     }
     // A second jump within the run (lines 102 and 103 a further 975 s ahead): one run, all
     // four rejected (a review: the second opened a run of its own, and every later row was
@@ -292,20 +301,8 @@ fn stamps_glitched_a_gaps_length_ahead_two_or_more_in_a_row_are_rejected_and_the
     // Lines 100.. put 0.9 s ahead (a gap's length, within `sensor.max_dt_s`): before session
     // 37 they were a gap's far side and every row of the next 0.9 s was rejected as not
     // increasing (180 rows).
-    for n_glitched in [2u64, 3, 40] {
-        let mut text = good_file(5000);
-        for line in 100..100 + n_glitched {
-            text = replace_line(&text, line as usize, &row(0.9 + line as f64 * 0.005));
-        }
-        let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
-        let rejected: Vec<_> = log.rejected.iter().map(|r| (r.line, r.reason)).collect();
-        let expected: Vec<_> = (100..100 + n_glitched)
-            .map(|line| (line, RejectReason::TimeGlitch))
-            .collect();
-        assert_eq!(rejected, expected, "{n_glitched} glitched");
-        assert_eq!(log.rows.len() as u64, 5000 - n_glitched);
-        assert!(log.rows.windows(2).all(|w| w[1].t_s > w[0].t_s));
-        assert_eq!(log.rows[98].line, 100 + n_glitched);
+    for n_glitched in [2, 3, 40] {
+        assert_glitched_rows_rejected(0.9, n_glitched);
     }
     // A real gap of 0.5 s: the rows after it are held for the run's 1 s, then go out, in order
     // and all of them.
