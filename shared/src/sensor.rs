@@ -271,8 +271,9 @@ pub enum TimeVerdict {
     /// A jump was confirmed as a new time base ([`TimeVerdict::NewBase`]), or a gap's far side
     /// was followed by the next time, at most `max_dt_s` (and [`JUMP_RUN_MAX_SAMPLES`] samples)
     /// ago, with no gap or step back since, and this time goes back behind that base and
-    /// follows the time before the jump or gap within `max_dt_s`: the jump or gap and every time
-    /// since were glitched stamps (two or more in a row), not a gap. Accept
+    /// follows the time before the jump or gap within `max_dt_s`, where the clock comes back
+    /// after the run ([`JumpRun::returns_at`], when the run has a period of its own): the jump or
+    /// gap and every time since were glitched stamps (two or more in a row), not a gap. Accept
     /// this one (the time before the jump is its base); what was taken since the jump has to be
     /// dropped by the caller ([`TimeGuard::jump_run`] says from which time).
     GlitchRun,
@@ -305,8 +306,9 @@ pub enum TimeVerdict {
 /// could not judge after a gap that started a new segment, so the good samples after the run
 /// were refused until the stamps caught up: `examples/fault_scan.rs`). One of two or more
 /// samples beyond `max_dt_s` is a jump that the second sample confirms; the run from there stays
-/// open for `max_dt_s`, and a time that then goes back and follows the time before the jump
-/// ends it as glitched stamps ([`TimeVerdict::GlitchRun`]). Before, two stamps 975 s ahead in
+/// open for `max_dt_s`, and a time that then goes back to where the clock would come back after
+/// the run (following the time before the jump) ends it as glitched stamps
+/// ([`TimeVerdict::GlitchRun`]). Before, two stamps 975 s ahead in
 /// the middle of a walk made every later time "not increasing": the rest of the log was lost.
 /// A time that goes back by at most `max_dt_s` and is followed by the next one is a step back
 /// of the clock ([`TimeVerdict::StepBack`]), which the caller may take as the new time base.
@@ -503,11 +505,11 @@ impl TimeGuard {
     /// Records `t_s` as accepted: the new time base.
     #[inline]
     pub fn accept(&mut self, t_s: f64) {
+        // The time before a gap whose far side was the last accepted time, if it was.
+        let after_gap_from = self.before_gap_s;
         // A gap from the last accepted time stays provisional: also from the very first time, and
         // from a gap's far side (accepting the next time confirms that one). Not a time after a
         // refused jump or a replaced first time: those do not follow the last time.
-        // The time before a gap whose far side was the last accepted time, if it was.
-        let after_gap_from = self.before_gap_s;
         self.before_gap_s = self.last_s.filter(|&last| {
             let dt_s = t_s - last;
             dt_s > self.gap_dt_s && dt_s <= self.max_dt_s

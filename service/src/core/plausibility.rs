@@ -160,8 +160,9 @@ impl Plausibility {
         let (gyro_norm, accel_norm) = (norm(&s.gyro_rad_s), norm(&s.accel_m_s2));
         // Every value zero: a driver's fill for a sample it did not get (or a dead sensor), not a
         // measurement. A sensor's noise never gives six zeros, and a foot's accelerometer never
-        // reads 0 on all three axes (free fall): fused, a run of them was a free fall (the
-        // height 6–11 m off after 1 s of them). Refused, they are a loss like any other.
+        // reads 0 on all three axes (free fall): fused, a run of them was a free fall (the final
+        // height up to 14 m off, `examples/fault_scan.rs`). Refused, they are a loss like any
+        // other.
         if gyro_norm == 0.0 && accel_norm == 0.0 {
             return Err(SampleError::ZeroFill { t_s: s.t_s });
         }
