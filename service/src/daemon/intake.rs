@@ -131,8 +131,6 @@ impl<'a> Intake<'a> {
         if let Admit::TakeOver(reason) = admit {
             self.log_take_over(s.seq, producer, reason);
         }
-        // `received` is counted next to the store of the position (`last_seq_plus1`), so a
-        // SIGKILL can misplace at most the one sample between the two stores.
         let new_producer = last_producer != Some(producer);
         // The daemon's side of this producer's connection is attached now: its queued samples
         // survive the producer (`Producer::close` waits for the acknowledgement).
@@ -378,6 +376,8 @@ impl<'a> Intake<'a> {
         }
         self.last_seq = Some(s.seq);
         self.last_t_s = Some(s.t_s);
+        // `received` is counted next to the store of the position (`last_seq_plus1`), so a
+        // SIGKILL can misplace at most the one sample between the two stores.
         store_opt(&c.last_seq_plus1, self.last_seq);
         c.received.fetch_add(1, Ordering::Relaxed);
         Take::Data
