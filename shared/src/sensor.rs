@@ -271,9 +271,9 @@ pub enum TimeVerdict {
     /// A jump was confirmed as a new time base ([`TimeVerdict::NewBase`]), or a gap's far side
     /// was followed by the next time, at most `max_dt_s` (and [`JUMP_RUN_MAX_SAMPLES`] samples)
     /// ago, with no gap or step back since, and this time goes back behind that base and
-    /// follows the time before the jump or gap within `max_dt_s`, where the clock comes back
-    /// after the run ([`JumpRun::returns_at`], when the run has a period of its own): the jump or
-    /// gap and every time since were glitched stamps (two or more in a row), not a gap. Accept
+    /// follows the time before the jump or gap within `max_dt_s` (after a gap: where the clock
+    /// comes back after the run, [`JumpRun::returns_at`]): the jump or gap and every time since
+    /// were glitched stamps (two or more in a row), not a gap. Accept
     /// this one (the time before the jump is its base); what was taken since the jump has to be
     /// dropped by the caller ([`TimeGuard::jump_run`] says from which time).
     GlitchRun,
@@ -306,9 +306,8 @@ pub enum TimeVerdict {
 /// could not judge after a gap that started a new segment, so the good samples after the run
 /// were refused until the stamps caught up: `examples/fault_scan.rs`). One of two or more
 /// samples beyond `max_dt_s` is a jump that the second sample confirms; the run from there stays
-/// open for `max_dt_s`, and a time that then goes back to where the clock would come back after
-/// the run (following the time before the jump) ends it as glitched stamps
-/// ([`TimeVerdict::GlitchRun`]). Before, two stamps 975 s ahead in
+/// open for `max_dt_s`, and a time that then goes back and follows the time before the jump
+/// ends it as glitched stamps ([`TimeVerdict::GlitchRun`]). Before, two stamps 975 s ahead in
 /// the middle of a walk made every later time "not increasing": the rest of the log was lost.
 /// A time that goes back by at most `max_dt_s` and is followed by the next one is a step back
 /// of the clock ([`TimeVerdict::StepBack`]), which the caller may take as the new time base.
@@ -355,30 +354,27 @@ pub struct JumpRun {
     pub base_s: f64,
     /// Accepted times in the run, the first included.
     pub samples: u32,
-    /// The run began at a gap's far side (within `max_dt_s`), not at a jump (whose jumped
-    /// sample was refused, and is a glitched stamp of the run too): see
-    /// [`JumpRun::returns_at`].
+    /// The run began at a gap's far side (within `max_dt_s`), not at a jump: it ends as
+    /// glitched stamps only where the time that comes back is where the next sample after the
+    /// time before the gap would be had the run's samples been stamped right
+    /// ([`JumpRun::returns_at`]).
     pub after_gap: bool,
 }
 
 impl JumpRun {
-    /// Whether `t_s` is where the clock comes back after this run's glitched stamps (its
-    /// accepted times, and the refused jump before them when it began at a jump), the last of
-    /// them at `last_s`: one period after the last of them had they been stamped right, counted
-    /// from the time before the run (the period: the run's own), within 1.5 periods. `None`
-    /// where the run has no period of its own (one accepted time, or a second jump within it).
-    /// A sample lost in the gap and delivered late lies anywhere in the gap, and is not the
-    /// return (a review: after a real gap, one late sample dropped every good sample since the
-    /// gap as a glitched run, up to 1 s of walking, and `corridor run` refused whole logs at
-    /// the 1 % rule).
-    pub fn returns_at(&self, t_s: f64, last_s: f64) -> Option<bool> {
-        if self.samples < 2 || self.base_s != self.first_s {
-            return None;
+    /// Whether `t_s` is where the clock comes back after this run's `samples` glitched stamps,
+    /// the last of them at `last_s`: `samples + 1` periods after the time before the gap (the
+    /// period: the run's own), within 1.5 periods. A sample lost in the gap and delivered late
+    /// lies anywhere in the gap, and is not the return (a review: after a real gap, one late
+    /// sample dropped every good sample since the gap as a glitched run, up to 1 s of walking,
+    /// and `corridor run` refused whole logs at the 1 % rule).
+    pub fn returns_at(&self, t_s: f64, last_s: f64) -> bool {
+        if self.samples < 2 {
+            return false;
         }
         let period_s = (last_s - self.first_s) / f64::from(self.samples - 1);
-        let glitched = self.samples + u32::from(!self.after_gap);
-        let expected_s = self.before_s + f64::from(glitched + 1) * period_s;
-        Some((t_s - expected_s).abs() <= 1.5 * period_s)
+        let expected_s = self.before_s + f64::from(self.samples + 1) * period_s;
+        (t_s - expected_s).abs() <= 1.5 * period_s
     }
 }
 
@@ -452,9 +448,7 @@ impl TimeGuard {
         if let Some(run) = self.run
             && t_s < run.first_s
             && follows(run.before_s)
-            // Where the run has no period of its own (a jump's run of one sample, or with a
-            // second jump), any time that follows the time before it.
-            && run.returns_at(t_s, last).unwrap_or(!run.after_gap)
+            && (!run.after_gap || run.returns_at(t_s, last))
         {
             return TimeVerdict::GlitchRun;
         }

@@ -169,18 +169,6 @@ fn two_or_more_stamps_beyond_max_dt_are_a_glitched_run_when_the_time_comes_back(
         run(&[0.0, 0.005, 10.0, 10.005, 1.2]),
         [Accept, Accept, Jump, NewBase, NotIncreasing]
     );
-    // A sample lost in a real jump's loss, delivered late (0.5 s after the time before it),
-    // is not the clock's return: that is where the sample after the glitched stamps (the
-    // jumped one and the two taken) would be, 0.025 (session 37; before, any time that
-    // followed the time before the jump dropped the run).
-    assert_eq!(
-        run(&[0.0, 0.005, 10.0, 10.005, 10.010, 0.5]),
-        [Accept, Accept, Jump, NewBase, Accept, NotIncreasing]
-    );
-    assert_eq!(
-        run(&[0.0, 0.005, 10.0, 10.005, 10.010, 0.025]),
-        [Accept, Accept, Jump, NewBase, Accept, GlitchRun]
-    );
     // A real gap: the run closes once the new base has run on for max_dt_s; a time that
     // goes back after it is refused as before.
     let mut times = vec![0.0, 0.005];
