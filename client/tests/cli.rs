@@ -35,7 +35,8 @@ fn tool(exe: &str, args: &[&str]) -> Output {
 /// reads it while `corridor-replay` (given `extra` flags) runs. Returns the replay's output and
 /// the samples received.
 fn replay_into_lossless_daemon(domain_name: &str, extra: &[&str]) -> (Output, usize) {
-    // One stand-in daemon per process at a time (see the README's known issue with two).
+    // One stand-in daemon per process at a time (two in one process can lose a wake-up in
+    // iceoryx2 0.10: docs/known-issues.md, "Attitudes that stopped for 60 s").
     static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
     let _one = ONE_AT_A_TIME
         .lock()

@@ -4,7 +4,7 @@ sensor's heading: mean ± spread per walk (mm/s) over every bundled gdins walk, 
 
     python3 docs/experiments/touchdown-residual.py      # from the repository root
 
-A systematic lateral part is a touchdown velocity the model lacks (README, known issues; a 5
+A systematic lateral part is a touchdown velocity the model lacks (docs/known-issues.md; a 5
 mrad/s vertical gyro bias leaves about 7 mm/s there). A stance's first update is the `zupt` row
 at the sample whose estimate says `stance_began` (one per footfall). Needs the release binary
 (`cargo build --release -p corridor-service --bin corridor`).

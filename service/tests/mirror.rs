@@ -153,7 +153,7 @@ fn a_sensor_turned_on_the_shoe_gives_the_same_walk() {
     eprintln!("largest differences {d_m:.1e} m, {d_bias:.1e} rad/s");
     // equal to rounding: the mounting yaw is the one that gives the foot's forward axis the
     // stride's heading (`yaw_of_axis_with_heading`); with the ZYX yaw of the stance's attitude
-    // instead, 3.8 mm and 3.7e-6 rad/s here (README, "No side and no mounting is preferred")
+    // instead, 3.8 mm and 3.7e-6 rad/s here (docs/results/analysis.md, "No side and no mounting is preferred")
     assert!(d_m < 1e-6 && d_bias < 1e-9, "{d_m} m, {d_bias} rad/s");
 }
 
@@ -162,7 +162,7 @@ fn a_sensor_tilted_on_the_shoe_gives_nearly_the_same_walk() {
     // exp32 (no sample at a rail of the gyro or the accelerometer), the sensor tilted by 30°
     // about its x axis: the same decisions, the estimates 9.0 mm and 3.5e-4 rad/s apart. Not
     // exact: the rest-mean prior takes a σ per sensor axis, which does not turn with the sensor
-    // (README, "No side and no mounting is preferred", for the variants measured; tilted 20°
+    // (docs/results/analysis.md, "No side and no mounting is preferred", for the variants measured; tilted 20°
     // about y instead, one foot axis of 39 is taken otherwise). The bounds are under twice
     // those: a lever-arm σ without the rate about y moves the walk by 3.5 cm, a bias compared
     // without turning it differs by 2.2e-3 rad/s.

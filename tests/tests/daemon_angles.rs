@@ -2,7 +2,7 @@
 //! reaches the estimator end to end: the daemon's attitude stream is the offline run's with the
 //! same heading queued (to 1e-12, as the replay test compares), and differs in yaw from the run
 //! without it. Its own binary:
-//! one daemon per test process (README, known issues).
+//! one daemon per test process (docs/known-issues.md).
 
 mod daemon_common;
 

@@ -3,7 +3,7 @@
 //! alignment, the saved bias with the fresh rest fused into it (not the rest-mean prior a cold
 //! start gives), exactly as the offline estimator warm-started from the same state. The corrupt-file case
 //! is in `daemon_checkpoint_corrupt.rs`: one test binary a scenario, so that no more than the two
-//! daemons this scenario needs ever run in one process (see the README's known issue).
+//! daemons this scenario needs ever run in one process (see docs/known-issues.md).
 
 mod daemon_common;
 

@@ -11,7 +11,7 @@
 //! heading information.
 //!
 //! Exactly the same is too much to ask: the rotated samples differ in their last bits, and the
-//! association's yes/no decisions can flip on such a difference (README, "Results": ±0.1 % of
+//! association's yes/no decisions can flip on such a difference (docs/results/analysis.md: ±0.1 % of
 //! path under 0–4 ms of time-stamp jitter). Measured on the 16 walks (rotations by 180° about z,
 //! 90° about x and 37° about (1, 2, 3); the world turned by 37°, 180° and −100°): every walk
 //! without clipped samples moves by less than 0.02 % of path; a body-axis assumption would

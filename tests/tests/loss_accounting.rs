@@ -10,7 +10,7 @@
 //!
 //! The daemon runs as a child process (`corridor serve`, the binary next to this test's
 //! directory, or `CORRIDOR_BIN`), so it can be killed with SIGKILL and restarted, and no test
-//! process hosts more than one daemon (README, "Known issues"). Each test has its own domain.
+//! process hosts more than one daemon (docs/known-issues.md). Each test has its own domain.
 //! Run under `flock /tmp/corridor-tests.lock` (test domains are shared between worktrees).
 
 mod daemon_common;

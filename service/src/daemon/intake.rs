@@ -10,7 +10,7 @@
 //! producer, forward the sample). Every sample a producer numbered is received or counted
 //! missing once, whichever daemon life or producer was followed when (the tests below check
 //! the sums), but where a replacement producer that numbers afresh is taken for one that
-//! continues the old numbering (README, known issues).
+//! continues the old numbering (docs/known-issues.md).
 
 use super::producers::{Admit, Missing, OtherNumbering, ProducerLock, TakeOverReason};
 use super::receive::RxCounters;
