@@ -136,13 +136,14 @@ pub fn without_rest<'a>(rows: &'a [ImuRow], truth: &[TruthPoint]) -> Option<&'a 
 pub fn front_end_markdown(rows: &[SuiteRow]) -> String {
     let mut s = format!(
         "Start without rest (the log cut to its last {KEPT_REST_S} s of initial rest: alignment on that short \
-         stance, no rest-mean prior), the same start from a checkpoint (a daemon restarted while the wearer \
+         stance, no rest-mean prior: the bias starts at the configuration's \
+         `alignment.typical_gyro_bias_rad_s`, or zero), the same start from a checkpoint (a daemon restarted while the wearer \
          walks: the bias the other walks of the sensor ended with, per axis their median with their spread \
          as σ, none of this walk's own), and the clipping model (attitude variance about a clipped gyro \
          axis), footprint RMS, % of path. The start without rest is also scored in the map frame (as the \
          map-frame table above: translated onto the first footprint, its own heading kept), against the \
          default run's map-frame figure: the first-leg alignment turns a run by its heading error at the \
-         end of its first 5 m, where a start without a bias prior is least sure of it.\n\n\
+         end of its first 5 m, where a start without a rest is least sure of it.\n\n\
          | recording | default | without rest | difference | map frame: default | without rest | difference | from a checkpoint | difference | clipped samples | clipping model off |\n\
          |---|---|---|---|---|---|---|---|---|---|---|\n"
     );

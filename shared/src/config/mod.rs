@@ -544,6 +544,62 @@ mod tests {
     }
 
     #[test]
+    fn a_typical_bias_needs_its_sigma_and_must_lie_within_the_sensors_largest_bias() {
+        let parse = |body: &str| {
+            ConfigFile::parse(&format!("[alignment]\n{body}"), Path::new("t.toml"))
+                .unwrap()
+                .validate()
+        };
+        let c = parse(
+            "typical_gyro_bias_rad_s = [1e-3, -2e-3, 5e-3]\ntypical_gyro_bias_sd_rad_s = 4e-3\n",
+        )
+        .unwrap();
+        let t = c.alignment.typical_gyro_bias.unwrap();
+        assert_eq!((t.rad_s, t.sd_rad_s.get()), ([1e-3, -2e-3, 5e-3], 4e-3));
+        assert!(Config::default().alignment.typical_gyro_bias.is_none());
+        for (body, key, value) in [
+            // One without the other: the missing key is named.
+            (
+                "typical_gyro_bias_rad_s = [1e-3, -2e-3, 5e-3]\n",
+                "alignment.typical_gyro_bias_sd_rad_s",
+                "not given",
+            ),
+            (
+                "typical_gyro_bias_sd_rad_s = 4e-3\n",
+                "alignment.typical_gyro_bias_rad_s",
+                "not given",
+            ),
+            // Beyond the sensor's largest bias (default 0.2 rad/s), or not a number.
+            (
+                "typical_gyro_bias_rad_s = [1e-3, 0.5, 5e-3]\ntypical_gyro_bias_sd_rad_s = 4e-3\n",
+                "alignment.typical_gyro_bias_rad_s",
+                "0.5",
+            ),
+            (
+                "typical_gyro_bias_rad_s = [nan, 0.0, 0.0]\ntypical_gyro_bias_sd_rad_s = 4e-3\n",
+                "alignment.typical_gyro_bias_rad_s",
+                "NaN",
+            ),
+            (
+                "typical_gyro_bias_rad_s = [0.0, 0.0, 0.0]\ntypical_gyro_bias_sd_rad_s = 0.0\n",
+                "alignment.typical_gyro_bias_sd_rad_s",
+                "0",
+            ),
+        ] {
+            let err = parse(body).unwrap_err().to_string();
+            assert!(err.contains(key) && err.contains(value), "{body}: {err}");
+        }
+        // Two or four axes are a TOML shape error, named with the key.
+        let err = ConfigFile::parse(
+            "[alignment]\ntypical_gyro_bias_rad_s = [1e-3, 2e-3]\n",
+            Path::new("t.toml"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("typical_gyro_bias_rad_s"), "{err}");
+    }
+
+    #[test]
     fn unknown_mode_is_rejected() {
         let err = ConfigFile::parse("[estimator]\nmode = \"magic\"\n", Path::new("m.toml"))
             .unwrap_err()

@@ -105,6 +105,19 @@ pub struct AlignmentConfig {
     /// The largest initial-rest mean rate (magnitude) taken as the bias prior, rad/s (`None`:
     /// only the sensor's largest bias, per axis).
     pub max_prior_rate_rad_s: Option<Positive>,
+    /// What is known of the bias before the rest, with the rest-mean prior (`None`: zero, with
+    /// `eskf.gyro_bias_initial_sd_rad_s`).
+    pub typical_gyro_bias: Option<TypicalGyroBias>,
+}
+
+/// A sensor unit's typical gyro bias (`alignment.typical_gyro_bias_rad_s` and its σ): each
+/// axis finite and within `sensor.max_gyro_bias_rad_s`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TypicalGyroBias {
+    /// The bias, rad/s, sensor axes.
+    pub rad_s: [f64; 3],
+    /// Its σ on each axis, rad/s.
+    pub sd_rad_s: Positive,
 }
 
 /// Validated `[detector]`.

@@ -185,6 +185,11 @@ impl ConfigFile {
                 "was removed: the convergence flag is now estimator.converged_unabsorbed (the bias σ never fell that low)",
             ));
         }
+        let sensor = self
+            .sensor
+            .validate()
+            .map_err(|e| invalid(e.key, e.value, e.rule))?;
+        let typical_gyro_bias = typical_gyro_bias(a, sensor.max_gyro_bias_rad_s())?;
         Ok(Config {
             model,
             mode: e.mode.unwrap_or(ESTIMATOR_MODE),
@@ -226,10 +231,7 @@ impl ConfigFile {
                 100.0,
                 "must be in [1, 100] m/s",
             )?,
-            sensor: self
-                .sensor
-                .validate()
-                .map_err(|e| invalid(e.key, e.value, e.rule))?,
+            sensor,
             alignment: AlignmentConfig {
                 min_rest_s: Positive::in_range(
                     "alignment.min_rest_s",
@@ -302,6 +304,7 @@ impl ConfigFile {
                         )
                     })
                     .transpose()?,
+                typical_gyro_bias,
             },
             detector: DetectorConfig {
                 kind: d.kind.unwrap_or(DETECTOR_KIND),
@@ -631,5 +634,41 @@ impl Config {
         ConfigFile::read(path)?
             .validate()
             .map_err(|e| with_path(e, path))
+    }
+}
+
+/// `alignment.typical_gyro_bias_rad_s` with its σ: both or neither, each axis finite and within
+/// the sensor's largest bias (a prior the health check would refuse is no prior).
+fn typical_gyro_bias(
+    a: &AlignmentFile,
+    max_bias_rad_s: f64,
+) -> Result<Option<TypicalGyroBias>, ConfigError> {
+    const KEY: &str = "alignment.typical_gyro_bias_rad_s";
+    const SD_KEY: &str = "alignment.typical_gyro_bias_sd_rad_s";
+    match (a.typical_gyro_bias_rad_s, a.typical_gyro_bias_sd_rad_s) {
+        (None, None) => Ok(None),
+        (Some(_), None) => Err(invalid(
+            SD_KEY,
+            "(not given)",
+            "must be given with alignment.typical_gyro_bias_rad_s",
+        )),
+        (None, Some(_)) => Err(invalid(
+            KEY,
+            "(not given)",
+            "must be given with alignment.typical_gyro_bias_sd_rad_s",
+        )),
+        (Some(b), Some(sd)) => {
+            if b.iter().any(|v| !v.is_finite() || v.abs() > max_bias_rad_s) {
+                return Err(invalid(
+                    KEY,
+                    format!("{b:?}"),
+                    "each axis must be finite and within sensor.max_gyro_bias_rad_s",
+                ));
+            }
+            Ok(Some(TypicalGyroBias {
+                rad_s: b,
+                sd_rad_s: Positive::in_range(SD_KEY, sd, 0.0, 0.1, "must be in (0, 0.1] rad/s")?,
+            }))
+        }
     }
 }

@@ -199,19 +199,20 @@ impl Pipeline {
         let wants_prior = self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean;
         self.counters.rest_prior_refused = wants_prior && turning;
         let rest_prior = wants_prior && !short_start && !turning;
-        // The rest's mean rate is a measurement of the bias with the σ above; the sensor's own
-        // spread of biases (`eskf.gyro_bias_initial_sd_rad_s` about zero, the prior without a
-        // rest) is what is known before it, and the two are fused per axis. A quiet rest's σ
-        // (5e-4–2.5e-3 rad/s) is far below 0.01 and its mean is taken nearly whole; a "rest"
-        // that is mostly motion (a foot that shifts before its first step, a rest cut short by a
-        // loss so that only its moving tail is left) has a wide σ and its mean, tens of mrad/s
-        // off, no longer starts the filter there.
-        let initial_sd = self.cfg.eskf.gyro_bias_initial_sd_rad_s.get();
+        // The rest's mean rate is a measurement of the bias with the σ above; what is known
+        // before it (the unit's typical bias with its σ, `alignment.typical_gyro_bias_rad_s`,
+        // or else zero with the sensor's spread of biases, `eskf.gyro_bias_initial_sd_rad_s`)
+        // is fused with it per axis. A quiet rest's σ (5e-4–2.5e-3 rad/s) is below either and
+        // its mean is taken nearly whole; a "rest" that is mostly motion (a foot that shifts
+        // before its first step, a rest cut short by a loss so that only its moving tail is
+        // left) has a wide σ and its mean, tens of mrad/s off, no longer starts the filter
+        // there. Without a rest (or one refused as turning) the typical bias is the start.
+        let (before_rest, before_rest_sd) = self.bias_before_rest();
         let (b0, prior_sd, sd0) = if rest_prior {
-            let (b0, prior_sd) = fuse_with_zero_prior(&mean_w, &rest_sd, initial_sd);
+            let (b0, prior_sd) = fuse_with_prior(&mean_w, &rest_sd, &before_rest, before_rest_sd);
             (b0, prior_sd, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
         } else {
-            (Vector3::zeros(), Vector3::repeat(initial_sd), initial_sd)
+            (before_rest, Vector3::repeat(before_rest_sd), before_rest_sd)
         };
         let e = &self.cfg.eskf;
         let own_bias = matches!(self.cfg.mode, Mode::Zupt | Mode::Eskf);
@@ -317,6 +318,23 @@ impl Pipeline {
         Some(Box::new(eskf))
     }
 
+    /// What is known of the bias before any rest or stance measured it (sensor axes; σ per
+    /// axis): the unit's typical bias with the rest-mean prior, when configured
+    /// (`alignment.typical_gyro_bias_rad_s`), else zero with the sensor's spread of biases
+    /// (`eskf.gyro_bias_initial_sd_rad_s`). Also where a bias thrown away (a restore loop, a
+    /// relevel) starts again.
+    pub(super) fn bias_before_rest(&self) -> (Vector3<f64>, f64) {
+        match self.cfg.alignment.typical_gyro_bias {
+            Some(t) if self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean => {
+                (Vector3::from(t.rad_s), t.sd_rad_s.get())
+            }
+            _ => (
+                Vector3::zeros(),
+                self.cfg.eskf.gyro_bias_initial_sd_rad_s.get(),
+            ),
+        }
+    }
+
     /// Replaces the bias prior by a saved state (bias and covariance in sensor axes).
     pub(super) fn apply_warm_start(&mut self, eskf: &mut Eskf, ws: &WarmStart) {
         let b = Vector3::from(ws.gyro_bias_rad_s);
@@ -335,15 +353,16 @@ impl Pipeline {
     }
 }
 
-/// The bias measured as `mean` with σ `sd` (per axis), fused with a prior of zero and σ
+/// The bias measured as `mean` with σ `sd` (per axis), fused with a prior `prior` of σ
 /// `prior_sd`: the posterior mean and σ, per axis.
-fn fuse_with_zero_prior(
+fn fuse_with_prior(
     mean: &Vector3<f64>,
     sd: &Vector3<f64>,
+    prior: &Vector3<f64>,
     prior_sd: f64,
 ) -> (Vector3<f64>, Vector3<f64>) {
     let p2 = prior_sd * prior_sd;
     let gain = sd.map(|s| p2 / (p2 + s * s));
     let post_sd = sd.map(|s| (p2 * s * s / (p2 + s * s)).sqrt());
-    (mean.component_mul(&gain), post_sd)
+    (prior + (mean - prior).component_mul(&gain), post_sd)
 }

@@ -36,15 +36,15 @@ impl Pipeline {
         self.relevel_next_stance = false;
         let up = f.normalize();
         let e = &self.cfg.eskf;
-        let bias_var = e.gyro_bias_initial_sd_rad_s.get().powi(2);
+        let (bias, bias_sd) = self.bias_before_rest();
         eskf.relevel(
             &up,
             RELEVEL_TILT_SD_RAD.powi(2),
             e.zupt_sd_m_s.get().powi(2),
         );
         // What the filter made of a wrong tilt went into the bias, whichever filter owns it.
-        let p = Matrix3::from_diagonal_element(bias_var);
-        self.set_bias(eskf, Vector3::zeros(), &p);
+        let p = Matrix3::from_diagonal_element(bias_sd * bias_sd);
+        self.set_bias(eskf, bias, &p);
         self.counters.relevels += 1;
         true
     }

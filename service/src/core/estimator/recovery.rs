@@ -223,9 +223,9 @@ impl Pipeline {
                     };
                     self.restores_in_a_row = (t_clock, count);
                     if count >= RESTORE_LOOP_COUNT {
-                        let var = self.cfg.eskf.gyro_bias_initial_sd_rad_s.get().powi(2);
-                        let p = Matrix3::from_diagonal_element(var);
-                        self.set_bias(eskf, Vector3::zeros(), &p);
+                        let (bias, sd) = self.bias_before_rest();
+                        let p = Matrix3::from_diagonal_element(sd * sd);
+                        self.set_bias(eskf, bias, &p);
                         self.relevel_next_stance = true;
                         self.restores_in_a_row = (f64::NEG_INFINITY, 0);
                     }

@@ -1,5 +1,5 @@
 //! Unit tests of the estimator's per-sample pipeline; `tests/headings.rs` those of the external
-//! headings.
+//! headings, `tests/typical_bias.rs` those of the unit's typical bias.
 
 use super::*;
 use corridor_shared::config::{Config, ConfigFile};
@@ -626,3 +626,4 @@ fn the_calibrated_mounting_yaw_gives_the_foot_axis_the_stride_heading_at_a_tilte
 }
 
 mod headings;
+mod typical_bias;
