@@ -91,7 +91,53 @@ pub fn init_tracing(default_filter: &str) {
         .with_writer(std::io::stderr)
         // Colour codes only on a terminal: a log file or the journal gets plain text.
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
+        // A log line that cannot be written (stderr a pipe whose reader left) is dropped: the
+        // subscriber's own report of it went to that same stderr and panicked, which killed a
+        // daemon, or its signal thread so that it never stopped (a review, session 38).
+        .log_internal_errors(false)
         .init();
+}
+
+/// Prints a line to standard output; a line that cannot be written (a pipe whose reader left,
+/// `| head`) is dropped instead of panicking as `println!` does, so that a tool that must
+/// finish its work (a replay's end-of-stream marker) does.
+#[macro_export]
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// [`say!`] for standard error.
+#[macro_export]
+macro_rules! say_err {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
+static TERMINATION_SEEN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// True once SIGINT or SIGTERM was received by this process, as seen through `node`, for
+/// every thread. iceoryx2's signal handler clears a signal when it is read
+/// (`SignalHandler::last_signal`), so a second thread that also polls (the replay's watch on
+/// the daemon's diagnostics) took the Ctrl-C from the thread that was to act on it, and the
+/// replay could not be stopped (a review, session 38): the first thread to see it keeps it
+/// here. `Producer` and `Subscriber` ask through this; so should anything else that polls.
+pub fn termination_requested<S: iceoryx2::service::Service>(
+    node: &iceoryx2::node::Node<S>,
+) -> bool {
+    use std::sync::atomic::Ordering;
+    if TERMINATION_SEEN.load(Ordering::Relaxed) {
+        return true;
+    }
+    let seen = node.wait(std::time::Duration::ZERO).is_err();
+    if seen {
+        TERMINATION_SEEN.store(true, Ordering::Relaxed);
+    }
+    seen
 }
 
 /// The error and its causes on one line (`a: b: c`), each cause once: a cause whose text the
@@ -118,7 +164,7 @@ pub fn exit(result: anyhow::Result<()>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", error_message(&e));
+            say_err!("error: {}", error_message(&e));
             ExitCode::FAILURE
         }
     }

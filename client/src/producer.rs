@@ -304,7 +304,7 @@ impl Producer {
 
     /// True once SIGINT or SIGTERM was received by this process.
     pub fn termination_requested(&self) -> bool {
-        self.node.wait(Duration::ZERO).is_err()
+        crate::termination_requested(&self.node)
     }
 }
 

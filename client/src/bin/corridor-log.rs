@@ -61,25 +61,25 @@ fn run() -> Result<()> {
     if !a.stop_at_end_of_stream {
         recorder = recorder.following_new_streams();
     }
-    eprintln!(
+    corridor_client::say_err!(
         "recording domain {:?} into {}",
         domain.name(),
         a.out.display()
     );
     let r = recorder.run(&AtomicBool::new(false))?;
-    println!(
+    corridor_client::say!(
         "stopped: {} ({} streams ended)",
         r.stopped.describe(),
         r.streams_ended
     );
-    println!(
+    corridor_client::say!(
         "attitude rows: {} ({})",
         r.attitude_rows,
         r.attitude_path.display()
     );
-    println!("bias rows: {} ({})", r.bias_rows, r.bias_path.display());
+    corridor_client::say!("bias rows: {} ({})", r.bias_rows, r.bias_path.display());
     if r.retracting_rows > 0 {
-        println!(
+        corridor_client::say!(
             "retracting rows: {} (retracts 1: the rows before each with a later t_s came from \
              glitched stamps the daemon dropped after the fact)",
             r.retracting_rows
@@ -90,7 +90,7 @@ fn run() -> Result<()> {
     // the idle timeout, or after the daemon discarded a stalled logger's messages).
     let open_stream = r.open_stream_rows > 0;
     if open_stream {
-        println!(
+        corridor_client::say!(
             "open stream: its end never arrived; {} attitude rows of it recorded, what the \
              daemon published after them not received (a pause in the data longer than \
              --idle-timeout-s, messages the daemon discarded while this logger stalled, or a \
@@ -100,13 +100,17 @@ fn run() -> Result<()> {
     }
     // Every attitude message the daemon published up to the last one received is here:
     // published = before start + received + missing.
-    println!(
+    corridor_client::say!(
         "attitude messages: {} received, {} missing (seq gaps), {} published before the first",
-        r.attitude_received, r.attitude_missed, r.attitude_missed_at_start
+        r.attitude_received,
+        r.attitude_missed,
+        r.attitude_missed_at_start
     );
-    println!(
+    corridor_client::say!(
         "bias messages: {} received, {} missing (seq gaps), {} published before the first",
-        r.bias_received, r.bias_missed, r.bias_missed_at_start
+        r.bias_received,
+        r.bias_missed,
+        r.bias_missed_at_start
     );
     if open_stream && r.stopped == RecordStop::IdleTimeout {
         anyhow::bail!("the recording is incomplete: it timed out within a stream");

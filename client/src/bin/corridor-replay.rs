@@ -113,22 +113,22 @@ fn run() -> Result<()> {
     } else {
         0.0
     };
-    println!("imu: {}", a.imu.display());
-    println!("domain: {} (delivery {})", domain.name(), r.delivery.name());
-    println!(
+    corridor_client::say!("imu: {}", a.imu.display());
+    corridor_client::say!("domain: {} (delivery {})", domain.name(), r.delivery.name());
+    corridor_client::say!(
         "loops: {}{}",
         a.loops,
         if r.interrupted { " (interrupted)" } else { "" }
     );
-    println!("samples sent: {} (+1 end-of-stream marker)", r.samples);
+    corridor_client::say!("samples sent: {} (+1 end-of-stream marker)", r.samples);
     // Also counted by the daemon, from the numbering, when it next receives from this
     // producer (head_missing, missing_at_restart): not an extra loss.
-    println!(
+    corridor_client::say!(
         "samples nobody received: {} (sent while no daemon was reading)",
         s.imu_undelivered
     );
-    println!("lossless retries: {}", s.retries);
-    println!(
+    corridor_client::say!("lossless retries: {}", s.retries);
+    corridor_client::say!(
         "daemon confirmed it took the samples: {}",
         if s.closes_unconfirmed == 0 {
             "yes"
@@ -142,7 +142,7 @@ fn run() -> Result<()> {
     match account {
         Some(d) => {
             foreign = d.foreign;
-            println!(
+            corridor_client::say!(
                 "the daemon, over the replay{}: received {}, missing from the numbering {} \
                  (overwritten in its live input buffer), before its first read of them {}, \
                  dropped on a full queue {}, refused {}, estimated {}, producer changes {}, \
@@ -163,16 +163,16 @@ fn run() -> Result<()> {
             );
             lost = d.lost();
         }
-        None => println!(
+        None => corridor_client::say!(
             "the daemon, over the replay: not known (no diagnostics, or the daemon restarted); \
              corridor status --domain {}",
             a.domain
         ),
     }
-    println!("rows rejected by the CSV reader: {rejected}");
-    println!("elapsed: {:.3} s ({rate:.0} samples/s)", r.elapsed_s);
+    corridor_client::say!("rows rejected by the CSV reader: {rejected}");
+    corridor_client::say!("elapsed: {:.3} s ({rate:.0} samples/s)", r.elapsed_s);
     if s.imu_undelivered > 0 {
-        eprintln!(
+        corridor_client::say_err!(
             "warning: {} of {} messages reached no subscriber (is the daemon running on domain {:?}?)",
             s.imu_undelivered,
             s.imu_sent,
@@ -180,7 +180,7 @@ fn run() -> Result<()> {
         );
     }
     if lost > 0 && foreign == 0 {
-        eprintln!(
+        corridor_client::say_err!(
             "warning: the daemon lost {lost} of the {} samples sent (live delivery drops what \
              it cannot keep up with: --delivery lossless, or a lower --speed)",
             r.samples
@@ -188,7 +188,7 @@ fn run() -> Result<()> {
     } else if lost > 0 {
         // With a second producer the counts are both producers' (a review: "lost 59370 of the
         // 42000 samples sent").
-        eprintln!(
+        corridor_client::say_err!(
             "warning: the daemon lost {lost} samples during the replay, this replay's and the \
              other producer's together (live delivery drops what it cannot keep up with)"
         );
@@ -196,7 +196,7 @@ fn run() -> Result<()> {
     if foreign > 0 {
         // Whose they were cannot be told from the daemon's counters, which are the domain's
         // (a review: the first version named the other producer's on both replays).
-        eprintln!(
+        corridor_client::say_err!(
             "warning: another producer sent on domain {:?} during the replay, and the daemon \
              follows one producer at a time: it refused {foreign} samples as a second \
              producer's (this replay's or the other's), and its counts above are both \
@@ -205,7 +205,7 @@ fn run() -> Result<()> {
         );
     }
     if s.closes_unconfirmed > 0 {
-        eprintln!(
+        corridor_client::say_err!(
             "warning: the daemon did not confirm within {} s that it took this replay's \
              samples: the samples still queued when it ended may be lost",
             corridor_client::END_ACK_WAIT.as_secs()

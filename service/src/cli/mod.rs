@@ -107,6 +107,9 @@ enum Command {
 pub fn main() -> ExitCode {
     corridor_client::init_tracing("info");
     let cli = Cli::parse();
+    if !matches!(cli.command, Command::Serve(_)) {
+        end_quietly_on_a_closed_pipe();
+    }
     match dispatch(cli) {
         Ok(code) => code,
         // A flag's value outside the range of the key it sets is a usage error, as the
@@ -123,6 +126,19 @@ pub fn main() -> ExitCode {
             ExitCode::from(2)
         }
         Err(e) => corridor_client::exit(Err(e)),
+    }
+}
+
+/// A one-shot command whose reader left (`corridor man | head -1`, `corridor run … | head`)
+/// ends quietly, as `cat` does, instead of panicking in `println!` or reporting "Broken pipe"
+/// (a review, session 38): SIGPIPE back to its default, which Rust's start-up sets to ignored.
+/// Not for `serve`: a daemon outlives whoever reads its log, whose lines are then dropped
+/// (`init_tracing`). A run killed so leaves its outputs named `.partial`, as any killed run.
+fn end_quietly_on_a_closed_pipe() {
+    // SAFETY: signal(2) setting a standard disposition, at start-up before any thread exists;
+    // no handler of ours is involved.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 

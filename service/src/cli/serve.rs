@@ -55,7 +55,7 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
     }
     let report = daemon::serve(cfg)?;
     let d = &report.diagnostics;
-    println!(
+    corridor_client::say!(
         "{}",
         serde_json::to_string_pretty(&serde_json::json!({
             "streams_finished": report.streams_finished,

@@ -1,0 +1,39 @@
+//! A Ctrl-C read by one thread's node is seen by every other (iceoryx2 clears a signal when it
+//! is read, so the replay's watch thread took it from the replay loop, which then never
+//! stopped). Its own test binary: the signal and the latch belong to the process.
+
+use corridor_client::Domain;
+use iceoryx2::prelude::SignalHandlingMode;
+use std::time::{Duration, Instant};
+
+#[test]
+fn a_termination_request_read_through_one_node_is_seen_through_the_others() {
+    let d = Domain::new("corridor-latch-test").unwrap();
+    let a = d
+        .node("latch-a", SignalHandlingMode::HandleTerminationRequests)
+        .unwrap();
+    let b = d
+        .node("latch-b", SignalHandlingMode::HandleTerminationRequests)
+        .unwrap();
+    assert!(!corridor_client::termination_requested(&a));
+    let pid = std::process::id().to_string();
+    let sent = std::process::Command::new("kill")
+        .args(["-INT", &pid])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    // Delivered asynchronously: poll one node until it is read there.
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !corridor_client::termination_requested(&a) {
+        assert!(Instant::now() < deadline, "SIGINT never seen");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    // The other node's reader sees it as well, from another thread, and again later.
+    let seen_by_b = std::thread::scope(|s| {
+        s.spawn(|| corridor_client::termination_requested(&b))
+            .join()
+            .unwrap()
+    });
+    assert!(seen_by_b, "the request read through `a` was lost to `b`");
+    assert!(corridor_client::termination_requested(&a));
+}
