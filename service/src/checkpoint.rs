@@ -229,7 +229,7 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, DecodeError> {
     }
     let payload = &bytes[header..];
     let (cp, used): (Checkpoint, usize) = bincode::serde::decode_from_slice(payload, config())
-        .map_err(|e| DecodeError::Corrupt(format!("payload: {e}")))?;
+        .map_err(|e| DecodeError::Corrupt(payload_problem(&e, payload.len())))?;
     if used != payload.len() {
         return Err(DecodeError::Corrupt(format!(
             "{} trailing bytes after the payload",
@@ -238,6 +238,21 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, DecodeError> {
     }
     cp.validate().map_err(DecodeError::Corrupt)?;
     Ok(cp)
+}
+
+/// What is wrong with a payload bincode cannot decode, in words: its errors print as their
+/// debug form (`UnexpectedEnd { additional: 2 }`), which told a user nothing (a review).
+fn payload_problem(e: &bincode::error::DecodeError, len: usize) -> String {
+    use bincode::error::DecodeError as E;
+    match e {
+        E::UnexpectedEnd { .. } => {
+            format!("truncated: its {len}-byte payload ends before the checkpoint does")
+        }
+        E::Utf8 { .. } => "a text field that is not UTF-8".to_owned(),
+        E::UnexpectedVariant { found, .. } => format!("an unknown variant number {found}"),
+        E::LimitExceeded => "a length beyond the format's limit".to_owned(),
+        _ => "its payload is not a checkpoint's".to_owned(),
+    }
 }
 
 /// Saves atomically (temp file, fsync, rename, fsync of the directory).
@@ -397,6 +412,15 @@ mod tests {
             let CheckpointError::Corrupt { moved_to, .. } = &e else {
                 panic!("cut at {cut}: {e}");
             };
+            // Said in words, not as the decoder's debug form.
+            let text = e.to_string();
+            assert!(
+                !text.contains('{') && !text.contains("Unexpected"),
+                "{text}"
+            );
+            if cut > 12 {
+                assert!(text.contains("truncated"), "{text}");
+            }
             assert!(e.is_cold_start());
             assert!(!p.exists(), "the corrupt file must be moved away");
             assert!(moved_to.as_ref().unwrap().exists());

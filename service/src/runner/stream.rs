@@ -56,6 +56,9 @@ pub struct Summary {
     pub input_rows_rejected: BTreeMap<&'static str, u64>,
     /// The first few rejected rows, with file, line, column and value.
     pub input_rows_rejected_examples: Vec<String>,
+    /// Rows read whose `temp_c` field was empty or no finite number (their temperature unknown;
+    /// the rows are used).
+    pub input_temperature_missing: u64,
     /// Samples refused by the estimator (after the reader), by reason.
     pub samples_refused_counts: BTreeMap<&'static str, u64>,
     /// The first samples refused by the estimator, with file, line and reason.
@@ -459,6 +462,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         stride_observations_used: c.stride_used,
         stride_observations_rejected: c.stride_rejected,
         input_rows_rejected: reader.rejected_counts(),
+        input_temperature_missing: reader.temperature_missing(),
         input_rows_rejected_examples: reader
             .rejected_rows()
             .iter()

@@ -155,9 +155,7 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
     let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
     let file: FileToml = toml::from_str(&text).map_err(|e| error(e.to_string()))?;
     if file.recordings.is_empty() {
-        return Err(error(
-            "no [[recording]]: a suite needs at least one (its tables were all NaN)".into(),
-        ));
+        return Err(error("no [[recording]]: a suite needs at least one".into()));
     }
     if let Some(b) = file.inject_gyro_bias_rad_s
         && let Some(v) = b
@@ -177,7 +175,11 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
             w[0]
         )));
     }
-    let base = path.parent().unwrap_or(Path::new("."));
+    // A bare file name's parent is "" (the message then named an empty folder): ".".
+    let base = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
     let recordings = file
         .recordings
         .into_iter()

@@ -381,6 +381,7 @@ impl<'a> Ctx<'a> {
                 rows: rows.to_vec(),
                 rejected: Vec::new(),
                 has_temperature: self.log.has_temperature,
+                temperature_missing: 0,
                 extra_columns: self.log.extra_columns.clone(),
             },
             config: self.config.clone(),

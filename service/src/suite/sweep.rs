@@ -149,7 +149,10 @@ pub fn run_sweep(suite_path: &Path, sweep_path: &Path) -> Result<Vec<SweepResult
             for (v, value) in p.values.iter().enumerate() {
                 let file = with_value(&ctx.config, &p.key, value).map_err(&file_err)?;
                 let path = base.join(&r.config);
-                let cfg = config_for(&file, &path, r, best, BiasPrior::RestMean).map_err(wrap)?;
+                // A value the configuration refuses is the sweep file's, not the sensor
+                // configuration's (the error named the latter, a review).
+                let cfg = config_for(&file, &path, r, best, BiasPrior::RestMean)
+                    .map_err(|e| file_err(format!("parameter {} = {value}: {e}", p.key)))?;
                 let fp = ctx.footprint_at(&cfg, say.take()).map_err(wrap)?;
                 res.rms_pct[v].push(fp.rms_pct);
             }

@@ -247,8 +247,12 @@ pub struct ImuLog {
     /// but for a row held until the next row (a first time, a gap's far side, a time jump)
     /// whose rejection follows that of rows rejected in between.
     pub rejected: Vec<RejectedRow>,
-    /// Whether the file has a `temp_c` column (then every row has `temp_c: Some(_)`).
+    /// Whether the file has a `temp_c` column (then a row has `temp_c: Some(_)` where its field
+    /// held a finite number).
     pub has_temperature: bool,
+    /// Data rows whose `temp_c` field was empty or no finite number (a temperature logged at a
+    /// lower rate than the rest): their temperature is unknown, nothing else of them.
+    pub temperature_missing: u64,
     /// Names of the header columns after the seven required ones, in order (including `temp_c`).
     pub extra_columns: Vec<String>,
 }
@@ -431,6 +435,7 @@ fn collect<R: BufRead>(mut reader: ImuCsvReader<R>) -> Result<ImuLog, ImuCsvErro
         rows,
         rejected: reader.rejected,
         has_temperature: reader.temp_index.is_some(),
+        temperature_missing: reader.temperature_missing,
         extra_columns: reader.names.split_off(REQUIRED_COLUMNS.len()),
     })
 }

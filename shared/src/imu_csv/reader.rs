@@ -22,6 +22,8 @@ pub struct ImuCsvReader<R> {
     /// Header column names, trimmed.
     pub(super) names: Vec<String>,
     pub(super) temp_index: Option<usize>,
+    /// Data rows whose `temp_c` field was empty or no finite number (their temperature unknown).
+    pub(super) temperature_missing: u64,
     /// 1-based number of the last line read.
     pub(super) line_no: u64,
     pub(super) line: Vec<u8>,
@@ -111,6 +113,7 @@ impl<R: BufRead> ImuCsvReader<R> {
             check_units: opts.check_units,
             names: Vec::new(),
             temp_index: None,
+            temperature_missing: 0,
             line_no: 0,
             line: Vec::new(),
             bytes_read: 0,
@@ -178,6 +181,12 @@ impl<R: BufRead> ImuCsvReader<R> {
     /// Whether the file has a `temp_c` column.
     pub fn has_temperature(&self) -> bool {
         self.temp_index.is_some()
+    }
+
+    /// Data rows so far whose `temp_c` field was empty or no finite number: their temperature
+    /// is unknown (NaN on the wire); the rows themselves are read as any other.
+    pub fn temperature_missing(&self) -> u64 {
+        self.temperature_missing
     }
 
     /// A guess of the number of rows from the length and the first row (for a collecting caller).
@@ -378,6 +387,9 @@ impl<R: BufRead> ImuCsvReader<R> {
             let text = strip_cr(&raw);
             let parsed = parse_row(text, line_no, n_fields, self.temp_index);
             if let Ok(row) = &parsed {
+                if self.temp_index.is_some() && row.temp_c.is_none() {
+                    self.temperature_missing += 1;
+                }
                 let (first, _, n) = self.parsed_t.unwrap_or((row.t_s, row.t_s, 0));
                 self.parsed_t = Some((first, row.t_s, n + 1));
             }

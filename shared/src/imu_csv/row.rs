@@ -32,17 +32,17 @@ pub(super) fn parse_row(
     loop {
         let field_end = find_comma_or_newline(bytes, field_start);
         // Keep counting fields after a problem: a wrong count outranks a bad field.
-        if problem.is_none() && (index < values.len() || Some(index) == temp_index) {
+        if problem.is_none() && Some(index) == temp_index {
+            // The temperature is carried, never used by the estimator: a field that is no
+            // finite number (empty where a sensor logs it at 1 Hz, NaN, text) leaves it unknown
+            // and costs the sample nothing (it rejected the row, a review of session 38).
+            let field = unquote(&text[field_start..field_end]);
+            temp_c = field.parse::<f64>().ok().filter(|v| v.is_finite());
+        } else if problem.is_none() && index < values.len() {
             // `,` is ASCII, so both ends are char boundaries.
             let field = unquote(&text[field_start..field_end]);
             match field.parse::<f64>() {
-                Ok(v) if v.is_finite() => {
-                    if index < values.len() {
-                        values[index] = v;
-                    } else {
-                        temp_c = Some(v);
-                    }
-                }
+                Ok(v) if v.is_finite() => values[index] = v,
                 Ok(_) => {
                     problem = Some(RowProblem::Field {
                         index,

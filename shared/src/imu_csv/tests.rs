@@ -117,6 +117,31 @@ fn parses_values_and_extra_columns() {
     assert_eq!(log.rows[0].temp_c, Some(25.5));
 }
 
+/// A temperature logged at a lower rate than the rest (empty fields), or a bad one, leaves
+/// that row's temperature unknown, counted, and costs the row nothing: the estimator never
+/// uses it (such a file lost every row to the 1 % rule, a review of session 38).
+#[test]
+fn an_empty_or_bad_temperature_is_unknown_and_counted_not_a_rejected_row() {
+    let mut text = format!("{HEADER},temp_c\n");
+    let temps = ["25.5", "", "nan", "warm", "inf", "26.0", " "];
+    for (k, t) in temps.iter().enumerate() {
+        text.push_str(&format!(
+            "{},0.1,0.2,0.3,1.0,2.0,9.0,{t}\n",
+            k as f64 * 0.005
+        ));
+    }
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(log.rows.len(), temps.len());
+    assert!(log.rejected.is_empty());
+    let got: Vec<Option<f64>> = log.rows.iter().map(|r| r.temp_c).collect();
+    assert_eq!(got, [Some(25.5), None, None, None, None, Some(26.0), None]);
+    assert_eq!(log.temperature_missing, 5);
+    // The measured columns are still checked as before.
+    let bad = format!("{HEADER},temp_c\n0.0,0.1,x,0.3,1.0,2.0,9.0,25.0\n");
+    let err = parse_imu_csv(&bad, path(), &ImuCsvOptions::default()).unwrap_err();
+    assert!(err.to_string().contains("gy_rad_s"), "{err}");
+}
+
 #[test]
 fn no_temperature_column_gives_none() {
     let log = parse_imu_csv(&good_file(3), path(), &ImuCsvOptions::default()).unwrap();
