@@ -8,8 +8,9 @@
 //! bias, the converged-phase mean, the positions next to the footprint times in a
 //! [`GcpSampler`], for `--plots` at most [`PLOT_POINTS`] samples of each trace), so its memory
 //! does not depend on the log's length. Every output is written as `NAME.partial` and renamed
-//! only when the run succeeded; a run that fails removes its partial files (one killed leaves
-//! them named `.partial`), and earlier outputs in the directory stay as they were.
+//! only when the run succeeded, which also removes an earlier run's outputs it did not write (its
+//! figures); a run that fails removes its partial files (one killed leaves them named
+//! `.partial`), and earlier outputs in the directory stay as they were.
 //!
 //! [`run_log`] runs a log already in memory and keeps the whole per-sample [`Trace`]: the
 //! suite, the diagnosis and the tests use it on the bundled recordings. It logs nothing per
@@ -38,7 +39,7 @@ use figures::write_figures_to;
 pub use outputs::{
     ESTIMATES_HEADER, INNOVATIONS_HEADER, create, io_at, write_estimate_row, write_innovation_rows,
 };
-pub use stream::{PLOT_POINTS, RunOptions, Summary, run};
+pub use stream::{PLOT_POINTS, RUN_OUTPUT_FILES, RunOptions, Summary, run};
 
 /// Anything that stops a run.
 #[derive(Debug, thiserror::Error)]
@@ -457,6 +458,43 @@ mod tests {
             .validate()
             .expect("valid");
         (log, cfg)
+    }
+
+    /// A run into a directory that holds an earlier run's figures removes them when it succeeds
+    /// (they passed for its own, a review); a failed run leaves the directory as it was.
+    #[test]
+    fn a_run_without_figures_removes_an_earlier_runs_figures() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let out = std::env::temp_dir().join(format!("corridor-stale-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&out);
+        let path = root.join("configs/gdins.toml");
+        let config = ConfigFile::read(&path).unwrap().validate().unwrap();
+        let mut opts = RunOptions {
+            imu: root.join("tests/data/gdins_exp17_rect_loop_small/imu.csv"),
+            config,
+            map: None,
+            truth: None,
+            injection: BiasInjection::default(),
+            plots: true,
+            out_dir: out.clone(),
+            csv: ImuCsvOptions::default(),
+            warm_start: None,
+        };
+        run(&opts).unwrap();
+        let there = |name: &str| out.join(name).exists();
+        assert!(RUN_OUTPUT_FILES.iter().all(|f| there(f)));
+        // A failed run (its log missing) leaves them.
+        opts.plots = false;
+        opts.imu = root.join("no-such-log.csv");
+        assert!(run(&opts).is_err());
+        assert!(there("bias.svg"));
+        opts.imu = root.join("tests/data/gdins_exp17_rect_loop_small/imu.csv");
+        run(&opts).unwrap();
+        for f in ["trajectory.svg", "bias.svg", "covariance.svg"] {
+            assert!(!there(f), "{f} of the earlier run is left");
+        }
+        assert!(there("summary.json") && there("estimates.csv"));
+        std::fs::remove_dir_all(&out).unwrap();
     }
 
     #[test]

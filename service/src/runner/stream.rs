@@ -205,6 +205,18 @@ impl PlotTrace {
     }
 }
 
+/// Every file `corridor run` writes into its output directory. One that a successful run did
+/// not write (the figures of an earlier run with `--plots`) is removed then: left, it passed
+/// for this run's (a review, session 38).
+pub const RUN_OUTPUT_FILES: [&str; 6] = [
+    "estimates.csv",
+    "innovations.csv",
+    "summary.json",
+    "trajectory.svg",
+    "bias.svg",
+    "covariance.svg",
+];
+
 /// Outputs written as `NAME.partial` and renamed to `NAME` by [`Staged::commit`]; dropped
 /// without it (a failed run), the partial files are removed.
 struct Staged {
@@ -243,12 +255,24 @@ impl Staged {
         Ok((create(&partial)?, partial))
     }
 
-    /// Renames every file to its final name.
-    fn commit(mut self) -> Result<(), RunError> {
+    /// Renames every file to its final name, and removes the outputs of an earlier run in
+    /// `dir` that this one did not write ([`RUN_OUTPUT_FILES`]).
+    fn commit(mut self, dir: &Path) -> Result<(), RunError> {
         for f in &self.files {
             std::fs::rename(Self::partial(f), f).map_err(io_at(f))?;
         }
         self.committed = true;
+        for name in RUN_OUTPUT_FILES {
+            let stale = dir.join(name);
+            if !self.files.contains(&stale) {
+                match std::fs::remove_file(&stale) {
+                    Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                        return Err(io_at(&stale)(e));
+                    }
+                    _ => {}
+                }
+            }
+        }
         Ok(())
     }
 }
@@ -502,7 +526,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
     std::fs::write(&sum_path, json + "\n")
         .map_err(io_at(&sum_path))
-        .and_then(|()| staged.commit())
+        .and_then(|()| staged.commit(&opts.out_dir))
         .inspect_err(|_| say_more(""))?;
     say_more(" (counts in summary.json)");
     Ok(summary)
