@@ -25,7 +25,7 @@ struct Args {
     /// IMU log (CSV: t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2,...).
     #[arg(long)]
     imu: PathBuf,
-    /// realtime, max, or a speed-up factor (2 = twice real time).
+    /// realtime, max, or a speed-up factor in [0.001, 1e6] (2 = twice real time).
     #[arg(long, default_value = "realtime")]
     speed: Speed,
     /// Send the log this many times (time continues across loops).

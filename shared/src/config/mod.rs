@@ -329,6 +329,11 @@ mod tests {
                 "sensor.min_dt_s",
                 "sensor.max_dt_s = 1e-9",
             ),
+            (
+                "[detector]\nmin_stance_s = 0.0\nlate_stance_min_s = 0.02\n",
+                "detector.late_stance_min_s",
+                "detector.min_stance_s = 0",
+            ),
         ] {
             let f = ConfigFile::parse(text, Path::new("a.toml")).unwrap();
             let err = f.validate().unwrap_err().to_string();

@@ -362,6 +362,17 @@ impl ConfigFile {
                     .late_stance_min_s
                     .map(|v| {
                         // A dip as long as a stance is a stance: longer would never fire.
+                        // Beyond it, the other key's value is said too: the user may have
+                        // changed that one (a review found `min_stance_s = 0` reported as this
+                        // key's 0.02 alone).
+                        let min_stance = d.min_stance_s.unwrap_or(DETECTOR_MIN_STANCE_S);
+                        if v > min_stance {
+                            return Err(invalid(
+                                "detector.late_stance_min_s",
+                                format!("{v} (with detector.min_stance_s = {min_stance})"),
+                                "must be in (0, detector.min_stance_s] s",
+                            ));
+                        }
                         Positive::in_range(
                             "detector.late_stance_min_s",
                             v,
