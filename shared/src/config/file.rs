@@ -168,10 +168,11 @@ pub struct AlignmentFile {
     /// health bound.
     pub max_prior_rate_rad_s: Option<f64>,
     /// The gyro bias this sensor unit starts with, rad/s, sensor axes (e.g. the median of the
-    /// final biases of its earlier recordings): with `gyro_bias_prior = "rest_mean"`, what is
-    /// known of the bias before the rest is this with σ `typical_gyro_bias_sd_rad_s`, instead
-    /// of zero with `eskf.gyro_bias_initial_sd_rad_s`. A start without a rest begins there and
-    /// a rest is fused with it. Left out: zero. Both keys or neither.
+    /// final biases of its earlier recordings): with `gyro_bias_prior = "rest_mean"`, a start
+    /// without a rest (or with one refused as turning) begins here with σ
+    /// `typical_gyro_bias_sd_rad_s`, instead of at zero with `eskf.gyro_bias_initial_sd_rad_s`;
+    /// so does a bias thrown away (a restore loop, a relevel). A rest is not fused with it: the
+    /// rest measures the bias of now. Left out: zero. Both keys or neither.
     pub typical_gyro_bias_rad_s: Option<[f64; 3]>,
     /// The σ of `typical_gyro_bias_rad_s` on each axis, rad/s: the spread of the unit's biases
     /// from one start to the next, with a margin.

@@ -105,7 +105,7 @@ pub struct AlignmentConfig {
     /// The largest initial-rest mean rate (magnitude) taken as the bias prior, rad/s (`None`:
     /// only the sensor's largest bias, per axis).
     pub max_prior_rate_rad_s: Option<Positive>,
-    /// What is known of the bias before the rest, with the rest-mean prior (`None`: zero, with
+    /// Where the bias starts without a rest, with the rest-mean prior (`None`: zero, with
     /// `eskf.gyro_bias_initial_sd_rad_s`).
     pub typical_gyro_bias: Option<TypicalGyroBias>,
 }

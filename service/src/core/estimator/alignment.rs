@@ -199,19 +199,24 @@ impl Pipeline {
         let wants_prior = self.cfg.alignment.gyro_bias_prior == BiasPrior::RestMean;
         self.counters.rest_prior_refused = wants_prior && turning;
         let rest_prior = wants_prior && !short_start && !turning;
-        // The rest's mean rate is a measurement of the bias with the σ above; what is known
-        // before it (the unit's typical bias with its σ, `alignment.typical_gyro_bias_rad_s`,
-        // or else zero with the sensor's spread of biases, `eskf.gyro_bias_initial_sd_rad_s`)
-        // is fused with it per axis. A quiet rest's σ (5e-4–2.5e-3 rad/s) is below either and
-        // its mean is taken nearly whole; a "rest" that is mostly motion (a foot that shifts
-        // before its first step, a rest cut short by a loss so that only its moving tail is
-        // left) has a wide σ and its mean, tens of mrad/s off, no longer starts the filter
-        // there. Without a rest (or one refused as turning) the typical bias is the start.
-        let (before_rest, before_rest_sd) = self.bias_before_rest();
+        // The rest's mean rate is a measurement of the bias with the σ above; the sensor's own
+        // spread of biases (`eskf.gyro_bias_initial_sd_rad_s` about zero) is what is known
+        // before it, and the two are fused per axis. A quiet rest's σ (5e-4–2.5e-3 rad/s) is
+        // far below 0.01 and its mean is taken nearly whole; a "rest" that is mostly motion (a
+        // foot that shifts before its first step, a rest cut short by a loss so that only its
+        // moving tail is left) has a wide σ and its mean, tens of mrad/s off, no longer starts
+        // the filter there. Without a rest (or with one refused as turning) the start is the
+        // unit's typical bias when configured (`alignment.typical_gyro_bias_rad_s`). It is not
+        // fused with a rest: fused, its σ of 4 mrad/s pulled a swaying rest's mean by up to 28 %
+        // of the difference, which is right only for this unit and a bias that did not
+        // move (a g-sensitivity injected into the diagnosis's matrix was named first on 8 of 13
+        // walks instead of 10, and the late injection lost an axis: session 38).
         let (b0, prior_sd, sd0) = if rest_prior {
-            let (b0, prior_sd) = fuse_with_prior(&mean_w, &rest_sd, &before_rest, before_rest_sd);
+            let initial_sd = self.cfg.eskf.gyro_bias_initial_sd_rad_s.get();
+            let (b0, prior_sd) = fuse_with_zero_prior(&mean_w, &rest_sd, initial_sd);
             (b0, prior_sd, self.cfg.eskf.gyro_bias_prior_sd_rad_s.get())
         } else {
+            let (before_rest, before_rest_sd) = self.bias_before_rest();
             (before_rest, Vector3::repeat(before_rest_sd), before_rest_sd)
         };
         let e = &self.cfg.eskf;
@@ -353,16 +358,15 @@ impl Pipeline {
     }
 }
 
-/// The bias measured as `mean` with σ `sd` (per axis), fused with a prior `prior` of σ
+/// The bias measured as `mean` with σ `sd` (per axis), fused with a prior of zero and σ
 /// `prior_sd`: the posterior mean and σ, per axis.
-fn fuse_with_prior(
+fn fuse_with_zero_prior(
     mean: &Vector3<f64>,
     sd: &Vector3<f64>,
-    prior: &Vector3<f64>,
     prior_sd: f64,
 ) -> (Vector3<f64>, Vector3<f64>) {
     let p2 = prior_sd * prior_sd;
     let gain = sd.map(|s| p2 / (p2 + s * s));
     let post_sd = sd.map(|s| (p2 * s * s / (p2 + s * s)).sqrt());
-    (prior + (mean - prior).component_mul(&gain), post_sd)
+    (mean.component_mul(&gain), post_sd)
 }

@@ -80,7 +80,10 @@ impl EstState<'_> {
         } else if self.est.bias_state().is_none() {
             // Before the first stream's alignment there is no estimate: the fresh estimator's
             // zero bias with σ NaN was printed as one (a review, session 38).
-            ("(none before the alignment)".to_string(), "(none)".to_string())
+            (
+                "(none before the alignment)".to_string(),
+                "(none)".to_string(),
+            )
         } else {
             (
                 Vec3Fmt(self.last.gyro_bias_rad_s).to_string(),
