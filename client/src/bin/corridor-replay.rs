@@ -145,7 +145,7 @@ fn run() -> Result<()> {
             corridor_client::say!(
                 "the daemon, over the replay{}: received {}, missing from the numbering {} \
                  (overwritten in its live input buffer), before its first read of them {}, \
-                 dropped on a full queue {}, refused {}, estimated {}, producer changes {}, \
+                 dropped on a full queue {}, refused {}, accepted by its estimator {}, producer changes {}, \
                  refused as another producer's {}",
                 if complete {
                     ""
