@@ -118,27 +118,10 @@ macro_rules! say_err {
     }};
 }
 
-static TERMINATION_SEEN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
-/// True once SIGINT or SIGTERM was received by this process, as seen through `node`, for
-/// every thread. iceoryx2's signal handler clears a signal when it is read
-/// (`SignalHandler::last_signal`), so a second thread that also polls (the replay's watch on
-/// the daemon's diagnostics) took the Ctrl-C from the thread that was to act on it, and the
-/// replay could not be stopped (a review, session 38): the first thread to see it keeps it
-/// here. `Producer` and `Subscriber` ask through this; so should anything else that polls.
-pub fn termination_requested<S: iceoryx2::service::Service>(
-    node: &iceoryx2::node::Node<S>,
-) -> bool {
-    use std::sync::atomic::Ordering;
-    if TERMINATION_SEEN.load(Ordering::Relaxed) {
-        return true;
-    }
-    let seen = node.wait(std::time::Duration::ZERO).is_err();
-    if seen {
-        TERMINATION_SEEN.store(true, Ordering::Relaxed);
-    }
-    seen
-}
+/// True once SIGINT or SIGTERM was received by this process, for every thread (the latch is
+/// `corridor_shared::services::termination_requested`'s). `Producer` and `Subscriber` ask
+/// through it; so should anything else that polls.
+pub use corridor_shared::services::termination_requested;
 
 /// The error and its causes on one line (`a: b: c`), each cause once: a cause whose text the
 /// message already contains (many errors repeat their source in their own text) is left out.

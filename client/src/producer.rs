@@ -304,7 +304,7 @@ impl Producer {
 
     /// True once SIGINT or SIGTERM was received by this process.
     pub fn termination_requested(&self) -> bool {
-        crate::termination_requested(&self.node)
+        corridor_shared::services::termination_requested(&self.node)
     }
 }
 

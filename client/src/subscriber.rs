@@ -194,6 +194,6 @@ impl<T: Topic> Subscriber<T> {
 
     /// True once SIGINT or SIGTERM was received by this process.
     pub fn termination_requested(&self) -> bool {
-        crate::termination_requested(&self.node)
+        corridor_shared::services::termination_requested(&self.node)
     }
 }

@@ -3,6 +3,7 @@
 //! stopped). Its own test binary: the signal and the latch belong to the process.
 
 use corridor_client::Domain;
+use corridor_shared::services::node_sleep;
 use iceoryx2::prelude::SignalHandlingMode;
 use std::time::{Duration, Instant};
 
@@ -22,11 +23,11 @@ fn a_termination_request_read_through_one_node_is_seen_through_the_others() {
         .status()
         .unwrap();
     assert!(sent.success());
-    // Delivered asynchronously: poll one node until it is read there.
+    // Delivered asynchronously: read first by a sleep on one node, as a subscriber that is
+    // opening reads it (its reader once kept it from everyone else, a review).
     let deadline = Instant::now() + Duration::from_secs(10);
-    while !corridor_client::termination_requested(&a) {
+    while node_sleep(&a, Duration::from_millis(5)) {
         assert!(Instant::now() < deadline, "SIGINT never seen");
-        std::thread::sleep(Duration::from_millis(5));
     }
     // The other node's reader sees it as well, from another thread, and again later.
     let seen_by_b = std::thread::scope(|s| {
@@ -36,4 +37,5 @@ fn a_termination_request_read_through_one_node_is_seen_through_the_others() {
     });
     assert!(seen_by_b, "the request read through `a` was lost to `b`");
     assert!(corridor_client::termination_requested(&a));
+    assert!(!node_sleep(&b, Duration::from_millis(1)), "a sleep after it ends at once");
 }

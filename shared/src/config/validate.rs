@@ -58,13 +58,35 @@ impl ConfigFile {
         let alone: ConfigFile =
             toml::from_str(&base_text).map_err(|e| toml_err(&base_path, e.to_string()))?;
         alone.validate().map_err(|e| with_path(e, &base_path))?;
-        // The layer alone too (without its `base`), for its unknown keys.
+        // The layer alone too (without its `base`), for its unknown keys and wrong types: parsed
+        // from its text with the `base` line blanked, so that the error keeps its line and
+        // column (from the table it had neither, a review); from the table when `base` is not
+        // on a line of its own.
         let mut layer = table;
         layer.remove("base");
-        layer
-            .clone()
-            .try_into::<ConfigFile>()
-            .map_err(|e| toml_err(path, e.to_string()))?;
+        let blanked: String = text
+            .lines()
+            .map(|l| {
+                if l.trim_start().starts_with("base") && l.contains('=') {
+                    ""
+                } else {
+                    l
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        match toml::from_str::<toml::Table>(&blanked) {
+            Ok(t) if t == layer => {
+                toml::from_str::<ConfigFile>(&blanked)
+                    .map_err(|e| toml_err(path, e.to_string()))?;
+            }
+            _ => {
+                layer
+                    .clone()
+                    .try_into::<ConfigFile>()
+                    .map_err(|e| toml_err(path, e.to_string()))?;
+            }
+        }
         for (section, value) in layer {
             match (merged.get_mut(&section), value) {
                 (Some(toml::Value::Table(into)), toml::Value::Table(keys)) => into.extend(keys),

@@ -410,12 +410,42 @@ impl Domain {
 /// (Ctrl-Z, `fg`) Linux ends a `nanosleep` with EINTR even without a handler, and `Node::wait`
 /// then reports an interrupt although nobody asked to stop; a zero-length wait tells the two
 /// apart (it checks the termination request first).
+///
+/// A termination request it reads is kept for every thread ([`termination_requested`]).
 pub fn node_sleep(node: &Node<ipc::Service>, d: std::time::Duration) -> bool {
-    match node.wait(d) {
+    use std::sync::atomic::Ordering;
+    if TERMINATION_SEEN.load(Ordering::Relaxed) {
+        return false;
+    }
+    let going_on = match node.wait(d) {
         Ok(()) => true,
         Err(iceoryx2::node::NodeWaitFailure::TerminationRequest) => false,
         Err(iceoryx2::node::NodeWaitFailure::Interrupt) => {
             node.wait(std::time::Duration::ZERO).is_ok()
         }
+    };
+    if !going_on {
+        TERMINATION_SEEN.store(true, Ordering::Relaxed);
     }
+    going_on
+}
+
+static TERMINATION_SEEN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// True once SIGINT or SIGTERM was received by this process, as seen through `node` or through
+/// any earlier reader, for every thread. iceoryx2's signal handler clears a signal when it is
+/// read (`SignalHandler::last_signal`), so a second thread that also polled (the replay's watch
+/// on the daemon's diagnostics, or a subscriber opening, through [`node_sleep`]) took the
+/// Ctrl-C from the thread that was to act on it, and the replay could not be stopped (reviews
+/// of session 38): whoever sees it first keeps it here.
+pub fn termination_requested<S: iceoryx2::service::Service>(node: &Node<S>) -> bool {
+    use std::sync::atomic::Ordering;
+    if TERMINATION_SEEN.load(Ordering::Relaxed) {
+        return true;
+    }
+    let seen = node.wait(std::time::Duration::ZERO).is_err();
+    if seen {
+        TERMINATION_SEEN.store(true, Ordering::Relaxed);
+    }
+    seen
 }
