@@ -37,5 +37,8 @@ fn a_termination_request_read_through_one_node_is_seen_through_the_others() {
     });
     assert!(seen_by_b, "the request read through `a` was lost to `b`");
     assert!(corridor_client::termination_requested(&a));
-    assert!(!node_sleep(&b, Duration::from_millis(1)), "a sleep after it ends at once");
+    assert!(
+        !node_sleep(&b, Duration::from_millis(1)),
+        "a sleep after it ends at once"
+    );
 }

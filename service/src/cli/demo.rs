@@ -26,14 +26,14 @@ pub(super) fn demo(a: &DemoArgs) -> Result<()> {
     let suite = a.root.join("configs/eval/gdins.toml");
     let rows = corridor_service::suite::run_suite(&suite)?;
     let md = corridor_service::suite::markdown(&rows);
-    println!(
+    corridor_client::say!(
         "# Results on the bundled recordings ({})\n",
         suite.display()
     );
     print!("{md}");
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let loops = corridor_service::suite::run_loops(&suite, &a.out.join("diagnose"))?;
-    println!(
+    corridor_client::say!(
         "\n# The loop: residual diagnosis from the paper's model (reports in {})\n\n{loops}",
         a.out.join("diagnose").display()
     );
@@ -57,12 +57,12 @@ pub(super) fn demo(a: &DemoArgs) -> Result<()> {
         warm_start: None,
     };
     let s = runner::run(&opts)?;
-    println!(
+    corridor_client::say!(
         "\n# exp25 with the injected bias [0.001, 0.001, 0.005] rad/s, no prior, mode {}\n",
         s.mode
     );
-    println!("{}", serde_json::to_string_pretty(&brief(&s))?);
-    println!("\nFigures and CSV files: {}", run_dir.display());
+    corridor_client::say!("{}", serde_json::to_string_pretty(&brief(&s))?);
+    corridor_client::say!("\nFigures and CSV files: {}", run_dir.display());
     let exp25 = opts;
     let offline = s;
 
@@ -81,7 +81,7 @@ pub(super) fn demo(a: &DemoArgs) -> Result<()> {
     };
     let s = runner::run(&opts)?;
     let e = s.eval.as_ref();
-    println!(
+    corridor_client::say!(
         "\n# xio NGIMU long walk (~400 Hz, irregular timing, {} gaps > {} s): loop-closure error {:.3} m over {:.1} m walked (x-io's own ZUPT: 0.421 m)",
         s.gaps,
         opts.config.max_dt_s.get(),

@@ -145,20 +145,23 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
         .copied()
         .fold(0.0, |m: f64, d| if d > m || d.is_nan() { d } else { m });
 
-    println!(
+    corridor_client::say!(
         "\n# The same run through the daemon: iceoryx2 domain {:?}, lossless, replay at full speed with the injected bias, logger and PDR consumers\n",
         domain.name()
     );
-    println!(
+    corridor_client::say!(
         "replay: {sent} samples sent (+1 end-of-stream marker) in {replay_s:.2} s ({:.0} samples/s), {} reached no subscriber",
         sent as f64 / replay_s.max(1e-9),
         stats.imu_undelivered
     );
-    println!(
+    corridor_client::say!(
         "daemon: received {} (marker included), accepted {}, rejected {rejected}, sequence gaps {}, overflow drops {}",
-        d.received, d.accepted, d.seq_gaps, d.dropped_overflow
+        d.received,
+        d.accepted,
+        d.seq_gaps,
+        d.dropped_overflow
     );
-    println!(
+    corridor_client::say!(
         "logger: {} attitude rows, {} bias rows, {} missed ({}, {})",
         logged.attitude_rows,
         logged.bias_rows,
@@ -166,7 +169,7 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
         dir.join("attitude.csv").display(),
         dir.join("bias.csv").display()
     );
-    println!(
+    corridor_client::say!(
         "pdr: {} strides ({} stances offline), {} missed; last at t = {:.2} s: x = {:.3} m, y = {:.3} m, z = {:.3} m, yaw = {:.1}°; path {:.2} m",
         tracked.strides,
         offline.stances,
@@ -178,24 +181,30 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
         last.yaw_rad.to_degrees(),
         path_m
     );
-    println!("lost: {lost} (daemon {lost_daemon}, logger {lost_logger}, pdr {lost_pdr})");
-    println!(
+    corridor_client::say!(
+        "lost: {lost} (daemon {lost_daemon}, logger {lost_logger}, pdr {lost_pdr})"
+    );
+    corridor_client::say!(
         "\nfinal gyro bias, rad/s   {:>22} {:>22} {:>22}",
-        "x", "y", "z"
+        "x",
+        "y",
+        "z"
     );
     let row = |name: &str, v: [f64; 3]| {
-        println!(
+        corridor_client::say!(
             "{name:<24} {:>22.15e} {:>22.15e} {:>22.15e}",
-            v[0], v[1], v[2]
+            v[0],
+            v[1],
+            v[2]
         );
     };
     row("daemon", daemon_bias);
     row("corridor run (offline)", offline.bias_rad_s);
     row("|difference|", diff);
     for w in &report.warnings {
-        println!("daemon warning: {w}");
+        corridor_client::say!("daemon warning: {w}");
     }
-    println!(
+    corridor_client::say!(
         "iceoryx2 files left for the domain: {}",
         if left.is_empty() {
             "none".to_owned()
@@ -203,7 +212,7 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
             left.join(", ")
         }
     );
-    println!(
+    corridor_client::say!(
         "daemon section: {:.2} s wall time",
         started.elapsed().as_secs_f64()
     );

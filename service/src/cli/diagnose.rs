@@ -64,7 +64,7 @@ fn detection_matrix(suite: &std::path::Path, out: &std::path::Path) -> Result<()
     let m = suite::detection_matrix(
         suite,
         |c| {
-            eprintln!(
+            corridor_client::say_err!(
                 "{} | {}: top {} (expected {}: score {}, detectable {}) | rms {} -> {}",
                 c.recording,
                 c.case,
@@ -77,7 +77,7 @@ fn detection_matrix(suite: &std::path::Path, out: &std::path::Path) -> Result<()
             )
         },
         |r| {
-            eprintln!(
+            corridor_client::say_err!(
                 "{} | {} scan: predicted {}, power from {}, named from {}{}",
                 r.recording,
                 r.variant,

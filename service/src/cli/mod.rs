@@ -107,7 +107,10 @@ enum Command {
 pub fn main() -> ExitCode {
     corridor_client::init_tracing("info");
     let cli = Cli::parse();
-    if !matches!(cli.command, Command::Serve(_)) {
+    if matches!(
+        cli.command,
+        Command::Man | Command::Completions(_) | Command::Status(_)
+    ) {
         end_quietly_on_a_closed_pipe();
     }
     match dispatch(cli) {
@@ -122,18 +125,19 @@ pub fn main() -> ExitCode {
                 )
             }) =>
         {
-            eprintln!("error: {}", corridor_client::error_message(&e));
+            corridor_client::say_err!("error: {}", corridor_client::error_message(&e));
             ExitCode::from(2)
         }
         Err(e) => corridor_client::exit(Err(e)),
     }
 }
 
-/// A one-shot command whose reader left (`corridor man | head -1`, `corridor run … | head`)
-/// ends quietly, as `cat` does, instead of panicking in `println!` or reporting "Broken pipe"
-/// (a review, session 38): SIGPIPE back to its default, which Rust's start-up sets to ignored.
-/// Not for `serve`: a daemon outlives whoever reads its log, whose lines are then dropped
-/// (`init_tracing`). A run killed so leaves its outputs named `.partial`, as any killed run.
+/// A command that only prints (`corridor man | head -1`, `status`, `completions`) ends quietly
+/// when its reader leaves, as `cat` does, instead of reporting "Broken pipe" (a review, session
+/// 38): SIGPIPE back to its default, which Rust's start-up sets to ignored. Not for the
+/// commands that do work and write files (`run`, `eval`, `diagnose`, `demo`, whose daemon
+/// would leave its shared-memory files, and `serve`): their lines go through `say!`, which
+/// drops a line it cannot write, and their logs through `init_tracing`, which does the same.
 fn end_quietly_on_a_closed_pipe() {
     // SAFETY: signal(2) setting a standard disposition, at start-up before any thread exists;
     // no handler of ours is involved.

@@ -70,7 +70,7 @@ pub(super) fn run(a: &RunArgs) -> Result<()> {
             .map(|cp| cp.warm_start()),
     };
     let s = runner::run(&opts)?;
-    println!("{}", serde_json::to_string_pretty(&brief(&s))?);
+    corridor_client::say!("{}", serde_json::to_string_pretty(&brief(&s))?);
     Ok(())
 }
 
