@@ -9,7 +9,7 @@
 //! [`GcpSampler`], for `--plots` at most [`PLOT_POINTS`] samples of each trace), so its memory
 //! does not depend on the log's length. Every output is written as `NAME.partial` and renamed
 //! only when the run succeeded, which also removes an earlier run's outputs it did not write (its
-//! figures); a run that fails removes its partial files (one killed leaves them named
+//! figures, as its `summary.json` lists them); a run that fails removes its partial files (one killed leaves them named
 //! `.partial`), and earlier outputs in the directory stay as they were.
 //!
 //! [`run_log`] runs a log already in memory and keeps the whole per-sample [`Trace`]: the
@@ -461,12 +461,16 @@ mod tests {
     }
 
     /// A run into a directory that holds an earlier run's figures removes them when it succeeds
-    /// (they passed for its own, a review); a failed run leaves the directory as it was.
+    /// (they passed for its own, a review); a failed run leaves the directory as it was, and a
+    /// file of those names that no run listed as its own is the user's and stays.
     #[test]
     fn a_run_without_figures_removes_an_earlier_runs_figures() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
         let out = std::env::temp_dir().join(format!("corridor-stale-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&out);
+        // The user's own figure, in a directory no run has written to: kept.
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join("bias.svg"), "mine").unwrap();
         let path = root.join("configs/gdins.toml");
         let config = ConfigFile::read(&path).unwrap().validate().unwrap();
         let mut opts = RunOptions {
@@ -475,13 +479,19 @@ mod tests {
             map: None,
             truth: None,
             injection: BiasInjection::default(),
-            plots: true,
+            plots: false,
             out_dir: out.clone(),
             csv: ImuCsvOptions::default(),
             warm_start: None,
         };
         run(&opts).unwrap();
         let there = |name: &str| out.join(name).exists();
+        assert_eq!(
+            std::fs::read_to_string(out.join("bias.svg")).unwrap(),
+            "mine"
+        );
+        opts.plots = true;
+        run(&opts).unwrap();
         assert!(RUN_OUTPUT_FILES.iter().all(|f| there(f)));
         // A failed run (its log missing) leaves them.
         opts.plots = false;

@@ -110,6 +110,9 @@ pub struct Summary {
     pub late_footfalls_dropped: u64,
     /// Footprint evaluation (first-leg alignment), when truth was given.
     pub eval: Option<EvalReport>,
+    /// The files this run wrote into its output directory (names), this one included: what a
+    /// later run into the same directory may remove when it does not write them again.
+    pub outputs: Vec<String>,
 }
 
 /// What a streamed run keeps of its estimates: memory independent of the log's length.
@@ -205,9 +208,10 @@ impl PlotTrace {
     }
 }
 
-/// Every file `corridor run` writes into its output directory. One that a successful run did
-/// not write (the figures of an earlier run with `--plots`) is removed then: left, it passed
-/// for this run's (a review, session 38).
+/// Every file `corridor run` writes into its output directory. One that an earlier run wrote
+/// (its `summary.json` lists it) and a successful run did not write again (the figures of a run
+/// with `--plots`) is removed then: left, it passed for this run's (reviews of session 38; a
+/// file of these names that no run of ours listed is the user's, and stays).
 pub const RUN_OUTPUT_FILES: [&str; 6] = [
     "estimates.csv",
     "innovations.csv",
@@ -255,26 +259,50 @@ impl Staged {
         Ok((create(&partial)?, partial))
     }
 
-    /// Renames every file to its final name, and removes the outputs of an earlier run in
-    /// `dir` that this one did not write ([`RUN_OUTPUT_FILES`]).
-    fn commit(mut self, dir: &Path) -> Result<(), RunError> {
+    /// Renames every file to its final name, then removes what an earlier run in `dir` wrote
+    /// (`earlier`, from its summary) and this one did not. The run has succeeded by then: a
+    /// file that cannot be removed is warned of, not an error.
+    fn commit(mut self, dir: &Path, earlier: &[String]) -> Result<(), RunError> {
         for f in &self.files {
             std::fs::rename(Self::partial(f), f).map_err(io_at(f))?;
         }
         self.committed = true;
-        for name in RUN_OUTPUT_FILES {
+        for name in earlier {
             let stale = dir.join(name);
-            if !self.files.contains(&stale) {
-                match std::fs::remove_file(&stale) {
-                    Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                        return Err(io_at(&stale)(e));
-                    }
-                    _ => {}
+            if self.files.contains(&stale) {
+                continue;
+            }
+            match std::fs::remove_file(&stale) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    tracing::warn!(
+                        "{}: an earlier run's output, not written by this one, could not be removed: {e}",
+                        stale.display()
+                    );
                 }
+                _ => {}
             }
         }
         Ok(())
     }
+}
+
+/// The outputs an earlier run listed in `dir/summary.json` (only names of
+/// [`RUN_OUTPUT_FILES`]); none when there is no such summary or it lists none.
+fn earlier_outputs(dir: &Path) -> Vec<String> {
+    let Ok(text) = std::fs::read_to_string(dir.join("summary.json")) else {
+        return Vec::new();
+    };
+    let Ok(json) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return Vec::new();
+    };
+    json.get("outputs")
+        .and_then(|v| v.as_array())
+        .into_iter()
+        .flatten()
+        .filter_map(|v| v.as_str())
+        .filter(|n| RUN_OUTPUT_FILES.contains(n))
+        .map(str::to_owned)
+        .collect()
 }
 
 impl Drop for Staged {
@@ -455,7 +483,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         )
         .inspect_err(|_| say_more(""))?;
     }
-    let summary = Summary {
+    let mut summary = Summary {
         imu: opts.imu.display().to_string(),
         mode: opts.config.mode.name(),
         bias_rad_s: kept.last.map_or([f64::NAN; 3], |l| l.0),
@@ -521,12 +549,20 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         late_footfalls: c.late_footfalls,
         late_footfalls_dropped: c.late_footfalls_dropped,
         eval,
+        outputs: Vec::new(),
     };
     let sum_path = staged.stage(opts.out_dir.join("summary.json"));
+    summary.outputs = staged
+        .files
+        .iter()
+        .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    // What an earlier run here wrote, by its own summary (nothing else is ever removed).
+    let earlier = earlier_outputs(&opts.out_dir);
     let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
     std::fs::write(&sum_path, json + "\n")
         .map_err(io_at(&sum_path))
-        .and_then(|()| staged.commit(&opts.out_dir))
+        .and_then(|()| staged.commit(&opts.out_dir, &earlier))
         .inspect_err(|_| say_more(""))?;
     say_more(" (counts in summary.json)");
     Ok(summary)
