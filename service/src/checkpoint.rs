@@ -245,9 +245,10 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, DecodeError> {
 fn payload_problem(e: &bincode::error::DecodeError, len: usize) -> String {
     use bincode::error::DecodeError as E;
     match e {
-        E::UnexpectedEnd { .. } => {
-            format!("truncated: its {len}-byte payload ends before the checkpoint does")
-        }
+        E::UnexpectedEnd { .. } => format!(
+            "its {len}-byte payload ends before the checkpoint does (truncated, or a length in it \
+             corrupt)"
+        ),
         E::Utf8 { .. } => "a text field that is not UTF-8".to_owned(),
         E::UnexpectedVariant { found, .. } => format!("an unknown variant number {found}"),
         E::LimitExceeded => "a length beyond the format's limit".to_owned(),
@@ -419,7 +420,7 @@ mod tests {
                 "{text}"
             );
             if cut > 12 {
-                assert!(text.contains("truncated"), "{text}");
+                assert!(text.contains("payload ends before"), "{text}");
             }
             assert!(e.is_cold_start());
             assert!(!p.exists(), "the corrupt file must be moved away");

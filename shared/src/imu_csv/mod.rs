@@ -83,7 +83,8 @@ pub struct ImuRow {
     pub gyro_rad_s: [f64; 3],
     /// Specific force along the body x, y, z axes in m/s² (points up at rest).
     pub accel_m_s2: [f64; 3],
-    /// Sensor temperature in °C; `Some` exactly when the file has a `temp_c` column.
+    /// Sensor temperature in °C; `Some` when the file has a `temp_c` column and this row's
+    /// field in it is a finite number.
     pub temp_c: Option<f64>,
     /// 1-based line number of this row in the file (the header is line 1).
     pub line: u64,

@@ -75,25 +75,23 @@ impl EstState<'_> {
         // The followed producer's input: a second producer's refused samples are not it.
         let received = d.received.saturating_sub(d.foreign_samples);
         let rate = received.saturating_sub(h.received) as f64 / secs;
+        // (Each with its unit, or none: "none rad/s" read oddly, a review.)
         let (bias, sd) = if self.between_streams {
-            ("(between streams)".to_string(), "(none)".to_string())
+            ("none (between streams)".to_string(), "none".to_string())
         } else if self.est.bias_state().is_none() {
             // Before the first stream's alignment there is no estimate: the fresh estimator's
             // zero bias with σ NaN was printed as one (a review, session 38).
-            (
-                "(none before the alignment)".to_string(),
-                "(none)".to_string(),
-            )
+            ("none before the alignment".to_string(), "none".to_string())
         } else {
             (
-                Vec3Fmt(self.last.gyro_bias_rad_s).to_string(),
-                Vec3Fmt(self.last.gyro_bias_sd_rad_s).to_string(),
+                format!("{} rad/s", Vec3Fmt(self.last.gyro_bias_rad_s)),
+                format!("{} rad/s", Vec3Fmt(self.last.gyro_bias_sd_rad_s)),
             )
         };
         tracing::info!(
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
-             dropped +{} ({}), producer changes {}, foreign samples {}, latency p50 {} p99 {}, bias {} rad/s, \
-             σ {} rad/s, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
+             dropped +{} ({}), producer changes {}, foreign samples {}, latency p50 {} p99 {}, bias {}, \
+             σ {}, converged {}, phase {}, implausible {}, time jumps {}, clipped {}, \
              health restores {} (footprints forgotten {}), velocity resets {}, tilts levelled again {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
              lost in a killed daemon {}, external headings refused {} (superseded {}, outside the gate {}, expired at a stream's end {}, undone by the health check {})",
             d.received,
