@@ -69,6 +69,21 @@ fn a_layered_file_takes_its_base_and_replaces_only_the_keys_it_sets() {
         e.contains("sensor.toml") && e.contains("eskf.zupt_sd_m_s"),
         "{e}"
     );
+    // A wrong type in the layer is named with its line, as in a file without a base (it lost
+    // its line, a review of session 38).
+    std::fs::write(dir.join("sensor.toml"), "[eskf]\nzupt_sd_m_s = 0.02\n").unwrap();
+    std::fs::write(
+        dir.join("daemon.toml"),
+        "base = \"sensor.toml\"\n\n[eskf]\naccel_noise_m_s2 = \"abc\"\n",
+    )
+    .unwrap();
+    let e = ConfigFile::read(&dir.join("daemon.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("daemon.toml") && e.contains("line 4") && e.contains("invalid type"),
+        "{e}"
+    );
     // A base that cannot be read is named from the file that asks for it.
     std::fs::remove_file(dir.join("sensor.toml")).unwrap();
     let e = ConfigFile::read(&dir.join("daemon.toml"))
