@@ -53,7 +53,8 @@ pub(super) fn diagnose(a: &DiagnoseArgs) -> Result<()> {
     }
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     corridor_service::diagnose::write_report(&a.out, &d.report, &d.before, &d.after)?;
-    print!("{}", std::fs::read_to_string(a.out.join("report.md"))?);
+    let report = std::fs::read_to_string(a.out.join("report.md"))?;
+    corridor_client::say!("{}", report.trim_end_matches('\n'));
     Ok(())
 }
 
@@ -98,6 +99,6 @@ fn detection_matrix(suite: &std::path::Path, out: &std::path::Path) -> Result<()
     let f = out.join("detection.json");
     std::fs::write(&f, serde_json::to_string_pretty(&m)? + "\n")
         .with_context(|| format!("writing {}", f.display()))?;
-    print!("{md}");
+    corridor_client::say!("{}", md.trim_end_matches('\n'));
     Ok(())
 }

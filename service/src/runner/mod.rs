@@ -498,6 +498,17 @@ mod tests {
         opts.imu = root.join("no-such-log.csv");
         assert!(run(&opts).is_err());
         assert!(there("bias.svg"));
+        // So does one that fails at its commit (a directory where its summary goes): no output
+        // half replaced.
+        let before = std::fs::read(out.join("estimates.csv")).unwrap();
+        std::fs::rename(out.join("summary.json"), out.join("kept.json")).unwrap();
+        std::fs::create_dir(out.join("summary.json")).unwrap();
+        opts.imu = root.join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
+        assert!(run(&opts).is_err());
+        assert_eq!(std::fs::read(out.join("estimates.csv")).unwrap(), before);
+        std::fs::remove_dir(out.join("summary.json")).unwrap();
+        std::fs::rename(out.join("kept.json"), out.join("summary.json")).unwrap();
+        assert!(!there("estimates.csv.partial") && !there("summary.json.partial"));
         opts.imu = root.join("tests/data/gdins_exp17_rect_loop_small/imu.csv");
         run(&opts).unwrap();
         for f in ["trajectory.svg", "bias.svg", "covariance.svg"] {

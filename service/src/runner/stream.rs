@@ -263,6 +263,15 @@ impl Staged {
     /// (`earlier`, from its summary) and this one did not. The run has succeeded by then: a
     /// file that cannot be removed is warned of, not an error.
     fn commit(mut self, dir: &Path, earlier: &[String]) -> Result<(), RunError> {
+        // A directory in the way fails a rename: found before the first one, so that a failed
+        // run leaves the earlier outputs whole rather than half replaced (a review).
+        if let Some(f) = self.files.iter().find(|f| f.is_dir()) {
+            let e = std::io::Error::new(
+                std::io::ErrorKind::IsADirectory,
+                "a directory stands where this output goes",
+            );
+            return Err(io_at(f)(e));
+        }
         for f in &self.files {
             std::fs::rename(Self::partial(f), f).map_err(io_at(f))?;
         }
