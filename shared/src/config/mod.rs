@@ -8,14 +8,15 @@
 //!
 //! Files: this one holds the error, the checked number types and the enums; `file.rs` the
 //! TOML mirror ([`ConfigFile`]); `settings.rs` the validated types ([`Config`]);
-//! `validate.rs` the one validation pass between them (`validate_daemon.rs` the `[daemon]`
-//! section's); `defaults.rs` every default, as a
+//! `read.rs` reading a file and layering it over its `base`; `validate.rs` the one validation
+//! pass between them (`validate_daemon.rs` the `[daemon]` section's); `defaults.rs` every default, as a
 //! named constant; `overrides.rs`
 //! [`ConfigOverrides`], the one way to replace a file's values (command line, suite, tests).
 
 pub mod defaults;
 mod file;
 mod overrides;
+mod read;
 mod settings;
 mod validate;
 mod validate_daemon;
