@@ -109,6 +109,13 @@ macro_rules! say {
     }};
 }
 
+/// Prints `text` to standard output as it is (a table that ends its own lines); like [`say!`],
+/// a text that cannot be written is dropped.
+pub fn say_text(text: &str) {
+    use std::io::Write as _;
+    let _ = std::io::stdout().write_all(text.as_bytes());
+}
+
 /// [`say!`] for standard error.
 #[macro_export]
 macro_rules! say_err {

@@ -30,7 +30,7 @@ pub(super) fn demo(a: &DemoArgs) -> Result<()> {
         "# Results on the bundled recordings ({})\n",
         suite.display()
     );
-    corridor_client::say!("{}", md.trim_end_matches('\n'));
+    corridor_client::say_text(&md);
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let loops = corridor_service::suite::run_loops(&suite, &a.out.join("diagnose"))?;
     corridor_client::say!(

@@ -54,7 +54,7 @@ pub(super) fn diagnose(a: &DiagnoseArgs) -> Result<()> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     corridor_service::diagnose::write_report(&a.out, &d.report, &d.before, &d.after)?;
     let report = std::fs::read_to_string(a.out.join("report.md"))?;
-    corridor_client::say!("{}", report.trim_end_matches('\n'));
+    corridor_client::say_text(&report);
     Ok(())
 }
 
@@ -99,6 +99,6 @@ fn detection_matrix(suite: &std::path::Path, out: &std::path::Path) -> Result<()
     let f = out.join("detection.json");
     std::fs::write(&f, serde_json::to_string_pretty(&m)? + "\n")
         .with_context(|| format!("writing {}", f.display()))?;
-    corridor_client::say!("{}", md.trim_end_matches('\n'));
+    corridor_client::say_text(&md);
     Ok(())
 }

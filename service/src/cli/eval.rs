@@ -63,7 +63,7 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
             "\nThe residual-diagnosis loop from the paper's model (`corridor diagnose`):\n\n{loops}"
         ));
     }
-    corridor_client::say!("{}", md.trim_end_matches('\n'));
+    corridor_client::say_text(&md);
     if let Some(dir) = a.out {
         std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
         std::fs::write(dir.join("results.md"), &md)?;
@@ -77,7 +77,7 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
 
 /// Prints a table and, with an output directory, writes it there as `name`.
 fn print_and_write(md: &str, out: Option<&Path>, name: &str) -> Result<()> {
-    corridor_client::say!("{}", md.trim_end_matches('\n'));
+    corridor_client::say_text(md);
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         std::fs::write(dir.join(name), md)?;

@@ -39,7 +39,7 @@ use figures::write_figures_to;
 pub use outputs::{
     ESTIMATES_HEADER, INNOVATIONS_HEADER, create, io_at, write_estimate_row, write_innovation_rows,
 };
-pub use stream::{PLOT_POINTS, RUN_OUTPUT_FILES, RunOptions, Summary, run};
+pub use stream::{PLOT_POINTS, RunOptions, Summary, run};
 
 /// Anything that stops a run.
 #[derive(Debug, thiserror::Error)]
@@ -492,7 +492,7 @@ mod tests {
         );
         opts.plots = true;
         run(&opts).unwrap();
-        assert!(RUN_OUTPUT_FILES.iter().all(|f| there(f)));
+        assert!(stream::RUN_OUTPUT_FILES.iter().all(|f| there(f)));
         // A failed run (its log missing) leaves them.
         opts.plots = false;
         opts.imu = root.join("no-such-log.csv");

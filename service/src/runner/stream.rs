@@ -212,7 +212,7 @@ impl PlotTrace {
 /// (its `summary.json` lists it) and a successful run did not write again (the figures of a run
 /// with `--plots`) is removed then: left, it passed for this run's (reviews of session 38; a
 /// file of these names that no run of ours listed is the user's, and stays).
-pub const RUN_OUTPUT_FILES: [&str; 6] = [
+pub(super) const RUN_OUTPUT_FILES: [&str; 6] = [
     "estimates.csv",
     "innovations.csv",
     "summary.json",
