@@ -107,20 +107,14 @@ fn a_stamp_glitched_forward_by_less_than_a_jump_is_rejected_and_the_rows_after_i
     assert_eq!((log.rows[97].line, log.rows[98].line), (99, 101));
     // A real gap at the same place (every row from line 100 on 0.9 s later): the row after it
     // is held until the next one follows it, then both are kept, in order.
-    let gapped = with_gaps(400, &[(100, 0.9)]);
-    let log = parse_imu_csv(&gapped, path(), &ImuCsvOptions::default()).unwrap();
-    assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
-    assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
+    assert_every_row_kept_in_order(&[(100, 0.9)]);
 }
 
 #[test]
 fn gaps_in_a_row_keep_every_row_and_a_glitch_next_to_a_gap_is_still_caught() {
     // Two gaps in a row (lines 100 and 101 each 0.3 s later than the row before): the held
     // row goes out when the next gap's row is held, none is lost and the order stays.
-    let gapped = with_gaps(400, &[(100, 0.3), (101, 0.3)]);
-    let log = parse_imu_csv(&gapped, path(), &ImuCsvOptions::default()).unwrap();
-    assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
-    assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
+    assert_every_row_kept_in_order(&[(100, 0.3), (101, 0.3)]);
     // A glitched stamp on the row right after a gap's far side (one gap of 0.3 s at line 100,
     // line 101 0.7 s ahead), and one on the second row: before, the rows after either were
     // refused as not increasing until the stamp's time.
@@ -147,14 +141,7 @@ fn the_row_after_a_real_long_gap_goes_out_once_the_next_row_follows_it() {
     // rejected as a time jump and the estimator behind the reader refused line 101 too (the
     // jump again, from its own last time): two rows for one gap, and the gap reported one row
     // late. Now the reader passes line 100 on, and the stream is the one a live sensor gives.
-    let log = parse_imu_csv(
-        &with_gaps(400, &[(100, 10.0)]),
-        path(),
-        &ImuCsvOptions::default(),
-    )
-    .unwrap();
-    assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
-    assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
+    assert_every_row_kept_in_order(&[(100, 10.0)]);
     // Two jumps in a row, the second confirmed: the first is rejected, the second goes out.
     let text = replace_line(&with_gaps(400, &[(101, 20.0)]), 100, &row(10.0));
     let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
@@ -244,14 +231,7 @@ fn a_clock_set_back_runs_on_from_the_step_and_its_first_row_goes_out() {
     // to the old time were rejected as not increasing: 15 % of this log, so it was refused
     // whole. Now line 100 is held until line 101 follows it, and both go out (the estimator
     // behind the reader refuses line 100 and judges the step from the rates).
-    let log = parse_imu_csv(
-        &with_gaps(400, &[(100, -0.3)]),
-        path(),
-        &ImuCsvOptions::default(),
-    )
-    .unwrap();
-    assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
-    assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
+    assert_every_row_kept_in_order(&[(100, -0.3)]);
     // A step back beyond max_dt_s (1 s) is not one: the rows are refused until the time passes
     // the last accepted one, as before.
     let opts = ImuCsvOptions {
@@ -306,14 +286,7 @@ fn stamps_glitched_a_gaps_length_ahead_two_or_more_in_a_row_are_rejected_and_the
     }
     // A real gap of 0.5 s: the rows after it are held for the run's 1 s, then go out, in order
     // and all of them.
-    let log = parse_imu_csv(
-        &with_gaps(400, &[(100, 0.5)]),
-        path(),
-        &ImuCsvOptions::default(),
-    )
-    .unwrap();
-    assert_eq!((log.rows.len(), log.rejected.len()), (400, 0));
-    assert!(log.rows.windows(2).all(|w| w[1].line == w[0].line + 1));
+    assert_every_row_kept_in_order(&[(100, 0.5)]);
     // Rows 100..160 lost and one of them (t of line 130) written after line 180: refused as
     // not increasing, every other row kept (a review: it was taken for the clock's return, the
     // 20 rows since the gap rejected as glitched, and a log with 8 such places refused whole).
@@ -330,4 +303,15 @@ fn stamps_glitched_a_gaps_length_ahead_two_or_more_in_a_row_are_rejected_and_the
     let rejected: Vec<_> = log.rejected.iter().map(|r| r.reason).collect();
     assert_eq!(rejected, [RejectReason::TimeNotIncreasing]);
     assert_eq!(log.rows.len(), 5000 - 60);
+}
+
+/// 400 rows with the given gaps (from a line on, every row that much later): every row read,
+/// none rejected, in file order.
+fn assert_every_row_kept_in_order(gaps: &[(u64, f64)]) {
+    let log = parse_imu_csv(&with_gaps(400, gaps), path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!((log.rows.len(), log.rejected.len()), (400, 0), "{gaps:?}");
+    assert!(
+        log.rows.windows(2).all(|w| w[1].line == w[0].line + 1),
+        "{gaps:?}"
+    );
 }
