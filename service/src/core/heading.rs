@@ -138,15 +138,6 @@ impl Rejection {
 }
 
 impl HeadingAid {
-    /// The angle between neighbouring candidate directions: the grid step, or π for a
-    /// corridor's ψ / ψ + π.
-    pub fn spacing_rad(&self) -> f64 {
-        match self {
-            HeadingAid::Grid { step_rad, .. } => *step_rad,
-            HeadingAid::None | HeadingAid::Map(_) => PI,
-        }
-    }
-
     /// The associated direction (rad, map frame) for a foot at `xy` walking at `heading_rad`,
     /// the nearest of the candidate directions within `gate_rad`.
     pub fn associate(
@@ -155,38 +146,111 @@ impl HeadingAid {
         heading_rad: f64,
         gate_rad: f64,
     ) -> Result<f64, Rejection> {
+        self.associate_among(xy, heading_rad, gate_rad)
+            .map(|(dir, _)| dir)
+    }
+
+    /// [`HeadingAid::associate`], and the candidate directions there, relative to the one
+    /// associated (for its weight: `association_weight`).
+    pub fn associate_among(
+        &self,
+        xy: [f64; 2],
+        heading_rad: f64,
+        gate_rad: f64,
+    ) -> Result<(f64, Candidates), Rejection> {
         match self {
             HeadingAid::None => Err(Rejection::NoSource),
             HeadingAid::Grid { grid_rad, step_rad } => {
                 let k = ((heading_rad - grid_rad) / step_rad).round();
                 let dir = wrap_pi(grid_rad + k * step_rad);
                 if wrap_pi(heading_rad - dir).abs() <= gate_rad {
-                    Ok(dir)
+                    Ok((
+                        dir,
+                        Candidates::Spaced {
+                            spacing_rad: *step_rad,
+                        },
+                    ))
                 } else {
                     Err(Rejection::OutsideGate)
                 }
             }
             HeadingAid::Map(map) => {
-                let mut inside = false;
-                let mut best: Option<(f64, f64)> = None;
+                // Every direction of every corridor containing `xy`, once (parallel corridors
+                // that overlap give the same two).
+                let mut dirs = [0.0; MAX_LISTED_DIRECTIONS];
+                let mut n = 0;
                 for c in map.corridors.iter().filter(|c| c.contains(xy)) {
-                    inside = true;
                     for dir in [c.axis_rad(), c.axis_rad() + PI] {
-                        let d = wrap_pi(heading_rad - dir).abs();
-                        if best.is_none_or(|(bd, _)| d < bd) {
-                            best = Some((d, wrap_pi(dir)));
+                        let dir = wrap_pi(dir);
+                        let known = dirs[..n]
+                            .iter()
+                            .any(|&d| wrap_pi(d - dir).abs() < SAME_DIRECTION_RAD);
+                        if !known && n < MAX_LISTED_DIRECTIONS {
+                            dirs[n] = dir;
+                            n += 1;
                         }
                     }
                 }
-                match best {
-                    Some((d, dir)) if d <= gate_rad => Ok(dir),
-                    Some(_) => Err(Rejection::OutsideGate),
-                    None if !inside => Err(Rejection::OutsideMap),
-                    None => Err(Rejection::OutsideGate),
+                if n == 0 {
+                    return Err(Rejection::OutsideMap);
                 }
+                let best = (0..n)
+                    .min_by(|&a, &b| {
+                        let d = |i: usize| wrap_pi(heading_rad - dirs[i]).abs();
+                        d(a).total_cmp(&d(b))
+                    })
+                    .expect("n > 0");
+                let dir = dirs[best];
+                if wrap_pi(heading_rad - dir).abs() > gate_rad {
+                    return Err(Rejection::OutsideGate);
+                }
+                if n == 2 {
+                    // One corridor (or parallel ones): its ψ and ψ + π.
+                    return Ok((dir, Candidates::Spaced { spacing_rad: PI }));
+                }
+                // A junction: the associated direction first, then the others.
+                dirs.swap(0, best);
+                let mut offsets_rad = [0.0; MAX_LISTED_DIRECTIONS];
+                for (o, d) in offsets_rad.iter_mut().zip(&dirs[..n]) {
+                    *o = wrap_pi(d - dir);
+                }
+                Ok((
+                    dir,
+                    Candidates::Listed {
+                        offsets_rad,
+                        n: n as u8,
+                    },
+                ))
             }
         }
     }
+}
+
+/// At most this many distinct directions are told apart where corridors of a map cross (eight
+/// corridor axes through one place); a ninth axis there is left out of the association weight.
+pub const MAX_LISTED_DIRECTIONS: usize = 16;
+
+/// Two corridor directions closer than this are the same direction.
+const SAME_DIRECTION_RAD: f64 = 1e-9;
+
+/// The directions a walker at one place may walk along, relative to the one an observation was
+/// associated with: evenly spaced around the circle (a grid's step, or π for one corridor's ψ
+/// and ψ + π), or listed where corridors of a map cross (each corridor's two directions, once;
+/// `offsets_rad[0]` is the associated one's, 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Candidates {
+    /// Around the circle at this spacing.
+    Spaced {
+        /// Spacing, rad.
+        spacing_rad: f64,
+    },
+    /// The first `n` of `offsets_rad`.
+    Listed {
+        /// Each direction minus the associated one, wrapped to ±π.
+        offsets_rad: [f64; MAX_LISTED_DIRECTIONS],
+        /// How many there are.
+        n: u8,
+    },
 }
 
 /// The straight-walk test: the foot heading at each of the previous `n` stances lies within
@@ -392,6 +456,44 @@ mod tests {
             aid.associate([5.0, 0.0], 1.0, gate),
             Err(Rejection::OutsideGate)
         );
+    }
+
+    #[test]
+    fn a_junction_lists_every_corridor_direction_once() {
+        let corridor = |name: &str, from_m, to_m| Corridor {
+            name: name.into(),
+            from_m,
+            to_m,
+            width_m: 2.0,
+        };
+        let aid = HeadingAid::Map(CorridorMap {
+            corridors: vec![
+                corridor("east-west", [-20.0, 0.0], [20.0, 0.0]),
+                // Overlapping and parallel to the first: no new direction.
+                corridor("east-west again", [-5.0, 0.5], [5.0, 0.5]),
+                corridor("north-south", [0.0, -20.0], [0.0, 20.0]),
+            ],
+        });
+        let gate = 15f64.to_radians();
+        // Away from the junction: one corridor's ψ and ψ + π.
+        assert_eq!(
+            aid.associate_among([10.0, 0.0], 0.1, gate),
+            Ok((0.0, Candidates::Spaced { spacing_rad: PI }))
+        );
+        // At the junction: four directions, the associated one (north) first.
+        let (dir, candidates) = aid.associate_among([0.2, 0.2], 1.5, gate).unwrap();
+        assert!((dir - PI / 2.0).abs() < 1e-12);
+        let Candidates::Listed { offsets_rad, n } = candidates else {
+            panic!("{candidates:?}");
+        };
+        let mut offsets_deg: Vec<f64> = offsets_rad[..usize::from(n)]
+            .iter()
+            .map(|o| o.to_degrees().round())
+            .map(|d| if d == -180.0 { 180.0 } else { d })
+            .collect();
+        assert_eq!(offsets_deg[0], 0.0);
+        offsets_deg.sort_by(f64::total_cmp);
+        assert_eq!(offsets_deg, [-90.0, 0.0, 90.0, 180.0]);
     }
 
     #[test]

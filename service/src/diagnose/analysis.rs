@@ -2,6 +2,7 @@
 //! consistency figures (NIS, whiteness, footprint error) and the ranked effects.
 
 use super::ranking::{Finding, rank_effects};
+use crate::core::heading::Candidates;
 use crate::eval::EvalOptions;
 use crate::runner::{RunError, heading_aid, run_log};
 use crate::stats::{self, nis_consistency, whiteness};
@@ -78,8 +79,9 @@ pub struct StanceResidual {
     pub weight: f64,
     /// The σ the weight was computed with, rad.
     pub sd_rad: f64,
-    /// The spacing of the map's directions, rad.
-    pub spacing_rad: f64,
+    /// The other directions the walker may have walked along there (a junction's too).
+    #[serde(skip)]
+    pub candidates: Candidates,
     /// The filter used this observation (foot axis only).
     pub accepted: bool,
     /// The residual a unit amount of each effect of [`super::power::REFERENCES`] would add at
@@ -187,7 +189,6 @@ pub fn analyse(
     let mut last_stance_xy: Option<[f64; 2]> = None;
     let sd_foot = cfg.heading.sigma_rad.get();
     let sd_stride = cfg.heading.stride_sigma_rad.get();
-    let spacing = aid.spacing_rad();
     let mut rest_n = 0u32;
     // yaw error built up by a unit amount of each effect since the filter last removed it
     let mut yaw_error = [0.0; super::power::N_REFERENCES];
@@ -257,7 +258,7 @@ pub fn analyse(
         let k = leaves(&h.outcome, sd_foot);
         yaw_error.iter_mut().for_each(|v| *v *= k);
         let mut push = |kind, heading: f64, sd: f64, accepted, signature| {
-            if let Ok(d) = aid.associate(xy, heading, std::f64::consts::PI) {
+            if let Ok((d, candidates)) = aid.associate_among(xy, heading, std::f64::consts::PI) {
                 let r = crate::core::rotation::wrap_pi(d - heading);
                 stances.push(StanceResidual {
                     sample,
@@ -269,10 +270,10 @@ pub fn analyse(
                         r,
                         sd * sd,
                         DIAGNOSIS_ALIGNED_PRIOR,
-                        spacing,
+                        &candidates,
                     ),
                     sd_rad: sd,
-                    spacing_rad: spacing,
+                    candidates,
                     accepted,
                     signature,
                 });

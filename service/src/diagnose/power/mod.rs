@@ -194,7 +194,7 @@ fn reweighted_fit(pairs: &[(&StanceResidual, f64)]) -> (Vec<Row>, Option<Signatu
                         s.r_rad - f.intercepts[group] - f.beta * g,
                         s.sd_rad * s.sd_rad,
                         super::analysis::DIAGNOSIS_ALIGNED_PRIOR,
-                        s.spacing_rad,
+                        &s.candidates,
                     ),
                 };
                 Row {

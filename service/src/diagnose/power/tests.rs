@@ -17,7 +17,9 @@ fn placebo_fits_are_standard_normal_on_white_residuals_and_wide_on_slow_ones() {
         direction_rad: 0.0,
         weight: 1.0,
         sd_rad: 0.2,
-        spacing_rad: std::f64::consts::FRAC_PI_2,
+        candidates: crate::core::heading::Candidates::Spaced {
+            spacing_rad: std::f64::consts::FRAC_PI_2,
+        },
         accepted: true,
         signature: [(i as f64 / 15.0).sin(); N_REFERENCES],
     };
