@@ -109,6 +109,9 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
             s.initial_rest_moving_blocks as f64 * corridor_service::core::estimator::REST_BLOCK_S
         ));
     }
+    if let Some(note) = heading_never_held(s) {
+        notes.push(note);
+    }
     if s.clipped_samples > 0 {
         notes.push(format!(
             "{} samples at a sensor rail (clipped)",
@@ -129,4 +132,65 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
         "final_gcp_error_m": e.and_then(|e| e.final_gcp_error_m),
         "notes": notes,
     })
+}
+
+/// Stances a walk needs before a heading that no observation ever held is worth a note: a
+/// dozen strides of each foot.
+const HEADING_NOTE_MIN_STANCES: u64 = 20;
+
+/// A walk whose heading no map direction ever took: every observation was refused (outside the
+/// gate, unlikely, not straight), so nothing but the start heading fixed it. Said because the
+/// footprints may then be off by a constant angle that nothing in the run shows (a start in a
+/// weave anchors the start heading on a stride that runs off its corridor).
+fn heading_never_held(s: &runner::Summary) -> Option<String> {
+    never_held_note(
+        s.stances,
+        s.heading_observations_used + s.stride_observations_used,
+        &s.heading_observations_rejected,
+        s.stride_observations_rejected,
+    )
+}
+
+/// [`heading_never_held`] on the counts: `refused` by reason (foot axis), `no_source` meaning
+/// that there was nothing to observe with (no heading aid, the ZUPT mode).
+fn never_held_note(
+    stances: u64,
+    used: u64,
+    refused: &std::collections::BTreeMap<&'static str, u64>,
+    strides_refused: u64,
+) -> Option<String> {
+    let reasons: Vec<String> = refused
+        .iter()
+        .filter(|&(&reason, &n)| reason != "no_source" && n > 0)
+        .map(|(reason, n)| format!("{reason} {n}"))
+        .collect();
+    (used == 0 && !reasons.is_empty() && stances >= HEADING_NOTE_MIN_STANCES).then(|| {
+        format!(
+            "no heading observation was used in {stances} stances (foot axis refused: {}; stride directions refused: {strides_refused}): only the start heading fixed the heading, which may be off its corridors by more than the gate (a start in a weave, or a wrong --start-heading-deg)",
+            reasons.join(", "),
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::never_held_note;
+    use std::collections::BTreeMap;
+
+    #[test]
+    fn a_heading_no_direction_ever_took_is_said_and_a_zupt_run_is_not() {
+        let refused = BTreeMap::from([("outside_gate", 20), ("not_straight", 22), ("unlikely", 0)]);
+        let note = never_held_note(49, 0, &refused, 41).expect("a note");
+        assert!(
+            note.contains("49 stances")
+                && note.contains("not_straight 22, outside_gate 20;")
+                && note.contains("refused: 41)"),
+            "{note}"
+        );
+        // One observation used, a short log, or nothing to observe with: no note.
+        assert_eq!(never_held_note(49, 1, &refused, 41), None);
+        assert_eq!(never_held_note(19, 0, &refused, 41), None);
+        let zupt = BTreeMap::from([("no_source", 49)]);
+        assert_eq!(never_held_note(49, 0, &zupt, 0), None);
+    }
 }

@@ -362,6 +362,7 @@ impl<'a> EstState<'a> {
         p.clock_steps_back += c.clock_steps_back;
         p.stances += c.stances;
         p.heading_used += c.heading_used;
+        p.stride_used += c.stride_used;
         p.headings_refused += c.headings_refused;
         p.headings_superseded += c.headings_superseded;
         p.headings_outside_gate += c.headings_outside_gate;
