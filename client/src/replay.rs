@@ -147,7 +147,7 @@ pub fn replay(
             }
             let mut s = ImuSample::from(r);
             s.t_s = t_s;
-            opts.injection.apply(t_s, &mut s.gyro_rad_s);
+            opts.injection.apply(t_s - first_t_s, &mut s.gyro_rad_s);
             p.send_imu(s)?;
         }
     }

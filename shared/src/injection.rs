@@ -2,15 +2,17 @@
 //! linearly in time, or either one starting only after a given time (so a rest-mean prior taken
 //! before it cannot see it). Used by `corridor run` and by the replay producer.
 
-/// A bias added to every gyro sample at or after `after_s`:
-/// `constant_rad_s + ramp_rad_s2 · (t_s − after_s)`.
+/// A bias added to every gyro sample from `after_s` after the log's first sample on:
+/// `constant_rad_s + ramp_rad_s2 · (t − after_s)`, with t counted from that first sample (so a
+/// log stamped in epoch seconds, or from a negative time, gets the injection a log stamped from
+/// 0 gets).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct BiasInjection {
     /// Constant part, rad/s, sensor axes.
     pub constant_rad_s: [f64; 3],
     /// Growth rate, rad/s², sensor axes.
     pub ramp_rad_s2: [f64; 3],
-    /// Start time, s (same clock as the log). Before it nothing is added.
+    /// Start, s after the log's first sample. Before it nothing is added.
     pub after_s: f64,
 }
 
@@ -20,18 +22,18 @@ impl BiasInjection {
         self.constant_rad_s == [0.0; 3] && self.ramp_rad_s2 == [0.0; 3]
     }
 
-    /// The injected bias at `t_s`, rad/s.
-    pub fn bias_at(&self, t_s: f64) -> [f64; 3] {
-        if t_s < self.after_s {
+    /// The injected bias `since_start_s` after the log's first sample, rad/s.
+    pub fn bias_at(&self, since_start_s: f64) -> [f64; 3] {
+        if since_start_s < self.after_s {
             return [0.0; 3];
         }
-        let dt = t_s - self.after_s;
+        let dt = since_start_s - self.after_s;
         std::array::from_fn(|i| self.constant_rad_s[i] + self.ramp_rad_s2[i] * dt)
     }
 
-    /// Adds the bias at `t_s` to `gyro_rad_s` in place.
-    pub fn apply(&self, t_s: f64, gyro_rad_s: &mut [f64; 3]) {
-        let b = self.bias_at(t_s);
+    /// Adds the bias `since_start_s` after the log's first sample to `gyro_rad_s` in place.
+    pub fn apply(&self, since_start_s: f64, gyro_rad_s: &mut [f64; 3]) {
+        let b = self.bias_at(since_start_s);
         for (g, b) in gyro_rad_s.iter_mut().zip(b) {
             *g += b;
         }

@@ -54,7 +54,7 @@ fn injected_bias_is_recovered_and_footprint_error_drops_on_exp25() {
     // The convergence flag (the filter's own prediction of how much of a start bias error it
     // has absorbed) rises, and when it does the injection is recovered to ±5 % on every axis
     // (hindsight).
-    let c = convergence(&with, &clean, INJECTED, 0.0);
+    let c = convergence(&with, &clean, INJECTED, 0.0, 0.0);
     let at = c
         .recovered_at_flag
         .expect("the convergence flag never rose");

@@ -41,7 +41,7 @@ struct Args {
     /// Constant gyro bias to add, X,Y,Z in rad/s (each within ±0.2).
     #[arg(long, value_parser = parse_injected_bias_rad_s, allow_hyphen_values = true)]
     inject_gyro_bias: Option<[f64; 3]>,
-    /// Start the injection at this sensor time, s.
+    /// Start the injection this long after the log's first sample instead of at it, s.
     #[arg(
         long,
         default_value_t = 0.0,

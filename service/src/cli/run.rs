@@ -27,7 +27,7 @@ pub(super) struct RunArgs {
     /// Linearly growing gyro bias to add, X,Y,Z in rad/s² (each within ±0.01).
     #[arg(long, value_parser = parse_injected_ramp_rad_s2, allow_hyphen_values = true)]
     pub(super) inject_gyro_bias_ramp: Option<[f64; 3]>,
-    /// Start the injection at this time instead of 0, s.
+    /// Start the injection this long after the log's first sample instead of at it, s.
     #[arg(
         long,
         default_value_t = 0.0,

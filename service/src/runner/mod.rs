@@ -221,6 +221,8 @@ struct Feed<'a> {
     /// Log nothing per sample (count only): the in-memory runs, and `corridor run`'s second,
     /// "before" filter, which reads the same rows.
     quiet: bool,
+    /// The time of the log's first row, from which the injection counts.
+    first_t_s: Option<f64>,
 }
 
 impl<'a> Feed<'a> {
@@ -232,6 +234,7 @@ impl<'a> Feed<'a> {
             refused: Vec::new(),
             warned: 0,
             quiet: false,
+            first_t_s: None,
         }
     }
 
@@ -247,7 +250,8 @@ impl<'a> Feed<'a> {
     /// estimator refused the row.
     fn step(&mut self, row: &ImuRow) -> Option<(ImuInput, &Estimate, Option<f64>)> {
         let mut gyro = row.gyro_rad_s;
-        self.injection.apply(row.t_s, &mut gyro);
+        let first_t_s = *self.first_t_s.get_or_insert(row.t_s);
+        self.injection.apply(row.t_s - first_t_s, &mut gyro);
         let input = ImuInput {
             t_s: row.t_s,
             gyro_rad_s: gyro,

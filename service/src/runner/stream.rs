@@ -24,7 +24,7 @@ pub struct Summary {
     pub injected_gyro_bias_rad_s: [f64; 3],
     /// Injected ramp, rad/s².
     pub injected_gyro_bias_ramp_rad_s2: [f64; 3],
-    /// Injection start, s.
+    /// Injection start, s after the log's first sample.
     pub injected_after_s: f64,
     /// Input rows in the file (accepted by the reader).
     pub samples_read: u64,

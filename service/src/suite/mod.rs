@@ -68,7 +68,7 @@ pub use tables::{
     NOT_WORSE_TOLERANCE_PCT, Summary, headline_markdown, markdown, nis_markdown, summary,
 };
 
-use crate::eval::{Align, EvalOptions};
+use crate::eval::{Align, EvalOptions, EvalReport};
 use crate::runner::{self, RunError, RunOutcome, heading_aid};
 use corridor_shared::config::{BiasPrior, Config, ConfigFile, Mode};
 use corridor_shared::imu_csv::ImuLog;
@@ -202,6 +202,10 @@ pub struct SuiteRow {
     pub before_suspect: Option<BeforeSuspect>,
     /// The footprint figures in the map frame (no first-leg rotation).
     pub map_frame: MapFrame,
+    /// What the footprint evaluation of the default run had to do (footprints outside the
+    /// log's time span clamped to its ends), as `corridor run` and `eval_traj.py` say it.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub eval_warnings: Vec<String>,
 }
 
 /// The input a recording's default run did not take as it came (see [`SuiteRow::input`]).
@@ -433,23 +437,38 @@ impl<'a> Ctx<'a> {
         self.footprint_aligned(out, &self.truth, Align::Translation)
     }
 
+    /// The warnings of a run's footprint evaluation against the recording's truth.
+    fn eval_warnings(&self, out: &RunOutcome) -> Result<Vec<String>, RunError> {
+        Ok(self
+            .eval_report(out, &self.truth, Align::FirstLeg)?
+            .warnings)
+    }
+
+    fn eval_report(
+        &self,
+        out: &RunOutcome,
+        truth: &[TruthPoint],
+        align: Align,
+    ) -> Result<EvalReport, RunError> {
+        let opts = EvalOptions {
+            align,
+            ..EvalOptions::default()
+        };
+        out.trace
+            .evaluate(truth, &opts)
+            .map_err(|source| RunError::Eval {
+                truth: self.base.join(&self.rec.truth),
+                source,
+            })
+    }
+
     fn footprint_aligned(
         &self,
         out: &RunOutcome,
         truth: &[TruthPoint],
         align: Align,
     ) -> Result<Footprint, RunError> {
-        let opts = EvalOptions {
-            align,
-            ..EvalOptions::default()
-        };
-        let rep = out
-            .trace
-            .evaluate(truth, &opts)
-            .map_err(|source| RunError::Eval {
-                truth: self.base.join(&self.rec.truth),
-                source,
-            })?;
+        let rep = self.eval_report(out, truth, align)?;
         Ok(Footprint {
             rms_m: rep.rms_error_m.unwrap_or(f64::NAN),
             rms_pct: rep.rms_error_pct_of_path.unwrap_or(f64::NAN),
@@ -596,8 +615,13 @@ fn run_recording(
     let (best1, best_inj) = ctx.run(best, BiasPrior::None, injected)?;
     let (best_r0, best_rest) = ctx.run(best, BiasPrior::RestMean, none)?;
     let fig = ctx.default_figures(best)?;
-    // The runs log nothing per sample (`runner::run_log`): what the input cost is said once.
+    // The runs log nothing per sample (`runner::run_log`): what the input cost is said once,
+    // and so is what the footprint evaluation had to do.
     ctx.say_input(&best_r0, "the default run");
+    let eval_warnings = ctx.eval_warnings(&best_r0)?;
+    for w in &eval_warnings {
+        tracing::warn!("{}: {w} (the default run's footprint evaluation)", r.name);
+    }
     let c = best_r0.counters;
     let (stances, heading_used, stride_used) = (c.stances, c.heading_used, c.stride_used);
     // The injection starts when the initial rest ends (the alignment instant of the clean run).
@@ -608,9 +632,10 @@ fn run_recording(
         .copied()
         .unwrap_or(0.0)
         .max(first_motion_s(&best_r0));
+    let log_from_s = ctx.log.rows.first().map_or(0.0, |r| r.t_s);
     let late = BiasInjection {
         constant_rad_s: inj,
-        after_s: rest_end,
+        after_s: rest_end - log_from_s,
         ..Default::default()
     };
     let (best_r1, _) = ctx.run(best, BiasPrior::RestMean, late)?;
@@ -648,9 +673,9 @@ fn run_recording(
         paper_recovery: recovery(&paper1, &paper0, inj),
         best_recovery: recovery(&best1, &best0, inj),
         best_recovery_prior_late: recovery(&best_r1, &best_r0, inj),
-        paper_convergence: convergence(&paper1, &paper0, inj, rest_end),
-        best_convergence: convergence(&best1, &best0, inj, rest_end),
-        best_convergence_prior_late: convergence(&best_r1, &best_r0, inj, rest_end),
+        paper_convergence: convergence(&paper1, &paper0, inj, rest_end, log_from_s),
+        best_convergence: convergence(&best1, &best0, inj, rest_end, log_from_s),
+        best_convergence_prior_late: convergence(&best_r1, &best_r0, inj, rest_end, log_from_s),
         best_reduction_pct: 100.0 * (1.0 - best_inj.rms_m / zupt_inj.rms_m),
         stances,
         heading_used,
@@ -667,6 +692,7 @@ fn run_recording(
             .copied()
             .unwrap_or([f64::NAN; 3]),
         input: InputCounts::of(&ctx.log, &best_r0),
+        eval_warnings,
         before_suspect,
         map_frame,
     })

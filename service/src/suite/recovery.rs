@@ -8,7 +8,8 @@ use serde::Serialize;
 /// relative error stays within this.
 pub const SETTLED_TOLERANCE: f64 = 0.05;
 
-/// The convergence flag of one injected run against hindsight.
+/// The convergence flag of one injected run against hindsight. Times are s after the log's
+/// first sample (a log stamped in epoch seconds reads as one stamped from 0).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Convergence {
     /// When the walk started (the end of the initial rest, where the late injection starts), s.
@@ -34,12 +35,14 @@ impl Convergence {
     }
 }
 
-/// The flag of `with` (the injected run) against the recovery `with − without`.
+/// The flag of `with` (the injected run) against the recovery `with − without`; the walk
+/// started at `walking_from_s` and the log at `log_from_s` (both on the log's clock).
 pub fn convergence(
     with: &RunOutcome,
     without: &RunOutcome,
     inj: [f64; 3],
     walking_from_s: f64,
+    log_from_s: f64,
 ) -> Convergence {
     let flag_at_s = with.converged_at_s;
     let recovered_at_flag = flag_at_s.and_then(|tf| {
@@ -49,11 +52,12 @@ pub fn convergence(
             (with.trace.bias_rad_s[i][k] - without.trace.bias_rad_s[i][k]) / inj[k]
         }))
     });
+    let since_log = |t: f64| t - log_from_s;
     Convergence {
-        walking_from_s,
-        flag_at_s,
+        walking_from_s: since_log(walking_from_s),
+        flag_at_s: flag_at_s.map(since_log),
         recovered_at_flag,
-        settled_at_s: settled_at(with, without, inj),
+        settled_at_s: settled_at(with, without, inj).map(since_log),
     }
 }
 

@@ -194,6 +194,22 @@ Input not taken as it came (the default runs; `results.json`'s `input`): {}.
             input.join("; ")
         )
     });
+    let clamped: Vec<String> = rows
+        .iter()
+        .flat_map(|r| {
+            r.eval_warnings
+                .iter()
+                .map(|w| format!("{}: {w}", r.recording))
+        })
+        .collect();
+    if !clamped.is_empty() {
+        s.push_str(&format!(
+            "
+What the footprint evaluation had to do (the default runs; `results.json`'s `eval_warnings`): {}. Those footprints are scored at the log's first or last estimate, as `eval_traj.py` does.
+",
+            clamped.join("; ")
+        ));
+    }
     let derived: Vec<String> = rows
         .iter()
         .filter(|r| r.start_heading == StartHeading::FirstStride)

@@ -1,0 +1,119 @@
+//! The results suite on recordings unlike the bundled ones (a review's new-user pass): what it
+//! says about them, in `results.md` and `results.json`, as `corridor run` would.
+
+mod common;
+
+use common::TempDir;
+use corridor_service::suite::{markdown, run_suite};
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// A suite file in `dir` over one recording (`imu.csv` and `ground_truth.csv` in `dir`), run
+/// with the shipped configurations.
+fn suite_of(dir: &Path) -> PathBuf {
+    let configs = root().join("configs");
+    let suite = dir.join("suite.toml");
+    std::fs::write(
+        &suite,
+        format!(
+            "[[recording]]\nname = \"walk\"\nimu = \"imu.csv\"\ntruth = \"ground_truth.csv\"\n\
+             config = {:?}\nbaseline_config = {:?}\nstart_heading_deg = 0.0\n",
+            configs.join("gdins.toml"),
+            configs.join("gdins_zupt_baseline.toml"),
+        ),
+    )
+    .unwrap();
+    suite
+}
+
+#[test]
+fn footprints_after_the_end_of_the_log_are_said_not_silently_clamped() {
+    let dir = TempDir::new("suite-truncated");
+    let src = root().join("tests/data/gdins_exp17_rect_loop_small");
+    // The log ends at 25 s; its last footprint (index 4) was surveyed at 33 s.
+    let imu = std::fs::read_to_string(src.join("imu.csv")).unwrap();
+    let kept: Vec<&str> = imu
+        .lines()
+        .take_while(|l| {
+            l.split(',').next().unwrap().parse::<f64>().is_err() || {
+                l.split(',').next().unwrap().parse::<f64>().unwrap() < 25.0
+            }
+        })
+        .collect();
+    std::fs::write(dir.join("imu.csv"), kept.join("\n") + "\n").unwrap();
+    std::fs::copy(src.join("ground_truth.csv"), dir.join("ground_truth.csv")).unwrap();
+    let rows = run_suite(&suite_of(&dir)).unwrap_or_else(|e| panic!("{e}"));
+    let w = &rows[0].eval_warnings;
+    assert!(
+        w.len() == 1 && w[0].contains("clamped") && w[0].contains("[4]"),
+        "{w:?}"
+    );
+    let md = markdown(&rows);
+    assert!(
+        md.contains("What the footprint evaluation had to do") && md.contains("walk: GCP time(s)"),
+        "{md}"
+    );
+    let json = serde_json::to_value(&rows).unwrap();
+    assert_eq!(json[0]["eval_warnings"][0], w[0].as_str());
+}
+
+/// exp17's log and footprints with every time stamp moved by `shift_s`, in `dir`.
+fn shifted_exp17(dir: &Path, shift_s: f64) {
+    let src = root().join("tests/data/gdins_exp17_rect_loop_small");
+    for name in ["imu.csv", "ground_truth.csv"] {
+        let text = std::fs::read_to_string(src.join(name)).unwrap();
+        let mut lines = text.lines();
+        let mut out = vec![lines.next().unwrap().to_string()];
+        out.extend(lines.map(|l| {
+            let (t, rest) = l.split_once(',').unwrap();
+            format!("{},{rest}", t.parse::<f64>().unwrap() + shift_s)
+        }));
+        std::fs::write(dir.join(name), out.join("\n") + "\n").unwrap();
+    }
+}
+
+#[test]
+fn the_injections_and_their_times_count_from_the_logs_first_sample() {
+    let original = TempDir::new("suite-shift-0");
+    shifted_exp17(&original, 0.0);
+    let reference = &run_suite(&suite_of(&original)).unwrap()[0];
+    // A log stamped in epoch seconds, and one that starts at −30 s: the protocols inject
+    // where they injected (from the first sample; from the end of the initial rest) and say
+    // their times from the log's start. They inject after 30 s of this one, and into none of
+    // that one, if the times are the clock's.
+    for (tag, shift_s) in [("epoch", 1.7e9), ("negative", -30.0)] {
+        let dir = TempDir::new(&format!("suite-shift-{tag}"));
+        shifted_exp17(&dir, shift_s);
+        let row = &run_suite(&suite_of(&dir)).unwrap()[0];
+        let close = |a: [f64; 3], b: [f64; 3]| (0..3).all(|k| (a[k] - b[k]).abs() < 0.03);
+        assert!(
+            close(row.best_recovery, reference.best_recovery)
+                && close(row.paper_recovery, reference.paper_recovery)
+                && close(
+                    row.best_recovery_prior_late,
+                    reference.best_recovery_prior_late
+                ),
+            "{tag}: {:?} {:?} {:?} against {:?} {:?} {:?}",
+            row.best_recovery,
+            row.paper_recovery,
+            row.best_recovery_prior_late,
+            reference.best_recovery,
+            reference.paper_recovery,
+            reference.best_recovery_prior_late
+        );
+        let (c, r) = (&row.best_convergence, &reference.best_convergence);
+        let near = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) => (a - b).abs() < 0.5,
+            (a, b) => a.is_none() && b.is_none(),
+        };
+        assert!(
+            (c.walking_from_s - r.walking_from_s).abs() < 0.1
+                && near(c.flag_at_s, r.flag_at_s)
+                && near(c.settled_at_s, r.settled_at_s),
+            "{tag}: {c:?} against {r:?}"
+        );
+    }
+}
