@@ -16,7 +16,10 @@ pub struct ModelArgs {
     /// Corridor map (TOML with `[[corridor]]` tables); switches the heading source to the map.
     #[arg(long)]
     pub map: Option<PathBuf>,
-    /// Walking direction at the start, degrees in the map frame (overrides the config).
+    /// Direction of the walk's first stride, degrees in the map frame (overrides the config):
+    /// the filter anchors that stride to it (`heading.start_heading_sd_deg`). For a walk that
+    /// starts from standing in a corridor, that corridor's direction; a walk that starts in a
+    /// weave or across a corridor needs the stride's own direction.
     #[arg(long, allow_negative_numbers = true)]
     pub start_heading_deg: Option<f64>,
     /// Orientation of the building's dominant directions, degrees (overrides the config).

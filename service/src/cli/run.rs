@@ -112,6 +112,11 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
     if let Some(note) = heading_never_held(s) {
         notes.push(note);
     }
+    if let Some(d) = s.bias_from_typical_sd.filter(|&d| d > BIAS_NOTE_SD) {
+        notes.push(format!(
+            "the gyro bias estimate lies {d:.0} σ from this unit's typical bias (alignment.typical_gyro_bias_rad_s): check the IMU columns' axes and signs (a left-handed frame, a flipped axis), or the configuration is another unit's"
+        ));
+    }
     if s.clipped_samples > 0 {
         notes.push(format!(
             "{} samples at a sensor rail (clipped)",
@@ -133,6 +138,10 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
         "notes": notes,
     })
 }
+
+/// A final bias further than this many σ from the unit's typical one is worth a note (the 16
+/// bundled walks end within 1 σ of it: its σ is their largest distance).
+const BIAS_NOTE_SD: f64 = 5.0;
 
 /// Stances a walk needs before a heading that no observation ever held is worth a note: a
 /// dozen strides of each foot.

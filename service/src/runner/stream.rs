@@ -1,6 +1,7 @@
 //! `corridor run`: the streamed run, what it keeps, its staged outputs and its progress bar.
 
 use super::*;
+use corridor_shared::config::TypicalGyroBias;
 
 /// `summary.json`.
 #[derive(Debug, Clone, Serialize)]
@@ -99,6 +100,10 @@ pub struct Summary {
     /// 50 ms blocks of the initial rest left out of the bias prior and the tilt because the
     /// foot moved in them.
     pub initial_rest_moving_blocks: u64,
+    /// How far the final bias lies from the unit's typical one (plus what was injected), in its
+    /// σ, on the farthest axis (`alignment.typical_gyro_bias_rad_s`; `None` without one, or with
+    /// an injected ramp).
+    pub bias_from_typical_sd: Option<f64>,
     /// Zero-rate updates of the bias at rests after the alignment.
     pub zero_rate_updates: u64,
     /// Rests not fused (see the estimator's counter of the same name).
@@ -553,6 +558,11 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         start_replayed_ms: c.start_replayed_ms,
         rest_prior_refused: c.rest_prior_refused,
         initial_rest_moving_blocks: c.initial_rest_moving_blocks,
+        bias_from_typical_sd: bias_from_typical_sd(
+            kept.last.map(|l| l.0),
+            opts.config.alignment.typical_gyro_bias,
+            &opts.injection,
+        ),
         zero_rate_updates: c.zero_rate_updates,
         zero_rate_refused: c.zero_rate_refused,
         late_footfalls: c.late_footfalls,
@@ -618,5 +628,57 @@ impl Progress {
         if self.enabled {
             eprintln!();
         }
+    }
+}
+
+/// [`Summary::bias_from_typical_sd`]: the final bias `bias_rad_s` against the unit's `typical`
+/// one plus the injected constant.
+fn bias_from_typical_sd(
+    bias_rad_s: Option<[f64; 3]>,
+    typical: Option<TypicalGyroBias>,
+    injection: &BiasInjection,
+) -> Option<f64> {
+    let (b, t) = (bias_rad_s?, typical?);
+    if injection.ramp_rad_s2 != [0.0; 3] || b.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let sd = t.sd_rad_s.get();
+    (0..3)
+        .map(|k| (b[k] - t.rad_s[k] - injection.constant_rad_s[k]).abs() / sd)
+        .reduce(f64::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::bias_from_typical_sd;
+    use corridor_shared::config::{Positive, TypicalGyroBias};
+    use corridor_shared::injection::BiasInjection;
+
+    #[test]
+    fn the_final_bias_is_measured_from_the_typical_one_plus_what_was_injected() {
+        let typical = TypicalGyroBias {
+            rad_s: [1e-3, -2e-3, 5e-3],
+            sd_rad_s: Positive::new("sd", 4e-3).unwrap(),
+        };
+        let none = BiasInjection::default();
+        let d = bias_from_typical_sd(Some([1e-3, -2e-3, 25e-3]), Some(typical), &none).unwrap();
+        assert!((d - 5.0).abs() < 1e-9, "{d}");
+        let injected = BiasInjection {
+            constant_rad_s: [0.0, 0.0, 0.02],
+            ..Default::default()
+        };
+        let d = bias_from_typical_sd(Some([1e-3, -2e-3, 25e-3]), Some(typical), &injected);
+        assert!(d.unwrap() < 1e-9, "{d:?}");
+        // Nothing to compare with: no typical bias, no estimate, or a ramp injected.
+        assert_eq!(bias_from_typical_sd(Some([0.0; 3]), None, &none), None);
+        assert_eq!(bias_from_typical_sd(None, Some(typical), &none), None);
+        let ramp = BiasInjection {
+            ramp_rad_s2: [0.0, 0.0, 1e-4],
+            ..Default::default()
+        };
+        assert_eq!(
+            bias_from_typical_sd(Some([0.0; 3]), Some(typical), &ramp),
+            None
+        );
     }
 }

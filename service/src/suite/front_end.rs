@@ -52,7 +52,8 @@ pub struct FrontEnd {
     pub clipped_samples: u64,
     /// The default run with the clipping model off (footprint RMS).
     pub clipping_off: Footprint,
-    /// The default run on the log cut to its last [`KEPT_REST_S`] of initial rest.
+    /// The default run on the log cut [`KEPT_REST_S`] before its first footprint (the last
+    /// [`KEPT_REST_S`] of the initial rest, on a walk that starts with one).
     pub without_rest: Option<Footprint>,
     /// The same run scored in the map frame (as [`super::MapFrame`]): the first-leg alignment
     /// turns a run by its heading error at the end of its first 5 m, which is where a start
@@ -135,8 +136,8 @@ pub fn without_rest<'a>(rows: &'a [ImuRow], truth: &[TruthPoint]) -> Option<&'a 
 /// The front-end tables as Markdown.
 pub fn front_end_markdown(rows: &[SuiteRow]) -> String {
     let mut s = format!(
-        "Start without rest (the log cut to its last {KEPT_REST_S} s of initial rest: alignment on that short \
-         stance, no rest-mean prior: the bias starts at the configuration's \
+        "Start without rest (the log cut {KEPT_REST_S} s before its first footprint, which on a walk that \
+         starts with a rest leaves the last {KEPT_REST_S} s of it: alignment on that short stance, no rest-mean prior: the bias starts at the configuration's \
          `alignment.typical_gyro_bias_rad_s`, or zero), the same start from a checkpoint (a daemon restarted while the wearer \
          walks: the bias the other walks of the sensor ended with, per axis their median with their spread \
          as σ, none of this walk's own), and the clipping model (attitude variance about a clipped gyro \

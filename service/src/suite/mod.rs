@@ -285,7 +285,7 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
     Ok(rows)
 }
 
-/// The default run on the log cut to its last [`KEPT_REST_S`] of rest, started from the
+/// The default run on the log cut [`KEPT_REST_S`] before its first footprint, started from the
 /// checkpoint the other walks give ([`front_end::checkpoint_from`]).
 fn without_rest_from_checkpoint(
     base: &Path,
@@ -376,7 +376,7 @@ impl<'a> Ctx<'a> {
         })
     }
 
-    /// The recording cut to its last [`KEPT_REST_S`] of initial rest ([`front_end::without_rest`]).
+    /// The recording cut [`KEPT_REST_S`] before its first footprint ([`front_end::without_rest`]).
     fn without_rest(&self) -> Option<Ctx<'a>> {
         let rows = front_end::without_rest(&self.log.rows, &self.truth)?;
         Some(Ctx {

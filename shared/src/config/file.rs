@@ -290,7 +290,8 @@ pub struct HeadingFile {
     pub grid_deg: Option<f64>,
     /// Spacing of the dominant directions (default 90°; 180° means one corridor axis).
     pub grid_step_deg: Option<f64>,
-    /// Walking direction at the start, in the map frame (default 0°).
+    /// Direction of the walk's first stride, in the map frame (default 0°): for a walk that
+    /// starts from standing in a corridor, that corridor's.
     pub start_heading_deg: Option<f64>,
     /// Largest distance to the nearest direction that is still associated (default 15°).
     pub gate_deg: Option<f64>,

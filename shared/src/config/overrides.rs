@@ -14,7 +14,7 @@ pub struct ConfigOverrides {
     pub mode: Option<Mode>,
     /// `alignment.gyro_bias_prior`.
     pub gyro_bias_prior: Option<BiasPrior>,
-    /// `heading.start_heading_deg`: the walking direction at the start, degrees, map frame.
+    /// `heading.start_heading_deg`: the direction of the walk's first stride, degrees, map frame.
     pub start_heading_deg: Option<f64>,
     /// `heading.grid_deg`: the orientation of the building's dominant directions, degrees.
     pub grid_deg: Option<f64>,
