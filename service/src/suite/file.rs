@@ -8,7 +8,8 @@
 //! set's `meta.json` beside its truth flags, when there is one (a `meta.json` that is there but
 //! unreadable is an error naming it; `suspect_legs = []` opts out). `suspect_legs` are checked
 //! against the truth here, for every command that reads a suite (eval, its ensemble and sweep,
-//! the detection matrix).
+//! the detection matrix): a suite file's own strictly, the data set's flags leniently (legs this
+//! truth cannot be scored before are said and left out; the walk is still scored).
 
 use super::SuiteError;
 use crate::eval::EvalOptions;
@@ -264,7 +265,26 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
             (deg, StartHeading::FirstStride)
         }
     };
-    check_suspect_legs(&r.name, &suspect_legs, &truth).map_err(|e| e + &source)?;
+    let suspect_legs = if source.is_empty() {
+        check_suspect_legs(&r.name, &suspect_legs, &truth)?;
+        suspect_legs
+    } else {
+        // The data set's own flags are extra information: legs it names that this truth cannot
+        // score before (a stride number no footprint carries, a leg before the first-leg
+        // alignment's footprint) leave the recording scored on every footprint, and are said.
+        let legs = legs_of_strides(&suspect_legs, &truth);
+        match check_suspect_legs(&r.name, &legs, &truth) {
+            Ok(()) => legs,
+            Err(e) => {
+                tracing::warn!(
+                    "{e} (the data set's flags, read from {}): the recording is scored on \
+                     every footprint, not also before the flagged legs",
+                    meta.display()
+                );
+                Vec::new()
+            }
+        }
+    };
     Ok(SuiteRecording {
         name: r.name,
         imu: r.imu,
@@ -295,6 +315,23 @@ fn flagged_legs_beside(meta: &Path) -> Result<Vec<usize>, String> {
         return Ok(Vec::new());
     }
     serde_json::from_value(legs.clone()).map_err(|e| format!("{FLAGGED_LEGS_KEY}: {e}"))
+}
+
+/// The legs a gdins `meta.json` flags, as legs of `truth`: the data set names each by the
+/// stride number of the footprint it ends at ("legs ending at strides [30, 31]"), the truth's
+/// `stride` column, which is the leg's own number only where every stride is surveyed. A value
+/// no footprint carries (a truth without that column) is taken as a leg number.
+fn legs_of_strides(flagged: &[usize], truth: &[TruthPoint]) -> Vec<usize> {
+    flagged
+        .iter()
+        .map(|&v| {
+            truth
+                .iter()
+                .skip(1)
+                .position(|g| g.stride.is_some_and(|s| usize::try_from(s) == Ok(v)))
+                .map_or(v, |k| k + 1)
+        })
+        .collect()
 }
 
 /// The start heading a user of the map gives a walk, taken from its truth: the direction from
@@ -477,13 +514,21 @@ mod tests {
         // ... without the entry: none.
         std::fs::write(dir.join("meta.json"), r#"{"truth": {}}"#).unwrap();
         assert!(legs("").is_empty());
-        // ... flagging a leg the truth does not have: the error says where the leg came from.
+        // ... flagging a leg the truth does not have, or one before the first-leg alignment's
+        // footprint: said, and the recording scored on every footprint (the flags are extra
+        // information; a suite file's own `suspect_legs` are checked strictly, below).
         meta("[9]");
-        let e = read_one(&dir, line, "").unwrap_err();
-        assert!(
-            e.contains("9 is not a leg") && e.contains("read from") && e.contains("meta.json"),
-            "{e}"
-        );
+        assert!(legs("").is_empty());
+        meta("[1]");
+        assert!(legs("").is_empty());
+        let e = read_one(&dir, line, "suspect_legs = [9]\n").unwrap_err();
+        assert!(e.contains("9 is not a leg"), "{e}");
+        // ... named by the stride number of the footprint each ends at: a walk surveyed at its
+        // corners (strides 0, 12, 17, 24, 31, 38) flagging the leg that ends at stride 31.
+        let corners = "t_s,x_m,y_m,z_m,stride,sample_index\n0,0,0,0,0,0\n1,6,0,0,12,200\n\
+                       2,6,4,0,17,400\n3,0,4,0,24,600\n4,0,0,0,31,800\n5,6,0,0,38,1000\n";
+        meta("[31]");
+        assert_eq!(read_one(&dir, corners, "").unwrap().suspect_legs, vec![4]);
         std::fs::remove_file(dir.join("meta.json")).unwrap();
         // A truth without a stride: the error names the recording and the key.
         let short = "t_s,x_m,y_m,z_m\n0.0,0.0,0.0,0.0\n1.0,0.1,0.1,0.0\n";
