@@ -117,3 +117,49 @@ fn the_injections_and_their_times_count_from_the_logs_first_sample() {
         );
     }
 }
+
+#[test]
+fn a_recording_that_fails_does_not_cost_the_others_their_rows() {
+    let dir = TempDir::new("suite-one-bad");
+    let (good, bad) = (dir.join("good"), dir.join("bad"));
+    std::fs::create_dir_all(&good).unwrap();
+    std::fs::create_dir_all(&bad).unwrap();
+    shifted_exp17(&good, 0.0);
+    shifted_exp17(&bad, 0.0);
+    // The bad one's footprints on another clock: its evaluation fails.
+    let truth = std::fs::read_to_string(good.join("ground_truth.csv")).unwrap();
+    let mut lines = truth.lines();
+    let mut out = vec![lines.next().unwrap().to_string()];
+    out.extend(lines.map(|l| {
+        let (t, rest) = l.split_once(',').unwrap();
+        format!("{},{rest}", t.parse::<f64>().unwrap() + 1.7e9)
+    }));
+    std::fs::write(bad.join("ground_truth.csv"), out.join("\n") + "\n").unwrap();
+    let one = std::fs::read_to_string(suite_of(&good)).unwrap();
+    let entry = |name: &str, sub: &str| {
+        one.replace("\"walk\"", &format!("{name:?}"))
+            .replace("\"imu.csv\"", &format!("\"{sub}/imu.csv\""))
+            .replace(
+                "\"ground_truth.csv\"",
+                &format!("\"{sub}/ground_truth.csv\""),
+            )
+    };
+    let suite = dir.join("two.toml");
+    std::fs::write(
+        &suite,
+        entry("bad walk", "bad") + "\n" + &entry("good walk", "good"),
+    )
+    .unwrap();
+    let run = corridor_service::suite::run_suite_each(&suite).unwrap();
+    assert_eq!(run.rows.len(), 1);
+    assert_eq!(run.rows[0].recording, "good walk");
+    assert_eq!(run.failed.len(), 1);
+    assert!(
+        run.failed[0].to_string().contains("recording bad walk"),
+        "{}",
+        run.failed[0]
+    );
+    // The strict form fails on it.
+    let e = run_suite(&suite).unwrap_err().to_string();
+    assert!(e.contains("recording bad walk"), "{e}");
+}

@@ -47,21 +47,36 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
         let md = corridor_service::suite::ensemble_markdown(&rows);
         return print_and_write(&md, a.out.as_deref(), "ensemble.md");
     }
-    let rows = corridor_service::suite::run_suite(&a.suite)?;
+    // A recording that fails does not cost the others their tables: they are written, and
+    // the failures make the command fail after them.
+    let run = corridor_service::suite::run_suite_each(&a.suite)?;
+    let rows = run.rows;
+    let scored = rows.len();
+    let mut failed: Vec<String> = run.failed.iter().map(ToString::to_string).collect();
     let mut md = corridor_service::suite::markdown(&rows);
+    if !failed.is_empty() {
+        md.push_str(&format!(
+            "\nNot scored (its run failed): {}.\n",
+            failed.join("; ")
+        ));
+    }
     if a.loops {
         let reports = a.out.as_ref().map_or_else(
             || std::env::temp_dir().join(format!("corridor-loops-{}", std::process::id())),
             |d| d.join("diagnose"),
         );
-        let loops = corridor_service::suite::run_loops(&a.suite, &reports)?;
+        let loops = corridor_service::suite::run_loops(&a.suite, &reports);
         if a.out.is_none() {
             // Reports were only a by-product; keep nothing behind.
             let _ = std::fs::remove_dir_all(&reports);
         }
-        md.push_str(&format!(
-            "\nThe residual-diagnosis loop from the paper's model (`corridor diagnose`):\n\n{loops}"
-        ));
+        match loops {
+            Ok(loops) => md.push_str(&format!(
+                "\nThe residual-diagnosis loop from the paper's model (`corridor diagnose`):\n\n{loops}"
+            )),
+            // (It stops at its first failing recording: the tables above are still written.)
+            Err(e) => failed.push(format!("the diagnosis loop: {e}")),
+        }
     }
     corridor_client::say_text(&md);
     if let Some(dir) = a.out {
@@ -72,7 +87,15 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
             serde_json::to_string_pretty(&rows)? + "\n",
         )?;
     }
-    Ok(())
+    if failed.is_empty() {
+        return Ok(());
+    }
+    anyhow::bail!(
+        "{} recording(s) not scored of {} (the others' tables were written): {}",
+        run.failed.len(),
+        run.failed.len() + scored,
+        failed.join("; ")
+    )
 }
 
 /// Prints a table and, with an output directory, writes it there as `name`.

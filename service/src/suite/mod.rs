@@ -245,8 +245,27 @@ impl InputCounts {
     }
 }
 
-/// Runs the suite (the table's rows).
+/// Runs the suite (the table's rows); the first recording that fails fails it.
 pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
+    let run = run_suite_each(path)?;
+    match run.failed.into_iter().next() {
+        Some(e) => Err(e),
+        None => Ok(run.rows),
+    }
+}
+
+/// The rows of the recordings that ran, and what failed in the others.
+#[derive(Debug)]
+pub struct SuiteRun {
+    /// The rows, in the suite file's order.
+    pub rows: Vec<SuiteRow>,
+    /// The recordings that failed (a log or a truth that cannot be read or evaluated), in
+    /// the suite file's order.
+    pub failed: Vec<SuiteError>,
+}
+
+/// Runs the suite, each recording on its own: one that fails does not stop the others.
+pub fn run_suite_each(path: &Path) -> Result<SuiteRun, SuiteError> {
     let suite = read_suite(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let inj = suite
@@ -259,30 +278,39 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
             source: Box::new(source),
         }
     }
-    let mut rows = suite
-        .recordings
-        .iter()
-        .map(|r| run_recording(base, r, inj, best_mode).map_err(wrap(r)))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut ran = Vec::new();
+    let mut failed = Vec::new();
+    for r in &suite.recordings {
+        match run_recording(base, r, inj, best_mode).map_err(wrap(r)) {
+            Ok(row) => ran.push((r, row)),
+            Err(e) => failed.push(e),
+        }
+    }
     // A restart without rest from a checkpoint needs the other walks' final biases: a second
     // pass, which reads each log again rather than keeping every log in memory.
-    for (i, r) in suite.recordings.iter().enumerate() {
-        let others: Vec<[f64; 3]> = suite
-            .recordings
+    let finals: Vec<(&PathBuf, [f64; 3])> = ran
+        .iter()
+        .map(|(r, row)| (&r.config, row.final_bias_rad_s))
+        .collect();
+    let mut rows = Vec::new();
+    for (i, (r, mut row)) in ran.into_iter().enumerate() {
+        let others: Vec<[f64; 3]> = finals
             .iter()
-            .zip(&rows)
             .enumerate()
-            .filter(|(j, (o, row))| {
-                *j != i
-                    && o.config == r.config
-                    && row.final_bias_rad_s.iter().all(|v| v.is_finite())
+            .filter(|(j, (config, bias))| {
+                *j != i && *config == &r.config && bias.iter().all(|v| v.is_finite())
             })
-            .map(|(_, (_, row))| row.final_bias_rad_s)
+            .map(|(_, (_, bias))| *bias)
             .collect();
-        rows[i].front_end.without_rest_checkpoint =
-            without_rest_from_checkpoint(base, r, best_mode, &others).map_err(wrap(r))?;
+        match without_rest_from_checkpoint(base, r, best_mode, &others).map_err(wrap(r)) {
+            Ok(fp) => {
+                row.front_end.without_rest_checkpoint = fp;
+                rows.push(row);
+            }
+            Err(e) => failed.push(e),
+        }
     }
-    Ok(rows)
+    Ok(SuiteRun { rows, failed })
 }
 
 /// The default run on the log cut [`KEPT_REST_S`] before its first footprint, started from the
