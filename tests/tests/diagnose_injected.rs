@@ -556,3 +556,30 @@ fn an_accelerometer_scale_error_is_named_on_the_stride_length_line() {
     let (b, a) = (r.before.gcp_rms_m.unwrap(), r.after.gcp_rms_m.unwrap());
     assert!(a < b, "footprint RMS {b:.3} -> {a:.3} m");
 }
+
+#[test]
+fn a_heading_the_map_never_held_names_nothing() {
+    // No heading observation can pass a gate of 1e-9° (and no run of strides re-acquires the
+    // heading): the model never holds its heading on the map, as a log started in a weave can
+    // do. Its stance residuals then measure how far off its corridors the heading is, which
+    // the scale-factor signature once fitted at score 30 (a review). A 5 % z scale factor is
+    // injected too: even a real effect is not named from such residuals.
+    let (log, truth) = load("gdins_exp17_rect_loop_small");
+    let mut log = log;
+    LogInjection::GyroScale {
+        axis: 2,
+        fraction: 0.05,
+    }
+    .apply(&mut log.rows);
+    let mut cfg = config(0.0, false);
+    cfg.heading.gate_deg = Some(1e-9);
+    cfg.heading.reacquire_strides = None;
+    let r = run(&log, &truth, &cfg);
+    assert_eq!(r.top_effect, "none", "{:#?}", r.effects);
+    assert!(
+        r.verdict.contains("heading was never held") && r.iterations.is_empty(),
+        "{}",
+        r.verdict
+    );
+    assert!(r.effects.iter().all(|e| e.score == 0.0), "{:#?}", r.effects);
+}

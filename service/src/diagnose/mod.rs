@@ -344,6 +344,15 @@ pub fn run_diagnosis(
         top_effect: top.map_or("none".to_string(), |e| e.name.to_string()),
         verdict: top.map_or_else(
             || {
+                if first.never_held() {
+                    return format!(
+                        "nothing named: the starting model fused none of its {} heading \
+                         observations (foot axis and stride direction), so its heading was never \
+                         held by the map (a start in a weave, a wrong start heading?) and its \
+                         residuals cannot show an effect",
+                        first.stances.len()
+                    );
+                }
                 power::nothing_found(
                     &first.power,
                     &first.effects,
