@@ -51,8 +51,7 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
     // the failures make the command fail after them.
     let run = corridor_service::suite::run_suite_each(&a.suite)?;
     let rows = run.rows;
-    let scored = rows.len();
-    let mut failed: Vec<String> = run.failed.iter().map(ToString::to_string).collect();
+    let failed: Vec<String> = run.failed.iter().map(ToString::to_string).collect();
     let mut md = corridor_service::suite::markdown(&rows);
     if !failed.is_empty() {
         md.push_str(&format!(
@@ -60,23 +59,22 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
             failed.join("; ")
         ));
     }
-    if a.loops {
+    if a.loops && !failed.is_empty() {
+        // The loop runs every recording of the file again, and would stop at the same one.
+        md.push_str("\nThe residual-diagnosis loop (`--loops`) was not run: a recording failed.\n");
+    } else if a.loops {
         let reports = a.out.as_ref().map_or_else(
             || std::env::temp_dir().join(format!("corridor-loops-{}", std::process::id())),
             |d| d.join("diagnose"),
         );
-        let loops = corridor_service::suite::run_loops(&a.suite, &reports);
+        let loops = corridor_service::suite::run_loops(&a.suite, &reports)?;
         if a.out.is_none() {
             // Reports were only a by-product; keep nothing behind.
             let _ = std::fs::remove_dir_all(&reports);
         }
-        match loops {
-            Ok(loops) => md.push_str(&format!(
-                "\nThe residual-diagnosis loop from the paper's model (`corridor diagnose`):\n\n{loops}"
-            )),
-            // (It stops at its first failing recording: the tables above are still written.)
-            Err(e) => failed.push(format!("the diagnosis loop: {e}")),
-        }
+        md.push_str(&format!(
+            "\nThe residual-diagnosis loop from the paper's model (`corridor diagnose`):\n\n{loops}"
+        ));
     }
     corridor_client::say_text(&md);
     if let Some(dir) = a.out {
@@ -91,9 +89,10 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
         return Ok(());
     }
     anyhow::bail!(
-        "{} recording(s) not scored of {} (the others' tables were written): {}",
-        run.failed.len(),
-        run.failed.len() + scored,
+        "{} of {} recordings not scored (the others' tables were written{}): {}",
+        failed.len(),
+        failed.len() + rows.len(),
+        if a.loops { "; --loops not run" } else { "" },
         failed.join("; ")
     )
 }

@@ -143,8 +143,8 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
 /// bundled walks end within 1 σ of it: its σ is their largest distance).
 const BIAS_NOTE_SD: f64 = 5.0;
 
-/// Stances a walk needs before a heading that no observation ever held is worth a note: a
-/// dozen strides of each foot.
+/// Stances a walk needs before a heading that no observation ever held is worth a note: ten
+/// strides of each foot.
 const HEADING_NOTE_MIN_STANCES: u64 = 20;
 
 /// A walk whose heading no map direction ever took: every observation was refused (outside the
@@ -160,8 +160,9 @@ fn heading_never_held(s: &runner::Summary) -> Option<String> {
     )
 }
 
-/// [`heading_never_held`] on the counts: `refused` by reason (foot axis), `no_source` meaning
-/// that there was nothing to observe with (no heading aid, the ZUPT mode).
+/// [`heading_never_held`] on the counts: the foot axes `refused` by reason, the stride
+/// directions refused. A run with nothing to observe with (no heading aid, the ZUPT mode)
+/// refuses none.
 fn never_held_note(
     stances: u64,
     used: u64,
@@ -170,13 +171,18 @@ fn never_held_note(
 ) -> Option<String> {
     let reasons: Vec<String> = refused
         .iter()
-        .filter(|&(&reason, &n)| reason != "no_source" && n > 0)
+        .filter(|&(_, &n)| n > 0)
         .map(|(reason, n)| format!("{reason} {n}"))
         .collect();
-    (used == 0 && !reasons.is_empty() && stances >= HEADING_NOTE_MIN_STANCES).then(|| {
+    let tried = !reasons.is_empty() || strides_refused > 0;
+    (used == 0 && tried && stances >= HEADING_NOTE_MIN_STANCES).then(|| {
         format!(
             "no heading observation was used in {stances} stances (foot axis refused: {}; stride directions refused: {strides_refused}): only the start heading fixed the heading, which may be off its corridors by more than the gate (a start in a weave, or a wrong --start-heading-deg)",
-            reasons.join(", "),
+            if reasons.is_empty() {
+                "none observed".to_string()
+            } else {
+                reasons.join(", ")
+            },
         )
     })
 }
@@ -196,10 +202,14 @@ mod tests {
                 && note.contains("refused: 41)"),
             "{note}"
         );
-        // One observation used, a short log, or nothing to observe with: no note.
+        // Strides alone observed (`heading.observations = "stride"`), every one refused.
+        let none = BTreeMap::from([("outside_gate", 0), ("not_straight", 0)]);
+        let note = never_held_note(49, 0, &none, 45).expect("a note");
+        assert!(note.contains("foot axis refused: none observed;"), "{note}");
+        // One observation used, a short log, or nothing to observe with (a ZUPT run counts
+        // no refusal): no note.
         assert_eq!(never_held_note(49, 1, &refused, 41), None);
         assert_eq!(never_held_note(19, 0, &refused, 41), None);
-        let zupt = BTreeMap::from([("no_source", 49)]);
-        assert_eq!(never_held_note(49, 0, &zupt, 0), None);
+        assert_eq!(never_held_note(49, 0, &none, 0), None);
     }
 }

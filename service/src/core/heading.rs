@@ -175,50 +175,42 @@ impl HeadingAid {
                 }
             }
             HeadingAid::Map(map) => {
-                // Every direction of every corridor containing `xy`, once (parallel corridors
-                // that overlap give the same two).
-                let mut dirs = [0.0; MAX_LISTED_DIRECTIONS];
-                let mut n = 0;
-                for c in map.corridors.iter().filter(|c| c.contains(xy)) {
-                    for dir in [c.axis_rad(), c.axis_rad() + PI] {
-                        let dir = wrap_pi(dir);
-                        let known = dirs[..n]
-                            .iter()
-                            .any(|&d| wrap_pi(d - dir).abs() < SAME_DIRECTION_RAD);
-                        if !known && n < MAX_LISTED_DIRECTIONS {
-                            dirs[n] = dir;
-                            n += 1;
-                        }
-                    }
-                }
-                if n == 0 {
-                    return Err(Rejection::OutsideMap);
-                }
-                let best = (0..n)
-                    .min_by(|&a, &b| {
-                        let d = |i: usize| wrap_pi(heading_rad - dirs[i]).abs();
-                        d(a).total_cmp(&d(b))
-                    })
-                    .expect("n > 0");
-                let dir = dirs[best];
-                if wrap_pi(heading_rad - dir).abs() > gate_rad {
+                // The nearest direction of every corridor containing `xy` ...
+                let inside = || map.corridors.iter().filter(|c| c.contains(xy));
+                let directions =
+                    || inside().flat_map(|c| [c.axis_rad(), c.axis_rad() + PI].map(wrap_pi));
+                let off = |d: f64| wrap_pi(heading_rad - d).abs();
+                let dir = directions()
+                    .min_by(|&a, &b| off(a).total_cmp(&off(b)))
+                    .ok_or(Rejection::OutsideMap)?;
+                if off(dir) > gate_rad {
                     return Err(Rejection::OutsideGate);
                 }
-                if n == 2 {
-                    // One corridor (or parallel ones): its ψ and ψ + π.
-                    return Ok((dir, Candidates::Spaced { spacing_rad: PI }));
-                }
-                // A junction: the associated direction first, then the others.
-                dirs.swap(0, best);
+                // ... and the directions there for its weight, the associated one first, each
+                // once (overlapping segments of one corridor drawn a few degrees apart are one
+                // direction).
                 let mut offsets_rad = [0.0; MAX_LISTED_DIRECTIONS];
-                for (o, d) in offsets_rad.iter_mut().zip(&dirs[..n]) {
-                    *o = wrap_pi(d - dir);
+                let mut n = 1;
+                for d in directions() {
+                    let o = wrap_pi(d - dir);
+                    let known = offsets_rad[..n]
+                        .iter()
+                        .any(|&k| wrap_pi(o - k).abs() < SAME_DIRECTION_RAD);
+                    if !known && n < MAX_LISTED_DIRECTIONS {
+                        offsets_rad[n] = o;
+                        n += 1;
+                    }
                 }
                 Ok((
                     dir,
-                    Candidates::Listed {
-                        offsets_rad,
-                        n: n as u8,
+                    if n == 2 {
+                        // One corridor (or parallel ones): its ψ and ψ + π.
+                        Candidates::Spaced { spacing_rad: PI }
+                    } else {
+                        Candidates::Listed {
+                            offsets_rad,
+                            n: n as u8,
+                        }
                     },
                 ))
             }
@@ -226,12 +218,16 @@ impl HeadingAid {
     }
 }
 
-/// At most this many distinct directions are told apart where corridors of a map cross (eight
-/// corridor axes through one place); a ninth axis there is left out of the association weight.
+/// At most this many distinct directions weigh an association where corridors of a map cross
+/// (eight corridor axes through one place); a ninth axis there is left out of the weight (the
+/// association itself takes the nearest of all).
 pub const MAX_LISTED_DIRECTIONS: usize = 16;
 
-/// Two corridor directions closer than this are the same direction.
-const SAME_DIRECTION_RAD: f64 = 1e-9;
+/// Corridor directions closer than this are one direction for the association weight: a
+/// corridor drawn as overlapping segments a few degrees apart is one corridor (with a 1e-9 rad
+/// tolerance, two segments 0.3° apart halved the weight of a stride along them, a review), and
+/// the corridors of a junction meet at tens of degrees.
+const SAME_DIRECTION_RAD: f64 = 5.0 * PI / 180.0;
 
 /// The directions a walker at one place may walk along, relative to the one an observation was
 /// associated with: evenly spaced around the circle (a grid's step, or π for one corridor's ψ
@@ -472,6 +468,8 @@ mod tests {
                 // Overlapping and parallel to the first: no new direction.
                 corridor("east-west again", [-5.0, 0.5], [5.0, 0.5]),
                 corridor("north-south", [0.0, -20.0], [0.0, 20.0]),
+                // The east-west corridor's next segment, drawn 0.3° off it, overlapping it.
+                corridor("east-west on", [15.0, 0.0], [40.0, 0.13]),
             ],
         });
         let gate = 15f64.to_radians();
@@ -480,6 +478,10 @@ mod tests {
             aid.associate_among([10.0, 0.0], 0.1, gate),
             Ok((0.0, Candidates::Spaced { spacing_rad: PI }))
         );
+        // Where the two segments of the east-west corridor overlap: still one corridor.
+        let (dir, candidates) = aid.associate_among([17.0, 0.0], 0.01, gate).unwrap();
+        assert!(dir.abs() < 0.01, "{dir}");
+        assert_eq!(candidates, Candidates::Spaced { spacing_rad: PI });
         // At the junction: four directions, the associated one (north) first.
         let (dir, candidates) = aid.associate_among([0.2, 0.2], 1.5, gate).unwrap();
         assert!((dir - PI / 2.0).abs() < 1e-12);

@@ -148,6 +148,13 @@ pub struct Analysis {
     /// The heading residuals of every stance (foot axis and stride direction).
     #[serde(skip)]
     pub stances: Vec<StanceResidual>,
+    /// The model fused no heading observation (foot axis or stride direction) at any of its
+    /// stances: its heading was never held by the map, and its stance residuals then measure
+    /// how far off its corridors it is, whatever put it there (a start in a weave, a wrong start
+    /// heading, or an effect as large as a 5 % z scale factor on a spiral). The report says so
+    /// beside what it names.
+    #[serde(skip)]
+    pub heading_never_held: bool,
     /// The power of this walk for the catalogue's effects.
     pub power: Vec<super::power::Power>,
     /// The test of the filter's bias estimate against its random walk (error-state modes
@@ -417,9 +424,10 @@ pub fn analyse(
     if let Some(o) = &onset {
         super::bias_change::apply_onset_change(&mut effects, o);
     }
-    if used.is_empty() && !stances.is_empty() {
-        never_held(&mut effects);
-    }
+    // (Both kinds: with `heading.observations = "stride"`, or strides holding the heading while
+    // every foot axis is refused, no foot-axis residual is accepted.)
+    let heading_never_held =
+        outcome.counters.heading_used + outcome.counters.stride_used == 0 && !stances.is_empty();
     let scale_factor = outcome.extensions.and_then(|(x, sd)| {
         sd.scale_factor
             .map(|sd| std::array::from_fn(|k| [x.scale_factor[k], sd[k]]))
@@ -438,6 +446,7 @@ pub fn analyse(
         stride_length: truth.and_then(|t| super::stride_length(&outcome.trace, t)),
         residuals: res,
         stances,
+        heading_never_held,
         power,
         bias_change,
         bias_change_applies: trace.is_some(),
@@ -445,31 +454,7 @@ pub fn analyse(
     })
 }
 
-/// A model that fused no heading observation never held its heading on the map: every
-/// stance's residual then measures how far off its corridors the heading is (a start in a
-/// weave, a wrong start heading), which a signature of the catalogue can fit by chance (a
-/// review: a lost heading named as an 8 % z scale factor at score 30). Nothing is named from
-/// the residuals; a rail still is (it is read from the samples).
-fn never_held(effects: &mut [Finding]) {
-    for e in effects
-        .iter_mut()
-        .filter(|e| e.name != super::catalogue::Effect::GyroClipping && e.score > 0.0)
-    {
-        e.score = 0.0;
-        e.evidence.push_str(
-            "; not named: the model fused no heading observation, so its heading was never held \
-             by the map and the stance residuals measure how far off its corridors it is",
-        );
-    }
-    effects.sort_by(|a, b| b.score.total_cmp(&a.score));
-}
-
 impl Analysis {
-    /// The model fused no heading observation at any of its stances ([`never_held`]).
-    pub fn never_held(&self) -> bool {
-        self.consistency.observations == 0 && !self.stances.is_empty()
-    }
-
     /// The stride-length line of this analysis of the model `file` (with truth only).
     pub fn stride_line(&self, file: &ConfigFile) -> Option<super::StrideLine> {
         let rolling = file.eskf.zupt_rolling_height_m.unwrap_or(0.0) > 0.0;

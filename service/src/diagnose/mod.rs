@@ -344,15 +344,6 @@ pub fn run_diagnosis(
         top_effect: top.map_or("none".to_string(), |e| e.name.to_string()),
         verdict: top.map_or_else(
             || {
-                if first.never_held() {
-                    return format!(
-                        "nothing named: the starting model fused none of its {} heading \
-                         observations (foot axis and stride direction), so its heading was never \
-                         held by the map (a start in a weave, a wrong start heading?) and its \
-                         residuals cannot show an effect",
-                        first.stances.len()
-                    );
-                }
                 power::nothing_found(
                     &first.power,
                     &first.effects,
@@ -362,7 +353,17 @@ pub fn run_diagnosis(
                 )
             },
             |e| format!("{} (score {:.1})", e.name, e.score),
-        ),
+        ) + &if first.heading_never_held {
+            format!(
+                "; but the starting model fused none of its {} heading observations (foot axis \
+                 and stride direction): its heading was never held by the map, and the residuals \
+                 measure how far off its corridors it is, which a start in a weave or a wrong \
+                 start heading does as well as an effect",
+                first.stances.len()
+            )
+        } else {
+            String::new()
+        },
         power: first.power.clone(),
         onset: first.onset,
         bias_change: first.bias_change.clone(),

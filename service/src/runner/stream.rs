@@ -124,6 +124,8 @@ pub struct Summary {
 struct Kept {
     /// Bias and σ of the last estimate.
     last: Option<([f64; 3], [f64; 3])>,
+    /// The time of the last estimate, s.
+    last_t_s: Option<f64>,
     /// Sum and count of the bias from the first converged sample on.
     converged_sum: [f64; 3],
     converged_n: usize,
@@ -137,6 +139,7 @@ impl Kept {
     fn new(truth: Option<&[TruthGcp]>, plots: bool) -> Self {
         Self {
             last: None,
+            last_t_s: None,
             converged_sum: [0.0; 3],
             converged_n: 0,
             gcps: truth.map(|t| GcpSampler::new(t, &EvalOptions::default())),
@@ -148,6 +151,7 @@ impl Kept {
     /// [`Trace::mean_bias_from`] over the whole trace).
     fn push(&mut self, e: &Estimate, converged_at_s: Option<f64>) {
         self.last = Some((e.gyro_bias_rad_s, e.gyro_bias_sd_rad_s));
+        self.last_t_s = Some(e.t_s);
         if converged_at_s.is_some_and(|t| e.t_s >= t) {
             for k in 0..3 {
                 self.converged_sum[k] += e.gyro_bias_rad_s[k];
@@ -562,6 +566,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
             kept.last.map(|l| l.0),
             opts.config.alignment.typical_gyro_bias,
             &opts.injection,
+            kept.last_t_s.zip(feed.first_t_s).map(|(t, t0)| t - t0),
         ),
         zero_rate_updates: c.zero_rate_updates,
         zero_rate_refused: c.zero_rate_refused,
@@ -631,20 +636,23 @@ impl Progress {
     }
 }
 
-/// [`Summary::bias_from_typical_sd`]: the final bias `bias_rad_s` against the unit's `typical`
-/// one plus the injected constant.
+/// [`Summary::bias_from_typical_sd`]: the final bias `bias_rad_s`, estimated `since_start_s`
+/// after the log's first sample, against the unit's `typical` one plus what was injected then
+/// (nothing, for an injection that starts after the log ends).
 fn bias_from_typical_sd(
     bias_rad_s: Option<[f64; 3]>,
     typical: Option<TypicalGyroBias>,
     injection: &BiasInjection,
+    since_start_s: Option<f64>,
 ) -> Option<f64> {
-    let (b, t) = (bias_rad_s?, typical?);
+    let (b, t, since_start_s) = (bias_rad_s?, typical?, since_start_s?);
     if injection.ramp_rad_s2 != [0.0; 3] || b.iter().any(|v| !v.is_finite()) {
         return None;
     }
+    let injected = injection.bias_at(since_start_s);
     let sd = t.sd_rad_s.get();
     (0..3)
-        .map(|k| (b[k] - t.rad_s[k] - injection.constant_rad_s[k]).abs() / sd)
+        .map(|k| (b[k] - t.rad_s[k] - injected[k]).abs() / sd)
         .reduce(f64::max)
 }
 
@@ -661,23 +669,32 @@ mod tests {
             sd_rad_s: Positive::new("sd", 4e-3).unwrap(),
         };
         let none = BiasInjection::default();
-        let d = bias_from_typical_sd(Some([1e-3, -2e-3, 25e-3]), Some(typical), &none).unwrap();
+        let end = Some(60.0);
+        let off = Some([1e-3, -2e-3, 25e-3]);
+        let d = bias_from_typical_sd(off, Some(typical), &none, end).unwrap();
         assert!((d - 5.0).abs() < 1e-9, "{d}");
         let injected = BiasInjection {
             constant_rad_s: [0.0, 0.0, 0.02],
             ..Default::default()
         };
-        let d = bias_from_typical_sd(Some([1e-3, -2e-3, 25e-3]), Some(typical), &injected);
+        let d = bias_from_typical_sd(off, Some(typical), &injected, end);
         assert!(d.unwrap() < 1e-9, "{d:?}");
+        // An injection that starts after the log ends added nothing.
+        let too_late = BiasInjection {
+            after_s: 1e6,
+            ..injected
+        };
+        let d = bias_from_typical_sd(off, Some(typical), &too_late, end).unwrap();
+        assert!((d - 5.0).abs() < 1e-9, "{d}");
         // Nothing to compare with: no typical bias, no estimate, or a ramp injected.
-        assert_eq!(bias_from_typical_sd(Some([0.0; 3]), None, &none), None);
-        assert_eq!(bias_from_typical_sd(None, Some(typical), &none), None);
+        assert_eq!(bias_from_typical_sd(Some([0.0; 3]), None, &none, end), None);
+        assert_eq!(bias_from_typical_sd(None, Some(typical), &none, end), None);
         let ramp = BiasInjection {
             ramp_rad_s2: [0.0, 0.0, 1e-4],
             ..Default::default()
         };
         assert_eq!(
-            bias_from_typical_sd(Some([0.0; 3]), Some(typical), &ramp),
+            bias_from_typical_sd(Some([0.0; 3]), Some(typical), &ramp, end),
             None
         );
     }

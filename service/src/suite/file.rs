@@ -269,21 +269,7 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
         check_suspect_legs(&r.name, &suspect_legs, &truth)?;
         suspect_legs
     } else {
-        // The data set's own flags are extra information: legs it names that this truth cannot
-        // score before (a stride number no footprint carries, a leg before the first-leg
-        // alignment's footprint) leave the recording scored on every footprint, and are said.
-        let legs = legs_of_strides(&suspect_legs, &truth);
-        match check_suspect_legs(&r.name, &legs, &truth) {
-            Ok(()) => legs,
-            Err(e) => {
-                tracing::warn!(
-                    "{e} (the data set's flags, read from {}): the recording is scored on \
-                     every footprint, not also before the flagged legs",
-                    meta.display()
-                );
-                Vec::new()
-            }
-        }
+        flagged_legs_of(&r.name, &suspect_legs, &truth, &meta)
     };
     Ok(SuiteRecording {
         name: r.name,
@@ -317,21 +303,43 @@ fn flagged_legs_beside(meta: &Path) -> Result<Vec<usize>, String> {
     serde_json::from_value(legs.clone()).map_err(|e| format!("{FLAGGED_LEGS_KEY}: {e}"))
 }
 
-/// The legs a gdins `meta.json` flags, as legs of `truth`: the data set names each by the
-/// stride number of the footprint it ends at ("legs ending at strides [30, 31]"), the truth's
-/// `stride` column, which is the leg's own number only where every stride is surveyed. A value
-/// no footprint carries (a truth without that column) is taken as a leg number.
-fn legs_of_strides(flagged: &[usize], truth: &[TruthPoint]) -> Vec<usize> {
-    flagged
-        .iter()
-        .map(|&v| {
+/// The legs a gdins `meta.json` (`meta`) flags, as legs of `truth`: the data set names each by
+/// the stride number of the footprint it ends at ("legs ending at strides [30, 31]"), the
+/// truth's `stride` column, which is the leg's own number only where every stride is surveyed
+/// (a truth without that column: taken as the leg's number). The data set's flags are extra
+/// information: one that no footprint carries, or that this truth cannot be scored before (a
+/// leg before the first-leg alignment's footprint), is said and left out, and the recording is
+/// still scored.
+fn flagged_legs_of(name: &str, flagged: &[usize], truth: &[TruthPoint], meta: &Path) -> Vec<usize> {
+    let has_strides = truth.iter().any(|g| g.stride.is_some());
+    let mut legs = Vec::new();
+    for &stride in flagged {
+        let leg = if has_strides {
             truth
                 .iter()
                 .skip(1)
-                .position(|g| g.stride.is_some_and(|s| usize::try_from(s) == Ok(v)))
-                .map_or(v, |k| k + 1)
-        })
-        .collect()
+                .position(|g| g.stride.is_some_and(|s| usize::try_from(s) == Ok(stride)))
+                .map(|k| k + 1)
+        } else {
+            Some(stride)
+        };
+        let problem = match leg {
+            None => format!("recording {name}: no footprint of its truth carries stride {stride}"),
+            Some(leg) => match check_suspect_legs(name, &[leg], truth) {
+                Ok(()) => {
+                    legs.push(leg);
+                    continue;
+                }
+                Err(e) => e,
+            },
+        };
+        tracing::warn!(
+            "{problem}: the leg ending at stride {stride} that {} flags is left out (the \
+             recording is scored on every footprint, and before the legs left)",
+            meta.display()
+        );
+    }
+    legs
 }
 
 /// The start heading a user of the map gives a walk, taken from its truth: the direction from
@@ -524,10 +532,14 @@ mod tests {
         let e = read_one(&dir, line, "suspect_legs = [9]\n").unwrap_err();
         assert!(e.contains("9 is not a leg"), "{e}");
         // ... named by the stride number of the footprint each ends at: a walk surveyed at its
-        // corners (strides 0, 12, 17, 24, 31, 38) flagging the leg that ends at stride 31.
+        // corners (strides 0, 12, 17, 24, 31, 38) flagging the leg that ends at stride 31; a
+        // stride no footprint carries (5) is left out, not taken for a leg number, and does
+        // not cost the others.
         let corners = "t_s,x_m,y_m,z_m,stride,sample_index\n0,0,0,0,0,0\n1,6,0,0,12,200\n\
                        2,6,4,0,17,400\n3,0,4,0,24,600\n4,0,0,0,31,800\n5,6,0,0,38,1000\n";
         meta("[31]");
+        assert_eq!(read_one(&dir, corners, "").unwrap().suspect_legs, vec![4]);
+        meta("[5, 31, 99]");
         assert_eq!(read_one(&dir, corners, "").unwrap().suspect_legs, vec![4]);
         std::fs::remove_file(dir.join("meta.json")).unwrap();
         // A truth without a stride: the error names the recording and the key.
