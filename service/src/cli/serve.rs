@@ -98,6 +98,7 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
             "daemon_lives": report.lives,
             "checkpoints_saved": report.checkpoints_saved,
             "warm_started": report.warm_started_from.is_some(),
+            "streams_warm_started": report.streams_warm_started,
             "warnings": report.warnings,
         }))?
     );

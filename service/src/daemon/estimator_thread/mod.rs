@@ -58,6 +58,8 @@ struct EstState<'a> {
     /// The state each new stream starts from (checkpoint configured only).
     warm: Option<WarmStart>,
     warm_started_from: Option<Checkpoint>,
+    /// Stream ends after which the next stream starts from the state this one left.
+    streams_warm_started: u64,
     /// Accepted samples at the last checkpoint save (no save when nothing changed).
     saved_at_samples: u64,
     checkpoints_saved: u64,
@@ -86,6 +88,7 @@ impl<'a> EstState<'a> {
             went_back: None,
             warm: None,
             warm_started_from: None,
+            streams_warm_started: 0,
             saved_at_samples: 0,
             checkpoints_saved: 0,
             latency_diag: LatencyHistogram::new(),
@@ -369,6 +372,14 @@ impl<'a> EstState<'a> {
         p.headings_expired += c.headings_expired;
         p.headings_undone += c.headings_undone;
         self.est = self.new_estimator(cfg);
+        if self.warm.is_some() {
+            self.streams_warm_started += 1;
+            tracing::info!(
+                "the next stream starts from the bias and attitude this one left (the daemon \
+                 carries its state across streams; `corridor run --checkpoint` with the saved \
+                 state reproduces it, a cold `corridor run` does not)"
+            );
+        }
         self.last = Estimate::default();
         self.last_bias_t_s = f64::NEG_INFINITY;
         self.last_phase = Phase::Aligning;
@@ -527,6 +538,7 @@ pub(super) fn estimator_thread(
         diagnostics,
         streams_finished: st.streams_finished,
         warm_started_from: st.warm_started_from,
+        streams_warm_started: st.streams_warm_started,
         checkpoints_saved: st.checkpoints_saved,
         warnings: st.warnings,
         stalls: [
