@@ -79,6 +79,16 @@ pub struct Recorded {
     pub attitude_missed: u64,
     /// Attitude messages published before the first one received (a logger that started late).
     pub attitude_missed_at_start: u64,
+    /// The recorder attached between two streams (the bias stream's first message was the end
+    /// of a stream that ended before): the messages published before its first one are all of
+    /// earlier streams, none of the ones it recorded.
+    pub attached_between_streams: bool,
+    /// IMU samples (the producer's numbering, `imu_seq`) within a stream that have no attitude
+    /// row between two that do: samples the daemon refused (implausible, time), dropped (a
+    /// full live queue) or never estimated (lost in a daemon killed and restarted, `corridor
+    /// status`'s "missing at a restart"). A stream's first attitude and a renumbered producer
+    /// start the count afresh.
+    pub imu_without_attitude: u64,
     /// Bias messages received (end-of-stream messages included).
     pub bias_received: u64,
     /// Bias messages missing from the `seq` numbering after the first one received.
@@ -165,6 +175,8 @@ impl Recorder {
                 attitude_received: 0,
                 attitude_missed: 0,
                 attitude_missed_at_start: 0,
+                attached_between_streams: false,
+                imu_without_attitude: 0,
                 bias_received: 0,
                 bias_missed: 0,
                 bias_missed_at_start: 0,
@@ -197,6 +209,8 @@ impl Recorder {
         let (mut attitude_done, mut bias_done) = (false, false);
         let mut first_bias = true;
         let mut any = false;
+        // The `imu_seq` of the stream's last attitude row.
+        let mut last_imu_seq: Option<u64> = None;
         let mut last_rx = Instant::now();
         let stopped = loop {
             if attitude_done && bias_done {
@@ -222,7 +236,9 @@ impl Recorder {
             if let Some(b) = b {
                 let end = b.flags & FLAG_END_OF_STREAM != 0;
                 if std::mem::take(&mut first_bias) && end {
-                    continue; // a stream that ended before the recorder attached
+                    // a stream that ended before the recorder attached
+                    self.got.attached_between_streams = true;
+                    continue;
                 }
                 (last_rx, any) = (Instant::now(), true);
                 if end {
@@ -244,7 +260,14 @@ impl Recorder {
                     if x.flags & FLAG_END_OF_STREAM != 0 {
                         attitude_done = true;
                         self.got.open_stream_rows = 0;
+                        last_imu_seq = None;
                     } else {
+                        if let Some(last) = last_imu_seq
+                            && x.imu_seq > last
+                        {
+                            self.got.imu_without_attitude += x.imu_seq - last - 1;
+                        }
+                        last_imu_seq = Some(x.imu_seq);
                         write_attitude_row(&mut self.att_w, &x)
                             .map_err(file_err(&self.got.attitude_path))?;
                         self.got.attitude_rows += 1;

@@ -416,6 +416,14 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
     assert_eq!(rec2.stopped, RecordStop::EndOfStream);
     assert_eq!(track2.stopped, TrackStop::EndOfStream);
     assert!(rec2.attitude_rows > 3900, "{} rows", rec2.attitude_rows);
+    // What was published before its first message is all the first stream's, and it says so
+    // (a review read the count as this stream's); the first logger attached before any stream.
+    assert!(rec2.attached_between_streams && !rec.attached_between_streams);
+    assert_eq!(rec2.attitude_missed_at_start, rec.attitude_received);
+    assert_eq!(
+        (rec.imu_without_attitude, rec2.imu_without_attitude),
+        (0, 0)
+    );
     assert!(track2.strides > 0 && Some(track2.strides) == track2.end_stances);
     assert_eq!((rec.open_stream_rows, rec2.open_stream_rows), (0, 0));
     assert_eq!((rec.retracting_rows, rec2.retracting_rows), (0, 0));

@@ -414,6 +414,14 @@ fn daemon_restart_mid_stream(name: &'static str, kill: bool) {
         "no double count of the first life"
     );
     assert!(n(&r, "missing_at_restart") >= 1000, "sent while no daemon");
+    // The logger's attitude numbering is whole over the restart (no attitude was published
+    // for them): it finds the samples by their IMU numbering.
+    assert!(
+        got.imu_without_attitude >= n(&r, "missing_at_restart"),
+        "{} IMU samples without an attitude, {} missing at the restart",
+        got.imu_without_attitude,
+        n(&r, "missing_at_restart")
+    );
 }
 
 #[test]

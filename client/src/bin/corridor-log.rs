@@ -100,18 +100,34 @@ fn run() -> Result<()> {
     }
     // Every attitude message the daemon published up to the last one received is here:
     // published = before start + received + missing.
+    // (The daemon numbers its messages over its lives: a logger that attached between two
+    // streams counts every earlier stream's there, a review read them as this stream's.)
+    let earlier = if r.attached_between_streams {
+        " (all of earlier streams: this logger attached between two)"
+    } else {
+        ""
+    };
     corridor_client::say!(
-        "attitude messages: {} received, {} missing (seq gaps), {} published before the first",
+        "attitude messages: {} received, {} missing (seq gaps), {} published before the first{earlier}",
         r.attitude_received,
         r.attitude_missed,
         r.attitude_missed_at_start
     );
     corridor_client::say!(
-        "bias messages: {} received, {} missing (seq gaps), {} published before the first",
+        "bias messages: {} received, {} missing (seq gaps), {} published before the first{earlier}",
         r.bias_received,
         r.bias_missed,
         r.bias_missed_at_start
     );
+    if r.imu_without_attitude > 0 {
+        // (A daemon killed and restarted mid-stream leaves such a hole with its attitude
+        // numbering whole: the logger said "0 missing" over it, a review.)
+        corridor_client::say!(
+            "IMU samples without an attitude between recorded rows: {} (refused or dropped by the daemon, or lost in a daemon restart: corridor status --domain {} says which)",
+            r.imu_without_attitude,
+            a.domain
+        );
+    }
     if open_stream && r.stopped == RecordStop::IdleTimeout {
         anyhow::bail!("the recording is incomplete: it timed out within a stream");
     }
