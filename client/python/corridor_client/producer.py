@@ -83,6 +83,8 @@ class Producer:
         self.sent = 0
         self.undelivered = 0
         self.closes_unconfirmed = 0
+        # The end-of-stream marker was sent (`finish`).
+        self.finished = False
 
     def wait_for_daemon(self, timeout_s: float = 10.0) -> None:
         """Waits until the daemon reads the IMU service."""
@@ -147,7 +149,9 @@ class Producer:
         s.t_s = math.nan
         s.temp_c = math.nan
         s.flags = FLAG_END_OF_STREAM
-        return self.send_sample(s)
+        sent = self.send_sample(s)
+        self.finished = True
+        return sent
 
     def _mine(self, activations: Any) -> bool:
         return any(a.id.as_value == self._ack_id for a in activations)
@@ -193,8 +197,19 @@ class Producer:
     def __enter__(self) -> "Producer":
         return self
 
-    def __exit__(self, *exc: Any) -> None:
-        self.close()
+    def __exit__(self, exc_type: Any, *exc: Any) -> None:
+        # A driver stopped by Ctrl-C (KeyboardInterrupt) or by SIGTERM turned into SystemExit
+        # (see examples/driver_producer.py) ends its stream, as `corridor-replay` does: without
+        # the marker the daemon's stream stayed open (a review).
+        try:
+            if (
+                exc_type is not None
+                and issubclass(exc_type, (KeyboardInterrupt, SystemExit))
+                and not self.finished
+            ):
+                self.finish()
+        finally:
+            self.close()
 
 
 def read_imu_csv(path: str) -> Iterable[ImuSample]:

@@ -84,12 +84,17 @@ class Domain:
             self.config.global_cfg.prefix = iox2.FileName.new(f"corridor_{name}_")
 
     def node(self, node_name: str) -> Any:
-        """A node in this domain; iceoryx2 handles SIGINT/SIGTERM (see `node.wait`)."""
+        """A node in this domain. Signals stay Python's alone (iceoryx2's handling, which the
+        Rust clients use with `node.wait`, is not asked for): Ctrl-C raises KeyboardInterrupt
+        in `send`, `recv` and the waits, within one wait slice, and a `Producer` used with
+        `with` then ends its stream. (A process started in the background by a non-interactive
+        shell inherits SIGINT ignored, and Python then never raises KeyboardInterrupt: a
+        review's "Ctrl-C is ignored"; send it SIGTERM, see examples/driver_producer.py.)"""
         node = (
             iox2.NodeBuilder.new()
             .name(iox2.NodeName.new(node_name))
             .config(self.config)
-            .signal_handling_mode(iox2.SignalHandlingMode.HandleTerminationRequests)
+            .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
             .create(iox2.ServiceType.Ipc)
         )
         if self.secured_prefix:

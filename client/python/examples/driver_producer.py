@@ -9,6 +9,8 @@ the corridor-specific code.
 """
 
 import argparse
+import signal
+import sys
 import time
 from typing import Iterator, Tuple
 
@@ -34,12 +36,21 @@ def main() -> None:
     ap.add_argument("--rate-hz", type=float, default=200.0)
     ap.add_argument("--seconds", type=float, default=10.0)
     a = ap.parse_args()
+    # A service manager stops a driver with SIGTERM: as SystemExit, it leaves the `with` block
+    # below the way Ctrl-C (KeyboardInterrupt) does, and the producer ends its stream there.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
 
-    with Producer(Domain(a.domain), "py-driver") as producer:  # 1: connect (daemon's policy)
-        producer.wait_for_daemon()  # 2: wait until the daemon listens
-        for t_s, gyro_rad_s, accel_m_s2 in read_imu(a.rate_hz, a.seconds):
-            producer.send(t_s, gyro_rad_s, accel_m_s2)  # 3: one sample
-        producer.finish()  # 4: end of stream
+    producer = Producer(Domain(a.domain), "py-driver")  # 1: connect (daemon's policy)
+    try:
+        with producer:
+            producer.wait_for_daemon()  # 2: wait until the daemon listens
+            for t_s, gyro_rad_s, accel_m_s2 in read_imu(a.rate_hz, a.seconds):
+                producer.send(t_s, gyro_rad_s, accel_m_s2)  # 3: one sample
+            producer.finish()  # 4: end of stream
+    except KeyboardInterrupt:
+        print("interrupted: the stream was ended", file=sys.stderr)
+        sys.exit(130)
+    finally:
         print(f"sent {producer.sent} messages, {producer.undelivered} undelivered")
 
 

@@ -8,6 +8,7 @@ service/tests/python_client.rs sets both."""
 import glob
 import json
 import os
+import signal
 import subprocess
 import tempfile
 import time
@@ -137,6 +138,45 @@ class Daemon(unittest.TestCase):
                 received = d.received
         self.assertEqual(received, 201)
         diagnostics.close()
+
+    def stop_the_driver_example(self, sig: int, code: int) -> None:
+        """The driver example, stopped by `sig` mid-stream: it exits with `code` and ends its
+        stream (the daemon publishes its end-of-stream bias)."""
+        domain = Domain(DOMAIN)
+        diagnostics = Consumer(domain, wire.Diagnostics, "eco-py-diag-sig", timeout_s=30)
+        bias = Consumer(domain, BiasSample, "eco-py-bias-sig", timeout_s=30)
+        example = os.path.join(env("CORRIDOR_ROOT"), "client/python/examples/driver_producer.py")
+        driver = subprocess.Popen(
+            ["python3", example, "--domain", DOMAIN, "--seconds", "60"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )
+        deadline = time.monotonic() + 60
+        received = 0
+        while received < 100:
+            self.assertLess(time.monotonic(), deadline, f"daemon received {received}")
+            d = diagnostics.recv(1.0)
+            if d is not None:
+                received = d.received
+        driver.send_signal(sig)
+        out, err = driver.communicate(timeout=30)
+        self.assertEqual(driver.returncode, code, err)
+        self.assertIn("sent ", out)
+        deadline = time.monotonic() + 30
+        while True:
+            self.assertLess(time.monotonic(), deadline, "no end-of-stream bias")
+            b = bias.recv(1.0)
+            if b is not None and b.flags & wire.FLAG_END_OF_STREAM:
+                break
+        for c in (diagnostics, bias):
+            c.close()
+
+    def test_ctrl_c_stops_the_driver_example_and_ends_its_stream(self) -> None:
+        # (iceoryx2's signal handler used to swallow it: the driver ran its 60 s.)
+        self.stop_the_driver_example(signal.SIGINT, 130)
+
+    def test_sigterm_stops_the_driver_example_and_ends_its_stream(self) -> None:
+        # (It used to die at once, its stream left open.)
+        self.stop_the_driver_example(signal.SIGTERM, 128 + signal.SIGTERM)
 
 
 if __name__ == "__main__":
