@@ -186,4 +186,21 @@ fn status_exits_2_when_no_daemon_answers() {
         err.contains("no corridor daemon answers on domain \"eco_status_nobody\""),
         "{err}"
     );
+    // Without the runtime directory a secured domain's daemon cannot be found: said.
+    let o = corridor()
+        .args([
+            "status",
+            "--domain",
+            "eco_status_nobody",
+            "--timeout-s",
+            "0.5",
+        ])
+        .env_remove("CORRIDOR_RUNTIME_DIR")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--runtime-dir DIR") && err.contains("CORRIDOR_RUNTIME_DIR=DIR"),
+        "{err}"
+    );
 }

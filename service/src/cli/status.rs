@@ -37,8 +37,18 @@ pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
     let domain = Domain::new(&a.domain)?;
     let timeout = Duration::from_secs_f64(a.timeout_s);
     let no_daemon = |why: &str| {
+        // A daemon serving a secured domain (`--runtime-dir`) is found only through its
+        // runtime directory: without it the domain looks empty (a review).
+        let hint = if std::env::var_os(corridor_shared::services::RUNTIME_DIR_ENV).is_none() {
+            format!(
+                " (a daemon started with --runtime-dir DIR is found only with {}=DIR)",
+                corridor_shared::services::RUNTIME_DIR_ENV
+            )
+        } else {
+            String::new()
+        };
         eprintln!(
-            "error: no corridor daemon answers on domain {:?}: {why}",
+            "error: no corridor daemon answers on domain {:?}: {why}{hint}",
             domain.name()
         );
         Ok(ExitCode::from(EXIT_NO_DAEMON))
