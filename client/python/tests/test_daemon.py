@@ -129,15 +129,19 @@ class Daemon(unittest.TestCase):
             check=True, capture_output=True, text=True, timeout=120,
         )
         self.assertIn("sent 201 messages, 0 undelivered", out.stdout)
+        self.assertEqual(self.until_received(diagnostics, 201), 201)
+        diagnostics.close()
+
+    def until_received(self, diagnostics: Consumer, n: int) -> int:
+        """The daemon's `received` count once it reached `n` (within 60 s)."""
         deadline = time.monotonic() + 60
         received = 0
-        while received < 201:
+        while received < n:
             self.assertLess(time.monotonic(), deadline, f"daemon received {received}")
             d = diagnostics.recv(1.0)
             if d is not None:
                 received = d.received
-        self.assertEqual(received, 201)
-        diagnostics.close()
+        return received
 
     def stop_the_driver_example(self, sig: int, code: int) -> None:
         """The driver example, stopped by `sig` mid-stream: it exits with `code` and ends its
@@ -146,17 +150,14 @@ class Daemon(unittest.TestCase):
         diagnostics = Consumer(domain, wire.Diagnostics, "eco-py-diag-sig", timeout_s=30)
         bias = Consumer(domain, BiasSample, "eco-py-bias-sig", timeout_s=30)
         example = os.path.join(env("CORRIDOR_ROOT"), "client/python/examples/driver_producer.py")
+        # As a foreground process: a test run in the background (`nohup ... &`) hands its
+        # children SIGINT ignored, and Python then never raises KeyboardInterrupt.
         driver = subprocess.Popen(
             ["python3", example, "--domain", DOMAIN, "--seconds", "60"],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
         )
-        deadline = time.monotonic() + 60
-        received = 0
-        while received < 100:
-            self.assertLess(time.monotonic(), deadline, f"daemon received {received}")
-            d = diagnostics.recv(1.0)
-            if d is not None:
-                received = d.received
+        self.until_received(diagnostics, 100)
         driver.send_signal(sig)
         out, err = driver.communicate(timeout=30)
         self.assertEqual(driver.returncode, code, err)
