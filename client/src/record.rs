@@ -83,11 +83,12 @@ pub struct Recorded {
     /// of a stream that ended before): the messages published before its first one are all of
     /// earlier streams, none of the ones it recorded.
     pub attached_between_streams: bool,
-    /// IMU samples (the producer's numbering, `imu_seq`) within a stream that have no attitude
-    /// row between two that do: samples the daemon refused (implausible, time), dropped (a
-    /// full live queue) or never estimated (lost in a daemon killed and restarted, `corridor
-    /// status`'s "missing at a restart"). A stream's first attitude and a renumbered producer
-    /// start the count afresh.
+    /// IMU samples (the producer's numbering, `imu_seq`) within a stream for which the daemon
+    /// published no attitude, between two rows that were recorded: samples it refused
+    /// (implausible, time), dropped (a full live queue, a gap in the producer's numbering) or
+    /// never estimated (lost in a daemon killed and restarted, `corridor status`'s "missing at
+    /// a restart"). Attitudes this reader missed (`attitude_missed`) are not counted again. A
+    /// stream's first attitude and a renumbered producer start the count afresh.
     pub imu_without_attitude: u64,
     /// Bias messages received (end-of-stream messages included).
     pub bias_received: u64,
@@ -209,8 +210,8 @@ impl Recorder {
         let (mut attitude_done, mut bias_done) = (false, false);
         let mut first_bias = true;
         let mut any = false;
-        // The `imu_seq` of the stream's last attitude row.
-        let mut last_imu_seq: Option<u64> = None;
+        // The `imu_seq` and `seq` of the stream's last attitude row.
+        let mut last_row: Option<(u64, u64)> = None;
         let mut last_rx = Instant::now();
         let stopped = loop {
             if attitude_done && bias_done {
@@ -260,14 +261,18 @@ impl Recorder {
                     if x.flags & FLAG_END_OF_STREAM != 0 {
                         attitude_done = true;
                         self.got.open_stream_rows = 0;
-                        last_imu_seq = None;
+                        last_row = None;
                     } else {
-                        if let Some(last) = last_imu_seq
-                            && x.imu_seq > last
+                        // The attitudes this reader missed (`seq` gaps, counted in
+                        // `attitude_missed`) were published: only the rest had none.
+                        if let Some((imu_seq, seq)) = last_row
+                            && x.imu_seq > imu_seq
                         {
-                            self.got.imu_without_attitude += x.imu_seq - last - 1;
+                            let imu_gap = x.imu_seq - imu_seq - 1;
+                            let missed = x.seq.saturating_sub(seq).saturating_sub(1);
+                            self.got.imu_without_attitude += imu_gap.saturating_sub(missed);
                         }
-                        last_imu_seq = Some(x.imu_seq);
+                        last_row = Some((x.imu_seq, x.seq));
                         write_attitude_row(&mut self.att_w, &x)
                             .map_err(file_err(&self.got.attitude_path))?;
                         self.got.attitude_rows += 1;

@@ -127,7 +127,7 @@ fn replay_takes_the_daemons_delivery_policy() {
     );
     // The stand-in acknowledged the producer: the replay did not wait or warn.
     assert!(
-        stdout.contains("daemon confirmed it took the end of the stream: yes"),
+        stdout.contains("daemon acknowledged this producer: yes"),
         "{stdout}"
     );
 }

@@ -338,8 +338,11 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
         std::fs::read_to_string(earlier.join("attitude.csv")).unwrap(),
         "an earlier recording\n"
     );
-    let daemon = Running::start(daemon_config(&domain, Delivery::Lossless));
     let dir = temp_dir("test-daemon-tools");
+    // With a checkpoint path the second stream starts from the bias the first left.
+    let mut dcfg = daemon_config(&domain, Delivery::Lossless);
+    dcfg.checkpoint = Some(dir.join("checkpoint.bin"));
+    let daemon = Running::start(dcfg);
     let rows = exp36_rows();
     let never = Arc::new(AtomicBool::new(false));
     let (ready_tx, ready_rx) = std::sync::mpsc::channel();
@@ -412,7 +415,9 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
         (rec2.join().unwrap(), track2.join().unwrap())
     });
 
-    let both = daemon.stop().diagnostics;
+    let report = daemon.stop();
+    assert_eq!(report.streams_warm_started, 1, "the second stream, warm");
+    let both = report.diagnostics;
     assert_eq!(rec2.stopped, RecordStop::EndOfStream);
     assert_eq!(track2.stopped, TrackStop::EndOfStream);
     assert!(rec2.attitude_rows > 3900, "{} rows", rec2.attitude_rows);

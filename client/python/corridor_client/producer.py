@@ -3,6 +3,7 @@
 import csv
 import math
 import time
+import warnings
 from typing import Any, Iterable, Optional, Sequence
 
 import iceoryx2 as iox2
@@ -83,8 +84,9 @@ class Producer:
         self.sent = 0
         self.undelivered = 0
         self.closes_unconfirmed = 0
-        # The end-of-stream marker was sent (`finish`).
+        # The end-of-stream marker was sent (`finish`); the ports were released (`close`).
         self.finished = False
+        self.closed = False
 
     def wait_for_daemon(self, timeout_s: float = 10.0) -> None:
         """Waits until the daemon reads the IMU service."""
@@ -149,9 +151,10 @@ class Producer:
         s.t_s = math.nan
         s.temp_c = math.nan
         s.flags = FLAG_END_OF_STREAM
-        sent = self.send_sample(s)
+        # (Set first: an interrupt during the send must not send a second marker, which the
+        # daemon would take for an empty stream.)
         self.finished = True
-        return sent
+        return self.send_sample(s)
 
     def _mine(self, activations: Any) -> bool:
         return any(a.id.as_value == self._ack_id for a in activations)
@@ -165,6 +168,9 @@ class Producer:
         does at the first sample it takes), this waits up to `END_ACK_WAIT_S` for that (none in
         time: `closes_unconfirmed`).
         """
+        if self.closed:
+            return
+        self.closed = True
         try:
             if self.sent > self.undelivered:
                 deadline = time.monotonic() + END_ACK_WAIT_S
@@ -201,13 +207,20 @@ class Producer:
         # A driver stopped by Ctrl-C (KeyboardInterrupt) or by SIGTERM turned into SystemExit
         # (see examples/driver_producer.py) ends its stream, as `corridor-replay` does: without
         # the marker the daemon's stream stayed open (a review).
+        # Not when no daemon reads (a lossless send would wait for one), and a failure to send
+        # it is said but does not replace the interrupt.
         try:
             if (
                 exc_type is not None
                 and issubclass(exc_type, (KeyboardInterrupt, SystemExit))
                 and not self.finished
+                and not self.closed
+                and self._imu_service.dynamic_config.number_of_subscribers > 0
             ):
-                self.finish()
+                try:
+                    self.finish()
+                except Exception as e:  # noqa: BLE001 - said, and the interrupt goes on
+                    warnings.warn(f"corridor producer: the end-of-stream marker was not sent: {e}")
         finally:
             self.close()
 

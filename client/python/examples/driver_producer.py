@@ -38,6 +38,8 @@ def main() -> None:
     a = ap.parse_args()
     # A service manager stops a driver with SIGTERM: as SystemExit, it leaves the `with` block
     # below the way Ctrl-C (KeyboardInterrupt) does, and the producer ends its stream there.
+    # (Python runs the handler between two calls: a lossless send that a daemon which stopped
+    # reading holds up defers it; the manager's SIGKILL after its stop timeout ends that.)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
 
     producer = Producer(Domain(a.domain), "py-driver")  # 1: connect (daemon's policy)
@@ -48,7 +50,8 @@ def main() -> None:
                 producer.send(t_s, gyro_rad_s, accel_m_s2)  # 3: one sample
             producer.finish()  # 4: end of stream
     except KeyboardInterrupt:
-        print("interrupted: the stream was ended", file=sys.stderr)
+        ended = "the stream was ended" if producer.finished else "no daemon read the stream"
+        print(f"interrupted: {ended}", file=sys.stderr)
         sys.exit(130)
     finally:
         print(f"sent {producer.sent} messages, {producer.undelivered} undelivered")

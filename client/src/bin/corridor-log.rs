@@ -123,7 +123,7 @@ fn run() -> Result<()> {
         // (A daemon killed and restarted mid-stream leaves such a hole with its attitude
         // numbering whole: the logger said "0 missing" over it, a review.)
         corridor_client::say!(
-            "IMU samples without an attitude between recorded rows: {} (refused or dropped by the daemon, or lost in a daemon restart: corridor status --domain {} says which)",
+            "IMU samples the daemon published no attitude for, between recorded rows: {} (refused or dropped by it, missing from the producer's numbering, or lost in a daemon restart: corridor status --domain {} says which)",
             r.imu_without_attitude,
             a.domain
         );

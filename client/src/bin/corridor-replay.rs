@@ -128,11 +128,11 @@ fn run() -> Result<()> {
         s.imu_undelivered
     );
     corridor_client::say!("lossless retries: {}", s.retries);
-    // (Of the stream's end only: a daemon that came back after a stop confirms it although the
-    // samples sent while none read them are lost, counted on the line above; a review read the
-    // two lines as contradicting each other.)
+    // (The daemon acknowledges a producer at the first sample it takes: a daemon that came
+    // back after a stop acknowledges it although the samples sent while none read them are
+    // lost, counted on the line above; a review read the two lines as contradicting.)
     corridor_client::say!(
-        "daemon confirmed it took the end of the stream: {}",
+        "daemon acknowledged this producer: {}",
         if s.closes_unconfirmed == 0 {
             "yes"
         } else {

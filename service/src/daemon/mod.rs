@@ -217,10 +217,10 @@ pub struct DaemonReport {
     pub streams_finished: u64,
     /// The checkpoint the daemon warm-started from, if any.
     pub warm_started_from: Option<Checkpoint>,
-    /// Stream ends after which the next stream starts from the bias and attitude that stream
-    /// left (a daemon with a checkpoint path carries its state from one stream to the next): a
-    /// replay of such a next stream equals `corridor run --checkpoint` with that state, not a
-    /// cold `corridor run`.
+    /// Streams after this life's first that started from the gyro bias (and its covariance) an
+    /// earlier stream left (a daemon with a checkpoint path carries it from one stream to the
+    /// next; the attitude is aligned again): a replay of such a stream equals `corridor run
+    /// --checkpoint` with that state, not a cold `corridor run`.
     pub streams_warm_started: u64,
     /// Checkpoints saved.
     pub checkpoints_saved: u64,

@@ -58,8 +58,11 @@ struct EstState<'a> {
     /// The state each new stream starts from (checkpoint configured only).
     warm: Option<WarmStart>,
     warm_started_from: Option<Checkpoint>,
-    /// Stream ends after which the next stream starts from the state this one left.
+    /// Streams after the first of this daemon life that started from the gyro bias an earlier
+    /// one left.
     streams_warm_started: u64,
+    /// The estimator prepared for the next stream holds an earlier stream's bias.
+    next_stream_warm: bool,
     /// Accepted samples at the last checkpoint save (no save when nothing changed).
     saved_at_samples: u64,
     checkpoints_saved: u64,
@@ -89,6 +92,7 @@ impl<'a> EstState<'a> {
             warm: None,
             warm_started_from: None,
             streams_warm_started: 0,
+            next_stream_warm: false,
             saved_at_samples: 0,
             checkpoints_saved: 0,
             latency_diag: LatencyHistogram::new(),
@@ -235,6 +239,14 @@ impl<'a> EstState<'a> {
             gyro_rad_s: s.gyro_rad_s,
             accel_m_s2: s.accel_m_s2,
         };
+        if self.between_streams && std::mem::take(&mut self.next_stream_warm) {
+            self.streams_warm_started += 1;
+            tracing::info!(
+                "this stream starts from the gyro bias an earlier one left (the daemon carries \
+                 it across streams; `corridor run --checkpoint` with the saved state reproduces \
+                 this stream, a cold `corridor run` does not)"
+            );
+        }
         self.between_streams = false;
         let e = match self.est.step(&input) {
             Ok(e) => {
@@ -372,14 +384,7 @@ impl<'a> EstState<'a> {
         p.headings_expired += c.headings_expired;
         p.headings_undone += c.headings_undone;
         self.est = self.new_estimator(cfg);
-        if self.warm.is_some() {
-            self.streams_warm_started += 1;
-            tracing::info!(
-                "the next stream starts from the bias and attitude this one left (the daemon \
-                 carries its state across streams; `corridor run --checkpoint` with the saved \
-                 state reproduces it, a cold `corridor run` does not)"
-            );
-        }
+        self.next_stream_warm = self.warm.is_some();
         self.last = Estimate::default();
         self.last_bias_t_s = f64::NEG_INFINITY;
         self.last_phase = Phase::Aligning;
