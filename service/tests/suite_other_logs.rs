@@ -60,18 +60,23 @@ fn footprints_after_the_end_of_the_log_are_said_not_silently_clamped() {
     assert_eq!(json[0]["eval_warnings"][0], w[0].as_str());
 }
 
+/// The CSV `src` written to `dst` with every time stamp (its first column) moved by `shift_s`.
+fn shifted_csv(src: &Path, dst: &Path, shift_s: f64) {
+    let text = std::fs::read_to_string(src).unwrap();
+    let mut lines = text.lines();
+    let mut out = vec![lines.next().unwrap().to_string()];
+    out.extend(lines.map(|l| {
+        let (t, rest) = l.split_once(',').unwrap();
+        format!("{},{rest}", t.parse::<f64>().unwrap() + shift_s)
+    }));
+    std::fs::write(dst, out.join("\n") + "\n").unwrap();
+}
+
 /// exp17's log and footprints with every time stamp moved by `shift_s`, in `dir`.
 fn shifted_exp17(dir: &Path, shift_s: f64) {
     let src = root().join("tests/data/gdins_exp17_rect_loop_small");
     for name in ["imu.csv", "ground_truth.csv"] {
-        let text = std::fs::read_to_string(src.join(name)).unwrap();
-        let mut lines = text.lines();
-        let mut out = vec![lines.next().unwrap().to_string()];
-        out.extend(lines.map(|l| {
-            let (t, rest) = l.split_once(',').unwrap();
-            format!("{},{rest}", t.parse::<f64>().unwrap() + shift_s)
-        }));
-        std::fs::write(dir.join(name), out.join("\n") + "\n").unwrap();
+        shifted_csv(&src.join(name), &dir.join(name), shift_s);
     }
 }
 
@@ -127,14 +132,11 @@ fn a_recording_that_fails_does_not_cost_the_others_their_rows() {
     shifted_exp17(&good, 0.0);
     shifted_exp17(&bad, 0.0);
     // The bad one's footprints on another clock: its evaluation fails.
-    let truth = std::fs::read_to_string(good.join("ground_truth.csv")).unwrap();
-    let mut lines = truth.lines();
-    let mut out = vec![lines.next().unwrap().to_string()];
-    out.extend(lines.map(|l| {
-        let (t, rest) = l.split_once(',').unwrap();
-        format!("{},{rest}", t.parse::<f64>().unwrap() + 1.7e9)
-    }));
-    std::fs::write(bad.join("ground_truth.csv"), out.join("\n") + "\n").unwrap();
+    shifted_csv(
+        &good.join("ground_truth.csv"),
+        &bad.join("ground_truth.csv"),
+        1.7e9,
+    );
     let one = std::fs::read_to_string(suite_of(&good)).unwrap();
     let entry = |name: &str, sub: &str| {
         one.replace("\"walk\"", &format!("{name:?}"))

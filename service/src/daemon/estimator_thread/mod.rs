@@ -61,8 +61,6 @@ struct EstState<'a> {
     /// Streams after the first of this daemon life that started from the gyro bias an earlier
     /// one left.
     streams_warm_started: u64,
-    /// The estimator prepared for the next stream holds an earlier stream's bias.
-    next_stream_warm: bool,
     /// Accepted samples at the last checkpoint save (no save when nothing changed).
     saved_at_samples: u64,
     checkpoints_saved: u64,
@@ -92,7 +90,6 @@ impl<'a> EstState<'a> {
             warm: None,
             warm_started_from: None,
             streams_warm_started: 0,
-            next_stream_warm: false,
             saved_at_samples: 0,
             checkpoints_saved: 0,
             latency_diag: LatencyHistogram::new(),
@@ -239,7 +236,9 @@ impl<'a> EstState<'a> {
             gyro_rad_s: s.gyro_rad_s,
             accel_m_s2: s.accel_m_s2,
         };
-        if self.between_streams && std::mem::take(&mut self.next_stream_warm) {
+        // (Between streams `warm` is what the estimator prepared for this one started from:
+        // `new_estimator` drops a state it refused, and nothing is saved before a sample.)
+        if self.between_streams && self.warm.is_some() {
             self.streams_warm_started += 1;
             tracing::info!(
                 "this stream starts from the gyro bias an earlier one left (the daemon carries \
@@ -384,7 +383,6 @@ impl<'a> EstState<'a> {
         p.headings_expired += c.headings_expired;
         p.headings_undone += c.headings_undone;
         self.est = self.new_estimator(cfg);
-        self.next_stream_warm = self.warm.is_some();
         self.last = Estimate::default();
         self.last_bias_t_s = f64::NEG_INFINITY;
         self.last_phase = Phase::Aligning;
