@@ -4,6 +4,7 @@
 
 use corridor_shared::services::{Access, Delivery, Domain};
 use corridor_shared::wire::ImuSample;
+use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -35,6 +36,17 @@ fn tool(exe: &str, args: &[&str]) -> Output {
 /// reads it while `corridor-replay` (given `extra` flags) runs. Returns the replay's output and
 /// the samples received.
 fn replay_into_lossless_daemon(domain_name: &str, extra: &[&str]) -> (Output, usize) {
+    replay_into_stand_in(domain_name, extra, "max", usize::MAX)
+}
+
+/// [`replay_into_lossless_daemon`] at `--speed speed`, with a stand-in that stops reading (its
+/// subscriber goes away, as a daemon that stopped) after `read_at_most` samples.
+fn replay_into_stand_in(
+    domain_name: &str,
+    extra: &[&str],
+    speed: &str,
+    read_at_most: usize,
+) -> (Output, usize) {
     // One stand-in daemon per process at a time (two in one process can lose a wake-up in
     // iceoryx2 0.10: docs/known-issues.md, "Attitudes that stopped for 60 s").
     static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
@@ -51,11 +63,13 @@ fn replay_into_lossless_daemon(domain_name: &str, extra: &[&str]) -> (Output, us
     let _event = domain
         .open_event(&node, corridor_shared::services::IMU_SERVICE, true)
         .unwrap();
-    let sub = service
-        .subscriber_builder()
-        .buffer_size(IMU_BUFFER)
-        .create()
-        .unwrap();
+    let mut sub = Some(
+        service
+            .subscriber_builder()
+            .buffer_size(IMU_BUFFER)
+            .create()
+            .unwrap(),
+    );
     // Acknowledges each producer at its first sample, as the daemon does.
     let ack = domain
         .open_event(&node, corridor_shared::services::IMU_ACK_SERVICE, true)
@@ -76,7 +90,7 @@ fn replay_into_lossless_daemon(domain_name: &str, extra: &[&str]) -> (Output, us
     let log = short_log(domain_name, 200);
     let mut child = Command::new(env!("CARGO_BIN_EXE_corridor-replay"))
         .args(["--imu", log.to_str().unwrap(), "--domain", domain_name])
-        .args(["--speed", "max", "--wait-s", "30"])
+        .args(["--speed", speed, "--wait-s", "30"])
         .args(extra)
         .env("RUST_BACKTRACE", "1")
         .stdout(Stdio::piped())
@@ -85,16 +99,22 @@ fn replay_into_lossless_daemon(domain_name: &str, extra: &[&str]) -> (Output, us
         .unwrap();
     let mut received = 0;
     let start = Instant::now();
-    loop {
-        while let Some(s) = sub.receive().unwrap() {
+    let mut read = |sub: &mut Option<_>, received: &mut usize| {
+        while let Some(s) = sub
+            .as_ref()
+            .and_then(|r: &Subscriber<ipc::Service, ImuSample, ()>| r.receive().unwrap())
+        {
             take(s);
-            received += 1;
-        }
-        if child.try_wait().unwrap().is_some() {
-            while let Some(s) = sub.receive().unwrap() {
-                take(s);
-                received += 1;
+            *received += 1;
+            if *received >= read_at_most {
+                *sub = None;
             }
+        }
+    };
+    loop {
+        read(&mut sub, &mut received);
+        if child.try_wait().unwrap().is_some() {
+            read(&mut sub, &mut received);
             break;
         }
         assert!(start.elapsed() < Duration::from_secs(120), "replay hangs");
@@ -143,6 +163,31 @@ fn replay_delivery_flag_is_an_assertion() {
         "{err}"
     );
     assert_eq!(received, 0);
+}
+
+#[test]
+fn a_replay_whose_daemon_went_away_fails_and_counts_what_nobody_received() {
+    // The stand-in stops reading after 50 of the 200 samples (1 s of log, sent in real time):
+    // the rest reached no subscriber, and a script must not take the replay for a success.
+    let (out, received) = replay_into_stand_in("eco_daemon_gone", &[], "realtime", 50);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(received, 50);
+    assert!(!out.status.success(), "{stdout}{stderr}");
+    let undelivered: usize = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("samples nobody received: "))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{stdout}"));
+    // Some of the 150 and the end-of-stream marker were taken into the stand-in's buffer
+    // before it went away.
+    assert!(undelivered > 0 && undelivered <= 151, "{stdout}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.starts_with("error: ") && stderr.contains("reached no subscriber"),
+        "{stderr}"
+    );
 }
 
 #[test]

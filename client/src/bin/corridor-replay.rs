@@ -1,7 +1,7 @@
 //! `corridor-replay`: publishes a CSV IMU log to the daemon as if it were a live sensor
 //! ([`corridor_client::replay()`]).
 //!
-//! Reports what it sent and how many samples reached no subscriber.
+//! Reports what it sent and how many samples reached no subscriber; fails when any did.
 
 use anyhow::{Result, bail};
 use clap::Parser;
@@ -174,14 +174,6 @@ fn run() -> Result<()> {
     }
     corridor_client::say!("rows rejected by the CSV reader: {rejected}");
     corridor_client::say!("elapsed: {:.3} s ({rate:.0} samples/s)", r.elapsed_s);
-    if s.imu_undelivered > 0 {
-        corridor_client::say_err!(
-            "warning: {} of {} messages reached no subscriber (is the daemon running on domain {:?}?)",
-            s.imu_undelivered,
-            s.imu_sent,
-            domain.name()
-        );
-    }
     if lost > 0 && foreign == 0 {
         corridor_client::say_err!(
             "warning: the daemon lost {lost} of the {} samples sent (live delivery drops what \
@@ -212,6 +204,18 @@ fn run() -> Result<()> {
             "warning: the daemon did not confirm within {} s that it took this replay's \
              samples: the samples still queued when it ended may be lost",
             corridor_client::END_ACK_WAIT.as_secs()
+        );
+    }
+    // The replay's purpose is that the daemon gets the log: samples sent while none read (it
+    // stopped or restarted during the replay) are lost, so the replay fails (it exited 0 with a
+    // warning, and a script took it for a success).
+    if s.imu_undelivered > 0 {
+        bail!(
+            "{} of {} messages (the end-of-stream marker included) reached no subscriber: no \
+             daemon read domain {:?} while they were sent",
+            s.imu_undelivered,
+            s.imu_sent,
+            domain.name()
         );
     }
     Ok(())
