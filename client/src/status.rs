@@ -159,18 +159,31 @@ impl Status {
 
 /// The `last checkpoint:` line for the daemon's checkpoint file (`daemon.checkpoint_path` or
 /// `corridor serve --checkpoint`): the daemon does not publish its checkpoints, but it writes
-/// the file atomically at each save, so its modification time is the last save.
-pub fn checkpoint_line(path: &std::path::Path) -> String {
-    let saved = std::fs::metadata(path).and_then(|m| Ok((m.len(), m.modified()?)));
+/// the file atomically at each save, so its modification time is the last save. `Err` (still
+/// a line to print) when the path holds something that cannot be the daemon's checkpoint: a
+/// directory, a file this user cannot read (it said "saved 3.0 s ago" of a directory, and the
+/// status exited 0 whatever it said). A file not there is not an error: a daemon has none
+/// before its first save.
+pub fn checkpoint_line(path: &std::path::Path) -> Result<String, String> {
+    let shown = path.display();
+    let saved = std::fs::File::open(path)
+        .and_then(|f| f.metadata())
+        .and_then(|m| Ok((m.is_file(), m.len(), m.modified()?)));
     match saved {
-        Ok((bytes, modified)) => {
+        Ok((true, bytes, modified)) => {
             let age_s = modified.elapsed().map_or(0.0, |d| d.as_secs_f64());
-            format!(
-                "last checkpoint:  {} ({bytes} B), saved {age_s:.1} s ago\n",
-                path.display()
-            )
+            Ok(format!(
+                "last checkpoint:  {shown} ({bytes} B), saved {age_s:.1} s ago\n"
+            ))
         }
-        Err(e) => format!("last checkpoint:  {} not readable ({e})\n", path.display()),
+        Ok((false, ..)) => Err(format!(
+            "last checkpoint:  {shown} is not a file (a directory?)\n"
+        )),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(format!(
+            "last checkpoint:  none at {shown} (not saved yet: the daemon saves every \
+             daemon.checkpoint_period_s, at each end of stream and at shutdown)\n"
+        )),
+        Err(e) => Err(format!("last checkpoint:  {shown} not readable ({e})\n")),
     }
 }
 
@@ -415,6 +428,24 @@ impl StatusReader {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_checkpoint_path_that_cannot_be_a_checkpoint_is_an_error_and_a_missing_one_is_not() {
+        let dir = std::env::temp_dir().join(format!("corridor-ckpt-line-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let line = checkpoint_line(&dir).unwrap_err();
+        assert!(line.contains("is not a file"), "{line}");
+        let missing = dir.join("checkpoint.bin");
+        let line = checkpoint_line(&missing).unwrap();
+        assert!(
+            line.contains("none at") && line.contains("not saved yet"),
+            "{line}"
+        );
+        std::fs::write(&missing, [0u8; 12]).unwrap();
+        let line = checkpoint_line(&missing).unwrap();
+        assert!(line.contains("(12 B), saved"), "{line}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn the_daemon_account_is_the_difference_within_one_life() {

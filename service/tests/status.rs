@@ -154,6 +154,20 @@ fn status_shows_the_daemons_counters_and_final_bias() {
         assert!(screen.contains(want), "missing {want:?} in\n{screen}");
     }
 
+    // A checkpoint path that cannot be the daemon's checkpoint (here a directory) is said, and
+    // the status, healthy otherwise, exits 1 (it exited 0 and said "saved 0.0 s ago").
+    let dir = std::env::temp_dir();
+    let o = status(name, "20", &["--checkpoint", dir.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let screen = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        screen.contains(&format!(
+            "last checkpoint:  {} is not a file",
+            dir.display()
+        )),
+        "{screen}"
+    );
+
     // --watch redraws at every diagnostics.
     let mut watch = corridor()
         .args(["status", "--watch", "--domain", name])

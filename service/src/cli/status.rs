@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use corridor_client::status::StatusReader;
+use corridor_client::status::{StatusReader, checkpoint_line};
 use corridor_client::{ClientError, Domain};
 use corridor_shared::injection::parse_time_s;
 use corridor_shared::services::DEFAULT_DOMAIN;
@@ -13,6 +13,10 @@ use std::time::Duration;
 
 /// Exit code when no daemon answered in time or it is shutting down.
 pub(super) const EXIT_NO_DAEMON: u8 = 2;
+
+/// Exit code when the daemon is healthy but `--checkpoint` names something that cannot be its
+/// checkpoint (a directory, a file that cannot be read).
+pub(super) const EXIT_BAD_CHECKPOINT: u8 = 1;
 
 #[derive(Args, Debug)]
 pub(super) struct StatusArgs {
@@ -32,7 +36,8 @@ pub(super) struct StatusArgs {
     pub(super) watch: bool,
 }
 
-/// Prints the status; exit code 0 when healthy, [`EXIT_NO_DAEMON`] when no daemon answers.
+/// Prints the status; exit code 0 when healthy, [`EXIT_NO_DAEMON`] when no daemon answers,
+/// [`EXIT_BAD_CHECKPOINT`] when `--checkpoint` cannot be read.
 pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
     let domain = Domain::new(&a.domain)?;
     let timeout = Duration::from_secs_f64(a.timeout_s);
@@ -72,14 +77,26 @@ pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
             print!("\x1b[2J\x1b[H");
         }
         print!("{}", status.render(domain.name()));
-        if let Some(p) = &a.checkpoint {
-            print!("{}", corridor_client::status::checkpoint_line(p));
-        }
+        let checkpoint_readable = match a.checkpoint.as_deref().map(checkpoint_line) {
+            Some(Err(line)) => {
+                print!("{line}");
+                false
+            }
+            Some(Ok(line)) => {
+                print!("{line}");
+                true
+            }
+            None => true,
+        };
         if !status.healthy() {
             return no_daemon("the daemon is shutting down");
         }
         if !a.watch {
-            return Ok(ExitCode::SUCCESS);
+            return Ok(if checkpoint_readable {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(EXIT_BAD_CHECKPOINT)
+            });
         }
     }
 }
