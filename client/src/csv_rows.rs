@@ -1,12 +1,15 @@
 //! The CSV rows of the daemon's attitude and bias streams, shared by `corridor-log` and the
 //! `corridor demo` logger. The attitude columns are those of `corridor run`'s `estimates.csv`
 //! that apply (no position or velocity: those are in the nav stream), preceded by
-//! `seq,imu_seq`. Both end in `retracts`: 1 on a row whose sample showed earlier ones to come
+//! `seq,imu_seq`. Both have `retracts`: 1 on a row whose sample showed earlier ones to come
 //! from glitched stamps ([`FLAG_RETRACTS`]): the rows before it with a later `t_s` are to be
-//! dropped (the files are written as the rows come).
+//! dropped (the files are written as the rows come). `bias.csv` ends each stream with the
+//! daemon's end-of-stream bias (`end_of_stream` 1: the stream's final estimate, which it left out
+//! before session 40), so a log of several streams shows where each ended.
 
 use corridor_shared::wire::{
-    AttitudeSample, BiasSample, FLAG_CONVERGED, FLAG_RETRACTS, FLAG_STANCE, phase,
+    AttitudeSample, BiasSample, FLAG_CONVERGED, FLAG_END_OF_STREAM, FLAG_RETRACTS, FLAG_STANCE,
+    phase,
 };
 use std::io::Write;
 
@@ -14,7 +17,7 @@ use std::io::Write;
 pub const ATTITUDE_HEADER: &str = "seq,imu_seq,t_s,roll_rad,pitch_rad,yaw_rad,qw,qx,qy,qz,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,stance,converged,phase,retracts";
 
 /// Header of `bias.csv`.
-pub const BIAS_HEADER: &str = "seq,imu_seq,t_s,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,bias_unabsorbed,converged,retracts";
+pub const BIAS_HEADER: &str = "seq,imu_seq,t_s,bias_x_rad_s,bias_y_rad_s,bias_z_rad_s,bias_sd_x_rad_s,bias_sd_y_rad_s,bias_sd_z_rad_s,bias_unabsorbed,converged,retracts,end_of_stream";
 
 /// Writes one `attitude.csv` row.
 pub fn write_attitude_row(w: &mut impl Write, x: &AttitudeSample) -> std::io::Result<()> {
@@ -54,7 +57,7 @@ pub fn write_bias_row(w: &mut impl Write, b: &BiasSample) -> std::io::Result<()>
     let (v, s) = (b.gyro_bias_rad_s, b.gyro_bias_sd_rad_s);
     writeln!(
         w,
-        "{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{},{},{},{},{},{},{},{},{},{},{}",
         b.seq,
         b.imu_seq,
         b.t_s,
@@ -66,7 +69,8 @@ pub fn write_bias_row(w: &mut impl Write, b: &BiasSample) -> std::io::Result<()>
         s[2],
         b.bias_unabsorbed,
         b.converged,
-        u8::from(b.flags & FLAG_RETRACTS != 0)
+        u8::from(b.flags & FLAG_RETRACTS != 0),
+        u8::from(b.flags & FLAG_END_OF_STREAM != 0)
     )
 }
 

@@ -68,7 +68,7 @@ pub struct Recorded {
     /// Of those, the rows of a stream whose end had not arrived when the recording stopped
     /// (0 when it stopped at or between ends of stream): that stream may have gone on.
     pub open_stream_rows: u64,
-    /// Rows written to `bias.csv`.
+    /// Rows written to `bias.csv` (each stream's end-of-stream bias included).
     pub bias_rows: u64,
     /// Attitude rows that retract earlier ones (`retracts` 1: the rows before them with a
     /// later `t_s` came from glitched stamps; [`corridor_shared::wire::FLAG_RETRACTS`]).
@@ -245,10 +245,9 @@ impl Recorder {
                 if end {
                     self.got.final_bias_rad_s = Some(b.gyro_bias_rad_s);
                     bias_done = true;
-                } else {
-                    write_bias_row(&mut self.bias_w, &b).map_err(file_err(&self.got.bias_path))?;
-                    self.got.bias_rows += 1;
                 }
+                write_bias_row(&mut self.bias_w, &b).map_err(file_err(&self.got.bias_path))?;
+                self.got.bias_rows += 1;
                 continue;
             }
             if !attitude_done {

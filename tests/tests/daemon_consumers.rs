@@ -456,6 +456,15 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
     let bias = std::fs::read_to_string(&rec.bias_path).unwrap();
     assert_eq!(bias.lines().next(), Some(BIAS_HEADER));
     assert_eq!(bias.lines().count() as u64, rec.bias_rows + 1);
+    // The stream's end is its last row: the final bias, marked (it was left out).
+    let last: Vec<&str> = bias.lines().last().unwrap().split(',').collect();
+    assert_eq!(last.last(), Some(&"1"), "{last:?}");
+    let final_bias = rec.final_bias_rad_s.unwrap();
+    for (axis, b) in final_bias.iter().enumerate() {
+        assert_eq!(last[3 + axis].parse::<f64>().unwrap(), *b);
+    }
+    let ends = bias.lines().filter(|l| l.ends_with(",1")).count();
+    assert_eq!(ends, 1, "one stream, one end");
 
     assert_eq!(track.stopped, TrackStop::EndOfStream);
     assert!(d.stances > 0);
