@@ -140,6 +140,22 @@ fn run_writes_estimates_innovations_and_summary() {
     let summary = read_json(&out.join("summary.json"));
     assert_eq!(summary["converged_at_s"].as_f64(), first_rise);
     assert!(first_rise.is_some(), "the flag never rose on exp36");
+    // The log clock's origin, from which the injection's start counts (`converged_at_s` is on
+    // the log's clock).
+    let imu = std::fs::read_to_string(
+        root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
+    )
+    .unwrap();
+    let first_t_s: f64 = imu
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(summary["first_t_s"].as_f64(), Some(first_t_s));
     for key in [
         "bias_rad_s",
         "bias_mean_converged_rad_s",

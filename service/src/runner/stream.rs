@@ -17,7 +17,8 @@ pub struct Summary {
     /// Mean bias over the converged phase (from `converged_at_s` on), or null.
     pub bias_mean_converged_rad_s: Option<[f64; 3]>,
     /// First time the estimate carried less than `estimator.converged_unabsorbed` of a bias
-    /// error present when the bias was set (a real-time criterion).
+    /// error present when the bias was set (a real-time criterion), on the log's clock (as the
+    /// estimates' `t_s`; `first_t_s` is where that clock started).
     pub converged_at_s: Option<f64>,
     /// Sensor yaw on the foot found by the calibration, degrees.
     pub mount_yaw_deg: Option<f64>,
@@ -25,8 +26,12 @@ pub struct Summary {
     pub injected_gyro_bias_rad_s: [f64; 3],
     /// Injected ramp, rad/s².
     pub injected_gyro_bias_ramp_rad_s2: [f64; 3],
-    /// Injection start, s after the log's first sample.
+    /// Injection start, s after the log's first sample (`first_t_s`).
     pub injected_after_s: f64,
+    /// The log's first sample time, s, on its own clock: the origin of `injected_after_s`
+    /// (the times a user gives count from the log's start), while `converged_at_s` and the
+    /// estimates are on the log's clock (a review read the two as one clock).
+    pub first_t_s: Option<f64>,
     /// Input rows in the file (accepted by the reader).
     pub samples_read: u64,
     /// Samples the estimator processed.
@@ -512,6 +517,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         injected_gyro_bias_rad_s: opts.injection.constant_rad_s,
         injected_gyro_bias_ramp_rad_s2: opts.injection.ramp_rad_s2,
         injected_after_s: opts.injection.after_s,
+        first_t_s: feed.first_t_s,
         samples_read: reader.rows_accepted(),
         samples: c.samples,
         stances: c.stances,
