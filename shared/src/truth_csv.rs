@@ -6,7 +6,7 @@
 //! reader it tolerates a UTF-8 byte-order mark, CRLF line ends, blank lines at the end and
 //! spaces around fields.
 
-use crate::imu_csv::truncate_chars;
+use crate::imu_csv::{truncate_chars, unquote};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -130,7 +130,8 @@ pub fn read_truth_csv(path: &Path) -> Result<Vec<TruthPoint>, TruthCsvError> {
 
 /// Parses ground-truth CSV `text` (the content of the file `path`, which is only used in messages).
 ///
-/// Strict: a wrong field count, a field that is not a number (or not an integer for `stride`,
+/// Names and values may be quoted (`"t_s"`, `"1.5"`: spreadsheets and `csv.QUOTE_ALL` write
+/// them so), as in the IMU reader. Strict: a wrong field count, a field that is not a number (or not an integer for `stride`,
 /// not a non-negative integer for `sample_index`), a non-finite value, a blank line between rows
 /// or a `t_s` that is not greater than the previous row's is an error.
 pub fn parse_truth_csv(text: &str, path: &Path) -> Result<Vec<TruthPoint>, TruthCsvError> {
@@ -143,7 +144,7 @@ pub fn parse_truth_csv(text: &str, path: &Path) -> Result<Vec<TruthPoint>, Truth
     }
     let mut lines = text.split('\n');
     let header = strip_cr(lines.next().unwrap_or(""));
-    let names: Vec<&str> = header.split(',').map(str::trim_ascii).collect();
+    let names: Vec<&str> = header.split(',').map(unquote).collect();
     let n_fields = match names.len() {
         4 | 6 if names[..] == COLUMNS[..names.len()] => names.len(),
         _ => {
@@ -180,7 +181,7 @@ pub fn parse_truth_csv(text: &str, path: &Path) -> Result<Vec<TruthPoint>, Truth
                 "is blank (blank lines are allowed only at the end)".into(),
             ));
         }
-        let fields: Vec<&str> = line.split(',').map(str::trim_ascii).collect();
+        let fields: Vec<&str> = line.split(',').map(unquote).collect();
         if fields.len() != n_fields {
             return Err(row_error(
                 line_no,
@@ -323,6 +324,24 @@ mod tests {
             }
         );
         assert_eq!((pts[0].stride, pts[0].sample_index), (Some(0), Some(472)));
+    }
+
+    #[test]
+    fn quoted_names_and_values_read_as_unquoted() {
+        // As spreadsheets and Python's csv.QUOTE_ALL write them (the header was refused).
+        let quoted = "\"t_s\",\"x_m\",\"y_m\",\"z_m\",\"stride\",\"sample_index\"\n\
+                      \"2.5\",\"1.0\",\"-2.0\",\"0.0\",\"3\",\"472\"\n";
+        let plain = "t_s,x_m,y_m,z_m,stride,sample_index\n2.5,1.0,-2.0,0.0,3,472\n";
+        assert_eq!(
+            parse_truth_csv(quoted, path()).unwrap(),
+            parse_truth_csv(plain, path()).unwrap()
+        );
+        // A quote left open is still a bad value, named as the file has it.
+        let err = parse_truth_csv("t_s,x_m,y_m,z_m\n\"2.5,1,2,3\n", path()).unwrap_err();
+        assert!(
+            err.to_string().contains("value \"\"2.5\" is not a number"),
+            "{err}"
+        );
     }
 
     #[test]

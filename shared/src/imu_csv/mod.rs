@@ -40,8 +40,8 @@ mod row;
 mod units;
 
 pub use reader::ImuCsvReader;
-pub(crate) use row::truncate_chars;
 use row::*;
+pub(crate) use row::{truncate_chars, unquote};
 use units::*;
 
 /// The seven columns every IMU CSV header must start with, in this order.

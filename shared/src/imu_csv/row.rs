@@ -117,7 +117,7 @@ pub(super) fn norm3(v: [f64; 3]) -> f64 {
 /// A field without the white space around it and without one pair of double quotes around
 /// that (as spreadsheets and `csv.QUOTE_ALL` write them; a quoted comma still splits the field).
 #[inline]
-pub(super) fn unquote(field: &str) -> &str {
+pub(crate) fn unquote(field: &str) -> &str {
     let field = field.trim_ascii();
     match field.as_bytes() {
         [b'"', .., b'"'] => field[1..field.len() - 1].trim_ascii(),
