@@ -17,8 +17,6 @@ fn corridor(args: &[&str]) -> std::process::Output {
         .expect("corridor runs")
 }
 
-/// A suite file of bundled walks with their gaits (paths absolute, so that it can live in a
-/// temporary directory), written to `dir/suite.toml`.
 /// `corridor run --imu IMU --out OUT`, then `extra`.
 fn run_cmd(imu: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec![
@@ -41,6 +39,8 @@ fn gdins() -> String {
         .to_string()
 }
 
+/// A suite file of bundled walks with their gaits (paths absolute, so that it can live in a
+/// temporary directory), written to `dir/suite.toml`.
 fn suite_of(dir: &Path, walks: &[(&str, &str)]) -> PathBuf {
     let mut suite = String::new();
     for (walk, gait) in walks {
@@ -266,29 +266,6 @@ fn absurd_values_and_times_are_refused_counted_and_named_in_the_summary() {
         .map(|v| v.parse().unwrap())
         .collect();
     assert!(last.iter().all(|v| v.abs() < 1000.0), "{last:?}");
-}
-
-#[test]
-fn a_nan_flag_value_is_an_error_naming_the_flag() {
-    let data = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
-    let out = tmp("nanflag");
-    let o = run_cmd(&data, &out, &["--inject-after-s", "nan"]);
-    assert!(!o.status.success());
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        err.contains("--inject-after-s") && err.contains("nan"),
-        "{err}"
-    );
-    // A flag that overrides a config key: the flag is named, not the config file.
-    let o = run_cmd(&data, &out, &["--start-heading-deg", "400"]);
-    assert!(!o.status.success());
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        err.starts_with("error: --start-heading-deg 400: must be in")
-            && err.contains("heading.start_heading_deg")
-            && !err.contains("built-in defaults"),
-        "{err}"
-    );
 }
 
 #[test]

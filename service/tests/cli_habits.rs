@@ -135,3 +135,37 @@ fn completions_and_man_page_cover_every_command() {
     }
     assert!(man.contains("start\\-heading\\-deg"), "flags are listed");
 }
+
+#[test]
+fn a_nan_flag_value_is_an_error_naming_the_flag() {
+    let data = root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv");
+    let out = TempDir::new(&format!("eco-nanflag-{}", std::process::id()));
+    let run_cmd = |extra: &[&str]| {
+        let mut args = vec![
+            "run",
+            "--imu",
+            data.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        corridor(&args)
+    };
+    let o = run_cmd(&["--inject-after-s", "nan"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--inject-after-s") && err.contains("nan"),
+        "{err}"
+    );
+    // A flag that overrides a config key: the flag is named, not the config file.
+    let o = run_cmd(&["--start-heading-deg", "400"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.starts_with("error: --start-heading-deg 400: must be in")
+            && err.contains("heading.start_heading_deg")
+            && !err.contains("built-in defaults"),
+        "{err}"
+    );
+}

@@ -165,3 +165,32 @@ fn a_recording_that_fails_does_not_cost_the_others_their_rows() {
     let e = run_suite(&suite).unwrap_err().to_string();
     assert!(e.contains("recording bad walk"), "{e}");
 }
+
+#[test]
+fn a_loop_closure_truth_is_not_scored_as_nan() {
+    // The x-io walk's truth is its start and end at one place: nothing for the footprint RMS.
+    // The suite gave it "NaN %" in its tables and exited 0 (a second-sensor review).
+    let dir = TempDir::new("suite-loop-closure");
+    let src = root().join("tests/data/xio_ngimu_long_walk");
+    for name in ["imu.csv", "ground_truth.csv"] {
+        std::fs::copy(src.join(name), dir.join(name)).unwrap();
+    }
+    let suite = dir.join("suite.toml");
+    std::fs::write(
+        &suite,
+        std::fs::read_to_string(suite_of(&dir))
+            .unwrap()
+            .replace("gdins.toml", "ngimu.toml")
+            .replace("gdins_zupt_baseline.toml", "ngimu.toml"),
+    )
+    .unwrap();
+    let run = corridor_service::suite::run_suite_each(&suite).unwrap();
+    assert!(run.rows.is_empty());
+    let e = run.failed[0].to_string();
+    assert!(
+        e.contains("recording walk")
+            && e.contains("no footprint error to score")
+            && e.contains("loop-closure-only"),
+        "{e}"
+    );
+}

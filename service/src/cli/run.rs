@@ -109,12 +109,28 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
             s.initial_rest_moving_blocks as f64 * corridor_service::core::estimator::REST_BLOCK_S
         ));
     }
-    if let Some(note) = heading_never_held(s) {
+    if s.heading_aid == "none" && s.mode != "zupt" {
+        // Nothing to observe the heading with: the never-held note below would blame a weave
+        // or the start heading (a second-sensor review).
+        notes.push(format!(
+            "no heading aid (heading.source = \"none\" and no --map): the {} mode's heading was held by nothing but the start heading, and drifts as in the zupt mode",
+            s.mode
+        ));
+    } else if let Some(note) = heading_never_held(s) {
         notes.push(note);
     }
     if let Some(d) = s.bias_from_typical_sd.filter(|&d| d > BIAS_NOTE_SD) {
         notes.push(format!(
             "the gyro bias estimate lies {d:.0} σ from this unit's typical bias (alignment.typical_gyro_bias_rad_s): check the IMU columns' axes and signs (a left-handed frame, a flipped axis), or the configuration is another unit's"
+        ));
+    }
+    if s.velocity_resets + s.health_restores > 0 {
+        // None on the 17 bundled walks; exp29 with its y axis negated: 10 resets and 21 restores
+        // (configs/ngimu.toml, which has no typical bias for the note above), 21 % of path,
+        // and nothing said (a second-sensor review).
+        notes.push(format!(
+            "the filter reset its velocity {} times and went back to its last healthy stance {} times: what it integrated contradicted the stances. Check the IMU columns' axes and signs (a left-handed frame, a flipped axis), samples at a rail (sensor ranges), or bursts of garbage in the log",
+            s.velocity_resets, s.health_restores
         ));
     }
     if s.clipped_samples > 0 {
@@ -123,7 +139,7 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
             s.clipped_samples
         ));
     }
-    serde_json::json!({
+    let mut brief = serde_json::json!({
         "mode": s.mode,
         "bias_rad_s": s.bias_rad_s,
         "bias_sd_rad_s": s.bias_sd_rad_s,
@@ -136,7 +152,14 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
         "gcp_rms_pct": e.and_then(|e| e.rms_error_pct_of_path),
         "final_gcp_error_m": e.and_then(|e| e.final_gcp_error_m),
         "notes": notes,
-    })
+    });
+    // A closed truth's figure (the x-io walk's start and end at one place), when it has one:
+    // it was only in summary.json, and the brief said null for the footprints alone.
+    if let Some(m) = e.and_then(|e| e.loop_closure_error_m) {
+        brief["loop_closure_m"] = m.into();
+        brief["loop_closure_pct"] = e.and_then(|e| e.loop_closure_pct.flatten()).into();
+    }
+    brief
 }
 
 /// A final bias further than this many σ from the unit's typical one is worth a note (the 16

@@ -138,6 +138,15 @@ impl Rejection {
 }
 
 impl HeadingAid {
+    /// `"none"`, `"grid"` or `"map"` (as `heading.source` names them).
+    pub fn name(&self) -> &'static str {
+        match self {
+            HeadingAid::None => "none",
+            HeadingAid::Grid { .. } => "grid",
+            HeadingAid::Map(_) => "map",
+        }
+    }
+
     /// The associated direction (rad, map frame) for a foot at `xy` walking at `heading_rad`,
     /// the nearest of the candidate directions within `gate_rad`.
     pub fn associate(

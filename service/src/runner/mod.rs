@@ -87,6 +87,22 @@ pub enum RunError {
         /// The first refusal, with its line.
         first: String,
     },
+    /// The truth gives no footprint error to score (a loop-closure-only truth: the suite's
+    /// figure is the footprint RMS; it printed NaN and exited 0).
+    #[error(
+        "{truth}: no footprint error to score ({why}): the suite scores surveyed footprints; `corridor run --truth` gives a loop closure"
+    )]
+    NotScorable {
+        /// Truth file.
+        truth: PathBuf,
+        /// The evaluation's alignment, which says why.
+        why: String,
+    },
+    /// `heading.source = "map"` without a map file.
+    #[error(
+        "heading.source = \"map\" needs a corridor map: give one with --map FILE (or set heading.source to \"grid\" or \"none\")"
+    )]
+    MapMissing,
     /// The log never left the alignment phase.
     #[error("{path}: no initial rest of at least {min_rest_s} s followed by motion was found")]
     NeverAligned {
@@ -97,11 +113,15 @@ pub enum RunError {
     },
 }
 
-/// Builds the heading source the configuration asks for.
+/// Builds the heading source the configuration asks for: the map file when one is given,
+/// whatever `heading.source` says; an error when the source is the map and none is given.
 pub fn heading_aid(cfg: &Config, map: Option<&Path>) -> Result<HeadingAid, RunError> {
     Ok(match (cfg.heading.source, map) {
         (_, Some(path)) => HeadingAid::Map(read_corridor_map(path)?),
-        (HeadingSource::Map, None) | (HeadingSource::None, None) => HeadingAid::None,
+        // Asked for map headings and given no map: refused (it ran without a heading aid and
+        // said nothing, a review).
+        (HeadingSource::Map, None) => return Err(RunError::MapMissing),
+        (HeadingSource::None, None) => HeadingAid::None,
         (HeadingSource::Grid, None) => HeadingAid::Grid {
             grid_rad: cfg.heading.grid_rad,
             step_rad: cfg.heading.grid_step_rad.get(),

@@ -10,6 +10,8 @@ pub struct Summary {
     pub imu: String,
     /// Estimation mode.
     pub mode: &'static str,
+    /// Where heading observations came from: `"map"`, `"grid"` or `"none"`.
+    pub heading_aid: &'static str,
     /// Final bias, rad/s, sensor axes.
     pub bias_rad_s: [f64; 3],
     /// Final bias σ.
@@ -509,6 +511,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     let mut summary = Summary {
         imu: opts.imu.display().to_string(),
         mode: opts.config.mode.name(),
+        heading_aid: aid.name(),
         bias_rad_s: kept.last.map_or([f64::NAN; 3], |l| l.0),
         bias_sd_rad_s: kept.last.map_or([f64::NAN; 3], |l| l.1),
         bias_mean_converged_rad_s: kept.mean_bias_converged(),

@@ -403,9 +403,15 @@ impl<'a> Ctx<'a> {
         align: Align,
     ) -> Result<Footprint, RunError> {
         let rep = self.eval_report(out, truth, align)?;
+        let (Some(rms_m), Some(rms_pct)) = (rep.rms_error_m, rep.rms_error_pct_of_path) else {
+            return Err(RunError::NotScorable {
+                truth: self.base.join(&self.rec.truth),
+                why: rep.alignment,
+            });
+        };
         Ok(Footprint {
-            rms_m: rep.rms_error_m.unwrap_or(f64::NAN),
-            rms_pct: rep.rms_error_pct_of_path.unwrap_or(f64::NAN),
+            rms_m,
+            rms_pct,
             final_m: rep.final_gcp_error_m.unwrap_or(f64::NAN),
         })
     }

@@ -220,9 +220,12 @@ pub struct DetectorFile {
 #[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct EskfFile {
-    /// Accelerometer white noise σ (default 0.5 m/s²: foot dynamics, not just sensor noise).
+    /// Accelerometer white-noise density, m/s²/√Hz (the velocity's variance grows by σ²·dt per
+    /// step; the key's name keeps the unit it had: a datasheet's per-sample σ is this times
+    /// √rate) (default 0.5: foot dynamics, not just sensor noise).
     pub accel_noise_m_s2: Option<f64>,
-    /// Gyro white noise σ (default 0.01 rad/s).
+    /// Gyro white-noise density, rad/s/√Hz (the attitude's variance grows by σ²·dt per step)
+    /// (default 0.01).
     pub gyro_noise_rad_s: Option<f64>,
     /// Gyro-bias random walk σ per √s (default 1e-4 rad/s/√s).
     pub gyro_bias_rw_rad_s_sqrt_s: Option<f64>,
@@ -247,8 +250,8 @@ pub struct EskfFile {
     /// settled part, not only at its end (default 2 s): the yaw integrates the difference
     /// between the filter's bias and the rest's rate until the bias is observed.
     pub zero_rate_interval_s: Option<f64>,
-    /// The gyro noise σ while the foot rests (from the first zero-rate update of a rest to its
-    /// end), rad/s: the sensor's own noise, not the swing's error budget of `gyro_noise_rad_s`
+    /// The gyro noise density while the foot rests (from the first zero-rate update of a rest
+    /// to its end), rad/s/√Hz: the sensor's own noise, not the swing's error budget of `gyro_noise_rad_s`
     /// (default 1e-3).
     pub rest_gyro_noise_rad_s: Option<f64>,
     /// Above this yaw σ the stance velocity updates leave the yaw alone (a Schmidt update: its

@@ -152,9 +152,9 @@ pub struct DetectorConfig {
 /// Validated `[eskf]`.
 #[derive(Debug, Clone, Serialize)]
 pub struct EskfConfig {
-    /// Accelerometer white noise σ.
+    /// Accelerometer white-noise density, m/s²/√Hz.
     pub accel_noise_m_s2: Positive,
-    /// Gyro white noise σ.
+    /// Gyro white-noise density, rad/s/√Hz.
     pub gyro_noise_rad_s: Positive,
     /// Gyro-bias random walk.
     pub gyro_bias_rw_rad_s_sqrt_s: f64,
@@ -172,7 +172,7 @@ pub struct EskfConfig {
     pub zero_rate_updates: bool,
     /// A long rest is fused every this many seconds of its settled part.
     pub zero_rate_interval_s: Positive,
-    /// Gyro noise σ while the foot rests.
+    /// Gyro noise density while the foot rests, rad/s/√Hz.
     pub rest_gyro_noise_rad_s: Positive,
     /// Above this yaw σ the stance updates leave the yaw alone (0: off).
     pub stance_yaw_max_sd_rad: f64,

@@ -44,12 +44,12 @@ const BG: usize = 9;
 /// Noise figures of the filter.
 #[derive(Debug, Clone, Copy)]
 pub struct EskfNoise {
-    /// Accelerometer white noise σ, m/s².
+    /// Accelerometer white-noise density, m/s²/√Hz: the velocity's variance grows by σ²·dt.
     pub accel_m_s2: f64,
-    /// Gyro white noise σ, rad/s.
+    /// Gyro white-noise density, rad/s/√Hz: the attitude's variance grows by σ²·dt.
     pub gyro_rad_s: f64,
     /// The same while the foot rests ([`Eskf::set_at_rest`]): the sensor's own noise, without
-    /// the errors a swing builds, rad/s.
+    /// the errors a swing builds, rad/s/√Hz.
     pub rest_gyro_rad_s: f64,
     /// Gyro-bias random walk σ, rad/s/√s (0 freezes the bias states).
     pub gyro_bias_rw: f64,
