@@ -7,6 +7,7 @@
 //!   across the crash receives the new daemon's stream. SIGTERM then stops it cleanly.
 //! - `second_daemon_on_the_same_domain_is_refused`: the second `corridor serve` exits with an
 //!   error naming the domain.
+//! - `sigterm_then_sigcont_stops_the_daemon`: systemd's stop.
 
 mod common;
 
@@ -342,6 +343,36 @@ fn second_daemon_on_the_same_domain_is_refused() {
     drop(diag);
     let (status, _) = terminate(first);
     assert!(status.success());
+    cleanup_domain(name);
+}
+
+#[test]
+fn sigterm_then_sigcont_stops_the_daemon() {
+    // systemd's stop (KillSignal, then SIGCONT) and timeout(1): iceoryx2 keeps only the last
+    // signal, and the daemon went on running (1 of 3 tries from a shell, 5 of 6 under
+    // `timeout 3`). The race does not show on every try (this test passed on the build without
+    // the latch when run once); `shared/tests/termination_latch.rs` shows it every time.
+    let name = "test_daemon_term_cont";
+    let (dir, _domain, mut child) = serve_fresh(name);
+    signal(&child, libc::SIGTERM);
+    signal(&child, libc::SIGCONT);
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if start.elapsed() > WAIT {
+            let _ = child.kill();
+            panic!(
+                "the daemon did not stop on SIGTERM followed by SIGCONT: {}",
+                std::fs::read_to_string(dir.join("daemon.log")).unwrap_or_default()
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert!(status.success(), "{status:?}");
+    let log = std::fs::read_to_string(dir.join("daemon.log")).unwrap();
+    assert!(log.contains("termination requested"), "{log}");
     cleanup_domain(name);
 }
 

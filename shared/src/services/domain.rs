@@ -413,8 +413,8 @@ impl Domain {
 ///
 /// A termination request it reads is kept for every thread ([`termination_requested`]).
 pub fn node_sleep(node: &Node<ipc::Service>, d: std::time::Duration) -> bool {
-    use std::sync::atomic::Ordering;
-    if TERMINATION_SEEN.load(Ordering::Relaxed) {
+    super::signals::ensure_latched();
+    if super::signals::termination_seen() {
         return false;
     }
     let going_on = match node.wait(d) {
@@ -425,27 +425,27 @@ pub fn node_sleep(node: &Node<ipc::Service>, d: std::time::Duration) -> bool {
         }
     };
     if !going_on {
-        TERMINATION_SEEN.store(true, Ordering::Relaxed);
+        super::signals::record_termination();
     }
-    going_on
+    // The latch also sees a request iceoryx2 lost to a later signal (SIGTERM, then SIGCONT).
+    going_on && !super::signals::termination_seen()
 }
-
-static TERMINATION_SEEN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// True once SIGINT or SIGTERM was received by this process, as seen through `node` or through
 /// any earlier reader, for every thread. iceoryx2's signal handler clears a signal when it is
 /// read (`SignalHandler::last_signal`), so a second thread that also polled (the replay's watch
 /// on the daemon's diagnostics, or a subscriber opening, through [`node_sleep`]) took the
 /// Ctrl-C from the thread that was to act on it, and the replay could not be stopped (reviews
-/// of session 38): whoever sees it first keeps it here.
+/// of session 38): whoever sees it first keeps it here. A SIGCONT right after the request
+/// (systemd's stop, `timeout(1)`) made iceoryx2 forget it: the latch in `signals.rs` keeps it.
 pub fn termination_requested<S: iceoryx2::service::Service>(node: &Node<S>) -> bool {
-    use std::sync::atomic::Ordering;
-    if TERMINATION_SEEN.load(Ordering::Relaxed) {
+    super::signals::ensure_latched();
+    if super::signals::termination_seen() {
         return true;
     }
     let seen = node.wait(std::time::Duration::ZERO).is_err();
     if seen {
-        TERMINATION_SEEN.store(true, Ordering::Relaxed);
+        super::signals::record_termination();
     }
     seen
 }

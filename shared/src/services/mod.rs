@@ -25,11 +25,13 @@
 //!
 //! Files: this one holds the service names; `error.rs` [`ServiceError`]; `qos.rs` the delivery
 //! policy, the quality of service and the [`Topic`] of each wire type; `domain.rs` the
-//! [`Domain`] namespace and the functions that open the services.
+//! [`Domain`] namespace and the functions that open the services; `signals.rs` the latch of
+//! SIGINT and SIGTERM that [`termination_requested`] and [`node_sleep`] read.
 
 mod domain;
 mod error;
 mod qos;
+mod signals;
 
 pub use domain::*;
 pub use error::ServiceError;
