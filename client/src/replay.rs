@@ -115,8 +115,22 @@ pub fn replay(
     rows: &[ImuRow],
     opts: &ReplayOptions,
 ) -> Result<Replayed, ClientError> {
+    replay_with(domain, rows, opts, || {})
+}
+
+/// [`replay`], calling `daemon_found` once the daemon reads the IMU service, before the first
+/// sample goes (`corridor-replay` starts its watch of the daemon's diagnostics there: started
+/// before, it gave up on a daemon that came up during `opts.wait`, and the replay said nothing
+/// of the samples that daemon lost).
+pub fn replay_with(
+    domain: &Domain,
+    rows: &[ImuRow],
+    opts: &ReplayOptions,
+    daemon_found: impl FnOnce(),
+) -> Result<Replayed, ClientError> {
     let mut p = Producer::open(domain, &opts.node_name, opts.delivery)?;
     p.wait_for_daemon(opts.wait)?;
+    daemon_found();
     let (first_t_s, loop_shift_s) = match (rows.first(), rows.last()) {
         (Some(first), Some(last)) => {
             let n = rows.len();

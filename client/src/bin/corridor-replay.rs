@@ -5,7 +5,7 @@
 
 use anyhow::{Result, bail};
 use clap::Parser;
-use corridor_client::replay::{ReplayOptions, Speed, replay};
+use corridor_client::replay::{ReplayOptions, Speed, replay_with};
 use corridor_client::status::DaemonWatch;
 use corridor_client::{Delivery, Domain};
 use corridor_shared::imu_csv::{ImuCsvOptions, read_imu_csv};
@@ -101,8 +101,12 @@ fn run() -> Result<()> {
     // its side), from its diagnostics, read on their own thread from before the first sample
     // to those of the stream's end. Not there (a daemon not yet started, a stand-in without
     // diagnostics): not known, and the replay goes on.
-    let watch = DaemonWatch::start(&domain, DIAGNOSTICS_OPEN_WAIT, DIAGNOSTICS_WAIT);
-    let r = replay(&domain, &log.rows, &opts)?;
+    // Started once the daemon is there (a daemon started during --wait-s came up after a
+    // watch started first had given up: its losses went unsaid, a review).
+    let mut watch = None;
+    let r = replay_with(&domain, &log.rows, &opts, || {
+        watch = DaemonWatch::start(&domain, DIAGNOSTICS_OPEN_WAIT, DIAGNOSTICS_WAIT);
+    })?;
     let (account, complete) = match watch.and_then(|w| w.finish(r.samples)) {
         Some((a, complete)) => (Some(a), complete),
         None => (None, false),
