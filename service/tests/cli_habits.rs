@@ -169,3 +169,24 @@ fn a_nan_flag_value_is_an_error_naming_the_flag() {
         "{err}"
     );
 }
+
+#[test]
+fn a_full_disk_is_an_error_not_a_panic() {
+    // `> /dev/full`: the completions panicked in clap_complete (exit 101, a backtrace).
+    for args in [&["completions", "bash"][..], &["man"][..]] {
+        let o = Command::new(env!("CARGO_BIN_EXE_corridor"))
+            .args(args)
+            .env("RUST_BACKTRACE", "1")
+            .stdout(std::fs::File::create("/dev/full").unwrap())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: ")
+                && err.contains("No space left")
+                && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+    }
+}

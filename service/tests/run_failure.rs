@@ -1,4 +1,5 @@
-//! A failed `corridor run` leaves no partial output (issue 10, finding 6).
+//! A failed `corridor run` leaves no partial output (issue 10, finding 6); a run or a diagnosis
+//! that cannot be right is refused before any output (session 40).
 //!
 //! Before the runner streamed, `estimates.csv` and `innovations.csv` were written to their final
 //! names while the run went on, and a run that failed after them (the log never aligned, the
@@ -143,4 +144,65 @@ fn a_failed_run_leaves_the_previous_outputs_as_they_were() {
         std::fs::metadata(out.join("estimates.csv")).unwrap().len(),
         estimates_len
     );
+}
+
+#[test]
+fn an_output_that_is_an_input_is_refused_and_the_input_kept() {
+    // `--imu same/estimates.csv --out same` replaced the log with its own estimates, exit 0.
+    let out = TempDir::new("eco-output-is-input");
+    let imu = out.join("estimates.csv");
+    std::fs::copy(exp36().join("imu.csv"), &imu).unwrap();
+    let before = std::fs::read(&imu).unwrap();
+    let e = run(&options(&imu, None, &out)).unwrap_err();
+    assert!(matches!(e, RunError::OutputIsInput { .. }), "{e}");
+    assert!(e.to_string().contains("estimates.csv"), "{e}");
+    assert_eq!(std::fs::read(&imu).unwrap(), before);
+    // The truth as `summary.json` too.
+    let truth = out.join("summary.json");
+    std::fs::copy(exp36().join("ground_truth.csv"), &truth).unwrap();
+    let e = run(&options(
+        &exp36().join("imu.csv"),
+        Some(truth.clone()),
+        &out,
+    ))
+    .unwrap_err();
+    assert!(matches!(e, RunError::OutputIsInput { .. }), "{e}");
+    assert!(std::fs::read_to_string(&truth).unwrap().starts_with("t_s,"));
+}
+
+#[test]
+fn diagnose_refuses_footprints_it_cannot_score() {
+    // Footprints on another clock: `corridor run` refused them, `corridor diagnose` reported
+    // "footprint RMS n/a", exit 0.
+    let out = TempDir::new("eco-diagnose-truth");
+    let text = std::fs::read_to_string(exp36().join("ground_truth.csv")).unwrap();
+    let mut lines = text.lines();
+    let mut shifted = vec![lines.next().unwrap().to_string()];
+    shifted.extend(lines.map(|l| {
+        let (t, rest) = l.split_once(',').unwrap();
+        format!("{},{rest}", t.parse::<f64>().unwrap() + 1000.0)
+    }));
+    let truth = out.join("truth.csv");
+    std::fs::write(&truth, shifted.join("\n") + "\n").unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_corridor"))
+        .args(["diagnose", "--imu"])
+        .arg(exp36().join("imu.csv"))
+        .arg("--truth")
+        .arg(&truth)
+        .arg("--config")
+        .arg(root().join("configs/gdins.toml"))
+        .arg("--out")
+        .arg(out.join("report"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.starts_with(&format!(
+            "error: {}: the footprints cannot be scored",
+            truth.display()
+        )) && err.contains("on its clock"),
+        "{err}"
+    );
+    assert!(!out.join("report").exists());
 }

@@ -46,7 +46,13 @@ pub(super) fn diagnose(a: &DiagnoseArgs) -> Result<()> {
         &file,
         truth.as_deref(),
         a.model.map.as_deref(),
-    )?;
+    )
+    .map_err(|e| match (&e, &a.truth) {
+        (corridor_service::runner::RunError::TruthUnusable(_), Some(path)) => {
+            anyhow::anyhow!("{}: {e}", path.display())
+        }
+        _ => e.into(),
+    })?;
     // Every model of the loop runs the same rows, and no run logs per sample: said once.
     if let Some(input) = &d.before.input {
         tracing::warn!("{}: {input}", imu.display());

@@ -15,7 +15,13 @@ pub(super) struct CompletionsArgs {
 /// Prints the completion script of `corridor` for the shell.
 pub(super) fn completions(a: &CompletionsArgs) -> Result<()> {
     let mut cmd = super::Cli::command();
-    clap_complete::generate(a.shell, &mut cmd, "corridor", &mut std::io::stdout());
+    // Into memory first: `generate` panics when its writer fails (`> /dev/full`), and the
+    // write below is an error instead.
+    let mut script = Vec::new();
+    clap_complete::generate(a.shell, &mut cmd, "corridor", &mut script);
+    let mut out = std::io::stdout().lock();
+    out.write_all(&script)?;
+    out.flush()?;
     Ok(())
 }
 

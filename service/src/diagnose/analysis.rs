@@ -128,6 +128,10 @@ pub struct Consistency {
 pub struct Analysis {
     /// Model extensions in force (config keys).
     pub model: Vec<String>,
+    /// Why the footprints given could not be scored against this run (another clock, too few),
+    /// when they could not: [`super::judge_names`] refuses the diagnosis then.
+    #[serde(skip)]
+    pub truth_error: Option<crate::eval::EvalError>,
     /// What the input cost the run, when anything ([`crate::runner::RunOutcome::input_report`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub input: Option<String>,
@@ -358,7 +362,9 @@ pub fn analyse(
     } else {
         ([f64::NAN; 3], [f64::NAN; 3])
     };
-    let eval = truth.and_then(|t| outcome.trace.evaluate(t, &EvalOptions::default()).ok());
+    let evaluated = truth.map(|t| outcome.trace.evaluate(t, &EvalOptions::default()));
+    let truth_error = evaluated.as_ref().and_then(|r| r.as_ref().err().cloned());
+    let eval = evaluated.and_then(Result::ok);
     let used: Vec<&HeadingResidual> = res.iter().filter(|r| r.accepted).collect();
     let nis: Vec<f64> = used.iter().map(|r| r.r_rad * r.r_rad / r.s_rad2).collect();
     let z: Vec<f64> = used.iter().map(|r| r.r_rad / r.s_rad2.sqrt()).collect();
@@ -438,6 +444,7 @@ pub fn analyse(
     });
     Ok(Analysis {
         model: model_keys(file),
+        truth_error,
         input: outcome.input_report(),
         consistency,
         effects,

@@ -249,6 +249,11 @@ pub fn judge_names(
     map: Option<&Path>,
 ) -> Result<(Analysis, Vec<Candidate>), RunError> {
     let mut first = analyse(log, start, truth, map)?;
+    // Footprints that cannot be scored are refused, as `corridor run` refuses them (the report
+    // said "footprint RMS n/a", exit 0, a review).
+    if let Some(e) = first.truth_error.take() {
+        return Err(RunError::TruthUnusable(e));
+    }
     let candidates = score_by_likelihood(log, start, &mut first, truth, map)?;
     Ok((first, candidates))
 }

@@ -98,6 +98,15 @@ pub enum RunError {
         /// The evaluation's alignment, which says why.
         why: String,
     },
+    /// Footprints that cannot be scored against the run (the truth's path is the caller's).
+    #[error("the footprints cannot be scored against this log: {0}")]
+    TruthUnusable(eval::EvalError),
+    /// An output of the run would replace one of its inputs.
+    #[error("{path}: an output of this run, and also one of its inputs: choose another --out")]
+    OutputIsInput {
+        /// The output (and input) file.
+        path: PathBuf,
+    },
     /// `heading.source = "map"` without a map file.
     #[error(
         "heading.source = \"map\" needs a corridor map: give one with --map FILE (or set heading.source to \"grid\" or \"none\")"

@@ -237,6 +237,25 @@ pub(super) const RUN_OUTPUT_FILES: [&str; 6] = [
     "covariance.svg",
 ];
 
+/// Refuses a run whose output would replace one of its inputs (`--imu out/estimates.csv
+/// --out out` replaced the log with its estimates, exit 0: a review).
+fn refuse_inputs_as_outputs(opts: &RunOptions) -> Result<(), RunError> {
+    let inputs: Vec<PathBuf> = [Some(&opts.imu), opts.truth.as_ref(), opts.map.as_ref()]
+        .into_iter()
+        .flatten()
+        .filter_map(|p| std::fs::canonicalize(p).ok())
+        .collect();
+    for name in RUN_OUTPUT_FILES {
+        let out = opts.out_dir.join(name);
+        if let Ok(canonical) = std::fs::canonicalize(&out)
+            && inputs.contains(&canonical)
+        {
+            return Err(RunError::OutputIsInput { path: out });
+        }
+    }
+    Ok(())
+}
+
 /// Outputs written as `NAME.partial` and renamed to `NAME` by [`Staged::commit`]; dropped
 /// without it (a failed run), the partial files are removed.
 struct Staged {
@@ -383,6 +402,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     let gcps: Option<Vec<TruthGcp>> = truth.as_ref().map(|t| t.iter().map(to_gcp).collect());
     let aid = heading_aid(&opts.config, opts.map.as_deref())?;
     std::fs::create_dir_all(&opts.out_dir).map_err(io_at(&opts.out_dir))?;
+    refuse_inputs_as_outputs(opts)?;
     let mut staged = Staged::new();
     let (mut est_w, est_path) = staged.create(opts.out_dir.join("estimates.csv"))?;
     let (mut inn_w, inn_path) = staged.create(opts.out_dir.join("innovations.csv"))?;
