@@ -104,6 +104,9 @@ pub struct Recorded {
     pub attitude_path: PathBuf,
     /// The bias file.
     pub bias_path: PathBuf,
+    /// Nothing was recorded, and the files of an earlier recording in the directory were left
+    /// as they were (a logger that received nothing emptied them, a review).
+    pub kept_earlier_files: bool,
 }
 
 /// The readers and the open files of a recording.
@@ -113,6 +116,10 @@ pub struct Recorder {
     bias: Subscriber<BiasSample>,
     att_w: BufWriter<File>,
     bias_w: BufWriter<File>,
+    /// Where the rows go while recording (`NAME.partial`), renamed to the final names at the
+    /// end of [`Recorder::run`].
+    att_partial: PathBuf,
+    bias_partial: PathBuf,
     opts: RecordOptions,
     got: Recorded,
     follow: bool,
@@ -136,8 +143,10 @@ fn file_err(path: &Path) -> impl FnOnce(std::io::Error) -> ClientError + '_ {
 
 impl Recorder {
     /// Attaches to the daemon's attitude and bias streams in `domain`, then creates `dir` (if
-    /// needed) with `attitude.csv` and `bias.csv` and their headers (in that order: a logger
-    /// that could not attach used to leave an earlier recording's files emptied).
+    /// needed) with `attitude.csv.partial` and `bias.csv.partial` and their headers (in that
+    /// order: a logger that could not attach used to leave an earlier recording's files
+    /// emptied). [`Recorder::run`] renames them to `attitude.csv` and `bias.csv` at its end, or,
+    /// when nothing was recorded and an earlier recording's files are there, removes them.
     pub fn open(domain: &Domain, dir: &Path, opts: &RecordOptions) -> Result<Self, ClientError> {
         let name = &opts.node_name;
         let attitude = Subscriber::open(domain, &format!("{name}-attitude"), opts.wait)?;
@@ -155,15 +164,19 @@ impl Recorder {
         std::fs::create_dir_all(dir).map_err(file_err(dir))?;
         let attitude_path = dir.join("attitude.csv");
         let bias_path = dir.join("bias.csv");
-        let mut att_w = create(&attitude_path)?;
-        let mut bias_w = create(&bias_path)?;
-        writeln!(att_w, "{ATTITUDE_HEADER}").map_err(file_err(&attitude_path))?;
-        writeln!(bias_w, "{BIAS_HEADER}").map_err(file_err(&bias_path))?;
+        let att_partial = dir.join("attitude.csv.partial");
+        let bias_partial = dir.join("bias.csv.partial");
+        let mut att_w = create(&att_partial)?;
+        let mut bias_w = create(&bias_partial)?;
+        writeln!(att_w, "{ATTITUDE_HEADER}").map_err(file_err(&att_partial))?;
+        writeln!(bias_w, "{BIAS_HEADER}").map_err(file_err(&bias_partial))?;
         Ok(Self {
             attitude,
             bias,
             att_w,
             bias_w,
+            att_partial,
+            bias_partial,
             opts: opts.clone(),
             follow: false,
             got: Recorded {
@@ -185,6 +198,7 @@ impl Recorder {
                 final_bias_rad_s: None,
                 attitude_path,
                 bias_path,
+                kept_earlier_files: false,
             },
         })
     }
@@ -200,8 +214,9 @@ impl Recorder {
 
     /// Records until the end-of-stream attitude and bias messages (unless
     /// [`Recorder::following_new_streams`]), the idle timeout,
-    /// SIGINT/SIGTERM or `abort`; flushes the files and says what it got. The end-of-stream
-    /// messages are not written as rows. An end of stream as the bias reader's first message is
+    /// SIGINT/SIGTERM or `abort`; flushes the files, gives them their final names and says
+    /// what it got. The end-of-stream attitude is not written as a row; the end-of-stream bias
+    /// is, marked (`end_of_stream`). An end of stream as the bias reader's first message is
     /// the daemon's history (the bias stream keeps its last message for late readers) of a
     /// stream that ended before the recorder attached: it is passed over (it ended the
     /// recording of a logger started between two streams, and the next stream went unlogged).
@@ -246,7 +261,7 @@ impl Recorder {
                     self.got.final_bias_rad_s = Some(b.gyro_bias_rad_s);
                     bias_done = true;
                 }
-                write_bias_row(&mut self.bias_w, &b).map_err(file_err(&self.got.bias_path))?;
+                write_bias_row(&mut self.bias_w, &b).map_err(file_err(&self.bias_partial))?;
                 self.got.bias_rows += 1;
                 continue;
             }
@@ -273,7 +288,7 @@ impl Recorder {
                         }
                         last_row = Some((x.imu_seq, x.seq));
                         write_attitude_row(&mut self.att_w, &x)
-                            .map_err(file_err(&self.got.attitude_path))?;
+                            .map_err(file_err(&self.att_partial))?;
                         self.got.attitude_rows += 1;
                         self.got.open_stream_rows += 1;
                         self.got.retracting_rows += u64::from(x.flags & FLAG_RETRACTS != 0);
@@ -286,10 +301,9 @@ impl Recorder {
                 break RecordStop::IdleTimeout;
             }
         };
-        self.att_w
-            .flush()
-            .map_err(file_err(&self.got.attitude_path))?;
-        self.bias_w.flush().map_err(file_err(&self.got.bias_path))?;
+        self.att_w.flush().map_err(file_err(&self.att_partial))?;
+        self.bias_w.flush().map_err(file_err(&self.bias_partial))?;
+        self.finish_files()?;
         self.got.stopped = stopped;
         self.got.attitude_received = self.attitude.received();
         self.got.attitude_missed = self.attitude.missed();
@@ -298,5 +312,26 @@ impl Recorder {
         self.got.bias_missed = self.bias.missed();
         self.got.bias_missed_at_start = self.bias.missed_at_start();
         Ok(self.got)
+    }
+
+    /// Renames the partial files to their final names; when nothing was recorded and an
+    /// earlier recording's files are there, removes the partial files instead and keeps those.
+    fn finish_files(&mut self) -> Result<(), ClientError> {
+        let nothing = self.got.attitude_rows == 0 && self.got.bias_rows == 0;
+        let earlier = self.got.attitude_path.exists() || self.got.bias_path.exists();
+        if nothing && earlier {
+            for p in [&self.att_partial, &self.bias_partial] {
+                std::fs::remove_file(p).map_err(file_err(p))?;
+            }
+            self.got.kept_earlier_files = true;
+            return Ok(());
+        }
+        for (from, to) in [
+            (&self.att_partial, &self.got.attitude_path),
+            (&self.bias_partial, &self.got.bias_path),
+        ] {
+            std::fs::rename(from, to).map_err(file_err(to))?;
+        }
+        Ok(())
     }
 }

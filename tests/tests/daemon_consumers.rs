@@ -343,6 +343,24 @@ fn client_tools_replay_record_and_track_a_whole_stream() {
     let mut dcfg = daemon_config(&domain, Delivery::Lossless);
     dcfg.checkpoint = Some(dir.join("checkpoint.bin"));
     let daemon = Running::start(dcfg);
+    // A logger that attaches and receives nothing (here: no stream yet, a short idle timeout)
+    // leaves the earlier recording as it was too (it emptied it: a review), and no partial file.
+    let idle = RecordOptions {
+        idle_timeout: Duration::from_millis(300),
+        ..record_opts("test-log-idle")
+    };
+    let got = Recorder::open(&domain, &earlier, &idle)
+        .unwrap()
+        .run(&AtomicBool::new(false))
+        .unwrap();
+    assert_eq!(got.stopped, RecordStop::IdleTimeout);
+    assert!(got.kept_earlier_files);
+    assert_eq!(
+        std::fs::read_to_string(earlier.join("attitude.csv")).unwrap(),
+        "an earlier recording\n"
+    );
+    assert!(!earlier.join("attitude.csv.partial").exists());
+    assert!(!earlier.join("bias.csv.partial").exists());
     let rows = exp36_rows();
     let never = Arc::new(AtomicBool::new(false));
     let (ready_tx, ready_rx) = std::sync::mpsc::channel();

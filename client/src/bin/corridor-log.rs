@@ -78,6 +78,12 @@ fn run() -> Result<()> {
         r.attitude_path.display()
     );
     corridor_client::say!("bias rows: {} ({})", r.bias_rows, r.bias_path.display());
+    if r.kept_earlier_files {
+        corridor_client::say!(
+            "nothing recorded: the files of an earlier recording in {} were left as they were",
+            a.out.display()
+        );
+    }
     if r.retracting_rows > 0 {
         corridor_client::say!(
             "retracting rows: {} (retracts 1: the rows before each with a later t_s came from \
