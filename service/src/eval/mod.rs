@@ -45,6 +45,27 @@ pub const LEG_MIN_DIST_M: f64 = 5.0;
 /// (1 ms: CSV rounding).
 pub(super) const SPAN_SLACK_S: f64 = 1e-3;
 
+/// A GCP whose trajectory rows before and after lie further apart than this, s, falls in a gap
+/// of the trajectory (a loss in the log): it is scored, as `eval_traj.py` scores it, and warned
+/// about (it was not: a review scored 18.5 % of path for a log with a 1e6 s hole, no warning).
+pub(super) const GAP_WARN_S: f64 = 2.0;
+
+/// The warning for the GCPs that fall in gaps of the trajectory: `(index, gap length in s)`.
+pub(super) fn gap_warning(in_gaps: &[(usize, f64)]) -> Option<String> {
+    let longest = in_gaps.iter().map(|g| g.1).fold(0.0, f64::max);
+    (!in_gaps.is_empty()).then(|| {
+        format!(
+            "GCP time(s) in a gap of the trajectory (the estimates around each more than {GAP_WARN_S} s apart; \
+             the longest gap {longest:.1} s), scored at the rows around it: indices [{}]",
+            in_gaps
+                .iter()
+                .map(|g| g.0.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    })
+}
+
 /// At least two GCP times within the trajectory's span, `eval_traj.py`'s 1 ms of tolerance
 /// included (beyond it a GCP is clamped to an end with a warning; with every GCP clamped the
 /// reference fails later, on a trajectory that "did not move", which says nothing of the cause).
@@ -118,6 +139,16 @@ pub fn evaluate(
     let tg: Vec<f64> = truth.iter().map(|g| g.t_s).collect();
     check_overlap(&tg, t[0], t[t.len() - 1])?;
     let (p, dt_used) = sample_traj(&t, &xy, &tg, opts.interp);
+    let in_gaps: Vec<(usize, f64)> = tg
+        .iter()
+        .enumerate()
+        .filter_map(|(i, &q)| {
+            let k = t.partition_point(|&tk| tk <= q);
+            let gap = t[k.min(t.len() - 1)] - t[k.saturating_sub(1)];
+            (k > 0 && k < t.len() && gap > GAP_WARN_S).then_some((i, gap))
+        })
+        .collect();
+    warnings.extend(gap_warning(&in_gaps));
     let in_span: Vec<P2> = t
         .iter()
         .zip(&xy)

@@ -179,18 +179,23 @@ impl GcpSampler {
                 0.0
             },
         };
-        let warnings = self.went_back.map(|(t_s, n)| {
+        let went_back = self.went_back.map(|(t_s, n)| {
             format!(
                 "trajectory time went back {n} time(s), first at t = {t_s} s (the clock stepped \
                  back): footprint times the rows had passed were sampled before the step"
             )
         });
-        report(
-            sampled,
-            &self.truth,
-            &self.opts,
-            warnings.into_iter().collect(),
-        )
+        let in_gaps: Vec<(usize, f64)> = (0..n)
+            .filter_map(|i| match (self.before[i], self.after[i]) {
+                (Some((tb, _)), Some((ta, _))) if ta - tb > super::GAP_WARN_S => Some((i, ta - tb)),
+                _ => None,
+            })
+            .collect();
+        let warnings = went_back
+            .into_iter()
+            .chain(super::gap_warning(&in_gaps))
+            .collect();
+        report(sampled, &self.truth, &self.opts, warnings)
     }
 }
 
