@@ -168,6 +168,16 @@ fn status_shows_the_daemons_counters_and_final_bias() {
         "{screen}"
     );
 
+    // A file that is not a checkpoint (a config file) is said as such, exit 1.
+    let not_one = root().join("configs/gdins.toml");
+    let o = status(name, "20", &["--checkpoint", not_one.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let screen = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        screen.contains("last checkpoint:  not a checkpoint the daemon can start from"),
+        "{screen}"
+    );
+
     // --watch redraws at every diagnostics.
     let mut watch = corridor()
         .args(["status", "--watch", "--domain", name])

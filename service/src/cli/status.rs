@@ -15,7 +15,7 @@ use std::time::Duration;
 pub(super) const EXIT_NO_DAEMON: u8 = 2;
 
 /// Exit code when the daemon is healthy but `--checkpoint` names something that cannot be its
-/// checkpoint (a directory, a file that cannot be read).
+/// checkpoint (a directory, a file that cannot be read or is no checkpoint).
 pub(super) const EXIT_BAD_CHECKPOINT: u8 = 1;
 
 #[derive(Args, Debug)]
@@ -77,15 +77,24 @@ pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
             print!("\x1b[2J\x1b[H");
         }
         print!("{}", status.render(domain.name()));
-        let checkpoint_readable = match a.checkpoint.as_deref().map(checkpoint_line) {
-            Some(Err(line)) => {
+        let checkpoint_readable = match a.checkpoint.as_deref().map(|p| (p, checkpoint_line(p))) {
+            Some((_, Err(line))) => {
                 print!("{line}");
                 false
             }
-            Some(Ok(line)) => {
-                print!("{line}");
-                true
-            }
+            // A file that is there is read as the daemon would (not moved, whatever it holds):
+            // a file that is no checkpoint passed for one ("saved 601.8 s ago", a review).
+            Some((p, Ok(line))) => match p.is_file().then(|| corridor_service::checkpoint::read(p))
+            {
+                Some(Err(e)) => {
+                    println!("last checkpoint:  not a checkpoint the daemon can start from: {e}");
+                    false
+                }
+                _ => {
+                    print!("{line}");
+                    true
+                }
+            },
             None => true,
         };
         if !status.healthy() {
