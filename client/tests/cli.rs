@@ -191,6 +191,22 @@ fn a_replay_whose_daemon_went_away_fails_and_counts_what_nobody_received() {
 }
 
 #[test]
+fn replay_flags_that_would_do_nothing_are_usage_errors() {
+    for (args, flag) in [
+        (&["--loop", "0"][..], "--loop"),
+        (&["--inject-after-s", "3"][..], "--inject-gyro-bias"),
+    ] {
+        let o = tool(
+            env!("CARGO_BIN_EXE_corridor-replay"),
+            &[&["--imu", "imu.csv"][..], args].concat(),
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(flag), "{args:?}: {err}");
+    }
+}
+
+#[test]
 fn replay_error_is_printed_once_without_a_backtrace() {
     let o = tool(
         env!("CARGO_BIN_EXE_corridor-replay"),

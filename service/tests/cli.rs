@@ -256,6 +256,13 @@ fn absurd_values_and_times_are_refused_counted_and_named_in_the_summary() {
     );
     let examples = summary["input_rows_rejected_examples"].to_string();
     assert!(examples.contains("imu.csv:6001"), "{examples}");
+    // And said on the terminal (it was in summary.json alone).
+    let notes =
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["notes"].to_string();
+    assert!(
+        notes.contains("1 of 13998 samples refused, not fused (implausible 1)"),
+        "{notes}"
+    );
     let est = std::fs::read_to_string(out.join("estimates.csv")).unwrap();
     let last: Vec<f64> = est
         .lines()

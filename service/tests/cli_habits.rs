@@ -190,3 +190,30 @@ fn a_full_disk_is_an_error_not_a_panic() {
         );
     }
 }
+
+#[test]
+fn flags_that_would_do_nothing_are_usage_errors() {
+    // --inject-after-s alone injected nothing, silently; --timeout-s 0 could not be met.
+    let imu = root().join("tests/data/gdins_exp17_rect_loop_small/imu.csv");
+    let out = TempDir::new(&format!("eco-nothing-{}", std::process::id()));
+    for (args, flag) in [
+        (
+            vec![
+                "run",
+                "--imu",
+                imu.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "--inject-after-s",
+                "5",
+            ],
+            "--inject-gyro-bias",
+        ),
+        (vec!["status", "--timeout-s", "0"], "--timeout-s"),
+    ] {
+        let o = corridor(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(flag), "{args:?}: {err}");
+    }
+}

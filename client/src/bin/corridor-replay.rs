@@ -29,7 +29,7 @@ struct Args {
     #[arg(long, default_value = "realtime")]
     speed: Speed,
     /// Send the log this many times (time continues across loops).
-    #[arg(long = "loop", default_value_t = 1)]
+    #[arg(long = "loop", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     loops: u32,
     /// iceoryx2 domain of the daemon.
     #[arg(long, default_value = DEFAULT_DOMAIN, value_parser = Domain::parse_name)]
@@ -41,9 +41,11 @@ struct Args {
     /// Constant gyro bias to add, X,Y,Z in rad/s (each within ±0.2).
     #[arg(long, value_parser = parse_injected_bias_rad_s, allow_hyphen_values = true)]
     inject_gyro_bias: Option<[f64; 3]>,
-    /// Start the injection this long after the log's first sample instead of at it, s.
+    /// Start the injection this long after the log's first sample instead of at it, s (with
+    /// --inject-gyro-bias).
     #[arg(
         long,
+        requires = "inject_gyro_bias",
         default_value_t = 0.0,
         allow_negative_numbers = true,
         value_parser = parse_time_s
@@ -72,9 +74,6 @@ const REJECTED_ROWS_NAMED: usize = 20;
 
 fn run() -> Result<()> {
     let a = Args::parse();
-    if a.loops == 0 {
-        bail!("--loop 0: nothing to send");
-    }
     // Its errors name the file.
     let log = read_imu_csv(&a.imu, &ImuCsvOptions::default())?;
     if log.rows.is_empty() {

@@ -5,7 +5,7 @@ use anyhow::Result;
 use clap::Args;
 use corridor_client::status::{StatusReader, checkpoint_line};
 use corridor_client::{ClientError, Domain};
-use corridor_shared::injection::parse_time_s;
+use corridor_shared::injection::parse_wait_s;
 use corridor_shared::services::DEFAULT_DOMAIN;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -25,7 +25,7 @@ pub(super) struct StatusArgs {
     pub(super) domain: String,
     /// How long to wait for the daemon's answer, s (it publishes diagnostics every
     /// `daemon.diagnostics_period_s`, 1 s by default).
-    #[arg(long, default_value_t = 5.0, value_parser = parse_time_s)]
+    #[arg(long, default_value_t = 5.0, value_parser = parse_wait_s)]
     pub(super) timeout_s: f64,
     /// The daemon's checkpoint file (`daemon.checkpoint_path`, or its `--checkpoint`): shows
     /// when it was last saved (the daemon does not publish its checkpoints).
