@@ -676,26 +676,3 @@ fn a_bad_mode_is_said_once_and_clamped_footprints_are_said_on_the_terminal() {
         "{err}"
     );
 }
-
-#[test]
-fn an_out_path_that_is_a_file_is_refused_before_any_work() {
-    let dir = tmp("outfile");
-    let file = dir.join("afile");
-    std::fs::write(&file, "").unwrap();
-    for args in [
-        vec!["eval", "--suite", "configs/eval/gdins.toml", "--out"],
-        vec!["diagnose", "--suite", "configs/eval/gdins.toml", "--out"],
-        vec!["demo", "--out"],
-    ] {
-        let mut args = args.clone();
-        args.push(file.to_str().unwrap());
-        let o = corridor(&args);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success(), "{args:?}");
-        // Refused up front: nothing computed or printed (eval printed its whole table first).
-        assert!(
-            err.contains("exists and is not a directory") && o.stdout.is_empty(),
-            "{args:?}: {err}"
-        );
-    }
-}
