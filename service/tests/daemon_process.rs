@@ -7,7 +7,7 @@
 //!   across the crash receives the new daemon's stream. SIGTERM then stops it cleanly.
 //! - `second_daemon_on_the_same_domain_is_refused`: the second `corridor serve` exits with an
 //!   error naming the domain.
-//! - `sigterm_then_sigcont_stops_the_daemon`: systemd's stop.
+//! - `sigterm_then_sigcont_stops_the_daemon`: systemd's stop; `ctrl_z_stops_the_daemon_and_fg_resumes_it`.
 
 mod common;
 
@@ -373,6 +373,47 @@ fn sigterm_then_sigcont_stops_the_daemon() {
     assert!(status.success(), "{status:?}");
     let log = std::fs::read_to_string(dir.join("daemon.log")).unwrap();
     assert!(log.contains("termination requested"), "{log}");
+    cleanup_domain(name);
+}
+
+/// The process state letter of `/proc/PID/stat` (`T`: stopped).
+fn proc_state(child: &Child) -> char {
+    let stat = std::fs::read_to_string(format!("/proc/{}/stat", child.id())).unwrap();
+    // "pid (comm) S ...": the state follows the command's closing parenthesis.
+    stat.rsplit_once(") ").unwrap().1.chars().next().unwrap()
+}
+
+#[test]
+fn ctrl_z_stops_the_daemon_and_fg_resumes_it() {
+    // SIGTSTP: iceoryx2's handler recorded it and the daemon went on running (Ctrl-Z did
+    // nothing).
+    let name = "test_daemon_tstp";
+    let (dir, domain, mut child) = serve_fresh(name);
+    signal(&child, libc::SIGTSTP);
+    let start = Instant::now();
+    while proc_state(&child) != 'T' {
+        if start.elapsed() > Duration::from_secs(10) {
+            let state = proc_state(&child);
+            let _ = child.kill();
+            panic!("not stopped by SIGTSTP: state {state}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    signal(&child, libc::SIGCONT);
+    // Running again: it publishes new diagnostics (the first read may be the service's
+    // history, from before the stop).
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag-tstp", WAIT).unwrap();
+    let seqs: Vec<u64> = (0..2)
+        .map(|_| diag.recv_timeout(WAIT).unwrap().expect("diagnostics").seq)
+        .collect();
+    assert!(
+        seqs[1] > seqs[0],
+        "{seqs:?} {}",
+        std::fs::read_to_string(dir.join("daemon.log")).unwrap_or_default()
+    );
+    drop(diag);
+    let (status, out) = terminate(child);
+    assert!(status.success(), "{status:?} {out}");
     cleanup_domain(name);
 }
 

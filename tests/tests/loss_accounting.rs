@@ -565,6 +565,8 @@ fn a_replay_started_before_its_daemon_reports_what_the_daemon_did() {
     std::thread::sleep(Duration::from_millis(1500));
     let daemon = Daemon::start(name, Delivery::Live, &dir.join("daemon.log"));
     let out = replay.wait_with_output().unwrap();
+    // Stopped before the checks, so that a failing one leaves no daemon running.
+    daemon.terminate();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),
@@ -579,6 +581,5 @@ fn a_replay_started_before_its_daemon_reports_what_the_daemon_did() {
         "{stdout}"
     );
     assert!(!stdout.contains("not known"), "{stdout}");
-    daemon.terminate();
     cleanup_domain(name);
 }

@@ -17,10 +17,17 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 /// Set by [`latch`] (or by a reader that saw iceoryx2 report a termination request).
 static SEEN: AtomicBool = AtomicBool::new(false);
 
-/// The handlers ours replaced, for SIGINT and SIGTERM (as `sighandler_t`).
-static REPLACED: [AtomicUsize; 2] = [AtomicUsize::new(0), AtomicUsize::new(0)];
+/// The handlers ours replaced, for each of [`SIGNALS`] (as `sighandler_t`).
+static REPLACED: [AtomicUsize; 3] = [
+    AtomicUsize::new(0),
+    AtomicUsize::new(0),
+    AtomicUsize::new(0),
+];
 
-const SIGNALS: [libc::c_int; 2] = [libc::SIGINT, libc::SIGTERM];
+/// The signals [`latch`] takes. SIGTSTP (Ctrl-Z) too: iceoryx2's handler records it and
+/// nothing stops, so Ctrl-Z did nothing to the daemon or a client tool; ours runs that handler
+/// and then stops the process as the default action would.
+const SIGNALS: [libc::c_int; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGTSTP];
 
 /// True once SIGINT or SIGTERM reached this process (after [`ensure_latched`] first ran), or a
 /// reader recorded iceoryx2's termination request ([`record_termination`]).
@@ -33,13 +40,16 @@ pub(crate) fn record_termination() {
     SEEN.store(true, Ordering::Relaxed);
 }
 
-/// The signal handler: records the request, then runs the handler it replaced. Only
-/// async-signal-safe work: an atomic store, an atomic load and a call.
+/// The signal handler: records a termination request (SIGINT, SIGTERM), runs the handler it
+/// replaced, and stops the process on SIGTSTP. Only async-signal-safe work: atomics, a call
+/// and `raise`.
 extern "C" fn latch(signal: libc::c_int) {
-    SEEN.store(true, Ordering::Relaxed);
     let Some(i) = SIGNALS.iter().position(|&s| s == signal) else {
         return;
     };
+    if signal != libc::SIGTSTP {
+        SEEN.store(true, Ordering::Relaxed);
+    }
     let replaced = REPLACED[i].load(Ordering::Relaxed);
     if replaced != libc::SIG_DFL && replaced != libc::SIG_IGN && replaced != latch_address() {
         // SAFETY: `replaced` was read from `sigaction` as the installed handler of this
@@ -48,14 +58,18 @@ extern "C" fn latch(signal: libc::c_int) {
         let f: extern "C" fn(libc::c_int) = unsafe { std::mem::transmute(replaced) };
         f(signal);
     }
+    if signal == libc::SIGTSTP {
+        // SAFETY: raise(3) is async-signal-safe; SIGSTOP stops the process until SIGCONT.
+        unsafe { libc::raise(libc::SIGSTOP) };
+    }
 }
 
 fn latch_address() -> libc::sighandler_t {
     latch as extern "C" fn(libc::c_int) as libc::sighandler_t
 }
 
-/// Installs [`latch`] for SIGINT and SIGTERM where another handler is installed now (iceoryx2's,
-/// or the default). Cheap enough for every poll.
+/// Installs [`latch`] for [`SIGNALS`] where another handler is installed now (iceoryx2's, or
+/// the default; SIGTSTP set to be ignored is left). Cheap enough for every poll.
 pub(crate) fn ensure_latched() {
     for (i, &signal) in SIGNALS.iter().enumerate() {
         // SAFETY: reading the current disposition into a zeroed `sigaction`.
@@ -63,8 +77,12 @@ pub(crate) fn ensure_latched() {
         if unsafe { libc::sigaction(signal, std::ptr::null(), &mut current) } != 0 {
             continue;
         }
-        if current.sa_sigaction == latch_address() || current.sa_flags & libc::SA_SIGINFO != 0 {
-            // Ours already, or a handler of another kind this latch cannot chain to: left.
+        if current.sa_sigaction == latch_address()
+            || current.sa_flags & libc::SA_SIGINFO != 0
+            || (signal == libc::SIGTSTP && current.sa_sigaction == libc::SIG_IGN)
+        {
+            // Ours already, a handler of another kind this latch cannot chain to, or a Ctrl-Z
+            // the process was started to ignore: left.
             continue;
         }
         REPLACED[i].store(current.sa_sigaction, Ordering::Relaxed);
