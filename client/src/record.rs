@@ -104,8 +104,8 @@ pub struct Recorded {
     pub attitude_path: PathBuf,
     /// The bias file.
     pub bias_path: PathBuf,
-    /// Nothing was recorded, and the files of an earlier recording in the directory were left
-    /// as they were (a logger that received nothing emptied them, a review).
+    /// No attitude was recorded, and the files of an earlier recording in the directory were
+    /// left as they were (a logger that received nothing emptied them, a review).
     pub kept_earlier_files: bool,
 }
 
@@ -314,10 +314,13 @@ impl Recorder {
         Ok(self.got)
     }
 
-    /// Renames the partial files to their final names; when nothing was recorded and an
+    /// Renames the partial files to their final names; when no attitude was recorded and an
     /// earlier recording's files are there, removes the partial files instead and keeps those.
+    /// (Bias rows alone do not count: the bias stream keeps its last message for late readers,
+    /// and a logger started after a stream that never ended got that one row, and emptied an
+    /// earlier recording with it: a review.)
     fn finish_files(&mut self) -> Result<(), ClientError> {
-        let nothing = self.got.attitude_rows == 0 && self.got.bias_rows == 0;
+        let nothing = self.got.attitude_rows == 0;
         let earlier = self.got.attitude_path.exists() || self.got.bias_path.exists();
         if nothing && earlier {
             for p in [&self.att_partial, &self.bias_partial] {

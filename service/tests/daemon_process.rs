@@ -383,26 +383,55 @@ fn proc_state(child: &Child) -> char {
     stat.rsplit_once(") ").unwrap().1.chars().next().unwrap()
 }
 
+/// A child killed when dropped (a failed check leaves no daemon running).
+struct KillOnDrop(Option<Child>);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        if let Some(mut c) = self.0.take() {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
 #[test]
 fn ctrl_z_stops_the_daemon_and_fg_resumes_it() {
     // SIGTSTP: iceoryx2's handler recorded it and the daemon went on running (Ctrl-Z did
-    // nothing).
+    // nothing). The daemon runs in a process group of its own, as a shell's job does: the
+    // kernel stops no member of an orphaned group on SIGTSTP (a test run started by setsid
+    // is one), and the daemon now takes the default action, as any program.
     let name = "test_daemon_tstp";
-    let (dir, domain, mut child) = serve_fresh(name);
-    signal(&child, libc::SIGTSTP);
+    cleanup_domain(name);
+    let dir = TempDir::new(&name.replace('_', "-"));
+    let config = write_config(&dir);
+    let domain = Domain::new(name).unwrap();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_corridor"));
+    cmd.args(["serve", "--delivery", "live", "--domain", name])
+        .arg("--config")
+        .arg(&config)
+        .env("RUST_LOG", "info")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(std::fs::File::create(dir.join("daemon.log")).unwrap());
+    std::os::unix::process::CommandExt::process_group(&mut cmd, 0);
+    let mut child = KillOnDrop(Some(cmd.spawn().expect("corridor serve starts")));
+    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag-tstp", WAIT).unwrap();
+    assert!(diag.recv_timeout(WAIT).unwrap().is_some(), "daemon up");
+    let running = child.0.as_ref().unwrap();
+    signal(running, libc::SIGTSTP);
     let start = Instant::now();
-    while proc_state(&child) != 'T' {
-        if start.elapsed() > Duration::from_secs(10) {
-            let state = proc_state(&child);
-            let _ = child.kill();
-            panic!("not stopped by SIGTSTP: state {state}");
-        }
+    while proc_state(running) != 'T' {
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "not stopped by SIGTSTP: state {}",
+            proc_state(running)
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
-    signal(&child, libc::SIGCONT);
-    // Running again: it publishes new diagnostics (the first read may be the service's
-    // history, from before the stop).
-    let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag-tstp", WAIT).unwrap();
+    signal(running, libc::SIGCONT);
+    // Running again: it publishes new diagnostics (one read may be from before the stop).
+    while diag.recv_timeout(Duration::ZERO).unwrap().is_some() {}
     let seqs: Vec<u64> = (0..2)
         .map(|_| diag.recv_timeout(WAIT).unwrap().expect("diagnostics").seq)
         .collect();
@@ -412,7 +441,7 @@ fn ctrl_z_stops_the_daemon_and_fg_resumes_it() {
         std::fs::read_to_string(dir.join("daemon.log")).unwrap_or_default()
     );
     drop(diag);
-    let (status, out) = terminate(child);
+    let (status, out) = terminate(child.0.take().unwrap());
     assert!(status.success(), "{status:?} {out}");
     cleanup_domain(name);
 }

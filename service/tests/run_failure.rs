@@ -168,6 +168,13 @@ fn an_output_that_is_an_input_is_refused_and_the_input_kept() {
     .unwrap_err();
     assert!(matches!(e, RunError::OutputIsInput { .. }), "{e}");
     assert!(std::fs::read_to_string(&truth).unwrap().starts_with("t_s,"));
+    // And as a staging name (`NAME.partial` is created first: it was truncated before it was
+    // read).
+    let staged = out.join("innovations.csv.partial");
+    std::fs::copy(exp36().join("imu.csv"), &staged).unwrap();
+    let e = run(&options(&staged, None, &out)).unwrap_err();
+    assert!(matches!(e, RunError::OutputIsInput { .. }), "{e}");
+    assert_eq!(std::fs::read(&staged).unwrap(), before);
 }
 
 #[test]

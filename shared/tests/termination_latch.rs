@@ -4,7 +4,32 @@
 
 use corridor_shared::services::{Domain, node_sleep, termination_requested};
 use iceoryx2::prelude::SignalHandlingMode;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
+
+/// The handler a host program installed after corridor's, and the one it replaced.
+static HOST_CALLS: AtomicUsize = AtomicUsize::new(0);
+static HOST_PREVIOUS: AtomicUsize = AtomicUsize::new(0);
+
+extern "C" fn host_handler(signal: libc::c_int) {
+    HOST_CALLS.fetch_add(1, Ordering::Relaxed);
+    let previous = HOST_PREVIOUS.load(Ordering::Relaxed);
+    if previous != libc::SIG_DFL && previous != libc::SIG_IGN {
+        // SAFETY: the plain handler that was installed before this one.
+        let f: extern "C" fn(libc::c_int) = unsafe { std::mem::transmute(previous) };
+        f(signal);
+    }
+}
+
+fn handler_of(signal: libc::c_int) -> libc::sighandler_t {
+    // SAFETY: reads the disposition into a zeroed `sigaction`.
+    let mut current: libc::sigaction = unsafe { std::mem::zeroed() };
+    assert_eq!(
+        unsafe { libc::sigaction(signal, std::ptr::null(), &mut current) },
+        0
+    );
+    current.sa_sigaction
+}
 
 #[test]
 fn sigterm_then_sigcont_is_still_a_termination_request() {
@@ -23,4 +48,26 @@ fn sigterm_then_sigcont_is_still_a_termination_request() {
     }
     assert!(termination_requested(&node));
     assert!(!node_sleep(&node, Duration::from_millis(10)));
+
+    // A host program that installs its own SIGINT handler afterwards, chaining to the one it
+    // replaced (corridor's): left in place by later nodes and polls (an earlier latch took the
+    // signal back at every poll, and the two handlers then called each other without end).
+    let host = host_handler as extern "C" fn(libc::c_int) as libc::sighandler_t;
+    // SAFETY: installs a plain handler, keeping the previous one to chain to.
+    unsafe {
+        let mut ours: libc::sigaction = std::mem::zeroed();
+        ours.sa_sigaction = host;
+        let mut previous: libc::sigaction = std::mem::zeroed();
+        assert_eq!(libc::sigaction(libc::SIGINT, &ours, &mut previous), 0);
+        HOST_PREVIOUS.store(previous.sa_sigaction, Ordering::Relaxed);
+    }
+    let second = domain
+        .node("latch-2", SignalHandlingMode::HandleTerminationRequests)
+        .unwrap();
+    assert!(!node_sleep(&second, Duration::from_millis(10)));
+    assert!(termination_requested(&second));
+    assert_eq!(handler_of(libc::SIGINT), host);
+    // SAFETY: raise(3) on this process: the host's handler, then corridor's, then iceoryx2's.
+    unsafe { libc::raise(libc::SIGINT) };
+    assert_eq!(HOST_CALLS.load(Ordering::Relaxed), 1);
 }

@@ -176,7 +176,11 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
     // it was only in summary.json, and the brief said null for the footprints alone.
     if let Some(m) = e.and_then(|e| e.loop_closure_error_m) {
         brief["loop_closure_m"] = m.into();
-        brief["loop_closure_pct"] = e.and_then(|e| e.loop_closure_pct.flatten()).into();
+        // A percentage only where the evaluation gives one (a loop-closure-only truth; a
+        // closed footprint truth has its footprint RMS instead).
+        if let Some(pct) = e.and_then(|e| e.loop_closure_pct.flatten()) {
+            brief["loop_closure_pct"] = pct.into();
+        }
     }
     brief
 }

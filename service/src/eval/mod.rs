@@ -143,9 +143,11 @@ pub fn evaluate(
         .iter()
         .enumerate()
         .filter_map(|(i, &q)| {
-            let k = t.partition_point(|&tk| tk <= q);
+            // The first row at or after q, and the one before it, as the streamed sampler
+            // brackets it; a footprint on a row is scored there exactly.
+            let k = t.partition_point(|&tk| tk < q);
             let gap = t[k.min(t.len() - 1)] - t[k.saturating_sub(1)];
-            (k > 0 && k < t.len() && gap > GAP_WARN_S).then_some((i, gap))
+            (k > 0 && k < t.len() && t[k] != q && gap > GAP_WARN_S).then_some((i, gap))
         })
         .collect();
     warnings.extend(gap_warning(&in_gaps));

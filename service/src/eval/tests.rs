@@ -571,14 +571,15 @@ fn a_clock_step_back_told_to_the_streamed_evaluation_samples_each_footprint_once
 #[test]
 fn footprints_in_a_gap_of_the_trajectory_are_warned_about_whole_or_streamed() {
     // Rows every 0.1 s over 0–10 s and 20–30 s: the footprints at 12 and 15 s lie in the hole
-    // (scored at the rows around it, as eval_traj.py does, and said); those at 5 and 25 s not.
+    // (scored at the rows around it, as eval_traj.py does, and said); those at 5 and 25 s not,
+    // nor those on the rows at the hole's edges (10 and 20 s: scored there exactly).
     let t: Vec<f64> = (0..=100)
         .map(|k| f64::from(k) * 0.1)
         .chain((0..=100).map(|k| 20.0 + f64::from(k) * 0.1))
         .collect();
     let x: Vec<f64> = t.clone();
     let y = vec![0.0; t.len()];
-    let truth: Vec<TruthGcp> = [0.0, 5.0, 12.0, 15.0, 25.0, 30.0]
+    let truth: Vec<TruthGcp> = [0.0, 5.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0]
         .iter()
         .map(|&t_s| TruthGcp {
             t_s,
@@ -595,7 +596,7 @@ fn footprints_in_a_gap_of_the_trajectory_are_warned_about_whole_or_streamed() {
         let w: Vec<&String> = rep.warnings.iter().filter(|w| w.contains("gap")).collect();
         assert_eq!(w.len(), 1, "{:?}", rep.warnings);
         assert!(
-            w[0].contains("indices [2, 3]") && w[0].contains("longest gap 10.0 s"),
+            w[0].contains("indices [3, 4]") && w[0].contains("longest gap 10.0 s"),
             "{}",
             w[0]
         );

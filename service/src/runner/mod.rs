@@ -109,7 +109,7 @@ pub enum RunError {
     },
     /// `heading.source = "map"` without a map file.
     #[error(
-        "heading.source = \"map\" needs a corridor map: give one with --map FILE (or set heading.source to \"grid\" or \"none\")"
+        "heading.source = \"map\" needs a corridor map: corridor run, diagnose and serve take one with --map FILE; the suite has none (set heading.source to \"grid\" or \"none\")"
     )]
     MapMissing,
     /// The log never left the alignment phase.

@@ -245,12 +245,18 @@ fn refuse_inputs_as_outputs(opts: &RunOptions) -> Result<(), RunError> {
         .flatten()
         .filter_map(|p| std::fs::canonicalize(p).ok())
         .collect();
+    // The staging names too (`NAME.partial`, created first: an input of that name was
+    // truncated before it was read, a review).
     for name in RUN_OUTPUT_FILES {
-        let out = opts.out_dir.join(name);
-        if let Ok(canonical) = std::fs::canonicalize(&out)
-            && inputs.contains(&canonical)
-        {
-            return Err(RunError::OutputIsInput { path: out });
+        for out in [
+            opts.out_dir.join(name),
+            opts.out_dir.join(format!("{name}.partial")),
+        ] {
+            if let Ok(canonical) = std::fs::canonicalize(&out)
+                && inputs.contains(&canonical)
+            {
+                return Err(RunError::OutputIsInput { path: out });
+            }
         }
     }
     Ok(())

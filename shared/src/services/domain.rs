@@ -222,12 +222,15 @@ impl Domain {
             detail,
         };
         let name: NodeName = node_name.try_into().map_err(|e| err(format!("{e:?}")))?;
+        super::signals::note_before_first_node();
         let node = NodeBuilder::new()
             .name(&name)
             .config(&self.config)
             .signal_handling_mode(signals)
             .create::<ipc::Service>()
             .map_err(|e| err(format!("{e:?}")))?;
+        // iceoryx2's signal handlers are in place now: ours goes over them, once.
+        super::signals::install_after_first_node();
         if let Some(prefix) = &self.secured_prefix {
             crate::runtime_dir::restrict_global_mgmt(prefix).map_err(|e| err(e.to_string()))?;
         }
@@ -413,7 +416,6 @@ impl Domain {
 ///
 /// A termination request it reads is kept for every thread ([`termination_requested`]).
 pub fn node_sleep(node: &Node<ipc::Service>, d: std::time::Duration) -> bool {
-    super::signals::ensure_latched();
     if super::signals::termination_seen() {
         return false;
     }
@@ -439,7 +441,6 @@ pub fn node_sleep(node: &Node<ipc::Service>, d: std::time::Duration) -> bool {
 /// of session 38): whoever sees it first keeps it here. A SIGCONT right after the request
 /// (systemd's stop, `timeout(1)`) made iceoryx2 forget it: the latch in `signals.rs` keeps it.
 pub fn termination_requested<S: iceoryx2::service::Service>(node: &Node<S>) -> bool {
-    super::signals::ensure_latched();
     if super::signals::termination_seen() {
         return true;
     }
