@@ -229,8 +229,12 @@ impl Domain {
             .signal_handling_mode(signals)
             .create::<ipc::Service>()
             .map_err(|e| err(format!("{e:?}")))?;
-        // iceoryx2's signal handlers are in place now: ours goes over them, once.
-        super::signals::install_after_first_node();
+        // A process that asks iceoryx2 to handle SIGINT and SIGTERM gets iceoryx2's handlers at
+        // that node's first wait: here instead, with ours over them, once. (A process with only
+        // `Disabled` nodes, such as a test binary hosting a daemon, keeps the default actions.)
+        if signals == SignalHandlingMode::HandleTerminationRequests {
+            super::signals::install_after_first_node();
+        }
         if let Some(prefix) = &self.secured_prefix {
             crate::runtime_dir::restrict_global_mgmt(prefix).map_err(|e| err(e.to_string()))?;
         }

@@ -8,8 +8,8 @@
 //! with `kill -TERM; kill -CONT`: it went on running in 1 of 3 tries, and in 5 of 6 under
 //! `timeout 3`. Its SIGTSTP handler records the signal and nothing stops: Ctrl-Z did nothing.
 //!
-//! So, once, after the first node exists ([`Domain::node`](super::Domain::node) calls
-//! [`install_after_first_node`]): a handler of ours takes SIGINT and SIGTERM, records them and
+//! So, once, after the first node that handles termination requests exists
+//! ([`Domain::node`](super::Domain::node) calls [`install_after_first_node`]): a handler of ours takes SIGINT and SIGTERM, records them and
 //! calls the handler it replaced (iceoryx2's, whose own waits then still see them); and SIGTSTP,
 //! which it passes to iceoryx2's handler and then delivers again with the default action, so the
 //! kernel's rules apply (no stop for an orphaned process group, as under systemd). A SIGTSTP the
