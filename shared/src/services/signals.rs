@@ -12,10 +12,16 @@
 //! ([`Domain::node`](super::Domain::node) calls [`install_after_first_node`]): a handler of ours takes SIGINT and SIGTERM, records them and
 //! calls the handler it replaced (iceoryx2's, whose own waits then still see them); and SIGTSTP,
 //! which it passes to iceoryx2's handler and then delivers again with the default action, so the
-//! kernel's rules apply (no stop for an orphaned process group, as under systemd). A SIGTSTP the
-//! process was started to ignore ([`note_before_first_node`]) is ignored again. Handlers a host
-//! program installs later are left alone (an earlier version re-took the signals at every poll,
-//! and a host handler that chains to its predecessor then recursed: a review).
+//! kernel's rules apply (no stop for an orphaned process group, as under systemd). A signal the
+//! process was started to ignore ([`note_before_first_node`]: SIGINT for a script's `&` job) is
+//! ignored again, and a plain handler the host program had installed before is called after
+//! iceoryx2's. Handlers a host program installs later are left alone (an earlier version re-took
+//! the signals at every poll, and a host handler that chains to its predecessor then recursed:
+//! a review). Left: iceoryx2 installs SIGCONT's handler before SIGTERM's and ours follows a few
+//! system calls later; a SIGTERM and a SIGCONT both within those microseconds of the first node
+//! lose the stop as before (not seen in 162 tries of `timeout` at 10–90 ms). iceoryx2's handler
+//! also takes SIGQUIT and SIGUSR1 (they do nothing), and a termination request, once seen, holds
+//! for the process's life.
 
 use std::sync::Once;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -39,8 +45,14 @@ static RUNNING: [AtomicBool; 3] = [
 
 const SIGNALS: [libc::c_int; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGTSTP];
 
-/// SIGTSTP was ignored before the first node (a process started so): it stays ignored.
-static TSTP_IGNORED: AtomicBool = AtomicBool::new(false);
+/// Per signal: what the process had before iceoryx2's handler replaced it, as noted by
+/// [`note_before_first_node`]: `SIG_IGN` (a job a script started with `&` ignores SIGINT), a
+/// plain handler of the host program's own (called after iceoryx2's), or `SIG_DFL`.
+static BEFORE: [AtomicUsize; 3] = [
+    AtomicUsize::new(libc::SIG_DFL),
+    AtomicUsize::new(libc::SIG_DFL),
+    AtomicUsize::new(libc::SIG_DFL),
+];
 
 static NOTED: Once = Once::new();
 static INSTALLED: Once = Once::new();
@@ -63,12 +75,19 @@ fn disposition(signal: libc::c_int) -> Option<libc::sigaction> {
     (unsafe { libc::sigaction(signal, std::ptr::null(), &mut current) } == 0).then_some(current)
 }
 
-/// Notes, before the process's first iceoryx2 node (which installs iceoryx2's handlers over
-/// every disposition), whether SIGTSTP is ignored.
+/// Notes, before the process's first iceoryx2 node (iceoryx2 installs its handlers over every
+/// disposition without looking at it), what each of [`SIGNALS`] had: ignored, or a plain
+/// handler of the host program's. (A handler with `SA_SIGINFO` cannot be called from a plain
+/// one: it is noted as the default, and replaced as iceoryx2 always replaced it.)
 pub(crate) fn note_before_first_node() {
     NOTED.call_once(|| {
-        let ignored = disposition(libc::SIGTSTP).is_some_and(|d| d.sa_sigaction == libc::SIG_IGN);
-        TSTP_IGNORED.store(ignored, Ordering::Relaxed);
+        for (i, &signal) in SIGNALS.iter().enumerate() {
+            if let Some(d) = disposition(signal)
+                && d.sa_flags & libc::SA_SIGINFO == 0
+            {
+                BEFORE[i].store(d.sa_sigaction, Ordering::Relaxed);
+            }
+        }
     });
 }
 
@@ -86,10 +105,12 @@ pub(crate) fn install_after_first_node() {
             let Some(current) = disposition(signal) else {
                 continue;
             };
-            if signal == libc::SIGTSTP && TSTP_IGNORED.load(Ordering::Relaxed) {
+            if BEFORE[i].load(Ordering::Relaxed) == libc::SIG_IGN {
                 let mut ignore = current;
                 ignore.sa_sigaction = libc::SIG_IGN;
-                // SAFETY: sets SIGTSTP back to ignored, as the process was started.
+                // SAFETY: sets the signal back to ignored, as the process was started (a
+                // review: a daemon started by a script with `&` took a Ctrl-C meant for the
+                // script as a stop request).
                 unsafe { libc::sigaction(signal, &ignore, std::ptr::null_mut()) };
                 continue;
             }
@@ -124,15 +145,21 @@ extern "C" fn latch(signal: libc::c_int) {
     if signal != libc::SIGTSTP {
         SEEN.store(true, Ordering::Relaxed);
     }
-    let replaced = REPLACED[i].load(Ordering::Relaxed);
-    if replaced != libc::SIG_DFL && replaced != libc::SIG_IGN && replaced != latch_address() {
-        // SAFETY: `replaced` was read from `sigaction` as the installed handler of this
-        // signal without SA_SIGINFO, and is neither SIG_DFL nor SIG_IGN: a plain
-        // `extern "C" fn(c_int)`.
-        let f: extern "C" fn(libc::c_int) = unsafe { std::mem::transmute(replaced) };
-        f(signal);
+    // iceoryx2's handler, then the host program's from before the first node, if any.
+    for handler in [
+        REPLACED[i].load(Ordering::Relaxed),
+        BEFORE[i].load(Ordering::Relaxed),
+    ] {
+        if handler != libc::SIG_DFL && handler != libc::SIG_IGN && handler != latch_address() {
+            // SAFETY: `handler` was read from `sigaction` as an installed handler of this
+            // signal without SA_SIGINFO, and is neither SIG_DFL nor SIG_IGN: a plain
+            // `extern "C" fn(c_int)`.
+            let f: extern "C" fn(libc::c_int) = unsafe { std::mem::transmute(handler) };
+            f(signal);
+        }
     }
-    if signal == libc::SIGTSTP {
+    // A host program's own SIGTSTP handler decides what Ctrl-Z does; otherwise the default.
+    if signal == libc::SIGTSTP && BEFORE[i].load(Ordering::Relaxed) == libc::SIG_DFL {
         stop_as_by_default();
     }
     RUNNING[i].store(false, Ordering::Relaxed);
@@ -156,6 +183,9 @@ fn stop_as_by_default() {
         libc::sigaddset(&mut set, libc::SIGTSTP);
         libc::sigprocmask(libc::SIG_UNBLOCK, &set, std::ptr::null_mut());
         libc::raise(libc::SIGTSTP);
+        // Blocked again before ours is back (a second Ctrl-Z in between would find the latch
+        // running and be lost): one pending now comes when the handler returns.
+        libc::sigprocmask(libc::SIG_BLOCK, &set, std::ptr::null_mut());
         libc::sigaction(libc::SIGTSTP, &ours, std::ptr::null_mut());
     }
 }
