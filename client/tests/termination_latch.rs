@@ -1,6 +1,8 @@
 //! A Ctrl-C read by one thread's node is seen by every other (iceoryx2 clears a signal when it
 //! is read, so the replay's watch thread took it from the replay loop, which then never
-//! stopped). Its own test binary: the signal and the latch belong to the process.
+//! stopped). Its own test binary: the signal and the latch belong to the process. SIGTERM
+//! stands in for the Ctrl-C: a test run started in the background (`cmd &` in a script) has
+//! SIGINT ignored, and an ignored SIGINT now stays ignored.
 
 use corridor_client::Domain;
 use corridor_shared::services::node_sleep;
@@ -19,7 +21,7 @@ fn a_termination_request_read_through_one_node_is_seen_through_the_others() {
     assert!(!corridor_client::termination_requested(&a));
     let pid = std::process::id().to_string();
     let sent = std::process::Command::new("kill")
-        .args(["-INT", &pid])
+        .args(["-TERM", &pid])
         .status()
         .unwrap();
     assert!(sent.success());
@@ -27,7 +29,7 @@ fn a_termination_request_read_through_one_node_is_seen_through_the_others() {
     // opening reads it (its reader once kept it from everyone else, a review).
     let deadline = Instant::now() + Duration::from_secs(10);
     while node_sleep(&a, Duration::from_millis(5)) {
-        assert!(Instant::now() < deadline, "SIGINT never seen");
+        assert!(Instant::now() < deadline, "SIGTERM never seen");
     }
     // The other node's reader sees it as well, from another thread, and again later.
     let seen_by_b = std::thread::scope(|s| {
