@@ -3,9 +3,10 @@
 //! that apply (no position or velocity: those are in the nav stream), preceded by
 //! `seq,imu_seq`. Both have `retracts`: 1 on a row whose sample showed earlier ones to come
 //! from glitched stamps ([`FLAG_RETRACTS`]): the rows before it with a later `t_s` are to be
-//! dropped (the files are written as the rows come, as `NAME.partial` until the logger stops). `bias.csv` ends each stream with the
-//! daemon's end-of-stream bias (`end_of_stream` 1: the stream's final estimate, which it left out
-//! before session 40), so a log of several streams shows where each ended.
+//! dropped (the files are written as the rows come, as `NAME.partial` until the logger stops).
+//! `bias.csv` ends each stream with the daemon's end-of-stream bias (`end_of_stream` 1: the
+//! stream's final estimate, which it left out before session 40), so a log of several streams
+//! shows where each ended.
 
 use corridor_shared::wire::{
     AttitudeSample, BiasSample, FLAG_CONVERGED, FLAG_END_OF_STREAM, FLAG_RETRACTS, FLAG_STANCE,
