@@ -194,3 +194,34 @@ fn a_loop_closure_truth_is_not_scored_as_nan() {
         "{e}"
     );
 }
+
+#[test]
+fn a_configuration_that_does_not_validate_is_named_with_its_file() {
+    // It printed an empty path: "recording walk: : key `detector.threshold` ...".
+    let dir = TempDir::new("suite-bad-config");
+    shifted_exp17(&dir, 0.0);
+    let config = dir.join("bad.toml");
+    let text = std::fs::read_to_string(root().join("configs/gdins.toml")).unwrap();
+    assert!(text.contains("\nthreshold = 1e5\n"));
+    std::fs::write(
+        &config,
+        text.replace("\nthreshold = 1e5\n", "\nthreshold = -1.0\n"),
+    )
+    .unwrap();
+    let suite = dir.join("suite.toml");
+    std::fs::write(
+        &suite,
+        std::fs::read_to_string(suite_of(&dir)).unwrap().replace(
+            &format!("{:?}", root().join("configs").join("gdins.toml")),
+            "\"bad.toml\"",
+        ),
+    )
+    .unwrap();
+    let run = corridor_service::suite::run_suite_each(&suite).unwrap();
+    let e = run.failed[0].to_string();
+    assert!(
+        e.contains("recording walk")
+            && e.contains(&format!("{}: key `detector.threshold`", config.display())),
+        "{e}"
+    );
+}

@@ -285,7 +285,11 @@ pub(crate) fn read_recording(
     r: &SuiteRecording,
     said: RejectedRows,
 ) -> Result<(ImuLog, Vec<TruthPoint>), RunError> {
-    let config = ConfigFile::read(&base.join(&r.config))?.validate()?;
+    let config_path = base.join(&r.config);
+    // The file named in a validation error (it printed an empty path, `recording X: : key`).
+    let config = ConfigFile::read(&config_path)?
+        .validate()
+        .map_err(|e| corridor_shared::config::with_path(e, &config_path))?;
     let path = base.join(&r.imu);
     let log = match said {
         RejectedRows::Say => crate::runner::read_log(&path, &config)?,
