@@ -54,7 +54,15 @@ fn a_layered_file_takes_its_base_and_replaces_only_the_keys_it_sets() {
     let e = ConfigFile::read(&dir.join("daemon.toml"))
         .unwrap_err()
         .to_string();
-    assert!(e.contains("base"), "{e}");
+    // Said from the file that names the base, with the base's own `base` (it showed the
+    // layer's value under the base's name).
+    assert!(
+        e.starts_with(&format!(
+            "{}: base = \"sensor.toml\"",
+            dir.join("daemon.toml").display()
+        )) && e.contains("names a base itself (base = \"other.toml\")"),
+        "{e}"
+    );
     std::fs::write(dir.join("sensor.toml"), "[eskf]\nzupt_sd = 1.0\n").unwrap();
     let e = ConfigFile::read(&dir.join("daemon.toml"))
         .unwrap_err()

@@ -46,10 +46,16 @@ impl ConfigFile {
         })?;
         let mut merged: toml::Table =
             toml::from_str(&base_text).map_err(|e| toml_err(&base_path, e.to_string()))?;
-        if merged.contains_key("base") {
-            return Err(with_path(
-                invalid("base", name, "a base file may not name a base itself"),
-                &base_path,
+        if let Some(inner) = merged.get("base") {
+            // Said from the file that names it, with the base's own `base` (it showed this
+            // file's value under the base's name, a review).
+            return Err(toml_err(
+                path,
+                format!(
+                    "base = {name:?}: {} names a base itself (base = {inner}); one level of \
+                     layering only: name a file without a base",
+                    base_path.display()
+                ),
             ));
         }
         // The base alone first, so that its own errors (unknown keys with their line, values out
