@@ -54,6 +54,14 @@ static BEFORE: [AtomicUsize; 3] = [
     AtomicUsize::new(libc::SIG_DFL),
 ];
 
+/// Per signal: the host program has a handler of its own for it (then it, not the latch,
+/// decides what SIGTSTP does).
+static HOST_HANDLES: [AtomicBool; 3] = [
+    AtomicBool::new(false),
+    AtomicBool::new(false),
+    AtomicBool::new(false),
+];
+
 static NOTED: Once = Once::new();
 static INSTALLED: Once = Once::new();
 
@@ -101,10 +109,23 @@ pub(crate) fn install_after_first_node() {
         if iceoryx2_bb_posix::signal::SignalHandler::termination_requested() {
             record_termination();
         }
+        // iceoryx2's handler, as it stands on SIGCONT (which no one else here takes).
+        let iceoryx2_handler = disposition(libc::SIGCONT).map(|d| d.sa_sigaction);
         for (i, &signal) in SIGNALS.iter().enumerate() {
             let Some(current) = disposition(signal) else {
                 continue;
             };
+            // What was noted before the first node is the host program's own handler only if
+            // it is not iceoryx2's (iceoryx2 used before corridor's first node: Ctrl-Z then did
+            // nothing) and not the one replaced now, which the latch calls already (it was
+            // called twice: a review).
+            let before = BEFORE[i].load(Ordering::Relaxed);
+            let a_handler = before != libc::SIG_DFL && before != libc::SIG_IGN;
+            let iceoryx2s = Some(before) == iceoryx2_handler;
+            HOST_HANDLES[i].store(a_handler && !iceoryx2s, Ordering::Relaxed);
+            if iceoryx2s || (a_handler && before == current.sa_sigaction) {
+                BEFORE[i].store(libc::SIG_DFL, Ordering::Relaxed);
+            }
             if BEFORE[i].load(Ordering::Relaxed) == libc::SIG_IGN {
                 let mut ignore = current;
                 ignore.sa_sigaction = libc::SIG_IGN;
@@ -159,7 +180,7 @@ extern "C" fn latch(signal: libc::c_int) {
         }
     }
     // A host program's own SIGTSTP handler decides what Ctrl-Z does; otherwise the default.
-    if signal == libc::SIGTSTP && BEFORE[i].load(Ordering::Relaxed) == libc::SIG_DFL {
+    if signal == libc::SIGTSTP && !HOST_HANDLES[i].load(Ordering::Relaxed) {
         stop_as_by_default();
     }
     RUNNING[i].store(false, Ordering::Relaxed);
