@@ -77,10 +77,10 @@ fn shm_files(domain: &str) -> Vec<String> {
         .unwrap_or_default()
 }
 
-/// `corridor serve` with its stderr (the log) in `log`.
-fn serve(config: &Path, domain: &str, ckpt: &Path, log: &Path) -> Child {
-    Command::new(env!("CARGO_BIN_EXE_corridor"))
-        .args(["serve", "--delivery", "live", "--domain", domain])
+/// The `corridor serve` command, its stderr (the log) in `log`.
+fn serve_command(config: &Path, domain: &str, ckpt: &Path, log: &Path) -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_corridor"));
+    cmd.args(["serve", "--delivery", "live", "--domain", domain])
         .arg("--config")
         .arg(config)
         .arg("--checkpoint")
@@ -88,7 +88,13 @@ fn serve(config: &Path, domain: &str, ckpt: &Path, log: &Path) -> Child {
         .env("RUST_LOG", "info")
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
-        .stderr(std::fs::File::create(log).unwrap())
+        .stderr(std::fs::File::create(log).unwrap());
+    cmd
+}
+
+/// `corridor serve` with its stderr (the log) in `log`.
+fn serve(config: &Path, domain: &str, ckpt: &Path, log: &Path) -> Child {
+    serve_command(config, domain, ckpt, log)
         .spawn()
         .expect("corridor serve starts")
 }
@@ -406,14 +412,7 @@ fn ctrl_z_stops_the_daemon_and_fg_resumes_it() {
     let dir = TempDir::new(&name.replace('_', "-"));
     let config = write_config(&dir);
     let domain = Domain::new(name).unwrap();
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_corridor"));
-    cmd.args(["serve", "--delivery", "live", "--domain", name])
-        .arg("--config")
-        .arg(&config)
-        .env("RUST_LOG", "info")
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(std::fs::File::create(dir.join("daemon.log")).unwrap());
+    let mut cmd = serve_command(&config, name, &dir.join("c.bin"), &dir.join("daemon.log"));
     std::os::unix::process::CommandExt::process_group(&mut cmd, 0);
     let mut child = KillOnDrop(Some(cmd.spawn().expect("corridor serve starts")));
     let diag = Subscriber::<Diagnostics>::open(&domain, "test-diag-tstp", WAIT).unwrap();

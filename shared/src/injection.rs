@@ -268,12 +268,10 @@ pub fn parse_time_s(text: &str) -> Result<f64, String> {
 /// [`parse_time_s`] for a wait that must be longer than zero (a timeout of 0 s cannot be met:
 /// `corridor status --timeout-s 0` said "no diagnostics within 0ns" of a live daemon).
 pub fn parse_wait_s(text: &str) -> Result<f64, String> {
-    parse_time_s(text)?;
-    text.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|&v| v > 0.0)
-        .ok_or_else(|| format!("{text:?} is not a wait in (0, {MAX_TIME_S:e}] s"))
+    match parse_time_s(text) {
+        Ok(v) if v > 0.0 => Ok(v),
+        _ => Err(format!("{text:?} is not a wait in (0, {MAX_TIME_S:e}] s")),
+    }
 }
 
 /// The longest time a flag or a configured period may give, s (about 31 years: any longer

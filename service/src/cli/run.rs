@@ -140,16 +140,10 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
     if refused > 0 {
         // Never fused, and counted in summary.json; said here too (a review: 2 % of rows at
         // 1e30 ran with exit 0 and no note). None on the 17 bundled walks.
-        let reasons: Vec<String> = s
-            .samples_refused_counts
-            .iter()
-            .filter(|&(_, &n)| n > 0)
-            .map(|(reason, n)| format!("{reason} {n}"))
-            .collect();
         notes.push(format!(
             "{refused} of {} samples refused, not fused ({}): summary.json samples_refused names the first",
             s.samples_read,
-            reasons.join(", ")
+            counts_by_reason(&s.samples_refused_counts).join(", ")
         ));
     }
     if s.clipped_samples > 0 {
@@ -215,11 +209,7 @@ fn never_held_note(
     refused: &std::collections::BTreeMap<&'static str, u64>,
     strides_refused: u64,
 ) -> Option<String> {
-    let reasons: Vec<String> = refused
-        .iter()
-        .filter(|&(_, &n)| n > 0)
-        .map(|(reason, n)| format!("{reason} {n}"))
-        .collect();
+    let reasons = counts_by_reason(refused);
     let tried = !reasons.is_empty() || strides_refused > 0;
     (used == 0 && tried && stances >= HEADING_NOTE_MIN_STANCES).then(|| {
         format!(
@@ -231,6 +221,15 @@ fn never_held_note(
             },
         )
     })
+}
+
+/// The nonzero counts of `counts`, each as "reason n".
+fn counts_by_reason(counts: &std::collections::BTreeMap<&'static str, u64>) -> Vec<String> {
+    counts
+        .iter()
+        .filter(|&(_, &n)| n > 0)
+        .map(|(reason, n)| format!("{reason} {n}"))
+        .collect()
 }
 
 #[cfg(test)]

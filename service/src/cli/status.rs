@@ -36,6 +36,25 @@ pub(super) struct StatusArgs {
     pub(super) watch: bool,
 }
 
+/// The `last checkpoint:` line for `path`, and whether it holds a checkpoint (or none yet). A
+/// file that is there is read as the daemon would (not moved, whatever it holds): a file that
+/// is no checkpoint passed for one ("saved 601.8 s ago", a review).
+fn checkpoint_status(path: &std::path::Path) -> (String, bool) {
+    match checkpoint_line(path) {
+        Err(line) => (line, false),
+        Ok(line) => match path
+            .is_file()
+            .then(|| corridor_service::checkpoint::read(path))
+        {
+            Some(Err(e)) => (
+                format!("last checkpoint:  not a checkpoint the daemon can start from: {e}\n"),
+                false,
+            ),
+            _ => (line, true),
+        },
+    }
+}
+
 /// Prints the status; exit code 0 when healthy, [`EXIT_NO_DAEMON`] when no daemon answers,
 /// [`EXIT_BAD_CHECKPOINT`] when `--checkpoint` cannot be read.
 pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
@@ -77,26 +96,11 @@ pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
             print!("\x1b[2J\x1b[H");
         }
         print!("{}", status.render(domain.name()));
-        let checkpoint_readable = match a.checkpoint.as_deref().map(|p| (p, checkpoint_line(p))) {
-            Some((_, Err(line))) => {
-                print!("{line}");
-                false
-            }
-            // A file that is there is read as the daemon would (not moved, whatever it holds):
-            // a file that is no checkpoint passed for one ("saved 601.8 s ago", a review).
-            Some((p, Ok(line))) => match p.is_file().then(|| corridor_service::checkpoint::read(p))
-            {
-                Some(Err(e)) => {
-                    println!("last checkpoint:  not a checkpoint the daemon can start from: {e}");
-                    false
-                }
-                _ => {
-                    print!("{line}");
-                    true
-                }
-            },
-            None => true,
-        };
+        let checkpoint_readable = a.checkpoint.as_deref().is_none_or(|p| {
+            let (line, readable) = checkpoint_status(p);
+            print!("{line}");
+            readable
+        });
         if !status.healthy() {
             return no_daemon("the daemon is shutting down");
         }

@@ -29,38 +29,32 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 /// Set by [`latch`] (or by a reader that saw iceoryx2 report a termination request).
 static SEEN: AtomicBool = AtomicBool::new(false);
 
-/// The handlers ours replaced, for each of [`SIGNALS`] (as `sighandler_t`).
-static REPLACED: [AtomicUsize; 3] = [
-    AtomicUsize::new(0),
-    AtomicUsize::new(0),
-    AtomicUsize::new(0),
-];
-
-/// Per signal: [`latch`] is running for it (a handler that calls back into it returns at once).
-static RUNNING: [AtomicBool; 3] = [
-    AtomicBool::new(false),
-    AtomicBool::new(false),
-    AtomicBool::new(false),
-];
-
 const SIGNALS: [libc::c_int; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGTSTP];
 
-/// Per signal: what the process had before iceoryx2's handler replaced it, as noted by
-/// [`note_before_first_node`]: `SIG_IGN` (a job a script started with `&` ignores SIGINT), a
-/// plain handler of the host program's own (called after iceoryx2's), or `SIG_DFL`.
-static BEFORE: [AtomicUsize; 3] = [
-    AtomicUsize::new(libc::SIG_DFL),
-    AtomicUsize::new(libc::SIG_DFL),
-    AtomicUsize::new(libc::SIG_DFL),
-];
+/// What the latch keeps for one of [`SIGNALS`].
+struct Slot {
+    /// The handler ours replaced (iceoryx2's), as `sighandler_t`.
+    replaced: AtomicUsize,
+    /// What the process had before iceoryx2's handler, as noted by [`note_before_first_node`]:
+    /// `SIG_IGN` (a job a script started with `&` ignores SIGINT), a plain handler of the host
+    /// program's own (called after iceoryx2's), or `SIG_DFL`.
+    before: AtomicUsize,
+    /// The host program has a handler of its own for it (then it, not the latch, decides what
+    /// SIGTSTP does).
+    host_handles: AtomicBool,
+    /// [`latch`] is running for it (a handler that calls back into it returns at once).
+    running: AtomicBool,
+}
 
-/// Per signal: the host program has a handler of its own for it (then it, not the latch,
-/// decides what SIGTSTP does).
-static HOST_HANDLES: [AtomicBool; 3] = [
-    AtomicBool::new(false),
-    AtomicBool::new(false),
-    AtomicBool::new(false),
-];
+/// One [`Slot`] per signal of [`SIGNALS`], in its order.
+static SLOTS: [Slot; 3] = [const {
+    Slot {
+        replaced: AtomicUsize::new(0),
+        before: AtomicUsize::new(libc::SIG_DFL),
+        host_handles: AtomicBool::new(false),
+        running: AtomicBool::new(false),
+    }
+}; 3];
 
 static NOTED: Once = Once::new();
 static INSTALLED: Once = Once::new();
@@ -93,7 +87,7 @@ pub(crate) fn note_before_first_node() {
             if let Some(d) = disposition(signal)
                 && d.sa_flags & libc::SA_SIGINFO == 0
             {
-                BEFORE[i].store(d.sa_sigaction, Ordering::Relaxed);
+                SLOTS[i].before.store(d.sa_sigaction, Ordering::Relaxed);
             }
         }
     });
@@ -119,14 +113,16 @@ pub(crate) fn install_after_first_node() {
             // it is not iceoryx2's (iceoryx2 used before corridor's first node: Ctrl-Z then did
             // nothing) and not the one replaced now, which the latch calls already (it was
             // called twice: a review).
-            let before = BEFORE[i].load(Ordering::Relaxed);
+            let before = SLOTS[i].before.load(Ordering::Relaxed);
             let a_handler = before != libc::SIG_DFL && before != libc::SIG_IGN;
             let iceoryx2s = Some(before) == iceoryx2_handler;
-            HOST_HANDLES[i].store(a_handler && !iceoryx2s, Ordering::Relaxed);
+            SLOTS[i]
+                .host_handles
+                .store(a_handler && !iceoryx2s, Ordering::Relaxed);
             if iceoryx2s || (a_handler && before == current.sa_sigaction) {
-                BEFORE[i].store(libc::SIG_DFL, Ordering::Relaxed);
+                SLOTS[i].before.store(libc::SIG_DFL, Ordering::Relaxed);
             }
-            if BEFORE[i].load(Ordering::Relaxed) == libc::SIG_IGN {
+            if SLOTS[i].before.load(Ordering::Relaxed) == libc::SIG_IGN {
                 let mut ignore = current;
                 ignore.sa_sigaction = libc::SIG_IGN;
                 // SAFETY: sets the signal back to ignored, as the process was started (a
@@ -139,7 +135,9 @@ pub(crate) fn install_after_first_node() {
                 // A handler of another kind than iceoryx2's: left.
                 continue;
             }
-            REPLACED[i].store(current.sa_sigaction, Ordering::Relaxed);
+            SLOTS[i]
+                .replaced
+                .store(current.sa_sigaction, Ordering::Relaxed);
             let mut ours = current;
             ours.sa_sigaction = latch_address();
             // SAFETY: installs `latch`, a plain handler, with the mask and flags of the one it
@@ -160,7 +158,7 @@ extern "C" fn latch(signal: libc::c_int) {
     let Some(i) = SIGNALS.iter().position(|&s| s == signal) else {
         return;
     };
-    if RUNNING[i].swap(true, Ordering::Relaxed) {
+    if SLOTS[i].running.swap(true, Ordering::Relaxed) {
         return;
     }
     if signal != libc::SIGTSTP {
@@ -168,8 +166,8 @@ extern "C" fn latch(signal: libc::c_int) {
     }
     // iceoryx2's handler, then the host program's from before the first node, if any.
     for handler in [
-        REPLACED[i].load(Ordering::Relaxed),
-        BEFORE[i].load(Ordering::Relaxed),
+        SLOTS[i].replaced.load(Ordering::Relaxed),
+        SLOTS[i].before.load(Ordering::Relaxed),
     ] {
         if handler != libc::SIG_DFL && handler != libc::SIG_IGN && handler != latch_address() {
             // SAFETY: `handler` was read from `sigaction` as an installed handler of this
@@ -180,10 +178,10 @@ extern "C" fn latch(signal: libc::c_int) {
         }
     }
     // A host program's own SIGTSTP handler decides what Ctrl-Z does; otherwise the default.
-    if signal == libc::SIGTSTP && !HOST_HANDLES[i].load(Ordering::Relaxed) {
+    if signal == libc::SIGTSTP && !SLOTS[i].host_handles.load(Ordering::Relaxed) {
         stop_as_by_default();
     }
-    RUNNING[i].store(false, Ordering::Relaxed);
+    SLOTS[i].running.store(false, Ordering::Relaxed);
 }
 
 /// SIGTSTP again with its default action (the process stops, unless the kernel discards it for
