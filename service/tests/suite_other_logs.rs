@@ -123,47 +123,134 @@ fn the_injections_and_their_times_count_from_the_logs_first_sample() {
     }
 }
 
-#[test]
-fn a_recording_that_fails_does_not_cost_the_others_their_rows() {
-    let dir = TempDir::new("suite-one-bad");
-    let (good, bad) = (dir.join("good"), dir.join("bad"));
-    std::fs::create_dir_all(&good).unwrap();
-    std::fs::create_dir_all(&bad).unwrap();
-    shifted_exp17(&good, 0.0);
-    shifted_exp17(&bad, 0.0);
-    // The bad one's footprints on another clock: its evaluation fails.
-    shifted_csv(
-        &good.join("ground_truth.csv"),
-        &bad.join("ground_truth.csv"),
-        1.7e9,
-    );
-    let one = std::fs::read_to_string(suite_of(&good)).unwrap();
-    let entry = |name: &str, sub: &str| {
-        one.replace("\"walk\"", &format!("{name:?}"))
+/// A suite file in `dir` over exp17 as "bad walk" (its footprints on another clock: its
+/// evaluation fails) and then `good` times as it is ("good walk", "good walk 2", ...).
+fn suite_with_a_bad_walk(dir: &Path, good: usize) -> PathBuf {
+    let mut names = vec![("bad walk".to_string(), "bad".to_string())];
+    names.extend((1..=good).map(|k| match k {
+        1 => ("good walk".to_string(), "good".to_string()),
+        _ => (format!("good walk {k}"), format!("good{k}")),
+    }));
+    let mut text = String::new();
+    for (name, sub) in &names {
+        let sub_dir = dir.join(sub);
+        std::fs::create_dir_all(&sub_dir).unwrap();
+        shifted_exp17(&sub_dir, 0.0);
+        if sub == "bad" {
+            let truth = sub_dir.join("ground_truth.csv");
+            let tmp = sub_dir.join("truth_on_time.csv");
+            std::fs::rename(&truth, &tmp).unwrap();
+            shifted_csv(&tmp, &truth, 1.7e9);
+        }
+        let one = std::fs::read_to_string(suite_of(&sub_dir)).unwrap();
+        text += &one
+            .replace("\"walk\"", &format!("{name:?}"))
             .replace("\"imu.csv\"", &format!("\"{sub}/imu.csv\""))
             .replace(
                 "\"ground_truth.csv\"",
                 &format!("\"{sub}/ground_truth.csv\""),
-            )
-    };
-    let suite = dir.join("two.toml");
-    std::fs::write(
-        &suite,
-        entry("bad walk", "bad") + "\n" + &entry("good walk", "good"),
-    )
-    .unwrap();
+            );
+        text += "\n";
+    }
+    let suite = dir.join("suite_with_a_bad_walk.toml");
+    std::fs::write(&suite, text).unwrap();
+    suite
+}
+
+/// `failed` names exactly the bad walk.
+fn names_the_bad_walk(failed: &[corridor_service::suite::SuiteError]) {
+    assert_eq!(failed.len(), 1, "{failed:?}");
+    assert!(
+        failed[0].to_string().contains("recording bad walk"),
+        "{}",
+        failed[0]
+    );
+}
+
+#[test]
+fn a_recording_that_fails_does_not_cost_the_others_their_rows() {
+    let dir = TempDir::new("suite-one-bad");
+    let suite = suite_with_a_bad_walk(&dir, 1);
     let run = corridor_service::suite::run_suite_each(&suite).unwrap();
     assert_eq!(run.rows.len(), 1);
     assert_eq!(run.rows[0].recording, "good walk");
-    assert_eq!(run.failed.len(), 1);
-    assert!(
-        run.failed[0].to_string().contains("recording bad walk"),
-        "{}",
-        run.failed[0]
-    );
+    names_the_bad_walk(&run.failed);
     // The strict form fails on it.
     let e = run_suite(&suite).unwrap_err().to_string();
     assert!(e.contains("recording bad walk"), "{e}");
+}
+
+#[test]
+fn the_loop_the_ensemble_and_the_sweep_run_past_a_recording_that_fails() {
+    // Each stopped at the first recording that failed, with no table for the others.
+    use corridor_service::suite::{run_ensemble, run_loops, run_sweep};
+    let dir = TempDir::new("suite-one-bad-each");
+    let suite = suite_with_a_bad_walk(&dir, 2);
+    let goods = ["good walk", "good walk 2"];
+    let ensemble = run_ensemble(&suite).unwrap();
+    names_the_bad_walk(&ensemble.failed);
+    let names: Vec<&str> = ensemble.rows.iter().map(|r| r.name.as_str()).collect();
+    assert_eq!(names, goods);
+    assert!(
+        ensemble
+            .rows
+            .iter()
+            .all(|r| r.rms_pct.iter().all(|v| v.is_finite()))
+    );
+
+    let loops = run_loops(&suite, &dir.join("loops")).unwrap();
+    names_the_bad_walk(&loops.failed);
+    assert_eq!(loops.rows.len(), 2);
+    assert!(
+        loops.rows[0].starts_with("| good walk |"),
+        "{}",
+        loops.rows[0]
+    );
+    assert!(dir.join("loops/good_walk_2/report.md").is_file());
+
+    let sweep_file = dir.join("sweep.toml");
+    std::fs::write(
+        &sweep_file,
+        "[[parameter]]\nkey = \"heading.sigma_deg\"\nvalues = [3.0, 4.0]\n",
+    )
+    .unwrap();
+    let sweep = run_sweep(&suite, &sweep_file).unwrap();
+    names_the_bad_walk(&sweep.failed);
+    assert_eq!(sweep.rows[0].walks, goods);
+    assert!(sweep.rows[0].rms_pct.iter().all(|at| at.len() == 2));
+}
+
+#[test]
+fn the_detection_matrix_names_each_recording_that_fails() {
+    // Two bad walks (a good one would run the whole matrix, minutes in a debug build): the
+    // matrix goes on past the first, names both, and holds no cell of either.
+    let dir = TempDir::new("suite-bad-matrix");
+    let one = suite_with_a_bad_walk(&dir, 0);
+    let text = std::fs::read_to_string(&one).unwrap();
+    let suite = dir.join("two_bad.toml");
+    std::fs::write(
+        &suite,
+        text.clone() + &text.replace("\"bad walk\"", "\"bad walk 2\""),
+    )
+    .unwrap();
+    let m = corridor_service::suite::detection_matrix(&suite, |_| {}, |_| {}).unwrap();
+    assert!(m.recordings.is_empty() && m.cells.is_empty() && m.mde_scan.is_empty());
+    assert_eq!(m.failed.len(), 2, "{:?}", m.failed);
+    assert!(
+        m.failed[0].contains("recording bad walk:"),
+        "{:?}",
+        m.failed
+    );
+    assert!(
+        m.failed[1].contains("recording bad walk 2:"),
+        "{:?}",
+        m.failed
+    );
+    let md = corridor_service::suite::matrix_markdown(&m);
+    assert!(
+        md.contains("Not in the matrix (its run failed): recording bad walk:"),
+        "{md}"
+    );
 }
 
 #[test]
@@ -223,5 +310,39 @@ fn a_configuration_that_does_not_validate_is_named_with_its_file() {
         e.contains("recording walk")
             && e.contains(&format!("{}: key `detector.threshold`", config.display())),
         "{e}"
+    );
+}
+
+#[test]
+fn corridor_eval_writes_the_others_table_then_fails_naming_the_recording_once() {
+    let dir = TempDir::new("suite-one-bad-cli");
+    let suite = suite_with_a_bad_walk(&dir, 1);
+    let out = dir.join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_corridor"))
+        .args(["eval", "--ensemble", "--suite"])
+        .arg(&suite)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert_eq!(o.status.code(), Some(1), "{stdout}\n{stderr}");
+    let table = std::fs::read_to_string(out.join("ensemble.md")).unwrap();
+    assert!(
+        table.contains("| good walk | normal |")
+            && table.contains("Not in the ensemble (its run failed): recording bad walk:"),
+        "{table}"
+    );
+    assert!(stdout.contains("| good walk | normal |"), "{stdout}");
+    let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
+    assert_eq!(errors.len(), 1, "{stderr}");
+    assert!(
+        errors[0].starts_with(
+            "error: 1 recording failed (the others' table was written): recording bad walk:"
+        ),
+        "{stderr}"
     );
 }

@@ -32,7 +32,10 @@ pub(super) fn demo(a: &DemoArgs) -> Result<()> {
     );
     corridor_client::say_text(&md);
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let loops = corridor_service::suite::run_loops(&suite, &a.out.join("diagnose"))?;
+    let loops = corridor_service::suite::loops_markdown(
+        &corridor_service::suite::run_loops(&suite, &a.out.join("diagnose"))?
+            .all_or_first_failure()?,
+    );
     corridor_client::say!(
         "\n# The loop: residual diagnosis from the paper's model (reports in {})\n\n{loops}",
         a.out.join("diagnose").display()

@@ -106,5 +106,13 @@ fn detection_matrix(suite: &std::path::Path, out: &std::path::Path) -> Result<()
     std::fs::write(&f, serde_json::to_string_pretty(&m)? + "\n")
         .with_context(|| format!("writing {}", f.display()))?;
     corridor_client::say_text(&md);
-    Ok(())
+    if m.failed.is_empty() {
+        return Ok(());
+    }
+    anyhow::bail!(
+        "{} of {} normal-gait recordings not in the matrix (the others' were written): {}",
+        m.failed.len(),
+        m.failed.len() + m.recordings.len(),
+        m.failed.join("; ")
+    )
 }

@@ -2,6 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
+use corridor_service::suite::SuiteError;
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
@@ -38,31 +39,35 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
         }
     }
     if let Some(sweep) = &a.sweep {
-        let results = corridor_service::suite::run_sweep(&a.suite, sweep)?;
-        let md = corridor_service::suite::sweep_markdown(&results);
-        return print_and_write(&md, a.out.as_deref(), "sweep.md");
+        let run = corridor_service::suite::run_sweep(&a.suite, sweep)?;
+        let md = corridor_service::suite::sweep_markdown(&run.rows);
+        return write_then_fail(
+            md,
+            &run.failed,
+            a.out.as_deref(),
+            "sweep.md",
+            "in the sweep",
+        );
     }
     if a.ensemble {
-        let rows = corridor_service::suite::run_ensemble(&a.suite)?;
-        let md = corridor_service::suite::ensemble_markdown(&rows);
-        return print_and_write(&md, a.out.as_deref(), "ensemble.md");
+        let run = corridor_service::suite::run_ensemble(&a.suite)?;
+        let md = corridor_service::suite::ensemble_markdown(&run.rows);
+        return write_then_fail(
+            md,
+            &run.failed,
+            a.out.as_deref(),
+            "ensemble.md",
+            "in the ensemble",
+        );
     }
     // A recording that fails does not cost the others their tables: they are written, and
     // the failures make the command fail after them.
     let run = corridor_service::suite::run_suite_each(&a.suite)?;
     let rows = run.rows;
-    let failed: Vec<String> = run.failed.iter().map(ToString::to_string).collect();
     let mut md = corridor_service::suite::markdown(&rows);
-    if !failed.is_empty() {
-        md.push_str(&format!(
-            "\nNot scored (its run failed): {}.\n",
-            failed.join("; ")
-        ));
-    }
-    if a.loops && !failed.is_empty() {
-        // The loop runs every recording of the file again, and would stop at the same one.
-        md.push_str("\nThe residual-diagnosis loop (`--loops`) was not run: a recording failed.\n");
-    } else if a.loops {
+    md.push_str(&not_scored(&run.failed, "scored"));
+    let mut failed = run.failed;
+    if a.loops {
         let reports = a.out.as_ref().map_or_else(
             || std::env::temp_dir().join(format!("corridor-loops-{}", std::process::id())),
             |d| d.join("diagnose"),
@@ -73,8 +78,11 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
             let _ = std::fs::remove_dir_all(&reports);
         }
         md.push_str(&format!(
-            "\nThe residual-diagnosis loop from the paper's model (`corridor diagnose`):\n\n{loops}"
+            "\nThe residual-diagnosis loop from the paper's model (`corridor diagnose`):\n\n{}{}",
+            corridor_service::suite::loops_markdown(&loops.rows),
+            not_scored(&loops.failed, "in the loop")
         ));
+        failed.extend(loops.failed);
     }
     corridor_client::say_text(&md);
     if let Some(dir) = a.out {
@@ -85,16 +93,60 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
             serde_json::to_string_pretty(&rows)? + "\n",
         )?;
     }
+    fail_if_any(&failed, "the others' tables were written")
+}
+
+/// The failures' messages.
+fn names(failed: &[SuiteError]) -> Vec<String> {
+    failed.iter().map(ToString::to_string).collect()
+}
+
+/// The line under a table that names the recordings left out of it, if any.
+fn not_scored(failed: &[SuiteError], what: &str) -> String {
     if failed.is_empty() {
-        return Ok(());
+        return String::new();
     }
-    anyhow::bail!(
-        "{} of {} recordings not scored (the others' tables were written{}): {}",
-        failed.len(),
-        failed.len() + rows.len(),
-        if a.loops { "; --loops not run" } else { "" },
-        failed.join("; ")
+    format!(
+        "\nNot {what} (its run failed): {}.\n",
+        names(failed).join("; ")
     )
+}
+
+/// The command's error when recordings failed: each named once, with its first error (the
+/// tables named them all already).
+fn fail_if_any(failed: &[SuiteError], written: &str) -> Result<()> {
+    let mut first: Vec<&SuiteError> = Vec::new();
+    for e in failed {
+        if !first.iter().any(|f| f.recording() == e.recording()) {
+            first.push(e);
+        }
+    }
+    match first.len() {
+        0 => Ok(()),
+        n => anyhow::bail!(
+            "{n} {} failed ({written}): {}",
+            if n == 1 { "recording" } else { "recordings" },
+            first
+                .iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join("; ")
+        ),
+    }
+}
+
+/// Prints and writes a table (the recordings that failed named under it), then fails when any
+/// did.
+fn write_then_fail(
+    mut md: String,
+    failed: &[SuiteError],
+    out: Option<&Path>,
+    name: &str,
+    what: &str,
+) -> Result<()> {
+    md.push_str(&not_scored(failed, what));
+    print_and_write(&md, out, name)?;
+    fail_if_any(failed, "the others' table was written")
 }
 
 /// Prints a table and, with an output directory, writes it there as `name`.

@@ -8,7 +8,7 @@
 //! ([`super::mde_scan`]). Slow (about 2 minutes): a bench-style command, not a test.
 
 use super::mde_scan::{ScanRow, already_modelled, scan_walk};
-use super::{Gait, SuiteError, SuiteRecording, read_suite};
+use super::{Gait, SuiteError, SuiteRecording, SuiteRun, read_suite};
 use crate::diagnose::{
     DriftProbe, Effect, RAMP_FROM_FRACTION, SIGNIFICANT, STEP_AT_FRACTION, run_diagnosis,
 };
@@ -321,6 +321,9 @@ pub struct DetectionMatrix {
     pub cells: Vec<MatrixCell>,
     /// The detectable sizes checked by injection, recording-major ([`ScanRow`]).
     pub mde_scan: Vec<ScanRow>,
+    /// The normal-gait recordings whose runs failed, each with its error: not in the matrix.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub failed: Vec<String>,
 }
 
 /// Runs the matrix over the normal-gait recordings of the suite at `path`, and on each walk the
@@ -339,29 +342,39 @@ pub fn detection_matrix(
         cases: cases.iter().map(|c| c.label.to_string()).collect(),
         cells: Vec::new(),
         mde_scan: Vec::new(),
+        failed: Vec::new(),
     };
-    for r in suite.recordings.iter().filter(|r| r.gait == Gait::Normal) {
-        let wrap = |source: RunError| SuiteError::Run {
-            name: r.name.clone(),
-            source: Box::new(source),
-        };
-        let (log, truth) =
-            super::read_recording(base, r, super::RejectedRows::Say).map_err(wrap)?;
-        let model = diagnosis_model(base, r).map_err(wrap)?;
-        out.recordings.push(r.name.clone());
-        // The clean column first: the effects it names are the walk's own (documented in that
-        // column), and the injected columns start from the model with their fixes.
-        let (clean, documented) = run_cell(&log, &truth, &model, r, &cases[0]).map_err(wrap)?;
-        progress(&clean);
-        out.cells.push(clean);
-        for case in &cases[1..] {
-            let (cell, _) = run_cell(&log, &truth, &documented, r, case).map_err(wrap)?;
-            progress(&cell);
-            out.cells.push(cell);
-        }
-        let scan = scan_walk(r, &log, &truth, &documented, &mut scan_progress).map_err(wrap)?;
+    // A recording that fails is named and leaves no cell: the others' cells are written.
+    let run = SuiteRun::each(
+        suite.recordings.iter().filter(|r| r.gait == Gait::Normal),
+        |r| {
+            let wrap = |source: RunError| SuiteError::Run {
+                name: r.name.clone(),
+                source: Box::new(source),
+            };
+            let (log, truth) =
+                super::read_recording(base, r, super::RejectedRows::Say).map_err(wrap)?;
+            let model = diagnosis_model(base, r).map_err(wrap)?;
+            // The clean column first: the effects it names are the walk's own (documented in
+            // that column), and the injected columns start from the model with their fixes.
+            let (clean, documented) = run_cell(&log, &truth, &model, r, &cases[0]).map_err(wrap)?;
+            progress(&clean);
+            let mut cells = vec![clean];
+            for case in &cases[1..] {
+                let (cell, _) = run_cell(&log, &truth, &documented, r, case).map_err(wrap)?;
+                progress(&cell);
+                cells.push(cell);
+            }
+            let scan = scan_walk(r, &log, &truth, &documented, &mut scan_progress).map_err(wrap)?;
+            Ok((r.name.clone(), cells, scan))
+        },
+    )?;
+    for (name, cells, scan) in run.rows {
+        out.recordings.push(name);
+        out.cells.extend(cells);
         out.mde_scan.extend(scan);
     }
+    out.failed = run.failed.iter().map(ToString::to_string).collect();
     Ok(out)
 }
 

@@ -11,7 +11,7 @@
 //! result (a jump). Either way a walk whose runs spread widely is one whose single figure says
 //! little, and the mean over the offsets is the fairer figure to compare two builds with.
 
-use super::{Ctx, Gait, SuiteError, read_suite, tables::median};
+use super::{Ctx, Gait, SuiteError, SuiteRun, read_suite, tables::median};
 use crate::runner::RunError;
 use corridor_shared::config::Mode;
 use std::fmt::Write as _;
@@ -53,13 +53,13 @@ impl EnsembleRow {
     }
 }
 
-/// Runs the default (best mode, rest-mean prior) of every recording at every offset.
-pub fn run_ensemble(suite_path: &Path) -> Result<Vec<EnsembleRow>, SuiteError> {
+/// Runs the default (best mode, rest-mean prior) of every recording at every offset; a
+/// recording that fails is named and the others run.
+pub fn run_ensemble(suite_path: &Path) -> Result<SuiteRun<EnsembleRow>, SuiteError> {
     let suite = read_suite(suite_path)?;
     let base = suite_path.parent().unwrap_or(Path::new("."));
     let best = suite.best_mode.unwrap_or(Mode::Eskf);
-    let mut rows = Vec::with_capacity(suite.recordings.len());
-    for r in &suite.recordings {
+    SuiteRun::each(&suite.recordings, |r| {
         let wrap = |source: RunError| SuiteError::Run {
             name: r.name.clone(),
             source: Box::new(source),
@@ -71,13 +71,12 @@ pub fn run_ensemble(suite_path: &Path) -> Result<Vec<EnsembleRow>, SuiteError> {
             let say = (offset == 0.0).then_some("the default run");
             rms_pct.push(ctx.footprint_at(&cfg, say).map_err(wrap)?.rms_pct);
         }
-        rows.push(EnsembleRow {
+        Ok(EnsembleRow {
             name: r.name.clone(),
             gait: r.gait,
             rms_pct,
-        });
-    }
-    Ok(rows)
+        })
+    })
 }
 
 /// The summary over the normal-gait walks: the median, mean and largest of the walks' means,

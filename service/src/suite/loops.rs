@@ -1,21 +1,19 @@
 //! The residual-diagnosis loop on every recording of a suite.
 
-use super::{SuiteError, read_suite};
+use super::{SuiteError, SuiteRun, read_suite};
 use crate::runner::RunError;
 use corridor_shared::config::{ConfigFile, Mode};
 use std::path::Path;
 
 /// The residual-diagnosis loop on every recording of a suite, starting from the paper's model
 /// (the sensor configuration without its `[model]` extensions, `mode = paper`). Writes each
-/// report under `out/<recording>/` and returns the summary table (Markdown). Runs after
-/// [`super::run_suite`], which said what each log's input cost (`eval --loops`, the demo).
-pub fn run_loops(path: &Path, out: &Path) -> Result<String, SuiteError> {
+/// report under `out/<recording>/` and returns each recording's row of the summary table
+/// ([`loops_markdown`]), or its failure. Runs after [`super::run_suite`], which said what each
+/// log's input cost (`eval --loops`, the demo).
+pub fn run_loops(path: &Path, out: &Path) -> Result<SuiteRun<String>, SuiteError> {
     let suite = read_suite(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let mut md = String::from(
-        "| recording | effects added, in order (score = −log₁₀ p) | footprint RMS before → after | heading NIS before → after | left |\n|---|---|---|---|---|\n",
-    );
-    for r in &suite.recordings {
+    SuiteRun::each(&suite.recordings, |r| {
         let wrap = |source: RunError| SuiteError::Run {
             name: r.name.clone(),
             source: Box::new(source),
@@ -63,7 +61,7 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<String, SuiteError> {
         let rms = |c: &crate::diagnose::Consistency| {
             c.gcp_rms_m.map_or("—".into(), |v| format!("{v:.2} m"))
         };
-        md.push_str(&format!(
+        Ok(format!(
             "| {} | {} | {} → {} | {:.2} → {:.2} | {} |\n",
             r.name,
             if added.is_empty() {
@@ -76,7 +74,15 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<String, SuiteError> {
             report.before.nis_mean,
             report.after.nis_mean,
             left
-        ));
-    }
-    Ok(md)
+        ))
+    })
+}
+
+/// The summary table of [`run_loops`]'s rows (Markdown).
+pub fn loops_markdown(rows: &[String]) -> String {
+    let mut md = String::from(
+        "| recording | effects added, in order (score = −log₁₀ p) | footprint RMS before → after | heading NIS before → after | left |\n|---|---|---|---|---|\n",
+    );
+    md.extend(rows.iter().map(String::as_str));
+    md
 }

@@ -61,7 +61,7 @@ pub use file::{
     read_suite, start_heading_from_truth,
 };
 pub use front_end::{DETECTORS, FrontEnd, KEPT_REST_S, detector_label, front_end_markdown};
-pub use loops::run_loops;
+pub use loops::{loops_markdown, run_loops};
 pub use mde_scan::{MDE_FACTORS, ScanPoint, ScanRow, already_modelled, detected_from, scan_walk};
 pub use recovery::{Convergence, SETTLED_TOLERANCE, convergence, recovery, settled_at};
 pub use run::{SuiteRun, run_suite, run_suite_each};
@@ -100,6 +100,16 @@ pub enum SuiteError {
         /// Cause.
         source: Box<RunError>,
     },
+}
+
+impl SuiteError {
+    /// The recording whose run failed (`None` for the suite file's own errors).
+    pub fn recording(&self) -> Option<&str> {
+        match self {
+            SuiteError::Run { name, .. } => Some(name),
+            SuiteError::File { .. } => None,
+        }
+    }
 }
 
 /// Footprint figures of one run.

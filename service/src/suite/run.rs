@@ -13,21 +13,50 @@ use std::path::{Path, PathBuf};
 
 /// Runs the suite (the table's rows); the first recording that fails fails it.
 pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
-    let run = run_suite_each(path)?;
-    match run.failed.into_iter().next() {
-        Some(e) => Err(e),
-        None => Ok(run.rows),
-    }
+    run_suite_each(path)?.all_or_first_failure()
 }
 
-/// The rows of the recordings that ran, and what failed in the others.
+/// The rows of the recordings that ran, and what failed in the others: what every command over
+/// a suite returns (the table, `--loops`, `--ensemble`, `--sweep`, the detection matrix), so
+/// that one recording that fails does not cost the others their rows.
 #[derive(Debug)]
-pub struct SuiteRun {
+pub struct SuiteRun<T = SuiteRow> {
     /// The rows, in the suite file's order.
-    pub rows: Vec<SuiteRow>,
+    pub rows: Vec<T>,
     /// The recordings that failed (a log or a truth that cannot be read or evaluated), in
     /// the suite file's order.
     pub failed: Vec<SuiteError>,
+}
+
+impl<T> SuiteRun<T> {
+    /// The rows when every recording ran, else the first failure (the demo: all or nothing).
+    pub fn all_or_first_failure(self) -> Result<Vec<T>, SuiteError> {
+        match self.failed.into_iter().next() {
+            Some(e) => Err(e),
+            None => Ok(self.rows),
+        }
+    }
+
+    /// Each recording in turn through `row`: its row, or its failure, which the next
+    /// recording does not wait on. An error that is not a recording's own (a file of the
+    /// command's, such as the sweep file) stops the whole command.
+    pub(super) fn each<'a, R: 'a>(
+        recordings: impl IntoIterator<Item = &'a R>,
+        mut row: impl FnMut(&'a R) -> Result<T, SuiteError>,
+    ) -> Result<Self, SuiteError> {
+        let mut out = SuiteRun {
+            rows: Vec::new(),
+            failed: Vec::new(),
+        };
+        for r in recordings {
+            match row(r) {
+                Ok(v) => out.rows.push(v),
+                Err(e @ SuiteError::Run { .. }) => out.failed.push(e),
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(out)
+    }
 }
 
 /// Runs the suite, each recording on its own: one that fails does not stop the others.

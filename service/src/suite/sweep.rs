@@ -10,7 +10,7 @@
 //! fragile there. The mean is the criterion because it sees the worst walks, which the median
 //! ignores (over this suite the medians of every swept value lie within 0.05 % of each other).
 
-use super::{Ctx, Gait, SuiteError, SuiteRecording, config_for, read_suite};
+use super::{Ctx, Gait, SuiteError, SuiteRecording, SuiteRun, config_for, read_suite};
 use crate::runner::RunError;
 use corridor_shared::config::{BiasPrior, ConfigFile, Mode};
 use serde::{Deserialize, Serialize};
@@ -91,8 +91,12 @@ pub fn held_out(r: &SweepResult) -> HeldOut {
     HeldOut { picks, rms_pct }
 }
 
-/// Reads the sweep file and runs it on the suite's normal-gait recordings.
-pub fn run_sweep(suite_path: &Path, sweep_path: &Path) -> Result<Vec<SweepResult>, SuiteError> {
+/// Reads the sweep file and runs it on the suite's normal-gait recordings; a recording that
+/// fails is named (`failed`) and left out of every parameter's folds.
+pub fn run_sweep(
+    suite_path: &Path,
+    sweep_path: &Path,
+) -> Result<SuiteRun<SweepResult>, SuiteError> {
     let suite = read_suite(suite_path)?;
     let base = suite_path.parent().unwrap_or(Path::new("."));
     let file_err = |message: String| SuiteError::File {
@@ -125,18 +129,9 @@ pub fn run_sweep(suite_path: &Path, sweep_path: &Path) -> Result<Vec<SweepResult
             )));
         }
     }
-    let mut out: Vec<SweepResult> = sweep
-        .parameters
-        .iter()
-        .map(|p| SweepResult {
-            key: p.key.clone(),
-            configured: String::new(),
-            values: p.values.iter().map(|v| v.to_string()).collect(),
-            walks: recs.iter().map(|r| r.name.clone()).collect(),
-            rms_pct: vec![Vec::new(); p.values.len()],
-        })
-        .collect();
-    for r in &recs {
+    // Per recording, its footprint RMS at every value of every parameter (`[parameter][value]`),
+    // or its failure: a recording that fails is left out of every fold and named.
+    let run = SuiteRun::each(&recs, |r| {
         let wrap = |source: RunError| SuiteError::Run {
             name: r.name.clone(),
             source: Box::new(source),
@@ -144,21 +139,47 @@ pub fn run_sweep(suite_path: &Path, sweep_path: &Path) -> Result<Vec<SweepResult
         let ctx = Ctx::open(base, r, super::RejectedRows::Say).map_err(wrap)?;
         // What the input cost is said with the recording's first run.
         let mut say = Some("its first run of the sweep");
-        for (p, res) in sweep.parameters.iter().zip(&mut out) {
-            res.configured = configured(&ctx.config, &p.key).map_err(&file_err)?;
-            for (v, value) in p.values.iter().enumerate() {
+        let mut walk = Vec::with_capacity(sweep.parameters.len());
+        for p in &sweep.parameters {
+            let configured = configured(&ctx.config, &p.key).map_err(&file_err)?;
+            let mut at = Vec::with_capacity(p.values.len());
+            for value in &p.values {
                 let file = with_value(&ctx.config, &p.key, value).map_err(&file_err)?;
                 let path = base.join(&r.config);
                 // A value the configuration refuses is the sweep file's, not the sensor
                 // configuration's (the error named the latter, a review).
                 let cfg = config_for(&file, &path, r, best, BiasPrior::RestMean)
                     .map_err(|e| file_err(format!("parameter {} = {value}: {e}", p.key)))?;
-                let fp = ctx.footprint_at(&cfg, say.take()).map_err(wrap)?;
-                res.rms_pct[v].push(fp.rms_pct);
+                at.push(ctx.footprint_at(&cfg, say.take()).map_err(wrap)?.rms_pct);
             }
+            walk.push((configured, at));
         }
+        Ok((r.name.clone(), walk))
+    })?;
+    if run.rows.len() < 2 {
+        // Fewer than two walks scored: no fold to hold one out of.
+        return Err(run.failed.into_iter().next().unwrap_or_else(|| {
+            file_err("a leave-one-walk-out check needs at least 2 scored walks".into())
+        }));
     }
-    Ok(out)
+    let out = sweep
+        .parameters
+        .iter()
+        .enumerate()
+        .map(|(k, p)| SweepResult {
+            key: p.key.clone(),
+            configured: run.rows[0].1[k].0.clone(),
+            values: p.values.iter().map(|v| v.to_string()).collect(),
+            walks: run.rows.iter().map(|(name, _)| name.clone()).collect(),
+            rms_pct: (0..p.values.len())
+                .map(|v| run.rows.iter().map(|(_, walk)| walk[k].1[v]).collect())
+                .collect(),
+        })
+        .collect();
+    Ok(SuiteRun {
+        rows: out,
+        failed: run.failed,
+    })
 }
 
 /// `file` with `section.key` set to `value`; an unknown key or a value of the wrong type is an
