@@ -1,7 +1,7 @@
 //! Faults in the input (issue 10, findings 2 and 3): absurd values and absurd times are refused,
 //! counted, and leave the rest of the run as it would have been.
 
-use corridor_service::core::{Estimator, ImuInput};
+use corridor_service::core::{Estimator, ImuInput, Notice, Phase};
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::Config;
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
@@ -120,6 +120,51 @@ fn an_absurd_time_in_a_stream_does_not_become_the_time_base() {
         e.t_s < 100.0 && e.p_m.iter().all(|p| p.abs() < 100.0),
         "{e:?}"
     );
+}
+
+#[test]
+fn a_stream_in_g_is_not_aligned_on_and_says_so() {
+    // The daemon path: no CSV reader (whose units check refuses such a log) in front of the
+    // estimator. A stream in g aligned with gravity taken as 1 m/s² from its rest and walked
+    // strides a tenth as long, with nothing said.
+    let (log, cfg) = exp36();
+    let mut est = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
+    let mut said = Vec::new();
+    for r in &log.rows {
+        let s = ImuInput {
+            t_s: r.t_s,
+            gyro_rad_s: r.gyro_rad_s,
+            accel_m_s2: r.accel_m_s2.map(|a| a / 9.80665),
+        };
+        let e = est.step(&s).unwrap();
+        said.extend(
+            e.notices()
+                .filter(|n| matches!(n, Notice::NotGravity(..)))
+                .map(|n| n.to_string()),
+        );
+        assert_eq!(est.phase(), Phase::Aligning, "aligned at {} s", r.t_s);
+    }
+    let c = est.counters();
+    // The initial rest, then every stance of the walk (each a candidate first stance).
+    assert!(c.alignment_not_gravity > 20, "{c:?}");
+    assert_eq!(said.len() as u64, c.alignment_not_gravity);
+    assert!(
+        said[0].contains("a mean specific force of 1.00") && said[0].contains("in g"),
+        "{}",
+        said[0]
+    );
+    // In m/s² the same rest aligns.
+    let mut est = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
+    let aligned = log.rows.iter().any(|r| {
+        let s = ImuInput {
+            t_s: r.t_s,
+            gyro_rad_s: r.gyro_rad_s,
+            accel_m_s2: r.accel_m_s2,
+        };
+        est.step(&s).unwrap();
+        est.phase() != Phase::Aligning
+    });
+    assert!(aligned && est.counters().alignment_not_gravity == 0);
 }
 
 #[test]

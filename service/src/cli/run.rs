@@ -88,6 +88,12 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
             s.jittery_clock_samples
         ));
     }
+    if s.alignment_not_gravity > 0 {
+        notes.push(format!(
+            "{} rests or stances were not aligned on: their specific force was no gravity (accelerations in g?); the log's warnings give each",
+            s.alignment_not_gravity
+        ));
+    }
     if s.started_without_rest {
         notes.push(
             "no initial rest: aligned on a short first stance, without a rest-mean bias prior"

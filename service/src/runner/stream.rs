@@ -99,6 +99,9 @@ pub struct Summary {
     pub headings_undone: u64,
     /// Alignment came from a short first stance (no initial rest, no rest-mean prior).
     pub started_without_rest: bool,
+    /// Rests or first stances not aligned on because their mean specific force was no
+    /// gravity (`Counters::alignment_not_gravity`).
+    pub alignment_not_gravity: u64,
     /// A start in fast gait went back this far, ms, to an earlier stance (see `Counters`).
     pub start_replayed_ms: u64,
     /// The initial rest turned faster than a bias of the sensor can be
@@ -594,6 +597,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         headings_expired: c.headings_expired,
         headings_undone: c.headings_undone,
         started_without_rest: c.started_without_rest,
+        alignment_not_gravity: c.alignment_not_gravity,
         start_replayed_ms: c.start_replayed_ms,
         rest_prior_refused: c.rest_prior_refused,
         initial_rest_moving_blocks: c.initial_rest_moving_blocks,

@@ -155,6 +155,15 @@ impl Pipeline {
             rest.clear();
             return None;
         }
+        // A "rest" whose specific force is no gravity (a stream in g) aligns nothing.
+        let g_expected = a.gravity_m_s2.map_or(STANDARD_GRAVITY_M_S2, |g| g.get());
+        let f_norm = rest.means_all().0.norm();
+        if (f_norm - g_expected).abs() > GRAVITY_TOLERANCE * g_expected || !f_norm.is_finite() {
+            self.counters.alignment_not_gravity += 1;
+            self.out.not_gravity_m_s2 = Some((f_norm, g_expected));
+            rest.clear();
+            return None;
+        }
         self.counters.started_without_rest = short_start;
         // A rest's blocks in which the foot moved are left out; a walking stance's (no rest)
         // are not: it begins with its landing, which the motion test would take as reference.

@@ -159,6 +159,9 @@ impl Pipeline {
             .partition_point(|r| r.t_clock < now.t_clock - a.fast_gait_replay_s);
         let mut rest = InitialRest::new(a.rest_tail_s, a.rest_max_rate_change_rad_s.get(), 0);
         let (out, restarts) = (self.out, self.counters.alignment_restarts);
+        // The live alignment counted the rests it refused as no gravity; the replay goes over
+        // the same samples and counts none again.
+        let not_gravity = self.counters.alignment_not_gravity;
         // The restarts are counted as the live start on that stance would have counted them:
         // those before the window, and the replay's own.
         self.counters.alignment_restarts = recent.ring[from].alignment_restarts;
@@ -169,6 +172,7 @@ impl Pipeline {
             self.align_on(&mut rest, r.t_s, xs, &r.decision, true)
                 .map(|e| (k, e))
         });
+        self.counters.alignment_not_gravity = not_gravity;
         let Some((first, mut eskf)) = start else {
             (self.out, self.counters.alignment_restarts) = (out, restarts);
             return Start::Here(live);

@@ -52,8 +52,8 @@ mod types;
 
 pub use association::association_weight;
 pub use types::{
-    Counters, EXTERNAL_HEADING_MAX_NIS, Estimate, GapCrossing, HeadingEvent, HeadingRefused,
-    ImuInput, Notice, Phase, SampleError, WarmStart, WarmStartError,
+    Counters, EXTERNAL_HEADING_MAX_NIS, Estimate, GRAVITY_TOLERANCE, GapCrossing, HeadingEvent,
+    HeadingRefused, ImuInput, Notice, Phase, SampleError, WarmStart, WarmStartError,
 };
 
 use fast_start::Start;

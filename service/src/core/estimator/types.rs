@@ -237,6 +237,10 @@ pub struct Counters {
     pub stride_rejected: u64,
     /// Times the initial rest was too short and alignment started over.
     pub alignment_restarts: u64,
+    /// Rests (or first stances) not aligned on because their mean specific force was no
+    /// gravity: beyond [`GRAVITY_TOLERANCE`] of it (accelerations in g, a dead accelerometer;
+    /// the CSV reader refuses such a log, a producer's stream reaches the daemon as it is).
+    pub alignment_not_gravity: u64,
     /// 50 ms blocks of the initial rest left out of its means (bias prior, tilt) because the
     /// foot moved in them (`alignment.rest_max_rate_change_rad_s`).
     pub initial_rest_moving_blocks: u64,
@@ -283,6 +287,15 @@ pub struct Counters {
 /// 6e-5). A heading 90° off with σ 1e-6 used to be fused as given and threw the bias to
 /// 0.04 rad/s.
 pub const EXTERNAL_HEADING_MAX_NIS: f64 = 16.0;
+
+/// How far (a fraction) the mean specific force of a rest or of a first stance may lie from
+/// gravity and still align the filter. A rest reads gravity to within the accelerometer's scale
+/// error, a first stance of a walk within a few percent (the aligning rests of the suite's
+/// runs of the 16 gdins walks: 9.82–9.86 m/s², their first stances without a rest up to 10.15;
+/// the NGIMU walk's rest 9.75); a log in g reads 1, one in mg about 1000. Beyond it the estimator does not align, as gravity
+/// taken from such a rest scaled every later position (a stream in g ran with g = 1 m/s² and
+/// walked strides a tenth as long, with nothing said).
+pub const GRAVITY_TOLERANCE: f64 = 0.25;
 
 impl Counters {
     /// Samples refused, for any reason (what was neither accepted nor lost elsewhere): with
@@ -367,6 +380,10 @@ pub struct Estimate {
     /// The heading was taken as lost on this sample: the straight strides before it ran this
     /// far (rad) off the nearest direction (counted in `heading_reacquisitions`).
     pub heading_reacquired: Option<f64>,
+    /// The rest or stance that would have aligned on this sample was refused: its mean
+    /// specific force and the gravity it was held against, m/s² (counted in
+    /// `alignment_not_gravity`).
+    pub not_gravity_m_s2: Option<(f64, f64)>,
     /// Zero-velocity detector statistic.
     pub detector_statistic: f64,
     /// Tracking, and less than `estimator.converged_unabsorbed` of a bias error present when the
@@ -407,6 +424,7 @@ impl Estimate {
         self.gap_crossing = None;
         self.velocity_reset = false;
         self.heading_reacquired = None;
+        self.not_gravity_m_s2 = None;
         self.replaced_first_t_s = None;
         self.glitch_t_s = None;
         self.glitch_run_dropped = 0;
@@ -444,6 +462,7 @@ impl Default for Estimate {
             clock_stepped_back_s: None,
             velocity_reset: false,
             heading_reacquired: None,
+            not_gravity_m_s2: None,
             gap_s: None,
             gap_crossing: None,
             detector_statistic: f64::NAN,
@@ -515,6 +534,9 @@ pub enum Notice {
     GlitchRun(f64, u64),
     /// The clock stepped back: the stamps from here on are taken plus this, s.
     ClockSteppedBack(f64),
+    /// A rest (or first stance) was not aligned on: its mean specific force is no gravity
+    /// (measured, gravity; m/s²).
+    NotGravity(f64, f64),
 }
 
 impl std::fmt::Display for Notice {
@@ -568,6 +590,13 @@ impl std::fmt::Display for Notice {
                 "the clock stepped back and the rates run on across the step: a new time base, \
                  the stamps from here on taken {shift_s:.3} s later (the first sample after the step refused)"
             ),
+            Notice::NotGravity(f_m_s2, g_m_s2) => write!(
+                f,
+                "the rest before this sample measured a mean specific force of {f_m_s2:.3} m/s², \
+                 not gravity ({g_m_s2:.3} m/s² ± {:.0} %): accelerations in g, or an \
+                 accelerometer that does not work? Not aligned on it",
+                GRAVITY_TOLERANCE * 100.0
+            ),
         }
     }
 }
@@ -589,5 +618,6 @@ impl Estimate {
                 n => Notice::GlitchRun(t_s, n),
             }))
             .chain(self.clock_stepped_back_s.map(Notice::ClockSteppedBack))
+            .chain(self.not_gravity_m_s2.map(|(f, g)| Notice::NotGravity(f, g)))
     }
 }

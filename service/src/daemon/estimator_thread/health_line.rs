@@ -91,7 +91,7 @@ impl EstState<'_> {
         tracing::info!(
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, foreign samples {}, latency p50 {} p99 {}, bias {}, \
-             σ {}, converged {}, phase {}, stances {} (map headings used: foot axis {}, strides {}), implausible {}, time jumps {}, clipped {}, \
+             σ {}, converged {}, phase {}{}, stances {} (map headings used: foot axis {}, strides {}), implausible {}, time jumps {}, clipped {}, \
              health restores {} (footprints forgotten {}), velocity resets {}, tilts levelled again {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
              lost in a killed daemon {}, external headings refused {} (superseded {}, outside the gate {}, expired at a stream's end {}, undone by the health check {})",
             d.received,
@@ -112,6 +112,10 @@ impl EstState<'_> {
                 "between streams"
             } else {
                 self.est.phase().name()
+            },
+            match c.alignment_not_gravity {
+                0 => String::new(),
+                n => format!(" ({n} rests refused: no gravity, accelerations in g?)"),
             },
             self.previous.stances + c.stances,
             self.previous.heading_used + c.heading_used,

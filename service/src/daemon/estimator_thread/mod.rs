@@ -10,7 +10,7 @@ use super::receive::{Msg, RxCounters};
 use super::state::{OUT_ATTITUDE, OUT_BIAS, OUT_DIAGNOSTICS, OUT_NAV, StateFile};
 use super::{DaemonConfig, DaemonError, DaemonReport};
 use crate::checkpoint::{self, Checkpoint, CheckpointError};
-use crate::core::{Counters, Estimate, Estimator, ImuInput, Phase, SampleError, WarmStart};
+use crate::core::{Counters, Estimate, Estimator, ImuInput, Notice, Phase, SampleError, WarmStart};
 use corridor_shared::wire::{
     Diagnostics, FLAG_END_OF_STREAM, FLAG_SHUTDOWN, ImuSample, NavSample, monotonic_ns,
 };
@@ -268,7 +268,14 @@ impl<'a> EstState<'a> {
             }
         };
         for n in e.notices() {
-            tracing::warn!(seq = s.seq, "{n}");
+            // A stream in g refuses every stance as a rest: the first few are named.
+            if matches!(n, Notice::NotGravity(..))
+                && self.est.counters().alignment_not_gravity > REFUSED_WARNINGS_PER_STREAM
+            {
+                tracing::debug!(seq = s.seq, "{n}");
+            } else {
+                tracing::warn!(seq = s.seq, "{n}");
+            }
         }
         if e.replaced_first_t_s.is_some()
             || e.glitch_t_s.is_some()
