@@ -293,8 +293,8 @@ pub const EXTERNAL_HEADING_MAX_NIS: f64 = 16.0;
 /// error, a first stance of a walk within a few percent (the aligning rests of the suite's
 /// runs of the 16 gdins walks: 9.82–9.86 m/s², their first stances without a rest up to 10.15;
 /// the NGIMU walk's rest 9.75); a log in g reads 1, one in mg about 1000. Beyond it the estimator does not align, as gravity
-/// taken from such a rest scaled every later position (a stream in g ran with g = 1 m/s² and
-/// walked strides a tenth as long, with nothing said).
+/// taken from such a rest scaled every later position (exp36 in g ran with g = 1 m/s² and
+/// walked 10.7 m of track instead of 82.7 m, with nothing said).
 pub const GRAVITY_TOLERANCE: f64 = 0.25;
 
 impl Counters {
