@@ -198,8 +198,12 @@ fn the_loop_the_ensemble_and_the_sweep_run_past_a_recording_that_fails() {
             .all(|r| r.rms_pct.iter().all(|v| v.is_finite()))
     );
 
+    // An earlier report of the walk that fails now would read as this run's.
+    std::fs::create_dir_all(dir.join("loops/bad_walk")).unwrap();
+    std::fs::write(dir.join("loops/bad_walk/report.md"), "an earlier run's").unwrap();
     let loops = run_loops(&suite, &dir.join("loops")).unwrap();
     names_the_bad_walk(&loops.failed);
+    assert!(!dir.join("loops/bad_walk").exists());
     assert_eq!(loops.rows.len(), 2);
     assert!(
         loops.rows[0].starts_with("| good walk |"),
@@ -218,6 +222,15 @@ fn the_loop_the_ensemble_and_the_sweep_run_past_a_recording_that_fails() {
     names_the_bad_walk(&sweep.failed);
     assert_eq!(sweep.rows[0].walks, goods);
     assert!(sweep.rows[0].rms_pct.iter().all(|at| at.len() == 2));
+    // With one walk left there is no fold to hold out: an error naming the rule and the failure.
+    let one_dir = TempDir::new("suite-one-bad-sweep");
+    let one_good = suite_with_a_bad_walk(&one_dir, 1);
+    let e = run_sweep(&one_good, &sweep_file).unwrap_err().to_string();
+    assert!(
+        e.contains("at least 2 normal-gait walks that run; 1 of 2 did")
+            && e.contains("recording bad walk:"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -340,9 +353,58 @@ fn corridor_eval_writes_the_others_table_then_fails_naming_the_recording_once() 
     let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error:")).collect();
     assert_eq!(errors.len(), 1, "{stderr}");
     assert!(
-        errors[0].starts_with(
-            "error: 1 recording failed (the others' table was written): recording bad walk:"
-        ),
+        errors[0]
+            == "error: 1 recording failed, named with its error under the tables (the others' \
+                table was written): bad walk",
         "{stderr}"
     );
+}
+
+#[test]
+fn corridor_eval_writes_nothing_when_no_recording_runs() {
+    // An empty table replaced the last good one in --out.
+    let dir = TempDir::new("suite-all-bad-cli");
+    let suite = suite_with_a_bad_walk(&dir, 0);
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    for (flag, file) in [("--ensemble", "ensemble.md"), ("--loops", "results.md")] {
+        std::fs::write(out.join(file), "the last good table").unwrap();
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_corridor"))
+            .args(["eval", flag, "--suite"])
+            .arg(&suite)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{flag}: {stderr}");
+        assert!(
+            stderr.contains("error: no recording ran, nothing written: recording bad walk:"),
+            "{flag}: {stderr}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(out.join(file)).unwrap(),
+            "the last good table"
+        );
+    }
+    std::fs::write(out.join("detection.md"), "the last good matrix").unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_corridor"))
+        .args(["diagnose", "--suite"])
+        .arg(&suite)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr
+            .contains("error: no normal-gait recording ran, nothing written: recording bad walk:"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("detection.md")).unwrap(),
+        "the last good matrix"
+    );
+    assert!(!out.join("detection.json").exists());
 }

@@ -97,6 +97,13 @@ fn detection_matrix(suite: &std::path::Path, out: &std::path::Path) -> Result<()
             )
         },
     )?;
+    if m.recordings.is_empty() && !m.failed.is_empty() {
+        // An empty matrix would replace the last good one in `out`.
+        anyhow::bail!(
+            "no normal-gait recording ran, nothing written: {}",
+            m.failed.join("; ")
+        );
+    }
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let md = suite::matrix_markdown(&m);
     let f = out.join("detection.md");
@@ -110,9 +117,10 @@ fn detection_matrix(suite: &std::path::Path, out: &std::path::Path) -> Result<()
         return Ok(());
     }
     anyhow::bail!(
-        "{} of {} normal-gait recordings not in the matrix (the others' were written): {}",
+        "{} of {} normal-gait recordings failed, named with {} error under the tables (the \
+         others' cells were written)",
         m.failed.len(),
         m.failed.len() + m.recordings.len(),
-        m.failed.join("; ")
+        if m.failed.len() == 1 { "its" } else { "their" },
     )
 }

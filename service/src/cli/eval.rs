@@ -39,6 +39,7 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
         }
     }
     if let Some(sweep) = &a.sweep {
+        // (With fewer than two walks that ran, `run_sweep` fails and nothing is written.)
         let run = corridor_service::suite::run_sweep(&a.suite, sweep)?;
         let md = corridor_service::suite::sweep_markdown(&run.rows);
         return write_then_fail(
@@ -51,6 +52,7 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
     }
     if a.ensemble {
         let run = corridor_service::suite::run_ensemble(&a.suite)?;
+        nothing_ran(run.rows.is_empty(), &run.failed)?;
         let md = corridor_service::suite::ensemble_markdown(&run.rows);
         return write_then_fail(
             md,
@@ -63,6 +65,7 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
     // A recording that fails does not cost the others their tables: they are written, and
     // the failures make the command fail after them.
     let run = corridor_service::suite::run_suite_each(&a.suite)?;
+    nothing_ran(run.rows.is_empty(), &run.failed)?;
     let rows = run.rows;
     let mut md = corridor_service::suite::markdown(&rows);
     md.push_str(&not_scored(&run.failed, "scored"));
@@ -96,6 +99,18 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
     fail_if_any(&failed, "the others' tables were written")
 }
 
+/// When every recording failed: the command's error, each failure in full, and no table written
+/// (an empty one would replace the last good one in `--out`).
+fn nothing_ran(no_rows: bool, failed: &[SuiteError]) -> Result<()> {
+    if no_rows && !failed.is_empty() {
+        anyhow::bail!(
+            "no recording ran, nothing written: {}",
+            names(failed).join("; ")
+        );
+    }
+    Ok(())
+}
+
 /// The failures' messages.
 fn names(failed: &[SuiteError]) -> Vec<String> {
     failed.iter().map(ToString::to_string).collect()
@@ -112,25 +127,22 @@ fn not_scored(failed: &[SuiteError], what: &str) -> String {
     )
 }
 
-/// The command's error when recordings failed: each named once, with its first error (the
-/// tables named them all already).
+/// The command's error when recordings failed: each named once (its errors are said under
+/// the tables, not a second time here).
 fn fail_if_any(failed: &[SuiteError], written: &str) -> Result<()> {
-    let mut first: Vec<&SuiteError> = Vec::new();
-    for e in failed {
-        if !first.iter().any(|f| f.recording() == e.recording()) {
-            first.push(e);
+    let mut names: Vec<&str> = Vec::new();
+    for name in failed.iter().filter_map(SuiteError::recording) {
+        if !names.contains(&name) {
+            names.push(name);
         }
     }
-    match first.len() {
+    match names.len() {
         0 => Ok(()),
         n => anyhow::bail!(
-            "{n} {} failed ({written}): {}",
+            "{n} {} failed, named with {} error under the tables ({written}): {}",
             if n == 1 { "recording" } else { "recordings" },
-            first
-                .iter()
-                .map(ToString::to_string)
-                .collect::<Vec<_>>()
-                .join("; ")
+            if n == 1 { "its" } else { "their" },
+            names.join(", ")
         ),
     }
 }

@@ -8,7 +8,8 @@ use std::path::Path;
 /// The residual-diagnosis loop on every recording of a suite, starting from the paper's model
 /// (the sensor configuration without its `[model]` extensions, `mode = paper`). Writes each
 /// report under `out/<recording>/` and returns each recording's row of the summary table
-/// ([`loops_markdown`]), or its failure. Runs after [`super::run_suite`], which said what each
+/// ([`loops_markdown`]), or its failure (and no report: an earlier one of that recording is
+/// removed). Runs after the suite's table ([`super::run_suite_each`]), which said what each
 /// log's input cost (`eval --loops`, the demo).
 pub fn run_loops(path: &Path, out: &Path) -> Result<SuiteRun<String>, SuiteError> {
     let suite = read_suite(path)?;
@@ -18,6 +19,11 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<SuiteRun<String>, SuiteError
             name: r.name.clone(),
             source: Box::new(source),
         };
+        // An earlier report of a recording that fails now would read as this run's.
+        let dir = out.join(r.name.replace(' ', "_"));
+        if dir.exists() {
+            std::fs::remove_dir_all(&dir).map_err(|e| wrap(crate::runner::io_at(&dir)(e)))?;
+        }
         let (log, truth) =
             super::read_recording(base, r, super::RejectedRows::AlreadySaid).map_err(wrap)?;
         let mut file = ConfigFile::read(&base.join(&r.config)).map_err(|e| wrap(e.into()))?;
@@ -30,7 +36,6 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<SuiteRun<String>, SuiteError
             after,
             ..
         } = crate::diagnose::run_diagnosis(&log, &file, Some(&truth), None).map_err(wrap)?;
-        let dir = out.join(r.name.replace(' ', "_"));
         std::fs::create_dir_all(&dir).map_err(|e| wrap(crate::runner::io_at(&dir)(e)))?;
         crate::diagnose::write_report(&dir, &report, &before, &after).map_err(wrap)?;
         let added: Vec<String> = report

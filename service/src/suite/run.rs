@@ -16,12 +16,13 @@ pub fn run_suite(path: &Path) -> Result<Vec<SuiteRow>, SuiteError> {
     run_suite_each(path)?.all_or_first_failure()
 }
 
-/// The rows of the recordings that ran, and what failed in the others: what every command over
-/// a suite returns (the table, `--loops`, `--ensemble`, `--sweep`, the detection matrix), so
-/// that one recording that fails does not cost the others their rows.
+/// The rows of the recordings that ran, and what failed in the others: what the commands over a
+/// suite return (the table, `--loops`, `--ensemble`, `--sweep`; the detection matrix runs its
+/// recordings through it too), so that one recording that fails does not cost the others their
+/// rows.
 #[derive(Debug)]
 pub struct SuiteRun<T = SuiteRow> {
-    /// The rows, in the suite file's order.
+    /// The rows, in the suite file's order (the sweep's: one per parameter).
     pub rows: Vec<T>,
     /// The recordings that failed (a log or a truth that cannot be read or evaluated), in
     /// the suite file's order.

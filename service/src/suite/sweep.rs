@@ -91,8 +91,9 @@ pub fn held_out(r: &SweepResult) -> HeldOut {
     HeldOut { picks, rms_pct }
 }
 
-/// Reads the sweep file and runs it on the suite's normal-gait recordings; a recording that
-/// fails is named (`failed`) and left out of every parameter's folds.
+/// Reads the sweep file and runs it on the suite's normal-gait recordings: one result per
+/// parameter, in the sweep file's order. A recording that fails is named (`failed`) and left
+/// out of every parameter's folds; with fewer than two left, the sweep fails, naming them all.
 pub fn run_sweep(
     suite_path: &Path,
     sweep_path: &Path,
@@ -157,10 +158,18 @@ pub fn run_sweep(
         Ok((r.name.clone(), walk))
     })?;
     if run.rows.len() < 2 {
-        // Fewer than two walks scored: no fold to hold one out of.
-        return Err(run.failed.into_iter().next().unwrap_or_else(|| {
-            file_err("a leave-one-walk-out check needs at least 2 scored walks".into())
-        }));
+        // Fewer than two walks scored: no fold to hold one out of, and no table.
+        let failed: Vec<String> = run.failed.iter().map(ToString::to_string).collect();
+        return Err(file_err(format!(
+            "a leave-one-walk-out check needs at least 2 normal-gait walks that run; {} of {} did{}",
+            run.rows.len(),
+            recs.len(),
+            if failed.is_empty() {
+                String::new()
+            } else {
+                format!(", and these failed: {}", failed.join("; "))
+            }
+        )));
     }
     let out = sweep
         .parameters
