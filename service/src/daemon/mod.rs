@@ -67,7 +67,11 @@
 //! - `estimator_thread`: the estimator thread (`corridor-estimator`): its state, the end of
 //!   stream, the checkpoint saves; its `health_line` the one-line health summary.
 //! - `outputs`: the output publishers and the conversion of an estimate into wire messages.
+//! - `intake`: the IMU input's bookkeeping, sample by sample (received, repeated, late, another
+//!   producer's, missing), for the accounting file.
 //! - `producers`: which IMU producer the receive thread follows when several publish.
+//! - [`stall`]: a lossless consumer that stops reading does not hold the publishers for longer
+//!   than `daemon.stall_timeout_s`.
 //! - `latency`: the allocation-free latency histogram behind the diagnostics and health line.
 //! - `state`: the accounting file (the receive thread's counters, the output `seq`s).
 //!
@@ -167,7 +171,7 @@ impl DaemonConfig {
 
     /// `domain`, and the rest from the built-in `[daemon]` defaults (live delivery, channel of
     /// 4096 samples, bias every 1 s, diagnostics every 1 s, health every 10 s, no checkpoint,
-    /// checkpoint every 30 s); 100 ms poll.
+    /// checkpoint every 30 s); the event waits of `EVENT_WAIT_SLICE`.
     pub fn new(domain: Domain, estimator: Config, aid: HeadingAid) -> Self {
         Self::with_settings(domain, estimator, &DaemonSettings::default(), aid)
     }
@@ -422,23 +426,18 @@ pub fn serve(cfg: DaemonConfig) -> Result<DaemonReport, DaemonError> {
 
 /// Watches SIGINT/SIGTERM (through iceoryx2's handler, on a node of `domain`) on a thread named
 /// `corridor-signals` and sets `shutdown` when one arrives. The thread also ends once `shutdown`
-/// is set by someone else.
+/// is set by someone else. The node is made here, so that a daemon whose signals nothing would
+/// watch does not start (it was made on the thread, whose failure was only logged, and the
+/// daemon ran on with no way to stop it by a signal).
 pub fn shutdown_on_signal(
     domain: &Domain,
     shutdown: Arc<AtomicBool>,
 ) -> Result<JoinHandle<()>, DaemonError> {
-    let domain = domain.clone();
+    let node = domain.node(
+        "corridor-signals",
+        SignalHandlingMode::HandleTerminationRequests,
+    )?;
     spawn("corridor-signals", move || {
-        let node = match domain.node(
-            "corridor-signals",
-            SignalHandlingMode::HandleTerminationRequests,
-        ) {
-            Ok(n) => n,
-            Err(e) => {
-                tracing::error!("signal watcher: {e}; SIGINT/SIGTERM will not stop the daemon");
-                return;
-            }
-        };
         while !shutdown.load(Ordering::Relaxed) {
             if !corridor_shared::services::node_sleep(&node, Duration::from_millis(100)) {
                 tracing::info!("termination requested");
