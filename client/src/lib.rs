@@ -16,7 +16,8 @@
 //!
 //! Binaries (`src/bin/`), thin wrappers around the three tool modules (which `corridor demo`
 //! uses too): `corridor-replay` ([`replay`](mod@replay)), `corridor-log` ([`record`]), `corridor-pdr`
-//! ([`track`]). [`init_tracing`] is the log setup of every corridor binary.
+//! ([`track`]); and `corridor-wire`, the wire types' layout for C and Python clients
+//! ([`corridor_shared::wire_layout`]). [`init_tracing`] is the log setup of every corridor binary.
 //!
 //! Service names, QoS and domains are defined once in [`corridor_shared::services`]; the wire
 //! types in [`corridor_shared::wire`].

@@ -1,6 +1,7 @@
 //! Record: the daemon's attitude and bias streams written to `attitude.csv` and `bias.csv`
-//! (the rows of [`crate::csv_rows`]) until the end of stream. Used by `corridor-log` and by
-//! `corridor demo`.
+//! (the rows of [`crate::csv_rows`]) until the end of stream, or, following new streams
+//! ([`Recorder::following_new_streams`]), until nothing arrives for the idle timeout. Used by
+//! `corridor-log` and by `corridor demo`.
 //!
 //! [`Recorder::open`] attaches the readers and creates the files; [`Recorder::run`] then
 //! records. The split lets a caller say "attached" before the producer starts.

@@ -7,8 +7,10 @@
 //! depend on the Rust module path.
 //!
 //! Conventions for every type:
-//! - `seq`: a per-stream sequence number, starting at 0 and increasing by 1 per message of that
-//!   type, set by the publisher of the type. Gaps mean lost messages.
+//! - `seq`: a sequence number increasing by 1 per message of that type, set by the publisher of
+//!   the type. A producer's [`ImuSample`]s count from 0 in each stream; the daemon's outputs
+//!   count on across streams and across daemon restarts on a domain (its accounting file keeps
+//!   them), so a consumer that stays connected sees no step back. Gaps mean lost messages.
 //! - `t_s`: sensor time in **seconds** (`f64`, the clock of the IMU log, not wall-clock time).
 //!   Seconds as `f64` are used rather than integer nanoseconds so that a log replayed through the
 //!   daemon reaches the estimator with bit-identical times (and so bit-identical estimates) to

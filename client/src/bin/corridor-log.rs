@@ -1,6 +1,7 @@
 //! `corridor-log`: writes the daemon's attitude and bias streams to CSV
-//! ([`corridor_client::record`]) until the producer finishes (end-of-stream marker) or nothing
-//! arrives for `--idle-timeout-s`.
+//! ([`corridor_client::record`]), following one stream after another into the same files, until
+//! nothing arrives for `--idle-timeout-s` (or, with `--stop-at-end-of-stream`, until the first
+//! end-of-stream marker).
 //!
 //! `attitude.csv` reuses the `estimates.csv` column names of `corridor run` where they apply
 //! (no position or velocity: those are in the nav stream), preceded by `seq,imu_seq`.

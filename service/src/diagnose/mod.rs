@@ -65,6 +65,8 @@
 //! - `clipping`: rails in the data below the configured gyro range ([`Rail`]);
 //! - `power`: the power of the walk for each effect: every stance's residual fitted on the
 //!   effect's signature ([`Power`]);
+//! - `signature_fit`: the regression behind `power`'s fits (weighted least squares of the
+//!   stance residuals on a signature, with a Newey–West standard error);
 //! - `stride_length`: the stride scale against the footprints, when they are given
 //!   ([`StrideLength`]): an effect only position information shows, tried after the heading
 //!   effects (its fix, the rolling-foot stance update, changes the navigation filter);

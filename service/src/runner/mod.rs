@@ -16,6 +16,13 @@
 //! suite, the diagnosis and the tests use it on the bundled recordings. It logs nothing per
 //! sample (a suite runs each log a dozen times): what the input cost is counted in the
 //! outcome, and [`RunOutcome::input_report`] says it in one line, once, where the caller wants.
+//!
+//! Map of the module:
+//! - this file: [`run_log`] and its [`Trace`], the options and errors, the step of one row;
+//! - `stream`: [`run`], the streamed run, what it keeps for the summary, its staged outputs;
+//! - `summary`: [`Summary`], what `summary.json` says;
+//! - `outputs`: the rows of `estimates.csv` and `innovations.csv`;
+//! - `figures`: the SVG figures of `--plots`.
 
 use crate::core::heading::HeadingAid;
 use crate::core::{Counters, Estimate, Estimator, ImuInput, WarmStart, WarmStartError};
@@ -33,13 +40,15 @@ use std::path::{Path, PathBuf};
 mod figures;
 mod outputs;
 mod stream;
+mod summary;
 
 pub use figures::write_figures;
 use figures::write_figures_to;
 pub use outputs::{
     ESTIMATES_HEADER, INNOVATIONS_HEADER, create, io_at, write_estimate_row, write_innovation_rows,
 };
-pub use stream::{PLOT_POINTS, RunOptions, Summary, run};
+pub use stream::{PLOT_POINTS, RunOptions, run};
+pub use summary::Summary;
 
 /// Anything that stops a run.
 #[derive(Debug, thiserror::Error)]

@@ -21,6 +21,8 @@
 //! - [`file`]: the suite file, read and checked (start headings, suspect legs);
 //! - [`figures`]: what is measured on the default run besides the footprint error (NIS by
 //!   update type, heading use on straight and weave strides, stances found, stride lengths);
+//! - [`front_end`]: the front end's figures (the stance detectors against the footprint lists,
+//!   the start without a rest and from a checkpoint, the clipping model);
 //! - [`recovery`]: injected-bias recovery and its hindsight settling time;
 //! - [`tables`]: the summary and the Markdown tables;
 //! - [`loops`]: the residual-diagnosis loop on every recording;

@@ -27,6 +27,13 @@
 //! The checks over the whole log come at its end, also when streaming: the decision is exact at
 //! any length; the median |a| quoted in the message is exact up to 16 384 rows and read from a
 //! 0.07 % histogram beyond.
+//!
+//! Map of the module:
+//! - this file: the types ([`ImuRow`], [`ImuLog`], [`RejectedRow`], [`ImuCsvOptions`],
+//!   [`ImuCsvError`]) and [`read_imu_csv`];
+//! - `reader`: [`ImuCsvReader`], the log row by row;
+//! - `row`: one data row, split at the commas, parsed and checked;
+//! - `units`: the units check over the accepted rows (g, deg/s).
 
 use crate::sensor::{TimeGuard, TimeVerdict};
 use serde::Serialize;

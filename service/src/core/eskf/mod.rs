@@ -25,7 +25,8 @@
 //! the bias set) and the σ readouts; `covariance.rs` the block
 //! propagation of the covariance; `updates.rs` the measurement updates (ZUPT, foot-axis heading,
 //! stride direction with its footprint clone); `response.rs` the closed-loop response to a bias
-//! error, on which the convergence flag rises; `tests.rs` and `response_tests.rs` the unit tests.
+//! error, on which the convergence flag rises; `tests.rs`, `clone_tests.rs` (the footprint
+//! clones) and `response_tests.rs` the unit tests.
 
 use super::rotation::{exp_rotvec, heading_jacobian, heading_of_axis, skew, wrap_pi};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
