@@ -276,7 +276,7 @@ impl DaemonAccount {
 /// review), until [`DaemonWatch::finish`] says how many samples were sent.
 #[derive(Debug)]
 pub struct DaemonWatch {
-    sent: std::sync::mpsc::Sender<u64>,
+    sent: std::sync::mpsc::SyncSender<u64>,
     thread: std::thread::JoinHandle<Option<(DaemonAccount, bool)>>,
 }
 
@@ -292,8 +292,9 @@ impl DaemonWatch {
         open_wait: Duration,
         finish_wait: Duration,
     ) -> Option<Self> {
-        let (attached_tx, attached) = std::sync::mpsc::channel();
-        let (sent, sent_rx) = std::sync::mpsc::channel::<u64>();
+        // One message each (bounded, as every channel of the project).
+        let (attached_tx, attached) = std::sync::mpsc::sync_channel(1);
+        let (sent, sent_rx) = std::sync::mpsc::sync_channel::<u64>(1);
         let domain = domain.clone();
         let thread = std::thread::Builder::new()
             .name("daemon-watch".into())

@@ -51,7 +51,8 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
     // The consumers open their ports on their own threads (iceoryx2 ports are !Send) and say
     // when they are attached; the replay starts after both.
     let abort = Arc::new(AtomicBool::new(false));
-    let (ready_tx, ready_rx) = std::sync::mpsc::channel::<()>();
+    // One message from each of the two consumers (bounded, as every channel of the project).
+    let (ready_tx, ready_rx) = std::sync::mpsc::sync_channel::<()>(2);
     let logger = {
         let (domain, dir, ready, abort) = (
             domain.clone(),
@@ -201,9 +202,8 @@ pub(super) fn demo_daemon(out: &Path, exp25: &RunOptions, offline: &runner::Summ
     row("daemon", daemon_bias);
     row("corridor run (offline)", offline.bias_rad_s);
     row("|difference|", diff);
-    for w in &report.warnings {
-        corridor_client::say!("daemon warning: {w}");
-    }
+    // Each warning was logged as it came (stderr): counted here, not printed a second time.
+    corridor_client::say!("daemon warnings: {} (in the log)", report.warnings.len());
     corridor_client::say!(
         "iceoryx2 files left for the domain: {}",
         if left.is_empty() {
@@ -265,7 +265,7 @@ fn demo_replay(domain: &Domain, log: &ImuLog, injection: &BiasInjection) -> Resu
 fn demo_logger(
     domain: &Domain,
     dir: &Path,
-    ready: &std::sync::mpsc::Sender<()>,
+    ready: &std::sync::mpsc::SyncSender<()>,
     abort: &AtomicBool,
 ) -> Result<Recorded> {
     let opts = RecordOptions {
@@ -290,7 +290,7 @@ fn demo_logger(
 /// stream until its end; says `ready` once attached.
 fn demo_pdr(
     domain: &Domain,
-    ready: &std::sync::mpsc::Sender<()>,
+    ready: &std::sync::mpsc::SyncSender<()>,
     abort: &AtomicBool,
 ) -> Result<Track> {
     let tracker = Tracker::open(domain, "corridor-demo-pdr", DEMO_WAIT)?;

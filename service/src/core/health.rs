@@ -136,7 +136,7 @@ mod tests {
                 accel_m_s2: 0.03,
                 gyro_rad_s: 0.01,
                 rest_gyro_rad_s: 1e-3,
-                gyro_bias_rw: 7e-4,
+                gyro_bias_rw_rad_s_sqrt_s: 7e-4,
                 zupt_m_s: 0.01,
                 stance_yaw_max_sd_rad: f64::INFINITY,
             },

@@ -3,7 +3,7 @@
 //! configuration ([`apply_fix`]). The names and labels are those of `report.json` and
 //! `report.md`.
 
-use corridor_shared::config::{ConfigFile, Mode};
+use corridor_shared::config::{ConfigFile, Mode, defaults};
 use serde::{Serialize, Serializer};
 use std::fmt;
 
@@ -246,7 +246,10 @@ pub fn apply_fix(fix: Fix, file: &mut ConfigFile) -> bool {
             m.gyro_coupling_z_sd_deg = Some(3.0)
         }
         Fix::BiasRandomWalkTimes10 => {
-            let rw = file.eskf.gyro_bias_rw_rad_s_sqrt_s.unwrap_or(1e-4);
+            let rw = file
+                .eskf
+                .gyro_bias_rw_rad_s_sqrt_s
+                .unwrap_or(defaults::ESKF_GYRO_BIAS_RW_RAD_S_SQRT_S);
             if rw >= 1e-3 {
                 return false;
             }
@@ -255,7 +258,13 @@ pub fn apply_fix(fix: Fix, file: &mut ConfigFile) -> bool {
         Fix::RotationAware if file.estimator.mode == Some(Mode::Paper) => {
             file.estimator.mode = Some(Mode::RotationAware)
         }
-        Fix::RollingStance if file.eskf.zupt_rolling_height_m.unwrap_or(0.0) == 0.0 => {
+        Fix::RollingStance
+            if file
+                .eskf
+                .zupt_rolling_height_m
+                .unwrap_or(defaults::ESKF_ZUPT_ROLLING_HEIGHT_M)
+                == 0.0 =>
+        {
             file.eskf.zupt_rolling_height_m = Some(ROLLING_HEIGHT_M)
         }
         Fix::GyroRail { milli_rad_s } => {

@@ -261,7 +261,7 @@ impl Eskf {
         };
         let qg = gyro.powi(2) * dt;
         let qb = if self.estimate_bias {
-            self.noise.gyro_bias_rw.powi(2) * dt
+            self.noise.gyro_bias_rw_rad_s_sqrt_s.powi(2) * dt
         } else {
             0.0
         };

@@ -53,7 +53,7 @@ pub struct EskfNoise {
     /// the errors a swing builds, rad/s/√Hz.
     pub rest_gyro_rad_s: f64,
     /// Gyro-bias random walk σ, rad/s/√s (0 freezes the bias states).
-    pub gyro_bias_rw: f64,
+    pub gyro_bias_rw_rad_s_sqrt_s: f64,
     /// ZUPT σ, m/s.
     pub zupt_m_s: f64,
     /// Above this yaw σ the stance velocity updates leave the yaw alone (a Schmidt update),

@@ -6,7 +6,7 @@ fn noise() -> EskfNoise {
         accel_m_s2: 0.5,
         gyro_rad_s: 0.01,
         rest_gyro_rad_s: 1e-3,
-        gyro_bias_rw: 1e-4,
+        gyro_bias_rw_rad_s_sqrt_s: 1e-4,
         zupt_m_s: 0.01,
         stance_yaw_max_sd_rad: f64::INFINITY,
     }
@@ -529,7 +529,7 @@ fn bias_rate_state_follows_a_ramp() {
             bias: BiasStates::Estimated,
         },
         EskfNoise {
-            gyro_bias_rw: 1e-6,
+            gyro_bias_rw_rad_s_sqrt_s: 1e-6,
             ..noise()
         },
         ext,

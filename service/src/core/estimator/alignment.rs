@@ -234,7 +234,7 @@ impl Pipeline {
             accel_m_s2: e.accel_noise_m_s2.get(),
             gyro_rad_s: e.gyro_noise_rad_s.get(),
             rest_gyro_rad_s: e.rest_gyro_noise_rad_s.get(),
-            gyro_bias_rw: e.gyro_bias_rw_rad_s_sqrt_s,
+            gyro_bias_rw_rad_s_sqrt_s: e.gyro_bias_rw_rad_s_sqrt_s,
             zupt_m_s: e.zupt_sd_m_s.get(),
             stance_yaw_max_sd_rad: match e.stance_yaw_max_sd_rad {
                 0.0 => f64::INFINITY,
