@@ -168,6 +168,36 @@ fn a_stream_in_g_is_not_aligned_on_and_says_so() {
 }
 
 #[test]
+fn short_fast_gait_stances_with_a_scale_error_are_not_taken_for_a_stream_in_g() {
+    // A walking stance reads far from gravity: a review found exp38's first stances after
+    // 21.9 s at up to +22 %, and with a 3 % accelerometer scale error the first tolerance (±25 %)
+    // refused them and lost 9 s of walking. A stream in g reads −90 %.
+    let log = read_imu_csv(
+        &root().join("tests/data/gdins_exp38_zigzag_extreme/imu.csv"),
+        &ImuCsvOptions::default(),
+    )
+    .unwrap();
+    let cfg = Config::from_file(&root().join("configs/gdins.toml")).unwrap();
+    let mut est = Estimator::new(cfg.clone(), heading_aid(&cfg, None).unwrap());
+    let aligned_at = log
+        .rows
+        .iter()
+        .filter(|r| r.t_s >= 21.9)
+        .find_map(|r| {
+            let s = ImuInput {
+                t_s: r.t_s,
+                gyro_rad_s: r.gyro_rad_s,
+                accel_m_s2: r.accel_m_s2.map(|a| a * 1.03),
+            };
+            est.step(&s).unwrap();
+            (est.phase() != Phase::Aligning).then_some(r.t_s)
+        })
+        .unwrap();
+    assert_eq!(est.counters().alignment_not_gravity, 0);
+    assert!(aligned_at < 25.0, "aligned at {aligned_at} s");
+}
+
+#[test]
 fn a_state_broken_by_a_sample_the_limits_let_through_falls_back_to_the_last_good_state() {
     // Limits so wide that the plausibility check lets 1e30 through: the health check after the
     // update is what must catch it (before: positions of 1e26 m, or a NaN state with

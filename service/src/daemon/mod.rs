@@ -255,6 +255,10 @@ pub struct DaemonReport {
     pub published: [u64; 4],
     /// Daemon lives that used the accounting file, this one included.
     pub lives: u64,
+    /// Rests or first stances not aligned on because their specific force was no gravity (a
+    /// producer's stream in g), over every stream of this life; the first of each stream is in
+    /// `warnings`.
+    pub rests_not_gravity: u64,
 }
 
 /// A daemon failure.

@@ -122,13 +122,32 @@ pub enum RunError {
     )]
     MapMissing,
     /// The log never left the alignment phase.
-    #[error("{path}: no initial rest of at least {min_rest_s} s followed by motion was found")]
+    #[error(
+        "{path}: no initial rest of at least {min_rest_s} s followed by motion was found{}",
+        not_gravity_note(*not_gravity)
+    )]
     NeverAligned {
         /// The log.
         path: PathBuf,
         /// Required rest.
         min_rest_s: f64,
+        /// Rests or stances refused because their specific force was no gravity.
+        not_gravity: u64,
     },
+}
+
+/// What [`RunError::NeverAligned`] adds when rests were refused for their specific force.
+fn not_gravity_note(n: u64) -> String {
+    match n {
+        0 => String::new(),
+        1 => " that measured gravity: 1 rest or stance was refused for its specific force (the \
+              log's warnings say it)"
+            .to_owned(),
+        n => format!(
+            " that measured gravity: {n} rests or stances were refused for their specific force \
+             (the log's warnings give the first)"
+        ),
+    }
 }
 
 /// Builds the heading source the configuration asks for: the map file when one is given,

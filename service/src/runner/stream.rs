@@ -379,6 +379,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         return Err(RunError::NeverAligned {
             path: opts.imu.clone(),
             min_rest_s: opts.config.alignment.min_rest_s.get(),
+            not_gravity: c.alignment_not_gravity,
         });
     }
     let eval = match (&kept.gcps, &opts.truth) {

@@ -155,9 +155,17 @@ impl Pipeline {
             rest.clear();
             return None;
         }
-        // A "rest" whose specific force is no gravity (a stream in g) aligns nothing.
+        // A "rest" whose specific force is no gravity (a stream in g) aligns nothing: the
+        // force tested is the one the alignment takes (a rest's gravity and tilt leave out the
+        // blocks in which the foot moved; a walking stance's tilt does not).
         let g_expected = a.gravity_m_s2.map_or(STANDARD_GRAVITY_M_S2, |g| g.get());
-        let f_norm = rest.means_all().0.norm();
+        let f_norm = if short_start {
+            rest.means_all()
+        } else {
+            rest.means()
+        }
+        .0
+        .norm();
         if (f_norm - g_expected).abs() > GRAVITY_TOLERANCE * g_expected || !f_norm.is_finite() {
             self.counters.alignment_not_gravity += 1;
             self.out.not_gravity_m_s2 = Some((f_norm, g_expected));

@@ -38,6 +38,8 @@ pub(super) struct Recorded {
     clipped_gyro_axes: [bool; 3],
     /// `Counters::alignment_restarts` before this sample.
     alignment_restarts: u64,
+    /// `Counters::alignment_not_gravity` before this sample.
+    alignment_not_gravity: u64,
 }
 
 impl Recorded {
@@ -133,6 +135,7 @@ impl Pipeline {
             clipped: self.out.clipped,
             clipped_gyro_axes: self.clipped_gyro_axes,
             alignment_restarts: self.counters.alignment_restarts,
+            alignment_not_gravity: self.counters.alignment_not_gravity,
         };
         recent.push(r, self.cfg.max_dt_s.get());
     }
@@ -159,12 +162,12 @@ impl Pipeline {
             .partition_point(|r| r.t_clock < now.t_clock - a.fast_gait_replay_s);
         let mut rest = InitialRest::new(a.rest_tail_s, a.rest_max_rate_change_rad_s.get(), 0);
         let (out, restarts) = (self.out, self.counters.alignment_restarts);
-        // The live alignment counted the rests it refused as no gravity; the replay goes over
-        // the same samples and counts none again.
         let not_gravity = self.counters.alignment_not_gravity;
-        // The restarts are counted as the live start on that stance would have counted them:
-        // those before the window, and the replay's own.
+        // The restarts and the rests refused as no gravity are counted as the live start on
+        // that stance would have counted them: those before the window, and the replay's own
+        // (a stance refused after the one the replay starts on is run through, not refused).
         self.counters.alignment_restarts = recent.ring[from].alignment_restarts;
+        self.counters.alignment_not_gravity = recent.ring[from].alignment_not_gravity;
         let current = recent.ring.len() - 1;
         let start = (from..current).find_map(|k| {
             let r = &recent.ring[k];
@@ -172,9 +175,9 @@ impl Pipeline {
             self.align_on(&mut rest, r.t_s, xs, &r.decision, true)
                 .map(|e| (k, e))
         });
-        self.counters.alignment_not_gravity = not_gravity;
         let Some((first, mut eskf)) = start else {
             (self.out, self.counters.alignment_restarts) = (out, restarts);
+            self.counters.alignment_not_gravity = not_gravity;
             return Start::Here(live);
         };
         let pending_heading = self.pending_heading.take();
@@ -226,6 +229,7 @@ mod tests {
             clipped: false,
             clipped_gyro_axes: [false; 3],
             alignment_restarts: 0,
+            alignment_not_gravity: 0,
         }
     }
 

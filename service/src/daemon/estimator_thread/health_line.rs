@@ -3,6 +3,7 @@
 
 use super::super::receive::RxCounters;
 use super::EstState;
+use crate::core::Phase;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -113,9 +114,12 @@ impl EstState<'_> {
             } else {
                 self.est.phase().name()
             },
-            match c.alignment_not_gravity {
-                0 => String::new(),
-                n => format!(" ({n} rests refused: no gravity, accelerations in g?)"),
+            match (c.alignment_not_gravity, self.est.phase()) {
+                (0, _) | (_, Phase::Calibrating | Phase::Tracking) => String::new(),
+                (1, Phase::Aligning) => " (1 rest refused: no gravity, accelerations in g?)".into(),
+                (n, Phase::Aligning) => {
+                    format!(" ({n} rests refused: no gravity, accelerations in g?)")
+                }
             },
             self.previous.stances + c.stances,
             self.previous.heading_used + c.heading_used,

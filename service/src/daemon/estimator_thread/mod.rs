@@ -268,13 +268,14 @@ impl<'a> EstState<'a> {
             }
         };
         for n in e.notices() {
-            // A stream in g refuses every stance as a rest: the first few are named.
-            if matches!(n, Notice::NotGravity(..))
-                && self.est.counters().alignment_not_gravity > REFUSED_WARNINGS_PER_STREAM
-            {
-                tracing::debug!(seq = s.seq, "{n}");
-            } else {
-                tracing::warn!(seq = s.seq, "{n}");
+            // A stream in g refuses every stance as a rest: the first few are named, and the
+            // first of each stream goes into the report's warnings.
+            match (n, self.est.counters().alignment_not_gravity) {
+                (Notice::NotGravity(..), 1) => self.warn(format!("IMU seq {}: {n}", s.seq)),
+                (Notice::NotGravity(..), k) if k > REFUSED_WARNINGS_PER_STREAM => {
+                    tracing::debug!(seq = s.seq, "{n}")
+                }
+                _ => tracing::warn!(seq = s.seq, "{n}"),
             }
         }
         if e.replaced_first_t_s.is_some()
@@ -389,6 +390,7 @@ impl<'a> EstState<'a> {
         p.headings_outside_gate += c.headings_outside_gate;
         p.headings_expired += c.headings_expired;
         p.headings_undone += c.headings_undone;
+        p.alignment_not_gravity += c.alignment_not_gravity;
         self.est = self.new_estimator(cfg);
         self.last = Estimate::default();
         self.last_bias_t_s = f64::NEG_INFINITY;
@@ -569,6 +571,8 @@ pub(super) fn estimator_thread(
             out.diagnostics.seq,
         ],
         lives: counters.lives.load(Ordering::Relaxed),
+        rests_not_gravity: st.previous.alignment_not_gravity
+            + st.est.counters().alignment_not_gravity,
     })
 }
 
