@@ -167,14 +167,28 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
             "inject_gyro_bias_rad_s: {v:?} must be a finite number within ±{MAX_INJECTED_BIAS_RAD_S} rad/s"
         )));
     }
-    // Tables and results are keyed by name: two of one name would be one row twice.
-    let mut names: Vec<&str> = file.recordings.iter().map(|r| r.name.as_str()).collect();
+    // Tables and results are keyed by name: two of one name would be one row twice. Reports
+    // go into a directory named after the recording (`--loops`): two names of one directory
+    // would overwrite, and the loop's removal of an earlier report remove, each other's.
+    let mut names: Vec<(String, &str)> = file
+        .recordings
+        .iter()
+        .map(|r| (report_dir_name(&r.name), r.name.as_str()))
+        .collect();
     names.sort_unstable();
-    if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
-        return Err(error(format!(
-            "two recordings are named {:?}: names must be unique",
-            w[0]
-        )));
+    if let Some(w) = names.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(error(if w[0].1 == w[1].1 {
+            format!(
+                "two recordings are named {:?}: names must be unique",
+                w[0].1
+            )
+        } else {
+            format!(
+                "recordings {:?} and {:?} would share the report directory {:?}: names must \
+                 differ in more than spaces and punctuation",
+                w[0].1, w[1].1, w[0].0
+            )
+        }));
     }
     // A bare file name's parent is "" (the message then named an empty folder): ".".
     let base = match path.parent() {
@@ -192,6 +206,27 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
         best_mode: file.best_mode,
         recordings,
     })
+}
+
+/// The name of a recording's report directory (`corridor eval --loops`, under OUT/diagnose):
+/// letters, digits, `-`, `_` and `.` kept, anything else `_`, so that no name reaches outside
+/// that directory (`..`, `/`) or makes an odd one; a name of dots alone gets a prefix.
+pub fn report_dir_name(name: &str) -> String {
+    let dir: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if dir.chars().all(|c| c == '.') {
+        format!("recording_{dir}")
+    } else {
+        dir
+    }
 }
 
 /// One recording as written → checked, with its start heading.
@@ -479,6 +514,41 @@ mod tests {
                      truth = \"truth.csv\"\nconfig = \"c.toml\"\nstart_heading_deg = 0.0\n";
         let err = read_one(&dir, truth, twice).unwrap_err();
         assert!(err.contains("two recordings are named \"walk\""), "{err}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_report_directory_stays_inside_and_two_recordings_never_share_one() {
+        // The loop removes a recording's earlier report: a name with `..` or `/` reached
+        // outside OUT/diagnose, and "a b" and "a_b" shared one directory.
+        for (name, dir) in [
+            ("exp17 rect loop small", "exp17_rect_loop_small"),
+            ("../../home", ".._.._home"),
+            ("..", "recording_.."),
+            ("", "recording_"),
+            ("a/b\\c", "a_b_c"),
+        ] {
+            assert_eq!(report_dir_name(name), dir, "{name:?}");
+            assert!(
+                !Path::new(&report_dir_name(name))
+                    .components()
+                    .any(|c| !matches!(c, std::path::Component::Normal(_)))
+            );
+        }
+        let dir = std::env::temp_dir().join(format!("corridor-suite-dirs-{}", std::process::id()));
+        let truth = "t_s,x_m,y_m,z_m\n0.0,0.0,0.0,0.0\n1.0,0.1,0.9,0.0\n";
+        let one = |name: &str| {
+            format!(
+                "[[recording]]\nname = {name:?}\nimu = \"imu.csv\"\ntruth = \"truth.csv\"\n\
+                 config = \"c.toml\"\nstart_heading_deg = 0.0\n"
+            )
+        };
+        let alike = format!("start_heading_deg = 0.0\n{}{}", one("a b"), one("a/b"));
+        let err = read_one(&dir, truth, &alike).unwrap_err();
+        assert!(
+            err.contains("would share the report directory \"a_b\""),
+            "{err}"
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 

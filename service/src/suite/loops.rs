@@ -20,7 +20,7 @@ pub fn run_loops(path: &Path, out: &Path) -> Result<SuiteRun<String>, SuiteError
             source: Box::new(source),
         };
         // An earlier report of a recording that fails now would read as this run's.
-        let dir = out.join(r.name.replace(' ', "_"));
+        let dir = out.join(super::file::report_dir_name(&r.name));
         if dir.exists() {
             std::fs::remove_dir_all(&dir).map_err(|e| wrap(crate::runner::io_at(&dir)(e)))?;
         }
