@@ -93,7 +93,7 @@ pub enum RunError {
         path: PathBuf,
         /// Samples read.
         samples: u64,
-        /// The first refusal, with its line.
+        /// The first refusal, with its line (`line N: why`).
         first: String,
     },
     /// The truth gives no footprint error to score (a loop-closure-only truth: the suite's

@@ -371,7 +371,12 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         return Err(RunError::NothingAccepted {
             path: opts.imu.clone(),
             samples: refused,
-            first: feed.refused.first().cloned().unwrap_or_default(),
+            // "line N: why": the error names the log once (the refusal was kept as "PATH:N: why").
+            first: feed.refused.first().map_or_else(String::new, |f| {
+                let path = format!("{}:", opts.imu.display());
+                f.strip_prefix(&path)
+                    .map_or_else(|| f.clone(), |rest| format!("line {rest}"))
+            }),
         });
     }
     if never_aligned {
