@@ -326,18 +326,24 @@ fn a_configuration_that_does_not_validate_is_named_with_its_file() {
     );
 }
 
+/// `corridor ARGS --suite SUITE --out OUT`.
+fn corridor_on(args: &[&str], suite: &Path, out: &Path) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_corridor"))
+        .args(args)
+        .arg("--suite")
+        .arg(suite)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn corridor_eval_writes_the_others_table_then_fails_naming_the_recording_once() {
     let dir = TempDir::new("suite-one-bad-cli");
     let suite = suite_with_a_bad_walk(&dir, 1);
     let out = dir.join("out");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_corridor"))
-        .args(["eval", "--ensemble", "--suite"])
-        .arg(&suite)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = corridor_on(&["eval", "--ensemble"], &suite, &out);
     let (stdout, stderr) = (
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr),
@@ -369,13 +375,7 @@ fn corridor_eval_writes_nothing_when_no_recording_runs() {
     std::fs::create_dir_all(&out).unwrap();
     for (flag, file) in [("--ensemble", "ensemble.md"), ("--loops", "results.md")] {
         std::fs::write(out.join(file), "the last good table").unwrap();
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_corridor"))
-            .args(["eval", flag, "--suite"])
-            .arg(&suite)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
+        let o = corridor_on(&["eval", flag], &suite, &out);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{flag}: {stderr}");
         assert!(
@@ -388,13 +388,7 @@ fn corridor_eval_writes_nothing_when_no_recording_runs() {
         );
     }
     std::fs::write(out.join("detection.md"), "the last good matrix").unwrap();
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_corridor"))
-        .args(["diagnose", "--suite"])
-        .arg(&suite)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = corridor_on(&["diagnose"], &suite, &out);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{stderr}");
     assert!(
