@@ -227,8 +227,22 @@ fn the_loop_the_ensemble_and_the_sweep_run_past_a_recording_that_fails() {
     let one_good = suite_with_a_bad_walk(&one_dir, 1);
     let e = run_sweep(&one_good, &sweep_file).unwrap_err().to_string();
     assert!(
-        e.contains("at least 2 normal-gait walks that run; 1 of 2 did")
+        e.starts_with(&one_good.display().to_string())
+            && e.contains("at least 2 normal-gait walks that run; 1 of 2 did")
             && e.contains("recording bad walk:"),
+        "{e}"
+    );
+    // A value the configuration refuses is said before any run, whatever the recordings do
+    // (it was found inside a recording's run, so never when they failed).
+    std::fs::write(
+        &sweep_file,
+        "[[parameter]]\nkey = \"heading.sigma_deg\"\nvalues = [3.0, -3.0]\n",
+    )
+    .unwrap();
+    let e = run_sweep(&one_good, &sweep_file).unwrap_err().to_string();
+    assert!(
+        e.starts_with(&sweep_file.display().to_string())
+            && e.contains("parameter heading.sigma_deg = -3.0"),
         "{e}"
     );
 }
@@ -249,13 +263,10 @@ fn the_detection_matrix_names_each_recording_that_fails() {
     let m = corridor_service::suite::detection_matrix(&suite, |_| {}, |_| {}).unwrap();
     assert!(m.recordings.is_empty() && m.cells.is_empty() && m.mde_scan.is_empty());
     assert_eq!(m.failed.len(), 2, "{:?}", m.failed);
+    let names: Vec<&str> = m.failed.iter().map(|f| f.recording.as_str()).collect();
+    assert_eq!(names, ["bad walk", "bad walk 2"]);
     assert!(
-        m.failed[0].contains("recording bad walk:"),
-        "{:?}",
-        m.failed
-    );
-    assert!(
-        m.failed[1].contains("recording bad walk 2:"),
+        m.failed[1].error.starts_with("recording bad walk 2:"),
         "{:?}",
         m.failed
     );
@@ -401,4 +412,19 @@ fn corridor_eval_writes_nothing_when_no_recording_runs() {
         "the last good matrix"
     );
     assert!(!out.join("detection.json").exists());
+    // No normal-gait recording at all: nothing to put in a matrix either.
+    let fast = dir.join("bad").join("fast.toml");
+    std::fs::write(
+        &fast,
+        std::fs::read_to_string(suite_of(&dir.join("bad"))).unwrap() + "gait = \"fast\"\n",
+    )
+    .unwrap();
+    let o = corridor_on(&["diagnose"], &fast, &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("no normal-gait recording"), "{stderr}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("detection.md")).unwrap(),
+        "the last good matrix"
+    );
 }

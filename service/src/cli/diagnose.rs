@@ -97,11 +97,18 @@ fn detection_matrix(suite: &std::path::Path, out: &std::path::Path) -> Result<()
             )
         },
     )?;
-    if m.recordings.is_empty() && !m.failed.is_empty() {
+    if m.recordings.is_empty() {
         // An empty matrix would replace the last good one in `out`.
+        if m.failed.is_empty() {
+            anyhow::bail!(
+                "{}: no normal-gait recording (the matrix is over those), nothing written",
+                suite.display()
+            );
+        }
+        let errors: Vec<&str> = m.failed.iter().map(|f| f.error.as_str()).collect();
         anyhow::bail!(
             "no normal-gait recording ran, nothing written: {}",
-            m.failed.join("; ")
+            errors.join("; ")
         );
     }
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
@@ -116,11 +123,13 @@ fn detection_matrix(suite: &std::path::Path, out: &std::path::Path) -> Result<()
     if m.failed.is_empty() {
         return Ok(());
     }
+    let names: Vec<&str> = m.failed.iter().map(|f| f.recording.as_str()).collect();
     anyhow::bail!(
         "{} of {} normal-gait recordings failed, named with {} error under the tables (the \
-         others' cells were written)",
+         others' cells were written): {}",
         m.failed.len(),
         m.failed.len() + m.recordings.len(),
         if m.failed.len() == 1 { "its" } else { "their" },
+        names.join("; ")
     )
 }

@@ -130,19 +130,19 @@ fn not_scored(failed: &[SuiteError], what: &str) -> String {
 /// The command's error when recordings failed: each named once (its errors are said under
 /// the tables, not a second time here).
 fn fail_if_any(failed: &[SuiteError], written: &str) -> Result<()> {
-    let mut names: Vec<&str> = Vec::new();
+    let mut recordings: Vec<&str> = Vec::new();
     for name in failed.iter().filter_map(SuiteError::recording) {
-        if !names.contains(&name) {
-            names.push(name);
+        if !recordings.contains(&name) {
+            recordings.push(name);
         }
     }
-    match names.len() {
+    match recordings.len() {
         0 => Ok(()),
         n => anyhow::bail!(
             "{n} {} failed, named with {} error under the tables ({written}): {}",
             if n == 1 { "recording" } else { "recordings" },
             if n == 1 { "its" } else { "their" },
-            names.join(", ")
+            recordings.join("; ")
         ),
     }
 }

@@ -321,9 +321,18 @@ pub struct DetectionMatrix {
     pub cells: Vec<MatrixCell>,
     /// The detectable sizes checked by injection, recording-major ([`ScanRow`]).
     pub mde_scan: Vec<ScanRow>,
-    /// The normal-gait recordings whose runs failed, each with its error: not in the matrix.
+    /// The normal-gait recordings whose runs failed: not in the matrix.
     #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub failed: Vec<String>,
+    pub failed: Vec<FailedRecording>,
+}
+
+/// A recording left out of the matrix.
+#[derive(Debug, Clone, Serialize)]
+pub struct FailedRecording {
+    /// Its name.
+    pub recording: String,
+    /// Why (`recording NAME: ...`).
+    pub error: String,
 }
 
 /// Runs the matrix over the normal-gait recordings of the suite at `path`, and on each walk the
@@ -374,7 +383,14 @@ pub fn detection_matrix(
         out.cells.extend(cells);
         out.mde_scan.extend(scan);
     }
-    out.failed = run.failed.iter().map(ToString::to_string).collect();
+    out.failed = run
+        .failed
+        .iter()
+        .map(|e| FailedRecording {
+            recording: e.recording().unwrap_or_default().to_owned(),
+            error: e.to_string(),
+        })
+        .collect();
     Ok(out)
 }
 

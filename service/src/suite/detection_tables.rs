@@ -131,9 +131,10 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
     md.push_str(&super::mde_scan::scan_markdown(&m.mde_scan));
     md.push_str("\nAbbreviations: sf gyro_scale_factor, mis axis_misalignment, drift bias_drift, off heading_offset, time timing, gs g_sensitivity, tilt mounting_tilt, clip gyro_clipping, unexp unexplained, stride stride_length (its own line: the cell shows it when named there, else the heading effect named first).\n");
     if !m.failed.is_empty() {
+        let errors: Vec<&str> = m.failed.iter().map(|f| f.error.as_str()).collect();
         md.push_str(&format!(
             "\nNot in the matrix (its run failed): {}.\n",
-            m.failed.join("; ")
+            errors.join("; ")
         ));
     }
     md

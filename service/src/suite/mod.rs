@@ -48,8 +48,8 @@ mod sweep;
 mod tables;
 
 pub use detection::{
-    CaseInjection, DetectionMatrix, MatrixCase, MatrixCell, StrideFigure, detection_matrix,
-    diagnosis_model, matrix_cases,
+    CaseInjection, DetectionMatrix, FailedRecording, MatrixCase, MatrixCell, StrideFigure,
+    detection_matrix, diagnosis_model, matrix_cases,
 };
 pub use detection_tables::{matrix_markdown, prediction_markdown};
 pub use ensemble::{

@@ -130,6 +130,23 @@ pub fn run_sweep(
             )));
         }
     }
+    // Every value checked once, before any run, on the first configuration that reads (a value
+    // the configuration refuses was found only inside a recording's run, after the recordings
+    // before it, and not at all when they failed: a review).
+    if let Some((r, file)) = recs.iter().find_map(|r| {
+        ConfigFile::read(&base.join(&r.config))
+            .ok()
+            .map(|f| (*r, f))
+    }) {
+        for p in &sweep.parameters {
+            configured(&file, &p.key).map_err(&file_err)?;
+            for value in &p.values {
+                let with = with_value(&file, &p.key, value).map_err(&file_err)?;
+                config_for(&with, &base.join(&r.config), r, best, BiasPrior::RestMean)
+                    .map_err(|e| file_err(format!("parameter {} = {value}: {e}", p.key)))?;
+            }
+        }
+    }
     // Per recording, its footprint RMS at every value of every parameter (`[parameter][value]`),
     // or its failure: a recording that fails is left out of every fold and named.
     let run = SuiteRun::each(&recs, |r| {
@@ -160,16 +177,20 @@ pub fn run_sweep(
     if run.rows.len() < 2 {
         // Fewer than two walks scored: no fold to hold one out of, and no table.
         let failed: Vec<String> = run.failed.iter().map(ToString::to_string).collect();
-        return Err(file_err(format!(
-            "a leave-one-walk-out check needs at least 2 normal-gait walks that run; {} of {} did{}",
-            run.rows.len(),
-            recs.len(),
-            if failed.is_empty() {
-                String::new()
-            } else {
-                format!(", and these failed: {}", failed.join("; "))
-            }
-        )));
+        // The suite's walks, not the sweep file, are what is missing.
+        return Err(SuiteError::File {
+            path: suite_path.to_owned(),
+            message: format!(
+                "a leave-one-walk-out check needs at least 2 normal-gait walks that run; {} of {} did{}",
+                run.rows.len(),
+                recs.len(),
+                if failed.is_empty() {
+                    String::new()
+                } else {
+                    format!(", and these failed: {}", failed.join("; "))
+                }
+            ),
+        });
     }
     let out = sweep
         .parameters
