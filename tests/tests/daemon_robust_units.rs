@@ -55,7 +55,7 @@ fn a_stream_in_g_is_never_aligned_on_and_the_report_says_so() {
         "the stream in m/s² after it did not align"
     );
     // Every stance of the walk was a candidate first stance and was refused (exp36: 58).
-    assert!(report.rests_not_gravity > 20, "{report:?}");
+    assert!(report.alignment_not_gravity > 20, "{report:?}");
     let said: Vec<&String> = report
         .warnings
         .iter()

@@ -90,7 +90,7 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
     }
     if s.alignment_not_gravity > 0 {
         notes.push(format!(
-            "{} {} not aligned on: {} specific force was no gravity (a broken accelerometer, a wrong scale?); the log's warnings give the first",
+            "{} {} not aligned on: {} specific force was no gravity (accelerations in g, a wrong scale or a broken accelerometer?); the log's warnings give the first",
             s.alignment_not_gravity,
             if s.alignment_not_gravity == 1 { "rest or stance was" } else { "rests or stances were" },
             if s.alignment_not_gravity == 1 { "its" } else { "their" }

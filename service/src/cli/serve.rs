@@ -99,7 +99,7 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
             "checkpoints_saved": report.checkpoints_saved,
             "warm_started": report.warm_started_from.is_some(),
             "streams_warm_started": report.streams_warm_started,
-            "rests_not_gravity": report.rests_not_gravity,
+            "alignment_not_gravity": report.alignment_not_gravity,
             "warnings": report.warnings,
         }))?
     );

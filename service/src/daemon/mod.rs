@@ -258,7 +258,7 @@ pub struct DaemonReport {
     /// Rests or first stances not aligned on because their specific force was no gravity (a
     /// producer's stream in g), over every stream of this life; the first of each stream is in
     /// `warnings`.
-    pub rests_not_gravity: u64,
+    pub alignment_not_gravity: u64,
 }
 
 /// A daemon failure.

@@ -155,17 +155,16 @@ impl Pipeline {
             rest.clear();
             return None;
         }
-        // A "rest" whose specific force is no gravity (a stream in g) aligns nothing: the
-        // force tested is the one the alignment takes (a rest's gravity and tilt leave out the
-        // blocks in which the foot moved; a walking stance's tilt does not).
-        let g_expected = a.gravity_m_s2.map_or(STANDARD_GRAVITY_M_S2, |g| g.get());
-        let f_norm = if short_start {
+        // A rest's blocks in which the foot moved are left out; a walking stance's (no rest)
+        // are not: it begins with its landing, which the motion test would take as reference.
+        let (mean_f, mean_w) = if short_start {
             rest.means_all()
         } else {
             rest.means()
-        }
-        .0
-        .norm();
+        };
+        // A "rest" whose specific force is no gravity (a stream in g) aligns nothing.
+        let g_expected = a.gravity_m_s2.map_or(STANDARD_GRAVITY_M_S2, |g| g.get());
+        let f_norm = mean_f.norm();
         if (f_norm - g_expected).abs() > GRAVITY_TOLERANCE * g_expected || !f_norm.is_finite() {
             self.counters.alignment_not_gravity += 1;
             self.out.not_gravity_m_s2 = Some((f_norm, g_expected));
@@ -173,14 +172,9 @@ impl Pipeline {
             return None;
         }
         self.counters.started_without_rest = short_start;
-        // A rest's blocks in which the foot moved are left out; a walking stance's (no rest)
-        // are not: it begins with its landing, which the motion test would take as reference.
-        let (mean_f, mean_w) = if short_start {
-            rest.means_all()
-        } else {
+        if !short_start {
             self.counters.initial_rest_moving_blocks = rest.moving_blocks();
-            rest.means()
-        };
+        }
         // The prior's σ: √(floor² + spread²), the bias instability floor and the rest's rate
         // spread over √(number of 50 ms blocks) (a rest during which the foot still sways).
         let rest_sd = rest

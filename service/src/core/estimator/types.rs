@@ -597,8 +597,8 @@ impl std::fmt::Display for Notice {
             Notice::NotGravity(f_m_s2, g_m_s2) => write!(
                 f,
                 "the rest or stance before this sample measured a mean specific force of \
-                 {f_m_s2:.3} m/s², not gravity ({g_m_s2:.3} m/s² ± {:.0} %): accelerations in g \
-                 (a producer's stream), or an accelerometer that does not work? Not aligned on it",
+                 {f_m_s2:.3} m/s², not gravity ({g_m_s2:.3} m/s² ± {:.0} %): accelerations in g, \
+                 a wrong scale or a broken accelerometer? Not aligned on it",
                 GRAVITY_TOLERANCE * 100.0
             ),
         }

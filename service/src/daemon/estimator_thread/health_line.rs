@@ -116,9 +116,11 @@ impl EstState<'_> {
             },
             match (c.alignment_not_gravity, self.est.phase()) {
                 (0, _) | (_, Phase::Calibrating | Phase::Tracking) => String::new(),
-                (1, Phase::Aligning) => " (1 rest refused: no gravity, accelerations in g?)".into(),
+                (1, Phase::Aligning) => {
+                    " (1 rest or stance refused: its specific force is no gravity)".into()
+                }
                 (n, Phase::Aligning) => {
-                    format!(" ({n} rests refused: no gravity, accelerations in g?)")
+                    format!(" ({n} rests or stances refused: their specific force is no gravity)")
                 }
             },
             self.previous.stances + c.stances,

@@ -30,7 +30,8 @@ const CLOCK_RESTART_S: f64 = 1.0;
 const MAX_REPORTED_WARNINGS: usize = 64;
 use std::time::Instant;
 
-/// Refused samples per stream that are logged as warnings (the rest at debug level; all counted).
+/// Refused samples per stream that are logged as warnings, and rests or stances refused as no
+/// gravity (the rest at debug level; all counted).
 const REFUSED_WARNINGS_PER_STREAM: u64 = 10;
 
 /// State of the estimator thread.
@@ -68,6 +69,8 @@ struct EstState<'a> {
     latency_health: LatencyHistogram,
     health: HealthMark,
     warnings: Vec<String>,
+    /// This stream's first rest refused as no gravity went into `warnings`.
+    not_gravity_reported: bool,
     /// The last checkpoint save's error, while saves keep failing with it.
     last_save_error: Option<String>,
 }
@@ -96,6 +99,7 @@ impl<'a> EstState<'a> {
             latency_health: LatencyHistogram::new(),
             health: HealthMark::now(rec),
             warnings: Vec::new(),
+            not_gravity_reported: false,
             last_save_error: None,
         }
     }
@@ -271,7 +275,15 @@ impl<'a> EstState<'a> {
             // A stream in g refuses every stance as a rest: the first few are named, and the
             // first of each stream goes into the report's warnings.
             match (n, self.est.counters().alignment_not_gravity) {
-                (Notice::NotGravity(..), 1) => self.warn(format!("IMU seq {}: {n}", s.seq)),
+                (Notice::NotGravity(..), _) if !self.not_gravity_reported => {
+                    // (A flag, not the count: a copy restored after a glitch takes it back.)
+                    self.not_gravity_reported = true;
+                    self.warn(format!(
+                        "stream {} (IMU seq {}): {n}",
+                        self.streams_finished + 1,
+                        s.seq
+                    ));
+                }
                 (Notice::NotGravity(..), k) if k > REFUSED_WARNINGS_PER_STREAM => {
                     tracing::debug!(seq = s.seq, "{n}")
                 }
@@ -391,6 +403,7 @@ impl<'a> EstState<'a> {
         p.headings_expired += c.headings_expired;
         p.headings_undone += c.headings_undone;
         p.alignment_not_gravity += c.alignment_not_gravity;
+        self.not_gravity_reported = false;
         self.est = self.new_estimator(cfg);
         self.last = Estimate::default();
         self.last_bias_t_s = f64::NEG_INFINITY;
@@ -571,7 +584,7 @@ pub(super) fn estimator_thread(
             out.diagnostics.seq,
         ],
         lives: counters.lives.load(Ordering::Relaxed),
-        rests_not_gravity: st.previous.alignment_not_gravity
+        alignment_not_gravity: st.previous.alignment_not_gravity
             + st.est.counters().alignment_not_gravity,
     })
 }
