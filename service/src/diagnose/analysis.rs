@@ -537,7 +537,7 @@ fn model_keys(file: &ConfigFile) -> Vec<String> {
         v.push(format!("zupt_rolling_height = {h} m"));
     }
     if let Some(rw) = file.eskf.gyro_bias_rw_rad_s_sqrt_s {
-        v.push(format!("gyro_bias_rw_rad_s_sqrt_s = {rw:e}"));
+        v.push(format!("gyro_bias_rw = {rw:e}"));
     }
     v.push(format!(
         "mode = {}",
