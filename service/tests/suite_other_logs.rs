@@ -245,6 +245,32 @@ fn the_loop_the_ensemble_and_the_sweep_run_past_a_recording_that_fails() {
             && e.contains("parameter heading.sigma_deg = -3.0"),
         "{e}"
     );
+    // A recording whose configuration is invalid as it stands fails its own run and is named;
+    // the values are not checked against it (they were, first in the file, and the whole sweep
+    // stopped on it as the sweep file's error).
+    std::fs::write(
+        &sweep_file,
+        "[[parameter]]\nkey = \"heading.sigma_deg\"\nvalues = [3.0, 4.0]\n",
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(root().join("configs/gdins.toml")).unwrap();
+    std::fs::write(
+        dir.join("bad_config.toml"),
+        text.replace("\nthreshold = 1e5\n", "\nthreshold = -1.0\n"),
+    )
+    .unwrap();
+    let gdins = format!("{:?}", root().join("configs").join("gdins.toml"));
+    let good = std::fs::read_to_string(&suite).unwrap();
+    let bad_config = good[..good.find("\n\n").unwrap() + 2]
+        .replace("\"bad walk\"", "\"bad config\"")
+        .replace("\"bad/", "\"good/")
+        .replace(&format!("config = {gdins}"), "config = \"bad_config.toml\"");
+    let first_bad = dir.join("first_bad_config.toml");
+    std::fs::write(&first_bad, bad_config + &good).unwrap();
+    let sweep = run_sweep(&first_bad, &sweep_file).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(sweep.rows[0].walks, goods);
+    let failed: Vec<_> = sweep.failed.iter().filter_map(|e| e.recording()).collect();
+    assert_eq!(failed, ["bad config", "bad walk"]);
 }
 
 #[test]

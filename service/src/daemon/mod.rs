@@ -257,7 +257,7 @@ pub struct DaemonReport {
     pub lives: u64,
     /// Rests or first stances not aligned on because their specific force was no gravity (a
     /// producer's stream in g), over every stream of this life; the first of each stream is in
-    /// `warnings`.
+    /// `warnings` (while they are below their cap).
     pub alignment_not_gravity: u64,
 }
 

@@ -184,8 +184,8 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
             )
         } else {
             format!(
-                "recordings {:?} and {:?} would share the report directory {:?}: names must \
-                 differ in more than spaces and punctuation",
+                "recordings {:?} and {:?} would share the report directory {:?} (letters, \
+                 digits, '-', '_' and '.' kept, anything else '_'): names must differ there",
                 w[0].1, w[1].1, w[0].0
             )
         }));

@@ -113,10 +113,14 @@ pub fn run_sweep(
         .filter(|r| r.gait == Gait::Normal)
         .collect();
     if recs.len() < 2 {
-        return Err(file_err(format!(
-            "a leave-one-walk-out check needs at least 2 normal-gait recordings, the suite has {}",
-            recs.len()
-        )));
+        return Err(SuiteError::File {
+            path: suite_path.to_owned(),
+            message: format!(
+                "a leave-one-walk-out check needs at least 2 normal-gait recordings, the suite \
+                 has {}",
+                recs.len()
+            ),
+        });
     }
     for p in &sweep.parameters {
         if p.values.is_empty() {
@@ -130,19 +134,28 @@ pub fn run_sweep(
             )));
         }
     }
-    // Every value checked once, before any run, on the first configuration that reads (a value
-    // the configuration refuses was found only inside a recording's run, after the recordings
-    // before it, and not at all when they failed: a review).
-    if let Some((r, file)) = recs.iter().find_map(|r| {
-        ConfigFile::read(&base.join(&r.config))
-            .ok()
-            .map(|f| (*r, f))
-    }) {
+    // Every value checked before any run, on every configuration of the suite that is valid
+    // as it stands (a value one refuses was found only inside a recording's run, after the
+    // recordings before it, and not at all when they failed; one that is invalid without the
+    // sweep fails its recordings' runs, which name it: reviews).
+    let mut checked: Vec<&Path> = Vec::new();
+    for r in &recs {
+        if checked.contains(&r.config.as_path()) {
+            continue;
+        }
+        checked.push(&r.config);
+        let path = base.join(&r.config);
+        let Ok(file) = ConfigFile::read(&path) else {
+            continue;
+        };
+        if config_for(&file, &path, r, best, BiasPrior::RestMean).is_err() {
+            continue;
+        }
         for p in &sweep.parameters {
             configured(&file, &p.key).map_err(&file_err)?;
             for value in &p.values {
                 let with = with_value(&file, &p.key, value).map_err(&file_err)?;
-                config_for(&with, &base.join(&r.config), r, best, BiasPrior::RestMean)
+                config_for(&with, &path, r, best, BiasPrior::RestMean)
                     .map_err(|e| file_err(format!("parameter {} = {value}: {e}", p.key)))?;
             }
         }

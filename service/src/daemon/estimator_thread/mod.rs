@@ -69,7 +69,7 @@ struct EstState<'a> {
     latency_health: LatencyHistogram,
     health: HealthMark,
     warnings: Vec<String>,
-    /// This stream's first rest refused as no gravity went into `warnings`.
+    /// This stream's first rest or stance refused as no gravity went into `warnings`.
     not_gravity_reported: bool,
     /// The last checkpoint save's error, while saves keep failing with it.
     last_save_error: Option<String>,
