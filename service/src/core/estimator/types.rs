@@ -238,9 +238,9 @@ pub struct Counters {
     /// Times the initial rest was too short and alignment started over.
     pub alignment_restarts: u64,
     /// Rests (or first stances) not aligned on because their mean specific force was no
-    /// gravity: beyond [`GRAVITY_TOLERANCE`] of it (accelerations in g, a wrong scale or a broken
-    /// accelerometer;
-    /// the CSV reader refuses such a log, a producer's stream reaches the daemon as it is).
+    /// gravity: beyond [`GRAVITY_TOLERANCE`] of it (accelerations in g, a wrong scale or a
+    /// broken accelerometer; the CSV reader refuses a log in g, a producer's stream reaches the
+    /// daemon as it is).
     pub alignment_not_gravity: u64,
     /// 50 ms blocks of the initial rest left out of its means (bias prior, tilt) because the
     /// foot moved in them (`alignment.rest_max_rate_change_rad_s`).
