@@ -271,6 +271,26 @@ fn the_loop_the_ensemble_and_the_sweep_run_past_a_recording_that_fails() {
     assert_eq!(sweep.rows[0].walks, goods);
     let failed: Vec<_> = sweep.failed.iter().filter_map(|e| e.recording()).collect();
     assert_eq!(failed, ["bad config", "bad walk"]);
+    // Invalid as the runs judge it (the file as it is), though valid with the suite's
+    // overrides (its grid): it refused the swept value and stopped the sweep (a review).
+    std::fs::write(
+        &sweep_file,
+        "[[parameter]]\nkey = \"alignment.typical_gyro_bias_sd_rad_s\"\nvalues = [0.002, 0.004]\n",
+    )
+    .unwrap();
+    let no_typical: String = text
+        .lines()
+        .filter(|l| !l.starts_with("typical_gyro_bias"))
+        .map(|l| match l {
+            "grid_deg = 0.0" => "grid_deg = 999.0\n".to_owned(),
+            l => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::write(dir.join("bad_config.toml"), no_typical).unwrap();
+    let sweep = run_sweep(&first_bad, &sweep_file).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(sweep.rows[0].walks, goods);
+    let failed: Vec<_> = sweep.failed.iter().filter_map(|e| e.recording()).collect();
+    assert_eq!(failed, ["bad config", "bad walk"]);
 }
 
 #[test]

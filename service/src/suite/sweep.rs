@@ -49,8 +49,11 @@ pub struct SweepParameter {
 pub struct SweepResult {
     /// `section.key`.
     pub key: String,
-    /// The configured value (`default` when the file leaves it to the built-in default).
+    /// The configured value (`default` when the file leaves it to the built-in default), or
+    /// `mixed (…)` when the walks' configurations differ.
     pub configured: String,
+    /// Each walk's configured value, as `configured`.
+    pub configured_per_walk: Vec<String>,
     /// The values, as written.
     pub values: Vec<String>,
     /// Walk names.
@@ -145,10 +148,14 @@ pub fn run_sweep(
         }
         checked.push(&r.config);
         let path = base.join(&r.config);
+        // Valid as the runs judge it: the file as it is (`read_recording`), then with the
+        // suite's overrides.
         let Ok(file) = ConfigFile::read(&path) else {
             continue;
         };
-        if config_for(&file, &path, r, best, BiasPrior::RestMean).is_err() {
+        if file.validate().is_err()
+            || config_for(&file, &path, r, best, BiasPrior::RestMean).is_err()
+        {
             continue;
         }
         for p in &sweep.parameters {
@@ -211,7 +218,16 @@ pub fn run_sweep(
         .enumerate()
         .map(|(k, p)| SweepResult {
             key: p.key.clone(),
-            configured: run.rows[0].1[k].0.clone(),
+            configured: {
+                let mut each: Vec<&str> = run.rows.iter().map(|(_, w)| w[k].0.as_str()).collect();
+                each.sort_unstable();
+                each.dedup();
+                match each.as_slice() {
+                    [one] => (*one).to_owned(),
+                    many => format!("mixed ({})", many.join(", ")),
+                }
+            },
+            configured_per_walk: run.rows.iter().map(|(_, w)| w[k].0.clone()).collect(),
             values: p.values.iter().map(|v| v.to_string()).collect(),
             walks: run.rows.iter().map(|(name, _)| name.clone()).collect(),
             rms_pct: (0..p.values.len())
@@ -292,11 +308,17 @@ pub fn sweep_markdown(results: &[SweepResult]) -> String {
                 format!("{} ({n})", r.values[v])
             })
             .collect();
+        // Each walk at its own configuration's value (the walks' configurations may differ).
         let configured = r
-            .values
+            .configured_per_walk
             .iter()
-            .position(|v| *v == r.configured)
-            .map_or_else(|| "not swept".to_owned(), |v| stats(&r.rms_pct[v]));
+            .enumerate()
+            .map(|(w, c)| {
+                let v = r.values.iter().position(|v| v == c)?;
+                Some(r.rms_pct[v][w])
+            })
+            .collect::<Option<Vec<f64>>>()
+            .map_or_else(|| "not swept".to_owned(), |x| stats(&x));
         let _ = writeln!(
             md,
             "| `{}` | {} | {} | {} | {} | {} |",
@@ -319,6 +341,7 @@ mod tests {
         SweepResult {
             key: "heading.sigma_deg".into(),
             configured: "3.0".into(),
+            configured_per_walk: vec!["3.0".into(); rms[0].len()],
             values: vec!["2.0".into(), "3.0".into()],
             walks: (0..rms[0].len()).map(|k| format!("w{k}")).collect(),
             rms_pct: rms,
@@ -335,6 +358,20 @@ mod tests {
         assert_eq!(h.rms_pct, [0.3, 0.3, 0.3, 3.0]);
         let md = sweep_markdown(&[r]);
         assert!(md.contains("2.0 (1), 3.0 (3)"), "{md}");
+    }
+
+    #[test]
+    fn walks_configured_differently_are_each_scored_at_their_own_value() {
+        // The configured column took the first walk's value for every walk (a review).
+        let mut r = result(vec![vec![0.2, 0.4], vec![0.3, 0.5]]);
+        r.configured = "mixed (2.0, 3.0)".into();
+        r.configured_per_walk = vec!["2.0".into(), "3.0".into()];
+        let md = sweep_markdown(&[r.clone()]);
+        // Walk 0 at 2.0 (0.2), walk 1 at 3.0 (0.5): mean 0.35, median 0.35, worst 0.50.
+        assert!(md.contains("| mixed (2.0, 3.0) |"), "{md}");
+        assert!(md.trim_end().ends_with("| 0.35 / 0.35 / 0.50 |"), "{md}");
+        r.configured_per_walk[1] = "default".into();
+        assert!(sweep_markdown(&[r]).trim_end().ends_with("| not swept |"));
     }
 
     #[test]
