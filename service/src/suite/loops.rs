@@ -7,9 +7,9 @@ use std::path::Path;
 
 /// The residual-diagnosis loop on every recording of a suite, starting from the paper's model
 /// (the sensor configuration without its `[model]` extensions, `mode = paper`). Writes each
-/// report under `out/<report_dir_name(recording)>/` and returns each recording's row of the summary table
-/// ([`loops_markdown`]), or its failure (and no report: an earlier one of that recording is
-/// removed). Runs after the suite's table ([`super::run_suite_each`]), which said what each
+/// report under `out/<report_dir_name(recording)>/` and returns each recording's row of the
+/// summary table ([`loops_markdown`]), or its failure (and no report: an earlier one of that
+/// recording is removed). Runs after the suite's table ([`super::run_suite_each`]), which said what each
 /// log's input cost (`eval --loops`, the demo).
 pub fn run_loops(path: &Path, out: &Path) -> Result<SuiteRun<String>, SuiteError> {
     let suite = read_suite(path)?;

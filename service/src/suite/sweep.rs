@@ -49,10 +49,8 @@ pub struct SweepParameter {
 pub struct SweepResult {
     /// `section.key`.
     pub key: String,
-    /// The configured value (`default` when the file leaves it to the built-in default), or
-    /// `mixed (…)` when the walks' configurations differ.
-    pub configured: String,
-    /// Each walk's configured value, as `configured`.
+    /// Each walk's configured value, as written (`default` when its file leaves it to the
+    /// built-in default).
     pub configured_per_walk: Vec<String>,
     /// The values, as written.
     pub values: Vec<String>,
@@ -60,6 +58,23 @@ pub struct SweepResult {
     pub walks: Vec<String>,
     /// Footprint RMS, % of path, `[value][walk]`.
     pub rms_pct: Vec<Vec<f64>>,
+}
+
+impl SweepResult {
+    /// The configured value, or `mixed (…)` when the walks' configurations differ.
+    pub fn configured(&self) -> String {
+        let mut each: Vec<&str> = self
+            .configured_per_walk
+            .iter()
+            .map(String::as_str)
+            .collect();
+        each.sort_unstable();
+        each.dedup();
+        match each.as_slice() {
+            [one] => (*one).to_owned(),
+            many => format!("mixed ({})", many.join(", ")),
+        }
+    }
 }
 
 /// What the leave-one-walk-out check finds for one parameter.
@@ -161,9 +176,7 @@ pub fn run_sweep(
         for p in &sweep.parameters {
             configured(&file, &p.key).map_err(&file_err)?;
             for value in &p.values {
-                let with = with_value(&file, &p.key, value).map_err(&file_err)?;
-                config_for(&with, &path, r, best, BiasPrior::RestMean)
-                    .map_err(|e| file_err(format!("parameter {} = {value}: {e}", p.key)))?;
+                swept_config((&file, &path), r, best, (p, value), sweep_path)?;
             }
         }
     }
@@ -181,13 +194,9 @@ pub fn run_sweep(
         for p in &sweep.parameters {
             let configured = configured(&ctx.config, &p.key).map_err(&file_err)?;
             let mut at = Vec::with_capacity(p.values.len());
+            let path = base.join(&r.config);
             for value in &p.values {
-                let file = with_value(&ctx.config, &p.key, value).map_err(&file_err)?;
-                let path = base.join(&r.config);
-                // A value the configuration refuses is the sweep file's, not the sensor
-                // configuration's (the error named the latter, a review).
-                let cfg = config_for(&file, &path, r, best, BiasPrior::RestMean)
-                    .map_err(|e| file_err(format!("parameter {} = {value}: {e}", p.key)))?;
+                let cfg = swept_config((&ctx.config, &path), r, best, (p, value), sweep_path)?;
                 at.push(ctx.footprint_at(&cfg, say.take()).map_err(wrap)?.rms_pct);
             }
             walk.push((configured, at));
@@ -218,15 +227,6 @@ pub fn run_sweep(
         .enumerate()
         .map(|(k, p)| SweepResult {
             key: p.key.clone(),
-            configured: {
-                let mut each: Vec<&str> = run.rows.iter().map(|(_, w)| w[k].0.as_str()).collect();
-                each.sort_unstable();
-                each.dedup();
-                match each.as_slice() {
-                    [one] => (*one).to_owned(),
-                    many => format!("mixed ({})", many.join(", ")),
-                }
-            },
             configured_per_walk: run.rows.iter().map(|(_, w)| w[k].0.clone()).collect(),
             values: p.values.iter().map(|v| v.to_string()).collect(),
             walks: run.rows.iter().map(|(name, _)| name.clone()).collect(),
@@ -239,6 +239,25 @@ pub fn run_sweep(
         rows: out,
         failed: run.failed,
     })
+}
+
+/// The run configuration of recording `r` with the sweep's `value` of parameter `p` in its
+/// configuration `file` (at `path`); a value refused is the sweep file's error (it named the
+/// sensor configuration, a review), and the pre-run check and the runs say it alike.
+fn swept_config(
+    (file, path): (&ConfigFile, &Path),
+    r: &SuiteRecording,
+    best: Mode,
+    (p, value): (&SweepParameter, &toml::Value),
+    sweep_path: &Path,
+) -> Result<corridor_shared::config::Config, SuiteError> {
+    let file_err = |message: String| SuiteError::File {
+        path: sweep_path.to_owned(),
+        message,
+    };
+    let with = with_value(file, &p.key, value).map_err(file_err)?;
+    config_for(&with, path, r, best, BiasPrior::RestMean)
+        .map_err(|e| file_err(format!("parameter {} = {value}: {e}", p.key)))
 }
 
 /// `file` with `section.key` set to `value`; an unknown key or a value of the wrong type is an
@@ -323,7 +342,7 @@ pub fn sweep_markdown(results: &[SweepResult]) -> String {
             md,
             "| `{}` | {} | {} | {} | {} | {} |",
             r.key,
-            r.configured,
+            r.configured(),
             per_value.join("; "),
             chosen.join(", "),
             stats(&h.rms_pct),
@@ -340,7 +359,6 @@ mod tests {
     fn result(rms: Vec<Vec<f64>>) -> SweepResult {
         SweepResult {
             key: "heading.sigma_deg".into(),
-            configured: "3.0".into(),
             configured_per_walk: vec!["3.0".into(); rms[0].len()],
             values: vec!["2.0".into(), "3.0".into()],
             walks: (0..rms[0].len()).map(|k| format!("w{k}")).collect(),
@@ -364,7 +382,6 @@ mod tests {
     fn walks_configured_differently_are_each_scored_at_their_own_value() {
         // The configured column took the first walk's value for every walk (a review).
         let mut r = result(vec![vec![0.2, 0.4], vec![0.3, 0.5]]);
-        r.configured = "mixed (2.0, 3.0)".into();
         r.configured_per_walk = vec!["2.0".into(), "3.0".into()];
         let md = sweep_markdown(&[r.clone()]);
         // Walk 0 at 2.0 (0.2), walk 1 at 3.0 (0.5): mean 0.35, median 0.35, worst 0.50.
