@@ -266,6 +266,10 @@ pub(crate) fn count(n: u64, what: &str) -> String {
 /// health faults the log prints one by one (the rest are counted in `summary.json`).
 pub const MAX_REFUSED_EXAMPLES: usize = 10;
 
+/// What [`Feed::step`] gives for a row the estimator took: the input as fed (the injection
+/// applied), its estimate, and the first convergence time so far.
+type Stepped<'e> = (ImuInput, &'e Estimate, Option<f64>);
+
 /// One estimator fed row by row: the injection, the warnings naming file and line, the first
 /// refused samples.
 struct Feed<'a> {
@@ -305,7 +309,22 @@ impl<'a> Feed<'a> {
 
     /// The estimate of one row and the first convergence time after it, or `None` when the
     /// estimator refused the row.
-    fn step(&mut self, row: &ImuRow) -> Option<(ImuInput, &Estimate, Option<f64>)> {
+    fn step(&mut self, row: &ImuRow) -> Option<Stepped<'_>> {
+        match self.step_checked(row, || Ok::<(), std::convert::Infallible>(())) {
+            Ok(stepped) => stepped,
+            Err(never) => match never {},
+        }
+    }
+
+    /// [`Feed::step`], calling `before_not_gravity` before a warning that a rest or stance was
+    /// not gravity is logged: the streamed run checks the units of the rows read so far there,
+    /// so that a log in g fails with the units error alone instead of after a warning per
+    /// stance. Its error is returned, the warning not logged.
+    fn step_checked<E>(
+        &mut self,
+        row: &ImuRow,
+        before_not_gravity: impl FnOnce() -> Result<(), E>,
+    ) -> Result<Option<Stepped<'_>>, E> {
         let mut gyro = row.gyro_rad_s;
         let first_t_s = *self.first_t_s.get_or_insert(row.t_s);
         self.injection.apply(row.t_s - first_t_s, &mut gyro);
@@ -320,6 +339,9 @@ impl<'a> Feed<'a> {
                 if notices.peek().is_some() {
                     self.warned += 1;
                     if self.warned <= MAX_REFUSED_EXAMPLES && !self.quiet {
+                        if e.not_gravity_m_s2.is_some() {
+                            before_not_gravity()?;
+                        }
                         for n in notices {
                             tracing::warn!("{}:{}: {n}", self.path.display(), row.line);
                         }
@@ -334,10 +356,14 @@ impl<'a> Feed<'a> {
                     }
                     self.refused.push(at);
                 }
-                return None;
+                return Ok(None);
             }
         }
-        Some((input, self.est.last_estimate(), self.est.converged_at_s()))
+        Ok(Some((
+            input,
+            self.est.last_estimate(),
+            self.est.converged_at_s(),
+        )))
     }
 
     /// The outcome, with the trace kept by the caller.

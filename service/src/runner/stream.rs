@@ -322,7 +322,9 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         let Some(row) = item else { break };
         let row = row?;
         progress.show(reader.progress_bytes().0);
-        if let Some((input, e, converged_at_s)) = feed.step(&row) {
+        if let Some((input, e, converged_at_s)) =
+            feed.step_checked(&row, || reader.check_units_so_far())?
+        {
             write_estimate_row(&mut est_w, e).map_err(io_at(&est_path))?;
             write_innovation_rows(&mut inn_w, &input, e).map_err(io_at(&inn_path))?;
             kept.push(e, converged_at_s);

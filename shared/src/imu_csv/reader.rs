@@ -173,6 +173,33 @@ impl<R: BufRead> ImuCsvReader<R> {
             .collect()
     }
 
+    /// The units check (the one the end of the log makes, [`ImuCsvError::Units`]) over the
+    /// rows accepted so far, for a caller with a reason to doubt the units before the end: the
+    /// estimator refused a rest as not gravity, and a log in g should say so once, not after a
+    /// warning per stance. The statistic names the rows it covers. `Ok` when the units are not
+    /// checked or no row was accepted yet; the end of the log checks every row again.
+    pub fn check_units_so_far(&mut self) -> Result<(), ImuCsvError> {
+        if !self.check_units || self.accepted == 0 {
+            return Ok(());
+        }
+        self.units.check(&self.path).map_err(|e| match e {
+            ImuCsvError::Units {
+                path,
+                column,
+                statistic,
+                value,
+                hint,
+            } => ImuCsvError::Units {
+                path,
+                column,
+                statistic: format!("{statistic} over the first {} rows", self.accepted),
+                value,
+                hint,
+            },
+            other => other,
+        })
+    }
+
     /// Bytes read so far and the source's length when known (progress).
     pub fn progress_bytes(&self) -> (u64, Option<u64>) {
         (self.bytes_read, self.len_bytes)

@@ -182,3 +182,42 @@ fn the_units_decision_is_the_whole_logs_beyond_the_exact_median_rows() {
     let text = units_file(n, n / 2 + 1);
     assert!(stream(&text).all(|r| r.is_ok()));
 }
+
+#[test]
+fn the_units_are_checked_over_the_rows_read_so_far_on_request() {
+    // Rows in g first, then rows in m/s²: over the first 30 rows the log looks like g, and the
+    // error names the rows it covers; over all of them the units are m/s².
+    let text = units_file(100, 0)
+        .lines()
+        .enumerate()
+        .map(|(i, l)| match i {
+            0..=30 => l.to_string(),
+            _ => l.replace(",0,0,1.00", ",0,0,9.80"),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &lenient()).unwrap();
+    assert!(reader.check_units_so_far().is_ok(), "no row read yet");
+    for _ in 0..30 {
+        reader.next().unwrap().unwrap();
+    }
+    match reader.check_units_so_far().unwrap_err() {
+        ImuCsvError::Units {
+            statistic, value, ..
+        } => {
+            assert_eq!(statistic, "median |a| (m/s²) over the first 30 rows");
+            assert!((1.0..1.01).contains(&value), "{value}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // The request changes nothing of the end's check over every row: m/s².
+    assert!(reader.all(|r| r.is_ok()));
+    // Not checked at all when the check is off.
+    let off = ImuCsvOptions {
+        check_units: false,
+        ..lenient()
+    };
+    let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &off).unwrap();
+    reader.next().unwrap().unwrap();
+    assert!(reader.check_units_so_far().is_ok());
+}
