@@ -1,5 +1,6 @@
 //! A producer's stream in g instead of m/s² (no CSV reader and its units check in front of the
-//! daemon): never aligned on, said, and counted in the report; the next stream in m/s² aligns.
+//! daemon): never aligned on, said, and counted in the report; the next stream, in m/s² but with
+//! its accelerometer's scale 20 % low, aligns, and the scale is said once and counted.
 //!
 //! One daemon test per binary (see `daemon_robust_garbage.rs`).
 
@@ -30,13 +31,16 @@ fn a_stream_in_g_is_never_aligned_on_and_the_report_says_so() {
     let first = produce(&domain, "test-in-g", Delivery::Lossless, in_g, true);
     reader.wait_for_ends(1);
     first.join();
-    let second = produce(
-        &domain,
-        "test-in-m-s2",
-        Delivery::Lossless,
-        exp36_rows(),
-        true,
-    );
+    // A scale error aligns (it reads gravity within the alignment's ±50 %), and is said once
+    // the quiet stances' median is known (`core/estimator/stance_force.rs`).
+    let scaled: Vec<_> = exp36_rows()
+        .into_iter()
+        .map(|mut r| {
+            r.accel_m_s2 = r.accel_m_s2.map(|a| a * 0.8);
+            r
+        })
+        .collect();
+    let second = produce(&domain, "test-scaled", Delivery::Lossless, scaled, true);
     let att = reader.join();
     second.join();
     let report = daemon.stop();
@@ -54,12 +58,24 @@ fn a_stream_in_g_is_never_aligned_on_and_the_report_says_so() {
         att[end + 1..].iter().any(|a| a.phase == phase::TRACKING),
         "the stream in m/s² after it did not align"
     );
+    assert_eq!(report.specific_force_off_gravity, 1, "{report:?}");
+    let scale: Vec<&String> = report
+        .warnings
+        .iter()
+        .filter(|w| w.contains("quiet stances"))
+        .collect();
+    assert_eq!(scale.len(), 1, "{:?}", report.warnings);
+    assert!(
+        scale[0].starts_with("stream 2 ") && scale[0].contains("-20 %"),
+        "{}",
+        scale[0]
+    );
     // Every stance of the walk was a candidate first stance and was refused (exp36: 58).
     assert!(report.alignment_not_gravity > 20, "{report:?}");
     let said: Vec<&String> = report
         .warnings
         .iter()
-        .filter(|w| w.contains("not gravity"))
+        .filter(|w| w.contains("Not aligned on it"))
         .collect();
     assert_eq!(said.len(), 1, "{:?}", report.warnings);
     assert!(

@@ -96,6 +96,13 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
             if s.alignment_not_gravity == 1 { "its" } else { "their" }
         ));
     }
+    if s.specific_force_off_gravity > 0 {
+        notes.push(format!(
+            "the quiet stances' specific force was no gravity ({}): the accelerometer's scale or units look wrong, and every distance with them; the log's warnings give the median",
+            s.stance_specific_force_m_s2
+                .map_or_else(|| "left it".to_string(), |f| format!("{f:.2} m/s² at the end"))
+        ));
+    }
     if s.started_without_rest {
         notes.push(
             "no initial rest: aligned on a short first stance, without a rest-mean bias prior"

@@ -100,6 +100,7 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
             "warm_started": report.warm_started_from.is_some(),
             "streams_warm_started": report.streams_warm_started,
             "alignment_not_gravity": report.alignment_not_gravity,
+            "specific_force_off_gravity": report.specific_force_off_gravity,
             "warnings": report.warnings,
         }))?
     );

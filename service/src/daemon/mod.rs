@@ -259,6 +259,10 @@ pub struct DaemonReport {
     /// producer's stream in g), over every stream of this life; the first of each stream is in
     /// `warnings` (while they are below their cap).
     pub alignment_not_gravity: u64,
+    /// Times a stream's quiet stances read a median specific force beyond
+    /// `core::SPECIFIC_FORCE_TOLERANCE` of gravity (an accelerometer scale or units wrong),
+    /// over every stream of this life; each is in `warnings`.
+    pub specific_force_off_gravity: u64,
 }
 
 /// A daemon failure.

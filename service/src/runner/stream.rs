@@ -480,6 +480,8 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         headings_undone: c.headings_undone,
         started_without_rest: c.started_without_rest,
         alignment_not_gravity: c.alignment_not_gravity,
+        specific_force_off_gravity: c.specific_force_off_gravity,
+        stance_specific_force_m_s2: feed.est.stance_specific_force_m_s2(),
         start_replayed_ms: c.start_replayed_ms,
         rest_prior_refused: c.rest_prior_refused,
         initial_rest_moving_blocks: c.initial_rest_moving_blocks,

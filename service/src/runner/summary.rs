@@ -101,6 +101,12 @@ pub struct Summary {
     /// Rests or first stances not aligned on because their mean specific force was no
     /// gravity (`Counters::alignment_not_gravity`).
     pub alignment_not_gravity: u64,
+    /// Times the quiet stances' median specific force left gravity by more than
+    /// `core::SPECIFIC_FORCE_TOLERANCE` (an accelerometer scale or units wrong;
+    /// `Counters::specific_force_off_gravity`).
+    pub specific_force_off_gravity: u64,
+    /// That median at the end of the log, m/s² (`null` before enough quiet stances).
+    pub stance_specific_force_m_s2: Option<f64>,
     /// A start in fast gait went back this far, ms, to an earlier stance (see `Counters`).
     pub start_replayed_ms: u64,
     /// The initial rest turned faster than a bias of the sensor can be

@@ -163,7 +163,7 @@ impl Pipeline {
             rest.means()
         };
         // A "rest" whose specific force is no gravity (a stream in g) aligns nothing.
-        let g_expected = a.gravity_m_s2.map_or(STANDARD_GRAVITY_M_S2, |g| g.get());
+        let g_expected = self.expected_gravity_m_s2();
         let f_norm = mean_f.norm();
         if (f_norm - g_expected).abs() > GRAVITY_TOLERANCE * g_expected || !f_norm.is_finite() {
             self.counters.alignment_not_gravity += 1;

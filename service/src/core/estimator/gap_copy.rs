@@ -89,6 +89,7 @@ impl Pipeline {
                 off_direction, reacquiring, line, stance_events, stance_edge, stances_seen,
                 resumed_look, was_stance, clock, late, undo, zero_rate_applied, clipped_gyro_axes,
                 stance_obs_done, stance_f_sum, pending_heading, headings_queued, last_queued,
+                stance_force,
                 warm_start, converged_at_s, out;
             copy_from: detector, straight, memory, stance_rest);
     }

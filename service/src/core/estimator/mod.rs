@@ -30,7 +30,8 @@
 //! filled from the stride before, or a new segment);
 //! `stride_memory.rs` the last strides' samples and footfalls that fill one;
 //! `late_footfall.rs` a footfall the detector missed (a short dip of its statistic, or a stride
-//! cycle without a stance), updated late from the stride memory; `recovery.rs`
+//! cycle without a stance), updated late from the stride memory; `stance_force.rs` the quiet
+//! stances' specific force held against gravity (an accelerometer scale gone wrong); `recovery.rs`
 //! what it does when the state or the input goes bad (health check, velocity reset, a first
 //! time stamp that was an outlier, a glitched one); `gap_copy.rs` the copy of the estimator
 //! that undoes a glitched one; `tests.rs` its unit tests.
@@ -47,6 +48,7 @@ mod reacquire;
 mod recovery;
 mod rest;
 mod running;
+mod stance_force;
 mod stride_memory;
 mod types;
 
@@ -61,6 +63,7 @@ use gaps::Gap;
 use recovery::{VELOCITY_RESET_Z2, take_spare};
 pub use rest::REST_BLOCK_S;
 use rest::{InitialRest, RestMeans, RestSums};
+pub use stance_force::SPECIFIC_FORCE_TOLERANCE;
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::clock::SampleClock;
@@ -197,6 +200,8 @@ struct Pipeline {
     /// The previous navigated sample was a stance sample.
     was_stance: bool,
     clock: SampleClock,
+    /// The median specific force of the last quiet stances against gravity (`stance_force.rs`).
+    stance_force: stance_force::StanceForce,
     /// The last strides' samples and footfalls, to fill a gap in a swing (`stride_memory.rs`).
     memory: stride_memory::StrideMemory,
     /// Short dips of the detector's statistic and stride cycles without a stance that may be a
@@ -272,6 +277,7 @@ impl Estimator {
             was_stance: false,
             clipped_gyro_axes: [false; 3],
             clock: SampleClock::default(),
+            stance_force: stance_force::StanceForce::default(),
             memory: stride_memory::StrideMemory::default(),
             late: late_footfall::LateFootfall::new(&cfg.detector),
             undo: LastGood::default(),
@@ -346,6 +352,12 @@ impl Estimator {
     /// The sensor's yaw on the foot (mounting yaw and toe-out), rad, once calibrated.
     pub fn mount_yaw_rad(&self) -> Option<f64> {
         (self.p.phase == Phase::Tracking).then_some(self.p.mount_yaw_rad)
+    }
+
+    /// The median specific force of the last quiet stances, m/s² (`Counters::
+    /// specific_force_off_gravity` says when it left gravity), once enough stances were seen.
+    pub fn stance_specific_force_m_s2(&self) -> Option<f64> {
+        self.p.stance_force_m_s2()
     }
 
     /// An external observation of the walking (foot) heading in the map frame with its σ; it is

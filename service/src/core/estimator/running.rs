@@ -99,6 +99,7 @@ impl Pipeline {
         if failed {
             self.late.drop_pending();
         } else {
+            self.check_specific_force(stance, w, f);
             self.remember(t_clock, w, f);
             let began = self.stance_edge == StanceEdge::Began;
             let flags = (decision.raw, stance, began, decision.statistic);
@@ -107,6 +108,30 @@ impl Pipeline {
         self.counters.velocity_resets += u64::from(self.out.velocity_reset);
         self.counters.heading_reacquisitions += u64::from(self.out.heading_reacquired.is_some());
         self.fill_output(eskf);
+    }
+
+    /// The quiet stances' specific force against gravity (`stance_force.rs`): said once when
+    /// its median leaves the tolerance.
+    fn check_specific_force(&mut self, stance: bool, w: &Vector3<f64>, f: &Vector3<f64>) {
+        let g = self.expected_gravity_m_s2();
+        if let Some(median) = self.stance_force.sample(stance, w.norm(), f.norm(), g) {
+            self.counters.specific_force_off_gravity += 1;
+            self.out.specific_force_off_gravity_m_s2 = Some((median, g));
+        }
+    }
+
+    /// The gravity the accelerometer should read at rest, m/s²: `alignment.gravity_m_s2`, or
+    /// standard gravity (the filter's own may come from a rest, and scale with the sensor).
+    pub(super) fn expected_gravity_m_s2(&self) -> f64 {
+        self.cfg
+            .alignment
+            .gravity_m_s2
+            .map_or(STANDARD_GRAVITY_M_S2, |g| g.get())
+    }
+
+    /// The median specific force of the last quiet stances, m/s², once there are enough.
+    pub(super) fn stance_force_m_s2(&self) -> Option<f64> {
+        self.stance_force.median_m_s2()
     }
 
     /// Foot-from-sensor rotation: `R_z(mount_yaw)·tilt0`.

@@ -115,7 +115,17 @@ impl EstState<'_> {
                 self.est.phase().name()
             },
             match (c.alignment_not_gravity, self.est.phase()) {
-                (0, _) | (_, Phase::Calibrating | Phase::Tracking) => String::new(),
+                (0, _) | (_, Phase::Calibrating | Phase::Tracking) => {
+                    match (
+                        c.specific_force_off_gravity,
+                        self.est.stance_specific_force_m_s2(),
+                    ) {
+                        (0, _) | (_, None) => String::new(),
+                        (_, Some(f)) => format!(
+                            " (accelerometer scale? its quiet stances read {f:.2} m/s², said off gravity)"
+                        ),
+                    }
+                }
                 (1, Phase::Aligning) => {
                     " (1 rest or stance refused: its specific force is no gravity)".into()
                 }

@@ -287,6 +287,12 @@ impl<'a> EstState<'a> {
                 (Notice::NotGravity(..), k) if k > REFUSED_WARNINGS_PER_STREAM => {
                     tracing::debug!(seq = s.seq, "{n}")
                 }
+                // Said once each time the median leaves gravity: every one to the report.
+                (Notice::SpecificForceOffGravity(..), _) => self.warn(format!(
+                    "stream {} (IMU seq {}): {n}",
+                    self.streams_finished + 1,
+                    s.seq
+                )),
                 _ => tracing::warn!(seq = s.seq, "{n}"),
             }
         }
@@ -403,6 +409,7 @@ impl<'a> EstState<'a> {
         p.headings_expired += c.headings_expired;
         p.headings_undone += c.headings_undone;
         p.alignment_not_gravity += c.alignment_not_gravity;
+        p.specific_force_off_gravity += c.specific_force_off_gravity;
         self.not_gravity_reported = false;
         self.est = self.new_estimator(cfg);
         self.last = Estimate::default();
@@ -586,6 +593,8 @@ pub(super) fn estimator_thread(
         lives: counters.lives.load(Ordering::Relaxed),
         alignment_not_gravity: st.previous.alignment_not_gravity
             + st.est.counters().alignment_not_gravity,
+        specific_force_off_gravity: st.previous.specific_force_off_gravity
+            + st.est.counters().specific_force_off_gravity,
     })
 }
 
