@@ -319,45 +319,6 @@ fn degrees_per_second_are_refused() {
 }
 
 #[test]
-fn a_log_in_g_fails_with_the_units_error_alone() {
-    // The estimator refuses the log's rest as not gravity long before the reader's units check
-    // at the end of the log; each rest and stance refused used to print a warning first (ten
-    // lines, then the error). The first refusal now checks the units of the rows read so far.
-    let dir = tmp("in_g");
-    let imu = dir.join("imu.csv");
-    let src = std::fs::read_to_string(
-        root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
-    )
-    .unwrap();
-    let mut lines = src.lines();
-    let mut text = format!("{}\n", lines.next().unwrap());
-    for line in lines.take(3000) {
-        let v: Vec<&str> = line.split(',').collect();
-        let g: Vec<String> = v[4..7]
-            .iter()
-            .map(|a| (a.parse::<f64>().unwrap() / 9.80665).to_string())
-            .collect();
-        text += &format!(
-            "{},{},{}\n",
-            v[..4].join(","),
-            g.join(","),
-            v[7..].join(",")
-        );
-    }
-    std::fs::write(&imu, text).unwrap();
-    let o = run_cmd(&imu, &dir.join("o"), &["--config", &gdins()]);
-    assert!(!o.status.success());
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        err.contains("median |a| (m/s²) over the first 460 rows = 1.00")
-            && err.contains("looks like it is in g"),
-        "{err}"
-    );
-    assert!(!err.contains("not gravity"), "{err}");
-    assert_eq!(err.lines().count(), 1, "{err}");
-}
-
-#[test]
 fn bad_config_names_the_key() {
     let dir = tmp("cfg");
     let cfg = dir.join("c.toml");

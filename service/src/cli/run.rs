@@ -97,10 +97,20 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
         ));
     }
     if s.specific_force_off_gravity > 0 {
+        let end = match (
+            s.stance_specific_force_m_s2,
+            s.specific_force_off_gravity_at_end,
+        ) {
+            (Some(f), true) => format!("still off at the end: {f:.2} m/s²"),
+            (Some(f), false) => format!("back to gravity by the end: {f:.2} m/s²"),
+            (None, _) => "no median at the end".to_string(),
+        };
         notes.push(format!(
-            "the quiet stances' specific force was no gravity ({}): the accelerometer's scale or units look wrong, and every distance with them; the log's warnings give the median",
-            s.stance_specific_force_m_s2
-                .map_or_else(|| "left it".to_string(), |f| format!("{f:.2} m/s² at the end"))
+            "the quiet stances' specific force left gravity {} ({end}): the accelerometer's scale or units look wrong, and the distances walked with them; the log's warnings give the median",
+            match s.specific_force_off_gravity {
+                1 => "once".to_string(),
+                n => format!("{n} times"),
+            }
         ));
     }
     if s.started_without_rest {

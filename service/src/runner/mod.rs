@@ -25,7 +25,7 @@
 //! - `figures`: the SVG figures of `--plots`.
 
 use crate::core::heading::HeadingAid;
-use crate::core::{Counters, Estimate, Estimator, ImuInput, WarmStart, WarmStartError};
+use crate::core::{Counters, Estimate, Estimator, ImuInput, Notice, WarmStart, WarmStartError};
 use crate::eval::{self, EvalOptions, EvalReport, GcpSampler, TruthGcp};
 use crate::map_file::{MapError, read_corridor_map};
 use corridor_shared::config::{Config, HeadingSource};
@@ -279,6 +279,8 @@ struct Feed<'a> {
     refused: Vec<String>,
     /// Gap and health-fault warnings printed so far.
     warned: usize,
+    /// Refusals as not gravity that checked the units of the rows read so far.
+    units_checks: usize,
     /// Log nothing per sample (count only): the in-memory runs, and `corridor run`'s second,
     /// "before" filter, which reads the same rows.
     quiet: bool,
@@ -294,6 +296,7 @@ impl<'a> Feed<'a> {
             path,
             refused: Vec::new(),
             warned: 0,
+            units_checks: 0,
             quiet: false,
             first_t_s: None,
         }
@@ -316,10 +319,10 @@ impl<'a> Feed<'a> {
         }
     }
 
-    /// [`Feed::step`], calling `before_not_gravity` before a warning that a rest or stance was
-    /// not gravity is logged: the streamed run checks the units of the rows read so far there,
-    /// so that a log in g fails with the units error alone instead of after a warning per
-    /// stance. Its error is returned, the warning not logged.
+    /// [`Feed::step`], calling `before_not_gravity` at the first refusals of a rest or stance as
+    /// not gravity, before their warning: the streamed run asks there whether the rows read so
+    /// far look like g, so that a log in g fails with the units error alone instead of after a
+    /// warning per stance. Its error is returned, the warning not logged.
     fn step_checked<E>(
         &mut self,
         row: &ImuRow,
@@ -335,17 +338,32 @@ impl<'a> Feed<'a> {
         };
         match self.est.step(&input) {
             Ok(e) => {
-                let mut notices = e.notices().peekable();
+                // The first refusals as not gravity check the units so far (whatever was
+                // printed before them).
+                if e.not_gravity_m_s2.is_some()
+                    && !self.quiet
+                    && self.units_checks < MAX_REFUSED_EXAMPLES
+                {
+                    self.units_checks += 1;
+                    before_not_gravity()?;
+                }
+                let mut notices = e
+                    .notices()
+                    .filter(|n| !matches!(n, Notice::SpecificForceOffGravity(..)))
+                    .peekable();
                 if notices.peek().is_some() {
                     self.warned += 1;
                     if self.warned <= MAX_REFUSED_EXAMPLES && !self.quiet {
-                        if e.not_gravity_m_s2.is_some() {
-                            before_not_gravity()?;
-                        }
                         for n in notices {
                             tracing::warn!("{}:{}: {n}", self.path.display(), row.line);
                         }
                     }
+                }
+                // Said once each time the median leaves gravity: never held back by the cap
+                // on the others (a review found it swallowed after ten gaps).
+                if let (Some((f, g)), false) = (e.specific_force_off_gravity_m_s2, self.quiet) {
+                    let n = Notice::SpecificForceOffGravity(f, g);
+                    tracing::warn!("{}:{}: {n}", self.path.display(), row.line);
                 }
             }
             Err(err) => {

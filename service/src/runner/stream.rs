@@ -323,7 +323,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         let row = row?;
         progress.show(reader.progress_bytes().0);
         if let Some((input, e, converged_at_s)) =
-            feed.step_checked(&row, || reader.check_units_so_far())?
+            feed.step_checked(&row, || reader.check_g_so_far())?
         {
             write_estimate_row(&mut est_w, e).map_err(io_at(&est_path))?;
             write_innovation_rows(&mut inn_w, &input, e).map_err(io_at(&inn_path))?;
@@ -482,6 +482,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         alignment_not_gravity: c.alignment_not_gravity,
         specific_force_off_gravity: c.specific_force_off_gravity,
         stance_specific_force_m_s2: feed.est.stance_specific_force_m_s2(),
+        specific_force_off_gravity_at_end: feed.est.specific_force_off_gravity_now(),
         start_replayed_ms: c.start_replayed_ms,
         rest_prior_refused: c.rest_prior_refused,
         initial_rest_moving_blocks: c.initial_rest_moving_blocks,

@@ -107,6 +107,9 @@ pub struct Summary {
     pub specific_force_off_gravity: u64,
     /// That median at the end of the log, m/s² (`null` before enough quiet stances).
     pub stance_specific_force_m_s2: Option<f64>,
+    /// That median was off gravity at the end of the log (said, and not back within half the
+    /// tolerance).
+    pub specific_force_off_gravity_at_end: bool,
     /// A start in fast gait went back this far, ms, to an earlier stance (see `Counters`).
     pub start_replayed_ms: u64,
     /// The initial rest turned faster than a bias of the sensor can be

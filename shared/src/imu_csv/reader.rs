@@ -173,13 +173,16 @@ impl<R: BufRead> ImuCsvReader<R> {
             .collect()
     }
 
-    /// The units check (the one the end of the log makes, [`ImuCsvError::Units`]) over the
-    /// rows accepted so far, for a caller with a reason to doubt the units before the end: the
-    /// estimator refused a rest as not gravity, and a log in g should say so once, not after a
-    /// warning per stance. The statistic names the rows it covers. `Ok` when the units are not
-    /// checked or no row was accepted yet; the end of the log checks every row again.
-    pub fn check_units_so_far(&mut self) -> Result<(), ImuCsvError> {
-        if !self.check_units || self.accepted == 0 {
+    /// The units check's verdict "in g" ([`ImuCsvError::Units`], the end of the log's check)
+    /// over the rows accepted so far, for a caller with a reason to suspect a log in g before
+    /// the end: the estimator refused a rest as not gravity, and such a log should say so once,
+    /// not after a warning per stance. Only that verdict: a log whose first rows read nothing
+    /// (an accelerometer that starts late) is judged at the end, on every row, as before (a
+    /// review found such a log in m/s² refused early as "gravity removed"). The statistic names
+    /// the rows it covers. `Ok` when the units are not checked, no row was accepted yet, or the
+    /// rows so far do not look like g.
+    pub fn check_g_so_far(&mut self) -> Result<(), ImuCsvError> {
+        if !self.check_units || self.accepted == 0 || !self.units.looks_like_g() {
             return Ok(());
         }
         self.units.check(&self.path).map_err(|e| match e {

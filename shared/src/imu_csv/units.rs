@@ -103,19 +103,29 @@ impl UnitsStats {
         unreachable!("the histogram holds every row")
     }
 
+    /// The [`accel_band`] of the median |a| (exact for any length).
+    pub(super) fn median_band(&self) -> usize {
+        let n: u64 = self.bands.iter().sum();
+        let mut rank = n / 2;
+        for (i, &c) in self.bands.iter().enumerate() {
+            if rank < c {
+                return i;
+            }
+            rank -= c;
+        }
+        0
+    }
+
+    /// Whether the median |a| lies in the band of a log in g.
+    pub(super) fn looks_like_g(&self) -> bool {
+        self.median_band() == 1
+    }
+
     /// Refuses logs whose accelerometer does not look like m/s² or whose gyroscope does not
     /// look like rad/s. The decision is the median's band, exact for any length.
     pub(super) fn check(&mut self, path: &Path) -> Result<(), ImuCsvError> {
         let n: u64 = self.bands.iter().sum();
-        let mut rank = n / 2;
-        let mut band = 0;
-        for (i, &c) in self.bands.iter().enumerate() {
-            if rank < c {
-                band = i;
-                break;
-            }
-            rank -= c;
-        }
+        let band = self.median_band();
         let units = |column, statistic: &str, value, hint: String| ImuCsvError::Units {
             path: path.to_path_buf(),
             column,

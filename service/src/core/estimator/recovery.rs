@@ -88,8 +88,8 @@ impl Estimator {
     /// refused and counted then). Kept from now: the time rule (which accepted the current
     /// time), the refusals counted since, an external heading handed in since (one handed in
     /// before and used by a dropped sample is pending again), and a warm start handed in since
-    /// (applied again to the restored filter when it was running). Returns the number of
-    /// samples dropped.
+    /// (applied again to the restored filter when it was running), and whether the stances'
+    /// specific force was said off gravity. Returns the number of samples dropped.
     /// Out of line: its copies of the filter stay out of the per-sample step's frame (see
     /// `Pipeline::save_good`).
     #[inline(never)]
@@ -108,6 +108,11 @@ impl Estimator {
         c.rejected_time_jump = now.counters.rejected_time_jump + dropped;
         c.headings_refused = now.counters.headings_refused;
         c.headings_expired = now.counters.headings_expired;
+        // A specific force said off gravity on a dropped sample was said (its estimate went
+        // out): the stance that ended there ends again on a later sample and is not said
+        // twice (a review: two warnings in the daemon's report, one counted).
+        c.specific_force_off_gravity = now.counters.specific_force_off_gravity;
+        p.stance_force.keep_said(&now.stance_force);
         // (`headings_undone` stays the copy's: an undo in a dropped sample is dropped with it,
         // as its uses and gate refusals are; a review found it counted with the heading
         // pending again.)

@@ -99,7 +99,7 @@ impl Pipeline {
         if failed {
             self.late.drop_pending();
         } else {
-            self.check_specific_force(stance, w, f);
+            self.check_specific_force(dt, stance, w, f);
             self.remember(t_clock, w, f);
             let began = self.stance_edge == StanceEdge::Began;
             let flags = (decision.raw, stance, began, decision.statistic);
@@ -112,9 +112,18 @@ impl Pipeline {
 
     /// The quiet stances' specific force against gravity (`stance_force.rs`): said once when
     /// its median leaves the tolerance.
-    fn check_specific_force(&mut self, stance: bool, w: &Vector3<f64>, f: &Vector3<f64>) {
+    fn check_specific_force(
+        &mut self,
+        dt_s: f64,
+        stance: bool,
+        w: &Vector3<f64>,
+        f: &Vector3<f64>,
+    ) {
         let g = self.expected_gravity_m_s2();
-        if let Some(median) = self.stance_force.sample(stance, w.norm(), f.norm(), g) {
+        if let Some(median) = self
+            .stance_force
+            .sample(dt_s, stance, w.norm(), f.norm(), g)
+        {
             self.counters.specific_force_off_gravity += 1;
             self.out.specific_force_off_gravity_m_s2 = Some((median, g));
         }
@@ -129,9 +138,12 @@ impl Pipeline {
             .map_or(STANDARD_GRAVITY_M_S2, |g| g.get())
     }
 
-    /// The median specific force of the last quiet stances, m/s², once there are enough.
-    pub(super) fn stance_force_m_s2(&self) -> Option<f64> {
-        self.stance_force.median_m_s2()
+    /// The median specific force of the last quiet stances, m/s², once there are enough, and
+    /// whether it is off gravity now.
+    pub(super) fn stance_force_m_s2(&self) -> Option<(f64, bool)> {
+        self.stance_force
+            .median_m_s2()
+            .map(|m| (m, self.stance_force.is_off()))
     }
 
     /// Foot-from-sensor rotation: `R_z(mount_yaw)·tilt0`.

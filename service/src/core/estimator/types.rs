@@ -619,7 +619,7 @@ impl std::fmt::Display for Notice {
                 f,
                 "the foot's last {STANCES} quiet stances read a median specific force of \
                  {f_m_s2:.3} m/s², not gravity ({g_m_s2:.3} m/s² ± {:.0} %): the accelerometer's \
-                 scale or units look wrong by {:+.0} %, and distances by about as much",
+                 scale or units look wrong by {:+.1} %, and distances by about as much",
                 SPECIFIC_FORCE_TOLERANCE * 100.0,
                 (f_m_s2 / g_m_s2 - 1.0) * 100.0
             ),

@@ -116,14 +116,11 @@ impl EstState<'_> {
             },
             match (c.alignment_not_gravity, self.est.phase()) {
                 (0, _) | (_, Phase::Calibrating | Phase::Tracking) => {
-                    match (
-                        c.specific_force_off_gravity,
-                        self.est.stance_specific_force_m_s2(),
-                    ) {
-                        (0, _) | (_, None) => String::new(),
-                        (_, Some(f)) => format!(
-                            " (accelerometer scale? its quiet stances read {f:.2} m/s², said off gravity)"
+                    match self.est.stance_specific_force_m_s2() {
+                        Some(f) if self.est.specific_force_off_gravity_now() => format!(
+                            " (accelerometer scale? its quiet stances read {f:.2} m/s², not gravity)"
                         ),
+                        _ => String::new(),
                     }
                 }
                 (1, Phase::Aligning) => {

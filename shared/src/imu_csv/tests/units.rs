@@ -184,7 +184,7 @@ fn the_units_decision_is_the_whole_logs_beyond_the_exact_median_rows() {
 }
 
 #[test]
-fn the_units_are_checked_over_the_rows_read_so_far_on_request() {
+fn a_log_in_g_is_told_from_the_rows_read_so_far_on_request() {
     // Rows in g first, then rows in m/s²: over the first 30 rows the log looks like g, and the
     // error names the rows it covers; over all of them the units are m/s².
     let text = units_file(100, 0)
@@ -197,11 +197,11 @@ fn the_units_are_checked_over_the_rows_read_so_far_on_request() {
         .collect::<Vec<_>>()
         .join("\n");
     let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &lenient()).unwrap();
-    assert!(reader.check_units_so_far().is_ok(), "no row read yet");
+    assert!(reader.check_g_so_far().is_ok(), "no row read yet");
     for _ in 0..30 {
         reader.next().unwrap().unwrap();
     }
-    match reader.check_units_so_far().unwrap_err() {
+    match reader.check_g_so_far().unwrap_err() {
         ImuCsvError::Units {
             statistic, value, ..
         } => {
@@ -219,5 +219,22 @@ fn the_units_are_checked_over_the_rows_read_so_far_on_request() {
     };
     let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &off).unwrap();
     reader.next().unwrap().unwrap();
-    assert!(reader.check_units_so_far().is_ok());
+    assert!(reader.check_g_so_far().is_ok());
+    // Only the verdict "in g": first rows that read nothing (an accelerometer that starts
+    // late) are no units error so far, and the log is judged at its end, on every row.
+    let text = units_file(100, 100)
+        .lines()
+        .enumerate()
+        .map(|(i, l)| match i {
+            1..=30 => l.replace(",0,0,9.8", ",0,0,0.0"),
+            _ => l.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &lenient()).unwrap();
+    for _ in 0..30 {
+        reader.next().unwrap().unwrap();
+    }
+    assert!(reader.check_g_so_far().is_ok());
+    assert!(reader.all(|r| r.is_ok()));
 }
