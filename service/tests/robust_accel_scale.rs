@@ -186,6 +186,25 @@ fn a_log_in_g_fails_with_the_units_error_alone() {
     );
     assert!(!err.contains("not gravity"), "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
+    // Its accelerometer reading 0 for the first 20 s: those refusals are no log in g; a stance
+    // in g stops the run once most rows so far are in g (the check was made only at the first
+    // ten refusals, all in the dead stretch, and the error came at the end of the log).
+    let imu = exp36_csv(
+        &dir,
+        14_000,
+        |k, a| if k < 4000 { 0.0 } else { a / 9.80665 },
+    );
+    let o = corridor_run(&imu, &dir.join("o2"));
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    let rows: u64 = err
+        .split("over the first ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .unwrap_or_else(|| panic!("{err}"))
+        .parse()
+        .unwrap();
+    assert!((8000..12_000).contains(&rows), "{err}");
 }
 
 #[test]

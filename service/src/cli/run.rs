@@ -101,8 +101,8 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
             s.stance_specific_force_m_s2,
             s.specific_force_off_gravity_at_end,
         ) {
-            (Some(f), true) => format!("still off at the end: {f:.2} m/s²"),
-            (Some(f), false) => format!("back to gravity by the end: {f:.2} m/s²"),
+            (Some(f), true) => format!("not back within 2.5 % of gravity by the end: {f:.2} m/s²"),
+            (Some(f), false) => format!("back within 2.5 % of gravity by the end: {f:.2} m/s²"),
             (None, _) => "no median at the end".to_string(),
         };
         notes.push(format!(

@@ -261,7 +261,7 @@ pub struct DaemonReport {
     pub alignment_not_gravity: u64,
     /// Times a stream's quiet stances read a median specific force beyond
     /// `core::SPECIFIC_FORCE_TOLERANCE` of gravity (an accelerometer scale or units wrong),
-    /// over every stream of this life; each is in `warnings`.
+    /// over every stream of this life; each is in `warnings` (while they are below their cap).
     pub specific_force_off_gravity: u64,
 }
 

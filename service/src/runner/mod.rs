@@ -279,8 +279,6 @@ struct Feed<'a> {
     refused: Vec<String>,
     /// Gap and health-fault warnings printed so far.
     warned: usize,
-    /// Refusals as not gravity that checked the units of the rows read so far.
-    units_checks: usize,
     /// Log nothing per sample (count only): the in-memory runs, and `corridor run`'s second,
     /// "before" filter, which reads the same rows.
     quiet: bool,
@@ -296,7 +294,6 @@ impl<'a> Feed<'a> {
             path,
             refused: Vec::new(),
             warned: 0,
-            units_checks: 0,
             quiet: false,
             first_t_s: None,
         }
@@ -319,8 +316,8 @@ impl<'a> Feed<'a> {
         }
     }
 
-    /// [`Feed::step`], calling `before_not_gravity` at the first refusals of a rest or stance as
-    /// not gravity, before their warning: the streamed run asks there whether the rows read so
+    /// [`Feed::step`], calling `before_not_gravity` at each refusal of a rest or stance as not
+    /// gravity, before its warning: the streamed run asks there whether the rows read so
     /// far look like g, so that a log in g fails with the units error alone instead of after a
     /// warning per stance. Its error is returned, the warning not logged.
     fn step_checked<E>(
@@ -338,13 +335,11 @@ impl<'a> Feed<'a> {
         };
         match self.est.step(&input) {
             Ok(e) => {
-                // The first refusals as not gravity check the units so far (whatever was
-                // printed before them).
-                if e.not_gravity_m_s2.is_some()
-                    && !self.quiet
-                    && self.units_checks < MAX_REFUSED_EXAMPLES
-                {
-                    self.units_checks += 1;
+                // Each refusal as not gravity asks whether the rows so far look like g
+                // (whatever was printed before it; a log in g whose accelerometer reads 0 at
+                // first is stopped at its first stance in g, a review). Cheap: the rows' bands
+                // decide, the median is taken only for the error.
+                if e.not_gravity_m_s2.is_some() && !self.quiet {
                     before_not_gravity()?;
                 }
                 let mut notices = e
