@@ -112,6 +112,7 @@ impl Pipeline {
 
     /// The quiet stances' specific force against gravity (`stance_force.rs`): said once when
     /// its median leaves the tolerance.
+    #[inline]
     fn check_specific_force(
         &mut self,
         dt_s: f64,
@@ -119,13 +120,14 @@ impl Pipeline {
         w: &Vector3<f64>,
         f: &Vector3<f64>,
     ) {
-        let g = self.expected_gravity_m_s2();
-        if let Some(median) = self
-            .stance_force
-            .sample(dt_s, stance, w.norm(), f.norm(), g)
-        {
-            self.counters.specific_force_off_gravity += 1;
-            self.out.specific_force_off_gravity_m_s2 = Some((median, g));
+        if stance {
+            self.stance_force.stance_sample(dt_s, w, f);
+        } else if self.stance_force.pending() {
+            let g = self.expected_gravity_m_s2();
+            if let Some(median) = self.stance_force.stance_ended(g) {
+                self.counters.specific_force_off_gravity += 1;
+                self.out.specific_force_off_gravity_m_s2 = Some((median, g));
+            }
         }
     }
 

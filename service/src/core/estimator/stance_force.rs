@@ -32,6 +32,8 @@ pub const STANCES: usize = 15;
 /// rests within ±2 %.
 pub const SPECIFIC_FORCE_TOLERANCE: f64 = 0.05;
 
+use nalgebra::Vector3;
+
 /// The running check. Fixed size, no allocation.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct StanceForce {
@@ -63,33 +65,35 @@ impl Default for StanceForce {
 }
 
 impl StanceForce {
-    /// One sample of `dt_s`: whether the foot stands, |ω| (rad/s) and |f| (m/s²), and the
-    /// gravity it should read (m/s²). Returns the median when it has just left the tolerance
-    /// (once, until it comes back).
-    pub(super) fn sample(
-        &mut self,
-        dt_s: f64,
-        stance: bool,
-        rate_rad_s: f64,
-        force_m_s2: f64,
-        gravity_m_s2: f64,
-    ) -> Option<f64> {
-        if stance {
-            if rate_rad_s < QUIET_RATE_RAD_S && force_m_s2.is_finite() {
+    /// A stance sample of `dt_s` with rate `w` (rad/s) and specific force `f` (m/s²): summed
+    /// when it turns slower than [`QUIET_RATE_RAD_S`]. Per sample: a comparison of squares,
+    /// and one root for the quiet ones.
+    #[inline]
+    pub(super) fn stance_sample(&mut self, dt_s: f64, w: &Vector3<f64>, f: &Vector3<f64>) {
+        if w.norm_squared() < QUIET_RATE_RAD_S * QUIET_RATE_RAD_S {
+            let force_m_s2 = f.norm();
+            if force_m_s2.is_finite() {
                 self.sum_m_s2 += force_m_s2;
                 self.quiet += 1;
                 self.quiet_s += dt_s;
             }
-            return None;
         }
-        if self.quiet == 0 {
-            return None;
-        }
+    }
+
+    /// Whether a stance's quiet samples wait for its end ([`StanceForce::stance_ended`]).
+    #[inline]
+    pub(super) fn pending(&self) -> bool {
+        self.quiet > 0
+    }
+
+    /// The stance whose samples were summed has ended; `gravity_m_s2` is what it should read.
+    /// Returns the median when it has just left the tolerance (once, until it comes back).
+    pub(super) fn stance_ended(&mut self, gravity_m_s2: f64) -> Option<f64> {
         let (sum, quiet, quiet_s) = (self.sum_m_s2, self.quiet, self.quiet_s);
         (self.sum_m_s2, self.quiet, self.quiet_s) = (0.0, 0, 0.0);
         // To half a sample step: the stamps jitter (exp38's steps run 4.990–5.013 ms, and five
         // quiet samples summed to 24.99 ms: a review), and a stance of five samples counts.
-        if quiet_s + 0.5 * quiet_s / f64::from(quiet) < MIN_QUIET_S {
+        if quiet == 0 || quiet_s + 0.5 * quiet_s / f64::from(quiet) < MIN_QUIET_S {
             return None;
         }
         self.means_m_s2[self.next] = sum / f64::from(quiet);
@@ -136,6 +140,28 @@ mod tests {
     const G: f64 = 9.80665;
 
     const DT: f64 = 0.005;
+
+    /// One sample as the running step gives it: |ω| `rate` and |f| `force`.
+    trait Sample {
+        fn sample(&mut self, dt: f64, stance: bool, rate: f64, force: f64, g: f64) -> Option<f64>;
+    }
+
+    impl Sample for StanceForce {
+        fn sample(&mut self, dt: f64, stance: bool, rate: f64, force: f64, g: f64) -> Option<f64> {
+            if stance {
+                self.stance_sample(
+                    dt,
+                    &Vector3::new(0.0, rate, 0.0),
+                    &Vector3::new(0.0, 0.0, force),
+                );
+                None
+            } else if self.pending() {
+                self.stance_ended(g)
+            } else {
+                None
+            }
+        }
+    }
 
     /// `n` stances of `quiet` samples at |f| = `f` (and a swing sample after each), 200 Hz;
     /// the medians reported.
