@@ -335,10 +335,10 @@ impl<'a> Feed<'a> {
         };
         match self.est.step(&input) {
             Ok(e) => {
-                // Each refusal as not gravity asks whether the rows so far look like g
-                // (whatever was printed before it; a log in g whose accelerometer reads 0 at
-                // first is stopped at its first stance in g, a review). Cheap: the rows' bands
-                // decide, the median is taken only for the error.
+                // Each refusal as not gravity asks whether the rows so far look like g,
+                // whatever was printed before it (a log in g whose accelerometer read 0 for its
+                // first 20 s had its first ten refusals there, and failed only at its end: a
+                // review). Cheap: the rows' bands decide, the median is taken for the error.
                 if e.not_gravity_m_s2.is_some() && !self.quiet {
                     before_not_gravity()?;
                 }

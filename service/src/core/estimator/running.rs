@@ -120,24 +120,17 @@ impl Pipeline {
         w: &Vector3<f64>,
         f: &Vector3<f64>,
     ) {
-        if stance {
-            self.stance_force.stance_sample(dt_s, w, f);
-        } else if self.stance_force.pending() {
-            let g = self.expected_gravity_m_s2();
-            if let Some(median) = self.stance_force.stance_ended(g) {
-                self.counters.specific_force_off_gravity += 1;
-                self.out.specific_force_off_gravity_m_s2 = Some((median, g));
-            }
+        let configured = self.cfg.alignment.gravity_m_s2;
+        let gravity = || expected_gravity_m_s2(configured);
+        if let Some((median, g)) = self.stance_force.sample(dt_s, stance, w, f, gravity) {
+            self.counters.specific_force_off_gravity += 1;
+            self.out.specific_force_off_gravity_m_s2 = Some((median, g));
         }
     }
 
-    /// The gravity the accelerometer should read at rest, m/s²: `alignment.gravity_m_s2`, or
-    /// standard gravity (the filter's own may come from a rest, and scale with the sensor).
+    /// The gravity the accelerometer should read at rest, m/s² ([`expected_gravity_m_s2`]).
     pub(super) fn expected_gravity_m_s2(&self) -> f64 {
-        self.cfg
-            .alignment
-            .gravity_m_s2
-            .map_or(STANDARD_GRAVITY_M_S2, |g| g.get())
+        expected_gravity_m_s2(self.cfg.alignment.gravity_m_s2)
     }
 
     /// The median specific force of the last quiet stances, m/s², once there are enough, and
@@ -224,4 +217,11 @@ impl Pipeline {
             self.converged_at_s = Some(out.t_s);
         }
     }
+}
+
+/// The gravity the accelerometer should read at rest, m/s²: `alignment.gravity_m_s2` as
+/// `configured`, or standard gravity (the filter's own may come from a rest, and scale with the
+/// sensor).
+fn expected_gravity_m_s2(configured: Option<Positive>) -> f64 {
+    configured.map_or(STANDARD_GRAVITY_M_S2, |g| g.get())
 }

@@ -12,6 +12,8 @@
 //! within 9.73–9.90 m/s² at every sample (−0.8 to +1.0 %; the NGIMU walk 9.75–9.76); it is held
 //! to [`SPECIFIC_FORCE_TOLERANCE`].
 
+use nalgebra::Vector3;
+
 /// Stance samples turning slower than this count (rad/s): the foot flat, not its landing or
 /// push-off. At 0.5 rad/s the fast walks keep 7 (exp34) and 17 (exp38) of their 25 and 61
 /// stances; with every stance sample, exp38's median of 15 reached 11.7 m/s².
@@ -31,8 +33,6 @@ pub const STANCES: usize = 15;
 /// is a fraction of a percent; the suite's medians lie within −0.8 to +1.0 %, the NGIMU walk's
 /// rests within ±2 %.
 pub const SPECIFIC_FORCE_TOLERANCE: f64 = 0.05;
-
-use nalgebra::Vector3;
 
 /// The running check. Fixed size, no allocation.
 #[derive(Debug, Clone, Copy)]
@@ -65,35 +65,49 @@ impl Default for StanceForce {
 }
 
 impl StanceForce {
-    /// A stance sample of `dt_s` with rate `w` (rad/s) and specific force `f` (m/s²): summed
-    /// when it turns slower than [`QUIET_RATE_RAD_S`]. Per sample: a comparison of squares,
-    /// and one root for the quiet ones.
+    /// One sample of `dt_s` that the running step took: whether the foot stands, its rate `w`
+    /// (rad/s) and specific force `f` (m/s²). A stance sample turning slower than
+    /// [`QUIET_RATE_RAD_S`] is summed (per sample: a comparison of squares, and one root for
+    /// the quiet ones); the first sample after a stance closes it against `gravity_m_s2()`.
+    /// Returns the median and that gravity when the median has just left the tolerance (once,
+    /// until it comes back).
     #[inline]
-    pub(super) fn stance_sample(&mut self, dt_s: f64, w: &Vector3<f64>, f: &Vector3<f64>) {
-        if w.norm_squared() < QUIET_RATE_RAD_S * QUIET_RATE_RAD_S {
-            let force_m_s2 = f.norm();
-            if force_m_s2.is_finite() {
-                self.sum_m_s2 += force_m_s2;
-                self.quiet += 1;
-                self.quiet_s += dt_s;
+    pub(super) fn sample(
+        &mut self,
+        dt_s: f64,
+        stance: bool,
+        w: &Vector3<f64>,
+        f: &Vector3<f64>,
+        gravity_m_s2: impl FnOnce() -> f64,
+    ) -> Option<(f64, f64)> {
+        if stance {
+            if w.norm_squared() < QUIET_RATE_RAD_S * QUIET_RATE_RAD_S {
+                let force_m_s2 = f.norm();
+                if force_m_s2.is_finite() {
+                    self.sum_m_s2 += force_m_s2;
+                    self.quiet += 1;
+                    self.quiet_s += dt_s;
+                }
             }
+            return None;
         }
-    }
-
-    /// Whether a stance's quiet samples wait for its end ([`StanceForce::stance_ended`]).
-    #[inline]
-    pub(super) fn pending(&self) -> bool {
-        self.quiet > 0
+        if self.quiet == 0 {
+            return None;
+        }
+        let g = gravity_m_s2();
+        self.stance_ended(g).map(|median| (median, g))
     }
 
     /// The stance whose samples were summed has ended; `gravity_m_s2` is what it should read.
     /// Returns the median when it has just left the tolerance (once, until it comes back).
-    pub(super) fn stance_ended(&mut self, gravity_m_s2: f64) -> Option<f64> {
+    /// Out of line: once per stance.
+    #[inline(never)]
+    fn stance_ended(&mut self, gravity_m_s2: f64) -> Option<f64> {
         let (sum, quiet, quiet_s) = (self.sum_m_s2, self.quiet, self.quiet_s);
         (self.sum_m_s2, self.quiet, self.quiet_s) = (0.0, 0, 0.0);
         // To half a sample step: the stamps jitter (exp38's steps run 4.990–5.013 ms, and five
         // quiet samples summed to 24.99 ms: a review), and a stance of five samples counts.
-        if quiet == 0 || quiet_s + 0.5 * quiet_s / f64::from(quiet) < MIN_QUIET_S {
+        if quiet_s + 0.5 * quiet_s / f64::from(quiet) < MIN_QUIET_S {
             return None;
         }
         self.means_m_s2[self.next] = sum / f64::from(quiet);
@@ -141,26 +155,20 @@ mod tests {
 
     const DT: f64 = 0.005;
 
-    /// One sample as the running step gives it: |ω| `rate` and |f| `force`.
-    trait Sample {
-        fn sample(&mut self, dt: f64, stance: bool, rate: f64, force: f64, g: f64) -> Option<f64>;
-    }
-
-    impl Sample for StanceForce {
-        fn sample(&mut self, dt: f64, stance: bool, rate: f64, force: f64, g: f64) -> Option<f64> {
-            if stance {
-                self.stance_sample(
-                    dt,
-                    &Vector3::new(0.0, rate, 0.0),
-                    &Vector3::new(0.0, 0.0, force),
-                );
-                None
-            } else if self.pending() {
-                self.stance_ended(g)
-            } else {
-                None
-            }
-        }
+    /// One sample as the running step gives it: |ω| `rate` and |f| `force`; the median when
+    /// said.
+    fn sample(
+        check: &mut StanceForce,
+        dt: f64,
+        stance: bool,
+        rate: f64,
+        force: f64,
+    ) -> Option<f64> {
+        let (w, f) = (Vector3::new(0.0, rate, 0.0), Vector3::new(0.0, 0.0, force));
+        check.sample(dt, stance, &w, &f, || G).map(|(median, g)| {
+            assert_eq!(g, G);
+            median
+        })
     }
 
     /// `n` stances of `quiet` samples at |f| = `f` (and a swing sample after each), 200 Hz;
@@ -169,11 +177,11 @@ mod tests {
         let mut said = Vec::new();
         for _ in 0..n {
             for _ in 0..quiet {
-                assert_eq!(check.sample(DT, true, 0.1, f, G), None);
+                assert_eq!(sample(check, DT, true, 0.1, f), None);
             }
             // A landing and a push-off: turning fast, reading far more.
-            check.sample(DT, true, 2.0, 3.0 * f, G);
-            said.extend(check.sample(DT, false, 5.0, 20.0, G));
+            sample(check, DT, true, 2.0, 3.0 * f);
+            said.extend(sample(check, DT, false, 5.0, 20.0));
         }
         said
     }
@@ -221,9 +229,9 @@ mod tests {
         let mut said = Vec::new();
         for _ in 0..STANCES {
             for _ in 0..3 {
-                assert_eq!(check.sample(0.01, true, 0.1, 0.5 * G, G), None);
+                assert_eq!(sample(&mut check, 0.01, true, 0.1, 0.5 * G), None);
             }
-            said.extend(check.sample(0.01, false, 5.0, 20.0, G));
+            said.extend(sample(&mut check, 0.01, false, 5.0, 20.0));
         }
         assert_eq!(said.len(), 1);
     }
@@ -235,18 +243,18 @@ mod tests {
         for k in 0..STANCES {
             for j in 0..5 {
                 let dt = 0.005 + if (j + k) % 2 == 0 { -1e-5 } else { 1e-6 };
-                assert_eq!(check.sample(dt, true, 0.1, 0.5 * G, G), None);
+                assert_eq!(sample(&mut check, dt, true, 0.1, 0.5 * G), None);
             }
-            said.extend(check.sample(0.005, false, 5.0, 20.0, G));
+            said.extend(sample(&mut check, 0.005, false, 5.0, 20.0));
         }
         assert_eq!(said.len(), 1);
         // Four do not.
         let mut check = StanceForce::default();
         for _ in 0..STANCES {
             for _ in 0..4 {
-                check.sample(0.00501, true, 0.1, 0.5 * G, G);
+                sample(&mut check, 0.00501, true, 0.1, 0.5 * G);
             }
-            assert_eq!(check.sample(0.005, false, 5.0, 20.0, G), None);
+            assert_eq!(sample(&mut check, 0.005, false, 5.0, 20.0), None);
         }
     }
 
