@@ -342,23 +342,19 @@ impl<'a> Feed<'a> {
                 if e.not_gravity_m_s2.is_some() && !self.quiet {
                     before_not_gravity()?;
                 }
-                let mut notices = e
-                    .notices()
-                    .filter(|n| !matches!(n, Notice::SpecificForceOffGravity(..)))
-                    .peekable();
-                if notices.peek().is_some() {
-                    self.warned += 1;
-                    if self.warned <= MAX_REFUSED_EXAMPLES && !self.quiet {
-                        for n in notices {
-                            tracing::warn!("{}:{}: {n}", self.path.display(), row.line);
-                        }
+                // The warnings of a sample count once against the cap; the specific force's
+                // is said once each time the median leaves gravity and is never held back by
+                // it (a review found it swallowed after ten gaps).
+                let mut counted = false;
+                for n in e.notices() {
+                    let uncapped = matches!(n, Notice::SpecificForceOffGravity(..));
+                    if !uncapped && !counted {
+                        self.warned += 1;
+                        counted = true;
                     }
-                }
-                // Said once each time the median leaves gravity: never held back by the cap
-                // on the others (a review found it swallowed after ten gaps).
-                if let (Some((f, g)), false) = (e.specific_force_off_gravity_m_s2, self.quiet) {
-                    let n = Notice::SpecificForceOffGravity(f, g);
-                    tracing::warn!("{}:{}: {n}", self.path.display(), row.line);
+                    if !self.quiet && (uncapped || self.warned <= MAX_REFUSED_EXAMPLES) {
+                        tracing::warn!("{}:{}: {n}", self.path.display(), row.line);
+                    }
                 }
             }
             Err(err) => {

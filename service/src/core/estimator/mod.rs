@@ -357,13 +357,13 @@ impl Estimator {
     /// The median specific force of the last quiet stances, m/s² (`Counters::
     /// specific_force_off_gravity` says when it left gravity), once enough stances were seen.
     pub fn stance_specific_force_m_s2(&self) -> Option<f64> {
-        self.p.stance_force_m_s2().map(|(m, _)| m)
+        self.p.stance_force.median_m_s2()
     }
 
     /// Whether that median is off gravity now: said so, and not yet back within half the
     /// tolerance.
     pub fn specific_force_off_gravity_now(&self) -> bool {
-        self.p.stance_force_m_s2().is_some_and(|(_, off)| off)
+        self.p.stance_force.is_off()
     }
 
     /// An external observation of the walking (foot) heading in the map frame with its σ; it is

@@ -133,14 +133,6 @@ impl Pipeline {
         expected_gravity_m_s2(self.cfg.alignment.gravity_m_s2)
     }
 
-    /// The median specific force of the last quiet stances, m/s², once there are enough, and
-    /// whether it is off gravity now.
-    pub(super) fn stance_force_m_s2(&self) -> Option<(f64, bool)> {
-        self.stance_force
-            .median_m_s2()
-            .map(|m| (m, self.stance_force.is_off()))
-    }
-
     /// Foot-from-sensor rotation: `R_z(mount_yaw)·tilt0`.
     pub(super) fn foot_from_sensor(&self) -> UnitQuaternion<f64> {
         rot_z(self.mount_yaw_rad) * self.tilt0

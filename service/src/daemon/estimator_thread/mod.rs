@@ -272,28 +272,27 @@ impl<'a> EstState<'a> {
             }
         };
         for n in e.notices() {
-            // A stream in g refuses every stance as a rest: the first few are named, and the
-            // first of each stream goes into the report's warnings.
-            match (n, self.est.counters().alignment_not_gravity) {
-                (Notice::NotGravity(..), _) if !self.not_gravity_reported => {
-                    // (A flag, not the count: a copy restored after a glitch takes it back.)
-                    self.not_gravity_reported = true;
-                    self.warn(format!(
-                        "stream {} (IMU seq {}): {n}",
-                        self.streams_finished + 1,
-                        s.seq
-                    ));
-                }
-                (Notice::NotGravity(..), k) if k > REFUSED_WARNINGS_PER_STREAM => {
-                    tracing::debug!(seq = s.seq, "{n}")
-                }
-                // Said once each time the median leaves gravity: every one to the report.
-                (Notice::SpecificForceOffGravity(..), _) => self.warn(format!(
+            // A stream in g refuses every stance as a rest: the first few are named. Into the
+            // report's warnings: the first refusal as not gravity of each stream (a
+            // flag, not the count: a copy restored after a glitch takes the count back), and
+            // every time the stances' specific force leaves gravity (said once each time).
+            let to_report = match n {
+                Notice::NotGravity(..) => !std::mem::replace(&mut self.not_gravity_reported, true),
+                Notice::SpecificForceOffGravity(..) => true,
+                _ => false,
+            };
+            let not_gravity_beyond_cap = matches!(n, Notice::NotGravity(..))
+                && self.est.counters().alignment_not_gravity > REFUSED_WARNINGS_PER_STREAM;
+            if to_report {
+                self.warn(format!(
                     "stream {} (IMU seq {}): {n}",
                     self.streams_finished + 1,
                     s.seq
-                )),
-                _ => tracing::warn!(seq = s.seq, "{n}"),
+                ));
+            } else if not_gravity_beyond_cap {
+                tracing::debug!(seq = s.seq, "{n}");
+            } else {
+                tracing::warn!(seq = s.seq, "{n}");
             }
         }
         if e.replaced_first_t_s.is_some()
