@@ -97,16 +97,23 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
         ));
     }
     if s.specific_force_off_gravity > 0 {
+        let rest = s.rest_specific_force_m_s2.map_or_else(String::new, |f| {
+            format!("the initial rest read {f:.2} m/s²; ")
+        });
         let end = match (
             s.stance_specific_force_m_s2,
             s.specific_force_off_gravity_at_end,
         ) {
-            (Some(f), true) => format!("not back within 2.5 % of gravity by the end: {f:.2} m/s²"),
-            (Some(f), false) => format!("back within 2.5 % of gravity by the end: {f:.2} m/s²"),
-            (None, _) => "no median at the end".to_string(),
+            (Some(f), true) => format!(
+                "the quiet stances not back within 2.5 % of gravity by the end: {f:.2} m/s²"
+            ),
+            (Some(f), false) => {
+                format!("the quiet stances back within 2.5 % of gravity by the end: {f:.2} m/s²")
+            }
+            (None, _) => "too few quiet stances for a median".to_string(),
         };
         notes.push(format!(
-            "the quiet stances' specific force left gravity {} ({end}): the accelerometer's scale or units look wrong, and the distances walked with them; the log's warnings give the median",
+            "the specific force left gravity {} ({rest}{end}): the accelerometer's scale or units look wrong, and the distances walked with them; the log's warnings give the figure",
             match s.specific_force_off_gravity {
                 1 => "once".to_string(),
                 n => format!("{n} times"),

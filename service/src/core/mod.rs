@@ -21,6 +21,6 @@ pub mod rotation;
 pub mod stance;
 
 pub use estimator::{
-    Counters, Estimate, Estimator, GapCrossing, ImuInput, Notice, Phase, SPECIFIC_FORCE_TOLERANCE,
-    SampleError, WarmStart, WarmStartError,
+    Counters, Estimate, Estimator, ForceWitness, GapCrossing, ImuInput, Notice, OffGravity, Phase,
+    SPECIFIC_FORCE_TOLERANCE, SampleError, WarmStart, WarmStartError,
 };

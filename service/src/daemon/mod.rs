@@ -259,7 +259,7 @@ pub struct DaemonReport {
     /// producer's stream in g), over every stream of this life; the first of each stream is in
     /// `warnings` (while they are below their cap).
     pub alignment_not_gravity: u64,
-    /// Times a stream's quiet stances read a median specific force beyond
+    /// Times a stream's initial rest, or its quiet stances' median, read a specific force beyond
     /// `core::SPECIFIC_FORCE_TOLERANCE` of gravity (an accelerometer scale or units wrong),
     /// over every stream of this life; each is in `warnings` (while they are below their cap).
     pub specific_force_off_gravity: u64,

@@ -481,6 +481,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         started_without_rest: c.started_without_rest,
         alignment_not_gravity: c.alignment_not_gravity,
         specific_force_off_gravity: c.specific_force_off_gravity,
+        rest_specific_force_m_s2: feed.est.rest_specific_force_m_s2(),
         stance_specific_force_m_s2: feed.est.stance_specific_force_m_s2(),
         specific_force_off_gravity_at_end: feed.est.specific_force_off_gravity_now(),
         start_replayed_ms: c.start_replayed_ms,

@@ -101,14 +101,16 @@ pub struct Summary {
     /// Rests or first stances not aligned on because their mean specific force was no
     /// gravity (`Counters::alignment_not_gravity`).
     pub alignment_not_gravity: u64,
-    /// Times the quiet stances' median specific force left gravity by more than
-    /// `core::SPECIFIC_FORCE_TOLERANCE` (an accelerometer scale or units wrong;
+    /// Times the initial rest's specific force or the quiet stances' median left gravity by
+    /// more than `core::SPECIFIC_FORCE_TOLERANCE` (an accelerometer scale or units wrong;
     /// `Counters::specific_force_off_gravity`).
     pub specific_force_off_gravity: u64,
+    /// The initial rest's mean specific force, m/s² (`null` without a rest).
+    pub rest_specific_force_m_s2: Option<f64>,
     /// That median at the end of the log, m/s² (`null` before enough quiet stances).
     pub stance_specific_force_m_s2: Option<f64>,
-    /// That median was off gravity at the end of the log (said, and not back within half the
-    /// tolerance).
+    /// The specific force was off gravity at the end of the log (said, by the rest or the
+    /// median, and the median not back within half the tolerance).
     pub specific_force_off_gravity_at_end: bool,
     /// A start in fast gait went back this far, ms, to an earlier stance (see `Counters`).
     pub start_replayed_ms: u64,

@@ -174,6 +174,18 @@ impl Pipeline {
         self.counters.started_without_rest = short_start;
         if !short_start {
             self.counters.initial_rest_moving_blocks = rest.moving_blocks();
+            // Standing still, the foot reads gravity to the accelerometer's scale error (the
+            // aligning rests of the 16 gdins walks 9.82–9.86 m/s²): beyond the stances' own
+            // tolerance the scale or units are wrong, said now rather than after fifteen quiet
+            // stances. (A walking stance reads its landing and push-off too: not held to it.)
+            if self.stance_force.rest(f_norm, g_expected) {
+                self.counters.specific_force_off_gravity += 1;
+                self.out.specific_force_off_gravity = Some(OffGravity {
+                    force_m_s2: f_norm,
+                    gravity_m_s2: g_expected,
+                    witness: ForceWitness::InitialRest,
+                });
+            }
         }
         // The prior's σ: √(floor² + spread²), the bias instability floor and the rest's rate
         // spread over √(number of 50 ms blocks) (a rest during which the foot still sways).

@@ -63,7 +63,7 @@ use gaps::Gap;
 use recovery::{VELOCITY_RESET_Z2, take_spare};
 pub use rest::REST_BLOCK_S;
 use rest::{InitialRest, RestMeans, RestSums};
-pub use stance_force::SPECIFIC_FORCE_TOLERANCE;
+pub use stance_force::{ForceWitness, OffGravity, SPECIFIC_FORCE_TOLERANCE};
 
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::clock::SampleClock;
@@ -360,8 +360,14 @@ impl Estimator {
         self.p.stance_force.median_m_s2()
     }
 
-    /// Whether that median is off gravity now: said so, and not yet back within half the
-    /// tolerance.
+    /// The mean specific force of the initial rest the filter aligned on, m/s² (`None` before
+    /// alignment, or after a start without a rest).
+    pub fn rest_specific_force_m_s2(&self) -> Option<f64> {
+        self.p.stance_force.rest_m_s2()
+    }
+
+    /// Whether the specific force is off gravity now: the initial rest's or that median said
+    /// so, and the median not yet back within half the tolerance.
     pub fn specific_force_off_gravity_now(&self) -> bool {
         self.p.stance_force.is_off()
     }

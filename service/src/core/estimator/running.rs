@@ -122,9 +122,9 @@ impl Pipeline {
     ) {
         let configured = self.cfg.alignment.gravity_m_s2;
         let gravity = || expected_gravity_m_s2(configured);
-        if let Some((median, g)) = self.stance_force.sample(dt_s, stance, w, f, gravity) {
+        if let Some(said) = self.stance_force.sample(dt_s, stance, w, f, gravity) {
             self.counters.specific_force_off_gravity += 1;
-            self.out.specific_force_off_gravity_m_s2 = Some((median, g));
+            self.out.specific_force_off_gravity = Some(said);
         }
     }
 

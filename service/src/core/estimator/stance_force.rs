@@ -11,6 +11,11 @@
 //! [`STANCES`] such stances. On the 16 gdins walks (the default run's stances) that median lies
 //! within 9.73–9.90 m/s² at every sample (−0.8 to +1.0 %; the NGIMU walk 9.75–9.76); it is held
 //! to [`SPECIFIC_FORCE_TOLERANCE`].
+//!
+//! The initial rest the filter aligns on is held to the same tolerance at once ([`StanceForce::
+//! rest`]): standing still, the foot reads gravity to the accelerometer's scale error, so a walk
+//! that starts with a rest is told at its first step, not fifteen quiet stances later (which a
+//! fast walk may never have: exp34 keeps 7 of its 25 stances).
 
 use nalgebra::Vector3;
 
@@ -34,6 +39,27 @@ pub const STANCES: usize = 15;
 /// rests within ±2 %.
 pub const SPECIFIC_FORCE_TOLERANCE: f64 = 0.05;
 
+/// What read the specific force that was said off gravity.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ForceWitness {
+    /// The initial rest the filter aligned on (its mean over the blocks in which the foot
+    /// stood still).
+    InitialRest,
+    /// The median of the last [`STANCES`] quiet stances.
+    QuietStances,
+}
+
+/// A specific force said off gravity: what read it, and the gravity it was held against.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OffGravity {
+    /// The rest's mean or the stances' median, m/s².
+    pub force_m_s2: f64,
+    /// The gravity it should read (`alignment.gravity_m_s2`, else standard gravity), m/s².
+    pub gravity_m_s2: f64,
+    /// What read it.
+    pub witness: ForceWitness,
+}
+
 /// The running check. Fixed size, no allocation.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct StanceForce {
@@ -45,8 +71,11 @@ pub(super) struct StanceForce {
     means_m_s2: [f64; STANCES],
     len: usize,
     next: usize,
-    /// The median lies beyond the tolerance and was reported; it is reported again only after
-    /// it came back within half the tolerance.
+    /// The mean specific force of the initial rest the filter aligned on (NaN before, or
+    /// without a rest).
+    rest_m_s2: f64,
+    /// The rest or the median lies beyond the tolerance and was reported; it is reported again
+    /// only after the median came back within half the tolerance.
     off: bool,
 }
 
@@ -59,6 +88,7 @@ impl Default for StanceForce {
             means_m_s2: [f64::NAN; STANCES],
             len: 0,
             next: 0,
+            rest_m_s2: f64::NAN,
             off: false,
         }
     }
@@ -70,7 +100,7 @@ impl StanceForce {
     /// [`QUIET_RATE_RAD_S`] is summed (per sample: a comparison of squares, and one root for
     /// the quiet ones); the first sample after a stance closes it against `gravity_m_s2()`.
     /// Returns the median and that gravity when the median has just left the tolerance (once,
-    /// until it comes back).
+    /// until it comes back; not when the rest said it and it never came back).
     #[inline]
     pub(super) fn sample(
         &mut self,
@@ -79,7 +109,7 @@ impl StanceForce {
         w: &Vector3<f64>,
         f: &Vector3<f64>,
         gravity_m_s2: impl FnOnce() -> f64,
-    ) -> Option<(f64, f64)> {
+    ) -> Option<OffGravity> {
         if stance {
             if w.norm_squared() < QUIET_RATE_RAD_S * QUIET_RATE_RAD_S {
                 let force_m_s2 = f.norm();
@@ -95,7 +125,11 @@ impl StanceForce {
             return None;
         }
         let g = gravity_m_s2();
-        self.stance_ended(g).map(|median| (median, g))
+        self.stance_ended(g).map(|median| OffGravity {
+            force_m_s2: median,
+            gravity_m_s2: g,
+            witness: ForceWitness::QuietStances,
+        })
     }
 
     /// The stance whose samples were summed has ended; `gravity_m_s2` is what it should read.
@@ -125,7 +159,27 @@ impl StanceForce {
         None
     }
 
-    /// Whether the median is off gravity now (said, and not back within half the tolerance).
+    /// The initial rest the filter aligned on read `force_m_s2` (its mean over its still
+    /// blocks) where gravity is `gravity_m_s2`: beyond the tolerance it is said at once (true),
+    /// and the stances say it again only once their median has come back within half the
+    /// tolerance and left it again.
+    pub(super) fn rest(&mut self, force_m_s2: f64, gravity_m_s2: f64) -> bool {
+        self.rest_m_s2 = force_m_s2;
+        let off = (force_m_s2 - gravity_m_s2).abs() > SPECIFIC_FORCE_TOLERANCE * gravity_m_s2;
+        if off && !self.off {
+            self.off = true;
+            return true;
+        }
+        false
+    }
+
+    /// The initial rest's mean specific force, m/s², once the filter aligned on a rest.
+    pub(super) fn rest_m_s2(&self) -> Option<f64> {
+        Some(self.rest_m_s2).filter(|f| f.is_finite())
+    }
+
+    /// Whether the rest or the median is off gravity now (said, and the median not back within
+    /// half the tolerance).
     pub(super) fn is_off(&self) -> bool {
         self.off
     }
@@ -165,9 +219,10 @@ mod tests {
         force: f64,
     ) -> Option<f64> {
         let (w, f) = (Vector3::new(0.0, rate, 0.0), Vector3::new(0.0, 0.0, force));
-        check.sample(dt, stance, &w, &f, || G).map(|(median, g)| {
-            assert_eq!(g, G);
-            median
+        check.sample(dt, stance, &w, &f, || G).map(|said| {
+            assert_eq!(said.gravity_m_s2, G);
+            assert_eq!(said.witness, ForceWitness::QuietStances);
+            said.force_m_s2
         })
     }
 
@@ -256,6 +311,26 @@ mod tests {
             }
             assert_eq!(sample(&mut check, 0.005, false, 5.0, 20.0), None);
         }
+    }
+
+    #[test]
+    fn a_rest_off_gravity_is_said_at_once_and_the_stances_do_not_say_it_again() {
+        let mut check = StanceForce::default();
+        assert_eq!(check.rest_m_s2(), None);
+        assert!(check.rest(0.8 * G, G));
+        assert_eq!(check.rest_m_s2(), Some(0.8 * G));
+        assert!(check.is_off());
+        // The stances read the same: the same episode.
+        assert!(walk(&mut check, 2 * STANCES, 20, 0.8 * G).is_empty());
+        // Back to gravity, then off again: said by the stances.
+        assert!(walk(&mut check, STANCES, 20, G).is_empty());
+        assert!(!check.is_off());
+        assert_eq!(walk(&mut check, STANCES, 20, 1.2 * G).len(), 1);
+        // A rest within the tolerance says nothing, and leaves the stances free to say it.
+        let mut check = StanceForce::default();
+        assert!(!check.rest(1.04 * G, G));
+        assert!(!check.is_off());
+        assert_eq!(walk(&mut check, STANCES, 20, 0.8 * G).len(), 1);
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! The estimator's inputs and outputs: samples, refusals, warm-start states, phases, heading
 //! events, counters and the per-sample estimate.
 
-use super::stance_force::{SPECIFIC_FORCE_TOLERANCE, STANCES};
+use super::stance_force::{ForceWitness, OffGravity, SPECIFIC_FORCE_TOLERANCE, STANCES};
 use crate::core::eskf::Innovation;
 use crate::core::heading::Rejection;
 use crate::core::health::HealthFault;
@@ -243,9 +243,10 @@ pub struct Counters {
     /// broken accelerometer; the CSV reader refuses a log in g, a producer's stream reaches the
     /// daemon as it is).
     pub alignment_not_gravity: u64,
-    /// Times the median specific force of the last quiet stances left gravity by more than
-    /// [`SPECIFIC_FORCE_TOLERANCE`] (an accelerometer scale or units wrong: every distance is
-    /// wrong by as much; `stance_force.rs`). Counted once per time it left.
+    /// Times the specific force left gravity by more than [`SPECIFIC_FORCE_TOLERANCE`]: the
+    /// initial rest's, or the median of the last quiet stances (an accelerometer scale or units
+    /// wrong: every distance is wrong by as much; `stance_force.rs`). Counted once per time it
+    /// left.
     pub specific_force_off_gravity: u64,
     /// 50 ms blocks of the initial rest left out of its means (bias prior, tilt) because the
     /// foot moved in them (`alignment.rest_max_rate_change_rad_s`).
@@ -394,10 +395,11 @@ pub struct Estimate {
     /// specific force and the gravity it was held against, m/s² (counted in
     /// `alignment_not_gravity`).
     pub not_gravity_m_s2: Option<(f64, f64)>,
-    /// The stance that ended on this sample took the median specific force of the last quiet
-    /// stances beyond [`SPECIFIC_FORCE_TOLERANCE`] of gravity: that median and the gravity it
-    /// was held against, m/s² (counted in `specific_force_off_gravity`).
-    pub specific_force_off_gravity_m_s2: Option<(f64, f64)>,
+    /// The initial rest that aligned the filter on this sample, or the stance that ended on
+    /// it, took the specific force beyond [`SPECIFIC_FORCE_TOLERANCE`] of gravity: the rest's
+    /// mean or the last quiet stances' median, and the gravity it was held against (counted in
+    /// `specific_force_off_gravity`).
+    pub specific_force_off_gravity: Option<OffGravity>,
     /// Zero-velocity detector statistic.
     pub detector_statistic: f64,
     /// Tracking, and less than `estimator.converged_unabsorbed` of a bias error present when the
@@ -439,7 +441,7 @@ impl Estimate {
         self.velocity_reset = false;
         self.heading_reacquired = None;
         self.not_gravity_m_s2 = None;
-        self.specific_force_off_gravity_m_s2 = None;
+        self.specific_force_off_gravity = None;
         self.replaced_first_t_s = None;
         self.glitch_t_s = None;
         self.glitch_run_dropped = 0;
@@ -478,7 +480,7 @@ impl Default for Estimate {
             velocity_reset: false,
             heading_reacquired: None,
             not_gravity_m_s2: None,
-            specific_force_off_gravity_m_s2: None,
+            specific_force_off_gravity: None,
             gap_s: None,
             gap_crossing: None,
             detector_statistic: f64::NAN,
@@ -553,8 +555,8 @@ pub enum Notice {
     /// A rest (or first stance) was not aligned on: its mean specific force is no gravity
     /// (measured, gravity; m/s²).
     NotGravity(f64, f64),
-    /// The quiet stances' median specific force is no gravity (median, gravity; m/s²).
-    SpecificForceOffGravity(f64, f64),
+    /// The initial rest's or the quiet stances' specific force is no gravity.
+    SpecificForceOffGravity(OffGravity),
 }
 
 impl std::fmt::Display for Notice {
@@ -615,13 +617,22 @@ impl std::fmt::Display for Notice {
                  a wrong scale or a broken accelerometer? Not aligned on it",
                 GRAVITY_TOLERANCE * 100.0
             ),
-            Notice::SpecificForceOffGravity(f_m_s2, g_m_s2) => write!(
+            Notice::SpecificForceOffGravity(OffGravity {
+                force_m_s2,
+                gravity_m_s2,
+                witness,
+            }) => write!(
                 f,
-                "the foot's last {STANCES} quiet stances read a median specific force of \
-                 {f_m_s2:.3} m/s², not gravity ({g_m_s2:.3} m/s² ± {:.0} %): the accelerometer's \
-                 scale or units look wrong by {:+.1} %, and distances by about as much",
+                "{} specific force of {force_m_s2:.3} m/s², not gravity ({gravity_m_s2:.3} m/s² \
+                 ± {:.0} %): the accelerometer's scale or units look wrong by {:+.1} %, and \
+                 distances by about as much",
+                match witness {
+                    ForceWitness::InitialRest => "the initial rest read a mean".to_string(),
+                    ForceWitness::QuietStances =>
+                        format!("the foot's last {STANCES} quiet stances read a median"),
+                },
                 SPECIFIC_FORCE_TOLERANCE * 100.0,
-                (f_m_s2 / g_m_s2 - 1.0) * 100.0
+                (force_m_s2 / gravity_m_s2 - 1.0) * 100.0
             ),
         }
     }
@@ -646,8 +657,8 @@ impl Estimate {
             .chain(self.clock_stepped_back_s.map(Notice::ClockSteppedBack))
             .chain(self.not_gravity_m_s2.map(|(f, g)| Notice::NotGravity(f, g)))
             .chain(
-                self.specific_force_off_gravity_m_s2
-                    .map(|(f, g)| Notice::SpecificForceOffGravity(f, g)),
+                self.specific_force_off_gravity
+                    .map(Notice::SpecificForceOffGravity),
             )
     }
 }

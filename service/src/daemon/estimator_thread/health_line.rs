@@ -116,11 +116,17 @@ impl EstState<'_> {
             },
             match (c.alignment_not_gravity, self.est.phase()) {
                 (0, _) | (_, Phase::Calibrating | Phase::Tracking) => {
-                    match self.est.stance_specific_force_m_s2() {
-                        Some(f) if self.est.specific_force_off_gravity_now() => format!(
+                    let stances = self.est.stance_specific_force_m_s2();
+                    let rest = self.est.rest_specific_force_m_s2();
+                    match (stances, rest) {
+                        _ if !self.est.specific_force_off_gravity_now() => String::new(),
+                        (Some(f), _) => format!(
                             " (accelerometer scale? its quiet stances read {f:.2} m/s², not gravity)"
                         ),
-                        _ => String::new(),
+                        (None, Some(f)) => format!(
+                            " (accelerometer scale? its initial rest read {f:.2} m/s², not gravity)"
+                        ),
+                        (None, None) => String::new(),
                     }
                 }
                 (1, Phase::Aligning) => {
