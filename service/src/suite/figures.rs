@@ -27,13 +27,20 @@ pub struct StanceMatch {
     pub extra: usize,
     /// Median of (detected − listed) stance end over the found footprints, s (NaN: none).
     pub median_end_offset_s: f64,
+    /// Listed footprints whose stance end the data set's authors placed by hand (the
+    /// recording's `hand_placed_strides`), and of them, found.
+    pub hand_placed: usize,
+    /// Of the hand-placed ones, found.
+    pub hand_placed_found: usize,
 }
 
 /// Largest distance between a detected and a listed stance end, s.
 pub const STANCE_MATCH_S: f64 = 0.05;
 
 impl StanceMatch {
-    pub(super) fn of(truth: &[TruthPoint], stances: &[(f64, f64)]) -> Self {
+    /// `truth` against the `stances` (first, last sample, s); `hand_placed`: the strides (the
+    /// truth's `stride` column) whose listed end was placed by hand.
+    pub(super) fn of(truth: &[TruthPoint], stances: &[(f64, f64)], hand_placed: &[u32]) -> Self {
         let (t0, t1) = match (truth.first(), truth.last()) {
             (Some(a), Some(b)) => (a.t_s - STANCE_MATCH_S, b.t_s + STANCE_MATCH_S),
             _ => return Self::default(),
@@ -71,6 +78,16 @@ impl StanceMatch {
             .filter(|d| d.abs() <= STANCE_MATCH_S)
             .collect();
         let timing = assigned.iter().flatten().count() - offsets.len();
+        let by_hand = |p: &TruthPoint| {
+            p.stride
+                .is_some_and(|s| hand_placed.iter().any(|&h| i64::from(h) == s))
+        };
+        let hand: Vec<bool> = truth
+            .iter()
+            .zip(&assigned)
+            .filter(|(p, _)| by_hand(p))
+            .map(|(_, a)| a.is_some_and(|(_, d)| d.abs() <= STANCE_MATCH_S))
+            .collect();
         let mut owners: Vec<usize> = assigned.iter().flatten().map(|&(k, _)| k).collect();
         owners.sort_unstable();
         owners.dedup();
@@ -85,6 +102,8 @@ impl StanceMatch {
             timing,
             extra: detected.len() - owners.len(),
             median_end_offset_s: super::tables::median(&mut offsets),
+            hand_placed: hand.len(),
+            hand_placed_found: hand.iter().filter(|&&f| f).count(),
         }
     }
 
@@ -350,12 +369,13 @@ mod tests {
     fn footprints(times: &[f64]) -> Vec<TruthPoint> {
         times
             .iter()
-            .map(|&t_s| TruthPoint {
+            .zip(0..)
+            .map(|(&t_s, stride)| TruthPoint {
                 t_s,
                 x_m: 0.0,
                 y_m: 0.0,
                 z_m: 0.0,
-                stride: None,
+                stride: Some(stride),
                 sample_index: None,
             })
             .collect()
@@ -368,8 +388,14 @@ mod tests {
         // 4 s (missed), and an extra one ending at 3.45 s.
         let truth = footprints(&[1.0, 2.0, 3.0, 4.0]);
         let stances = [(0.7, 1.02), (1.6, 1.97), (2.8, 3.2), (3.4, 3.45)];
-        let m = StanceMatch::of(&truth, &stances);
+        let m = StanceMatch::of(&truth, &stances, &[]);
         assert_eq!((m.listed, m.found, m.timing, m.missed()), (4, 2, 1, 1));
+        assert_eq!((m.hand_placed, m.hand_placed_found), (0, 0));
+        // Strides 1 and 2 (at 2 and 3 s) placed by hand: the first found, the second not (its
+        // end 200 ms off); stride 3 (missed) is not among them.
+        let m = StanceMatch::of(&truth, &stances, &[1, 2]);
+        assert_eq!((m.hand_placed, m.hand_placed_found), (2, 1));
+        assert_eq!((m.listed, m.found), (4, 2));
         assert_eq!((m.detected, m.matching, m.extra), (4, 2, 1));
         // Median of +20 and −30 ms.
         assert!(

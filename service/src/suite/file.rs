@@ -66,6 +66,10 @@ pub struct SuiteRecording {
     /// key out). The reference figure keeps every footprint; the default and the baseline are
     /// also scored on the footprints before the first of these legs.
     pub suspect_legs: Vec<usize>,
+    /// Strides (the truth's `stride` column) whose listed stance end the data set's authors
+    /// placed by hand from |a| and |ω|; the others are the last zero-velocity sample of another
+    /// detector (PyShoe's LSTM, in the gdins walks). The stance table scores the two apart.
+    pub hand_placed_strides: Vec<u32>,
 }
 
 /// Where a recording's start heading came from.
@@ -144,6 +148,8 @@ struct RecordingToml {
     gait: Gait,
     #[serde(default)]
     suspect_legs: Option<Vec<usize>>,
+    #[serde(default)]
+    hand_placed_strides: Vec<u32>,
 }
 
 /// Reads a suite file: every recording's start heading given or derived from its truth, its
@@ -280,7 +286,9 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
             ));
         }
     }
-    let needs_truth = r.start_heading_deg.is_none() || !suspect_legs.is_empty();
+    let needs_truth = r.start_heading_deg.is_none()
+        || !suspect_legs.is_empty()
+        || !r.hand_placed_strides.is_empty();
     let truth = if needs_truth {
         read_truth_csv(&base.join(&r.truth))
             .map_err(|e| format!("recording {}: truth: {e}", r.name))?
@@ -306,6 +314,7 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
     } else {
         flagged_legs_of(&r.name, &suspect_legs, &truth, &meta)
     };
+    check_hand_placed(&r.name, &r.hand_placed_strides, &truth)?;
     Ok(SuiteRecording {
         name: r.name,
         imu: r.imu,
@@ -317,6 +326,7 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
         grid_deg: r.grid_deg,
         gait: r.gait,
         suspect_legs,
+        hand_placed_strides: r.hand_placed_strides,
     })
 }
 
@@ -424,6 +434,24 @@ fn check_suspect_legs(name: &str, legs: &[usize], truth: &[TruthPoint]) -> Resul
     }
 }
 
+/// Every hand-placed stride is a stride of the truth, listed once.
+fn check_hand_placed(name: &str, strides: &[u32], truth: &[TruthPoint]) -> Result<(), String> {
+    for (i, &stride) in strides.iter().enumerate() {
+        if strides[..i].contains(&stride) {
+            return Err(format!(
+                "recording {name}: hand_placed_strides: stride {stride} is listed twice"
+            ));
+        }
+        if !truth.iter().any(|g| g.stride == Some(i64::from(stride))) {
+            return Err(format!(
+                "recording {name}: hand_placed_strides: stride {stride} is no stride of its truth \
+                 (its `stride` column)"
+            ));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -503,6 +531,38 @@ mod tests {
             err.contains("baseline_config = \"nope.toml\": no such file"),
             "{err}"
         );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn hand_placed_strides_must_be_strides_of_the_truth() {
+        let dir = std::env::temp_dir().join(format!("corridor-suite-hand-{}", std::process::id()));
+        let truth = "t_s,x_m,y_m,z_m,stride,sample_index\n0.0,0,0,0,0,0\n1.0,0.8,0,0,1,200\n\
+                     2.0,1.6,0,0,2,400\n";
+        let hand = |list: &str| {
+            read_one(
+                &dir,
+                truth,
+                &format!("start_heading_deg = 0.0\nhand_placed_strides = {list}\n"),
+            )
+        };
+        assert_eq!(hand("[2, 1]").unwrap().hand_placed_strides, vec![2, 1]);
+        let err = hand("[1, 3]").unwrap_err();
+        assert!(
+            err.contains("hand_placed_strides: stride 3 is no stride of its truth"),
+            "{err}"
+        );
+        let err = hand("[1, 1]").unwrap_err();
+        assert!(err.contains("stride 1 is listed twice"), "{err}");
+        // A truth without a stride column has no stride to name.
+        let no_strides = "t_s,x_m,y_m,z_m\n0.0,0,0,0\n1.0,0.8,0,0\n";
+        let err = read_one(
+            &dir,
+            no_strides,
+            "start_heading_deg = 0.0\nhand_placed_strides = [1]\n",
+        )
+        .unwrap_err();
+        assert!(err.contains("stride 1 is no stride of its truth"), "{err}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 

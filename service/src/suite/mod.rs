@@ -486,7 +486,9 @@ impl<'a> Ctx<'a> {
         );
         Ok(DefaultFigures {
             nis: nis.figures(),
-            stances_found: stride_use.map(|_| StanceMatch::of(&self.truth, nis.intervals())),
+            stances_found: stride_use.map(|_| {
+                StanceMatch::of(&self.truth, nis.intervals(), &self.rec.hand_placed_strides)
+            }),
             stride_use,
             stride_ratio: stride_ratio(&out.trace, &self.truth),
         })
