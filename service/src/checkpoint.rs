@@ -99,7 +99,7 @@ pub enum CheckpointError {
         /// The target file.
         path: PathBuf,
         /// What is wrong.
-        reason: String,
+        reason: InvalidState,
     },
 }
 
@@ -117,44 +117,78 @@ fn moved_note(p: &Option<PathBuf>) -> String {
         .map_or_else(String::new, |p| format!("; moved to {}", p.display()))
 }
 
+/// Why a checkpoint's state is not one to warm-start from ([`Checkpoint::validate`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum InvalidState {
+    /// A time, bias, covariance or quaternion value is NaN or infinite.
+    #[error("a value is not finite")]
+    NotFinite,
+    /// A bias component beyond [`MAX_BIAS_RAD_S`].
+    #[error("gyro bias {bias_rad_s} rad/s is beyond the physical bound {MAX_BIAS_RAD_S} rad/s")]
+    BiasBeyondBound {
+        /// The component, rad/s.
+        bias_rad_s: f64,
+    },
+    /// A bias variance beyond [`MAX_BIAS_RAD_S`]².
+    #[error("bias variance {cov:?} is beyond the physical bound {MAX_BIAS_RAD_S}² (rad/s)²")]
+    VarianceBeyondBound {
+        /// The covariance, (rad/s)².
+        cov: [[f64; 3]; 3],
+    },
+    /// The covariance differs from its transpose by more than 1e-12 of its largest entry.
+    #[error("bias covariance is not symmetric")]
+    NotSymmetric,
+    /// The covariance has no Cholesky factor.
+    #[error("bias covariance is not positive definite")]
+    NotPositiveDefinite,
+    /// The quaternion's norm is off 1 by more than 1e-6.
+    #[error("attitude quaternion has norm {norm}")]
+    QuaternionNotUnit {
+        /// Its norm.
+        norm: f64,
+    },
+}
+
 impl Checkpoint {
     /// Checks that every value is finite, the bias and its σ within [`MAX_BIAS_RAD_S`], the
     /// covariance symmetric positive definite (what `Estimator::set_warm_start` accepts) and the
     /// quaternion of unit norm (within 1e-6).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidState> {
         let finite = self.t_s.is_finite()
             && self.gyro_bias_rad_s.iter().all(|v| v.is_finite())
             && self.gyro_bias_cov.iter().flatten().all(|v| v.is_finite())
             && self.nav_from_body_wxyz.iter().all(|v| v.is_finite());
         if !finite {
-            return Err("a value is not finite".into());
+            return Err(InvalidState::NotFinite);
         }
-        if let Some(b) = self
+        if let Some(&bias_rad_s) = self
             .gyro_bias_rad_s
             .iter()
             .find(|b| b.abs() > MAX_BIAS_RAD_S)
         {
-            return Err(format!(
-                "gyro bias {b} rad/s is beyond the physical bound {MAX_BIAS_RAD_S} rad/s"
-            ));
+            return Err(InvalidState::BiasBeyondBound { bias_rad_s });
         }
         if (0..3).any(|i| self.gyro_bias_cov[i][i] > MAX_BIAS_RAD_S * MAX_BIAS_RAD_S) {
-            return Err(format!(
-                "bias variance {:?} is beyond the physical bound {MAX_BIAS_RAD_S}² (rad/s)²",
-                self.gyro_bias_cov
-            ));
+            return Err(InvalidState::VarianceBeyondBound {
+                cov: self.gyro_bias_cov,
+            });
         }
         let p = nalgebra::Matrix3::from_fn(|i, j| self.gyro_bias_cov[i][j]);
         let scale = p.abs().max().max(1e-300);
         if (p - p.transpose()).abs().max() > 1e-12 * scale {
-            return Err("bias covariance is not symmetric".into());
+            return Err(InvalidState::NotSymmetric);
         }
         if p.cholesky().is_none() {
-            return Err("bias covariance is not positive definite".into());
+            return Err(InvalidState::NotPositiveDefinite);
         }
-        let n2: f64 = self.nav_from_body_wxyz.iter().map(|v| v * v).sum();
-        if (n2.sqrt() - 1.0).abs() > 1e-6 {
-            return Err(format!("attitude quaternion has norm {}", n2.sqrt()));
+        let norm = self
+            .nav_from_body_wxyz
+            .iter()
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt();
+        if (norm - 1.0).abs() > 1e-6 {
+            return Err(InvalidState::QuaternionNotUnit { norm });
         }
         Ok(())
     }
@@ -205,8 +239,10 @@ pub fn encode(cp: &Checkpoint) -> Vec<u8> {
 /// Why bytes are not a checkpoint.
 #[derive(Debug, Clone, PartialEq)]
 pub enum DecodeError {
-    /// Not a checkpoint or damaged.
+    /// Not a checkpoint or damaged, in words.
     Corrupt(String),
+    /// A well-formed checkpoint whose state is not valid.
+    Invalid(InvalidState),
     /// Another format version.
     Version(u32),
 }
@@ -236,7 +272,7 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, DecodeError> {
             payload.len() - used
         )));
     }
-    cp.validate().map_err(DecodeError::Corrupt)?;
+    cp.validate().map_err(DecodeError::Invalid)?;
     Ok(cp)
 }
 
@@ -327,6 +363,11 @@ fn load_with(path: &Path, move_bad: bool) -> Result<Checkpoint, CheckpointError>
         Err(DecodeError::Corrupt(reason)) => Err(CheckpointError::Corrupt {
             path: path.to_owned(),
             reason,
+            moved_to: aside(path),
+        }),
+        Err(DecodeError::Invalid(invalid)) => Err(CheckpointError::Corrupt {
+            path: path.to_owned(),
+            reason: invalid.to_string(),
             moved_to: aside(path),
         }),
         Err(DecodeError::Version(found)) => Err(CheckpointError::Incompatible {
@@ -486,20 +527,24 @@ mod tests {
         // not symmetric.
         let mut bad = sample();
         bad.gyro_bias_cov[2][2] = 0.0;
-        assert!(
-            matches!(decode(&encode(&bad)), Err(DecodeError::Corrupt(r)) if r.contains("positive"))
+        assert_eq!(
+            decode(&encode(&bad)),
+            Err(DecodeError::Invalid(InvalidState::NotPositiveDefinite))
         );
         let mut bad = sample();
         bad.gyro_bias_cov[0][1] = 5e-9;
-        assert!(
-            matches!(decode(&encode(&bad)), Err(DecodeError::Corrupt(r)) if r.contains("symmetric"))
+        assert_eq!(
+            decode(&encode(&bad)),
+            Err(DecodeError::Invalid(InvalidState::NotSymmetric))
         );
         let mut bad = sample();
         bad.nav_from_body_wxyz = [2.0, 0.0, 0.0, 0.0];
-        assert!(matches!(
+        assert_eq!(
             decode(&encode(&bad)),
-            Err(DecodeError::Corrupt(_))
-        ));
+            Err(DecodeError::Invalid(InvalidState::QuaternionNotUnit {
+                norm: 2.0
+            }))
+        );
     }
 
     #[test]
