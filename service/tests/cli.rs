@@ -413,7 +413,8 @@ fn run_starts_from_a_checkpoint_as_the_daemon_does_and_names_a_missing_one() {
 
 /// The footprints before the first truth leg the data set flags are scored on their own: the
 /// suite's figure equals `corridor run`'s evaluation of the same default run against the truth
-/// cut before that leg, and a leg the truth does not have is refused, naming the key.
+/// cut before that leg, and a leg the truth does not have is refused, naming the key. The same
+/// run's stance ends scored apart for the strides a suite lists as placed by hand.
 #[test]
 fn eval_scores_the_footprints_before_a_flagged_truth_leg() {
     let dir = tmp("suspect");
@@ -424,7 +425,7 @@ fn eval_scores_the_footprints_before_a_flagged_truth_leg() {
             &path,
             format!(
                 "[[recording]]\nname = \"exp31\"\nimu = {:?}\ntruth = {:?}\nconfig = {:?}\n\
-                 start_heading_deg = 0.0\nsuspect_legs = {legs}\n",
+                 start_heading_deg = 0.0\nsuspect_legs = {legs}\nhand_placed_strides = [1, 2, 21]\n",
                 data.join("imu.csv"),
                 data.join("ground_truth.csv"),
                 root().join("configs/gdins.toml"),
@@ -481,6 +482,12 @@ fn eval_scores_the_footprints_before_a_flagged_truth_leg() {
     assert!((got - all).abs() > 1e-6, "{got} {all}");
     let md = std::fs::read_to_string(out.join("results.md")).unwrap();
     assert!(md.contains("| exp31 | 30 | 30 of 34 |"), "{md}");
+    // exp31's strides 1 and 21 end more than 50 ms from the listed ends, stride 2 within them
+    // (none of exp31's is placed by hand in the data set: a suite's list, scored as given).
+    let stances = &rows[0]["stances_found"];
+    assert_eq!(stances["hand_placed"], 3, "{stances}");
+    assert_eq!(stances["hand_placed_found"], 1, "{stances}");
+    assert!(md.contains("| 1 of 3 | 28 of 31 (90 %) |"), "{md}");
 
     // A leg the truth does not have (34 footprints: legs 1-33).
     let o = corridor(&["eval", "--suite", write_suite("[40]").to_str().unwrap()]);

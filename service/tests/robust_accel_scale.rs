@@ -157,6 +157,23 @@ fn the_bundled_walks_as_recorded_are_not_taken_for_a_scale_error() {
 }
 
 #[test]
+fn a_rest_that_is_mostly_motion_is_not_held_to_gravity() {
+    // exp40 from its 142nd sample (0.705 s): 0.67 s of "rest" of which 10 of 13 blocks move,
+    // and the motion test, anchored on a moving first block, keeps the moving ones. Its mean
+    // read 10.30 m/s², +5.0 %, and was said as a scale error (a review); the stances' median
+    // reads 9.88. Held to gravity only once still for `alignment.min_rest_s`.
+    let mut log = walk("gdins_exp40_serpentine_return");
+    log.rows.drain(..141);
+    let (said, count, median) = run(&log, 1.0);
+    assert!(said.is_empty() && count == 0, "{said:?}");
+    assert!((median.unwrap() / 9.80665 - 1.0).abs() < 0.02);
+    // Scaled, the stances say it.
+    let (said, count, _) = run(&log, 0.8);
+    assert_eq!((said.len(), count), (1, 1), "{said:?}");
+    assert!(said[0].1.contains("last 15 quiet stances"), "{said:?}");
+}
+
+#[test]
 fn a_glitched_stamp_on_the_sample_that_said_it_does_not_say_it_twice() {
     // The daemon's path: a stamp 0.3 s ahead on the sample whose estimate said the scale is
     // dropped after the fact and the estimator goes back to its copy from before; the stance
@@ -164,12 +181,17 @@ fn a_glitched_stamp_on_the_sample_that_said_it_does_not_say_it_twice() {
     // daemon's report), and counted once.
     // Both ways of saying it: at the initial rest's end, and at a stance's end (no rest).
     let log = walk("gdins_exp36_corridor_out_and_back");
-    for log in [from(&log, 2.115), log] {
+    for (log, witness) in [
+        (from(&log, 2.115), "last 15 quiet stances"),
+        (log, "the initial rest read"),
+    ] {
         let (said, _, _) = run(&log, 0.8);
+        assert!(said[0].1.contains(witness), "{said:?}");
         let at_s = said[0].0;
         let glitched = |t_s| if t_s == at_s { t_s + 0.3 } else { t_s };
         let (said, count, _) = run_stamped(&log, 0.8, glitched);
         assert_eq!(said.len(), 1, "{said:?}");
+        assert!(said[0].1.contains(witness), "{said:?}");
         assert_eq!(count, 1);
     }
 }
@@ -273,7 +295,7 @@ fn an_accelerometer_that_reads_nothing_at_first_is_judged_on_the_whole_log() {
 
 #[test]
 fn the_scale_is_said_after_ten_other_warnings_too() {
-    // exp36 × 0.8 without its rest (from row 423, 2.115 s) with twelve gaps of 0.15 s in its
+    // exp36 × 0.8 without its rest (from line 423, 2.115 s) with eleven gaps of 0.15 s in its
     // first 18 s: ten gap warnings are printed, the rest counted; the stances' notice was
     // counted among them and never printed.
     let dir = tmp("after_gaps");
@@ -284,7 +306,8 @@ fn the_scale_is_said_after_ten_other_warnings_too() {
         if (1..423).contains(&k) {
             continue;
         }
-        // Rows 600, 1800, ... 3600 + 1200·m: 30 samples (0.15 s) left out at each.
+        // Lines 300·m (m = 2 to 12; the first falls in the rest cut out): 30 samples (0.15 s)
+        // left out at each.
         let gap = (1..=12).any(|m| (300 * m..300 * m + 30).contains(&k));
         if !gap {
             out += line;
@@ -304,4 +327,50 @@ fn the_scale_is_said_after_ten_other_warnings_too() {
     assert_eq!(before, 10, "{err}");
     assert!(err.contains("more gaps and health-check failures"), "{err}");
     assert_eq!(err.matches("last 15 quiet stances").count(), 1, "{err}");
+    // No rest: no rest's reading in the summary.
+    let summary = summary_of(&dir.join("o"));
+    assert!(summary["rest_specific_force_m_s2"].is_null(), "{summary}");
+    assert_eq!(summary["specific_force_off_gravity"], 1, "{summary}");
+}
+
+fn summary_of(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn corridor_run_reports_the_rests_reading_in_its_summary_and_its_note() {
+    let dir = tmp("rest_note");
+    let imu = exp36_csv(&dir, 14_000, |_, a| a * 0.8);
+    let o = corridor_run(&imu, &dir.join("o"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(
+        err.matches("the initial rest read a mean").count(),
+        1,
+        "{err}"
+    );
+    let summary = summary_of(&dir.join("o"));
+    let rest = summary["rest_specific_force_m_s2"].as_f64().unwrap();
+    assert!((rest / 9.80665 / 0.8 - 1.0).abs() < 0.01, "{summary}");
+    assert_eq!(summary["specific_force_off_gravity"], 1, "{summary}");
+    assert_eq!(
+        summary["specific_force_off_gravity_at_end"], true,
+        "{summary}"
+    );
+    // The notes are in the brief `corridor run` prints.
+    let brief: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let notes = brief["notes"].to_string();
+    assert!(
+        notes.contains(&format!("the initial rest read {rest:.2} m/s²"))
+            && notes.contains("not back within 2.5 % of gravity by the end"),
+        "{notes}"
+    );
+    // As recorded: the rest's reading is there, and nothing is said.
+    let imu = exp36_csv(&dir, 14_000, |_, a| a);
+    let o = corridor_run(&imu, &dir.join("o2"));
+    assert!(o.status.success());
+    let summary = summary_of(&dir.join("o2"));
+    let rest = summary["rest_specific_force_m_s2"].as_f64().unwrap();
+    assert!((rest / 9.80665 - 1.0).abs() < 0.01, "{summary}");
+    assert_eq!(summary["specific_force_off_gravity"], 0, "{summary}");
 }

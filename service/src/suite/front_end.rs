@@ -225,8 +225,8 @@ fn stance_misses_markdown(rows: &[SuiteRow]) -> String {
          footprint's nearest by those limits is extra. A footfall the detector missed and the \
          estimator updated late (`detector.late_stance_min_s`, `detector.overdue_stride_factor`) \
          counts as a stance ending at its quietest sample. The listed ends are the data set's: the last \
-         zero-velocity sample of PyShoe's LSTM detector, except the strides its authors placed by hand \
-         from |a| and |ω| where the LSTM missed or misplaced one (`hand_placed_strides` in the suite \
+         zero-velocity sample of PyShoe's LSTM detector (the last footprint: the log's last sample), except \
+         the strides its authors placed by hand from |a| and |ω| where the LSTM missed or misplaced one (`hand_placed_strides` in the suite \
          file, from the data set's `own_data.py`); the two are scored apart in the last columns.\n\n\
          | recording | listed | found | end further off | missed | extra stances | \
          median end offset (detected − listed) | placed by hand: found | the others: found |\n\
@@ -236,10 +236,15 @@ fn stance_misses_markdown(rows: &[SuiteRow]) -> String {
         let Some(m) = r.stances_found else {
             continue;
         };
-        let others = m.listed - m.hand_placed;
-        let others_found = m.found - m.hand_placed_found;
+        let others = match m.listed - m.hand_placed {
+            0 => "—".to_string(),
+            n => {
+                let found = m.found - m.hand_placed_found;
+                format!("{found} of {n} ({:.0} %)", 100.0 * found as f64 / n as f64)
+            }
+        };
         s.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {:+.0} ms | {} | {others_found} of {others} ({:.0} %) |\n",
+            "| {} | {} | {} | {} | {} | {} | {:+.0} ms | {} | {others} |\n",
             r.recording,
             m.listed,
             m.found,
@@ -251,7 +256,6 @@ fn stance_misses_markdown(rows: &[SuiteRow]) -> String {
                 0 => "—".to_string(),
                 n => format!("{} of {n}", m.hand_placed_found),
             },
-            100.0 * others_found as f64 / others.max(1) as f64
         ));
     }
     s

@@ -217,6 +217,17 @@ impl RestSums {
         }
     }
 
+    /// How long the blocks the means use last, s ([`REST_BLOCK_S`] each; the block still
+    /// being summed not counted).
+    pub(super) fn still_s(&self) -> f64 {
+        let s = if self.settled.n > 0 {
+            self.settled
+        } else {
+            self.still_blocks()
+        };
+        s.blocks as f64 * REST_BLOCK_S
+    }
+
     /// Every closed block in which the foot did not move, the settled ones and the recent.
     fn still_blocks(&self) -> Sums {
         let mut s = self.settled;
