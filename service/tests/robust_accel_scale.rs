@@ -89,51 +89,49 @@ fn check_said(text: &str, scale: f64) {
     assert!((wrong_pct - expected_pct).abs() < 0.06, "{scale}: {text}");
 }
 
+/// `log` with its accelerometer scaled by `scale`: said once, by `witness`, before `by_s`, with
+/// the figure and its error right; the stances' median at the end.
+fn said_once_by(log: &ImuLog, scale: f64, witness: &str, by_s: f64) -> Option<f64> {
+    let (said, count, median) = run(log, scale);
+    assert_eq!((said.len(), count), (1, 1), "{scale}: {said:?}");
+    let (t_s, text) = &said[0];
+    assert!(*t_s < by_s, "{scale}: said at {t_s} s");
+    assert!(text.contains(witness), "{text}");
+    check_said(text, scale);
+    median
+}
+
+/// The stances' median at the end reads `scale` × gravity.
+fn median_reads(median: Option<f64>, scale: f64) {
+    let median = median.unwrap();
+    assert!(
+        (median / 9.80665 / scale - 1.0).abs() < 0.01,
+        "{scale}: {median}"
+    );
+}
+
 #[test]
 fn a_scaled_accelerometer_is_said_once_at_the_initial_rest() {
     // exp36's rest ends at about 2 s; the stances' median (fifteen quiet stances in, at about
     // 20 s) is off too, and not said again. exp34, fast, never keeps fifteen quiet stances:
     // only its rest can say it.
-    for (name, scales) in [
-        ("gdins_exp36_corridor_out_and_back", &[0.8, 1.2, 0.94][..]),
-        ("gdins_exp34_fast_out_and_back", &[0.94][..]),
-    ] {
-        let log = walk(name);
-        for &scale in scales {
-            let (said, count, median) = run(&log, scale);
-            assert_eq!(said.len(), 1, "{name} {scale}: {said:?}");
-            assert_eq!(count, 1, "{name} {scale}");
-            let (t_s, text) = &said[0];
-            assert!(*t_s < 3.0, "{name} {scale}: said at {t_s} s");
-            assert!(text.contains("the initial rest read a mean"), "{text}");
-            check_said(text, scale);
-            if name.contains("exp36") {
-                let median = median.unwrap();
-                assert!(
-                    (median / 9.80665 / scale - 1.0).abs() < 0.01,
-                    "{scale}: {median}"
-                );
-            }
-        }
+    let rest = "the initial rest read a mean";
+    let exp36 = walk("gdins_exp36_corridor_out_and_back");
+    for scale in [0.8, 1.2, 0.94] {
+        median_reads(said_once_by(&exp36, scale, rest, 3.0), scale);
     }
+    let exp34 = walk("gdins_exp34_fast_out_and_back");
+    assert_eq!(said_once_by(&exp34, 0.94, rest, 3.0), None);
 }
 
 #[test]
 fn without_a_rest_the_quiet_stances_say_it_within_the_first_stances() {
+    // Fifteen stances into the walk, not at its end (70 s).
     let log = from(&walk("gdins_exp36_corridor_out_and_back"), 2.115);
     for scale in [0.8, 1.2, 0.94] {
-        let (said, count, median) = run(&log, scale);
-        assert_eq!(said.len(), 1, "{scale}: {said:?}");
-        assert_eq!(count, 1, "{scale}");
-        let (t_s, text) = &said[0];
-        // Fifteen stances into the walk, not at its end (70 s).
-        assert!(*t_s < 25.0, "{scale}: said at {t_s} s");
-        assert!(text.contains("last 15 quiet stances"), "{text}");
-        check_said(text, scale);
-        let median = median.unwrap();
-        assert!(
-            (median / 9.80665 / scale - 1.0).abs() < 0.01,
-            "{scale}: {median}"
+        median_reads(
+            said_once_by(&log, scale, "last 15 quiet stances", 25.0),
+            scale,
         );
     }
 }
