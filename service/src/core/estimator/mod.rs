@@ -372,6 +372,12 @@ impl Estimator {
         self.p.stance_force.is_off()
     }
 
+    /// What said the specific force off gravity, while it is ([`Estimator::
+    /// specific_force_off_gravity_now`]): the initial rest, or the quiet stances' median.
+    pub fn specific_force_off_gravity_said_by(&self) -> Option<ForceWitness> {
+        self.p.stance_force.said_by()
+    }
+
     /// An external observation of the walking (foot) heading in the map frame with its σ; it is
     /// used at the next stance instead of the map. A heading that is not finite, or a σ that is
     /// not in (0, π], is refused and counted (`headings_refused`); at the stance, one further

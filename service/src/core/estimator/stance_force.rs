@@ -74,9 +74,10 @@ pub(super) struct StanceForce {
     /// The mean specific force of the initial rest the filter aligned on (NaN before, or
     /// without a rest).
     rest_m_s2: f64,
-    /// The rest or the median lies beyond the tolerance and was reported; it is reported again
-    /// only after the median came back within half the tolerance.
-    off: bool,
+    /// What said the specific force off gravity (the rest or the median lies beyond the
+    /// tolerance, reported); it is reported again only after the median came back within half
+    /// the tolerance.
+    said: Option<ForceWitness>,
 }
 
 impl Default for StanceForce {
@@ -89,7 +90,7 @@ impl Default for StanceForce {
             len: 0,
             next: 0,
             rest_m_s2: f64::NAN,
-            off: false,
+            said: None,
         }
     }
 }
@@ -149,12 +150,12 @@ impl StanceForce {
         self.len = (self.len + 1).min(STANCES);
         let median = self.median_m_s2()?;
         let off = (median - gravity_m_s2).abs() / gravity_m_s2;
-        if !self.off && off > SPECIFIC_FORCE_TOLERANCE {
-            self.off = true;
+        if self.said.is_none() && off > SPECIFIC_FORCE_TOLERANCE {
+            self.said = Some(ForceWitness::QuietStances);
             return Some(median);
         }
-        if self.off && off < 0.5 * SPECIFIC_FORCE_TOLERANCE {
-            self.off = false;
+        if self.said.is_some() && off < 0.5 * SPECIFIC_FORCE_TOLERANCE {
+            self.said = None;
         }
         None
     }
@@ -166,8 +167,8 @@ impl StanceForce {
     pub(super) fn rest(&mut self, force_m_s2: f64, gravity_m_s2: f64) -> bool {
         self.rest_m_s2 = force_m_s2;
         let off = (force_m_s2 - gravity_m_s2).abs() > SPECIFIC_FORCE_TOLERANCE * gravity_m_s2;
-        if off && !self.off {
-            self.off = true;
+        if off && self.said.is_none() {
+            self.said = Some(ForceWitness::InitialRest);
             return true;
         }
         false
@@ -181,13 +182,18 @@ impl StanceForce {
     /// Whether the rest or the median is off gravity now (said, and the median not back within
     /// half the tolerance).
     pub(super) fn is_off(&self) -> bool {
-        self.off
+        self.said.is_some()
+    }
+
+    /// What said it, while it is off gravity ([`StanceForce::is_off`]).
+    pub(super) fn said_by(&self) -> Option<ForceWitness> {
+        self.said
     }
 
     /// Takes `said`'s word on whether the median was said off gravity: for a pipeline put back
     /// to a copy from before samples whose estimates went out (a glitched stamp's).
     pub(super) fn keep_said(&mut self, said: &StanceForce) {
-        self.off = said.off;
+        self.said = said.said;
     }
 
     /// The median |f| of the last [`STANCES`] quiet stances, m/s², once there are that many.
@@ -319,13 +325,15 @@ mod tests {
         assert_eq!(check.rest_m_s2(), None);
         assert!(check.rest(0.8 * G, G));
         assert_eq!(check.rest_m_s2(), Some(0.8 * G));
-        assert!(check.is_off());
-        // The stances read the same: the same episode.
+        assert_eq!(check.said_by(), Some(ForceWitness::InitialRest));
+        // The stances read the same: the same episode, the rest's.
         assert!(walk(&mut check, 2 * STANCES, 20, 0.8 * G).is_empty());
+        assert_eq!(check.said_by(), Some(ForceWitness::InitialRest));
         // Back to gravity, then off again: said by the stances.
         assert!(walk(&mut check, STANCES, 20, G).is_empty());
-        assert!(!check.is_off());
+        assert!(!check.is_off() && check.said_by().is_none());
         assert_eq!(walk(&mut check, STANCES, 20, 1.2 * G).len(), 1);
+        assert_eq!(check.said_by(), Some(ForceWitness::QuietStances));
         // A rest within the tolerance says nothing, and leaves the stances free to say it.
         let mut check = StanceForce::default();
         assert!(!check.rest(1.04 * G, G));

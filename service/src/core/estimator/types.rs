@@ -297,8 +297,8 @@ pub const EXTERNAL_HEADING_MAX_NIS: f64 = 16.0;
 
 /// How far (a fraction) the mean specific force of a rest or of a first stance may lie from
 /// gravity and still align the filter. A rest reads gravity to within the accelerometer's scale
-/// error (the aligning rests of the suite's runs of the 16 gdins walks: 9.82–9.86 m/s²; the
-/// NGIMU walk 9.62–9.96 wherever it starts); a short walking stance, which a start without a
+/// error (the aligning rests of the default runs of the 16 gdins walks: 9.809–9.825 m/s²,
+/// `rest_specific_force_m_s2` of `summary.json`; the NGIMU walk 9.62–9.96 wherever it starts); a short walking stance, which a start without a
 /// rest aligns on, reads far more (a review started the 16 walks every 10 ms: 7.77–12.00
 /// m/s², −21 to +22 %, on the fast exp38 164 of 7,453 starts beyond 20 %). A log in g reads 1
 /// m/s² (−90 %), a dead accelerometer 0, one in mg about 1000: ±50 % tells them from any

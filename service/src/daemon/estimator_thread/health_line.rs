@@ -3,7 +3,7 @@
 
 use super::super::receive::RxCounters;
 use super::EstState;
-use crate::core::Phase;
+use crate::core::{ForceWitness, Phase};
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -116,18 +116,20 @@ impl EstState<'_> {
             },
             match (c.alignment_not_gravity, self.est.phase()) {
                 (0, _) | (_, Phase::Calibrating | Phase::Tracking) => {
-                    let stances = self.est.stance_specific_force_m_s2();
-                    let rest = self.est.rest_specific_force_m_s2();
-                    match (stances, rest) {
-                        _ if !self.est.specific_force_off_gravity_now() => String::new(),
-                        (Some(f), _) => format!(
-                            " (accelerometer scale? its quiet stances read {f:.2} m/s², not gravity)"
-                        ),
-                        (None, Some(f)) => format!(
-                            " (accelerometer scale? its initial rest read {f:.2} m/s², not gravity)"
-                        ),
-                        (None, None) => String::new(),
-                    }
+                    // What said it: the rest's reading, or the stances' median (the median
+                    // may lie within the tolerance while the rest's episode lasts).
+                    let (what, reading) = match self.est.specific_force_off_gravity_said_by() {
+                        Some(ForceWitness::InitialRest) => {
+                            ("initial rest", self.est.rest_specific_force_m_s2())
+                        }
+                        Some(ForceWitness::QuietStances) => {
+                            ("quiet stances", self.est.stance_specific_force_m_s2())
+                        }
+                        None => ("", None),
+                    };
+                    reading.map_or_else(String::new, |f| {
+                        format!(" (accelerometer scale? its {what} read {f:.2} m/s², not gravity)")
+                    })
                 }
                 (1, Phase::Aligning) => {
                     " (1 rest or stance refused: its specific force is no gravity)".into()
