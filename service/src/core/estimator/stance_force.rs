@@ -101,7 +101,7 @@ impl StanceForce {
     /// [`QUIET_RATE_RAD_S`] is summed (per sample: a comparison of squares, and one root for
     /// the quiet ones); the first sample after a stance closes it against `gravity_m_s2()`.
     /// Returns the median and that gravity when the median has just left the tolerance (once,
-    /// until it comes back; not when the rest said it and it never came back).
+    /// until it comes back; not while the rest's word that it is off stands).
     #[inline]
     pub(super) fn sample(
         &mut self,

@@ -298,14 +298,15 @@ pub const EXTERNAL_HEADING_MAX_NIS: f64 = 16.0;
 /// How far (a fraction) the mean specific force of a rest or of a first stance may lie from
 /// gravity and still align the filter. A rest reads gravity to within the accelerometer's scale
 /// error (the aligning rests of the default runs of the 16 gdins walks: 9.809–9.825 m/s²,
-/// `rest_specific_force_m_s2` of `summary.json`; the NGIMU walk 9.62–9.96 wherever it starts); a short walking stance, which a start without a
-/// rest aligns on, reads far more (a review started the 16 walks every 10 ms: 7.77–12.00
-/// m/s², −21 to +22 %, on the fast exp38 164 of 7,453 starts beyond 20 %). A log in g reads 1
-/// m/s² (−90 %), a dead accelerometer 0, one in mg about 1000: ±50 % tells them from any
-/// stance. Beyond it the estimator does not align, as gravity taken from such a rest scaled
-/// every later position (exp36 in g ran with g = 1 m/s² and walked 10.7 m of track instead of
-/// 82.7 m, with nothing said). At ±25 % a review's exp38 with a 3 % accelerometer scale error
-/// lost 9 s of walking to refused first stances.
+/// `rest_specific_force_m_s2` of `summary.json`; the NGIMU walk 9.62–9.96 wherever it
+/// starts); a short walking stance, which a start without a rest aligns on, reads far more (a
+/// review started the 16 walks every 10 ms: 7.77–12.00 m/s², −21 to +22 %, on the fast exp38
+/// 164 of 7,453 starts beyond 20 %). A log in g reads 1 m/s² (−90 %), a dead accelerometer 0,
+/// one in mg about 1000: ±50 % tells them from any stance. Beyond it the estimator does not
+/// align, as gravity taken from such a rest scaled every later position (exp36 in g ran with
+/// g = 1 m/s² and walked 10.7 m of track instead of 82.7 m, with nothing said). At ±25 % a
+/// review's exp38 with a 3 % accelerometer scale error lost 9 s of walking to refused first
+/// stances.
 pub const GRAVITY_TOLERANCE: f64 = 0.5;
 
 impl Counters {
