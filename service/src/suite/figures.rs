@@ -28,7 +28,7 @@ pub struct StanceMatch {
     /// Median of (detected − listed) stance end over the found footprints, s (NaN: none).
     pub median_end_offset_s: f64,
     /// Listed footprints whose stance end the data set's authors placed by hand (the
-    /// recording's `hand_placed_strides`), and of them, found.
+    /// recording's `hand_placed_strides`).
     pub hand_placed: usize,
     /// Of the hand-placed ones, found.
     pub hand_placed_found: usize,
