@@ -343,8 +343,8 @@ impl<'a> Feed<'a> {
                     before_not_gravity()?;
                 }
                 // The warnings of a sample count once against the cap; the specific force's
-                // is said once each time the median leaves gravity and is never held back by
-                // it (a review found it swallowed after ten gaps).
+                // (said once each time the rest or the stances' median is off gravity) is never
+                // held back by it (a review found it swallowed after ten gaps).
                 let mut counted = false;
                 for n in e.notices() {
                     let uncapped = matches!(n, Notice::SpecificForceOffGravity(..));

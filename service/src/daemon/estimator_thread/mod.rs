@@ -275,7 +275,8 @@ impl<'a> EstState<'a> {
             // A stream in g refuses every stance as a rest: the first few are named. Into the
             // report's warnings: the first refusal as not gravity of each stream (a
             // flag, not the count: a copy restored after a glitch takes the count back), and
-            // every time the stances' specific force leaves gravity (said once each time).
+            // every time the specific force (the initial rest's or the stances' median) is said
+            // off gravity (once each time).
             let to_report = match n {
                 Notice::NotGravity(..) => !std::mem::replace(&mut self.not_gravity_reported, true),
                 Notice::SpecificForceOffGravity(..) => true,
