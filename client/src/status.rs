@@ -157,14 +157,34 @@ impl Status {
     }
 }
 
+/// Why a checkpoint path cannot be the daemon's checkpoint; its message is the status's
+/// `last checkpoint:` line.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckpointPathError {
+    /// The path holds something other than a file.
+    #[error("last checkpoint:  {} is not a file (a directory?)", path.display())]
+    NotAFile {
+        /// The path.
+        path: std::path::PathBuf,
+    },
+    /// The file is there but cannot be read by this user.
+    #[error("last checkpoint:  {} not readable ({source})", path.display())]
+    Unreadable {
+        /// The path.
+        path: std::path::PathBuf,
+        /// What reading it said.
+        source: std::io::Error,
+    },
+}
+
 /// The `last checkpoint:` line for the daemon's checkpoint file (`daemon.checkpoint_path` or
 /// `corridor serve --checkpoint`): the daemon does not publish its checkpoints, but it writes
-/// the file atomically at each save, so its modification time is the last save. `Err` (still
-/// a line to print) when the path holds something that cannot be the daemon's checkpoint: a
-/// directory, a file this user cannot read (it said "saved 3.0 s ago" of a directory, and the
-/// status exited 0 whatever it said). A file not there is not an error: a daemon has none
-/// before its first save.
-pub fn checkpoint_line(path: &std::path::Path) -> Result<String, String> {
+/// the file atomically at each save, so its modification time is the last save. An error (its
+/// message still the line to print) when the path holds something that cannot be the daemon's
+/// checkpoint: a directory, a file this user cannot read (it said "saved 3.0 s ago" of a
+/// directory, and the status exited 0 whatever it said). A file not there is not an error: a
+/// daemon has none before its first save.
+pub fn checkpoint_line(path: &std::path::Path) -> Result<String, CheckpointPathError> {
     let shown = path.display();
     let saved = std::fs::File::open(path)
         .and_then(|f| f.metadata())
@@ -176,14 +196,17 @@ pub fn checkpoint_line(path: &std::path::Path) -> Result<String, String> {
                 "last checkpoint:  {shown} ({bytes} B), saved {age_s:.1} s ago\n"
             ))
         }
-        Ok((false, ..)) => Err(format!(
-            "last checkpoint:  {shown} is not a file (a directory?)\n"
-        )),
+        Ok((false, ..)) => Err(CheckpointPathError::NotAFile {
+            path: path.to_owned(),
+        }),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(format!(
             "last checkpoint:  none at {shown} (not saved yet: the daemon saves every \
              daemon.checkpoint_period_s, at each end of stream and at shutdown)\n"
         )),
-        Err(e) => Err(format!("last checkpoint:  {shown} not readable ({e})\n")),
+        Err(source) => Err(CheckpointPathError::Unreadable {
+            path: path.to_owned(),
+            source,
+        }),
     }
 }
 
@@ -434,8 +457,12 @@ mod tests {
     fn a_checkpoint_path_that_cannot_be_a_checkpoint_is_an_error_and_a_missing_one_is_not() {
         let dir = std::env::temp_dir().join(format!("corridor-ckpt-line-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let line = checkpoint_line(&dir).unwrap_err();
-        assert!(line.contains("is not a file"), "{line}");
+        let err = checkpoint_line(&dir).unwrap_err();
+        assert!(
+            matches!(&err, CheckpointPathError::NotAFile { path } if *path == dir),
+            "{err:?}"
+        );
+        assert!(err.to_string().contains("is not a file"), "{err}");
         let missing = dir.join("checkpoint.bin");
         let line = checkpoint_line(&missing).unwrap();
         assert!(

@@ -41,7 +41,7 @@ pub(super) struct StatusArgs {
 /// is no checkpoint passed for one ("saved 601.8 s ago", a review).
 fn checkpoint_status(path: &std::path::Path) -> (String, bool) {
     match checkpoint_line(path) {
-        Err(line) => (line, false),
+        Err(e) => (format!("{e}\n"), false),
         Ok(line) => match path
             .is_file()
             .then(|| corridor_service::checkpoint::read(path))
