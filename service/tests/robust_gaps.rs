@@ -6,7 +6,7 @@
 use corridor_service::core::heading::HeadingAid;
 use corridor_service::core::{Counters, Estimate, GapCrossing};
 use corridor_service::runner::{heading_aid, run_log};
-use corridor_shared::config::Config;
+use corridor_shared::config::{Config, NonNegative};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
 use corridor_shared::injection::BiasInjection;
 use corridor_shared::truth_csv::read_truth_csv;
@@ -120,8 +120,8 @@ fn a_few_samples_lost_in_a_swing_are_bridged_and_the_footprints_stay() {
     let at =
         |tr: &[(f64, [f64; 3])], t: f64| tr[tr.partition_point(|x| x.0 < t).min(tr.len() - 1)].1;
     let mut segment_cfg = cfg.clone();
-    segment_cfg.max_bridge_s = 0.0;
-    segment_cfg.max_fill_s = 0.0;
+    segment_cfg.max_bridge_s = NonNegative::ZERO;
+    segment_cfg.max_fill_s = NonNegative::ZERO;
     // Nine places through three strides: swing, touchdown, stance.
     let (mut bridged_m, mut segment_m) = (Vec::new(), Vec::new());
     for k in [5000, 5050, 5100, 7000, 7050, 7100, 9000, 9050, 9100] {
@@ -217,7 +217,7 @@ fn a_longer_gap_in_a_swing_is_filled_from_the_stride_before() {
     let (clean, _) = attitudes(&log, &cfg);
     let at = |tr: &[(f64, UnitQuaternion<f64>)], t: f64| tr[tr.partition_point(|x| x.0 < t)].1;
     let mut segment_cfg = cfg.clone();
-    segment_cfg.max_fill_s = 0.0;
+    segment_cfg.max_fill_s = NonNegative::ZERO;
     let (mut filled_deg, mut segment_deg) = (Vec::new(), Vec::new());
     // Samples 100 apart (0.5 s) through four strides of the out and the return walk: swings,
     // touchdowns and stances.
@@ -327,10 +327,10 @@ fn after_a_long_gap_in_a_turn_the_stance_updates_leave_the_wide_yaw_alone() {
     // `eskf.stance_yaw_max_sd_rad` they leave the yaw alone.
     let walk = data().join("../gdins_exp26_narrow_out_and_back");
     let cfg = Config::from_file(&data().join("../../../configs/gdins.toml")).unwrap();
-    assert!(cfg.eskf.stance_yaw_max_sd_rad > 0.0);
+    assert!(cfg.eskf.stance_yaw_max_sd_rad.get() > 0.0);
     let worst = worst_move_after_a_gap_at_the_middle_footprint(&walk, &cfg, 600.0);
     let mut off = cfg.clone();
-    off.eskf.stance_yaw_max_sd_rad = 0.0;
+    off.eskf.stance_yaw_max_sd_rad = NonNegative::ZERO;
     let worst_off = worst_move_after_a_gap_at_the_middle_footprint(&walk, &off, 600.0);
     println!("the footprints after the gap moved by up to {worst:.2} m ({worst_off:.2} m off)");
     assert!(

@@ -70,7 +70,7 @@ fn a_run_that_fails_after_writing_leaves_no_output() {
     // aligns, found only after every row was estimated.
     let imu = without_rest(&dir, 1500);
     let mut opts = options(&imu, None, &out);
-    opts.config.alignment.min_start_stance_s = 0.0;
+    opts.config.alignment.min_start_stance_s = corridor_shared::config::NonNegative::ZERO;
     let err = run(&opts).unwrap_err();
     assert!(matches!(err, RunError::NeverAligned { .. }), "{err}");
     assert_eq!(listing(&out), Vec::<String>::new());

@@ -144,7 +144,7 @@ impl StanceDetector {
             threshold: cfg.threshold.get(),
             inv_var_a: 1.0 / cfg.sigma_accel_m_s2.get().powi(2),
             inv_var_g: 1.0 / cfg.sigma_gyro_rad_s.get().powi(2),
-            min_stance_s: cfg.min_stance_s,
+            min_stance_s: cfg.min_stance_s.get(),
             gravity_m_s2,
             gyro: vec![Vector3::zeros(); w],
             accel: vec![Vector3::zeros(); w],

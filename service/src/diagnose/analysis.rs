@@ -183,7 +183,7 @@ pub fn analyse(
 ) -> Result<Analysis, RunError> {
     let cfg = file.validate()?;
     let aid = heading_aid(&cfg, map)?;
-    let grid = cfg.heading.grid_rad;
+    let grid = cfg.heading.grid_rad.get();
     let step = cfg.heading.grid_step_rad.get();
     let sigma2 = cfg.heading.sigma_rad.get().powi(2);
     let n_dirs = (std::f64::consts::TAU / step).round() as i64;
@@ -396,7 +396,7 @@ pub fn analyse(
         t_s: &outcome.trace.t_s,
         bias_rad_s: &outcome.trace.bias_rad_s,
         bias_sd_rad_s: &outcome.trace.bias_sd_rad_s,
-        rw_rad_s_sqrt_s: cfg.eskf.gyro_bias_rw_rad_s_sqrt_s,
+        rw_rad_s_sqrt_s: cfg.eskf.gyro_bias_rw_rad_s_sqrt_s.get(),
         from_s,
     });
     let mut bias_change = trace.and_then(|t| t.change());
@@ -417,7 +417,7 @@ pub fn analyse(
         &super::clipping::find_rails(&log.rows),
         cfg.sensor.gyro_range_rad_s(),
         // the error-state filter widens its attitude at a clipped sample; the paper's does not
-        cfg.eskf.clipped_rate_sd_rad_s > 0.0 && matches!(cfg.mode, Mode::Eskf | Mode::Zupt),
+        cfg.eskf.clipped_rate_sd_rad_s.get() > 0.0 && matches!(cfg.mode, Mode::Eskf | Mode::Zupt),
     ) {
         effects.insert(0, f);
     }

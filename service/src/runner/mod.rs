@@ -160,7 +160,7 @@ pub fn heading_aid(cfg: &Config, map: Option<&Path>) -> Result<HeadingAid, RunEr
         (HeadingSource::Map, None) => return Err(RunError::MapMissing),
         (HeadingSource::None, None) => HeadingAid::None,
         (HeadingSource::Grid, None) => HeadingAid::Grid {
-            grid_rad: cfg.heading.grid_rad,
+            grid_rad: cfg.heading.grid_rad.get(),
             step_rad: cfg.heading.grid_step_rad.get(),
         },
     })

@@ -72,7 +72,7 @@ pub struct FrontEnd {
 /// stance still open at the end of the log counts.
 pub fn stance_intervals(rows: &[ImuRow], cfg: &DetectorConfig, max_step_s: f64) -> Vec<(f64, f64)> {
     let mut d = StanceDetector::new(cfg, 9.80665);
-    let mut events = StanceEvents::new(cfg.merge_gap_s, max_step_s);
+    let mut events = StanceEvents::new(cfg.merge_gap_s.get(), max_step_s);
     let mut out = StanceIntervals::default();
     for r in rows {
         let w = Vector3::from(r.gyro_rad_s);

@@ -480,7 +480,7 @@ impl<'a> Ctx<'a> {
         let grid = &cfg.heading;
         let stride_use = StrideUse::of(
             &self.truth,
-            grid.grid_rad,
+            grid.grid_rad.get(),
             grid.grid_step_rad.get(),
             &nis.stances,
         );

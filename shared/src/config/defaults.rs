@@ -256,7 +256,10 @@ mod tests {
         assert_eq!(c.eskf.initial_tilt_sd_rad.get(), 0.5f64.to_radians());
         assert_eq!(c.bias_kf.tilt_sd_rad.get(), 1.0f64.to_radians());
         assert_eq!(c.heading.sigma_rad.get(), HEADING_SIGMA_DEG.to_radians());
-        assert_eq!(c.eskf.clipped_rate_sd_rad_s, ESKF_CLIPPED_RATE_SD_RAD_S);
+        assert_eq!(
+            c.eskf.clipped_rate_sd_rad_s.get(),
+            ESKF_CLIPPED_RATE_SD_RAD_S
+        );
         assert_eq!(
             c.detector.adaptive_max_threshold.get(),
             DETECTOR_ADAPTIVE_MAX_FACTOR * DETECTOR_THRESHOLD

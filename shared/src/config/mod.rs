@@ -2,8 +2,9 @@
 //!
 //! Parsing happens in two steps. [`ConfigFile`] mirrors the TOML one to one (serde,
 //! `deny_unknown_fields`, every key optional with a documented default). [`ConfigFile::validate`]
-//! turns it into [`Config`], whose fields are [`Positive`], [`Fraction`] or enums, so code that
-//! holds a `Config` never sees a negative noise, a zero window or an unknown mode. Every error
+//! turns it into [`Config`], whose numbers are [`Positive`], [`NonNegative`], [`Fraction`] or
+//! [`Finite`] and whose choices are enums, so code that holds a `Config` never sees a negative
+//! noise, a NaN, a zero window or an unknown mode. Every error
 //! names the key that is wrong and the value found.
 //!
 //! Files: this one holds the error, the checked number types and the enums; `file.rs` the
@@ -111,6 +112,68 @@ impl Positive {
         rule: &'static str,
     ) -> Result<Self, ConfigError> {
         Self::from_degrees(key, in_range(key, degrees, lo, hi, rule)?)
+    }
+    /// The value.
+    pub fn get(self) -> f64 {
+        self.0
+    }
+}
+
+/// A finite number ≥ 0: a length, a duration or a σ for which 0 means "none" or "off" (the
+/// key's documentation says which).
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd, Serialize)]
+pub struct NonNegative(f64);
+
+impl NonNegative {
+    /// Zero.
+    pub const ZERO: Self = Self(0.0);
+    /// Checks `value`, naming `key` in the error.
+    pub fn new(key: &str, value: f64) -> Result<Self, ConfigError> {
+        if value.is_finite() && value >= 0.0 {
+            Ok(Self(value))
+        } else {
+            Err(invalid(key, value, "must be a finite number >= 0"))
+        }
+    }
+    /// [`NonNegative::new`] within `[lo, hi]` as well (see the crate-private `in_range`).
+    pub fn in_range(
+        key: &str,
+        value: f64,
+        lo: f64,
+        hi: f64,
+        rule: &'static str,
+    ) -> Result<Self, ConfigError> {
+        Self::new(key, in_range(key, value, lo, hi, rule)?)
+    }
+    /// The value.
+    pub fn get(self) -> f64 {
+        self.0
+    }
+}
+
+/// A finite number (an angle or a direction, any sign).
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd, Serialize)]
+pub struct Finite(f64);
+
+impl Finite {
+    /// Checks `value`, naming `key` in the error.
+    pub fn new(key: &str, value: f64) -> Result<Self, ConfigError> {
+        if value.is_finite() {
+            Ok(Self(value))
+        } else {
+            Err(invalid(key, value, "must be a finite number"))
+        }
+    }
+    /// An angle given in degrees under `key`, within `[lo, hi]` degrees (`rule` says it), kept
+    /// in radians.
+    pub fn from_degrees_in_range(
+        key: &str,
+        degrees: f64,
+        lo: f64,
+        hi: f64,
+        rule: &'static str,
+    ) -> Result<Self, ConfigError> {
+        Self::new(key, in_range(key, degrees, lo, hi, rule)?.to_radians())
     }
     /// The value.
     pub fn get(self) -> f64 {
@@ -283,6 +346,41 @@ mod tests {
         assert_eq!(c.mode, Mode::Eskf);
         assert_eq!(c.detector.window, 5);
         assert!((c.heading.grid_step_rad.get() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_checked_numbers_refuse_what_their_type_says_they_cannot_hold() {
+        for v in [0.0, 0.5, 1e3] {
+            assert_eq!(NonNegative::new("k", v).unwrap().get(), v);
+            assert_eq!(Finite::new("k", -v).unwrap().get(), -v);
+        }
+        for v in [-1e-12, -1.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let err = NonNegative::new("a.key", v).unwrap_err().to_string();
+            assert!(err.contains("a.key") && err.contains(">= 0"), "{v}: {err}");
+        }
+        for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let err = Finite::new("a.key", v).unwrap_err().to_string();
+            assert!(
+                err.contains("a.key") && err.contains("finite"),
+                "{v}: {err}"
+            );
+        }
+        // Degrees checked as written, kept in radians.
+        let a = Finite::from_degrees_in_range("h.deg", -90.0, -360.0, 360.0, "in range").unwrap();
+        assert_eq!(a.get(), (-90f64).to_radians());
+        assert!(Finite::from_degrees_in_range("h.deg", 400.0, -360.0, 360.0, "r").is_err());
+        // A NaN passes no range: every key that may be 0 refuses it in the file.
+        for key in [
+            "[estimator]\nmax_bridge_s = nan\n",
+            "[alignment]\nrest_tail_s = nan\n",
+            "[eskf]\nzupt_rolling_height_m = nan\n",
+            "[heading]\ngrid_deg = nan\n",
+            "[model]\naccel_scale_factor = nan\n",
+        ] {
+            let f = ConfigFile::parse(key, Path::new("a.toml")).unwrap();
+            let err = f.validate().unwrap_err().to_string();
+            assert!(err.contains("NaN"), "{key}: {err}");
+        }
     }
 
     #[test]

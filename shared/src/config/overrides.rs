@@ -89,8 +89,8 @@ mod tests {
         let cfg = o.validate(&file, Path::new("c.toml")).unwrap();
         assert_eq!(cfg.mode, Mode::Paper);
         assert_eq!(cfg.alignment.gyro_bias_prior, BiasPrior::None);
-        assert!((cfg.heading.start_heading_rad - 90f64.to_radians()).abs() < 1e-12);
-        assert!((cfg.heading.grid_rad - 10f64.to_radians()).abs() < 1e-12);
+        assert!((cfg.heading.start_heading_rad.get() - 90f64.to_radians()).abs() < 1e-12);
+        assert!((cfg.heading.grid_rad.get() - 10f64.to_radians()).abs() < 1e-12);
         // Nothing overridden: the file's value stays.
         let kept = ConfigOverrides::default()
             .validate(&file, Path::new("c.toml"))

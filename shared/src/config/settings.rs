@@ -13,9 +13,9 @@ pub struct Config {
     /// Largest regular time step.
     pub max_dt_s: Positive,
     /// Longest gap bridged by one step (0: none).
-    pub max_bridge_s: f64,
+    pub max_bridge_s: NonNegative,
     /// Longest gap filled from the stride before (0: none).
-    pub max_fill_s: f64,
+    pub max_fill_s: NonNegative,
     /// Largest plausible foot speed (health check).
     pub max_speed_m_s: Positive,
     /// What the sensor can output, and the time-step bounds.
@@ -51,7 +51,7 @@ pub struct ModelSettings {
     pub gyro_coupling_z_sd_rad: Option<Positive>,
     /// What every sample's specific force is multiplied by: `1 / (1 + model.accel_scale_factor)`
     /// (1 without it).
-    pub accel_correction: f64,
+    pub accel_correction: Positive,
 }
 
 /// Validated `[daemon]`.
@@ -91,15 +91,15 @@ pub struct AlignmentConfig {
     /// Fixed gravity, or `None` for the rest mean.
     pub gravity_m_s2: Option<Positive>,
     /// Tail of the rest left out of the means.
-    pub rest_tail_s: f64,
+    pub rest_tail_s: NonNegative,
     /// An initial-rest block further than this from the rest's mean rate is motion, rad/s.
     pub rest_max_rate_change_rad_s: Positive,
     /// Shortest first stance that aligns without a rest (0: wait for a rest).
-    pub min_start_stance_s: f64,
+    pub min_start_stance_s: NonNegative,
     /// Shortest stance seen whole that aligns in fast gait (the detector's threshold raised).
-    pub fast_gait_start_stance_s: f64,
+    pub fast_gait_start_stance_s: NonNegative,
     /// How far back a start in fast gait may go, s (0: off).
-    pub fast_gait_replay_s: f64,
+    pub fast_gait_replay_s: NonNegative,
     /// σ of roll and pitch when a walking stance aligns (no rest), rad.
     pub start_stance_tilt_sd_rad: Positive,
     /// The largest initial-rest mean rate (magnitude) taken as the bias prior, rad/s (`None`:
@@ -134,9 +134,9 @@ pub struct DetectorConfig {
     /// Gyro σ.
     pub sigma_gyro_rad_s: Positive,
     /// Shortest stance.
-    pub min_stance_s: f64,
+    pub min_stance_s: NonNegative,
     /// Longest pause inside one stance.
-    pub merge_gap_s: f64,
+    pub merge_gap_s: NonNegative,
     /// Adaptive factor (off when `None`).
     pub adaptive_factor: Option<Positive>,
     /// Adaptive look-back.
@@ -157,7 +157,7 @@ pub struct EskfConfig {
     /// Gyro white-noise density, rad/s/√Hz.
     pub gyro_noise_rad_s: Positive,
     /// Gyro-bias random walk.
-    pub gyro_bias_rw_rad_s_sqrt_s: f64,
+    pub gyro_bias_rw_rad_s_sqrt_s: NonNegative,
     /// Initial bias σ without prior (about zero); the rest-mean prior is fused with it.
     pub gyro_bias_initial_sd_rad_s: Positive,
     /// Floor of the rest-mean prior's σ.
@@ -167,7 +167,7 @@ pub struct EskfConfig {
     /// Initial tilt σ.
     pub initial_tilt_sd_rad: Positive,
     /// ZUPT lever arm (0 = a constant ZUPT σ).
-    pub zupt_lever_arm_m: f64,
+    pub zupt_lever_arm_m: NonNegative,
     /// Zero-rate updates at later rests.
     pub zero_rate_updates: bool,
     /// A long rest is fused every this many seconds of its settled part.
@@ -175,11 +175,11 @@ pub struct EskfConfig {
     /// Gyro noise density while the foot rests, rad/s/√Hz.
     pub rest_gyro_noise_rad_s: Positive,
     /// Above this yaw σ the stance updates leave the yaw alone (0: off).
-    pub stance_yaw_max_sd_rad: f64,
+    pub stance_yaw_max_sd_rad: NonNegative,
     /// Sensor height above the rolling contact (0: plain ZUPT).
-    pub zupt_rolling_height_m: f64,
+    pub zupt_rolling_height_m: NonNegative,
     /// σ of the true rate's excess over a clipped gyro axis.
-    pub clipped_rate_sd_rad_s: f64,
+    pub clipped_rate_sd_rad_s: NonNegative,
 }
 
 /// Validated `[bias_kf]`.
@@ -188,7 +188,7 @@ pub struct BiasKfConfig {
     /// Roll/pitch reference σ.
     pub tilt_sd_rad: Positive,
     /// Bias random walk.
-    pub bias_rw_rad_s_sqrt_s: f64,
+    pub bias_rw_rad_s_sqrt_s: NonNegative,
 }
 
 /// Validated `[heading]`, angles in radians.
@@ -199,11 +199,11 @@ pub struct HeadingConfig {
     /// Observation σ.
     pub sigma_rad: Positive,
     /// Grid orientation.
-    pub grid_rad: f64,
+    pub grid_rad: Finite,
     /// Grid spacing.
     pub grid_step_rad: Positive,
     /// Start walking direction.
-    pub start_heading_rad: f64,
+    pub start_heading_rad: Finite,
     /// Association gate.
     pub gate_rad: Positive,
     /// Straight-walk limit.
@@ -213,7 +213,7 @@ pub struct HeadingConfig {
     /// Mounting-yaw calibration stances.
     pub calibration_strides: usize,
     /// Observation delay into a stance.
-    pub obs_delay_s: f64,
+    pub obs_delay_s: NonNegative,
     /// σ of the start heading.
     pub start_heading_sd_rad: Positive,
     /// Observations of the `eskf` mode.

@@ -14,7 +14,6 @@ impl ConfigFile {
         let k = &self.eskf;
         let b = &self.bias_kf;
         let h = &self.heading;
-        let deg = f64::to_radians;
         let window = d.window.unwrap_or(DETECTOR_WINDOW);
         if window == 0 || window > 1000 {
             return Err(invalid("detector.window", window, "must be in 1..=1000"));
@@ -105,7 +104,7 @@ impl ConfigFile {
                         "must be in (-0.2, 0.2): a larger error is a wrong unit, not a scale",
                     ));
                 }
-                1.0 / (1.0 + k)
+                Positive::new("model.accel_scale_factor", 1.0 / (1.0 + k))?
             },
         };
         if let Some(v) = e.converged_sd_rad_s {
@@ -139,7 +138,7 @@ impl ConfigFile {
                 "must be in [0.001, 0.1] s",
             )?,
             // Interpolating across a second of walking is worse than starting anew.
-            max_bridge_s: in_range(
+            max_bridge_s: NonNegative::in_range(
                 "estimator.max_bridge_s",
                 e.max_bridge_s.unwrap_or(ESTIMATOR_MAX_BRIDGE_S),
                 0.0,
@@ -147,7 +146,7 @@ impl ConfigFile {
                 "must be in [0, 1] s",
             )?,
             // Half of the slowest stride: a longer gap loses a footfall.
-            max_fill_s: in_range(
+            max_fill_s: NonNegative::in_range(
                 "estimator.max_fill_s",
                 e.max_fill_s.unwrap_or(ESTIMATOR_MAX_FILL_S),
                 0.0,
@@ -179,11 +178,14 @@ impl ConfigFile {
                         Positive::in_range("alignment.gravity_m_s2", g, 9.7, 9.9, rule)
                     })
                     .transpose()?,
-                rest_tail_s: match a.rest_tail_s.unwrap_or(ALIGNMENT_REST_TAIL_S) {
-                    // The rest is kept in 50 ms blocks for this long: bounded.
-                    v if (0.0..=60.0).contains(&v) => v,
-                    v => return Err(invalid("alignment.rest_tail_s", v, "must be in [0, 60] s")),
-                },
+                // The rest is kept in 50 ms blocks for this long: bounded.
+                rest_tail_s: NonNegative::in_range(
+                    "alignment.rest_tail_s",
+                    a.rest_tail_s.unwrap_or(ALIGNMENT_REST_TAIL_S),
+                    0.0,
+                    60.0,
+                    "must be in [0, 60] s",
+                )?,
                 rest_max_rate_change_rad_s: Positive::in_range(
                     "alignment.rest_max_rate_change_rad_s",
                     a.rest_max_rate_change_rad_s
@@ -192,14 +194,14 @@ impl ConfigFile {
                     10.0,
                     "must be in (0, 10] rad/s",
                 )?,
-                min_start_stance_s: in_range(
+                min_start_stance_s: NonNegative::in_range(
                     "alignment.min_start_stance_s",
                     a.min_start_stance_s.unwrap_or(ALIGNMENT_MIN_START_STANCE_S),
                     0.0,
                     60.0,
                     "must be in [0, 60] s",
                 )?,
-                fast_gait_start_stance_s: in_range(
+                fast_gait_start_stance_s: NonNegative::in_range(
                     "alignment.fast_gait_start_stance_s",
                     a.fast_gait_start_stance_s
                         .unwrap_or(ALIGNMENT_FAST_GAIT_START_STANCE_S),
@@ -207,7 +209,7 @@ impl ConfigFile {
                     60.0,
                     "must be in [0, 60] s",
                 )?,
-                fast_gait_replay_s: in_range(
+                fast_gait_replay_s: NonNegative::in_range(
                     "alignment.fast_gait_replay_s",
                     a.fast_gait_replay_s.unwrap_or(ALIGNMENT_FAST_GAIT_REPLAY_S),
                     0.0,
@@ -257,14 +259,14 @@ impl ConfigFile {
                     10.0,
                     "must be in [1e-6, 10] rad/s",
                 )?,
-                min_stance_s: in_range(
+                min_stance_s: NonNegative::in_range(
                     "detector.min_stance_s",
                     d.min_stance_s.unwrap_or(DETECTOR_MIN_STANCE_S),
                     0.0,
                     10.0,
                     "must be in [0, 10] s",
                 )?,
-                merge_gap_s: in_range(
+                merge_gap_s: NonNegative::in_range(
                     "detector.merge_gap_s",
                     d.merge_gap_s.unwrap_or(DETECTOR_MERGE_GAP_S),
                     0.0,
@@ -341,7 +343,7 @@ impl ConfigFile {
                     10.0,
                     "must be in (0, 10] rad/s",
                 )?,
-                gyro_bias_rw_rad_s_sqrt_s: in_range(
+                gyro_bias_rw_rad_s_sqrt_s: NonNegative::in_range(
                     "eskf.gyro_bias_rw_rad_s_sqrt_s",
                     k.gyro_bias_rw_rad_s_sqrt_s
                         .unwrap_or(ESKF_GYRO_BIAS_RW_RAD_S_SQRT_S),
@@ -379,7 +381,7 @@ impl ConfigFile {
                     std::f64::consts::PI,
                     "must be in (0, π] rad",
                 )?,
-                zupt_lever_arm_m: in_range(
+                zupt_lever_arm_m: NonNegative::in_range(
                     "eskf.zupt_lever_arm_m",
                     k.zupt_lever_arm_m.unwrap_or(ESKF_ZUPT_LEVER_ARM_M),
                     0.0,
@@ -402,7 +404,7 @@ impl ConfigFile {
                     10.0,
                     "must be in (0, 10] rad/s",
                 )?,
-                stance_yaw_max_sd_rad: in_range(
+                stance_yaw_max_sd_rad: NonNegative::in_range(
                     "eskf.stance_yaw_max_sd_rad",
                     k.stance_yaw_max_sd_rad
                         .unwrap_or(ESKF_STANCE_YAW_MAX_SD_RAD),
@@ -410,7 +412,7 @@ impl ConfigFile {
                     std::f64::consts::PI,
                     "must be in [0, π] rad (0: off)",
                 )?,
-                zupt_rolling_height_m: in_range(
+                zupt_rolling_height_m: NonNegative::in_range(
                     "eskf.zupt_rolling_height_m",
                     k.zupt_rolling_height_m
                         .unwrap_or(ESKF_ZUPT_ROLLING_HEIGHT_M),
@@ -418,7 +420,7 @@ impl ConfigFile {
                     1.0,
                     "must be in [0, 1] m",
                 )?,
-                clipped_rate_sd_rad_s: in_range(
+                clipped_rate_sd_rad_s: NonNegative::in_range(
                     "eskf.clipped_rate_sd_rad_s",
                     k.clipped_rate_sd_rad_s
                         .unwrap_or(ESKF_CLIPPED_RATE_SD_RAD_S),
@@ -435,7 +437,7 @@ impl ConfigFile {
                     std::f64::consts::PI,
                     "must be in (0, π] rad",
                 )?,
-                bias_rw_rad_s_sqrt_s: in_range(
+                bias_rw_rad_s_sqrt_s: NonNegative::in_range(
                     "bias_kf.bias_rw_rad_s_sqrt_s",
                     b.bias_rw_rad_s_sqrt_s
                         .unwrap_or(BIAS_KF_BIAS_RW_RAD_S_SQRT_S),
@@ -453,13 +455,13 @@ impl ConfigFile {
                     90.0,
                     "must be in (0, 90]°",
                 )?,
-                grid_rad: deg(in_range(
+                grid_rad: Finite::from_degrees_in_range(
                     "heading.grid_deg",
                     h.grid_deg.unwrap_or(HEADING_GRID_DEG),
                     -360.0,
                     360.0,
                     "must be in [-360, 360]°",
-                )?),
+                )?,
                 grid_step_rad: {
                     let step = h.grid_step_deg.unwrap_or(HEADING_GRID_STEP_DEG);
                     if !(1.0..=360.0).contains(&step) || (360.0 / step).fract().abs() > 1e-9 {
@@ -471,13 +473,13 @@ impl ConfigFile {
                     }
                     Positive::from_degrees("heading.grid_step_deg", step)?
                 },
-                start_heading_rad: deg(in_range(
+                start_heading_rad: Finite::from_degrees_in_range(
                     "heading.start_heading_deg",
                     h.start_heading_deg.unwrap_or(HEADING_START_HEADING_DEG),
                     -360.0,
                     360.0,
                     "must be in [-360, 360]°",
-                )?),
+                )?,
                 gate_rad: Positive::from_degrees_in_range(
                     "heading.gate_deg",
                     h.gate_deg.unwrap_or(HEADING_GATE_DEG),
@@ -495,7 +497,7 @@ impl ConfigFile {
                 )?,
                 straight_strides,
                 calibration_strides,
-                obs_delay_s: in_range(
+                obs_delay_s: NonNegative::in_range(
                     "heading.obs_delay_s",
                     h.obs_delay_s.unwrap_or(HEADING_OBS_DELAY_S),
                     0.0,

@@ -49,7 +49,7 @@ impl Pipeline {
         // stall of 0.2–0.3 s 0.43 s into exp40's rest (then 0.8 s of it rocking) cost up to
         // 9.5 % of path; started again at any loss, 58 of a review's 288 runs were worse by
         // more than 0.3 % of path.
-        let bridgeable_s = self.cfg.max_bridge_s.max(self.cfg.max_dt_s.get());
+        let bridgeable_s = self.cfg.max_bridge_s.get().max(self.cfg.max_dt_s.get());
         let min_rest_s = self.cfg.alignment.min_rest_s.get();
         if let Some(t_prev) = t_prev
             && t_clock - t_prev > bridgeable_s
@@ -106,7 +106,8 @@ impl Pipeline {
         // after the loss is too short to start from.
         let restarts = self.counters.alignment_restarts;
         let a = &self.cfg.alignment;
-        let min_start_s = rest.min_start_s(a.min_start_stance_s, a.fast_gait_start_stance_s);
+        let min_start_s =
+            rest.min_start_s(a.min_start_stance_s.get(), a.fast_gait_start_stance_s.get());
         let aligned = self.align_step(&mut rest.whole, t_s, (w, f), stance, min_start_s);
         if restarted && self.counters.alignment_restarts == restarts {
             self.counters.alignment_restarts += 1;
@@ -148,7 +149,7 @@ impl Pipeline {
         // ZUPTs refine them), no bias prior (the later rests' zero-rate updates and the
         // heading observations give the bias).
         let short_start = rest_s < a.min_rest_s.get();
-        if short_start && (a.min_start_stance_s <= 0.0 || rest_s < min_start_s) {
+        if short_start && (a.min_start_stance_s.get() <= 0.0 || rest_s < min_start_s) {
             if !rest.is_empty() {
                 self.counters.alignment_restarts += 1;
             }
@@ -254,9 +255,9 @@ impl Pipeline {
             accel_m_s2: e.accel_noise_m_s2.get(),
             gyro_rad_s: e.gyro_noise_rad_s.get(),
             rest_gyro_rad_s: e.rest_gyro_noise_rad_s.get(),
-            gyro_bias_rw_rad_s_sqrt_s: e.gyro_bias_rw_rad_s_sqrt_s,
+            gyro_bias_rw_rad_s_sqrt_s: e.gyro_bias_rw_rad_s_sqrt_s.get(),
             zupt_m_s: e.zupt_sd_m_s.get(),
-            stance_yaw_max_sd_rad: match e.stance_yaw_max_sd_rad {
+            stance_yaw_max_sd_rad: match e.stance_yaw_max_sd_rad.get() {
                 0.0 => f64::INFINITY,
                 sd => sd,
             },
@@ -306,7 +307,7 @@ impl Pipeline {
             noise,
             ext,
         );
-        let rw = self.cfg.bias_kf.bias_rw_rad_s_sqrt_s;
+        let rw = self.cfg.bias_kf.bias_rw_rad_s_sqrt_s.get();
         self.bias = match self.cfg.mode {
             Mode::Zupt | Mode::Eskf => BiasFilter::InEskf,
             // The paper's filter works on a foot-frame bias; the foot frame is the sensor frame

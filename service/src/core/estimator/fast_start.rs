@@ -159,8 +159,8 @@ impl Pipeline {
         let a = &self.cfg.alignment;
         let from = recent
             .ring
-            .partition_point(|r| r.t_clock < now.t_clock - a.fast_gait_replay_s);
-        let mut rest = InitialRest::new(a.rest_tail_s, a.rest_max_rate_change_rad_s.get(), 0);
+            .partition_point(|r| r.t_clock < now.t_clock - a.fast_gait_replay_s.get());
+        let mut rest = InitialRest::new(a.rest_tail_s.get(), a.rest_max_rate_change_rad_s.get(), 0);
         let (out, restarts) = (self.out, self.counters.alignment_restarts);
         let not_gravity = self.counters.alignment_not_gravity;
         // The restarts and the rests refused as no gravity are counted as the live start on

@@ -209,7 +209,7 @@ impl Pipeline {
         gyro_after: &Vector3<f64>,
     ) -> Option<f64> {
         let dt = t_after_s - t_prev_s;
-        if dt <= self.cfg.max_dt_s.get() || dt > self.cfg.max_fill_s {
+        if dt <= self.cfg.max_dt_s.get() || dt > self.cfg.max_fill_s.get() {
             return None;
         }
         let run = Continuation::of(&self.memory, t_prev_s, self.cfg.max_dt_s.get())?;
@@ -259,7 +259,7 @@ impl Pipeline {
         self.counters.gaps += 1;
         self.out.gap_s = Some(dt);
         self.out.gap_crossing = Some(GapCrossing::Bridged);
-        if dt <= self.cfg.max_bridge_s {
+        if dt <= self.cfg.max_bridge_s.get() {
             // A short gap (a few lost samples) is bridged: one step on the mean of the rates and
             // forces on both sides of it, as every step is integrated. What that interpolation
             // misses is at most half the change of the rate (force) across the gap times its
@@ -275,7 +275,7 @@ impl Pipeline {
             }
             return Gap::Integrate;
         }
-        if dt <= self.cfg.max_fill_s
+        if dt <= self.cfg.max_fill_s.get()
             && let Some(last) = self.fill_gap(eskf, t_prev, t_clock, w_now)
         {
             self.counters.gaps_filled += 1;

@@ -95,7 +95,7 @@ impl LateFootfall {
                 Some(_) => cfg.adaptive_max_threshold.get(),
                 None => cfg.threshold.get(),
             },
-            wait_s: cfg.merge_gap_s,
+            wait_s: cfg.merge_gap_s.get(),
             last_stance_s: f64::NEG_INFINITY,
             footfalls_s: [f64::NAN; 4],
             period_s: f64::NAN,

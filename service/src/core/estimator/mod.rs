@@ -270,7 +270,7 @@ impl Estimator {
             heading_suspect: false,
             off_direction: reacquire::OffDirectionRun::default(),
             reacquiring: false,
-            stance_events: StanceEvents::new(cfg.detector.merge_gap_s, cfg.max_dt_s.get()),
+            stance_events: StanceEvents::new(cfg.detector.merge_gap_s.get(), cfg.max_dt_s.get()),
             stance_edge: StanceEdge::None,
             stances_seen: 0,
             resumed_look: false,
@@ -286,8 +286,8 @@ impl Estimator {
             // block out (the zero-rate update then never came). The landing is left out as
             // the tail is: in the mean it was a bias error (exp40 with a 20 s pause: 1.5e-3
             // rad/s on y, its heading turned by 3° when the rest was fused).
-            stance_rest: RestSums::new(cfg.alignment.rest_tail_s, None)
-                .leaving_out_head(cfg.alignment.rest_tail_s),
+            stance_rest: RestSums::new(cfg.alignment.rest_tail_s.get(), None)
+                .leaving_out_head(cfg.alignment.rest_tail_s.get()),
             zero_rate_applied: false,
             stance_obs_done: false,
             stance_f_sum: (Vector3::zeros(), 0),
@@ -301,9 +301,9 @@ impl Estimator {
         };
         Self {
             stage: Stage::Aligning(Box::new(InitialRest::new(
-                p.cfg.alignment.rest_tail_s,
+                p.cfg.alignment.rest_tail_s.get(),
                 p.cfg.alignment.rest_max_rate_change_rad_s.get(),
-                if p.cfg.alignment.fast_gait_replay_s > 0.0 {
+                if p.cfg.alignment.fast_gait_replay_s.get() > 0.0 {
                     fast_start::REPLAY_SAMPLES
                 } else {
                     0
@@ -419,7 +419,7 @@ impl Estimator {
         let w = Vector3::from(s.gyro_rad_s);
         // A known accelerometer scale error (`model.accel_scale_factor`) taken out; the
         // plausibility limits are on what the sensor output.
-        let f = Vector3::from(s.accel_m_s2) * self.p.cfg.model.accel_correction;
+        let f = Vector3::from(s.accel_m_s2) * self.p.cfg.model.accel_correction.get();
         // A step back of the clock is taken where the rates run on across it (`gaps.rs`).
         // (Everything read only when asked: a step back is rare.)
         let (stage, memory, last, cfg) = (&self.stage, &self.p.memory, &self.p.last, &self.p.cfg);
@@ -431,7 +431,7 @@ impl Estimator {
                     (last.map(|l| l.0), clock),
                     back,
                     (s.t_s, &w, &f),
-                    (cfg.model.accel_correction, cfg.max_dt_s.get()),
+                    (cfg.model.accel_correction.get(), cfg.max_dt_s.get()),
                 )
         };
         let accepted = match self.p.plausibility.check(s, judge) {

@@ -50,7 +50,7 @@ impl Pipeline {
             if self.relevel_next_stance && stance_age_s >= observations::RELEVEL_MIN_STANCE_S {
                 self.relevel_if_due(eskf);
             }
-            if !self.stance_obs_done && stance_age_s >= self.cfg.heading.obs_delay_s {
+            if !self.stance_obs_done && stance_age_s >= self.cfg.heading.obs_delay_s.get() {
                 self.stance_obs_done = true;
                 self.stance_observation(eskf, t_s);
             }
@@ -95,7 +95,7 @@ impl Pipeline {
     /// The attitude variance about each gyro axis at its rail grows by the clipped rate's σ
     /// over the step: the rotation the rail cut off.
     pub(super) fn widen_clipped(&self, eskf: &mut Eskf, clipped_axes: [bool; 3], dt: f64) {
-        let clip_var = (self.cfg.eskf.clipped_rate_sd_rad_s * dt).powi(2);
+        let clip_var = (self.cfg.eskf.clipped_rate_sd_rad_s.get() * dt).powi(2);
         for (k, &c) in clipped_axes.iter().enumerate() {
             if c && clip_var > 0.0 {
                 eskf.widen_attitude_about(&Vector3::ith(k, 1.0), clip_var);
@@ -114,11 +114,11 @@ impl Pipeline {
     ) -> Option<Innovation> {
         // A foot that rolls about its heel or toe moves the sensor at the lever arm times the
         // rotation rate: at the edges of a stance the zero velocity is that much less sure.
-        let arm = self.cfg.eskf.zupt_lever_arm_m * omega.norm();
+        let arm = self.cfg.eskf.zupt_lever_arm_m.get() * omega.norm();
         let sd = self.cfg.eskf.zupt_sd_m_s.get().hypot(arm);
         // ... and, rolling over its heel, its ball or the edge of its sole, at its height
         // above the floor times the horizontal rate (ω × h·ẑ; no mounting yaw needed).
-        let h = self.cfg.eskf.zupt_rolling_height_m;
+        let h = self.cfg.eskf.zupt_rolling_height_m.get();
         let v = if h > 0.0 {
             rolling_velocity(&eskf.nav_from_body, omega, h)
         } else {

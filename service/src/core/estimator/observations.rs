@@ -60,9 +60,9 @@ impl Pipeline {
                     if d.x.hypot(d.y) < 0.2 {
                         return; // not a stride yet (a shuffle in place)
                     }
-                    eskf.rotate_frame(h.start_heading_rad - d.y.atan2(d.x));
+                    eskf.rotate_frame(h.start_heading_rad.get() - d.y.atan2(d.x));
                     eskf.set_heading_variance(h.start_heading_sd_rad.get().powi(2));
-                    h.start_heading_rad
+                    h.start_heading_rad.get()
                 }
                 Some((xy, _)) => {
                     let (dx, dy) = (eskf.p_m.x - xy[0], eskf.p_m.y - xy[1]);

@@ -2,7 +2,7 @@
 //! headings, `tests/typical_bias.rs` those of the unit's typical bias.
 
 use super::*;
-use corridor_shared::config::{Config, ConfigFile};
+use corridor_shared::config::{Config, ConfigFile, NonNegative};
 
 fn level_rest(t_s: f64) -> ImuInput {
     ImuInput {
@@ -98,7 +98,8 @@ fn a_short_first_stance_aligns_without_a_bias_prior_unless_switched_off() {
     let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
     for min_start_stance_s in [0.1, 0.0] {
         let mut cfg = Config::default();
-        cfg.alignment.min_start_stance_s = min_start_stance_s;
+        cfg.alignment.min_start_stance_s =
+            NonNegative::new("alignment.min_start_stance_s", min_start_stance_s).unwrap();
         let mut est = Estimator::new(cfg, HeadingAid::None);
         // 0.2 s of stance (shorter than min_rest_s = 0.5 s), then the foot moves.
         let t = feed(&mut est, 0.0, 40, bias, level);
@@ -231,7 +232,8 @@ fn a_clipped_gyro_axis_is_counted_and_widens_the_attitude_only_when_modelled() {
     let mut roll = Vec::new();
     for sd in [0.5, 0.0] {
         let mut cfg = Config::default();
-        cfg.eskf.clipped_rate_sd_rad_s = sd;
+        cfg.eskf.clipped_rate_sd_rad_s =
+            NonNegative::new("eskf.clipped_rate_sd_rad_s", sd).unwrap();
         let rail = cfg.sensor.gyro_range_rad_s();
         let mut est = Estimator::new(cfg, HeadingAid::None);
         let t = feed(&mut est, 0.0, 200, bias, level);
@@ -437,7 +439,7 @@ fn a_stance_split_by_a_short_pause_is_one_stance() {
     let (level, spin) = ([0.0, 0.0, 9.81], [0.0, 2.0, 0.0]);
     for (merge_gap_s, want) in [(0.3, 1), (0.0, 2)] {
         let mut cfg = Config::default();
-        cfg.detector.merge_gap_s = merge_gap_s;
+        cfg.detector.merge_gap_s = NonNegative::new("detector.merge_gap_s", merge_gap_s).unwrap();
         let mut est = Estimator::new(cfg, HeadingAid::None);
         let t = feed(&mut est, 0.0, 200, [0.0; 3], level); // aligning rest
         let t = feed(&mut est, t, 100, spin, level); // swing
