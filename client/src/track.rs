@@ -6,7 +6,7 @@
 //! starts, and follow several streams with one reader.
 
 use crate::{ClientError, Domain, Subscriber};
-use corridor_shared::wire::{FLAG_END_OF_STREAM, NavSample};
+use corridor_shared::wire::{FLAG_END_OF_STREAM, FLAG_FRAME_SET, NavSample};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -17,11 +17,16 @@ pub struct Stride {
     pub nav: NavSample,
     /// Horizontal distance from the previous stride of the stream, m (0 for the first).
     pub step_m: f64,
-    /// The daemon sent this stance again: the sample that began it carried a glitched stamp
-    /// and was dropped after the fact, and this stride replaces the previous one (the same
+    /// The daemon sent this stance again, and this stride replaces the previous one (the same
     /// `stance`, a later `imu_seq`; or earlier ones, when a run of glitched stamps held
-    /// several stances); it is not counted again.
+    /// several stances); it is not counted again. Either the sample that began it carried a
+    /// glitched stamp and was dropped after the fact, or ([`Stride::frame_set`]) the start
+    /// heading set the map frame during it.
     pub replaces_previous: bool,
+    /// The start heading set the map frame on this stride's sample ([`FLAG_FRAME_SET`]): the
+    /// stance sent again in that frame, replacing its first sending, which was in the frame
+    /// before (the first stride, on a walk that starts along its start heading).
+    pub frame_set: bool,
     /// The daemon's estimator started again (its stance count went back to 1: a daemon that
     /// restarted within the stream): this stride starts a new track from the new origin (it
     /// was joined to the last one, a step of tens of metres that never happened: a review).
@@ -52,6 +57,14 @@ impl Strides {
     }
 
     fn add(&mut self, n: NavSample) -> Stride {
+        // The stance sent again in the frame the start heading set replaces its first sending
+        // (the same stance, a later time: without the flag, an estimator started again).
+        let frame_set = n.flags & FLAG_FRAME_SET != 0;
+        let resent = frame_set && self.last().is_some_and(|q| q.stance == n.stance);
+        if resent && let Some((_, step)) = self.recent.pop_back() {
+            self.path_m -= step;
+            self.count -= 1;
+        }
         // A stance count that does not go on: stances sent again after glitched stamps, which
         // the dropped samples had stamped ahead of this one, or else an estimator that started
         // again (a daemon restarted within the stream), whose times go on (a review: telling
@@ -65,7 +78,7 @@ impl Strides {
         }
         // Strides from this stance on, sent before with a later time, are replaced (not
         // counted again).
-        let mut replaced = false;
+        let mut replaced = resent;
         while let Some(&(q, step)) = self.recent.back()
             && q.stance >= n.stance
             && q.t_s > n.t_s
@@ -87,6 +100,7 @@ impl Strides {
             step_m,
             replaces_previous: replaced,
             new_track,
+            frame_set,
         }
     }
 }
@@ -259,6 +273,39 @@ mod tests {
         let again = s.add(nav(1, 0.1, 30));
         assert!(again.replaces_previous && !again.new_track);
         assert_eq!((s.count, s.path_m), (1, 0.0));
+    }
+
+    #[test]
+    fn the_first_stance_sent_again_in_the_frame_the_start_heading_set_replaces_it() {
+        // As exp36 through the daemon: stance 1 published as it began, in the frame before
+        // the start heading (2.99 m to stance 2 in a review), then again 0.01 s later in it.
+        let mut s = Strides::default();
+        s.add(nav_at(1, -0.691, 309, 3.09));
+        let set = NavSample {
+            flags: FLAG_FRAME_SET,
+            ..nav_at(1, 0.763, 310, 3.10)
+        };
+        let again = s.add(set);
+        assert!(again.frame_set && again.replaces_previous && !again.new_track);
+        assert_eq!((again.step_m, s.count, s.path_m), (0.0, 1, 0.0));
+        let second = s.add(nav_at(2, 2.251, 432, 4.315));
+        assert!((second.step_m - 1.488).abs() < 1e-9, "{}", second.step_m);
+        assert_eq!(s.count, 2);
+        assert!((s.path_m - 1.488).abs() < 1e-9, "{}", s.path_m);
+        // Without the flag the same stance at a later time is an estimator started again.
+        let mut s = Strides::default();
+        s.add(nav_at(1, -0.691, 309, 3.09));
+        let unflagged = s.add(nav_at(1, 0.763, 310, 3.10));
+        assert!(unflagged.new_track && !unflagged.frame_set);
+        // The flag on a stance not sent before (the frame set as it began) replaces nothing.
+        let mut s = Strides::default();
+        s.add(nav_at(1, 0.0, 10, 0.1));
+        let first_in_frame = s.add(NavSample {
+            flags: FLAG_FRAME_SET,
+            ..nav_at(2, 1.4, 20, 0.2)
+        });
+        assert!(first_in_frame.frame_set && !first_in_frame.replaces_previous);
+        assert_eq!(s.count, 2);
     }
 
     #[test]

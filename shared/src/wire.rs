@@ -51,6 +51,13 @@ pub const FLAG_SHUTDOWN: u32 = 1 << 4;
 /// cannot tell apart: the glitched time is not on the wire).
 pub const FLAG_RETRACTS: u32 = 1 << 5;
 
+/// Output `flags`: the start heading (`heading.start_heading_deg`) set the map frame on this
+/// sample, at the first stride's stance, turning it about the start point: the positions and
+/// yaws published before it are in the frame before. The nav sample of that stance, published
+/// when it began, is published again with this flag (the same `stance`, a later `imu_seq` and
+/// `t_s`): it replaces the first one.
+pub const FLAG_FRAME_SET: u32 = 1 << 6;
+
 /// [`AngleObservation::valid`] bit: `roll_rad` is valid. The daemon does not fuse an external
 /// roll (its tilt comes from gravity at every stance): such observations are counted
 /// (`angles_ignored` in its report) and their heading, if any, is used.
@@ -237,7 +244,8 @@ pub struct AttitudeSample {
 /// (first sample of the stance), after alignment. A sample whose stamp turns out to be a glitch
 /// is dropped after its nav sample went out; its stance's real first sample then sends one
 /// again, with the same `stance` and a later `imu_seq` (`corridor_client`'s tracker takes it
-/// for the stride it replaces).
+/// for the stride it replaces). The stance during which the start heading sets the map frame
+/// (the first stride's) is sent again too, in that frame, flagged [`FLAG_FRAME_SET`].
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
 #[type_name("corridor_v5_NavSample")]
 #[repr(C)]

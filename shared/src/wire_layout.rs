@@ -167,6 +167,7 @@ pub fn constants() -> Vec<(&'static str, u32)> {
         ("FLAG_CONVERGED", FLAG_CONVERGED),
         ("FLAG_SHUTDOWN", FLAG_SHUTDOWN),
         ("FLAG_RETRACTS", FLAG_RETRACTS),
+        ("FLAG_FRAME_SET", FLAG_FRAME_SET),
         ("ANGLE_ROLL", ANGLE_ROLL),
         ("ANGLE_PITCH", ANGLE_PITCH),
         ("ANGLE_HEADING", ANGLE_HEADING),

@@ -17,6 +17,9 @@ FLAG_CONVERGED = 1 << 3
 FLAG_SHUTDOWN = 1 << 4
 # Outputs published earlier in the stream with a later t_s came from glitched stamps: drop them.
 FLAG_RETRACTS = 1 << 5
+# The start heading set the map frame on this sample (positions and yaws before it are in the
+# frame before); the nav sample of that stance is sent again with it and replaces the first.
+FLAG_FRAME_SET = 1 << 6
 # Roll and pitch are not fused by the daemon (its tilt comes from gravity at every stance):
 # observations carrying them are counted (angles_ignored); their heading, if any, is used.
 ANGLE_ROLL = 1 << 0

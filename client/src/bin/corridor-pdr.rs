@@ -69,7 +69,9 @@ fn run() -> Result<()> {
                     p[2],
                     n.yaw_rad.to_degrees(),
                     s.step_m,
-                    if s.replaces_previous {
+                    if s.frame_set && s.replaces_previous {
+                        "  (again, in the map frame the start heading set on it: replaces the line above)"
+                    } else if s.replaces_previous {
                         "  (again: replaces the lines above from this stride on, whose samples had glitched stamps)"
                     } else if s.new_track {
                         "  (the daemon's estimator started again: a new track from its own origin)"

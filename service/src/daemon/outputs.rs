@@ -7,8 +7,8 @@ use super::{DaemonConfig, DaemonError};
 use crate::core::{Estimate, Phase};
 use corridor_shared::services::{Access, ServiceError, Topic};
 use corridor_shared::wire::{
-    AttitudeSample, BiasSample, Diagnostics, FLAG_BIAS_CORRECTED, FLAG_CONVERGED, FLAG_RETRACTS,
-    FLAG_STANCE, NavSample, phase,
+    AttitudeSample, BiasSample, Diagnostics, FLAG_BIAS_CORRECTED, FLAG_CONVERGED, FLAG_FRAME_SET,
+    FLAG_RETRACTS, FLAG_STANCE, NavSample, phase,
 };
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
@@ -131,6 +131,9 @@ pub(super) fn flags_of(e: &Estimate) -> u32 {
     }
     if e.glitch_t_s.is_some() {
         f |= FLAG_RETRACTS;
+    }
+    if e.frame_set {
+        f |= FLAG_FRAME_SET;
     }
     f
 }

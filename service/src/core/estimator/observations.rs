@@ -62,6 +62,7 @@ impl Pipeline {
                     }
                     eskf.rotate_frame(h.start_heading_rad.get() - d.y.atan2(d.x));
                     eskf.set_heading_variance(h.start_heading_sd_rad.get().powi(2));
+                    self.out.frame_set = true;
                     h.start_heading_rad.get()
                 }
                 Some((xy, _)) => {

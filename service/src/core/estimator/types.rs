@@ -392,6 +392,11 @@ pub struct Estimate {
     /// The heading was taken as lost on this sample: the straight strides before it ran this
     /// far (rad) off the nearest direction (counted in `heading_reacquisitions`).
     pub heading_reacquired: Option<f64>,
+    /// The start heading (`heading.start_heading_deg`) set the map frame on this sample, at the
+    /// first stride's stance: the filter's frame turned about the start point, so the positions
+    /// and yaws before this sample (the stance's first, whose footfall the daemon published)
+    /// are in the frame before it.
+    pub frame_set: bool,
     /// The rest or stance that would have aligned on this sample was refused: its mean
     /// specific force and the gravity it was held against, m/s² (counted in
     /// `alignment_not_gravity`).
@@ -441,6 +446,7 @@ impl Estimate {
         self.gap_crossing = None;
         self.velocity_reset = false;
         self.heading_reacquired = None;
+        self.frame_set = false;
         self.not_gravity_m_s2 = None;
         self.specific_force_off_gravity = None;
         self.replaced_first_t_s = None;
@@ -480,6 +486,7 @@ impl Default for Estimate {
             clock_stepped_back_s: None,
             velocity_reset: false,
             heading_reacquired: None,
+            frame_set: false,
             not_gravity_m_s2: None,
             specific_force_off_gravity: None,
             gap_s: None,
