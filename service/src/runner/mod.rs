@@ -316,14 +316,15 @@ impl<'a> Feed<'a> {
         }
     }
 
-    /// [`Feed::step`], calling `before_not_gravity` at each refusal of a rest or stance as not
-    /// gravity, before its warning: the streamed run asks there whether the rows read so
-    /// far look like g, so that a log in g fails with the units error alone instead of after a
-    /// warning per stance. Its error is returned, the warning not logged.
+    /// [`Feed::step`], calling `units_suspect` at each refusal of a rest or stance as not
+    /// gravity and of a sample as implausible, before its warning: the streamed run asks there
+    /// whether the rows read so far look like g or deg/s, so that such a log fails with the
+    /// units error alone instead of after a warning per stance or per swing. Its error is
+    /// returned, the warning not logged.
     fn step_checked<E>(
         &mut self,
         row: &ImuRow,
-        before_not_gravity: impl FnOnce() -> Result<(), E>,
+        units_suspect: impl FnOnce() -> Result<(), E>,
     ) -> Result<Option<Stepped<'_>>, E> {
         let mut gyro = row.gyro_rad_s;
         let first_t_s = *self.first_t_s.get_or_insert(row.t_s);
@@ -340,7 +341,7 @@ impl<'a> Feed<'a> {
                 // first 20 s had its first ten refusals there, and failed only at its end: a
                 // review). Cheap: the rows' bands decide, the median is taken for the error.
                 if e.not_gravity_m_s2.is_some() && !self.quiet {
-                    before_not_gravity()?;
+                    units_suspect()?;
                 }
                 // The warnings of a sample count once against the cap; the specific force's
                 // (said once each time the rest or the stances' median is off gravity) is never
@@ -358,6 +359,9 @@ impl<'a> Feed<'a> {
                 }
             }
             Err(err) => {
+                if matches!(err, crate::core::SampleError::Implausible { .. }) && !self.quiet {
+                    units_suspect()?;
+                }
                 if self.refused.len() < MAX_REFUSED_EXAMPLES {
                     let at = format!("{}:{}: {err}", self.path.display(), row.line);
                     if !self.quiet {

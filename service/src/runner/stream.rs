@@ -266,6 +266,13 @@ pub struct RunOptions {
     pub warm_start: Option<crate::core::WarmStart>,
 }
 
+/// The log's first seconds whose units are judged before any row is estimated
+/// ([`ImuCsvReader::check_units_so_far`]): longer than the initial rest of any bundled walk.
+const UNITS_AHEAD_S: f64 = 30.0;
+
+/// At most this many rows are read ahead for it (30 s of a 3.3 kHz sensor).
+const UNITS_AHEAD_ROWS: usize = 100_000;
+
 /// Streams a log through the estimator and writes `estimates.csv`, `innovations.csv`,
 /// `summary.json` (and the figures); see the module's documentation for what is kept and what
 /// a failed run leaves.
@@ -310,7 +317,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     });
     let mut progress = Progress::new(reader.progress_bytes().1.unwrap_or(0));
     let mut logged = 0;
-    loop {
+    let mut next_row = |reader: &mut ImuCsvReader<_>| {
         let item = reader.next();
         while logged < reader.rejected_rows().len().min(REJECTED_ROWS_LOGGED) {
             tracing::warn!(
@@ -319,11 +326,33 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
             );
             logged += 1;
         }
+        item
+    };
+    // The log's first `UNITS_AHEAD_S` are read before any row is estimated, and their units
+    // judged (a gyro in deg/s, an accelerometer in g): such a log fails with the units error
+    // alone, not after the warnings its rows cause (refused rates, gaps, health checks: 20 of
+    // them before the error at the end, a review).
+    let mut ahead = std::collections::VecDeque::new();
+    while let Some(row) = next_row(&mut reader) {
+        let row = row?;
+        let first_t_s = ahead.front().map_or(row.t_s, |r: &ImuRow| r.t_s);
+        let full = row.t_s - first_t_s >= UNITS_AHEAD_S || ahead.len() >= UNITS_AHEAD_ROWS;
+        ahead.push_back(row);
+        if full {
+            break;
+        }
+    }
+    reader.check_units_so_far()?;
+    loop {
+        let item = match ahead.pop_front() {
+            Some(row) => Some(Ok(row)),
+            None => next_row(&mut reader),
+        };
         let Some(row) = item else { break };
         let row = row?;
         progress.show(reader.progress_bytes().0);
         if let Some((input, e, converged_at_s)) =
-            feed.step_checked(&row, || reader.check_g_so_far())?
+            feed.step_checked(&row, || reader.check_units_so_far())?
         {
             write_estimate_row(&mut est_w, e).map_err(io_at(&est_path))?;
             write_innovation_rows(&mut inn_w, &input, e).map_err(io_at(&inn_path))?;

@@ -46,6 +46,11 @@ pub(super) struct UnitsStats {
 /// sensor's plausibility check refuses and counts (one corrupt value refused the whole file).
 pub(super) const GYRO_UNITS_MIN_FRACTION: f64 = 0.01;
 
+/// Rows above [`GYRO_MAX_PLAUSIBLE_RAD_S`] it takes, besides [`GYRO_UNITS_MIN_FRACTION`] of
+/// them, to say "deg/s" before the end of the log (a walk in deg/s has one in two rows above
+/// it: 4,099 of exp17's 6,601, 10 within its first 250 rows).
+pub(super) const GYRO_UNITS_MIN_ROWS_EARLY: u64 = 10;
+
 impl UnitsStats {
     pub(super) fn hist_index(norm: f64) -> usize {
         let lo = 2f64.powi(HIST_MIN_EXP);
@@ -116,22 +121,52 @@ impl UnitsStats {
         0
     }
 
-    /// Whether the median |a| lies in the band of a log in g.
-    pub(super) fn looks_like_g(&self) -> bool {
-        self.median_band() == 1
+    /// Whether the median |a| lies in a band no working accelerometer in m/s² reads over any
+    /// stretch of a walk: the band of a log in g, the one between g and the plausible band (a
+    /// wrong scale: 0.4 × m/s² reads 3.9), or the one above it (mg, ft/s²). Not the band below
+    /// g: an accelerometer that starts late reads 0 for its first rows.
+    pub(super) fn accel_units_wrong_early(&self) -> bool {
+        matches!(self.median_band(), 1 | 2 | 4)
+    }
+
+    /// Whether the rows so far read like a gyro in deg/s, judged before the end of the log:
+    /// at least [`GYRO_UNITS_MIN_ROWS_EARLY`] rows above the plausible rate as well as the
+    /// end's fraction of them, so that a few corrupt values among the first rows are not
+    /// taken for units.
+    pub(super) fn looks_like_deg_s_early(&self) -> bool {
+        let n: u64 = self.bands.iter().sum();
+        self.gyro_over >= GYRO_UNITS_MIN_ROWS_EARLY
+            && self.gyro_over as f64 >= GYRO_UNITS_MIN_FRACTION * n as f64
     }
 
     /// Refuses logs whose accelerometer does not look like m/s² or whose gyroscope does not
     /// look like rad/s. The decision is the median's band, exact for any length.
     pub(super) fn check(&mut self, path: &Path) -> Result<(), ImuCsvError> {
-        let n: u64 = self.bands.iter().sum();
-        let band = self.median_band();
-        let units = |column, statistic: &str, value, hint: String| ImuCsvError::Units {
+        self.check_accel(path)?;
+        self.check_gyro(path)
+    }
+
+    fn units_error(
+        path: &Path,
+        column: &'static str,
+        statistic: &str,
+        value: f64,
+        hint: String,
+    ) -> ImuCsvError {
+        ImuCsvError::Units {
             path: path.to_path_buf(),
             column,
             statistic: statistic.to_string(),
             value,
             hint,
+        }
+    }
+
+    /// The accelerometer's part of [`UnitsStats::check`].
+    fn check_accel(&mut self, path: &Path) -> Result<(), ImuCsvError> {
+        let band = self.median_band();
+        let units = |column, statistic: &str, value, hint| {
+            Self::units_error(path, column, statistic, value, hint)
         };
         const ACCEL_COLUMNS: &str = "ax_m_s2,ay_m_s2,az_m_s2";
         if band == 1 {
@@ -158,6 +193,15 @@ impl UnitsStats {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// The gyroscope's part of [`UnitsStats::check`].
+    pub(super) fn check_gyro(&self, path: &Path) -> Result<(), ImuCsvError> {
+        let n: u64 = self.bands.iter().sum();
+        let units = |column, statistic: &str, value, hint| {
+            Self::units_error(path, column, statistic, value, hint)
+        };
         let (max_gyro, max_line) = self.max_gyro;
         if self.gyro_over as f64 >= GYRO_UNITS_MIN_FRACTION * n as f64 && self.gyro_over > 0 {
             return Err(units(

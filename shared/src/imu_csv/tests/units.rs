@@ -197,11 +197,11 @@ fn a_log_in_g_is_told_from_the_rows_read_so_far_on_request() {
         .collect::<Vec<_>>()
         .join("\n");
     let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &lenient()).unwrap();
-    assert!(reader.check_g_so_far().is_ok(), "no row read yet");
+    assert!(reader.check_units_so_far().is_ok(), "no row read yet");
     for _ in 0..30 {
         reader.next().unwrap().unwrap();
     }
-    match reader.check_g_so_far().unwrap_err() {
+    match reader.check_units_so_far().unwrap_err() {
         ImuCsvError::Units {
             statistic, value, ..
         } => {
@@ -219,7 +219,7 @@ fn a_log_in_g_is_told_from_the_rows_read_so_far_on_request() {
     };
     let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &off).unwrap();
     reader.next().unwrap().unwrap();
-    assert!(reader.check_g_so_far().is_ok());
+    assert!(reader.check_units_so_far().is_ok());
     // Only the verdict "in g": first rows that read nothing (an accelerometer that starts
     // late) are no units error so far, and the log is judged at its end, on every row.
     let text = units_file(100, 100)
@@ -235,6 +235,60 @@ fn a_log_in_g_is_told_from_the_rows_read_so_far_on_request() {
     for _ in 0..30 {
         reader.next().unwrap().unwrap();
     }
-    assert!(reader.check_g_so_far().is_ok());
+    assert!(reader.check_units_so_far().is_ok());
     assert!(reader.all(|r| r.is_ok()));
+}
+
+#[test]
+fn a_gyro_in_deg_s_is_told_from_the_rows_read_so_far_but_a_few_corrupt_rates_are_not() {
+    // 100 rows in m/s², the gyro's z axis reading 57.3 (1 rad/s in deg/s) from row 50 on.
+    let in_deg_s_from = |first: usize, rate: f64| {
+        units_file(100, 100)
+            .lines()
+            .enumerate()
+            .map(|(i, l)| match i {
+                i if i > first => l.replace("0.01,0.02,0.03", &format!("0.01,0.02,{rate}")),
+                _ => l.to_string(),
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    let text = in_deg_s_from(50, 57.3);
+    let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &lenient()).unwrap();
+    for _ in 0..59 {
+        reader.next().unwrap().unwrap();
+    }
+    // 9 rows above the plausible rate: a few corrupt values, not yet units.
+    assert!(reader.check_units_so_far().is_ok());
+    reader.next().unwrap().unwrap();
+    match reader.check_units_so_far().unwrap_err() {
+        ImuCsvError::Units {
+            column,
+            statistic,
+            hint,
+            ..
+        } => {
+            assert_eq!(column, "gx_rad_s,gy_rad_s,gz_rad_s");
+            assert!(
+                statistic.contains("10 of 60 rows above")
+                    && statistic.ends_with("over the first 60 rows"),
+                "{statistic}"
+            );
+            assert!(hint.contains("deg/s"), "{hint}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // Fewer than 1 % of the rows so far above it: corrupt values, refused one by one.
+    let text = in_deg_s_from(1, 57.3);
+    let long: String = text
+        .lines()
+        .take(12)
+        .chain(units_file(2000, 2000).lines().skip(13))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let mut reader = ImuCsvReader::new(long.as_bytes(), path(), &lenient()).unwrap();
+    for _ in 0..1500 {
+        reader.next().unwrap().unwrap();
+    }
+    assert!(reader.check_units_so_far().is_ok());
 }
