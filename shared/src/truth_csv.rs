@@ -6,7 +6,7 @@
 //! reader it tolerates a UTF-8 byte-order mark, CRLF line ends, blank lines at the end and
 //! spaces around fields.
 
-use crate::imu_csv::{truncate_chars, unquote};
+use crate::imu_csv::{escape_controls, truncate_chars, unquote};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -62,7 +62,7 @@ pub enum TruthCsvError {
     Header {
         /// The file.
         path: PathBuf,
-        /// The header line as found (at most 200 characters).
+        /// The header line as found (at most 200 characters, control characters escaped).
         found: String,
         /// The accepted headers.
         expected: &'static str,
@@ -107,13 +107,15 @@ struct RowTail<'a> {
 
 impl fmt::Display for RowTail<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // Control characters escaped: a terminal would act on them rather than show them.
+        let value = escape_controls(self.value);
         if self.column.is_empty() {
-            write!(f, ": row \"{}\" {}", self.value, self.reason)
+            write!(f, ": row \"{value}\" {}", self.reason)
         } else {
             write!(
                 f,
-                " column {}: value \"{}\" {}",
-                self.column, self.value, self.reason
+                " column {}: value \"{value}\" {}",
+                self.column, self.reason
             )
         }
     }
@@ -150,7 +152,7 @@ pub fn parse_truth_csv(text: &str, path: &Path) -> Result<Vec<TruthPoint>, Truth
         _ => {
             return Err(TruthCsvError::Header {
                 path: path.to_path_buf(),
-                found: truncate_chars(header, MAX_HEADER_CHARS),
+                found: escape_controls(&truncate_chars(header, MAX_HEADER_CHARS)).into_owned(),
                 expected: "t_s,x_m,y_m,z_m\" or \"t_s,x_m,y_m,z_m,stride,sample_index",
             });
         }
@@ -363,6 +365,15 @@ mod tests {
                 )
             );
         }
+        // Control characters are shown escaped, in the header as in a row.
+        let err = parse_truth_csv("t_s,x_m,\x1b[2J\ty_m\n", path()).unwrap_err();
+        assert!(
+            err.to_string()
+                .ends_with("found \"t_s,x_m,\\x1b[2J\\ty_m\""),
+            "{err}"
+        );
+        let err = parse_truth_csv("t_s,x_m,y_m,z_m\n0,0,\x07,0\n", path()).unwrap_err();
+        assert!(err.to_string().contains("value \"\\x07\""), "{err}");
     }
 
     fn row_err(text: &str) -> (u64, String, String, String) {

@@ -7,7 +7,10 @@
 //!
 //! The reader tolerates a UTF-8 byte-order mark, CRLF line ends, blank lines at the end of the file,
 //! spaces or tabs around fields, and bytes that are not UTF-8 in columns it does not read (in a
-//! number they make the row malformed). It is a hand-rolled single pass over the bytes of each line
+//! number they make the row malformed). A file that is not text is refused at its header, a
+//! compressed one (gzip, xz, zstd, zip, bzip2, known by its first bytes) with the command that
+//! decompresses it; bytes quoted from a file in a message have their control characters and
+//! bytes that are not UTF-8 escaped. It is a hand-rolled single pass over the bytes of each line
 //! (fields split at `,` eight bytes at a time, numbers read with [`str::parse::<f64>`]); on the
 //! 21 001-row exp29 log it parses about 3 million rows per second on one core
 //! (`cargo bench -p corridor-shared --bench csv_parse`).
@@ -33,6 +36,8 @@
 //!   [`ImuCsvError`]) and [`read_imu_csv`];
 //! - `reader`: [`ImuCsvReader`], the log row by row;
 //! - `row`: one data row, split at the commas, parsed and checked;
+//! - `sniff`: files that are not CSV text (compressed ones by their first bytes), and bytes
+//!   quoted in messages (control characters and bytes that are not UTF-8 escaped);
 //! - `units`: the units check over the accepted rows (g, deg/s).
 
 use crate::sensor::{TimeGuard, TimeVerdict};
@@ -44,11 +49,13 @@ use std::path::{Path, PathBuf};
 
 mod reader;
 mod row;
+mod sniff;
 mod units;
 
 pub use reader::ImuCsvReader;
 use row::*;
 pub(crate) use row::{truncate_chars, unquote};
+pub(crate) use sniff::escape_controls;
 use units::*;
 
 /// The seven columns every IMU CSV header must start with, in this order.
@@ -192,6 +199,10 @@ pub struct RejectedRow {
     pub value: String,
     /// Why the row was rejected.
     pub reason: RejectReason,
+    /// For a row whose field count differs from the header's: (the row's, the header's), which
+    /// the message gives (the row in `value` may be cut before its extra fields).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub field_counts: Option<(usize, usize)>,
 }
 
 impl RejectedRow {
@@ -200,18 +211,24 @@ impl RejectedRow {
         Located { row: self, path }
     }
 
-    /// Writes everything after the line number: ` column c: value "v" reason` or `: row "v" reason`.
+    /// Writes everything after the line number: ` column c: value "v" reason` or `: row "v" reason`
+    /// (control characters in the value escaped).
     fn fmt_tail(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let value = escape_controls(&self.value);
         if self.column.is_empty() {
-            write!(f, ": row \"{}\" {}", self.value, self.reason)?;
-            if self.reason == RejectReason::Malformed {
-                f.write_str(" (its field count differs from the header's)")?;
+            write!(f, ": row \"{value}\" {}", self.reason)?;
+            match self.field_counts {
+                Some((row, header)) => write!(f, " ({row} fields, the header has {header})")?,
+                None if self.reason == RejectReason::Malformed => {
+                    f.write_str(" (its field count differs from the header's)")?
+                }
+                None => {}
             }
         } else {
             write!(
                 f,
-                " column {}: value \"{}\" {}",
-                self.column, self.value, self.reason
+                " column {}: value \"{value}\" {}",
+                self.column, self.reason
             )?;
             if self.reason == RejectReason::Malformed {
                 f.write_str(" (not a number)")?;
@@ -338,7 +355,8 @@ pub enum ImuCsvError {
         source: std::io::Error,
     },
     /// The header (line 1) is missing or does not start with the required columns, or it has an
-    /// empty or repeated column name.
+    /// empty or repeated column name, or the file is not text (compressed, not UTF-8, lines that
+    /// end in CR alone).
     #[error(
         "{path}:{line}: header {problem}: it must start with \"{expected}\", found \"{found}\""
     )]
@@ -347,9 +365,11 @@ pub enum ImuCsvError {
         path: PathBuf,
         /// The header's line (after leading blank lines).
         line: u64,
-        /// What is wrong with it.
-        problem: &'static str,
-        /// The header line as found (at most 200 characters).
+        /// What is wrong with it (for a compressed file, with the command that decompresses it).
+        problem: std::borrow::Cow<'static, str>,
+        /// The header line as found, up to a CR, at most 200 characters (control characters
+        /// and bytes that are not UTF-8 escaped, NULs left out); a compressed file's first 8
+        /// bytes.
         found: String,
         /// What the header must look like.
         expected: &'static str,

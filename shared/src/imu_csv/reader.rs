@@ -1,6 +1,7 @@
 //! [`ImuCsvReader`]: the log row by row, in memory independent of its length.
 
 use super::*;
+use std::borrow::Cow;
 
 /// A streaming reader of an IMU CSV log: an iterator of the accepted rows in file order, in
 /// memory independent of the log's length (one line buffer, the counters, the first
@@ -291,24 +292,36 @@ impl<R: BufRead> ImuCsvReader<R> {
         }
         let header = strip_cr(&Self::line_str(&self.line)).to_string();
         let names: Vec<&str> = header.split(',').map(unquote).collect();
-        let problem = if header.contains('\r') {
+        // The header proper: up to a CR, after which a file whose lines end in CR alone goes on.
+        let proper = self.line.split(|&b| b == b'\r').next().unwrap_or_default();
+        let compressed = sniff::compressed(&self.line, &self.path);
+        // Up to a CR (the rest of a CR-only file), escaped: a terminal would act on a control
+        // character rather than show it. Of a compressed file, its first bytes: its magic.
+        let found = match compressed {
+            Some(_) => sniff::first_bytes(&self.line),
+            None => sniff::excerpt(proper, MAX_HEADER_CHARS),
+        };
+        let problem: Option<Cow<'static, str>> = if let Some(problem) = compressed {
+            Some(problem.into())
+        } else if Self::line_str(proper).contains(['\u{fffd}', '\0']) {
+            // UTF-16 (a NUL byte in every other place), another 8-bit encoding, binary bytes
+            // (whose CR, if any, says nothing of line ends).
+            Some("is not UTF-8 text (a UTF-16 file, another encoding, or binary?)".into())
+        } else if header.contains('\r') {
             // Every line of the file, read as one: its lines end in CR alone (old Mac files).
-            Some("holds a CR inside it: the file's lines end in CR alone, not LF or CRLF")
-        } else if header.contains(['\u{fffd}', '\0']) {
-            // UTF-16 (a NUL byte in every other place), or another 8-bit encoding.
-            Some("is not UTF-8 text (a UTF-16 file, or another encoding?)")
+            Some("holds a CR inside it: the file's lines end in CR alone, not LF or CRLF".into())
         } else if names.len() < REQUIRED_COLUMNS.len()
             || !names.iter().zip(REQUIRED_COLUMNS).all(|(a, b)| *a == b)
         {
-            Some("does not start with the required columns")
+            Some("does not start with the required columns".into())
         } else if names.iter().any(|n| n.is_empty()) {
-            Some("has an empty column name")
+            Some("has an empty column name".into())
         } else if names
             .iter()
             .enumerate()
             .any(|(i, n)| names[..i].contains(n))
         {
-            Some("repeats a column name")
+            Some("repeats a column name".into())
         } else {
             None
         };
@@ -317,12 +330,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                 path: self.path.clone(),
                 line: self.line_no,
                 problem,
-                // Up to a CR (the rest of a CR-only file) and without NULs, which a terminal
-                // would act on rather than show.
-                found: truncate_chars(
-                    &header.split('\r').next().unwrap_or("").replace('\0', ""),
-                    MAX_HEADER_CHARS,
-                ),
+                found,
                 expected: IMU_HEADER,
             });
         }
@@ -370,6 +378,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                 column: REQUIRED_COLUMNS[0].to_string(),
                 value: row.t_s.to_string(),
                 reason: RejectReason::TimeGlitch,
+                field_counts: None,
             };
             // A jumped row with the value as it was read.
             let rejected = match jumped.iter().find(|j| j.line == row.line) {
@@ -418,6 +427,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                         column: String::new(),
                         value: String::new(),
                         reason: RejectReason::Malformed,
+                        field_counts: None,
                     });
                 }
             }
@@ -487,6 +497,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                                 } else {
                                     RejectReason::TimeOutlier
                                 },
+                                field_counts: None,
                             });
                         }
                         Ok((row, jumped))
@@ -506,16 +517,18 @@ impl<R: BufRead> ImuCsvReader<R> {
                             } else {
                                 RejectReason::TimeNotIncreasing
                             },
+                            field_counts: None,
                         },
                     )),
                 },
-                Err(RowProblem::FieldCount) => Err((
+                Err(RowProblem::FieldCount(fields)) => Err((
                     None,
                     RejectedRow {
                         line: line_no,
                         column: String::new(),
                         value: truncate_chars(text, MAX_VALUE_CHARS),
                         reason: RejectReason::Malformed,
+                        field_counts: Some((fields, n_fields)),
                     },
                 )),
                 Err(RowProblem::Field {
@@ -529,6 +542,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                         column: self.names[index].clone(),
                         value: truncate_chars(text, MAX_VALUE_CHARS),
                         reason,
+                        field_counts: None,
                     },
                 )),
             };

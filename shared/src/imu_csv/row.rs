@@ -4,8 +4,8 @@ use super::*;
 
 /// What is wrong with one data row.
 pub(super) enum RowProblem<'a> {
-    /// The field count differs from the header's.
-    FieldCount,
+    /// The field count differs from the header's: the row's.
+    FieldCount(usize),
     /// The first bad field: its index, its (trimmed) text and why.
     Field {
         index: usize,
@@ -66,7 +66,7 @@ pub(super) fn parse_row(
         field_start = field_end + 1;
     }
     if index != n_fields {
-        Err(RowProblem::FieldCount)
+        Err(RowProblem::FieldCount(index))
     } else if let Some(p) = problem {
         Err(p)
     } else {

@@ -9,6 +9,9 @@ mod time;
 /// log's decision.
 mod units;
 
+/// Files that are not CSV text: compressed, or a header that is not UTF-8.
+mod not_text;
+
 fn path() -> &'static Path {
     Path::new("data/imu.csv")
 }
@@ -274,6 +277,7 @@ fn nan_row_is_rejected_and_counted_with_line_and_column() {
             column: "gy_rad_s".into(),
             value: "nan".into(),
             reason: RejectReason::NonFinite,
+            field_counts: None,
         }]
     );
     let counts = log.rejected_counts();
@@ -355,7 +359,7 @@ fn wrong_field_count_is_a_whole_row_rejection() {
     }
     assert_eq!(
         log.rejected[0].to_string(),
-        "line 3: row \"0.005,0.01,0.02,0.03,0.1,0.2\" is malformed (its field count differs from the header's)"
+        "line 3: row \"0.005,0.01,0.02,0.03,0.1,0.2\" is malformed (6 fields, the header has 7)"
     );
     // A wrong field count outranks a bad field in the same row.
     let text = replace_line(&good_file(200), 3, "0.005,abc,0.02");
@@ -588,4 +592,38 @@ fn the_whole_log_checks_come_after_the_rows_as_the_last_item() {
         Err(ImuCsvError::TooManyRejected { rejected: 2, .. })
     ));
     assert!(reader.next().is_none());
+}
+
+#[test]
+fn a_wrong_field_count_names_both_counts_and_counts_as_malformed() {
+    let header = format!("{HEADER},mx_gauss,my_gauss,mz_gauss");
+    let mut text = header + "\n";
+    for i in 0..200 {
+        text.push_str(&format!("{},0.04,0.40,-0.1", row(f64::from(i) * 0.005)));
+        text.push_str(if i == 1 {
+            ",0.5,3.8948949810274\n"
+        } else {
+            "\n"
+        });
+    }
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    let r = &log.rejected[0];
+    assert_eq!((r.line, r.column.as_str()), (3, ""));
+    assert_eq!(r.value.chars().count(), MAX_VALUE_CHARS);
+    assert!(
+        r.located(path())
+            .to_string()
+            .ends_with("-0.1,0.5,3.894894981\" is malformed (12 fields, the header has 10)"),
+        "{r}"
+    );
+    // The counts by reason keep their keys.
+    assert_eq!(log.rejected_counts()["malformed"], 1);
+    // A control character in a rejected field is shown escaped.
+    let text = replace_line(&good_file(200), 3, "0.005,\x1b[2J,0.02,0.03,0.1,0.2,9.8");
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(log.rejected[0].value, "\x1b[2J");
+    assert_eq!(
+        log.rejected[0].to_string(),
+        "line 3 column gx_rad_s: value \"\\x1b[2J\" is malformed (not a number)"
+    );
 }
