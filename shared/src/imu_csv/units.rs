@@ -1,4 +1,5 @@
-//! The units check over the accepted rows: accelerometers in g, gyroscopes in deg/s.
+//! The units check over the accepted rows: accelerometers in g, gyroscopes in deg/s (at the end
+//! of the log, and over the rows so far on request: [`ImuCsvReader::check_units_so_far`]).
 
 use super::*;
 
@@ -219,5 +220,50 @@ impl UnitsStats {
             ));
         }
         Ok(())
+    }
+}
+
+impl<R: BufRead> ImuCsvReader<R> {
+    /// The units check's verdicts on the accelerometer (in g, or a median |a| between g and the
+    /// plausible band or above it) and "in deg/s" ([`ImuCsvError::Units`], the end of the
+    /// log's check) over the rows accepted so far, for a caller with a reason to suspect
+    /// wrong units before the end: the first rows of the log read (`corridor run` judges them
+    /// before it estimates any), the estimator refusing a rest as not gravity or a rate as
+    /// implausible. Such a log should say so once, not after a warning per stance or per swing
+    /// (a review: 20 warnings of refused rates, gaps and health checks before the deg/s error at
+    /// the end; ten of rests not gravity before the scale error). Only those verdicts: a log
+    /// whose first rows read nothing (an accelerometer that starts late, or gravity removed) is
+    /// judged at the end, on every row, as before (a review found such a log in m/s² refused
+    /// early as "gravity removed"), and "deg/s" takes
+    /// `GYRO_UNITS_MIN_ROWS_EARLY` rows above the plausible rate besides the end's
+    /// fraction. The statistic names the rows it covers. `Ok` when the units are not checked, no
+    /// row was accepted yet, or the rows so far look like neither.
+    pub fn check_units_so_far(&mut self) -> Result<(), ImuCsvError> {
+        if !self.check_units || self.accepted == 0 {
+            return Ok(());
+        }
+        let verdict = if self.units.accel_units_wrong_early() {
+            self.units.check(&self.path)
+        } else if self.units.looks_like_deg_s_early() {
+            self.units.check_gyro(&self.path)
+        } else {
+            return Ok(());
+        };
+        verdict.map_err(|e| match e {
+            ImuCsvError::Units {
+                path,
+                column,
+                statistic,
+                value,
+                hint,
+            } => ImuCsvError::Units {
+                path,
+                column,
+                statistic: format!("{statistic} over the first {} rows", self.accepted),
+                value,
+                hint,
+            },
+            other => other,
+        })
     }
 }
