@@ -168,6 +168,25 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
             s.velocity_resets, s.health_restores
         ));
     }
+    let injecting =
+        s.injected_gyro_bias_rad_s != [0.0; 3] || s.injected_gyro_bias_ramp_rad_s2 != [0.0; 3];
+    if injecting && s.injected_rows == 0 {
+        // (It ran with exit 0 and said nothing: a review.)
+        notes.push(format!(
+            "nothing was injected: the log ends before --inject-after-s {} s (counted from its first sample)",
+            s.injected_after_s
+        ));
+    }
+    let rejected: u64 = s.input_rows_rejected.values().sum();
+    if rejected > 0 {
+        // Said in the log's warnings and counted in summary.json; a note too, as for the
+        // samples refused below (a review: 60 rows of NaN ran with `"notes": []`).
+        notes.push(format!(
+            "{rejected} {} of the CSV rejected, not read ({}): summary.json input_rows_rejected_examples names the first",
+            if rejected == 1 { "row" } else { "rows" },
+            counts_by_reason(&s.input_rows_rejected).join(", ")
+        ));
+    }
     let refused: u64 = s.samples_refused_counts.values().sum();
     if refused > 0 {
         // Never fused, and counted in summary.json; said here too (a review: 2 % of rows at

@@ -445,7 +445,7 @@ pub fn analyse(
     Ok(Analysis {
         model: model_keys(file),
         truth_error,
-        input: outcome.input_report(),
+        input: outcome.input_report(log),
         consistency,
         effects,
         scale_factor,

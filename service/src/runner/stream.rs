@@ -460,6 +460,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         injected_gyro_bias_rad_s: opts.injection.constant_rad_s,
         injected_gyro_bias_ramp_rad_s2: opts.injection.ramp_rad_s2,
         injected_after_s: opts.injection.after_s,
+        injected_rows: feed.injected_rows,
         first_t_s: feed.first_t_s,
         samples_read: reader.rows_accepted(),
         samples: c.samples,

@@ -29,6 +29,9 @@ pub struct Summary {
     pub injected_gyro_bias_ramp_rad_s2: [f64; 3],
     /// Injection start, s after the log's first sample (`first_t_s`).
     pub injected_after_s: f64,
+    /// Rows the injection was added to (0 without one, or when the log ends before
+    /// `injected_after_s`).
+    pub injected_rows: u64,
     /// The log's first sample time, s, on its own clock: the origin of `injected_after_s`
     /// (the times a user gives count from the log's start), while `converged_at_s` and the
     /// estimates are on the log's clock (a review read the two as one clock).

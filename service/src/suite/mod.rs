@@ -359,7 +359,7 @@ impl<'a> Ctx<'a> {
 
     /// Logs what the input cost `run` ([`RunOutcome::input_report`]), when it cost anything.
     fn say_input(&self, run: &RunOutcome, which: &str) {
-        if let Some(report) = run.input_report() {
+        if let Some(report) = run.input_report(&self.log) {
             tracing::warn!("{}: {report} ({which})", self.rec.name);
         }
     }
