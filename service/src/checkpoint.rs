@@ -292,6 +292,29 @@ fn payload_problem(e: &bincode::error::DecodeError, len: usize) -> String {
     }
 }
 
+/// The file a save writes before renaming it onto `path`.
+fn tmp_path(path: &Path) -> PathBuf {
+    let mut tmp_name = path.as_os_str().to_owned();
+    tmp_name.push(format!(".tmp-{}", std::process::id()));
+    PathBuf::from(tmp_name)
+}
+
+/// Whether [`save`] can write at `path`: creates the file a save writes first, and removes it.
+/// The daemon asks at start, so that a directory that is not there or not writable is said
+/// then, not after its first stream (a review: `corridor serve --config configs/service.toml`
+/// said nothing of `/var/lib/corridor` until a stream had ended). The error is the one a save
+/// would give.
+pub fn probe(path: &Path) -> Result<(), CheckpointError> {
+    let tmp = tmp_path(path);
+    std::fs::File::create(&tmp).map_err(|source| CheckpointError::Io {
+        path: path.to_owned(),
+        operation: "create",
+        source,
+    })?;
+    let _ = std::fs::remove_file(&tmp);
+    Ok(())
+}
+
 /// Saves atomically (temp file, fsync, rename, fsync of the directory).
 pub fn save(path: &Path, cp: &Checkpoint) -> Result<(), CheckpointError> {
     cp.validate().map_err(|reason| CheckpointError::Invalid {
@@ -303,9 +326,7 @@ pub fn save(path: &Path, cp: &Checkpoint) -> Result<(), CheckpointError> {
         operation,
         source,
     };
-    let mut tmp_name = path.as_os_str().to_owned();
-    tmp_name.push(format!(".tmp-{}", std::process::id()));
-    let tmp = PathBuf::from(tmp_name);
+    let tmp = tmp_path(path);
     let result = (|| {
         let mut f = std::fs::File::create(&tmp).map_err(|e| io("create", e))?;
         f.write_all(&encode(cp)).map_err(|e| io("write", e))?;

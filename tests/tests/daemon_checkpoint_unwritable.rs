@@ -48,4 +48,17 @@ fn an_unwritable_checkpoint_is_said_once() {
         "{:?}",
         report.warnings
     );
+    // A directory that is not there is said at start, before any stream (it was said after the
+    // first stream had ended: `corridor serve --config configs/service.toml` on a machine
+    // without /var/lib/corridor, a review).
+    let mut dcfg = daemon_config(&domain, Delivery::Lossless);
+    dcfg.checkpoint = Some(dir.join("not-there").join("checkpoint.bin"));
+    let report = Running::start(dcfg).stop();
+    assert_eq!(report.checkpoints_saved, 0);
+    assert!(
+        report.warnings.len() == 1
+            && report.warnings[0].contains("not-there/checkpoint.bin: cannot create checkpoint"),
+        "{:?}",
+        report.warnings
+    );
 }

@@ -631,4 +631,12 @@ fn load_warm_start(cfg: &DaemonConfig, st: &mut EstState<'_>) {
         }
         Err(e) => st.warn(format!("{e}; cold start")),
     }
+    // Whether it can be saved there: said now, and not again by the saves that fail alike.
+    if let Err(e) = checkpoint::probe(path) {
+        let text = e.to_string();
+        st.warn(format!(
+            "{text} (the daemon tries again at each save; the bias is carried across streams in memory meanwhile)"
+        ));
+        st.last_save_error = Some(text);
+    }
 }
