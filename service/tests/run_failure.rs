@@ -177,6 +177,18 @@ fn an_output_that_is_an_input_is_refused_and_the_input_kept() {
     let e = run(&options(&staged, None, &out)).unwrap_err();
     assert!(matches!(e, RunError::OutputIsInput { .. }), "{e}");
     assert_eq!(std::fs::read(&staged).unwrap(), before);
+    // An output directory that cannot be made says what it tried (it said only "…: Not a
+    // directory", a review).
+    let under_a_file = imu.join("o");
+    let e = run(&options(&exp36().join("imu.csv"), None, &under_a_file)).unwrap_err();
+    assert!(matches!(e, RunError::OutDir { .. }), "{e}");
+    assert!(
+        e.to_string().starts_with(&format!(
+            "cannot create the output directory {}",
+            under_a_file.display()
+        )),
+        "{e}"
+    );
 }
 
 #[test]

@@ -70,6 +70,15 @@ pub enum RunError {
         /// Cause.
         source: eval::EvalError,
     },
+    /// The output directory cannot be created (it said only "/proc/x: No such file or
+    /// directory", a review).
+    #[error("cannot create the output directory {path}: {source}")]
+    OutDir {
+        /// Directory.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
     /// Writing an output failed.
     #[error("{path}: {source}")]
     Io {

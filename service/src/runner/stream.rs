@@ -291,7 +291,10 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         .transpose()?;
     let gcps: Option<Vec<TruthGcp>> = truth.as_ref().map(|t| t.iter().map(to_gcp).collect());
     let aid = heading_aid(&opts.config, opts.map.as_deref())?;
-    std::fs::create_dir_all(&opts.out_dir).map_err(io_at(&opts.out_dir))?;
+    std::fs::create_dir_all(&opts.out_dir).map_err(|source| RunError::OutDir {
+        path: opts.out_dir.clone(),
+        source,
+    })?;
     refuse_inputs_as_outputs(opts)?;
     let mut staged = Staged::new();
     let (mut est_w, est_path) = staged.create(opts.out_dir.join("estimates.csv"))?;
