@@ -85,11 +85,16 @@ pub struct Recorded {
     /// earlier streams, none of the ones it recorded.
     pub attached_between_streams: bool,
     /// IMU samples (the producer's numbering, `imu_seq`) within a stream for which the daemon
-    /// published no attitude, between two rows that were recorded: samples it refused
-    /// (implausible, time), dropped (a full live queue, a gap in the producer's numbering) or
-    /// never estimated (lost in a daemon killed and restarted, `corridor status`'s "missing at
-    /// a restart"). Attitudes this reader missed (`attitude_missed`) are not counted again. A
-    /// stream's first attitude and a renumbered producer start the count afresh.
+    /// published no attitude, between two rows that were recorded or between the stream's last
+    /// row and its end-of-stream attitude (whose `imu_seq` is the producer's end-of-stream
+    /// marker's, one past its last sample): samples it refused (implausible, time), dropped (a
+    /// full live queue, a gap in the producer's numbering) or never estimated (lost in a daemon
+    /// killed and restarted, `corridor status`'s "missing at a restart"). Attitudes this reader
+    /// missed (`attitude_missed`) are not counted again. A stream's first attitude and a
+    /// renumbered producer start the count afresh. A stream the daemon ended itself (its
+    /// producer's clock restarted) carries its last estimated sample's `imu_seq` on its end:
+    /// what it refused after that one is not counted. (The samples missing at a stream's end
+    /// went uncounted before: 3 refused last samples were not reported, a review.)
     pub imu_without_attitude: u64,
     /// Bias messages received (end-of-stream messages included).
     pub bias_received: u64,
@@ -108,6 +113,44 @@ pub struct Recorded {
     /// No attitude was recorded, and the files of an earlier recording in the directory were
     /// left as they were (a logger that received nothing emptied them, a review).
     pub kept_earlier_files: bool,
+}
+
+/// The count of [`Recorded::imu_without_attitude`], attitude message by attitude message (pure:
+/// unit-tested).
+#[derive(Debug, Clone, Copy, Default)]
+struct ImuCoverage {
+    /// The `imu_seq` and `seq` of the stream's last attitude row.
+    last_row: Option<(u64, u64)>,
+    /// IMU samples without an attitude so far.
+    without: u64,
+}
+
+impl ImuCoverage {
+    /// An attitude row: counts the samples between the last row and it.
+    fn row(&mut self, imu_seq: u64, seq: u64) {
+        self.count_to(imu_seq, seq);
+        self.last_row = Some((imu_seq, seq));
+    }
+
+    /// The stream's end-of-stream attitude: counts the samples between the last row and the
+    /// producer's end-of-stream marker (its `imu_seq`), then starts afresh for the next stream.
+    fn end_of_stream(&mut self, imu_seq: u64, seq: u64) {
+        self.count_to(imu_seq, seq);
+        self.last_row = None;
+    }
+
+    /// The IMU samples strictly between the last row and `imu_seq` had no attitude, except
+    /// those whose attitude this reader missed (the `seq` gap before `seq`: published, only not
+    /// received). A producer renumbered at or below the last row counts nothing.
+    fn count_to(&mut self, imu_seq: u64, seq: u64) {
+        if let Some((last_imu_seq, last_seq)) = self.last_row
+            && imu_seq > last_imu_seq
+        {
+            let imu_gap = imu_seq - last_imu_seq - 1;
+            let missed = seq.saturating_sub(last_seq).saturating_sub(1);
+            self.without += imu_gap.saturating_sub(missed);
+        }
+    }
 }
 
 /// The readers and the open files of a recording.
@@ -226,8 +269,7 @@ impl Recorder {
         let (mut attitude_done, mut bias_done) = (false, false);
         let mut first_bias = true;
         let mut any = false;
-        // The `imu_seq` and `seq` of the stream's last attitude row.
-        let mut last_row: Option<(u64, u64)> = None;
+        let mut coverage = ImuCoverage::default();
         let mut last_rx = Instant::now();
         let stopped = loop {
             if attitude_done && bias_done {
@@ -276,18 +318,10 @@ impl Recorder {
                     if x.flags & FLAG_END_OF_STREAM != 0 {
                         attitude_done = true;
                         self.got.open_stream_rows = 0;
-                        last_row = None;
+                        // The samples after the last row (refused, dropped) count too.
+                        coverage.end_of_stream(x.imu_seq, x.seq);
                     } else {
-                        // The attitudes this reader missed (`seq` gaps, counted in
-                        // `attitude_missed`) were published: only the rest had none.
-                        if let Some((imu_seq, seq)) = last_row
-                            && x.imu_seq > imu_seq
-                        {
-                            let imu_gap = x.imu_seq - imu_seq - 1;
-                            let missed = x.seq.saturating_sub(seq).saturating_sub(1);
-                            self.got.imu_without_attitude += imu_gap.saturating_sub(missed);
-                        }
-                        last_row = Some((x.imu_seq, x.seq));
+                        coverage.row(x.imu_seq, x.seq);
                         write_attitude_row(&mut self.att_w, &x)
                             .map_err(file_err(&self.att_partial))?;
                         self.got.attitude_rows += 1;
@@ -306,6 +340,7 @@ impl Recorder {
         self.bias_w.flush().map_err(file_err(&self.bias_partial))?;
         self.finish_files()?;
         self.got.stopped = stopped;
+        self.got.imu_without_attitude = coverage.without;
         self.got.attitude_received = self.attitude.received();
         self.got.attitude_missed = self.attitude.missed();
         self.got.attitude_missed_at_start = self.attitude.missed_at_start();
@@ -337,5 +372,67 @@ impl Recorder {
             std::fs::rename(from, to).map_err(file_err(to))?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ImuCoverage;
+
+    /// Attitude rows for IMU samples `imu` numbered from attitude `seq0` on, one each.
+    fn rows(c: &mut ImuCoverage, imu: impl IntoIterator<Item = u64>, seq0: u64) -> u64 {
+        let mut seq = seq0;
+        for i in imu {
+            c.row(i, seq);
+            seq += 1;
+        }
+        seq
+    }
+
+    #[test]
+    fn samples_without_attitude_between_rows() {
+        let mut c = ImuCoverage::default();
+        // IMU 0..=9, 13..=19 (10, 11, 12 refused), the attitudes numbered on.
+        let seq = rows(&mut c, 0..10, 100);
+        rows(&mut c, 13..20, seq);
+        assert_eq!(c.without, 3);
+    }
+
+    #[test]
+    fn samples_without_attitude_at_the_end_of_a_stream_count() {
+        // The last 3 of 20 samples refused: the producer's marker is IMU 20, the end-of-stream
+        // attitude the next one after the row of IMU 16 (a review: not counted).
+        let mut c = ImuCoverage::default();
+        let seq = rows(&mut c, 0..17, 100);
+        c.end_of_stream(20, seq);
+        assert_eq!(c.without, 3);
+        // Nothing missing at the end: none.
+        let mut c = ImuCoverage::default();
+        let seq = rows(&mut c, 0..20, 100);
+        c.end_of_stream(20, seq);
+        assert_eq!(c.without, 0);
+        // Attitudes this reader missed at the end (2 of the last 5 rows) were published.
+        let mut c = ImuCoverage::default();
+        let seq = rows(&mut c, 0..15, 100);
+        c.end_of_stream(20, seq + 2);
+        assert_eq!(c.without, 3);
+    }
+
+    #[test]
+    fn each_stream_counts_afresh() {
+        let mut c = ImuCoverage::default();
+        let seq = rows(&mut c, 0..10, 0);
+        c.end_of_stream(12, seq); // IMU 10, 11 without attitude
+        // The next stream starts at IMU 0 again, its first row at 5: not counted.
+        let seq = rows(&mut c, 5..8, seq + 1);
+        c.end_of_stream(8, seq);
+        assert_eq!(c.without, 2);
+        // An end the daemon made itself (a restarted clock) carries its last sample's imu_seq;
+        // an end with no row before it counts nothing.
+        let mut c = ImuCoverage::default();
+        let seq = rows(&mut c, 0..10, 0);
+        c.end_of_stream(9, seq);
+        c.end_of_stream(30, seq + 1);
+        assert_eq!(c.without, 0);
     }
 }

@@ -128,9 +128,10 @@ fn run() -> Result<()> {
     );
     if r.imu_without_attitude > 0 {
         // (A daemon killed and restarted mid-stream leaves such a hole with its attitude
-        // numbering whole: the logger said "0 missing" over it, a review.)
+        // numbering whole: the logger said "0 missing" over it, a review. The samples after a
+        // stream's last row, up to its end-of-stream marker, count too: a review.)
         corridor_client::say!(
-            "IMU samples the daemon published no attitude for, between recorded rows: {} (refused or dropped by it, missing from the producer's numbering, or lost in a daemon restart: corridor status --domain {} says which)",
+            "IMU samples the daemon published no attitude for, between recorded rows or after a stream's last one: {} (refused or dropped by it, missing from the producer's numbering, or lost in a daemon restart: corridor status --domain {} says which)",
             r.imu_without_attitude,
             a.domain
         );
