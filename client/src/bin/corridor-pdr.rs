@@ -1,5 +1,7 @@
 //! `corridor-pdr`: prints the daemon's stride-by-stride positions (one line per stance,
-//! [`corridor_client::track`]) until the producer finishes or Ctrl-C.
+//! [`corridor_client::track`]) until the producer finishes or Ctrl-C. `sensor_yaw_deg` is the
+//! sensor's yaw in the map frame, not the walking direction: a sensor sits turned on the shoe
+//! (the bundled walks' by about 180°; a review read it as the direction walked).
 
 use anyhow::Result;
 use clap::Parser;
@@ -15,7 +17,7 @@ use std::time::Duration;
 #[command(
     name = "corridor-pdr",
     version,
-    about = "Print stride-by-stride positions from the corridor daemon",
+    about = "Print stride-by-stride positions from the corridor daemon (sensor_yaw_deg: the sensor's yaw in the map frame, not the walking direction)",
     after_help = "Examples:\n  corridor-pdr --domain lab\n  corridor-pdr --domain lab --follow"
 )]
 struct Args {
@@ -51,8 +53,8 @@ fn run() -> Result<()> {
     say(
         &mut out,
         format_args!(
-            "{:>6} {:>10} {:>9} {:>9} {:>9} {:>8} {:>9}",
-            "stride", "t_s", "x_m", "y_m", "z_m", "yaw_deg", "step_m"
+            "{:>6} {:>10} {:>9} {:>9} {:>9} {:>14} {:>9}",
+            "stride", "t_s", "x_m", "y_m", "z_m", "sensor_yaw_deg", "step_m"
         ),
     );
     loop {
@@ -61,7 +63,7 @@ fn run() -> Result<()> {
             say(
                 &mut out,
                 format_args!(
-                    "{:>6} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>8.1} {:>9.3}{}",
+                    "{:>6} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>14.1} {:>9.3}{}",
                     n.stance,
                     n.t_s,
                     p[0],
