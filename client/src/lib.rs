@@ -56,8 +56,13 @@ pub enum ClientError {
     /// A service could not be opened or used.
     #[error(transparent)]
     Service(#[from] ServiceError),
-    /// The peer did not show up in time.
-    #[error("service {service:?} in domain {domain:?}: no {peer} after {waited:?}")]
+    /// The peer did not show up in time: no daemon serves the domain (said as `corridor
+    /// status` says it, with the runtime directory's hint: the tools gave the raw service
+    /// text, a review).
+    #[error(
+        "no corridor daemon answers on domain {domain:?}: service {service:?} has no {peer} after {waited:?}{}",
+        runtime_dir_hint()
+    )]
     NoPeer {
         /// Service name.
         service: &'static str,
@@ -79,6 +84,20 @@ pub enum ClientError {
         /// The OS error.
         source: std::io::Error,
     },
+}
+
+/// What to add to "no corridor daemon answers": a daemon serving a secured domain
+/// (`--runtime-dir`) is found only through its runtime directory, and without it the domain
+/// looks empty (a review). Empty when the variable is set.
+pub fn runtime_dir_hint() -> String {
+    if std::env::var_os(corridor_shared::services::RUNTIME_DIR_ENV).is_none() {
+        format!(
+            " (a daemon started with --runtime-dir DIR is found only with {}=DIR)",
+            corridor_shared::services::RUNTIME_DIR_ENV
+        )
+    } else {
+        String::new()
+    }
 }
 
 /// Logs to stderr, filtered by `RUST_LOG`, or by `default_filter` (e.g. `warn`) when it is

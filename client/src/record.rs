@@ -192,11 +192,9 @@ impl Recorder {
     /// emptied). [`Recorder::run`] renames them to `attitude.csv` and `bias.csv` at its end, or,
     /// when nothing was recorded and an earlier recording's files are there, removes them.
     pub fn open(domain: &Domain, dir: &Path, opts: &RecordOptions) -> Result<Self, ClientError> {
-        let name = &opts.node_name;
-        let attitude = Subscriber::open(domain, &format!("{name}-attitude"), opts.wait)?;
-        let bias = Subscriber::open(domain, &format!("{name}-bias"), opts.wait)?;
+        // Said as such (it read "File exists (os error 17)"), and before waiting for a daemon
+        // (it was said after `--wait-s`, a review).
         if dir.exists() && !dir.is_dir() {
-            // Said as such (it read "File exists (os error 17)").
             return Err(ClientError::File {
                 path: dir.to_owned(),
                 source: std::io::Error::other(
@@ -205,6 +203,9 @@ impl Recorder {
                 ),
             });
         }
+        let name = &opts.node_name;
+        let attitude = Subscriber::open(domain, &format!("{name}-attitude"), opts.wait)?;
+        let bias = Subscriber::open(domain, &format!("{name}-bias"), opts.wait)?;
         std::fs::create_dir_all(dir).map_err(file_err(dir))?;
         let attitude_path = dir.join("attitude.csv");
         let bias_path = dir.join("bias.csv");

@@ -240,3 +240,40 @@ fn every_tool_help_has_examples() {
         );
     }
 }
+
+#[test]
+fn a_reader_tool_without_a_daemon_says_so_as_status_does_and_a_bad_out_at_once() {
+    // They gave iceoryx2's service text ("service … no publisher after 1s"); corridor-log
+    // said its `--out` was a file only after waiting `--wait-s` for a daemon (a review).
+    let dir = std::env::temp_dir().join(format!("corridor-client-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let a_file = dir.join("a-file");
+    std::fs::write(&a_file, "").unwrap();
+    let o = tool(
+        env!("CARGO_BIN_EXE_corridor-log"),
+        &[
+            "--domain",
+            "eco_cli_nobody",
+            "--wait-s",
+            "600",
+            "--out",
+            a_file.to_str().unwrap(),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("exists and is not a directory"), "{err}");
+    let o = tool(
+        env!("CARGO_BIN_EXE_corridor-pdr"),
+        &["--domain", "eco_cli_nobody", "--wait-s", "0.3"],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.starts_with("error: no corridor daemon answers on domain \"eco_cli_nobody\"")
+            && err.contains("has no publisher"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -61,25 +61,19 @@ pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
     let domain = Domain::new(&a.domain)?;
     let timeout = Duration::from_secs_f64(a.timeout_s);
     let no_daemon = |why: &str| {
-        // A daemon serving a secured domain (`--runtime-dir`) is found only through its
-        // runtime directory: without it the domain looks empty (a review).
-        let hint = if std::env::var_os(corridor_shared::services::RUNTIME_DIR_ENV).is_none() {
-            format!(
-                " (a daemon started with --runtime-dir DIR is found only with {}=DIR)",
-                corridor_shared::services::RUNTIME_DIR_ENV
-            )
-        } else {
-            String::new()
-        };
         eprintln!(
-            "error: no corridor daemon answers on domain {:?}: {why}{hint}",
-            domain.name()
+            "error: no corridor daemon answers on domain {:?}: {why}{}",
+            domain.name(),
+            corridor_client::runtime_dir_hint()
         );
         Ok(ExitCode::from(EXIT_NO_DAEMON))
     };
     let mut reader = match StatusReader::open(&domain, timeout) {
         Ok(r) => r,
-        Err(e @ ClientError::NoPeer { .. }) => return no_daemon(&e.to_string()),
+        Err(e @ ClientError::NoPeer { .. }) => {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::from(EXIT_NO_DAEMON));
+        }
         Err(e) => return Err(e.into()),
     };
     let mut first = true;
