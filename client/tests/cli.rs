@@ -255,7 +255,7 @@ fn a_reader_tool_without_a_daemon_says_so_as_status_does_and_a_bad_out_at_once()
             "--domain",
             "eco_cli_nobody",
             "--wait-s",
-            "600",
+            "1",
             "--out",
             a_file.to_str().unwrap(),
         ],
