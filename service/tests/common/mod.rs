@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests of `corridor-service`.
 #![allow(dead_code)]
 
+pub mod cli;
+
 use std::path::{Path, PathBuf};
 
 /// A fresh, empty temporary directory, removed when dropped (also when the test fails).
