@@ -245,16 +245,16 @@ fn tmp(name: &str) -> TempDir {
 fn a_log_in_g_fails_with_the_units_error_alone() {
     // The estimator refuses the log's rest as not gravity long before the reader's units check
     // at the end of the log; each rest and stance refused used to print a warning first (ten
-    // lines, then the error). The log's first 30 s are now read and judged before any row is
-    // estimated (this one, 15 s long, is judged whole), and each refusal asks whether the rows
-    // so far look like g (below).
+    // lines, then the error). The log's first 10 s are now read and judged before any row is
+    // estimated, and each refusal asks whether the rows so far look like g (below).
     let dir = tmp("in_g");
     let imu = exp36_csv(&dir, 3000, |_, a| a / 9.80665);
     let o = corridor_run(&imu, &dir.join("o"));
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("median |a| (m/s²) = 1.0") && err.contains("looks like it is in g"),
+        err.contains("median |a| (m/s²) over the first 2002 rows = 1.0")
+            && err.contains("looks like it is in g"),
         "{err}"
     );
     assert!(!err.contains("not gravity"), "{err}");
@@ -284,7 +284,7 @@ fn a_log_in_g_fails_with_the_units_error_alone() {
 fn a_log_in_deg_s_or_at_a_wrong_scale_fails_with_the_units_error_alone() {
     // Each swing of a gyro in deg/s was refused as implausible, and the refusals made gaps and
     // failed health checks: 20 warnings, then the units error at the end of the log (a
-    // review). The log's first 30 s are judged before any row is estimated.
+    // review). The log's first 10 s are judged before any row is estimated.
     let dir = tmp("in_deg_s");
     let imu = exp36_csv(&dir, 14_000, |_, a| a);
     let text = std::fs::read_to_string(&imu).unwrap();
@@ -307,7 +307,7 @@ fn a_log_in_deg_s_or_at_a_wrong_scale_fails_with_the_units_error_alone() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("over the first 6002 rows") && err.contains("looks like it is in deg/s"),
+        err.contains("over the first 2002 rows") && err.contains("looks like it is in deg/s"),
         "{err}"
     );
     assert_eq!(err.lines().count(), 1, "{err}");
@@ -318,7 +318,7 @@ fn a_log_in_deg_s_or_at_a_wrong_scale_fails_with_the_units_error_alone() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("median |a| (m/s²) over the first 6002 rows = 4.")
+        err.contains("median |a| (m/s²) over the first 2002 rows = 4.")
             && err.contains("check the accelerometer's units and scale"),
         "{err}"
     );

@@ -267,11 +267,14 @@ pub struct RunOptions {
 }
 
 /// The log's first seconds whose units are judged before any row is estimated
-/// ([`ImuCsvReader::check_units_so_far`]): longer than the initial rest of any bundled walk.
-const UNITS_AHEAD_S: f64 = 30.0;
+/// ([`ImuCsvReader::check_units_so_far`]): they hold the first strides of every bundled walk
+/// (exp17's first swing comes 1.2 s in). A log that rests longer is judged again at each
+/// refusal as not gravity or implausible.
+const UNITS_AHEAD_S: f64 = 10.0;
 
-/// At most this many rows are read ahead for it (30 s of a 3.3 kHz sensor).
-const UNITS_AHEAD_ROWS: usize = 100_000;
+/// At most this many rows are read ahead for it (10 s of a 2 kHz sensor; 80 B each): the
+/// runner's peak heap does not grow with the log (`run_memory.rs`).
+const UNITS_AHEAD_ROWS: usize = 20_000;
 
 /// Streams a log through the estimator and writes `estimates.csv`, `innovations.csv`,
 /// `summary.json` (and the figures); see the module's documentation for what is kept and what
