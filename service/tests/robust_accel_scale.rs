@@ -307,7 +307,7 @@ fn a_log_in_deg_s_or_at_a_wrong_scale_fails_with_the_units_error_alone() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("over the first 2002 rows") && err.contains("looks like it is in deg/s"),
+        err.contains("of 2002 rows above 40") && err.contains("looks like it is in deg/s"),
         "{err}"
     );
     assert_eq!(err.lines().count(), 1, "{err}");
@@ -323,6 +323,40 @@ fn a_log_in_deg_s_or_at_a_wrong_scale_fails_with_the_units_error_alone() {
         "{err}"
     );
     assert_eq!(err.lines().count(), 1, "{err}");
+}
+
+#[test]
+fn a_burst_of_bad_rates_is_refused_sample_by_sample_not_taken_for_deg_s() {
+    // 35 rows of gx = 100 rad/s, in the first 10 s (read ahead for the units) and at 15 s:
+    // 25 such rows among the 2,002 read ahead stopped the run as "deg/s" (a review), which the
+    // end of the log's check (1 % of all rows) passes.
+    let dir = tmp("burst");
+    let imu = exp36_csv(&dir, 14_000, |_, a| a);
+    let text = std::fs::read_to_string(&imu).unwrap();
+    let burst: String = text
+        .lines()
+        .enumerate()
+        .map(|(k, line)| {
+            let bad = (502..537).contains(&k) || (3002..3037).contains(&k);
+            let mut v: Vec<String> = line.split(',').map(str::to_owned).collect();
+            if bad {
+                v[1] = "100".into();
+            }
+            v.join(",") + "\n"
+        })
+        .collect();
+    std::fs::write(&imu, burst).unwrap();
+    let o = corridor_run(&imu, &dir.join("o"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(!err.contains("deg/s"), "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("o/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        summary["samples_refused_counts"]["implausible"], 70,
+        "{summary}"
+    );
 }
 
 #[test]

@@ -272,9 +272,10 @@ pub struct RunOptions {
 /// refusal as not gravity or implausible.
 const UNITS_AHEAD_S: f64 = 10.0;
 
-/// At most this many rows are read ahead for it (10 s of a 2 kHz sensor; 80 B each): the
-/// runner's peak heap does not grow with the log (`run_memory.rs`).
-const UNITS_AHEAD_ROWS: usize = 20_000;
+/// At most this many rows are read ahead for it (8 s of a 2 kHz sensor; 80 B each, 1.3 MB,
+/// a power of two so that the buffer does not double past it): the runner's peak heap does not
+/// grow with the log (`run_memory.rs`).
+const UNITS_AHEAD_ROWS: usize = 16_384;
 
 /// Streams a log through the estimator and writes `estimates.csv`, `innovations.csv`,
 /// `summary.json` (and the figures); see the module's documentation for what is kept and what
@@ -338,11 +339,11 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     // judged (a gyro in deg/s, an accelerometer in g): such a log fails with the units error
     // alone, not after the warnings its rows cause (refused rates, gaps, health checks: 20 of
     // them before the error at the end, a review).
-    let mut ahead = std::collections::VecDeque::new();
+    let mut ahead = std::collections::VecDeque::with_capacity(256);
     while let Some(row) = next_row(&mut reader) {
         let row = row?;
         let first_t_s = ahead.front().map_or(row.t_s, |r: &ImuRow| r.t_s);
-        let full = row.t_s - first_t_s >= UNITS_AHEAD_S || ahead.len() >= UNITS_AHEAD_ROWS;
+        let full = row.t_s - first_t_s >= UNITS_AHEAD_S || ahead.len() + 1 >= UNITS_AHEAD_ROWS;
         ahead.push_back(row);
         if full {
             break;

@@ -47,10 +47,15 @@ pub(super) struct UnitsStats {
 /// sensor's plausibility check refuses and counts (one corrupt value refused the whole file).
 pub(super) const GYRO_UNITS_MIN_FRACTION: f64 = 0.01;
 
-/// Rows above [`GYRO_MAX_PLAUSIBLE_RAD_S`] it takes, besides [`GYRO_UNITS_MIN_FRACTION`] of
-/// them, to say "deg/s" before the end of the log (a walk in deg/s has one in two rows above
-/// it: 4,099 of exp17's 6,601, 10 within its first 250 rows).
-pub(super) const GYRO_UNITS_MIN_ROWS_EARLY: u64 = 10;
+/// What it takes to say "deg/s" before the end of the log: at least this many rows read, and
+/// of them at least [`GYRO_UNITS_MIN_FRACTION_EARLY`] above [`GYRO_MAX_PLAUSIBLE_RAD_S`]. A
+/// walk in deg/s has one row in two above it (4,099 of exp17's 6,601); a burst of bad values
+/// does not (the end's 1 % alone refused a 25-row burst among `corridor run`'s 2,002 rows read
+/// ahead, 0.1 s of exp36, which the end of the log's check passes: a review).
+pub(super) const GYRO_UNITS_MIN_ROWS_SEEN_EARLY: u64 = 500;
+
+/// See [`GYRO_UNITS_MIN_ROWS_SEEN_EARLY`].
+pub(super) const GYRO_UNITS_MIN_FRACTION_EARLY: f64 = 0.1;
 
 impl UnitsStats {
     pub(super) fn hist_index(norm: f64) -> usize {
@@ -130,14 +135,13 @@ impl UnitsStats {
         matches!(self.median_band(), 1 | 2 | 4)
     }
 
-    /// Whether the rows so far read like a gyro in deg/s, judged before the end of the log:
-    /// at least [`GYRO_UNITS_MIN_ROWS_EARLY`] rows above the plausible rate as well as the
-    /// end's fraction of them, so that a few corrupt values among the first rows are not
-    /// taken for units.
+    /// Whether the rows so far read like a gyro in deg/s, judged before the end of the log
+    /// ([`GYRO_UNITS_MIN_ROWS_SEEN_EARLY`] rows, a tenth of them above the plausible rate), so
+    /// that a burst of corrupt values is not taken for units.
     pub(super) fn looks_like_deg_s_early(&self) -> bool {
         let n: u64 = self.bands.iter().sum();
-        self.gyro_over >= GYRO_UNITS_MIN_ROWS_EARLY
-            && self.gyro_over as f64 >= GYRO_UNITS_MIN_FRACTION * n as f64
+        n >= GYRO_UNITS_MIN_ROWS_SEEN_EARLY
+            && self.gyro_over as f64 >= GYRO_UNITS_MIN_FRACTION_EARLY * n as f64
     }
 
     /// Refuses logs whose accelerometer does not look like m/s² or whose gyroscope does not
@@ -234,22 +238,22 @@ impl<R: BufRead> ImuCsvReader<R> {
     /// the end; ten of rests not gravity before the scale error). Only those verdicts: a log
     /// whose first rows read nothing (an accelerometer that starts late, or gravity removed) is
     /// judged at the end, on every row, as before (a review found such a log in m/s² refused
-    /// early as "gravity removed"), and "deg/s" takes
-    /// `GYRO_UNITS_MIN_ROWS_EARLY` rows above the plausible rate besides the end's
-    /// fraction. The statistic names the rows it covers. `Ok` when the units are not checked, no
-    /// row was accepted yet, or the rows so far look like neither.
+    /// early as "gravity removed"), and "deg/s" takes a tenth of at least 500 rows above the
+    /// plausible rate (the end: 1 % of all). The statistic names the rows it covers. `Ok` when
+    /// the units are not checked, no row was accepted yet, or the rows so far look like
+    /// neither.
     pub fn check_units_so_far(&mut self) -> Result<(), ImuCsvError> {
         if !self.check_units || self.accepted == 0 {
             return Ok(());
         }
-        let verdict = if self.units.accel_units_wrong_early() {
-            self.units.check(&self.path)
-        } else if self.units.looks_like_deg_s_early() {
-            self.units.check_gyro(&self.path)
-        } else {
+        if self.units.looks_like_deg_s_early() && !self.units.accel_units_wrong_early() {
+            // (Its statistic counts the rows already: "N of M rows above 40".)
+            return self.units.check_gyro(&self.path);
+        }
+        if !self.units.accel_units_wrong_early() {
             return Ok(());
-        };
-        verdict.map_err(|e| match e {
+        }
+        self.units.check(&self.path).map_err(|e| match e {
             ImuCsvError::Units {
                 path,
                 column,

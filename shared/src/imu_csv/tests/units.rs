@@ -240,26 +240,26 @@ fn a_log_in_g_is_told_from_the_rows_read_so_far_on_request() {
 }
 
 #[test]
-fn a_gyro_in_deg_s_is_told_from_the_rows_read_so_far_but_a_few_corrupt_rates_are_not() {
-    // 100 rows in m/s², the gyro's z axis reading 57.3 (1 rad/s in deg/s) from row 50 on.
-    let in_deg_s_from = |first: usize, rate: f64| {
-        units_file(100, 100)
+fn a_gyro_in_deg_s_is_told_from_the_rows_read_so_far_but_a_burst_of_bad_rates_is_not() {
+    // 1000 rows in m/s², the gyro's z axis reading 57.3 (1 rad/s in deg/s) on rows `bad`.
+    let with_z = |bad: &dyn Fn(usize) -> bool| {
+        units_file(1000, 1000)
             .lines()
             .enumerate()
             .map(|(i, l)| match i {
-                i if i > first => l.replace("0.01,0.02,0.03", &format!("0.01,0.02,{rate}")),
+                i if bad(i) => l.replace("0.01,0.02,0.03", "0.01,0.02,57.3"),
                 _ => l.to_string(),
             })
             .collect::<Vec<_>>()
             .join("\n")
     };
-    let text = in_deg_s_from(50, 57.3);
+    // In deg/s from row 451 on: at 500 rows read, 50 above the plausible rate (a tenth).
+    let text = with_z(&|i| i > 450);
     let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &lenient()).unwrap();
-    for _ in 0..59 {
+    for _ in 0..499 {
         reader.next().unwrap().unwrap();
     }
-    // 9 rows above the plausible rate: a few corrupt values, not yet units.
-    assert!(reader.check_units_so_far().is_ok());
+    assert!(reader.check_units_so_far().is_ok(), "49 of 499: not yet");
     reader.next().unwrap().unwrap();
     match reader.check_units_so_far().unwrap_err() {
         ImuCsvError::Units {
@@ -269,25 +269,23 @@ fn a_gyro_in_deg_s_is_told_from_the_rows_read_so_far_but_a_few_corrupt_rates_are
             ..
         } => {
             assert_eq!(column, "gx_rad_s,gy_rad_s,gz_rad_s");
-            assert!(
-                statistic.contains("10 of 60 rows above")
-                    && statistic.ends_with("over the first 60 rows"),
-                "{statistic}"
-            );
+            assert!(statistic.contains("50 of 500 rows above"), "{statistic}");
             assert!(hint.contains("deg/s"), "{hint}");
         }
         other => panic!("{other:?}"),
     }
-    // Fewer than 1 % of the rows so far above it: corrupt values, refused one by one.
-    let text = in_deg_s_from(1, 57.3);
-    let long: String = text
-        .lines()
-        .take(12)
-        .chain(units_file(2000, 2000).lines().skip(13))
-        .collect::<Vec<_>>()
-        .join("\n");
-    let mut reader = ImuCsvReader::new(long.as_bytes(), path(), &lenient()).unwrap();
-    for _ in 0..1500 {
+    // Too few rows read: 100 of 100 above it are no verdict yet (the end judges them).
+    let all_bad = with_z(&|_| true);
+    let mut reader = ImuCsvReader::new(all_bad.as_bytes(), path(), &lenient()).unwrap();
+    for _ in 0..100 {
+        reader.next().unwrap().unwrap();
+    }
+    assert!(reader.check_units_so_far().is_ok());
+    // A burst of 35 bad rows among 1000 (0.2 s of a 200 Hz walk): refused one by one, not
+    // units (the end's 1 % alone took 25 among 2,002 for units: a review).
+    let text = with_z(&|i| (300..335).contains(&i));
+    let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &lenient()).unwrap();
+    for _ in 0..1000 {
         reader.next().unwrap().unwrap();
     }
     assert!(reader.check_units_so_far().is_ok());
