@@ -25,7 +25,8 @@ pub struct Stride {
     pub replaces_previous: bool,
     /// The start heading set the map frame on this stride's sample ([`FLAG_FRAME_SET`]): the
     /// stance sent again in that frame, replacing its first sending, which was in the frame
-    /// before (the first stride, on a walk that starts along its start heading).
+    /// before (the first stride, on a walk that starts along its start heading; see the flag
+    /// for when it comes again).
     pub frame_set: bool,
     /// The daemon's estimator started again (its stance count went back to 1: a daemon that
     /// restarted within the stream): this stride starts a new track from the new origin (it

@@ -55,7 +55,9 @@ pub const FLAG_RETRACTS: u32 = 1 << 5;
 /// sample, at the first stride's stance, turning it about the start point: the positions and
 /// yaws published before it are in the frame before. The nav sample of that stance, published
 /// when it began, is published again with this flag (the same `stance`, a later `imu_seq` and
-/// `t_s`): it replaces the first one.
+/// `t_s`): it replaces the first one. Set again, at a later stance, when a health check's
+/// restore forgot the footprints before tracking began (the strides between are in the frame
+/// before); never on a start in fast gait, whose replay sets the frame before any output.
 pub const FLAG_FRAME_SET: u32 = 1 << 6;
 
 /// [`AngleObservation::valid`] bit: `roll_rad` is valid. The daemon does not fuse an external

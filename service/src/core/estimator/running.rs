@@ -84,6 +84,9 @@ impl Pipeline {
             // So is a heading taken as lost (its widened variance): the run starts over.
             self.out.velocity_reset = false;
             self.out.heading_reacquired = None;
+            // So is a frame the start heading set in it (the filter went back to the frame
+            // before): it is set at a later stance (a review).
+            self.out.frame_set = false;
             // A stance observation made in it was not used (it was counted as used, and an
             // external heading it took was lost uncounted: a review); the stance is not
             // observed again, as the zero-rate update is not made again.

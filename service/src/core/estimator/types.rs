@@ -395,7 +395,9 @@ pub struct Estimate {
     /// The start heading (`heading.start_heading_deg`) set the map frame on this sample, at the
     /// first stride's stance: the filter's frame turned about the start point, so the positions
     /// and yaws before this sample (the stance's first, whose footfall the daemon published)
-    /// are in the frame before it.
+    /// are in the frame before it. Again at a later stance when a health check's restore
+    /// forgot the footprints before tracking began; never on a start in fast gait, whose replay
+    /// sets the frame before any output.
     pub frame_set: bool,
     /// The rest or stance that would have aligned on this sample was refused: its mean
     /// specific force and the gravity it was held against, m/s² (counted in
