@@ -299,20 +299,38 @@ fn tmp_path(path: &Path) -> PathBuf {
     PathBuf::from(tmp_name)
 }
 
-/// Whether [`save`] can write at `path`: creates the file a save writes first, and removes it.
-/// The daemon asks at start, so that a directory that is not there or not writable is said
-/// then, not after its first stream (a review: `corridor serve --config configs/service.toml`
-/// said nothing of `/var/lib/corridor` until a stream had ended). The error is the one a save
-/// would give.
+/// Whether [`save`] can write at `path`: creates a file beside it, and removes it. The daemon
+/// asks at start, so that a directory that is not there or not writable is said then, not
+/// after its first stream (a review: `corridor serve --config configs/service.toml` said
+/// nothing of `/var/lib/corridor` until a stream had ended); for those the error is the one a
+/// save gives. A `path` that is a directory is refused too. The probe's file has a name of its
+/// own and is created only if it is not there, so that a save's file (another daemon of the
+/// same pid, in another container sharing the volume) is never truncated or removed (a
+/// review); one left by a daemon that died probing is no failure, and is left alone.
 pub fn probe(path: &Path) -> Result<(), CheckpointError> {
-    let tmp = tmp_path(path);
-    std::fs::File::create(&tmp).map_err(|source| CheckpointError::Io {
+    let io = |source| CheckpointError::Io {
         path: path.to_owned(),
         operation: "create",
         source,
-    })?;
-    let _ = std::fs::remove_file(&tmp);
-    Ok(())
+    };
+    if path.is_dir() {
+        return Err(io(std::io::Error::other("it is a directory")));
+    }
+    let mut name = path.as_os_str().to_owned();
+    name.push(format!(".probe-{}", std::process::id()));
+    let probe = PathBuf::from(name);
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(io(e)),
+    }
 }
 
 /// Saves atomically (temp file, fsync, rename, fsync of the directory).
@@ -435,6 +453,32 @@ mod tests {
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(&d).unwrap();
         d
+    }
+
+    #[test]
+    fn the_probe_leaves_nothing_and_never_touches_a_saves_file() {
+        let d = tmp_dir("probe");
+        let p = d.join("bias.ckpt");
+        probe(&p).unwrap();
+        assert_eq!(
+            std::fs::read_dir(&d).unwrap().count(),
+            0,
+            "nothing left behind"
+        );
+        // A save's file of the same pid being written (another container's daemon): kept.
+        let saving = tmp_path(&p);
+        std::fs::write(&saving, b"half a checkpoint").unwrap();
+        probe(&p).unwrap();
+        assert_eq!(std::fs::read(&saving).unwrap(), b"half a checkpoint");
+        // A directory missing, or the path one: the save's "cannot create".
+        let err = probe(&d.join("missing").join("bias.ckpt")).unwrap_err();
+        assert!(
+            err.to_string().contains("cannot create checkpoint"),
+            "{err}"
+        );
+        let err = probe(&d).unwrap_err();
+        assert!(err.to_string().contains("it is a directory"), "{err}");
+        std::fs::remove_dir_all(&d).unwrap();
     }
 
     #[test]
