@@ -54,6 +54,10 @@ pub(super) const GYRO_UNITS_MIN_FRACTION: f64 = 0.01;
 /// ahead, 0.1 s of exp36, which the end of the log's check passes: a review).
 pub(super) const GYRO_UNITS_MIN_ROWS_SEEN_EARLY: u64 = 500;
 
+/// Rows it takes to judge an accelerometer off scale before the end of the log (the read-ahead
+/// can end after a few rows, at a forward time jump: a review).
+pub(super) const ACCEL_MIN_ROWS_SEEN_EARLY: u64 = 200;
+
 /// See [`GYRO_UNITS_MIN_ROWS_SEEN_EARLY`].
 pub(super) const GYRO_UNITS_MIN_FRACTION_EARLY: f64 = 0.1;
 
@@ -128,11 +132,18 @@ impl UnitsStats {
     }
 
     /// Whether the median |a| lies in a band no working accelerometer in m/s² reads over any
-    /// stretch of a walk: the band of a log in g, the one between g and the plausible band (a
-    /// wrong scale: 0.4 × m/s² reads 3.9), or the one above it (mg, ft/s²). Not the band below
-    /// g: an accelerometer that starts late reads 0 for its first rows.
+    /// stretch of a walk: the band of a log in g, or, over at least
+    /// [`ACCEL_MIN_ROWS_SEEN_EARLY`] rows (a few rows of a foot struck hard are no stretch),
+    /// the one between g and the plausible band (a wrong scale: 0.4 × m/s² reads 3.9) or the
+    /// one above it (mg, ft/s²). Not the band below g: an accelerometer that starts late reads
+    /// 0 for its first rows.
     pub(super) fn accel_units_wrong_early(&self) -> bool {
-        matches!(self.median_band(), 1 | 2 | 4)
+        let n: u64 = self.bands.iter().sum();
+        match self.median_band() {
+            1 => true,
+            2 | 4 => n >= ACCEL_MIN_ROWS_SEEN_EARLY,
+            _ => false,
+        }
     }
 
     /// Whether the rows so far read like a gyro in deg/s, judged before the end of the log

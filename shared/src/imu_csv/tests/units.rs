@@ -290,3 +290,21 @@ fn a_gyro_in_deg_s_is_told_from_the_rows_read_so_far_but_a_burst_of_bad_rates_is
     }
     assert!(reader.check_units_so_far().is_ok());
 }
+
+#[test]
+fn an_accelerometer_off_scale_is_told_from_200_rows_read_so_far_not_from_a_few() {
+    // 0.4 × m/s² (3.9 at rest): a few rows could be a foot struck hard, 200 are a stretch.
+    let text = units_file(400, 400).replace(",0,0,9.8", ",0,0,3.92");
+    let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &lenient()).unwrap();
+    for _ in 0..199 {
+        reader.next().unwrap().unwrap();
+    }
+    assert!(reader.check_units_so_far().is_ok());
+    reader.next().unwrap().unwrap();
+    match reader.check_units_so_far().unwrap_err() {
+        ImuCsvError::Units { statistic, .. } => {
+            assert_eq!(statistic, "median |a| (m/s²) over the first 200 rows");
+        }
+        other => panic!("{other:?}"),
+    }
+}
