@@ -227,3 +227,33 @@ fn diagnose_refuses_footprints_it_cannot_score() {
     );
     assert!(!out.join("report").exists());
 }
+
+#[test]
+fn diagnose_refuses_a_log_that_never_aligned() {
+    // 2 s of rest and no walking: `corridor run` refused it, `corridor diagnose` wrote a report
+    // of NaN ("NIS NaN (band NaN–NaN)") and exited 0 (a review).
+    let out = TempDir::new("eco-diagnose-rest");
+    let text = std::fs::read_to_string(exp36().join("imu.csv")).unwrap();
+    let rest = out.join("rest.csv");
+    std::fs::write(
+        &rest,
+        text.lines().take(400).collect::<Vec<_>>().join("\n") + "\n",
+    )
+    .unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_corridor"))
+        .args(["diagnose", "--imu"])
+        .arg(&rest)
+        .arg("--config")
+        .arg(root().join("configs/gdins.toml"))
+        .arg("--out")
+        .arg(out.join("report"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.starts_with(&format!("error: {}: no initial rest", rest.display())),
+        "{err}"
+    );
+    assert!(!out.join("report").exists());
+}

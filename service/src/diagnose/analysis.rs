@@ -353,6 +353,16 @@ pub fn analyse(
             last_dir = Some(h.direction_rad);
         }
     });
+    // A log that never aligned has nothing to diagnose: `corridor run`'s error, not a report
+    // of NaN (a review: `diagnose` on 2 s of rest wrote one and exited 0).
+    let c = &outcome.counters;
+    if c.samples > 0 && outcome.mount_yaw_rad.is_none() && c.stances == 0 {
+        return Err(RunError::NeverAligned {
+            path: log.path.clone(),
+            min_rest_s: cfg.alignment.min_rest_s.get(),
+            not_gravity: c.alignment_not_gravity,
+        });
+    }
     let n = outcome.trace.t_s.len();
     let (bias, bias_sd) = if n > 0 {
         (
