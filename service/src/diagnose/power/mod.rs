@@ -317,8 +317,24 @@ pub fn walk_power(base: &[StanceResidual]) -> Vec<Power> {
                 .clone()
                 .map(|f| (rows.iter().map(|r| r.weight).collect(), f));
         }
+        // Too few residuals, or a size no sensor has: a degenerate fit, whose standard error
+        // says nothing (a review: 3 residuals of a 10 s log gave a z scale of −99 % at score 30;
+        // a straight leg, an x→z coupling of −33° at 9.5 σ).
+        let few = rows.len() < MIN_FIT_RESIDUALS;
+        let beyond = fit
+            .as_ref()
+            .is_some_and(|f| f.beta.abs() > DEGENERATE_FACTOR * reference.plausible_max);
         let mde = fit.as_ref().map(|f| MDE_Z * f.std_err);
         let cannot = match mde {
+            _ if few => Some(format!(
+                "{} stance residuals are too few to fit (at least {MIN_FIT_RESIDUALS})",
+                rows.len()
+            )),
+            Some(_) if beyond => Some(format!(
+                "its fit gives {}, beyond {DEGENERATE_FACTOR} × any plausible {}: the walk does not tell it from the residuals' mean (it turns {turns:.1} quarter turns)",
+                format_unit(reference.unit, fit.as_ref().map_or(f64::NAN, |f| f.beta)),
+                format_unit(reference.unit, reference.plausible_max),
+            )),
             Some(m) if m.is_finite() && m <= reference.plausible_max => None,
             _ => Some(format!(
                 "the smallest size it shows would be {} (beyond any plausible {}); the walk turns {:.1} quarter turns",
@@ -328,6 +344,12 @@ pub fn walk_power(base: &[StanceResidual]) -> Vec<Power> {
                 turns
             )),
         };
+        if few || beyond {
+            fit = None;
+            if i == 0 {
+                primary = None;
+            }
+        }
         let mut indistinguishable = Vec::new();
         for (j, other) in REFERENCES.iter().enumerate() {
             if j != i
@@ -358,6 +380,13 @@ pub fn walk_power(base: &[StanceResidual]) -> Vec<Power> {
     }
     out
 }
+
+/// Fewer stance residuals than this make no signature fit (a 10 s log has 3).
+pub const MIN_FIT_RESIDUALS: usize = 12;
+
+/// A fitted size beyond this many times [`Reference::plausible_max`] is no sensor's: the fit is
+/// degenerate (a signature that the walk does not tell from the residuals' mean).
+pub const DEGENERATE_FACTOR: f64 = 2.0;
 
 /// Below this response the model absorbs the effect: the walk cannot show it.
 pub const MIN_RESPONSE: f64 = 0.1;
@@ -578,13 +607,18 @@ pub fn apply_power(effects: &mut Vec<Finding>, power: &[Power], score: bool) {
                             .join(", ")
                     )
                 };
+                let fit = if p.estimate.is_finite() {
+                    format!(
+                        "signature fit {} ± {}",
+                        p.format_size(p.estimate),
+                        p.format_size(p.std_err)
+                    )
+                } else {
+                    "no signature fit".to_string()
+                };
                 format!(
-                    "{}: signature fit {} ± {} over {} stance residuals (score {:.1}), {size}{confused}",
-                    p.variant,
-                    p.format_size(p.estimate),
-                    p.format_size(p.std_err),
-                    p.residuals,
-                    p.score
+                    "{}: {fit} over {} stance residuals (score {:.1}), {size}{confused}",
+                    p.variant, p.residuals, p.score
                 )
             })
             .collect();

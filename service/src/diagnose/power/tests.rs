@@ -78,3 +78,52 @@ fn a_signature_scores_its_effect_where_the_residual_regression_has_no_finding() 
     apply_power(&mut effects, &p, false);
     assert_eq!(effects.len(), 1);
 }
+
+#[test]
+fn a_degenerate_fit_scores_nothing_and_says_why() {
+    // Residuals that follow the z scale's signature exactly: 3 of them fit any size at no
+    // error (a 10 s log: −99 % at score 30, a review); 60 that say +50 %, far beyond any
+    // plausible scale factor, are no sensor's either (a straight leg: −33° at 9.5 σ).
+    let stance = |i: usize, scale: f64| StanceResidual {
+        sample: i,
+        t_s: i as f64,
+        kind: ResidualKind::FootAxis,
+        r_rad: scale * (i as f64 / 7.0).sin() + 1e-4 * noise(i),
+        direction_rad: 0.0,
+        weight: 1.0,
+        sd_rad: 0.05,
+        candidates: crate::core::heading::Candidates::Spaced {
+            spacing_rad: std::f64::consts::FRAC_PI_2,
+        },
+        accepted: true,
+        signature: [(i as f64 / 7.0).sin(); N_REFERENCES],
+    };
+    let z_scale = |stances: &[StanceResidual]| {
+        walk_power(stances)
+            .into_iter()
+            .find(|p| p.variant == "z scale")
+            .unwrap()
+    };
+    let few: Vec<StanceResidual> = (0..3).map(|i| stance(i, 0.01)).collect();
+    let p = z_scale(&few);
+    assert_eq!(p.score, 0.0, "{p:?}");
+    assert!(
+        p.cannot.as_deref().unwrap().contains("too few to fit"),
+        "{p:?}"
+    );
+    let huge: Vec<StanceResidual> = (0..60).map(|i| stance(i, 0.5)).collect();
+    let p = z_scale(&huge);
+    assert_eq!(p.score, 0.0, "{p:?}");
+    assert!(
+        p.cannot
+            .as_deref()
+            .unwrap()
+            .contains("beyond 2 × any plausible"),
+        "{p:?}"
+    );
+    // A plausible size on as many residuals is scored.
+    let real: Vec<StanceResidual> = (0..60).map(|i| stance(i, 0.03)).collect();
+    let p = z_scale(&real);
+    assert!(p.score >= SIGNIFICANT && p.cannot.is_none(), "{p:?}");
+    assert!((p.estimate - 0.03).abs() < 0.005, "{p:?}");
+}
