@@ -475,6 +475,17 @@ mod tests {
     }
 
     #[test]
+    fn an_empty_checkpoint_path_is_refused() {
+        let f =
+            ConfigFile::parse("[daemon]\ncheckpoint_path = \"\"\n", Path::new("s.toml")).unwrap();
+        let err = f.validate_daemon().unwrap_err().to_string();
+        assert!(
+            err.contains("daemon.checkpoint_path") && err.contains("leave the key out"),
+            "{err}"
+        );
+    }
+
+    #[test]
     fn daemon_section_is_validated() {
         let f =
             ConfigFile::parse("[daemon]\ndelivery = \"sometimes\"\n", Path::new("s.toml")).unwrap();

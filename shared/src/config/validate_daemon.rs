@@ -38,6 +38,19 @@ impl ConfigFile {
         {
             return Err(invalid("daemon.domain", format!("{domain:?}"), rule));
         }
+        // An empty path was taken: "no checkpoint; cold start path=", then a save's rename
+        // failed at every stream's end (a review; the `--checkpoint ""` flag is refused).
+        if dm
+            .checkpoint_path
+            .as_ref()
+            .is_some_and(|p| p.as_os_str().is_empty())
+        {
+            return Err(invalid(
+                "daemon.checkpoint_path",
+                "\"\"",
+                "must be a file's path (leave the key out for no checkpoint)",
+            ));
+        }
         if let Some(dir) = &dm.runtime_dir
             && !dir.is_absolute()
         {
