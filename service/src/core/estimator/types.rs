@@ -506,7 +506,7 @@ impl Default for Estimate {
 /// An external heading observation that cannot be fused.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[error(
-    "heading observation refused: heading {heading_rad} rad, σ {sd_rad} rad (finite heading and σ in (0, π] needed)"
+    "heading observation refused: heading {heading_rad:e} rad, σ {sd_rad:e} rad (finite heading and σ in (0, π] needed)"
 )]
 pub struct HeadingRefused {
     /// The heading given.
