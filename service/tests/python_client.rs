@@ -52,5 +52,8 @@ fn python_client_tests_pass_against_the_daemon() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "Python client tests failed:\n{err}");
     // unittest reports on stderr; make sure the tests ran, not just an empty discovery.
-    assert!(err.contains("Ran 7 tests") && err.contains("\nOK"), "{err}");
+    assert!(
+        err.contains("Ran 11 tests") && err.contains("\nOK"),
+        "{err}"
+    );
 }

@@ -204,15 +204,15 @@ class Producer:
         return self
 
     def __exit__(self, exc_type: Any, *exc: Any) -> None:
-        # A driver stopped by Ctrl-C (KeyboardInterrupt) or by SIGTERM turned into SystemExit
-        # (see examples/driver_producer.py) ends its stream, as `corridor-replay` does: without
-        # the marker the daemon's stream stayed open (a review).
+        # A driver stopped by Ctrl-C (KeyboardInterrupt), by SIGTERM turned into SystemExit
+        # (see examples/driver_producer.py) or by any error (a log `read_imu_csv` refuses) ends
+        # its stream, as `corridor-replay` does: without the marker the daemon's stream stayed
+        # open, "running / phase: tracking" for ever (two reviews).
         # Not when no daemon reads (a lossless send would wait for one), and a failure to send
-        # it is said but does not replace the interrupt.
+        # it is said but does not replace the exception.
         try:
             if (
                 exc_type is not None
-                and issubclass(exc_type, (KeyboardInterrupt, SystemExit))
                 and not self.finished
                 and not self.closed
                 and self._imu_service.dynamic_config.number_of_subscribers > 0
@@ -227,23 +227,42 @@ class Producer:
 
 def read_imu_csv(path: str) -> Iterable[ImuSample]:
     """The rows of an IMU log (`t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2[,temp_c]`)
-    as samples; columns are found by name."""
-    with open(path, newline="") as f:
+    as samples; columns are found by name. A header without a column, or a row whose field is
+    no number, raises `ValueError` naming the file, the line, the column and the value (it raised
+    a bare `KeyError: 't_s'` or "could not convert string to float: 'x'", a review; the Rust
+    reader, which `corridor-replay` uses, skips such rows and counts them). A UTF-8 BOM is read
+    as the Rust reader reads it, and a `temp_c` field that is no number is an unknown
+    temperature (NaN)."""
+    with open(path, newline="", encoding="utf-8-sig") as f:
         rows = csv.reader(f)
-        header = [h.strip() for h in next(rows)]
+        header = [h.strip().strip('"') for h in next(rows)]
         col = {name: i for i, name in enumerate(header)}
-        g = [col["gx_rad_s"], col["gy_rad_s"], col["gz_rad_s"]]
-        a = [col["ax_m_s2"], col["ay_m_s2"], col["az_m_s2"]]
-        t = col["t_s"]
+        names = ["t_s", "gx_rad_s", "gy_rad_s", "gz_rad_s", "ax_m_s2", "ay_m_s2", "az_m_s2"]
+        missing = [n for n in names if n not in col]
+        if missing:
+            raise ValueError(f"{path}:1: the header has no column {', '.join(missing)}: {header}")
         temp = col.get("temp_c")
-        for row in rows:
+
+        def number(row: list, name: str, line: int) -> float:
+            field = row[col[name]] if col[name] < len(row) else ""
+            try:
+                return float(field)
+            except ValueError:
+                raise ValueError(f"{path}:{line}: column {name}: {field!r} is no number") from None
+
+        for line, row in enumerate(rows, start=2):
             if not row:
                 continue
             s = ImuSample()
-            s.t_s = float(row[t])
-            s.gyro_rad_s[:] = [float(row[i]) for i in g]
-            s.accel_m_s2[:] = [float(row[i]) for i in a]
-            s.temp_c = float(row[temp]) if temp is not None and row[temp] else math.nan
+            s.t_s = number(row, "t_s", line)
+            s.gyro_rad_s[:] = [number(row, n, line) for n in names[1:4]]
+            s.accel_m_s2[:] = [number(row, n, line) for n in names[4:7]]
+            s.temp_c = math.nan
+            if temp is not None and temp < len(row):
+                try:
+                    s.temp_c = float(row[temp])
+                except ValueError:
+                    pass
             yield s
 
 

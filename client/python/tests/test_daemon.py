@@ -21,6 +21,7 @@ from corridor_client import (
     Domain,
     Producer,
     read_imu_csv,
+    replay_csv,
     wire,
 )
 
@@ -170,6 +171,33 @@ class Daemon(unittest.TestCase):
                 break
         for c in (diagnostics, bias):
             c.close()
+
+    def test_a_producer_left_by_an_error_ends_its_stream(self) -> None:
+        # A log with a malformed row, replayed inside `with Producer(...)`: the error names the
+        # row, and the stream ends (it stayed open, "running / phase: tracking", a review).
+        domain = Domain(DOMAIN)
+        bias = Consumer(domain, BiasSample, "eco-py-bias-err", timeout_s=30)
+        with open(self.imu) as f:
+            lines = f.read().splitlines()[:2000]
+        fields = lines[1500].split(",")
+        fields[2] = "x"
+        lines[1500] = ",".join(fields)
+        fd, bad = tempfile.mkstemp(suffix=".csv")
+        with os.fdopen(fd, "w") as f:
+            f.write("\n".join(lines) + "\n")
+        with self.assertRaises(ValueError) as e:
+            with Producer(domain, "eco-py-producer-err", timeout_s=30) as producer:
+                producer.wait_for_daemon(30)
+                replay_csv(producer, bad)
+        os.remove(bad)
+        self.assertIn(":1501: column gy_rad_s: 'x' is no number", str(e.exception))
+        deadline = time.monotonic() + 30
+        while True:
+            self.assertLess(time.monotonic(), deadline, "no end-of-stream bias")
+            b = bias.recv(1.0)
+            if b is not None and b.flags & wire.FLAG_END_OF_STREAM:
+                break
+        bias.close()
 
     def test_ctrl_c_stops_the_driver_example_and_ends_its_stream(self) -> None:
         # (iceoryx2's signal handler used to swallow it: the driver ran its 60 s.)
