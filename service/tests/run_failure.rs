@@ -37,6 +37,21 @@ fn options(imu: &Path, truth: Option<PathBuf>, out: &Path) -> RunOptions {
     }
 }
 
+/// `corridor diagnose --imu IMU [--truth TRUTH] --config configs/gdins.toml --out OUT`.
+fn diagnose(imu: &Path, truth: Option<&Path>, out: &Path) -> std::process::Output {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_corridor"));
+    c.args(["diagnose", "--imu"]).arg(imu);
+    if let Some(t) = truth {
+        c.arg("--truth").arg(t);
+    }
+    c.arg("--config")
+        .arg(root().join("configs/gdins.toml"))
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
 /// The names in `dir`, sorted.
 fn listing(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -205,17 +220,7 @@ fn diagnose_refuses_footprints_it_cannot_score() {
     }));
     let truth = out.join("truth.csv");
     std::fs::write(&truth, shifted.join("\n") + "\n").unwrap();
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_corridor"))
-        .args(["diagnose", "--imu"])
-        .arg(exp36().join("imu.csv"))
-        .arg("--truth")
-        .arg(&truth)
-        .arg("--config")
-        .arg(root().join("configs/gdins.toml"))
-        .arg("--out")
-        .arg(out.join("report"))
-        .output()
-        .unwrap();
+    let o = diagnose(&exp36().join("imu.csv"), Some(&truth), &out.join("report"));
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -240,15 +245,7 @@ fn diagnose_refuses_a_log_that_never_aligned() {
         text.lines().take(400).collect::<Vec<_>>().join("\n") + "\n",
     )
     .unwrap();
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_corridor"))
-        .args(["diagnose", "--imu"])
-        .arg(&rest)
-        .arg("--config")
-        .arg(root().join("configs/gdins.toml"))
-        .arg("--out")
-        .arg(out.join("report"))
-        .output()
-        .unwrap();
+    let o = diagnose(&rest, None, &out.join("report"));
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

@@ -144,6 +144,15 @@ class Daemon(unittest.TestCase):
                 received = d.received
         return received
 
+    def until_end_of_stream(self, bias: Consumer) -> None:
+        """Reads `bias` until the daemon's end-of-stream bias (within 30 s)."""
+        deadline = time.monotonic() + 30
+        while True:
+            self.assertLess(time.monotonic(), deadline, "no end-of-stream bias")
+            b = bias.recv(1.0)
+            if b is not None and b.flags & wire.FLAG_END_OF_STREAM:
+                return
+
     def stop_the_driver_example(self, sig: int, code: int) -> None:
         """The driver example, stopped by `sig` mid-stream: it exits with `code` and ends its
         stream (the daemon publishes its end-of-stream bias)."""
@@ -163,12 +172,7 @@ class Daemon(unittest.TestCase):
         out, err = driver.communicate(timeout=30)
         self.assertEqual(driver.returncode, code, err)
         self.assertIn("sent ", out)
-        deadline = time.monotonic() + 30
-        while True:
-            self.assertLess(time.monotonic(), deadline, "no end-of-stream bias")
-            b = bias.recv(1.0)
-            if b is not None and b.flags & wire.FLAG_END_OF_STREAM:
-                break
+        self.until_end_of_stream(bias)
         for c in (diagnostics, bias):
             c.close()
 
@@ -191,12 +195,7 @@ class Daemon(unittest.TestCase):
                 replay_csv(producer, bad)
         os.remove(bad)
         self.assertIn(":1501: column gy_rad_s: 'x' is no number", str(e.exception))
-        deadline = time.monotonic() + 30
-        while True:
-            self.assertLess(time.monotonic(), deadline, "no end-of-stream bias")
-            b = bias.recv(1.0)
-            if b is not None and b.flags & wire.FLAG_END_OF_STREAM:
-                break
+        self.until_end_of_stream(bias)
         bias.close()
 
     def test_ctrl_c_stops_the_driver_example_and_ends_its_stream(self) -> None:

@@ -257,12 +257,13 @@ impl<R: BufRead> ImuCsvReader<R> {
         if !self.check_units || self.accepted == 0 {
             return Ok(());
         }
-        if self.units.looks_like_deg_s_early() && !self.units.accel_units_wrong_early() {
-            // (Its statistic counts the rows already: "N of M rows above 40".)
-            return self.units.check_gyro(&self.path);
-        }
         if !self.units.accel_units_wrong_early() {
-            return Ok(());
+            // (The gyro's statistic counts the rows already: "N of M rows above 40".)
+            return if self.units.looks_like_deg_s_early() {
+                self.units.check_gyro(&self.path)
+            } else {
+                Ok(())
+            };
         }
         self.units.check(&self.path).map_err(|e| match e {
             ImuCsvError::Units {
