@@ -274,7 +274,9 @@ impl Producer {
         }
     }
 
-    /// Sends one angle observation with the next sequence number.
+    /// Sends one angle observation with the next sequence number. Its `t_s` is on the IMU
+    /// samples' clock: the daemon uses its heading at the stance that time falls in or the next
+    /// one, within 2 s ([`AngleObservation`]).
     pub fn send_angles(&mut self, mut obs: AngleObservation) -> Result<usize, ClientError> {
         obs.seq = self.next_angles_seq;
         self.next_angles_seq += 1;

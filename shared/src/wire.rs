@@ -137,15 +137,18 @@ impl From<&ImuRow> for ImuSample {
 }
 
 /// An external attitude observation, producer → daemon (`corridor/v5/angles`), e.g. a heading
-/// from a map matcher or a camera. The heading is used when its bit is set in `valid` (at the
-/// next stance, instead of the map); roll and pitch are not fused (see [`ANGLE_ROLL`]).
+/// from a map matcher or a camera. The heading is used when its bit is set in `valid`, instead
+/// of the map, at the stance its `t_s` falls in or the next one: at the first stance observed
+/// from 0.5 s before `t_s` on, and only within 2 s after `t_s` (older, it is counted as expired,
+/// `Diagnostics::headings_expired`); roll and pitch are not fused (see [`ANGLE_ROLL`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
 #[type_name("corridor_v5_AngleObservation")]
 #[repr(C)]
 pub struct AngleObservation {
     /// Sequence number of the producer.
     pub seq: u64,
-    /// Sensor time the observation refers to, s.
+    /// Sensor time the observation refers to, s: the clock of the [`ImuSample`]s' `t_s`. Not
+    /// finite: refused (`Diagnostics::headings_refused`).
     pub t_s: f64,
     /// Roll, rad.
     pub roll_rad: f64,
@@ -352,8 +355,8 @@ pub struct Diagnostics {
     /// Angle observations carrying roll or pitch, which are not fused (their heading, if any, is
     /// used) (v5; cumulative, as `received`).
     pub angles_ignored: u64,
-    /// External headings refused on arrival: not finite, or σ not in (0, π] (v5; this life,
-    /// every stream).
+    /// External headings refused on arrival: time or heading not finite, or σ not in (0, π]
+    /// (v5; this life, every stream).
     pub headings_refused: u64,
     /// External headings replaced by a newer one before the stance that would have used them
     /// (v5; this life).
@@ -361,8 +364,9 @@ pub struct Diagnostics {
     /// External headings refused at their stance: too far from the filter's prediction (NIS
     /// beyond 16) (v5; this life).
     pub headings_outside_gate: u64,
-    /// External headings still waiting for a stance when their stream ended or the daemon
-    /// stopped (v5; this life).
+    /// External headings not used because their time had passed: no stance within 2 s after
+    /// their `t_s`, or still waiting for a stance when their stream ended or the daemon stopped
+    /// (v5; this life).
     pub headings_expired: u64,
     /// External headings fused in an update the estimator's health check then undid (v5; this
     /// life).

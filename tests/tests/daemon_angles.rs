@@ -1,7 +1,8 @@
 //! An external heading (`AngleObservation` over `corridor/v5/angles`, e.g. from a map matcher)
 //! reaches the estimator end to end: the daemon's attitude stream is the offline run's with the
 //! same heading queued (to 1e-12, as the replay test compares), and differs in yaw from the run
-//! without it. Its own binary:
+//! without it. Handed in before the first sample and stamped later, it waits for its own time.
+//! Its own binary:
 //! one daemon per test process (docs/known-issues.md).
 
 mod daemon_common;
@@ -19,24 +20,36 @@ use std::time::Instant;
 const HEADING_RAD: f64 = 0.349;
 const HEADING_SD_RAD: f64 = 0.0087;
 
-/// The offline estimates of exp36, with `queued` heading observation given before the first
-/// sample (as the daemon gets it), or none.
-fn offline(queued: Option<(f64, f64)>) -> Vec<Estimate> {
+/// The offline estimates of exp36, with `queued` heading observation (time, heading, σ) given
+/// before the first sample (as the daemon gets it), or none.
+fn offline(queued: Option<(f64, f64, f64)>) -> Vec<Estimate> {
     offline_exp36_with(|est| {
-        if let Some((h, sd)) = queued {
-            est.queue_heading(h, sd).unwrap();
+        if let Some((t, h, sd)) = queued {
+            est.queue_heading(t, h, sd).unwrap();
         }
     })
 }
 
 #[test]
 fn an_external_heading_moves_the_published_yaw_as_offline() {
-    let with = offline(Some((HEADING_RAD, HEADING_SD_RAD)));
     let without = offline(None);
-    let first_tracking = with
+    let first_tracking = without
         .iter()
         .position(|e| e.phase == Phase::Tracking)
         .expect("exp36 reaches tracking");
+    // Stamped half a second into tracking: the next stance's.
+    let t_heading = without[first_tracking].t_s + 0.5;
+    let with = offline(Some((t_heading, HEADING_RAD, HEADING_SD_RAD)));
+    let used = with
+        .iter()
+        .filter_map(|e| e.heading)
+        .find(|h| h.direction_rad == HEADING_RAD)
+        .expect("the heading is used");
+    assert!(
+        used.observed_t_s >= t_heading - 0.5 && used.observed_t_s <= t_heading + 2.0,
+        "used at {} s, stamped {t_heading} s",
+        used.observed_t_s
+    );
     let differ = with
         .iter()
         .zip(&without)
@@ -58,10 +71,10 @@ fn an_external_heading_moves_the_published_yaw_as_offline() {
         let mut p = Producer::new(&d, "test-angles", Delivery::Lossless).unwrap();
         p.wait_for_daemon(WAIT).unwrap();
         // The heading first: the daemon drains angle observations before IMU samples, so it is
-        // queued before the first sample, as offline. Sent again until the daemon's angle
-        // subscriber is connected (it is created next to the IMU one).
+        // queued before the first sample, as offline, and waits for its time. Sent again until
+        // the daemon's angle subscriber is connected (it is created next to the IMU one).
         let obs = AngleObservation {
-            t_s: rows[0].t_s,
+            t_s: t_heading,
             heading_rad: HEADING_RAD,
             heading_sd_rad: HEADING_SD_RAD,
             valid: ANGLE_HEADING,
@@ -136,7 +149,7 @@ fn an_absurd_external_heading_mid_walk_is_refused_at_its_stance() {
                 // The foot's heading now, roughly (the sensor's yaw less its yaw on the foot),
                 // turned by `h`, with σ `sd`.
                 let foot = e.yaw_rad - est.mount_yaw_rad().expect("calibrated by 30 s");
-                est.queue_heading(foot + h, sd).unwrap();
+                est.queue_heading(r.t_s, foot + h, sd).unwrap();
                 queued = Some(foot + h);
             }
         }

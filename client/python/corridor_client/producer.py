@@ -138,7 +138,10 @@ class Producer:
         return n
 
     def send_angles(self, obs: AngleObservation) -> int:
-        """Sends an external attitude observation with the next `seq`."""
+        """Sends an external attitude observation with the next `seq`.
+
+        Its `t_s` is on the IMU samples' clock: the daemon uses its heading at the stance that
+        time falls in or the next one, within 2 s (older: counted as expired)."""
         obs.seq = self.next_angles_seq
         self.next_angles_seq += 1
         n = int(self._angles.send_copy(obs))

@@ -23,6 +23,7 @@ pub(super) type RxCounters = super::state::Record;
 pub(super) enum Msg {
     Imu(ImuSample),
     Heading {
+        t_s: f64,
         heading_rad: f64,
         sd_rad: f64,
     },
@@ -132,6 +133,7 @@ pub(super) fn rx_thread(
             }
             if o.valid & ANGLE_HEADING != 0 {
                 let msg = Msg::Heading {
+                    t_s: o.t_s,
                     heading_rad: o.heading_rad,
                     sd_rad: o.heading_sd_rad,
                 };

@@ -95,7 +95,8 @@ pub struct Summary {
     pub headings_superseded: u64,
     /// External heading observations refused at their stance as too far from the prediction.
     pub headings_outside_gate: u64,
-    /// External heading observations still waiting for a stance when the stream ended.
+    /// External heading observations not used because their time had passed (no stance within
+    /// 2 s after it) or still waiting for a stance when the stream ended.
     pub headings_expired: u64,
     /// External heading observations whose update the health check undid.
     pub headings_undone: u64,

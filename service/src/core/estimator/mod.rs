@@ -53,9 +53,11 @@ mod stride_memory;
 mod types;
 
 pub use association::association_weight;
+use types::QueuedHeading;
 pub use types::{
-    Counters, EXTERNAL_HEADING_MAX_NIS, Estimate, GRAVITY_TOLERANCE, GapCrossing, HeadingEvent,
-    HeadingRefused, ImuInput, Notice, Phase, SampleError, WarmStart, WarmStartError,
+    Counters, EXTERNAL_HEADING_LEAD_S, EXTERNAL_HEADING_MAX_AGE_S, EXTERNAL_HEADING_MAX_NIS,
+    Estimate, GRAVITY_TOLERANCE, GapCrossing, HeadingEvent, HeadingRefused, ImuInput, Notice,
+    Phase, SampleError, WarmStart, WarmStartError,
 };
 
 use fast_start::Start;
@@ -218,11 +220,11 @@ struct Pipeline {
     clipped_gyro_axes: [bool; 3],
     stance_obs_done: bool,
     stance_f_sum: (Vector3<f64>, u64),
-    pending_heading: Option<(f64, f64)>,
+    pending_heading: Option<QueuedHeading>,
     /// External headings taken in (`queue_heading`), and the newest: what was handed in while
     /// samples that are dropped later ran (`drop_glitched_samples`).
     headings_queued: u64,
-    last_queued: Option<(f64, f64)>,
+    last_queued: Option<QueuedHeading>,
     warm_start: Option<WarmStart>,
     converged_at_s: Option<f64>,
     out: Estimate,
@@ -378,29 +380,41 @@ impl Estimator {
         self.p.stance_force.said_by()
     }
 
-    /// An external observation of the walking (foot) heading in the map frame with its σ; it is
-    /// used at the next stance instead of the map. A heading that is not finite, or a σ that is
-    /// not in (0, π], is refused and counted (`headings_refused`); at the stance, one further
-    /// than [`EXTERNAL_HEADING_MAX_NIS`] from the prediction is refused and counted
-    /// (`headings_outside_gate`): nothing absurd is fused. Of several before one stance the
-    /// newest is used, the others counted (`headings_superseded`).
-    pub fn queue_heading(&mut self, heading_rad: f64, sd_rad: f64) -> Result<(), HeadingRefused> {
-        let sane = heading_rad.is_finite() && sd_rad > 0.0 && sd_rad <= std::f64::consts::PI;
+    /// An external observation of the walking (foot) heading in the map frame at sensor time
+    /// `t_s` (the samples' clock) with its σ; it is used instead of the map at the first stance
+    /// observed from [`EXTERNAL_HEADING_LEAD_S`] before `t_s` on, and only within
+    /// [`EXTERNAL_HEADING_MAX_AGE_S`] after it (else counted, `headings_expired`). A time or
+    /// heading that is not finite, or a σ that is not in (0, π], is refused and counted
+    /// (`headings_refused`); at the stance, one further than [`EXTERNAL_HEADING_MAX_NIS`] from
+    /// the prediction is refused and counted (`headings_outside_gate`): nothing absurd is
+    /// fused. Of several before one stance the newest is used, the others counted
+    /// (`headings_superseded`).
+    pub fn queue_heading(
+        &mut self,
+        t_s: f64,
+        heading_rad: f64,
+        sd_rad: f64,
+    ) -> Result<(), HeadingRefused> {
+        let sane = t_s.is_finite()
+            && heading_rad.is_finite()
+            && sd_rad > 0.0
+            && sd_rad <= std::f64::consts::PI;
         if !sane {
             self.p.counters.headings_refused += 1;
             return Err(HeadingRefused {
+                t_s,
                 heading_rad,
                 sd_rad,
             });
         }
+        let queued = QueuedHeading {
+            t_s: t_s - self.p.clock.offset_s(),
+            heading_rad,
+            sd_rad,
+        };
         self.p.headings_queued += 1;
-        self.p.last_queued = Some((heading_rad, sd_rad));
-        if self
-            .p
-            .pending_heading
-            .replace((heading_rad, sd_rad))
-            .is_some()
-        {
+        self.p.last_queued = Some(queued);
+        if self.p.pending_heading.replace(queued).is_some() {
             self.p.counters.headings_superseded += 1;
         }
         Ok(())

@@ -107,16 +107,17 @@ impl Pipeline {
             }
             return;
         }
-        if self.cfg.mode == Mode::Eskf && self.pending_heading.is_none() {
+        let due = self.due_heading(t_s);
+        if self.cfg.mode == Mode::Eskf && due.is_none() {
             self.eskf_observations(eskf, &forward, t_s);
             return;
         }
         let foot_heading = wrap_pi(eskf.predicted_heading(&forward));
         let straight = self.straight.push(foot_heading);
         let xy = [eskf.p_m.x, eskf.p_m.y];
-        let external = self.pending_heading.is_some();
-        let (direction, sd) = match self.pending_heading.take() {
-            Some((dir, sd)) => (Ok(dir), sd),
+        let external = due.is_some();
+        let (direction, sd) = match due {
+            Some(h) => (Ok(h.heading_rad), h.sd_rad),
             None if self.cfg.mode == Mode::Zupt => (Err(Rejection::NoSource), h.sigma_rad.get()),
             None if !straight => (Err(Rejection::NotStraight), h.sigma_rad.get()),
             None => (
@@ -204,6 +205,24 @@ impl Pipeline {
     /// footprint (with `heading.stride_look_ahead`, the stride before it, one stance late) and
     /// the foot axis, each associated with the nearest dominant direction and fused with the
     /// weight of that association (see [`association_weight`]).
+    /// The external heading this stance, observed at `t_s` (stamped), uses: the pending one if
+    /// its time has come ([`EXTERNAL_HEADING_LEAD_S`]), taken; one whose time is more than
+    /// [`EXTERNAL_HEADING_MAX_AGE_S`] past is taken and counted as expired; one whose time is
+    /// to come stays pending.
+    fn due_heading(&mut self, t_s: f64) -> Option<QueuedHeading> {
+        let h = self.pending_heading?;
+        let t_s = t_s - self.clock.offset_s();
+        if h.t_s - t_s > EXTERNAL_HEADING_LEAD_S {
+            return None;
+        }
+        self.pending_heading = None;
+        if t_s - h.t_s > EXTERNAL_HEADING_MAX_AGE_S {
+            self.counters.headings_expired += 1;
+            return None;
+        }
+        Some(h)
+    }
+
     fn eskf_observations(&mut self, eskf: &mut Eskf, forward: &Vector3<f64>, t_s: f64) {
         // The foot axis is associated where the stance began, before the stride update.
         let xy = [eskf.p_m.x, eskf.p_m.y];

@@ -107,7 +107,9 @@ impl Estimator {
         c.rejected_implausible = now.counters.rejected_implausible;
         c.rejected_time_jump = now.counters.rejected_time_jump + dropped;
         c.headings_refused = now.counters.headings_refused;
-        c.headings_expired = now.counters.headings_expired;
+        // (`headings_expired` stays the copy's: a heading a dropped sample's stance found too
+        // old is pending again, as one it used is. The stream's end, which also expires one,
+        // is never followed by a drop: the daemon starts a new estimator there.)
         // A specific force said off gravity on a dropped sample was said (its estimate went
         // out): the stance that ended there ends again on a later sample and is not said
         // twice (a review: two warnings in the daemon's report, one counted).

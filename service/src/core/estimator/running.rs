@@ -57,6 +57,7 @@ impl Pipeline {
         let mut before = take_spare(&mut self.before, eskf);
         let used_before = (self.counters.heading_used, self.counters.stride_used);
         let external_pending = self.pending_heading.is_some();
+        let expired_before = self.counters.headings_expired;
         let omega = self.navigate(
             eskf,
             &mut before,
@@ -93,6 +94,7 @@ impl Pipeline {
             let c = &mut self.counters;
             let external_used = external_pending
                 && self.pending_heading.is_none()
+                && c.headings_expired == expired_before
                 && c.heading_used > used_before.0;
             c.headings_undone += u64::from(external_used);
             (c.heading_used, c.stride_used) = used_before;

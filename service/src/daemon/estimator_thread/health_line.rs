@@ -94,7 +94,7 @@ impl EstState<'_> {
              dropped +{} ({}), producer changes {}, foreign samples {}, latency p50 {} p99 {}, bias {}, \
              σ {}, converged {}, phase {}{}, stances {} (map headings used: foot axis {}, strides {}), implausible {}, time jumps {}, clipped {}, \
              health restores {} (footprints forgotten {}), velocity resets {}, tilts levelled again {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
-             lost in a killed daemon {}, external headings refused {} (superseded {}, outside the gate {}, expired at a stream's end {}, undone by the health check {})",
+             lost in a killed daemon {}, external headings refused {} (superseded {}, outside the gate {}, expired (too old, or at a stream's end) {}, undone by the health check {})",
             d.received,
             d.seq_gaps - h.seq_gaps,
             d.seq_gaps,

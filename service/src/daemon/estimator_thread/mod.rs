@@ -534,11 +534,12 @@ pub(super) fn estimator_thread(
                 st.on_sample(cfg, &mut out, counters, &s);
             }
             Ok(Msg::Heading {
+                t_s,
                 heading_rad,
                 sd_rad,
             }) => {
                 // Refused and counted by the estimator when absurd.
-                if let Err(e) = st.est.queue_heading(heading_rad, sd_rad) {
+                if let Err(e) = st.est.queue_heading(t_s, heading_rad, sd_rad) {
                     tracing::warn!("{e}");
                 }
             }

@@ -1,28 +1,37 @@
 //! The external headings' path through the estimator (a map matcher's `queue_heading`): the
-//! gate in every mode, and every heading counted once (used, refused, superseded, outside the
-//! gate, expired, undone), also through glitched samples dropped after the fact.
+//! gate in every mode, each heading used at its own time, and every heading counted once (used,
+//! refused, superseded, outside the gate, expired, undone), also through glitched samples
+//! dropped after the fact.
 
 use super::*;
+
+/// The heading and σ waiting for a stance.
+fn pending(est: &Estimator) -> Option<(f64, f64)> {
+    est.p.pending_heading.map(|h| (h.heading_rad, h.sd_rad))
+}
 
 #[test]
 fn an_absurd_external_heading_is_refused_and_counted() {
     let mut est = Estimator::new(Config::default(), HeadingAid::None);
-    for (h, sd) in [
-        (f64::NAN, 0.01),
-        (0.3, 0.0),
-        (0.3, -1.0),
-        (0.3, f64::INFINITY),
-        (1e300 * 1e300, 0.1),
+    for (t, h, sd) in [
+        (0.0, f64::NAN, 0.01),
+        (0.0, 0.3, 0.0),
+        (0.0, 0.3, -1.0),
+        (0.0, 0.3, f64::INFINITY),
+        (0.0, 1e300 * 1e300, 0.1),
+        (f64::NAN, 0.3, 0.01),
+        (f64::INFINITY, 0.3, 0.01),
+        (f64::NEG_INFINITY, 0.3, 0.01),
     ] {
-        assert!(est.queue_heading(h, sd).is_err(), "{h} {sd}");
+        assert!(est.queue_heading(t, h, sd).is_err(), "{t} {h} {sd}");
     }
-    assert_eq!(est.counters().headings_refused, 5);
+    assert_eq!(est.counters().headings_refused, 8);
     assert!(est.p.pending_heading.is_none());
-    est.queue_heading(0.3, 0.01).unwrap();
-    assert_eq!(est.p.pending_heading, Some((0.3, 0.01)));
+    est.queue_heading(0.0, 0.3, 0.01).unwrap();
+    assert_eq!(pending(&est), Some((0.3, 0.01)));
     // A newer one before the stance replaces it, counted.
-    est.queue_heading(0.4, 0.02).unwrap();
-    assert_eq!(est.p.pending_heading, Some((0.4, 0.02)));
+    est.queue_heading(0.0, 0.4, 0.02).unwrap();
+    assert_eq!(pending(&est), Some((0.4, 0.02)));
     assert_eq!(est.counters().headings_superseded, 1);
     // One still waiting when the stream ends is counted (it went uncounted).
     est.expire_pending_heading();
@@ -43,7 +52,9 @@ fn heading_at_next_stance(
 ) -> (u64, u64, f64) {
     // Where the next stance takes a heading: found on a copy, with one no gate refuses.
     let mut probe = est.clone();
-    probe.queue_heading(0.0, std::f64::consts::PI).unwrap();
+    probe
+        .queue_heading(rows[*i].t_s, 0.0, std::f64::consts::PI)
+        .unwrap();
     let mut at = *i;
     while probe.p.pending_heading.is_some() {
         probe.step(&rows[at]).unwrap();
@@ -59,7 +70,8 @@ fn heading_at_next_stance(
     let (predicted, var) = e.heading_prediction(&est.p.foot_forward_body());
     let (c0, b0) = (*est.counters(), est.last_estimate().gyro_bias_rad_s);
     let heading = predicted + off_rad + off_sd * (var + sd * sd).sqrt();
-    est.queue_heading(wrap_pi(heading), sd).unwrap();
+    est.queue_heading(rows[*i].t_s, wrap_pi(heading), sd)
+        .unwrap();
     while est.p.pending_heading.is_some() {
         est.step(&rows[*i]).unwrap();
         *i += 1;
@@ -135,7 +147,7 @@ fn a_heading_used_by_a_glitched_sample_and_replaced_since_is_counted() {
     let h1 = (0.0, std::f64::consts::PI);
     loop {
         let mut trial = est.clone();
-        trial.queue_heading(h1.0, h1.1).unwrap();
+        trial.queue_heading(rows[i].t_s, h1.0, h1.1).unwrap();
         let glitched = ImuInput {
             t_s: rows[i].t_s + 0.1,
             ..rows[i]
@@ -151,12 +163,12 @@ fn a_heading_used_by_a_glitched_sample_and_replaced_since_is_counted() {
     // Without H2, H1 is pending again, and nothing is superseded.
     let mut alone = est.clone();
     assert!(alone.step(&rows[i + 1]).unwrap().glitch_t_s.is_some());
-    assert_eq!(alone.p.pending_heading, Some(h1));
+    assert_eq!(pending(&alone), Some(h1));
     assert_eq!(alone.counters().headings_superseded, 0);
     let h2 = (0.5, std::f64::consts::PI);
-    est.queue_heading(h2.0, h2.1).unwrap();
+    est.queue_heading(rows[i + 1].t_s, h2.0, h2.1).unwrap();
     assert!(est.step(&rows[i + 1]).unwrap().glitch_t_s.is_some());
-    assert_eq!(est.p.pending_heading, Some(h2));
+    assert_eq!(pending(&est), Some(h2));
     let c = est.counters();
     assert_eq!((c.headings_superseded, c.headings_outside_gate), (1, 0));
 }
@@ -210,35 +222,92 @@ fn paper_with_bias_bound(cfg: Config, bound_rad_s: f64) -> Config {
 fn a_heading_handed_in_during_a_glitched_run_is_pending_after_the_drop() {
     // A run of 150 stamps 975 s ahead. H2 is handed in after the run's first sample, and a
     // stance in the run uses it; the first good time drops the run. H2 was lost (the copy from
-    // before the run had no pending heading) and counted as superseded (a review).
+    // before the run had no pending heading) and counted as superseded (a review). Stamped on
+    // the good clock instead, the run's stance finds it 975 s old and counts it expired: that
+    // is undone with the run as well, and it is pending again.
     let (cfg, rows) = exp36_inputs();
     let h2 = (0.5, std::f64::consts::PI);
     let n = 150;
-    for k in (7000..12000).step_by(97) {
-        let mut glitched = rows.clone();
-        for r in &mut glitched[k..k + n] {
-            r.t_s += 975.0;
-        }
-        let aid = crate::runner::heading_aid(&cfg, None).unwrap();
-        let mut est = Estimator::new(cfg.clone(), aid);
-        for s in &glitched[..k + 2] {
-            let _ = est.step(s);
-        }
-        assert!(est.p.pending_heading.is_none());
-        est.queue_heading(h2.0, h2.1).unwrap();
-        for s in &glitched[k + 2..k + n] {
-            est.step(s).unwrap();
-        }
-        if est.p.pending_heading.is_some() {
-            continue; // no stance in the run used it
-        }
-        let e = *est.step(&glitched[k + n]).unwrap();
-        assert_eq!(e.glitch_run_dropped, n as u64 - 1);
-        assert_eq!(est.p.pending_heading, Some(h2), "k {k}");
-        assert_eq!(est.counters().headings_superseded, 0, "k {k}");
-        return;
+    for glitched_stamp in [true, false] {
+        let found = (7000..12000).step_by(97).any(|k| {
+            let mut glitched = rows.clone();
+            for r in &mut glitched[k..k + n] {
+                r.t_s += 975.0;
+            }
+            let aid = crate::runner::heading_aid(&cfg, None).unwrap();
+            let mut est = Estimator::new(cfg.clone(), aid);
+            for s in &glitched[..k + 2] {
+                let _ = est.step(s);
+            }
+            assert!(est.p.pending_heading.is_none());
+            let t = if glitched_stamp {
+                glitched[k + 1].t_s
+            } else {
+                rows[k + 1].t_s
+            };
+            est.queue_heading(t, h2.0, h2.1).unwrap();
+            for s in &glitched[k + 2..k + n] {
+                est.step(s).unwrap();
+            }
+            if est.p.pending_heading.is_some() {
+                return false; // no stance in the run came to it
+            }
+            let c = *est.counters();
+            assert_eq!(c.headings_expired, u64::from(!glitched_stamp), "k {k}");
+            let e = *est.step(&glitched[k + n]).unwrap();
+            assert_eq!(e.glitch_run_dropped, n as u64 - 1);
+            assert_eq!(pending(&est), Some(h2), "k {k}");
+            let c = est.counters();
+            assert_eq!((c.headings_superseded, c.headings_expired), (0, 0), "k {k}");
+            true
+        });
+        assert!(
+            found,
+            "no stance of a run came to the heading ({glitched_stamp})"
+        );
     }
-    panic!("no stance of a run used the heading");
+}
+
+#[test]
+fn an_external_heading_is_used_at_its_own_time() {
+    // It was fused at whatever stance came next: one stamped 5 s ahead at once, one 3 s old
+    // as if new (a review). At 30 s of exp36, σ π (no gate refuses it).
+    let (cfg, rows) = exp36_inputs();
+    let (est, i) = tracking_at_30_s(cfg, &rows);
+    let sd = std::f64::consts::PI;
+    // The stances observed from here, and the one that used the heading (its direction is the
+    // queued 0.123 rad), with the counters after.
+    let run = |t_s: f64| {
+        let mut est = est.clone();
+        est.queue_heading(t_s, 0.123, sd).unwrap();
+        let (mut observed, mut used_at) = (Vec::new(), None);
+        for r in &rows[i..i + 2000] {
+            let e = *est.step(r).unwrap();
+            if let Some(ev) = e.heading {
+                observed.push(ev.observed_t_s);
+                if ev.direction_rad == 0.123 {
+                    used_at = Some(ev.observed_t_s);
+                }
+            }
+        }
+        (observed, used_at, *est.counters())
+    };
+    let now = rows[i].t_s;
+    let base = *est.counters();
+    // 5 s ahead: the stances before its time use the map; the first from 0.5 s before it on
+    // uses it.
+    let (observed, used_at, c) = run(now + 5.0);
+    let first_due = observed.iter().copied().find(|&t| t >= now + 5.0 - 0.5);
+    assert!(observed.iter().filter(|&&t| t < now + 4.5).count() >= 3);
+    assert_eq!(used_at, first_due, "stances at {observed:?}");
+    assert_eq!(c.headings_expired, base.headings_expired);
+    // 3 s old: the next stance finds it expired, counted, and uses the map.
+    let (_, used_at, c) = run(now - 3.0);
+    assert_eq!(used_at, None);
+    assert_eq!(c.headings_expired, base.headings_expired + 1);
+    // Half a second old: still the next stance's.
+    let (observed, used_at, _) = run(now - 0.5);
+    assert_eq!(used_at, observed.first().copied());
 }
 
 #[test]
@@ -256,7 +325,7 @@ fn a_heading_update_undone_in_a_glitched_sample_is_pending_again_not_undone() {
         let (predicted, var) = e.heading_prediction(&trial.p.foot_forward_body());
         let sd: f64 = 1e-3;
         let heading = wrap_pi(predicted + 3.5 * (var + sd * sd).sqrt());
-        trial.queue_heading(heading, sd).unwrap();
+        trial.queue_heading(rows[i].t_s, heading, sd).unwrap();
         let glitched = ImuInput {
             t_s: rows[i].t_s + 0.1,
             ..rows[i]
@@ -265,7 +334,7 @@ fn a_heading_update_undone_in_a_glitched_sample_is_pending_again_not_undone() {
         if trial.counters().headings_undone == 1 {
             assert!(trial.step(&rows[i + 1]).unwrap().glitch_t_s.is_some());
             assert_eq!(trial.counters().headings_undone, 0);
-            assert_eq!(trial.p.pending_heading, Some((heading, sd)));
+            assert_eq!(pending(&trial), Some((heading, sd)));
             return;
         }
         est.step(&rows[i]).unwrap();
