@@ -219,6 +219,27 @@ fn flags_that_would_do_nothing_are_usage_errors() {
 }
 
 #[test]
+fn a_demo_away_from_the_repository_says_to_give_its_root() {
+    // It said "./configs/eval/gdins.toml: No such file or directory" (noticed in session 44).
+    let dir = TempDir::new(&format!("eco-demo-root-{}", std::process::id()));
+    let out = dir.join("out");
+    let o = corridor(&[
+        "demo",
+        "--root",
+        dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("configs/eval/gdins.toml not found") && err.contains("--root"),
+        "{err}"
+    );
+    assert!(o.stdout.is_empty() && !out.exists());
+}
+
+#[test]
 fn an_out_path_that_is_a_file_is_refused_before_any_work() {
     let dir = TempDir::new(&format!("eco-outfile-{}", std::process::id()));
     let file = dir.join("afile");

@@ -24,6 +24,12 @@ pub(super) struct DemoArgs {
 /// Runs the demo; fails when the daemon section finds a loss or a difference.
 pub(super) fn demo(a: &DemoArgs) -> Result<()> {
     let suite = a.root.join("configs/eval/gdins.toml");
+    if !suite.is_file() {
+        anyhow::bail!(
+            "{} not found: run the demo from the repository's root, or give it with --root",
+            suite.display()
+        );
+    }
     let rows = corridor_service::suite::run_suite(&suite)?;
     let md = corridor_service::suite::markdown(&rows);
     corridor_client::say!(
