@@ -201,10 +201,6 @@ impl Pipeline {
         self.out.heading = Some(event);
     }
 
-    /// The `eskf` mode's observations at a stance: the stride direction since the previous
-    /// footprint (with `heading.stride_look_ahead`, the stride before it, one stance late) and
-    /// the foot axis, each associated with the nearest dominant direction and fused with the
-    /// weight of that association (see [`association_weight`]).
     /// The external heading this stance, observed at `t_s` (stamped), uses: the pending one if
     /// its time has come ([`EXTERNAL_HEADING_LEAD_S`]), taken; one whose time is more than
     /// [`EXTERNAL_HEADING_MAX_AGE_S`] past is taken and counted as expired; one whose time is
@@ -223,6 +219,10 @@ impl Pipeline {
         Some(h)
     }
 
+    /// The `eskf` mode's observations at a stance: the stride direction since the previous
+    /// footprint (with `heading.stride_look_ahead`, the stride before it, one stance late) and
+    /// the foot axis, each associated with the nearest dominant direction and fused with the
+    /// weight of that association (see [`association_weight`]).
     fn eskf_observations(&mut self, eskf: &mut Eskf, forward: &Vector3<f64>, t_s: f64) {
         // The foot axis is associated where the stance began, before the stride update.
         let xy = [eskf.p_m.x, eskf.p_m.y];
