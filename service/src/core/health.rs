@@ -121,9 +121,9 @@ mod tests {
     use crate::core::eskf::{BiasStates, EskfInit, EskfNoise, Extensions};
     use nalgebra::UnitQuaternion;
 
-    #[test]
-    fn the_covariance_check_equals_the_plain_formula() {
-        let mut e = Eskf::new(
+    /// A healthy filter with a heading offset and a footprint clone.
+    fn filter() -> Eskf {
+        Eskf::new(
             EskfInit {
                 nav_from_body: UnitQuaternion::identity(),
                 gyro_bias_rad_s: Vector3::zeros(),
@@ -145,11 +145,62 @@ mod tests {
                 footprint_clone: true,
                 ..Default::default()
             },
-        );
-        let limits = HealthLimits {
-            max_speed_m_s: 10.0,
-            max_gyro_bias_rad_s: 0.2,
-        };
+        )
+    }
+
+    const LIMITS: HealthLimits = HealthLimits {
+        max_speed_m_s: 10.0,
+        max_gyro_bias_rad_s: 0.2,
+    };
+
+    #[test]
+    fn each_bound_of_a_healthy_state_is_checked_on_its_own() {
+        // Found by mutation testing (session 45): no test had one quantity alone not finite, or
+        // a speed or bias at or just beyond its bound.
+        let e = filter();
+        let zero = Vector3::zeros();
+        assert_eq!(check(&e, &zero, &LIMITS), Ok(()));
+        for k in 0..4 {
+            let (mut bad, mut bias) = (e.clone(), zero);
+            match k {
+                0 => bad.p_m.x = f64::NAN,
+                1 => bad.v_m_s.y = f64::INFINITY,
+                2 => {
+                    bad.nav_from_body = UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(
+                        f64::NAN,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ))
+                }
+                _ => bias.z = f64::NAN,
+            }
+            assert_eq!(
+                check(&bad, &bias, &LIMITS),
+                Err(HealthFault::NonFinite),
+                "{k}"
+            );
+        }
+        // The speed at its bound is healthy, beyond it not.
+        let mut fast = e.clone();
+        fast.v_m_s = Vector3::new(6.0, 8.0, 0.0);
+        assert_eq!(check(&fast, &zero, &LIMITS), Ok(()));
+        fast.v_m_s.z = 0.01;
+        assert_eq!(check(&fast, &zero, &LIMITS), Err(HealthFault::Speed));
+        // The same for the bias, on any axis and either sign.
+        for axis in 0..3 {
+            let mut bias = zero;
+            bias[axis] = -0.2;
+            assert_eq!(check(&e, &bias, &LIMITS), Ok(()));
+            bias[axis] = -0.2001;
+            assert_eq!(check(&e, &bias, &LIMITS), Err(HealthFault::Bias));
+        }
+    }
+
+    #[test]
+    fn the_covariance_check_equals_the_plain_formula() {
+        let mut e = filter();
+        let limits = LIMITS;
         let n = e.dim();
         assert_eq!(e.cov_diagonal().count(), n);
         for var in [
