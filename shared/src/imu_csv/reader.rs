@@ -333,7 +333,7 @@ impl<R: BufRead> ImuCsvReader<R> {
             let rejected = RejectedRow {
                 line: row.line,
                 column: REQUIRED_COLUMNS[0].to_string(),
-                value: row.t_s.to_string(),
+                value: time_text(row.t_s),
                 reason: RejectReason::TimeGlitch,
                 field_counts: None,
             };
@@ -448,7 +448,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                             self.reject(RejectedRow {
                                 line: first.line,
                                 column: REQUIRED_COLUMNS[0].to_string(),
-                                value: first.t_s.to_string(),
+                                value: time_text(first.t_s),
                                 reason: if verdict == TimeVerdict::Glitch {
                                     RejectReason::TimeGlitch
                                 } else {

@@ -131,6 +131,23 @@ pub(super) fn strip_cr(line: &str) -> &str {
     line.strip_suffix('\r').unwrap_or(line)
 }
 
+/// A time held as a number (a held row's, rejected once a later row decides it), as a message
+/// quotes it: as Rust prints it when that is short (`1000000000`, `0.49`), else in scientific
+/// notation (a first `t_s = -1e308` was quoted with its 309 digits, beyond the 64-character
+/// limit on a quoted value).
+pub(super) fn time_text(t_s: f64) -> String {
+    let plain = t_s.to_string();
+    if plain.len() <= MAX_TIME_CHARS {
+        plain
+    } else {
+        format!("{t_s:e}")
+    }
+}
+
+/// Longest time [`time_text`] writes in plain notation, characters: the 17 significant digits
+/// of an `f64` with a sign, a point and a few zeros.
+const MAX_TIME_CHARS: usize = 24;
+
 /// The first `max` characters of `s` (all of it when shorter).
 pub(crate) fn truncate_chars(s: &str, max: usize) -> String {
     match s.char_indices().nth(max) {

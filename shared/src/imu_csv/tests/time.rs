@@ -89,6 +89,32 @@ fn an_absurd_first_time_is_rejected_once_the_rows_after_it_agree() {
 }
 
 #[test]
+fn a_rejected_time_held_as_a_number_is_quoted_short() {
+    // Before: a first t_s of -1e308, rejected as the outlier once the rows after it agreed,
+    // was quoted with its 309 digits (every other quoted value is cut at 64 characters).
+    for (first, shown) in [
+        ("-1e308", "-1e308"),
+        ("5e300", "5e300"),
+        ("-123456789012345678901234567890", "-1.2345678901234568e29"),
+    ] {
+        let text = replace_line(
+            &good_file(200),
+            2,
+            &format!("{first},0.01,0.02,0.03,0.1,0.2,9.8"),
+        );
+        let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+        let r = log
+            .rejected
+            .iter()
+            .find(|r| r.line == 2)
+            .expect("line 2 rejected");
+        assert_eq!(r.value, shown, "{first}");
+        let message = r.located(path()).to_string();
+        assert!(message.len() < 200, "{message}");
+    }
+}
+
+#[test]
 fn a_stamp_glitched_forward_by_less_than_a_jump_is_rejected_and_the_rows_after_it_kept() {
     // Line 100 holds t = 0.49; put it 0.9 s ahead (a gap, not a jump: max_dt_s is 1 s).
     // Before: it was accepted as a gap and the next 180 rows, up to t = 1.39, were rejected as
