@@ -20,7 +20,8 @@
 //! [`ImuLog`] for the callers that want every row at hand (the suite, the diagnosis, replay).
 //!
 //! Bad rows are never dropped silently. A row with the wrong number of fields, a field that is not a
-//! number, a non-finite value or a timestamp that does not increase is moved to
+//! number (a row longer than 64 KiB is not parsed: the field its cut falls in, or its field count,
+//! is named), a non-finite value or a timestamp that does not increase is moved to
 //! [`ImuLog::rejected`] with its line, column, text and [`RejectReason`] (a row after a time jump
 //! or a step back of the clock that the next row confirms goes out, for the estimator behind the
 //! reader to refuse as a live stream's would be). If more than
@@ -356,7 +357,7 @@ pub enum ImuCsvError {
     },
     /// The header (line 1) is missing or does not start with the required columns, or it has an
     /// empty or repeated column name, or the file is not text (compressed, not UTF-8, lines that
-    /// end in CR alone).
+    /// end in CR alone, no line end within 64 KiB).
     #[error(
         "{path}:{line}: header {problem}: it must start with \"{expected}\", found \"{found}\""
     )]

@@ -2,6 +2,7 @@
 
 use super::*;
 use std::borrow::Cow;
+use std::io::Read as _;
 
 /// A streaming reader of an IMU CSV log: an iterator of the accepted rows in file order, in
 /// memory independent of the log's length (one line buffer, the counters, the first
@@ -28,6 +29,9 @@ pub struct ImuCsvReader<R> {
     /// 1-based number of the last line read.
     pub(super) line_no: u64,
     pub(super) line: Vec<u8>,
+    /// The last line was longer than [`MAX_LINE_BYTES`]: `line` holds its first bytes (one
+    /// more than that).
+    pub(super) line_cut: Option<LineCut>,
     pub(super) bytes_read: u64,
     /// Bytes of the first data line (for [`Self::rows_hint`]).
     pub(super) first_row_bytes: u64,
@@ -104,6 +108,19 @@ impl ImuCsvReader<std::io::BufReader<std::fs::File>> {
 /// Read buffer of [`ImuCsvReader::open`], bytes.
 pub(super) const READ_BUFFER_BYTES: usize = 1 << 16;
 
+/// Longest line the reader keeps, bytes (a data row is about 150, a header with a few dozen
+/// extra columns a few hundred). A line was read whole into memory: a file without line ends
+/// (a binary dump, `/dev/zero`) grew the buffer until the run aborted with "memory allocation
+/// failed". A longer header is refused; a longer data row is rejected, its rest skipped unread.
+pub(super) const MAX_LINE_BYTES: usize = 1 << 16;
+
+/// What lay beyond [`MAX_LINE_BYTES`] of a line that was cut.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct LineCut {
+    /// Commas in the part skipped (for the row's field count).
+    commas: usize,
+}
+
 impl<R: BufRead> ImuCsvReader<R> {
     /// Reads the header from `src` (the content of `path`, which is only used in messages).
     pub fn new(src: R, path: &Path, opts: &ImuCsvOptions) -> Result<Self, ImuCsvError> {
@@ -117,6 +134,7 @@ impl<R: BufRead> ImuCsvReader<R> {
             temperature_missing: 0,
             line_no: 0,
             line: Vec::new(),
+            line_cut: None,
             bytes_read: 0,
             first_row_bytes: 0,
             len_bytes: None,
@@ -199,10 +217,15 @@ impl<R: BufRead> ImuCsvReader<R> {
     }
 
     /// Reads the next line into `self.line` without its `\n`; `false` at the end of the source.
+    /// A line longer than [`MAX_LINE_BYTES`] is cut there (`self.line_cut`), its rest left
+    /// unread: [`Self::skip_rest`] reads past it.
     pub(super) fn read_line(&mut self) -> Result<bool, ImuCsvError> {
         self.line.clear();
-        let n = self
-            .src
+        self.line_cut = None;
+        // One byte more than the longest line: its `\n`.
+        let limit = MAX_LINE_BYTES as u64 + 1;
+        let n = (&mut self.src)
+            .take(limit)
             .read_until(b'\n', &mut self.line)
             .map_err(|source| ImuCsvError::Io {
                 path: self.path.clone(),
@@ -215,11 +238,67 @@ impl<R: BufRead> ImuCsvReader<R> {
         self.line_no += 1;
         if self.line.last() == Some(&b'\n') {
             self.line.pop();
+        } else if n as u64 == limit {
+            self.line_cut = Some(LineCut::default());
         }
         if self.line_no == 1 && self.line.starts_with("\u{feff}".as_bytes()) {
             self.line.drain(..3);
         }
         Ok(true)
+    }
+
+    /// Reads past the rest of a line cut at [`MAX_LINE_BYTES`], to its `\n`, counting its commas
+    /// (in memory independent of its length).
+    pub(super) fn skip_rest(&mut self) -> Result<(), ImuCsvError> {
+        let Some(cut) = &mut self.line_cut else {
+            return Ok(());
+        };
+        loop {
+            let buf = match self.src.fill_buf() {
+                Ok(buf) => buf,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(source) => {
+                    return Err(ImuCsvError::Io {
+                        path: self.path.clone(),
+                        source,
+                    });
+                }
+            };
+            if buf.is_empty() {
+                return Ok(());
+            }
+            let (n, end) = match buf.iter().position(|&b| b == b'\n') {
+                Some(i) => (i + 1, true),
+                None => (buf.len(), false),
+            };
+            cut.commas += buf[..n].iter().filter(|&&b| b == b',').count();
+            self.src.consume(n);
+            self.bytes_read += n as u64;
+            if end {
+                return Ok(());
+            }
+        }
+    }
+
+    /// The rejection of a data row cut at [`MAX_LINE_BYTES`] (`self.line`, its first bytes):
+    /// its field count when that differs from the header's, else the field the cut falls in.
+    fn cut_row(&self, line_no: u64, n_fields: usize, cut: LineCut) -> RejectedRow {
+        let text = Self::line_str(&self.line);
+        let kept_commas = text.matches(',').count();
+        let fields = kept_commas + cut.commas + 1;
+        let (column, value, field_counts) = if fields != n_fields {
+            (String::new(), text.as_ref(), Some((fields, n_fields)))
+        } else {
+            let field = text.rsplit(',').next().unwrap_or_default();
+            (self.names[kept_commas].clone(), unquote(field), None)
+        };
+        RejectedRow {
+            line: line_no,
+            column,
+            value: truncate_chars(value, MAX_VALUE_CHARS),
+            reason: RejectReason::Malformed,
+            field_counts,
+        }
     }
 
     /// A line as text: bytes that are not UTF-8 become U+FFFD, so that a field holding one is
@@ -243,6 +322,7 @@ impl<R: BufRead> ImuCsvReader<R> {
         }
         // Blank lines before the header: an empty file if nothing but white space follows.
         while Self::line_str(&self.line).trim().is_empty() {
+            self.skip_rest()?;
             if !self.read_line()? {
                 return Err(empty());
             }
@@ -260,6 +340,14 @@ impl<R: BufRead> ImuCsvReader<R> {
         };
         let problem: Option<Cow<'static, str>> = if let Some(problem) = compressed {
             Some(problem.into())
+        } else if self.line_cut.is_some() {
+            // Its rest is left unread: a source without line ends may have no end either.
+            Some(
+                format!(
+                    "is longer than {MAX_LINE_BYTES} bytes without a line end (a binary file?)"
+                )
+                .into(),
+            )
         } else if Self::line_str(proper).contains(['\u{fffd}', '\0']) {
             // UTF-16 (a NUL byte in every other place), another 8-bit encoding, binary bytes
             // (whose CR, if any, says nothing of line ends).
@@ -371,6 +459,9 @@ impl<R: BufRead> ImuCsvReader<R> {
                 return Ok(self.ready.pop_front().map(|row| self.emit(row)));
             }
             let line_no = self.line_no;
+            // Only the first bytes of a line cut at MAX_LINE_BYTES are kept: the rest is read
+            // past, its commas counted.
+            self.skip_rest()?;
             if self.line.iter().all(u8::is_ascii_whitespace) {
                 // Blank lines are fine at the end of the file; in the middle they are malformed.
                 self.blank.get_or_insert((line_no, 0)).1 += 1;
@@ -389,6 +480,12 @@ impl<R: BufRead> ImuCsvReader<R> {
                 }
             }
             self.total += 1;
+            if let Some(cut) = self.line_cut.take() {
+                // Never parsed: a number cut short would read as another.
+                let rejected = self.cut_row(line_no, n_fields, cut);
+                self.reject(rejected);
+                continue;
+            }
             if self.first_row_bytes == 0 {
                 self.first_row_bytes = self.line.len() as u64 + 1;
             }
