@@ -3,11 +3,16 @@
 //! bincode.
 //!
 //! Format versions: 1 (first slice: diagonal covariance, no save time), 2 (full covariance
-//! from `Estimator::bias_state`, validated as symmetric positive definite; wall-clock save time).
+//! from `Estimator::bias_state`, validated as symmetric positive definite; wall-clock save time),
+//! 3 (a checksum: in version 2 one flipped bit turned a bias axis's sign, or scaled it or its
+//! variance by a power of two, and the file still decoded to a valid state that was warm-started
+//! from).
 //!
 //! File layout: the 8-byte magic [`MAGIC`], the format version as a little-endian `u32`
 //! ([`FORMAT_VERSION`]), then the bincode-2 (`standard` config, serde) encoding of
-//! [`Checkpoint`]. Trailing bytes, non-finite values or a bad quaternion count as corruption.
+//! [`Checkpoint`], then the CRC-32 of everything before it as a little-endian `u32`. Trailing
+//! bytes, a checksum that does not match, non-finite values or a bad quaternion count as
+//! corruption.
 //!
 //! [`save`] is atomic: it writes `<file>.tmp-<pid>`, fsyncs it, renames it over the target and
 //! fsyncs the directory, so a crash leaves either the old or the new checkpoint. [`load`] moves a
@@ -23,7 +28,9 @@ use std::path::{Path, PathBuf};
 /// First bytes of every checkpoint file.
 pub const MAGIC: [u8; 8] = *b"CORRCKPT";
 /// Format version written by [`save`]; [`load`] accepts only this one.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
+/// Bytes of the checksum that ends a file (a CRC-32).
+const CHECKSUM_BYTES: usize = 4;
 /// Largest gyro bias (per axis, rad/s) and bias σ a checkpoint may hold: 1 rad/s (57 °/s) is far
 /// beyond any gyro's bias, so a file beyond it holds garbage even when it decodes (a NaN-poisoned
 /// or diverged state once saved 1.30 rad/s). The estimator's own bound
@@ -226,14 +233,27 @@ fn config() -> impl bincode::config::Config {
     bincode::config::standard().with_limit::<MAX_PAYLOAD>()
 }
 
-/// Encodes a checkpoint into the file layout (magic, version, payload).
+/// Encodes a checkpoint into the file layout (magic, version, payload, checksum).
 pub fn encode(cp: &Checkpoint) -> Vec<u8> {
     let mut out = Vec::with_capacity(128);
     out.extend_from_slice(&MAGIC);
     out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
     let payload = bincode::serde::encode_to_vec(cp, config()).expect("a checkpoint always encodes");
     out.extend_from_slice(&payload);
+    out.extend_from_slice(&crc32(&out).to_le_bytes());
     out
+}
+
+/// The CRC-32 of `bytes` (IEEE 802.3, as zlib's `crc32`); bitwise: a checkpoint is 170 bytes.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = (crc >> 1) ^ (0xEDB8_8320 & (crc & 1).wrapping_neg());
+        }
+    }
+    !crc
 }
 
 /// Why bytes are not a checkpoint.
@@ -266,10 +286,26 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, DecodeError> {
     let payload = &bytes[header..];
     let (cp, used): (Checkpoint, usize) = bincode::serde::decode_from_slice(payload, config())
         .map_err(|e| DecodeError::Corrupt(payload_problem(&e, payload.len())))?;
-    if used != payload.len() {
+    let checksum = &payload[used..];
+    if checksum.len() < CHECKSUM_BYTES {
         return Err(DecodeError::Corrupt(format!(
-            "{} trailing bytes after the payload",
-            payload.len() - used
+            "its {}-byte payload ends before the checkpoint does (truncated: {} of the \
+             {CHECKSUM_BYTES} checksum bytes)",
+            payload.len(),
+            checksum.len()
+        )));
+    }
+    if checksum.len() > CHECKSUM_BYTES {
+        return Err(DecodeError::Corrupt(format!(
+            "{} trailing bytes after the checksum",
+            checksum.len() - CHECKSUM_BYTES
+        )));
+    }
+    let stored = u32::from_le_bytes(checksum.try_into().expect("4 bytes"));
+    let computed = crc32(&bytes[..bytes.len() - CHECKSUM_BYTES]);
+    if stored != computed {
+        return Err(DecodeError::Corrupt(format!(
+            "checksum {stored:08x}, its content's is {computed:08x}: bytes changed on disk"
         )));
     }
     cp.validate().map_err(DecodeError::Invalid)?;
@@ -610,6 +646,27 @@ mod tests {
                 norm: 2.0
             }))
         );
+    }
+
+    #[test]
+    fn every_flipped_bit_is_refused() {
+        // Before (version 2, no checksum): 1 010 of the 1 296 single-bit flips of a checkpoint
+        // decoded to a valid state, among them a bias axis with its sign turned (1e-3 to -1e-3
+        // rad/s) or its variance scaled by 2^8 (1e-8 to 2.56e-6), and were warm-started from.
+        assert_eq!(crc32(b"123456789"), 0xcbf4_3926);
+        let bytes = encode(&sample());
+        for i in 0..bytes.len() {
+            for bit in 0..8 {
+                let mut flipped = bytes.clone();
+                flipped[i] ^= 1 << bit;
+                assert!(
+                    decode(&flipped).is_err(),
+                    "byte {i} bit {bit}: {:?}",
+                    decode(&flipped)
+                );
+            }
+        }
+        assert_eq!(decode(&bytes), Ok(sample()));
     }
 
     #[test]

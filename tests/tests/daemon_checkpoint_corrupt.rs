@@ -14,7 +14,9 @@ fn corrupt_checkpoint_is_moved_aside_and_the_daemon_cold_starts() {
     cleanup_domain(name);
     let dir = temp_dir("test-daemon-corrupt");
     let ckpt = dir.join("checkpoint.bin");
-    let garbage = b"CORRCKPT\x02\x00\x00\x00 this is not bincode".to_vec();
+    let mut garbage = checkpoint::MAGIC.to_vec();
+    garbage.extend_from_slice(&checkpoint::FORMAT_VERSION.to_le_bytes());
+    garbage.extend_from_slice(b" this is not bincode");
     std::fs::write(&ckpt, &garbage).unwrap();
     let domain = Domain::new(name).unwrap();
     let (offline, first_aligned) = offline_exp36();
