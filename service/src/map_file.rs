@@ -107,6 +107,63 @@ mod tests {
         ));
     }
 
+    /// A corridor too narrow or too short to hold a footprint (1e-300 m), or one whose ends lie
+    /// so far out (±1e308 m) that the test of a footprint inside it overflows, took every
+    /// heading observation along it away without a word (a review); a width of 1e300 m made
+    /// the whole plane one corridor.
+    #[test]
+    fn a_corridor_no_footprint_can_be_inside_or_beyond_any_survey_is_refused() {
+        let dir = std::env::temp_dir().join(format!("corridor-map-g-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("map.toml");
+        let read = |from: &str, to: &str, width: &str| {
+            std::fs::write(
+                &file,
+                format!("[[corridor]]\nfrom_m = {from}\nto_m = {to}\nwidth_m = {width}\n"),
+            )
+            .unwrap();
+            read_corridor_map(&file)
+                .map(|_| ())
+                .map_err(|e| e.to_string())
+        };
+        for (from, to, width, said) in [
+            (
+                "[0.0, 0.0]",
+                "[10.0, 0.0]",
+                "1e-300",
+                "width_m = 1e-300 must be in [0.1, 1e6] m",
+            ),
+            (
+                "[0.0, 0.0]",
+                "[10.0, 0.0]",
+                "1e300",
+                "width_m = 1e300 must be in [0.1, 1e6] m",
+            ),
+            (
+                "[0.0, 0.0]",
+                "[1e-200, 0.0]",
+                "2.0",
+                "ends are 1e-200 m apart",
+            ),
+            ("[0.0, 0.0]", "[0.0, 0.05]", "2.0", "ends are 0.05 m apart"),
+            (
+                "[-1e308, 0.0]",
+                "[1e308, 0.0]",
+                "2.0",
+                "from_m = [-1e308, 0.0], to_m = [1e308, 0.0]",
+            ),
+            ("[0.0, 0.0]", "[2e6, 0.0]", "2.0", "within ±1e6 m"),
+        ] {
+            let err = read(from, to, width).unwrap_err();
+            assert!(
+                err.contains("map.toml") && err.contains("corridor 0") && err.contains(said),
+                "{from} {to} {width}: {err}"
+            );
+        }
+        assert!(read("[0.0, 0.0]", "[0.0, 0.1]", "0.1").is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     /// An empty map, or a point with a third number, was taken without a word (a review): the
     /// one took every heading observation away, the other dropped the number.
     #[test]

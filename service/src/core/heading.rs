@@ -68,8 +68,18 @@ pub struct GeometryError {
     pub problem: String,
 }
 
+/// Narrowest and shortest corridor a map may hold, m: a foot's width. One narrower or shorter
+/// contains no footprint, and one at 1e300 m overflowed the test of a footprint inside it: either
+/// took every heading observation along it away, silently (a review).
+pub const MIN_CORRIDOR_M: f64 = 0.1;
+
+/// Largest corridor coordinate and width, m: the survey's bound
+/// ([`corridor_shared::truth_csv::MAX_COORDINATE_M`], 1000 km from the origin).
+pub const MAX_CORRIDOR_M: f64 = corridor_shared::truth_csv::MAX_COORDINATE_M;
+
 impl CorridorMap {
-    /// Checks every corridor: a positive finite width, finite and distinct ends.
+    /// Checks every corridor: a width in [[`MIN_CORRIDOR_M`], [`MAX_CORRIDOR_M`]], ends within
+    /// [`MAX_CORRIDOR_M`] of the origin and at least [`MIN_CORRIDOR_M`] apart.
     pub fn check(&self) -> Result<(), GeometryError> {
         for (index, c) in self.corridors.iter().enumerate() {
             let bad = |problem: String| GeometryError {
@@ -80,8 +90,28 @@ impl CorridorMap {
             if !(c.width_m.is_finite() && c.width_m > 0.0) {
                 return Err(bad(format!("width_m = {} must be > 0", c.width_m)));
             }
-            if c.from_m.iter().chain(&c.to_m).any(|v| !v.is_finite()) || c.from_m == c.to_m {
-                return Err(bad("from_m and to_m must be finite and distinct".into()));
+            if !(MIN_CORRIDOR_M..=MAX_CORRIDOR_M).contains(&c.width_m) {
+                return Err(bad(format!(
+                    "width_m = {:?} must be in [{MIN_CORRIDOR_M}, {MAX_CORRIDOR_M:e}] m",
+                    c.width_m
+                )));
+            }
+            let ends = format!("from_m = {:?}, to_m = {:?}", c.from_m, c.to_m);
+            if c.from_m
+                .iter()
+                .chain(&c.to_m)
+                .any(|v| !(-MAX_CORRIDOR_M..=MAX_CORRIDOR_M).contains(v))
+            {
+                return Err(bad(format!(
+                    "{ends}: each coordinate must be finite and within ±{MAX_CORRIDOR_M:e} m"
+                )));
+            }
+            let length_m = (c.to_m[0] - c.from_m[0]).hypot(c.to_m[1] - c.from_m[1]);
+            if length_m < MIN_CORRIDOR_M {
+                return Err(bad(format!(
+                    "{ends}: the ends are {length_m:?} m apart, a corridor must be at least \
+                     {MIN_CORRIDOR_M} m long"
+                )));
             }
         }
         Ok(())
