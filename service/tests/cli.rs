@@ -389,6 +389,18 @@ fn run_starts_from_a_checkpoint_as_the_daemon_does_and_names_a_missing_one() {
             "axis {k}: {b:?}, rest {rest:?}"
         );
     }
+    // A checkpoint of another mode, from which the daemon starts cold: an error naming both
+    // (it was used as it was).
+    let mut extra = vec!["--config", config.to_str().unwrap(), "--mode", "paper"];
+    let near_file = dir.join("near.ckpt");
+    extra.extend(["--checkpoint", near_file.to_str().unwrap()]);
+    let o = run_cmd(&imu, &dir.join("other_mode"), &extra);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("near.ckpt") && err.contains("\"eskf\"") && err.contains("paper"),
+        "{err}"
+    );
     // A missing file is an error that names it, said once.
     let o = run(Some(&dir.join("none.ckpt")), "missing");
     assert!(!o.status.success());

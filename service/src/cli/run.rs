@@ -39,7 +39,7 @@ pub(super) struct RunArgs {
     )]
     pub(super) inject_after_s: f64,
     /// Start from the bias state of a daemon's checkpoint file, as the daemon does after a
-    /// restart.
+    /// restart (one of another mode is refused: the daemon would start cold).
     #[arg(long)]
     pub(super) checkpoint: Option<PathBuf>,
     /// Write the figures (SVG).
@@ -52,9 +52,23 @@ pub(super) struct RunArgs {
 
 /// Runs the estimator over the log and prints the brief summary.
 pub(super) fn run(a: &RunArgs) -> Result<()> {
+    let config = a.model.config()?;
+    let checkpoint = a.checkpoint.as_deref().map(checkpoint::read).transpose()?;
+    // The daemon starts cold from a checkpoint of another mode; this run used it as it was.
+    if let (Some(cp), Some(path)) = (&checkpoint, &a.checkpoint)
+        && cp.mode != config.mode.name()
+    {
+        anyhow::bail!(
+            "{}: the checkpoint is for mode {:?}, this run's is {} (--mode or estimator.mode): \
+             the daemon would start cold from it",
+            path.display(),
+            cp.mode,
+            config.mode.name()
+        );
+    }
     let opts = RunOptions {
         imu: a.imu.clone(),
-        config: a.model.config()?,
+        config,
         map: a.model.map.clone(),
         truth: a.truth.clone(),
         injection: BiasInjection {
@@ -65,12 +79,7 @@ pub(super) fn run(a: &RunArgs) -> Result<()> {
         plots: a.plots,
         out_dir: a.out.clone(),
         csv: ImuCsvOptions::default(),
-        warm_start: a
-            .checkpoint
-            .as_deref()
-            .map(checkpoint::read)
-            .transpose()?
-            .map(|cp| cp.warm_start()),
+        warm_start: checkpoint.map(|cp| cp.warm_start()),
     };
     let s = runner::run(&opts)?;
     corridor_client::say!("{}", serde_json::to_string_pretty(&brief(&s))?);
