@@ -38,6 +38,8 @@ const CHECKSUM_BYTES: usize = 4;
 pub const MAX_BIAS_RAD_S: f64 = 1.0;
 /// Largest payload accepted by the decoder, bytes.
 const MAX_PAYLOAD: usize = 1 << 16;
+/// Longest checkpoint file: the header, the largest payload and the checksum, bytes.
+const MAX_FILE_BYTES: usize = MAGIC.len() + 4 + MAX_PAYLOAD + CHECKSUM_BYTES;
 
 /// What a checkpoint holds.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -270,6 +272,11 @@ pub enum DecodeError {
 /// Decodes the file layout.
 pub fn decode(bytes: &[u8]) -> Result<Checkpoint, DecodeError> {
     let header = MAGIC.len() + 4;
+    if bytes.len() > MAX_FILE_BYTES {
+        return Err(DecodeError::Corrupt(format!(
+            "longer than any checkpoint ({MAX_FILE_BYTES} bytes)"
+        )));
+    }
     if bytes.len() < header {
         return Err(DecodeError::Corrupt(format!(
             "{} bytes, shorter than the {header}-byte header",
@@ -418,7 +425,7 @@ pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
 
 fn load_with(path: &Path, move_bad: bool) -> Result<Checkpoint, CheckpointError> {
     let aside = |path: &Path| if move_bad { move_aside(path) } else { None };
-    let bytes = match std::fs::read(path) {
+    let bytes = match read_head(path) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             return Err(CheckpointError::NotFound {
@@ -452,6 +459,18 @@ fn load_with(path: &Path, move_bad: bool) -> Result<Checkpoint, CheckpointError>
             moved_to: aside(path),
         }),
     }
+}
+
+/// The file at `path`, up to one byte more than the longest checkpoint ([`MAX_FILE_BYTES`]):
+/// a path to something else (`/dev/zero`, a large file) was read whole into memory, and
+/// `/dev/zero` aborted the run with "memory allocation failed".
+fn read_head(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read as _;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(MAX_FILE_BYTES as u64 + 1)
+        .read_to_end(&mut bytes)?;
+    Ok(bytes)
 }
 
 /// Renames `path` to the first free `<path>.corrupt-<n>` (n = 1, 2, …).
@@ -646,6 +665,17 @@ mod tests {
                 norm: 2.0
             }))
         );
+    }
+
+    #[test]
+    fn a_file_without_an_end_is_read_no_further_than_a_checkpoint_can_be() {
+        // Before: read whole; `--checkpoint /dev/zero` aborted with "memory allocation failed".
+        let e = read(Path::new("/dev/zero")).unwrap_err();
+        assert!(
+            matches!(&e, CheckpointError::Corrupt { moved_to: None, .. }),
+            "{e}"
+        );
+        assert!(e.to_string().contains("longer than any checkpoint"), "{e}");
     }
 
     #[test]
