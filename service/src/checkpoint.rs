@@ -473,8 +473,14 @@ fn read_head(path: &Path) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// Renames `path` to the first free `<path>.corrupt-<n>` (n = 1, 2, …).
+/// Renames `path` to the first free `<path>.corrupt-<n>` (n = 1, 2, …); not a path to anything
+/// but a file (or a link): a device or a FIFO holds no checkpoint to keep, and is not the
+/// daemon's to move (`checkpoint_path = "/dev/zero"` would have renamed `/dev/zero`).
 fn move_aside(path: &Path) -> Option<PathBuf> {
+    let kind = std::fs::symlink_metadata(path).ok()?.file_type();
+    if !(kind.is_file() || kind.is_symlink()) {
+        return None;
+    }
     (1..10_000).find_map(|n| {
         let mut name = path.as_os_str().to_owned();
         name.push(format!(".corrupt-{n}"));
@@ -676,6 +682,31 @@ mod tests {
             "{e}"
         );
         assert!(e.to_string().contains("longer than any checkpoint"), "{e}");
+    }
+
+    #[test]
+    fn a_path_to_something_else_than_a_file_is_never_moved_aside() {
+        // A FIFO that a writer fills with garbage: corrupt, and left where it is (as a device
+        // such as /dev/zero is, which the daemon's move aside would have renamed).
+        let d = tmp_dir("fifo");
+        let p = d.join("bias.ckpt");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&p)
+            .status()
+            .unwrap();
+        assert!(made.success());
+        let writer = {
+            let p = p.clone();
+            std::thread::spawn(move || std::fs::write(&p, b"this is not a checkpoint").unwrap())
+        };
+        let e = load(&p).unwrap_err();
+        writer.join().unwrap();
+        assert!(
+            matches!(&e, CheckpointError::Corrupt { moved_to: None, .. }),
+            "{e}"
+        );
+        assert!(p.exists() && !d.join("bias.ckpt.corrupt-1").exists(), "{e}");
+        std::fs::remove_dir_all(&d).unwrap();
     }
 
     #[test]
