@@ -170,12 +170,13 @@ pub(super) fn excerpt(bytes: &[u8], max: usize) -> String {
 }
 
 /// Appends `c` to `out`, escaped when it is a control character: `\t`, `\n` and `\r` by name,
-/// another ASCII one as `\xNN`, one beyond ASCII as `\u{NN}`.
+/// another ASCII one as `\xNN`, one beyond ASCII (or an invisible one, [`is_invisible`]) as
+/// `\u{NN}`.
 fn push_escaped(out: &mut String, c: char) {
     match c {
         '\t' | '\n' | '\r' => write!(out, "{}", c.escape_default()),
         c if c.is_ascii_control() => write!(out, "\\x{:02x}", c as u32),
-        c if c.is_control() => write!(out, "{}", c.escape_unicode()),
+        c if c.is_control() || is_invisible(c) => write!(out, "{}", c.escape_unicode()),
         c => {
             out.push(c);
             Ok(())
@@ -184,10 +185,37 @@ fn push_escaped(out: &mut String, c: char) {
     .expect("writing to a String");
 }
 
-/// `text` with each control character escaped (`\t`, `\x1b`, `\u{85}`), to quote in a message
-/// (a rejected row's value, a ground-truth header); borrowed when it holds none.
+/// Whether `c` is a Unicode format character (general category Cf: a byte-order mark, a
+/// zero-width space or joiner, a soft hyphen, a direction mark or override) or a
+/// non-breaking space: printed as it is, a message showed nothing, or a space, where it stood
+/// (a BOM in the middle of a field quoted the value `"-0.3035"` as "not a number"), or
+/// reordered the text after it.
+fn is_invisible(c: char) -> bool {
+    matches!(
+        c,
+        '\u{a0}'
+            | '\u{ad}'
+            | '\u{600}'..='\u{605}'
+            | '\u{61c}'
+            | '\u{6dd}'
+            | '\u{70f}'
+            | '\u{180e}'
+            | '\u{200b}'..='\u{200f}'
+            | '\u{202a}'..='\u{202f}'
+            | '\u{2060}'..='\u{2064}'
+            | '\u{2066}'..='\u{206f}'
+            | '\u{feff}'
+            | '\u{fff9}'..='\u{fffb}'
+            | '\u{e0001}'
+            | '\u{e0020}'..='\u{e007f}'
+    )
+}
+
+/// `text` with each control character (and each invisible one, [`is_invisible`]) escaped
+/// (`\t`, `\x1b`, `\u{85}`, `\u{feff}`), to quote in a message (a rejected row's value, a
+/// ground-truth header); borrowed when it holds none.
 pub(crate) fn escape_controls(text: &str) -> Cow<'_, str> {
-    if !text.contains(char::is_control) {
+    if !text.contains(|c: char| c.is_control() || is_invisible(c)) {
         return Cow::Borrowed(text);
     }
     let mut out = String::with_capacity(text.len() + 8);

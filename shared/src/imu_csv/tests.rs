@@ -459,6 +459,32 @@ fn a_line_without_an_end_is_read_in_memory_independent_of_its_length() {
 }
 
 #[test]
+fn an_invisible_character_in_a_value_is_shown_escaped() {
+    // Before: a BOM inside a field was quoted as it is, invisible: the message read
+    // `value "-0.02" is malformed (not a number)`. A direction override reordered the rest.
+    for (field, shown) in [
+        ("\u{feff}-0.02", "value \"\\u{feff}-0.02\""),
+        ("-0.0\u{200b}2", "value \"-0.0\\u{200b}2\""),
+        ("\u{202e}-0.02", "value \"\\u{202e}-0.02\""),
+        ("-0.02\u{a0}1", "value \"-0.02\\u{a0}1\""),
+    ] {
+        let text = replace_line(
+            &good_file(200),
+            3,
+            &format!("0.005,0.01,{field},0.03,0.1,0.2,9.8"),
+        );
+        let log = parse_imu_csv(&text, path(), &lenient()).unwrap();
+        let message = log.rejected[0].located(path()).to_string();
+        assert_eq!(
+            message,
+            format!("data/imu.csv:3 column gy_rad_s: {shown} is malformed (not a number)")
+        );
+    }
+    // Visible text beyond ASCII stays as it is.
+    assert_eq!(escape_controls("µ-0.02°"), "µ-0.02°");
+}
+
+#[test]
 fn too_many_rejected_is_an_error_naming_the_first() {
     // 2 bad rows of 100 is 2 % > 1 %.
     let text = replace_line(&good_file(100), 7, "0.025,0.01,0.02,0.03,0.1,NaN,9.8");
