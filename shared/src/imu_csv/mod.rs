@@ -455,7 +455,11 @@ fn collect<R: BufRead>(mut reader: ImuCsvReader<R>) -> Result<ImuLog, ImuCsvErro
     while let Some(row) = reader.next() {
         let row = row?;
         if rows.capacity() == 0 {
-            rows.reserve(reader.rows_hint());
+            // A guess from the file's length and its first row: a large file whose first row
+            // is short asked for more than the machine has, and the reservation aborted the
+            // run (a sparse 200 GB file: "memory allocation of 1207959553280 bytes failed").
+            // Refused, the rows are collected as they come.
+            let _ = rows.try_reserve(reader.rows_hint());
         }
         rows.push(row);
     }

@@ -211,7 +211,9 @@ impl<R: BufRead> ImuCsvReader<R> {
     /// A guess of the number of rows from the length and the first row (for a collecting caller).
     pub(super) fn rows_hint(&self) -> usize {
         match (self.len_bytes, self.first_row_bytes) {
-            (Some(len), first) if first > 0 => (len / first * 9 / 8 + 16) as usize,
+            (Some(len), first) if first > 0 => {
+                usize::try_from((len / first).saturating_mul(9) / 8 + 16).unwrap_or(usize::MAX)
+            }
             _ => 0,
         }
     }

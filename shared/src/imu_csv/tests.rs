@@ -485,6 +485,17 @@ fn an_invisible_character_in_a_value_is_shown_escaped() {
 }
 
 #[test]
+fn a_length_that_promises_more_rows_than_memory_holds_is_no_failure() {
+    // The rows are reserved from the file's length and the first row's: a sparse 200 GB file
+    // with three short rows asked for 1.2 TB, and the reservation aborted the run.
+    let text = good_file(10);
+    let mut reader = ImuCsvReader::new(text.as_bytes(), path(), &lenient()).unwrap();
+    reader.len_bytes = Some(u64::MAX / 2);
+    let log = collect(reader).unwrap();
+    assert_eq!(log.rows.len(), 10);
+}
+
+#[test]
 fn too_many_rejected_is_an_error_naming_the_first() {
     // 2 bad rows of 100 is 2 % > 1 %.
     let text = replace_line(&good_file(100), 7, "0.025,0.01,0.02,0.03,0.1,NaN,9.8");
