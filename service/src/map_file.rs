@@ -41,7 +41,7 @@ pub enum MapError {
 
 /// Reads and checks a map file.
 pub fn read_corridor_map(path: &Path) -> Result<CorridorMap, MapError> {
-    let text = std::fs::read_to_string(path).map_err(|source| MapError::Io {
+    let text = corridor_shared::text_file::read_text(path).map_err(|source| MapError::Io {
         path: path.to_owned(),
         source,
     })?;

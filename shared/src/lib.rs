@@ -16,6 +16,8 @@
 //!   generated from it for the C and Python clients.
 //! - [`services`]: service names, QoS, the [`services::Domain`] namespace and the functions both
 //!   sides use to open the services.
+//! - [`text_file`]: reading a configuration, a map, a suite or a ground truth, no further than
+//!   such a file can be long.
 //! - [`runtime_dir`]: the runtime directory of a secured domain (who can reach iceoryx2's files,
 //!   what iceoryx2 0.10 lets one control, the daemon's lock and prefix token).
 
@@ -25,6 +27,7 @@ pub mod injection;
 pub mod runtime_dir;
 pub mod sensor;
 pub mod services;
+pub mod text_file;
 pub mod truth_csv;
 pub mod wire;
 pub mod wire_layout;

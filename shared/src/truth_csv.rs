@@ -123,7 +123,7 @@ impl fmt::Display for RowTail<'_> {
 
 /// Reads and parses the ground-truth file at `path`; see [`parse_truth_csv`].
 pub fn read_truth_csv(path: &Path) -> Result<Vec<TruthPoint>, TruthCsvError> {
-    let text = std::fs::read_to_string(path).map_err(|source| TruthCsvError::Io {
+    let text = crate::text_file::read_text(path).map_err(|source| TruthCsvError::Io {
         path: path.to_path_buf(),
         source,
     })?;

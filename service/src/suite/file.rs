@@ -159,7 +159,7 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
         path: path.to_owned(),
         message,
     };
-    let text = std::fs::read_to_string(path).map_err(|e| error(e.to_string()))?;
+    let text = corridor_shared::text_file::read_text(path).map_err(|e| error(e.to_string()))?;
     let file: FileToml = toml::from_str(&text).map_err(|e| error(e.to_string()))?;
     if file.recordings.is_empty() {
         return Err(error("no [[recording]]: a suite needs at least one".into()));
@@ -335,7 +335,7 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
 /// `legs_ratio_outside_0.85_1.15`); none without that file or that entry. A file that is there
 /// but cannot be read or parsed is an error (it names the file), not an empty list.
 fn flagged_legs_beside(meta: &Path) -> Result<Vec<usize>, String> {
-    let text = match std::fs::read_to_string(meta) {
+    let text = match corridor_shared::text_file::read_text(meta) {
         Ok(text) => text,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
         Err(e) => return Err(e.to_string()),

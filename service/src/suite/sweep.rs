@@ -122,7 +122,8 @@ pub fn run_sweep(
         path: sweep_path.to_owned(),
         message,
     };
-    let text = std::fs::read_to_string(sweep_path).map_err(|e| file_err(e.to_string()))?;
+    let text =
+        corridor_shared::text_file::read_text(sweep_path).map_err(|e| file_err(e.to_string()))?;
     let sweep: SweepFile = toml::from_str(&text).map_err(|e| file_err(e.to_string()))?;
     let best = suite.best_mode.unwrap_or(Mode::Eskf);
     let recs: Vec<&SuiteRecording> = suite

@@ -6,7 +6,7 @@ use std::path::Path;
 impl ConfigFile {
     /// Reads and parses a TOML file (no validation yet).
     pub fn read(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+        let text = crate::text_file::read_text(path).map_err(|source| ConfigError::Io {
             path: path.to_owned(),
             source,
         })?;
@@ -38,7 +38,7 @@ impl ConfigFile {
         let base_path = path.parent().unwrap_or(Path::new(".")).join(name);
         // Named from the file that names it: the base's own path alone did not say where it
         // was asked for.
-        let base_text = std::fs::read_to_string(&base_path).map_err(|e| {
+        let base_text = crate::text_file::read_text(&base_path).map_err(|e| {
             toml_err(
                 path,
                 format!("base = {name:?}: cannot read {}: {e}", base_path.display()),
