@@ -109,6 +109,14 @@ mod tests {
     use super::*;
 
     #[test]
+    fn every_periodic_output_comes_more_often_than_a_stall_is_forgotten() {
+        // The longest `daemon.bias_period_s` and `daemon.diagnostics_period_s` the
+        // configuration takes: a consumer that stays stalled is not waited on at each sample.
+        let longest = corridor_shared::config::defaults::DAEMON_OUTPUT_PERIOD_MAX_S;
+        assert!(RECOVERED_AFTER.as_secs_f64() >= longest);
+    }
+
+    #[test]
     fn a_consumer_waits_up_to_the_bound_then_is_discarded_at_once() {
         let g = StallGuard::new(Duration::from_millis(100));
         let ms = Duration::from_millis;

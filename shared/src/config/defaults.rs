@@ -36,28 +36,78 @@ pub const DAEMON_DELIVERY: &str = "live";
 /// `daemon.channel_capacity`, samples: 20 s at 200 Hz between the receive and estimator threads.
 pub const DAEMON_CHANNEL_CAPACITY: usize = 4096;
 
+/// Largest `daemon.channel_capacity`, samples. The channel preallocates (and writes) one slot
+/// per sample when the daemon starts, about 100 bytes each (an `ImuSample` of 88 bytes, the
+/// message's tag and the channel's stamp): 2^19 slots are about 55 MB and hold 44 min at
+/// 200 Hz. The estimator takes a sample in microseconds, so a backlog of minutes means it
+/// cannot keep up at all, and more only costs memory (2^24 was accepted and took 1.7 GB at
+/// start).
+pub const DAEMON_CHANNEL_CAPACITY_MAX: usize = 1 << 19;
+
 /// `daemon.domain`.
 pub const DAEMON_DOMAIN: &str = "default";
 
 /// `daemon.bias_period_s`, s of sensor time between bias samples.
 pub const DAEMON_BIAS_PERIOD_S: f64 = 1.0;
 
+/// Shortest `daemon.bias_period_s`, s of sensor time. The bias changes only at the filter's
+/// updates, by far less than its σ from one to the next; ten samples a second see every
+/// stance. Shorter (down to 1e-9, which was accepted) only sends the bias at every IMU sample,
+/// an output as heavy as the attitude's for nothing.
+pub const DAEMON_BIAS_PERIOD_MIN_S: f64 = 0.1;
+
+/// Longest `daemon.bias_period_s` and `daemon.diagnostics_period_s`, s: a periodic output at
+/// least once a minute. Beyond it a consumer waits minutes for its first value (`corridor
+/// status --watch` gives up after its `--timeout-s`), and a lossless consumer that stalled is
+/// waited on again at every one of its samples (the daemon forgets a stall after a minute of
+/// quiet, `RECOVERED_AFTER` in `service/src/daemon/stall.rs`).
+pub const DAEMON_OUTPUT_PERIOD_MAX_S: f64 = 60.0;
+
 /// `daemon.diagnostics_period_s`, s.
 pub const DAEMON_DIAGNOSTICS_PERIOD_S: f64 = 1.0;
+
+/// Shortest wall-clock period or wait of the `[daemon]` section (`diagnostics_period_s`,
+/// `health_period_s`, `checkpoint_period_s`, `stall_timeout_s`, `producer_takeover_s`), s: the
+/// slice every wait on an iceoryx2 event is cut into
+/// ([`EVENT_WAIT_SLICE`](crate::services::EVENT_WAIT_SLICE)), the daemon's and its clients'.
+/// A shorter period is due at every wake-up: `health_period_s = 1e-9` logged a health line,
+/// and published diagnostics, at every IMU sample, and spun a core when no sample came; a
+/// shorter stall timeout or take-over time takes a consumer or producer that is only between
+/// two of its wake-ups for a stalled or silent one.
+pub const DAEMON_WAKE_S: f64 = crate::services::EVENT_WAIT_SLICE.as_secs_f64();
 
 /// `daemon.health_period_s`, s between health log lines.
 pub const DAEMON_HEALTH_PERIOD_S: f64 = 10.0;
 
+/// Longest `daemon.health_period_s`, s: a health line at least every hour, so that the log
+/// says the daemon's rates and losses before any incident.
+pub const DAEMON_HEALTH_PERIOD_MAX_S: f64 = 3600.0;
+
 /// `daemon.checkpoint_period_s`, s.
 pub const DAEMON_CHECKPOINT_PERIOD_S: f64 = 30.0;
 
+/// Longest `daemon.checkpoint_period_s`, s: a day. The daemon also saves at each end of stream
+/// and at shutdown; a daemon killed loses at most this much of its bias state's history.
+pub const DAEMON_CHECKPOINT_PERIOD_MAX_S: f64 = 86400.0;
+
 /// `daemon.stall_timeout_s`: a lossless consumer that takes nothing for this long is dropped, s.
 pub const DAEMON_STALL_TIMEOUT_S: f64 = 1.0;
+
+/// Longest `daemon.stall_timeout_s`, s. While a publish waits on a consumer's full buffer the
+/// estimator thread waits with it: no output to anyone, no diagnostics, the input queue
+/// filling, and a stop (SIGTERM) waits for it. A dead consumer held the daemon for as long as
+/// 1e9 s allowed.
+pub const DAEMON_STALL_TIMEOUT_MAX_S: f64 = 60.0;
 
 /// `daemon.producer_takeover_s`: another IMU producer takes over from the followed one once this
 /// has sent nothing for this long, s. A driver at 100 Hz or more sends many times within it; a
 /// replacement started by hand or by a supervisor after a hang waits at most this.
 pub const DAEMON_PRODUCER_TAKEOVER_S: f64 = 1.0;
+
+/// Longest `daemon.producer_takeover_s`, s: the replacement of a hung driver loses the walk
+/// that passes while it waits; beyond a minute a hung driver is no longer replaced in any
+/// useful time.
+pub const DAEMON_PRODUCER_TAKEOVER_MAX_S: f64 = 60.0;
 
 /// `detector.window`, samples.
 pub const DETECTOR_WINDOW: usize = 5;

@@ -95,6 +95,17 @@ pub(crate) fn invalid(key: &str, value: impl std::fmt::Display, rule: &'static s
     }
 }
 
+/// [`invalid`] for a count, shown with all its digits (`invalid` showed a channel capacity of
+/// 16777216 as 1.6777216e7, and `usize::MAX` rounded).
+pub(crate) fn invalid_count(key: &str, value: u64, rule: &'static str) -> ConfigError {
+    ConfigError::Invalid {
+        path: PathBuf::new(),
+        key: key.to_owned(),
+        value: value.to_string(),
+        rule,
+    }
+}
+
 /// `value` under `key` must lie in `[lo, hi]`, the range the quantity can physically take
 /// (`rule` says it): a value beyond it used to pass as merely "positive" and broke the run
 /// later without naming the key (`initial_tilt_sd_rad = 1e300` froze the estimate).
@@ -534,6 +545,86 @@ mod tests {
             let err = f.validate_daemon().unwrap_err().to_string();
             assert!(err.contains(&format!("daemon.{key}")), "{err}");
         }
+    }
+
+    #[test]
+    fn every_daemon_number_has_a_range_and_its_error_names_key_value_and_range() {
+        use defaults::*;
+        // A review: `health_period_s = 1e-9` was taken (a health line and diagnostics at every
+        // IMU sample, a core spinning between them) and `channel_capacity = 16777216` too
+        // (1.7 GB preallocated at start).
+        let daemon = |body: String| {
+            ConfigFile::parse(&format!("[daemon]\n{body}\n"), Path::new("s.toml"))
+                .unwrap()
+                .validate_daemon()
+        };
+        let periods = [
+            (
+                "bias_period_s",
+                DAEMON_BIAS_PERIOD_MIN_S,
+                DAEMON_OUTPUT_PERIOD_MAX_S,
+            ),
+            (
+                "diagnostics_period_s",
+                DAEMON_WAKE_S,
+                DAEMON_OUTPUT_PERIOD_MAX_S,
+            ),
+            ("health_period_s", DAEMON_WAKE_S, DAEMON_HEALTH_PERIOD_MAX_S),
+            (
+                "checkpoint_period_s",
+                DAEMON_WAKE_S,
+                DAEMON_CHECKPOINT_PERIOD_MAX_S,
+            ),
+            ("stall_timeout_s", DAEMON_WAKE_S, DAEMON_STALL_TIMEOUT_MAX_S),
+            (
+                "producer_takeover_s",
+                DAEMON_WAKE_S,
+                DAEMON_PRODUCER_TAKEOVER_MAX_S,
+            ),
+        ];
+        for (key, lo, hi) in periods {
+            for ok in [lo, hi] {
+                daemon(format!("{key} = {ok:?}")).unwrap_or_else(|e| panic!("{key} = {ok}: {e}"));
+            }
+            for (bad, shown) in [
+                (lo * 0.99, format!("{}", lo * 0.99)),
+                (hi * 1.01, format!("{}", hi * 1.01)),
+                (1e-9, "1e-9".to_owned()),
+                (0.0, "0".to_owned()),
+            ] {
+                let err = daemon(format!("{key} = {bad:?}")).unwrap_err().to_string();
+                assert!(
+                    err.contains(&format!("`daemon.{key}` = {shown}:"))
+                        && err.contains(&format!("[{lo}, {hi}] s")),
+                    "{key} = {bad}: {err}"
+                );
+            }
+        }
+        // The wake-up slice is the event waits'.
+        assert_eq!(
+            DAEMON_WAKE_S,
+            crate::services::EVENT_WAIT_SLICE.as_secs_f64()
+        );
+        let max = DAEMON_CHANNEL_CAPACITY_MAX;
+        assert_eq!(
+            daemon(format!("channel_capacity = {max}"))
+                .unwrap()
+                .channel_capacity,
+            max
+        );
+        for bad in [0, max + 1, 1 << 24, i64::MAX as usize] {
+            let err = daemon(format!("channel_capacity = {bad}"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                err.contains(&format!("`daemon.channel_capacity` = {bad}:"))
+                    && err.contains(&format!("[1, {max}] samples")),
+                "{bad}: {err}"
+            );
+        }
+        // What the bound's documentation says it preallocates: about 100 bytes a slot, 55 MB.
+        let slot = std::mem::size_of::<crate::wire::ImuSample>() + 16;
+        assert!(slot <= 104 && max * slot <= 55_000_000, "{slot} B a slot");
     }
 
     #[test]

@@ -21,11 +21,11 @@ impl ConfigFile {
             }
         };
         let channel_capacity = dm.channel_capacity.unwrap_or(DAEMON_CHANNEL_CAPACITY);
-        if !(1..=1 << 24).contains(&channel_capacity) {
-            return Err(invalid(
+        if !(1..=DAEMON_CHANNEL_CAPACITY_MAX).contains(&channel_capacity) {
+            return Err(invalid_count(
                 "daemon.channel_capacity",
-                channel_capacity,
-                "must be in 1..=16777216",
+                channel_capacity as u64,
+                "must be in [1, 524288] samples (each preallocated at start)",
             ));
         }
         let domain = dm
@@ -60,45 +60,57 @@ impl ConfigFile {
                 "must be an absolute path",
             ));
         }
+        // Each range's reason is beside its bound in `defaults`.
+        let get = |v: Option<f64>, default: f64| v.unwrap_or(default);
         let daemon = DaemonSettings {
             domain,
             lossless,
             channel_capacity,
-            bias_period_s: period(
+            bias_period_s: Positive::in_range(
                 "daemon.bias_period_s",
-                dm.bias_period_s.unwrap_or(DAEMON_BIAS_PERIOD_S),
+                get(dm.bias_period_s, DAEMON_BIAS_PERIOD_S),
+                DAEMON_BIAS_PERIOD_MIN_S,
+                DAEMON_OUTPUT_PERIOD_MAX_S,
+                "must be in [0.1, 60] s of sensor time",
             )?,
-            diagnostics_period_s: period(
+            diagnostics_period_s: Positive::in_range(
                 "daemon.diagnostics_period_s",
-                dm.diagnostics_period_s
-                    .unwrap_or(DAEMON_DIAGNOSTICS_PERIOD_S),
+                get(dm.diagnostics_period_s, DAEMON_DIAGNOSTICS_PERIOD_S),
+                DAEMON_WAKE_S,
+                DAEMON_OUTPUT_PERIOD_MAX_S,
+                "must be in [0.05, 60] s",
             )?,
-            health_period_s: period(
+            health_period_s: Positive::in_range(
                 "daemon.health_period_s",
-                dm.health_period_s.unwrap_or(DAEMON_HEALTH_PERIOD_S),
+                get(dm.health_period_s, DAEMON_HEALTH_PERIOD_S),
+                DAEMON_WAKE_S,
+                DAEMON_HEALTH_PERIOD_MAX_S,
+                "must be in [0.05, 3600] s",
             )?,
             checkpoint_path: dm.checkpoint_path.clone(),
             runtime_dir: dm.runtime_dir.clone(),
-            checkpoint_period_s: period(
+            checkpoint_period_s: Positive::in_range(
                 "daemon.checkpoint_period_s",
-                dm.checkpoint_period_s.unwrap_or(DAEMON_CHECKPOINT_PERIOD_S),
+                get(dm.checkpoint_period_s, DAEMON_CHECKPOINT_PERIOD_S),
+                DAEMON_WAKE_S,
+                DAEMON_CHECKPOINT_PERIOD_MAX_S,
+                "must be in [0.05, 86400] s",
             )?,
-            stall_timeout_s: period(
+            stall_timeout_s: Positive::in_range(
                 "daemon.stall_timeout_s",
-                dm.stall_timeout_s.unwrap_or(DAEMON_STALL_TIMEOUT_S),
+                get(dm.stall_timeout_s, DAEMON_STALL_TIMEOUT_S),
+                DAEMON_WAKE_S,
+                DAEMON_STALL_TIMEOUT_MAX_S,
+                "must be in [0.05, 60] s",
             )?,
-            producer_takeover_s: period(
+            producer_takeover_s: Positive::in_range(
                 "daemon.producer_takeover_s",
-                dm.producer_takeover_s.unwrap_or(DAEMON_PRODUCER_TAKEOVER_S),
+                get(dm.producer_takeover_s, DAEMON_PRODUCER_TAKEOVER_S),
+                DAEMON_WAKE_S,
+                DAEMON_PRODUCER_TAKEOVER_MAX_S,
+                "must be in [0.05, 60] s",
             )?,
         };
         Ok(daemon)
     }
-}
-
-/// A daemon period or timeout: positive and at most [`crate::injection::MAX_TIME_S`] (1e300 s
-/// passed as positive and panicked where the daemon made a duration of it).
-fn period(key: &'static str, v: f64) -> Result<Positive, ConfigError> {
-    let max = crate::injection::MAX_TIME_S;
-    Positive::in_range(key, v, 0.0, max, "must be in (0, 1e9] s")
 }
