@@ -168,14 +168,32 @@ pub fn error_message(e: &anyhow::Error) -> String {
     msg
 }
 
+/// Exit code of every corridor binary for a usage error: the argument parser's own, and a
+/// flag's value outside the range of the key it sets.
+pub const EXIT_USAGE: u8 = 2;
+
+/// Exit code of every corridor binary when no daemon answered on the domain within its wait
+/// ([`ClientError::NoPeer`]; `corridor status` also when the daemon is shutting down). Not
+/// [`EXIT_USAGE`]: `corridor status` gave 2 for both, so a script could not tell a mistyped
+/// flag from a daemon that is down, and the tools gave 1, as for any other error.
+pub const EXIT_NO_DAEMON: u8 = 3;
+
 /// The exit of every corridor binary: success, or `error: ...` ([`error_message`]) once on
-/// stderr and a failure code.
+/// stderr and a failure code: [`EXIT_NO_DAEMON`] when the cause is that no daemon answered,
+/// 1 otherwise.
 pub fn exit(result: anyhow::Result<()>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             say_err!("error: {}", error_message(&e));
-            ExitCode::FAILURE
+            let no_daemon = e
+                .chain()
+                .any(|c| matches!(c.downcast_ref(), Some(ClientError::NoPeer { .. })));
+            if no_daemon {
+                ExitCode::from(EXIT_NO_DAEMON)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }

@@ -277,3 +277,46 @@ fn a_reader_tool_without_a_daemon_says_so_as_status_does_and_a_bad_out_at_once()
     assert_eq!(err.lines().count(), 1, "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn no_daemon_is_exit_code_3_in_every_tool_a_usage_error_2_and_help_says_so() {
+    // As `corridor status`: they exited 1 for no daemon, as for any error, and status 2, as
+    // for a usage error.
+    let imu = short_log("nodaemon", 10);
+    let out = std::env::temp_dir().join(format!("corridor-nodaemon-{}", std::process::id()));
+    for (exe, args) in [
+        (
+            env!("CARGO_BIN_EXE_corridor-replay"),
+            vec!["--imu", imu.to_str().unwrap()],
+        ),
+        (
+            env!("CARGO_BIN_EXE_corridor-log"),
+            vec!["--out", out.to_str().unwrap()],
+        ),
+        (env!("CARGO_BIN_EXE_corridor-pdr"), vec![]),
+    ] {
+        let o = tool(
+            exe,
+            &[
+                &["--domain", "eco_cli_nobody", "--wait-s", "0.3"][..],
+                &args,
+            ]
+            .concat(),
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(3), "{exe}: {err}");
+        assert!(err.contains("no corridor daemon answers"), "{exe}: {err}");
+        assert_eq!(
+            tool(exe, &["--no-such-flag"]).status.code(),
+            Some(2),
+            "{exe}"
+        );
+        let help = String::from_utf8_lossy(&tool(exe, &["--help"]).stdout).into_owned();
+        assert!(
+            help.contains("Exit code: 0 success, 1 error, 2 usage error, 3 no daemon"),
+            "{exe}: {help}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_file(&imu);
+}

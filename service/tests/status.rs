@@ -1,6 +1,6 @@
 //! `corridor status` against a real `corridor serve` process (domains `eco_status*`): the
-//! one-screen health after a replayed stream, `--watch` refreshing, and exit code 2 when no
-//! daemon answers.
+//! one-screen health after a replayed stream, `--watch` refreshing, and exit code 3 when no
+//! daemon answers (2 is a usage error's).
 
 use corridor_client::{Delivery, Domain, Producer};
 use corridor_service::runner::{heading_aid, run_log};
@@ -202,9 +202,13 @@ fn status_shows_the_daemons_counters_and_final_bias() {
 }
 
 #[test]
-fn status_exits_2_when_no_daemon_answers() {
+fn status_exits_3_when_no_daemon_answers_and_2_on_a_usage_error() {
     let o = status("eco_status_nobody", "0.5", &[]);
-    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(o.status.code(), Some(3));
+    // Not the code of a usage error: a script could not tell a mistyped flag from a daemon
+    // that is down (both were 2).
+    let usage = status("eco_status_nobody", "0.5", &["--no-such-flag"]);
+    assert_eq!(usage.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         err.contains("no corridor daemon answers on domain \"eco_status_nobody\""),

@@ -10,7 +10,7 @@ use std::io::Write;
     name = "corridor-wire",
     version,
     about = "Print the corridor wire types as a C header or as layout JSON",
-    after_help = "Examples:\n  corridor-wire c-header > client/c/corridor_wire.h\n  corridor-wire layout > layout.json"
+    after_help = "Examples:\n  corridor-wire c-header > client/c/corridor_wire.h\n  corridor-wire layout > layout.json\nExit code: 0 success, 1 error (writing the output), 2 usage error."
 )]
 struct Args {
     #[command(subcommand)]

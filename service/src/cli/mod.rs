@@ -30,7 +30,7 @@ use std::process::ExitCode;
     name = "corridor",
     version,
     about = "Gyro-bias and attitude estimation for foot-mounted IMUs from map headings",
-    after_help = "Examples:\n  corridor demo\n  corridor run --imu imu.csv --config configs/gdins.toml --out out/run\n  corridor serve --config configs/service.toml --domain lab\n  corridor <COMMAND> --help"
+    after_help = "Examples:\n  corridor demo\n  corridor run --imu imu.csv --config configs/gdins.toml --out out/run\n  corridor serve --config configs/service.toml --domain lab\n  corridor <COMMAND> --help\nExit code: 0 success, 1 error, 2 usage error, 3 no daemon answered (corridor status)."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -61,7 +61,7 @@ const STATUS_EXAMPLES: &str = "Examples:
   corridor status --domain lab
   corridor status --domain lab --watch --checkpoint /var/lib/corridor/bias.bin
   corridor status --domain lab --timeout-s 2 || systemctl restart corridor
-Exit code: 0 healthy, 2 no daemon answered within the timeout (or it is shutting down), 1 other errors.";
+Exit code: 0 healthy, 1 error (a --checkpoint that is no checkpoint, ...), 2 usage error, 3 no daemon answered within the timeout (or it is shutting down).";
 
 const COMPLETIONS_EXAMPLES: &str = "Examples:
   corridor completions bash > ~/.local/share/bash-completion/completions/corridor
@@ -89,7 +89,7 @@ enum Command {
     #[command(after_help = SERVE_EXAMPLES)]
     Serve(serve::ServeArgs),
     /// The health of the daemon of a domain: rates, counters, losses, latency, bias and its σ,
-    /// convergence (exit code 0 when healthy, 2 when no daemon answers).
+    /// convergence (exit code 0 when healthy, 3 when no daemon answers).
     #[command(after_help = STATUS_EXAMPLES)]
     Status(status::StatusArgs),
     /// Print the shell completion script of corridor.
@@ -126,7 +126,7 @@ pub fn main() -> ExitCode {
             }) =>
         {
             corridor_client::say_err!("error: {}", corridor_client::error_message(&e));
-            ExitCode::from(2)
+            ExitCode::from(corridor_client::EXIT_USAGE)
         }
         Err(e) => corridor_client::exit(Err(e)),
     }

@@ -4,15 +4,12 @@
 use anyhow::Result;
 use clap::Args;
 use corridor_client::status::{StatusReader, checkpoint_line};
-use corridor_client::{ClientError, Domain};
+use corridor_client::{ClientError, Domain, EXIT_NO_DAEMON};
 use corridor_shared::injection::parse_wait_s;
 use corridor_shared::services::DEFAULT_DOMAIN;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
-
-/// Exit code when no daemon answered in time or it is shutting down.
-pub(super) const EXIT_NO_DAEMON: u8 = 2;
 
 /// Exit code when the daemon is healthy but `--checkpoint` names something that cannot be its
 /// checkpoint (a directory, a file that cannot be read or is no checkpoint).
