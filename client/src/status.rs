@@ -103,6 +103,18 @@ impl Status {
             "producers:        changes {}, samples of a second producer refused {}, daemon life {}",
             d.producer_changes, d.foreign_samples, d.lives
         );
+        if d.lives > 1 {
+            // A restarted daemon continues its input counters from its accounting file, and
+            // starts its estimator's afresh: "received 25193, accepted 3000", with the losses
+            // of an earlier life, read as counts that do not add up (a review).
+            let _ = writeln!(
+                s,
+                "                  (received, losses, duplicate seq, late, not received, producers \
+                 and angles count over all {} daemon lives of this domain; accepted, stances, \
+                 heading updates, the other rejections and external headings over this life)",
+                d.lives
+            );
+        }
         let _ = writeln!(
             s,
             "angles:           dropped {}, with roll or pitch (not fused) {}; external headings \
@@ -587,6 +599,28 @@ mod tests {
         let screen = running.render("d");
         assert!(
             screen.contains("tracking (sensor time 12.500 s)"),
+            "{screen}"
+        );
+    }
+
+    #[test]
+    fn a_restarted_daemons_screen_says_which_counts_span_its_lives() {
+        let mut status = Status {
+            diagnostics: Diagnostics {
+                received: 25193,
+                accepted: 3000,
+                lives: 1,
+                ..Diagnostics::default()
+            },
+            previous: None,
+            bias: None,
+            missed: 0,
+        };
+        assert!(!status.render("d").contains("daemon lives"));
+        status.diagnostics.lives = 3;
+        let screen = status.render("d");
+        assert!(
+            screen.contains("received, losses, duplicate seq, late, not received, producers and angles count over all 3 daemon lives of this domain; accepted, stances, heading updates, the other rejections and external headings over this life"),
             "{screen}"
         );
     }
