@@ -89,7 +89,7 @@ fn status_shows_the_daemons_counters_and_final_bias() {
     let checkpoint =
         std::env::temp_dir().join(format!("corridor-eco-status-{}.bin", std::process::id()));
     let _ = std::fs::remove_file(&checkpoint);
-    let _daemon = Daemon::start(name, &checkpoint);
+    let daemon = Daemon::start(name, &checkpoint);
     let log = read_imu_csv(
         &root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
         &ImuCsvOptions::default(),
@@ -182,6 +182,7 @@ fn status_shows_the_daemons_counters_and_final_bias() {
     let mut watch = corridor()
         .args(["status", "--watch", "--domain", name])
         .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
         .spawn()
         .unwrap();
     let out = watch.stdout.take().unwrap();
@@ -197,7 +198,22 @@ fn status_shows_the_daemons_counters_and_final_bias() {
     let first = rx.recv_timeout(WAIT).expect("a first screen");
     let second = rx.recv_timeout(WAIT).expect("a refreshed screen");
     assert_ne!(first, second);
+    // The daemon stopping ends the watch with exit code 3, said as a daemon shutting down,
+    // without the hint on a secured domain's runtime directory (the daemon was found: the
+    // hint sent its reader looking for a directory that had nothing to do with it).
+    drop(daemon);
+    let start = std::time::Instant::now();
+    while watch.try_wait().unwrap().is_none() && start.elapsed() < WAIT {
+        std::thread::sleep(Duration::from_millis(20));
+    }
     terminate(&mut watch);
+    let o = watch.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(
+        err.contains("the daemon is shutting down") && !err.contains("--runtime-dir"),
+        "{err}"
+    );
     let _ = std::fs::remove_file(&checkpoint);
 }
 

@@ -57,11 +57,12 @@ fn checkpoint_status(path: &std::path::Path) -> (String, bool) {
 pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
     let domain = Domain::new(&a.domain)?;
     let timeout = Duration::from_secs_f64(a.timeout_s);
-    let no_daemon = |why: &str| {
+    // The hint on a secured domain's runtime directory only when nothing answered at all (it
+    // was added to "the daemon is shutting down" as well, a daemon that had been found).
+    let no_daemon = |why: &str, hint: String| {
         eprintln!(
-            "error: no corridor daemon answers on domain {:?}: {why}{}",
+            "error: no corridor daemon answers on domain {:?}: {why}{hint}",
             domain.name(),
-            corridor_client::runtime_dir_hint()
         );
         Ok(ExitCode::from(EXIT_NO_DAEMON))
     };
@@ -77,7 +78,15 @@ pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
     loop {
         let status = match reader.next(timeout, first) {
             Ok(Some(s)) => s,
-            Ok(None) => return no_daemon(&format!("no diagnostics within {timeout:?}")),
+            Ok(None) => {
+                // (After a first screen the daemon had been found.)
+                let hint = if first {
+                    corridor_client::runtime_dir_hint()
+                } else {
+                    String::new()
+                };
+                return no_daemon(&format!("no diagnostics within {timeout:?}"), hint);
+            }
             Err(ClientError::Interrupted) => return Ok(ExitCode::SUCCESS),
             Err(e) => return Err(e.into()),
         };
@@ -93,7 +102,7 @@ pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
             readable
         });
         if !status.healthy() {
-            return no_daemon("the daemon is shutting down");
+            return no_daemon("the daemon is shutting down", String::new());
         }
         if !a.watch {
             return Ok(if checkpoint_readable {
