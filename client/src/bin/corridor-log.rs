@@ -48,6 +48,26 @@ fn main() -> std::process::ExitCode {
     corridor_client::exit(run())
 }
 
+/// What is said of a stream whose end never arrived: why, as far as this logger can tell. (A
+/// logger stopped by Ctrl-C or SIGTERM within a stream was given the causes of an idle timeout,
+/// a pause in the data or a stalled logger.)
+fn open_stream_note(stopped: RecordStop, rows: u64) -> String {
+    let why = match stopped {
+        RecordStop::Interrupted | RecordStop::Aborted => {
+            "this logger was stopped within the stream"
+        }
+        _ => {
+            "a pause in the data longer than --idle-timeout-s, messages the daemon discarded \
+             while this logger stalled, or a producer that stopped without its end-of-stream \
+             marker"
+        }
+    };
+    format!(
+        "open stream: its end never arrived; {rows} attitude rows of it recorded, what the \
+         daemon published after them not received ({why})"
+    )
+}
+
 fn run() -> Result<()> {
     let a = Args::parse();
     let domain = Domain::new(&a.domain)?;
@@ -97,13 +117,7 @@ fn run() -> Result<()> {
     // the idle timeout, or after the daemon discarded a stalled logger's messages).
     let open_stream = r.open_stream_rows > 0;
     if open_stream {
-        corridor_client::say!(
-            "open stream: its end never arrived; {} attitude rows of it recorded, what the \
-             daemon published after them not received (a pause in the data longer than \
-             --idle-timeout-s, messages the daemon discarded while this logger stalled, or a \
-             producer that stopped without its end-of-stream marker)",
-            r.open_stream_rows
-        );
+        corridor_client::say!("{}", open_stream_note(r.stopped, r.open_stream_rows));
     }
     // Every attitude message the daemon published up to the last one received is here:
     // published = before start + received + missing.
@@ -140,4 +154,21 @@ fn run() -> Result<()> {
         anyhow::bail!("the recording is incomplete: it timed out within a stream");
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_interrupted_logger_says_it_was_stopped_not_why_the_data_paused() {
+        let note = open_stream_note(RecordStop::Interrupted, 1548);
+        assert!(
+            note.contains("1548 attitude rows") && note.contains("this logger was stopped"),
+            "{note}"
+        );
+        assert!(!note.contains("--idle-timeout-s"), "{note}");
+        let note = open_stream_note(RecordStop::IdleTimeout, 7);
+        assert!(note.contains("longer than --idle-timeout-s"), "{note}");
+    }
 }
