@@ -117,6 +117,11 @@ pub enum TrackStop {
     Interrupted,
     /// The caller's `abort` flag was set.
     Aborted,
+    /// The daemon stopped within the stream and no daemon came back within the wait given to
+    /// [`Tracker::open`]: its nav publisher left the service (a clean stop; a killed daemon's
+    /// stays until iceoryx2 cleans up its node). `corridor-pdr` waited on for ever, saying
+    /// nothing (a review). A daemon back within the wait is followed (a new track).
+    DaemonStopped,
 }
 
 /// What following one stream got.
@@ -141,18 +146,23 @@ pub struct Track {
 #[derive(Debug)]
 pub struct Tracker {
     nav: Subscriber<NavSample>,
+    /// How long a daemon that stopped may take to come back.
+    wait: Duration,
 }
 
 impl Tracker {
-    /// Attaches to the daemon's nav stream in `domain`, waiting up to `wait` for it.
+    /// Attaches to the daemon's nav stream in `domain`, waiting up to `wait` for it (and as
+    /// long for a daemon that stopped within a stream to come back).
     pub fn open(domain: &Domain, node_name: &str, wait: Duration) -> Result<Self, ClientError> {
         Ok(Self {
             nav: Subscriber::open(domain, node_name, wait)?,
+            wait,
         })
     }
 
-    /// Follows one stream until its end-of-stream nav sample, SIGINT/SIGTERM, `abort`, or
-    /// (when `idle_timeout` is set) nothing for that long; calls `on_stride` for every stride.
+    /// Follows one stream until its end-of-stream nav sample, SIGINT/SIGTERM, `abort`, the
+    /// daemon's stop (not back within the wait of [`Tracker::open`]), or (when `idle_timeout`
+    /// is set) nothing for that long; calls `on_stride` for every stride.
     /// A stream that had ended before the reader attached is not followed.
     /// `poll` is the longest single wait, so it sees `abort`.
     pub fn run(
@@ -173,6 +183,7 @@ impl Tracker {
         let mut strides = Strides::default();
         let mut last_rx = Instant::now();
         let mut first = true;
+        let mut gone_since: Option<Instant> = None;
         t.stopped = loop {
             if abort.load(Ordering::Relaxed) {
                 break TrackStop::Aborted;
@@ -183,12 +194,18 @@ impl Tracker {
                     if idle_timeout.is_some_and(|i| last_rx.elapsed() >= i) {
                         break TrackStop::IdleTimeout;
                     }
+                    // (Nothing was waiting: whatever it sent before it left has been read.)
+                    if self.nav.publishers() > 0 {
+                        gone_since = None;
+                    } else if gone_since.get_or_insert_with(Instant::now).elapsed() >= self.wait {
+                        break TrackStop::DaemonStopped;
+                    }
                     continue;
                 }
                 Err(ClientError::Interrupted) => break TrackStop::Interrupted,
                 Err(e) => return Err(e),
             };
-            last_rx = Instant::now();
+            (last_rx, gone_since) = (Instant::now(), None);
             // An end of stream as the first message is the daemon's history (the nav stream
             // keeps its last message for late readers) of a stream that ended before this
             // reader attached: passed over (it ended a track started between two streams at

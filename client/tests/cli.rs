@@ -3,7 +3,7 @@
 //! `--help` has examples.
 
 use corridor_shared::services::{Access, Delivery, Domain};
-use corridor_shared::wire::ImuSample;
+use corridor_shared::wire::{ImuSample, NavSample};
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use std::path::{Path, PathBuf};
@@ -319,4 +319,80 @@ fn no_daemon_is_exit_code_3_in_every_tool_a_usage_error_2_and_help_says_so() {
     }
     let _ = std::fs::remove_dir_all(&out);
     let _ = std::fs::remove_file(&imu);
+}
+
+#[test]
+fn pdr_stops_and_says_so_when_the_daemon_stops_within_a_stream() {
+    // It waited for ever, saying nothing, after a daemon's clean stop (a review). Now it waits
+    // --wait-s for the daemon to come back, then fails.
+    let name = "eco_cli_pdr_daemon_stops";
+    let domain = Domain::new(name).unwrap();
+    let node = domain
+        .node("eco-fake-daemon-nav", SignalHandlingMode::Disabled)
+        .unwrap();
+    let service = domain
+        .open::<NavSample>(&node, Access::Owner(Delivery::Live))
+        .unwrap();
+    let event = domain
+        .open_event(&node, corridor_shared::services::NAV_SERVICE, true)
+        .unwrap();
+    let publisher = service.publisher_builder().create().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_corridor-pdr"))
+        .args(["--domain", name, "--wait-s", "2"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while service.dynamic_config().number_of_subscribers() == 0 {
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "pdr never attached"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let nav = |stance: u64| NavSample {
+        seq: stance - 1,
+        stance,
+        p_m: [stance as f64, 0.0, 0.0],
+        imu_seq: stance * 100,
+        t_s: stance as f64,
+        ..NavSample::default()
+    };
+    for stance in 1..=2 {
+        publisher.send_copy(nav(stance)).unwrap();
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    // A daemon back within --wait-s is followed.
+    drop(publisher);
+    std::thread::sleep(Duration::from_millis(700));
+    let publisher = service.publisher_builder().create().unwrap();
+    publisher.send_copy(nav(3)).unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    drop((publisher, event, service, node));
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            panic!("corridor-pdr still waits 30 s after the daemon stopped");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // Not before --wait-s: a daemon may come back within it.
+    assert!(
+        start.elapsed() >= Duration::from_secs(2),
+        "{:?}",
+        start.elapsed()
+    );
+    let o = child.wait_with_output().unwrap();
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert_eq!(o.status.code(), Some(1), "{out}{err}");
+    assert!(out.contains("daemon stopped: 3 strides received"), "{out}");
+    assert!(
+        err.contains("stopped within the stream and did not come back within --wait-s (2 s)"),
+        "{err}"
+    );
 }

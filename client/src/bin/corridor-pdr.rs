@@ -1,9 +1,10 @@
 //! `corridor-pdr`: prints the daemon's stride-by-stride positions (one line per stance,
-//! [`corridor_client::track`]) until the producer finishes or Ctrl-C. `sensor_yaw_deg` is the
+//! [`corridor_client::track`]) until the producer finishes, the daemon stops and does not
+//! come back within `--wait-s` (an error: the walk's end was not received) or Ctrl-C. `sensor_yaw_deg` is the
 //! sensor's yaw in the map frame, not the walking direction: a sensor sits turned on the shoe
 //! (the bundled walks' by about 180°; a review read it as the direction walked).
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Parser;
 use corridor_client::Domain;
 use corridor_client::track::{TrackStop, Tracker};
@@ -24,7 +25,8 @@ struct Args {
     /// iceoryx2 domain of the daemon.
     #[arg(long, default_value = DEFAULT_DOMAIN, value_parser = Domain::parse_name)]
     domain: String,
-    /// How long to wait for the daemon, s.
+    /// How long to wait for the daemon, s: at the start, and for one that stopped within a
+    /// stream to come back.
     #[arg(long, default_value_t = 30.0, value_parser = parse_time_s)]
     wait_s: f64,
     /// Keep going after an end of stream (follow the next producer).
@@ -90,6 +92,7 @@ fn run() -> Result<()> {
         // nav messages this reader missed (it fell behind; before, neither was said, and the
         // daemon's count was printed as if every stride had been received).
         let ended = t.stopped == TrackStop::EndOfStream;
+        let daemon_stopped = t.stopped == TrackStop::DaemonStopped;
         let daemon = match t.end_stances {
             Some(n) if n != t.strides => format!(" of the daemon's {n}"),
             _ => String::new(),
@@ -102,11 +105,25 @@ fn run() -> Result<()> {
             &mut out,
             format_args!(
                 "{}: {} strides received{daemon}, path {:.2} m over them{missed}",
-                if ended { "end of stream" } else { "stopped" },
+                if ended {
+                    "end of stream"
+                } else if daemon_stopped {
+                    "daemon stopped"
+                } else {
+                    "stopped"
+                },
                 t.strides,
                 t.path_m
             ),
         );
+        if daemon_stopped {
+            bail!(
+                "the daemon of domain {:?} stopped within the stream and did not come back \
+                 within --wait-s ({} s): the strides after the last one above were not received",
+                a.domain,
+                a.wait_s
+            );
+        }
         if !ended || !a.follow {
             break;
         }

@@ -300,6 +300,7 @@ fn demo_pdr(
         TrackStop::EndOfStream => Ok(got),
         TrackStop::Aborted => bail!("stopped: the replay failed"),
         TrackStop::IdleTimeout => bail!("nothing from the daemon for {DEMO_WAIT:?}"),
+        TrackStop::DaemonStopped => bail!("the daemon stopped within the stream"),
         TrackStop::Interrupted => Err(ClientError::Interrupted.into()),
     }
 }
