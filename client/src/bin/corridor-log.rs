@@ -57,9 +57,9 @@ fn open_stream_note(stopped: RecordStop, rows: u64) -> String {
             "this logger was stopped within the stream"
         }
         _ => {
-            "a pause in the data longer than --idle-timeout-s, messages the daemon discarded \
-             while this logger stalled, or a producer that stopped without its end-of-stream \
-             marker"
+            "the daemon stopped, a pause in the data longer than --idle-timeout-s, messages the \
+             daemon discarded while this logger stalled, or a producer that stopped without its \
+             end-of-stream marker (corridor status --domain D says which)"
         }
     };
     format!(
@@ -170,5 +170,7 @@ mod tests {
         assert!(!note.contains("--idle-timeout-s"), "{note}");
         let note = open_stream_note(RecordStop::IdleTimeout, 7);
         assert!(note.contains("longer than --idle-timeout-s"), "{note}");
+        // A daemon stopped within the stream was not among the causes.
+        assert!(note.contains("the daemon stopped"), "{note}");
     }
 }
