@@ -41,7 +41,7 @@ pub const DAEMON_CHANNEL_CAPACITY: usize = 4096;
 /// message's tag and the channel's stamp): 2^19 slots are about 55 MB and hold 44 min at
 /// 200 Hz. The estimator takes a sample in microseconds, so a backlog of minutes means it
 /// cannot keep up at all, and more only costs memory (2^24 was accepted and took 1.7 GB at
-/// start).
+/// start, beyond the 256 MB `MemoryMax` of the shipped unit, `configs/corridor.service`).
 pub const DAEMON_CHANNEL_CAPACITY_MAX: usize = 1 << 19;
 
 /// `daemon.domain`.
@@ -96,7 +96,8 @@ pub const DAEMON_STALL_TIMEOUT_S: f64 = 1.0;
 /// Longest `daemon.stall_timeout_s`, s. While a publish waits on a consumer's full buffer the
 /// estimator thread waits with it: no output to anyone, no diagnostics, the input queue
 /// filling, and a stop (SIGTERM) waits for it. A dead consumer held the daemon for as long as
-/// 1e9 s allowed.
+/// 1e9 s allowed. (Under the shipped unit, `configs/corridor.service`, a stop has 10 s before
+/// SIGKILL, which costs the last checkpoint: keep it well below that there.)
 pub const DAEMON_STALL_TIMEOUT_MAX_S: f64 = 60.0;
 
 /// `daemon.producer_takeover_s`: another IMU producer takes over from the followed one once this
