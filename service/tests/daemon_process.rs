@@ -340,6 +340,8 @@ fn second_daemon_on_the_same_domain_is_refused() {
     assert!(
         err.contains(&format!(
             "another corridor daemon already serves domain \"{name}\""
+        )) && err.contains(&format!(
+            "stop it first, or serve another domain (--domain); `corridor status --domain {name}`"
         )),
         "{err}"
     );

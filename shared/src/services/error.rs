@@ -70,9 +70,12 @@ pub enum ServiceError {
         /// The path and what is wrong.
         detail: String,
     },
-    /// Another daemon already serves this domain.
+    /// Another daemon already serves this domain (said with what to do: it said only that the
+    /// service existed).
     #[error(
-        "another corridor daemon already serves domain {domain:?} (service {DAEMON_SERVICE:?} exists)"
+        "another corridor daemon already serves domain {domain:?} (service {DAEMON_SERVICE:?} \
+         exists): stop it first, or serve another domain (--domain); `corridor status --domain \
+         {domain}` shows it"
     )]
     DaemonAlreadyRunning {
         /// Domain.
