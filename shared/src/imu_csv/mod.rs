@@ -48,6 +48,7 @@ use std::fmt;
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
+mod lines;
 mod reader;
 mod row;
 mod sniff;

@@ -20,7 +20,8 @@
 //!
 //! Files: this one holds [`Estimator`] and its per-sample pipeline; `running.rs` the step once
 //! the filter runs, and the estimate it gives; `types.rs` the data it
-//! takes and gives (samples, estimates, counters, warm start); `alignment.rs` the initial rest
+//! takes and gives (samples, estimates, counters, warm start); `external_heading.rs` when a
+//! heading handed in from outside is used, and why one is refused; `alignment.rs` the initial rest
 //! (or first stance) that starts the filter, and a warm start; `fast_start.rs` a start in fast
 //! gait taken back to the first stance it could have started on; `observations.rs` what happens
 //! once per stance (calibration and heading observations); `association.rs` the weighted
@@ -38,6 +39,7 @@
 
 mod alignment;
 mod association;
+mod external_heading;
 mod fast_start;
 mod gap_copy;
 mod gaps;
@@ -53,11 +55,13 @@ mod stride_memory;
 mod types;
 
 pub use association::association_weight;
-use types::QueuedHeading;
+use external_heading::QueuedHeading;
+pub use external_heading::{
+    EXTERNAL_HEADING_LEAD_S, EXTERNAL_HEADING_MAX_AGE_S, EXTERNAL_HEADING_MAX_NIS, HeadingRefused,
+};
 pub use types::{
-    Counters, EXTERNAL_HEADING_LEAD_S, EXTERNAL_HEADING_MAX_AGE_S, EXTERNAL_HEADING_MAX_NIS,
-    Estimate, GRAVITY_TOLERANCE, GapCrossing, HeadingEvent, HeadingRefused, ImuInput, Notice,
-    Phase, SampleError, WarmStart, WarmStartError,
+    Counters, Estimate, GRAVITY_TOLERANCE, GapCrossing, HeadingEvent, ImuInput, Notice, Phase,
+    SampleError, WarmStart, WarmStartError,
 };
 
 use fast_start::Start;

@@ -279,48 +279,16 @@ pub struct Counters {
     /// used them (one is kept, the newest).
     pub headings_superseded: u64,
     /// External heading observations refused at their stance: further than
-    /// [`EXTERNAL_HEADING_MAX_NIS`] (in NIS) from the filter's prediction.
+    /// [`EXTERNAL_HEADING_MAX_NIS`](super::EXTERNAL_HEADING_MAX_NIS) (in NIS) from the filter's prediction.
     pub headings_outside_gate: u64,
     /// External heading observations not used because their time had passed: no stance was
-    /// observed within [`EXTERNAL_HEADING_MAX_AGE_S`] after their `t_s`, or they were still
+    /// observed within [`EXTERNAL_HEADING_MAX_AGE_S`](super::EXTERNAL_HEADING_MAX_AGE_S) after their `t_s`, or they were still
     /// waiting for a stance when their stream ended or the daemon stopped
     /// ([`crate::core::Estimator::expire_pending_heading`]).
     pub headings_expired: u64,
     /// External heading observations fused at their stance in an update that the health check
     /// then undid (not counted as used; not used again).
     pub headings_undone: u64,
-}
-
-/// The NIS beyond which an external heading observation is refused, not fused (16: four σ of
-/// the prediction and the observation together; the χ² probability of a right one beyond it is
-/// 6e-5). A heading 90° off with σ 1e-6 used to be fused as given and threw the bias to
-/// 0.04 rad/s.
-pub const EXTERNAL_HEADING_MAX_NIS: f64 = 16.0;
-
-/// How long after its time an external heading may still be used, s: at the first stance
-/// observed from [`EXTERNAL_HEADING_LEAD_S`] before its `t_s` on, if that stance is observed
-/// within this after it; otherwise it is counted as expired. A stride cycle lasts about 1.1 s on
-/// the gdins walks, so a heading given during a swing is used at the next stance, and one older
-/// than two seconds describes a foot placement already past (it was fused at whatever stance
-/// came next, however late: a review).
-pub const EXTERNAL_HEADING_MAX_AGE_S: f64 = 2.0;
-
-/// How far before an external heading's `t_s` a stance may be observed and still use it, s: a
-/// stance is observed `heading.obs_delay_s` (0.05 s) after it begins and lasts 0.3–0.6 s
-/// walking, so a heading stamped within the stance in progress is that stance's. One stamped
-/// later waits for its stance (a replay may hand headings in ahead of the samples).
-pub const EXTERNAL_HEADING_LEAD_S: f64 = 0.5;
-
-/// An external heading waiting for its stance ([`crate::core::Estimator::queue_heading`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct QueuedHeading {
-    /// The time it refers to, on the estimator's continuous clock (its stamp less the clock's
-    /// offset when it was handed in: [`crate::core::clock::SampleClock::offset_s`]), s.
-    pub t_s: f64,
-    /// The walking (foot) heading in the map frame, rad.
-    pub heading_rad: f64,
-    /// Its σ, rad.
-    pub sd_rad: f64,
 }
 
 /// How far (a fraction) the mean specific force of a rest or of a first stance may lie from
@@ -529,20 +497,6 @@ impl Default for Estimate {
             stride: None,
         }
     }
-}
-
-/// An external heading observation that cannot be fused.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[error(
-    "heading observation refused: t_s {t_s:e} s, heading {heading_rad:e} rad, σ {sd_rad:e} rad (finite time and heading and σ in (0, π] needed)"
-)]
-pub struct HeadingRefused {
-    /// The time given, s.
-    pub t_s: f64,
-    /// The heading given.
-    pub heading_rad: f64,
-    /// Its σ.
-    pub sd_rad: f64,
 }
 
 /// How a gap in the data (a step longer than `estimator.max_dt_s`) was crossed.

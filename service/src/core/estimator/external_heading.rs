@@ -1,0 +1,48 @@
+//! An external heading (a map matcher's, over the daemon's angle stream): when it is used,
+//! how far it may lie from the prediction, and why one is refused.
+
+/// The NIS beyond which an external heading observation is refused, not fused (16: four σ of
+/// the prediction and the observation together; the χ² probability of a right one beyond it is
+/// 6e-5). A heading 90° off with σ 1e-6 used to be fused as given and threw the bias to
+/// 0.04 rad/s.
+pub const EXTERNAL_HEADING_MAX_NIS: f64 = 16.0;
+
+/// How long after its time an external heading may still be used, s: at the first stance
+/// observed from [`EXTERNAL_HEADING_LEAD_S`] before its `t_s` on, if that stance is observed
+/// within this after it; otherwise it is counted as expired. A stride cycle lasts about 1.1 s on
+/// the gdins walks, so a heading given during a swing is used at the next stance, and one older
+/// than two seconds describes a foot placement already past (it was fused at whatever stance
+/// came next, however late: a review).
+pub const EXTERNAL_HEADING_MAX_AGE_S: f64 = 2.0;
+
+/// How far before an external heading's `t_s` a stance may be observed and still use it, s: a
+/// stance is observed `heading.obs_delay_s` (0.05 s) after it begins and lasts 0.3–0.6 s
+/// walking, so a heading stamped within the stance in progress is that stance's. One stamped
+/// later waits for its stance (a replay may hand headings in ahead of the samples).
+pub const EXTERNAL_HEADING_LEAD_S: f64 = 0.5;
+
+/// An external heading waiting for its stance ([`crate::core::Estimator::queue_heading`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct QueuedHeading {
+    /// The time it refers to, on the estimator's continuous clock (its stamp less the clock's
+    /// offset when it was handed in: [`crate::core::clock::SampleClock::offset_s`]), s.
+    pub t_s: f64,
+    /// The walking (foot) heading in the map frame, rad.
+    pub heading_rad: f64,
+    /// Its σ, rad.
+    pub sd_rad: f64,
+}
+
+/// An external heading observation that cannot be fused.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error(
+    "heading observation refused: t_s {t_s:e} s, heading {heading_rad:e} rad, σ {sd_rad:e} rad (finite time and heading and σ in (0, π] needed)"
+)]
+pub struct HeadingRefused {
+    /// The time given, s.
+    pub t_s: f64,
+    /// The heading given.
+    pub heading_rad: f64,
+    /// Its σ.
+    pub sd_rad: f64,
+}
