@@ -359,6 +359,7 @@ pub fn probe(path: &Path) -> Result<(), CheckpointError> {
     if path.is_dir() {
         return Err(io(std::io::Error::other("it is a directory")));
     }
+    refuse_non_file(path)?;
     let mut name = path.as_os_str().to_owned();
     name.push(format!(".probe-{}", std::process::id()));
     let probe = PathBuf::from(name);
@@ -376,6 +377,24 @@ pub fn probe(path: &Path) -> Result<(), CheckpointError> {
     }
 }
 
+/// A save renames its file onto `path`: refused when something other than a file (or a link)
+/// is there, a device or a FIFO, which holds no checkpoint and is not the daemon's to replace
+/// (`checkpoint_path = "/dev/zero"`: not moved aside at start, but the first save renamed its
+/// file over `/dev/zero`, a review). The same error from [`probe`] and [`save`], so that the
+/// daemon says it once.
+fn refuse_non_file(path: &Path) -> Result<(), CheckpointError> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if !(m.is_file() || m.is_symlink() || m.is_dir()) => Err(CheckpointError::Io {
+            path: path.to_owned(),
+            operation: "write",
+            source: std::io::Error::other(
+                "it is not a file (a device, a FIFO or a socket): a save would replace it",
+            ),
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// Saves atomically (temp file, fsync, rename, fsync of the directory).
 pub fn save(path: &Path, cp: &Checkpoint) -> Result<(), CheckpointError> {
     cp.validate().map_err(|reason| CheckpointError::Invalid {
@@ -387,6 +406,7 @@ pub fn save(path: &Path, cp: &Checkpoint) -> Result<(), CheckpointError> {
         operation,
         source,
     };
+    refuse_non_file(path)?;
     let tmp = tmp_path(path);
     let result = (|| {
         let mut f = std::fs::File::create(&tmp).map_err(|e| io("create", e))?;

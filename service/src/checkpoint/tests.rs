@@ -215,6 +215,32 @@ fn a_path_to_something_else_than_a_file_is_never_moved_aside() {
 }
 
 #[test]
+fn a_save_never_replaces_something_else_than_a_file() {
+    // A FIFO (as a device such as /dev/zero) at the path is not moved aside at start; the
+    // first save renamed its file over it (a review). Refused, said at start by the probe.
+    use std::os::unix::fs::FileTypeExt as _;
+    let d = tmp_dir("fifo-save");
+    let p = d.join("bias.ckpt");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&p)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let probed = probe(&p).unwrap_err().to_string();
+    let saved = save(&p, &sample()).unwrap_err().to_string();
+    assert!(saved.contains("not a file"), "{saved}");
+    assert_eq!(probed, saved, "said once by the daemon");
+    let kind = std::fs::symlink_metadata(&p).unwrap().file_type();
+    assert!(kind.is_fifo(), "the FIFO was replaced");
+    assert_eq!(
+        std::fs::read_dir(&d).unwrap().count(),
+        1,
+        "nothing left beside it"
+    );
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
 fn every_flipped_bit_is_refused() {
     // Before (version 2, no checksum): 1 010 of the 1 296 single-bit flips of a checkpoint
     // decoded to a valid state, among them a bias axis with its sign turned (1e-3 to -1e-3
