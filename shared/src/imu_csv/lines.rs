@@ -41,12 +41,36 @@ impl<R: BufRead> ImuCsvReader<R> {
         if self.line.last() == Some(&b'\n') {
             self.line.pop();
         } else if n as u64 == limit {
-            self.line_cut = Some(LineCut::default());
+            // A CRLF line of exactly the bound reads its CR as the byte beyond it: its LF comes
+            // next, and it is kept as the same line with LF alone is (it was cut, and its
+            // last field, "9.8\r", named as malformed: a review).
+            if self.line.last() == Some(&b'\r') && self.next_byte_is(b'\n')? {
+                self.src.consume(1);
+                self.bytes_read += 1;
+            } else {
+                self.line_cut = Some(LineCut::default());
+            }
         }
         if self.line_no == 1 && self.line.starts_with("\u{feff}".as_bytes()) {
             self.line.drain(..3);
         }
         Ok(true)
+    }
+
+    /// Whether the next byte of the source is `byte` (not consumed).
+    fn next_byte_is(&mut self, byte: u8) -> Result<bool, ImuCsvError> {
+        loop {
+            match self.src.fill_buf() {
+                Ok(buf) => return Ok(buf.first() == Some(&byte)),
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(source) => {
+                    return Err(ImuCsvError::Io {
+                        path: self.path.clone(),
+                        source,
+                    });
+                }
+            }
+        }
     }
 
     /// Reads past the rest of a line cut at [`MAX_LINE_BYTES`], to its `\n`, counting its commas

@@ -242,9 +242,14 @@ impl<R: BufRead> ImuCsvReader<R> {
             Some(_) => sniff::first_bytes(&self.line),
             None => sniff::excerpt(proper, MAX_HEADER_CHARS),
         };
+        // Every line of the file read as one, its lines ending in CR alone: said as such when
+        // that line is cut at the bound too (a file of more than 64 KiB, any real log, was
+        // called "longer than 65536 bytes without a line end (a binary file?)": a review).
+        let cr_alone =
+            header.contains('\r') && !Self::line_str(proper).contains(['\u{fffd}', '\0']);
         let problem: Option<Cow<'static, str>> = if let Some(problem) = compressed {
             Some(problem.into())
-        } else if self.line_cut.is_some() {
+        } else if self.line_cut.is_some() && !cr_alone {
             // Its rest is left unread: a source without line ends may have no end either.
             Some(
                 format!(
@@ -256,7 +261,7 @@ impl<R: BufRead> ImuCsvReader<R> {
             // UTF-16 (a NUL byte in every other place), another 8-bit encoding, binary bytes
             // (whose CR, if any, says nothing of line ends).
             Some("is not UTF-8 text (a UTF-16 file, another encoding, or binary?)".into())
-        } else if header.contains('\r') {
+        } else if cr_alone {
             // Every line of the file, read as one: its lines end in CR alone (old Mac files).
             Some("holds a CR inside it: the file's lines end in CR alone, not LF or CRLF".into())
         } else if names.len() < REQUIRED_COLUMNS.len()

@@ -2,6 +2,7 @@
 //! are: the reader's bounds (a fuzzing review, session 45).
 
 use super::*;
+use crate::imu_csv::lines::MAX_LINE_BYTES;
 
 #[test]
 fn a_line_without_an_end_is_read_in_memory_independent_of_its_length() {
@@ -89,4 +90,53 @@ fn a_length_that_promises_more_rows_than_memory_holds_is_no_failure() {
     reader.len_bytes = Some(u64::MAX / 2);
     let log = collect(reader).unwrap();
     assert_eq!(log.rows.len(), 10);
+}
+
+#[test]
+fn a_row_of_exactly_the_bound_is_kept_with_lf_or_crlf_line_ends() {
+    // A row of 65536 bytes before its line end is within the bound: kept with LF, and with
+    // CRLF too (its CR was read as the byte beyond the bound: the row was cut, and its last
+    // field, a good "9.8\r", named as malformed).
+    let head = "0.49,0.01";
+    let tail = ",-0.02,0.03,0.1,0.2,9.8";
+    let pad = "0".repeat(MAX_LINE_BYTES - head.len() - tail.len());
+    let long = format!("{head}{pad}{tail}");
+    assert_eq!(long.len(), MAX_LINE_BYTES);
+    for crlf in [false, true] {
+        let mut text = replace_line(&good_file(400), 100, &long);
+        if crlf {
+            text = text.replace('\n', "\r\n");
+        }
+        let log = parse_imu_csv(&text, path(), &lenient()).unwrap();
+        assert!(log.rejected.is_empty(), "crlf {crlf}: {:?}", log.rejected);
+        assert_eq!(log.rows.len(), 400, "crlf {crlf}");
+        assert_eq!(log.rows[98].line, 100);
+        assert_eq!(log.rows[98].gyro_rad_s[0], 0.01);
+    }
+    // One byte more is cut, with either line end.
+    let longer = format!("{head}0{pad}{tail}");
+    for crlf in [false, true] {
+        let mut text = replace_line(&good_file(400), 100, &longer);
+        if crlf {
+            text = text.replace('\n', "\r\n");
+        }
+        let log = parse_imu_csv(&text, path(), &lenient()).unwrap();
+        assert_eq!(log.rejected.len(), 1, "crlf {crlf}");
+        assert_eq!(log.rejected[0].line, 100);
+    }
+}
+
+#[test]
+fn a_file_whose_lines_end_in_cr_alone_is_named_as_such_at_any_length() {
+    // Read as one line, a file of more than 64 KiB is cut at the bound: it was called "longer
+    // than 65536 bytes without a line end (a binary file?)", a real log of 1,700 rows.
+    let text = good_file(3000).replace('\n', "\r");
+    assert!(text.len() > MAX_LINE_BYTES);
+    let err = ImuCsvReader::new(text.as_bytes(), path(), &lenient())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("end in CR alone") && !err.contains('\r'),
+        "{err}"
+    );
 }
