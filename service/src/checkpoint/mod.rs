@@ -483,9 +483,19 @@ fn load_with(path: &Path, move_bad: bool) -> Result<Checkpoint, CheckpointError>
 
 /// The file at `path`, up to one byte more than the longest checkpoint ([`MAX_FILE_BYTES`]):
 /// a path to something else (`/dev/zero`, a large file) was read whole into memory, and
-/// `/dev/zero` aborted the run with "memory allocation failed".
+/// `/dev/zero` aborted the run with "memory allocation failed". A FIFO or a socket is not
+/// opened: opening a FIFO waits for a writer, and the estimator thread of a daemon whose
+/// `checkpoint_path` was one waited there at start, taking no sample (`corridor run
+/// --checkpoint FIFO` too: a review).
 fn read_head(path: &Path) -> std::io::Result<Vec<u8>> {
     use std::io::Read as _;
+    use std::os::unix::fs::FileTypeExt as _;
+    let kind = std::fs::metadata(path)?.file_type();
+    if kind.is_fifo() || kind.is_socket() {
+        return Err(std::io::Error::other(
+            "it is a FIFO or a socket, not a file (not opened: a FIFO waits for a writer)",
+        ));
+    }
     let mut bytes = Vec::new();
     std::fs::File::open(path)?
         .take(MAX_FILE_BYTES as u64 + 1)

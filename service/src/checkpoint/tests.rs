@@ -191,8 +191,9 @@ fn a_file_without_an_end_is_read_no_further_than_a_checkpoint_can_be() {
 
 #[test]
 fn a_path_to_something_else_than_a_file_is_never_moved_aside() {
-    // A FIFO that a writer fills with garbage: corrupt, and left where it is (as a device
-    // such as /dev/zero is, which the daemon's move aside would have renamed).
+    // A FIFO: a cold start, and left where it is (as a device such as /dev/zero is, which the
+    // daemon's move aside would have renamed). Not opened: with no writer, the open waited for
+    // ever, and the daemon never started (a review; a writer was needed here).
     let d = tmp_dir("fifo");
     let p = d.join("bias.ckpt");
     let made = std::process::Command::new("mkfifo")
@@ -200,16 +201,20 @@ fn a_path_to_something_else_than_a_file_is_never_moved_aside() {
         .status()
         .unwrap();
     assert!(made.success());
-    let writer = {
-        let p = p.clone();
-        std::thread::spawn(move || std::fs::write(&p, b"this is not a checkpoint").unwrap())
+    let (tx, rx) = std::sync::mpsc::channel();
+    let q = p.clone();
+    std::thread::spawn(move || tx.send(load(&q)).unwrap());
+    let Ok(loaded) = rx.recv_timeout(std::time::Duration::from_secs(10)) else {
+        // Release the blocked reader before failing.
+        let _ = std::fs::OpenOptions::new().write(true).open(&p);
+        panic!("loading a FIFO waits for a writer");
     };
-    let e = load(&p).unwrap_err();
-    writer.join().unwrap();
+    let e = loaded.unwrap_err();
     assert!(
-        matches!(&e, CheckpointError::Corrupt { moved_to: None, .. }),
+        matches!(&e, CheckpointError::Io { .. }) && e.is_cold_start(),
         "{e}"
     );
+    assert!(e.to_string().contains("FIFO"), "{e}");
     assert!(p.exists() && !d.join("bias.ckpt.corrupt-1").exists(), "{e}");
     std::fs::remove_dir_all(&d).unwrap();
 }
