@@ -6,6 +6,7 @@
 //! starts, and follow several streams with one reader.
 
 use crate::{ClientError, Domain, Subscriber};
+use corridor_shared::services::Topic;
 use corridor_shared::wire::{FLAG_END_OF_STREAM, FLAG_FRAME_SET, NavSample};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -148,6 +149,8 @@ pub struct Tracker {
     nav: Subscriber<NavSample>,
     /// How long a daemon that stopped may take to come back.
     wait: Duration,
+    /// The domain's name, for the error of a daemon gone before a stream began.
+    domain: String,
 }
 
 impl Tracker {
@@ -157,12 +160,15 @@ impl Tracker {
         Ok(Self {
             nav: Subscriber::open(domain, node_name, wait)?,
             wait,
+            domain: domain.name().to_owned(),
         })
     }
 
     /// Follows one stream until its end-of-stream nav sample, SIGINT/SIGTERM, `abort`, the
     /// daemon's stop (not back within the wait of [`Tracker::open`]), or (when `idle_timeout`
-    /// is set) nothing for that long; calls `on_stride` for every stride.
+    /// is set) nothing for that long; calls `on_stride` for every stride. A daemon gone before
+    /// the stream's first stride, and not back within the wait, is [`ClientError::NoPeer`]: no
+    /// stream was cut (it was said as a daemon stopped within the stream: a review).
     /// A stream that had ended before the reader attached is not followed.
     /// `poll` is the longest single wait, so it sees `abort`.
     pub fn run(
@@ -198,6 +204,14 @@ impl Tracker {
                     if self.nav.publishers() > 0 {
                         gone_since = None;
                     } else if gone_since.get_or_insert_with(Instant::now).elapsed() >= self.wait {
+                        if strides.count == 0 {
+                            return Err(ClientError::NoPeer {
+                                service: NavSample::SERVICE,
+                                domain: self.domain.clone(),
+                                peer: "publisher",
+                                waited: self.wait,
+                            });
+                        }
                         break TrackStop::DaemonStopped;
                     }
                     continue;

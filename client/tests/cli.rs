@@ -396,3 +396,52 @@ fn pdr_stops_and_says_so_when_the_daemon_stops_within_a_stream() {
         "{err}"
     );
 }
+
+#[test]
+fn pdr_with_a_daemon_gone_before_any_stream_is_no_daemon_not_a_cut_stream() {
+    // It said "daemon stopped: 0 strides received" and "stopped within the stream", exit 1,
+    // where no stream had begun (a review): now exit 3, no daemon, as at its start.
+    let name = "eco_cli_pdr_daemon_gone_idle";
+    let domain = Domain::new(name).unwrap();
+    let node = domain
+        .node("eco-fake-idle-daemon-nav", SignalHandlingMode::Disabled)
+        .unwrap();
+    let service = domain
+        .open::<NavSample>(&node, Access::Owner(Delivery::Live))
+        .unwrap();
+    let event = domain
+        .open_event(&node, corridor_shared::services::NAV_SERVICE, true)
+        .unwrap();
+    let publisher = service.publisher_builder().create().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_corridor-pdr"))
+        .args(["--domain", name, "--wait-s", "2"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while service.dynamic_config().number_of_subscribers() == 0 {
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "pdr never attached"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    drop((publisher, event, service, node));
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            panic!("corridor-pdr still waits 30 s after the daemon left");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let o = child.wait_with_output().unwrap();
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert_eq!(o.status.code(), Some(3), "{out}{err}");
+    assert!(err.contains("no corridor daemon answers"), "{err}");
+    assert!(!out.contains("strides received"), "{out}");
+}
