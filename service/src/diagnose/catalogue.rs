@@ -72,7 +72,9 @@ impl Effect {
     /// flexible fix of the catalogue. Counted as one (until session 45), it out-scored fixes
     /// that lowered the residuals as much: exp24 with a +5 % z scale factor, the scale states
     /// F = 10.7 for 3 parameters, the random walk F = 33.2 for 1, the same reduction, and
-    /// `bias_drift` was named first (`docs/diagnosis.md`).
+    /// `bias_drift` was named first. Three is a heuristic penalty chosen after that case, not
+    /// a derived count (that would be the smoother's effective number of parameters;
+    /// `docs/diagnosis.md`).
     pub fn fixes(self) -> &'static [(Fix, usize)] {
         match self {
             Effect::HeadingOffset => &[(Fix::HeadingOffset, 1)],

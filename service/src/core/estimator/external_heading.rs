@@ -21,22 +21,50 @@ pub const EXTERNAL_HEADING_MAX_AGE_S: f64 = 2.0;
 /// later waits for its stance (a replay may hand headings in ahead of the samples).
 pub const EXTERNAL_HEADING_LEAD_S: f64 = 0.5;
 
+/// How far ahead of the latest sample an external heading's `t_s` may lie, s. The queues
+/// between a producer and the estimator hold well under a minute of samples, so a heading
+/// stamped an hour ahead is on another clock (Unix time against the sensor's time since it was
+/// powered): it would wait for ever, each newer one counted as superseding it (a review).
+/// Refused and counted as `headings_refused`; before the first sample there is nothing to
+/// compare with.
+pub const EXTERNAL_HEADING_MAX_AHEAD_S: f64 = 3600.0;
+
 /// An external heading waiting for its stance ([`crate::core::Estimator::queue_heading`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct QueuedHeading {
     /// The time it refers to, on the estimator's continuous clock (its stamp less the clock's
     /// offset when it was handed in: [`crate::core::clock::SampleClock::offset_s`]), s.
     pub t_s: f64,
+    /// Its stamp as given, s.
+    pub stamp_s: f64,
     /// The walking (foot) heading in the map frame, rad.
     pub heading_rad: f64,
     /// Its σ, rad.
     pub sd_rad: f64,
 }
 
+impl QueuedHeading {
+    /// The heading stamped `stamp_s`, on a clock whose stamps are taken less `offset_s`.
+    pub fn new(stamp_s: f64, heading_rad: f64, sd_rad: f64, offset_s: f64) -> Self {
+        Self {
+            t_s: stamp_s - offset_s,
+            stamp_s,
+            heading_rad,
+            sd_rad,
+        }
+    }
+
+    /// The same heading on a clock with another offset (a copy of the estimator from before a
+    /// clock step, put back when the samples after it were dropped as glitched).
+    pub fn on_clock(self, offset_s: f64) -> Self {
+        Self::new(self.stamp_s, self.heading_rad, self.sd_rad, offset_s)
+    }
+}
+
 /// An external heading observation that cannot be fused.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[error(
-    "heading observation refused: t_s {t_s:e} s, heading {heading_rad:e} rad, σ {sd_rad:e} rad (finite time and heading and σ in (0, π] needed)"
+    "heading observation refused: t_s {t_s:e} s, heading {heading_rad:e} rad, σ {sd_rad:e} rad (needs a finite heading, σ in (0, π], and a finite t_s on the samples' clock, at most 3600 s ahead of the latest sample)"
 )]
 pub struct HeadingRefused {
     /// The time given, s.

@@ -57,7 +57,8 @@ mod types;
 pub use association::association_weight;
 use external_heading::QueuedHeading;
 pub use external_heading::{
-    EXTERNAL_HEADING_LEAD_S, EXTERNAL_HEADING_MAX_AGE_S, EXTERNAL_HEADING_MAX_NIS, HeadingRefused,
+    EXTERNAL_HEADING_LEAD_S, EXTERNAL_HEADING_MAX_AGE_S, EXTERNAL_HEADING_MAX_AHEAD_S,
+    EXTERNAL_HEADING_MAX_NIS, HeadingRefused,
 };
 pub use types::{
     Counters, Estimate, GRAVITY_TOLERANCE, GapCrossing, HeadingEvent, ImuInput, Notice, Phase,
@@ -388,7 +389,8 @@ impl Estimator {
     /// `t_s` (the samples' clock) with its σ; it is used instead of the map at the first stance
     /// observed from [`EXTERNAL_HEADING_LEAD_S`] before `t_s` on, and only within
     /// [`EXTERNAL_HEADING_MAX_AGE_S`] after it (else counted, `headings_expired`). A time or
-    /// heading that is not finite, or a σ that is not in (0, π], is refused and counted
+    /// heading that is not finite, a σ that is not in (0, π], or a time more than
+    /// [`EXTERNAL_HEADING_MAX_AHEAD_S`] ahead of the latest sample, is refused and counted
     /// (`headings_refused`); at the stance, one further than [`EXTERNAL_HEADING_MAX_NIS`] from
     /// the prediction is refused and counted (`headings_outside_gate`): nothing absurd is
     /// fused. Of several before one stance the newest is used, the others counted
@@ -399,7 +401,13 @@ impl Estimator {
         heading_rad: f64,
         sd_rad: f64,
     ) -> Result<(), HeadingRefused> {
+        let ahead_s = if self.p.counters.samples > 0 {
+            t_s - self.p.out.t_s
+        } else {
+            0.0
+        };
         let sane = t_s.is_finite()
+            && ahead_s <= EXTERNAL_HEADING_MAX_AHEAD_S
             && heading_rad.is_finite()
             && sd_rad > 0.0
             && sd_rad <= std::f64::consts::PI;
@@ -411,11 +419,7 @@ impl Estimator {
                 sd_rad,
             });
         }
-        let queued = QueuedHeading {
-            t_s: t_s - self.p.clock.offset_s(),
-            heading_rad,
-            sd_rad,
-        };
+        let queued = QueuedHeading::new(t_s, heading_rad, sd_rad, self.p.clock.offset_s());
         self.p.headings_queued += 1;
         self.p.last_queued = Some(queued);
         if self.p.pending_heading.replace(queued).is_some() {

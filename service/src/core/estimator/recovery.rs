@@ -126,11 +126,14 @@ impl Estimator {
         let in_play =
             u64::from(p.pending_heading.is_some()) + now.headings_queued - p.headings_queued;
         let superseded_since = now.counters.headings_superseded - c.headings_superseded;
+        // Its time on the copy's clock: a dropped sample taken as a clock step moved the
+        // offset it was converted with (a review).
+        let last_queued = now.last_queued.map(|h| h.on_clock(p.clock.offset_s()));
         if now.headings_queued > p.headings_queued {
-            p.pending_heading = now.last_queued;
+            p.pending_heading = last_queued;
         }
         p.headings_queued = now.headings_queued;
-        p.last_queued = now.last_queued;
+        p.last_queued = last_queued;
         let pending = u64::from(p.pending_heading.is_some());
         let c = &mut p.counters;
         c.headings_superseded =

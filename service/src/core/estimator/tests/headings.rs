@@ -308,6 +308,16 @@ fn an_external_heading_is_used_at_its_own_time() {
     // Half a second old: still the next stance's.
     let (observed, used_at, _) = run(now - 0.5);
     assert_eq!(used_at, observed.first().copied());
+    // An hour ahead of the latest sample: another clock (Unix time, say), refused and counted;
+    // it would have waited for ever, each newer heading counted as superseding it (a review).
+    let mut far = est.clone();
+    let latest = far.last_estimate().t_s;
+    let err = far.queue_heading(latest + 3601.0, 0.1, sd).unwrap_err();
+    assert!(err.to_string().contains("3600 s ahead"), "{err}");
+    assert_eq!(far.counters().headings_refused, base.headings_refused + 1);
+    assert!(far.p.pending_heading.is_none());
+    far.queue_heading(latest + 3599.0, 0.1, sd).unwrap();
+    assert!(far.p.pending_heading.is_some());
 }
 
 #[test]
