@@ -352,3 +352,41 @@ fn a_heading_update_undone_in_a_glitched_sample_is_pending_again_not_undone() {
     }
     panic!("no undone heading update found");
 }
+
+#[test]
+fn an_external_heading_is_timed_on_the_clock_its_stamps_are_on_after_a_step_back() {
+    // The host clock set back by 0.3 s at 30 s of exp36: the stamps from there on are taken
+    // plus 0.3 s (`SampleClock::offset_s`). A heading stamped on the new clock 0.3 s after the
+    // next stance's observation is that stance's (within `EXTERNAL_HEADING_LEAD_S`), as without
+    // the step. Mutation testing found nothing that checked the stance's side of the
+    // conversion: with its offset added instead of taken off, the heading is 0.6 s further
+    // ahead and waits for a later stance.
+    let (cfg, mut rows) = exp36_inputs();
+    let (_, i) = tracking_at_30_s(cfg.clone(), &rows);
+    for r in &mut rows[i..] {
+        r.t_s -= 0.3;
+    }
+    let (mut est, _) = tracking_at_30_s(cfg, &rows[..i]);
+    let mut k = i;
+    while est.counters().clock_steps_back == 0 || k < i + 20 {
+        let _ = est.step(&rows[k]);
+        k += 1;
+    }
+    assert!(
+        (est.p.clock.offset_s() + 0.3).abs() < 0.01,
+        "{}",
+        est.p.clock.offset_s()
+    );
+    // The stamp of the sample the next stance is observed at, found on a copy.
+    let mut probe = est.clone();
+    let at = (k..rows.len())
+        .find(|&j| probe.step(&rows[j]).unwrap().heading.is_some())
+        .expect("a stance");
+    est.queue_heading(rows[at].t_s + 0.3, 0.123, std::f64::consts::PI)
+        .unwrap();
+    for r in &rows[k..at] {
+        est.step(r).unwrap();
+    }
+    let e = *est.step(&rows[at]).unwrap();
+    assert_eq!(e.heading.map(|h| h.direction_rad), Some(0.123));
+}
