@@ -321,14 +321,26 @@ fn no_daemon_is_exit_code_3_in_every_tool_a_usage_error_2_and_help_says_so() {
     let _ = std::fs::remove_file(&imu);
 }
 
-#[test]
-fn pdr_stops_and_says_so_when_the_daemon_stops_within_a_stream() {
-    // It waited for ever, saying nothing, after a daemon's clean stop (a review). Now it waits
-    // --wait-s for the daemon to come back, then fails.
-    let name = "eco_cli_pdr_daemon_stops";
+type Ipc = iceoryx2::service::ipc::Service;
+type NavService =
+    iceoryx2::service::port_factory::publish_subscribe::PortFactory<Ipc, NavSample, ()>;
+type NavEvent = iceoryx2::service::port_factory::event::PortFactory<Ipc>;
+type NavPublisher = iceoryx2::port::publisher::Publisher<Ipc, NavSample, ()>;
+
+/// A stand-in daemon's nav service on domain `name` (its node, service, event and publisher)
+/// and `corridor-pdr --wait-s 2` attached to it.
+fn fake_daemon_and_pdr(
+    name: &str,
+) -> (
+    iceoryx2::node::Node<Ipc>,
+    NavService,
+    NavEvent,
+    NavPublisher,
+    std::process::Child,
+) {
     let domain = Domain::new(name).unwrap();
     let node = domain
-        .node("eco-fake-daemon-nav", SignalHandlingMode::Disabled)
+        .node(&format!("{name}-fake-daemon"), SignalHandlingMode::Disabled)
         .unwrap();
     let service = domain
         .open::<NavSample>(&node, Access::Owner(Delivery::Live))
@@ -337,7 +349,7 @@ fn pdr_stops_and_says_so_when_the_daemon_stops_within_a_stream() {
         .open_event(&node, corridor_shared::services::NAV_SERVICE, true)
         .unwrap();
     let publisher = service.publisher_builder().create().unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_corridor-pdr"))
+    let child = Command::new(env!("CARGO_BIN_EXE_corridor-pdr"))
         .args(["--domain", name, "--wait-s", "2"])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -351,6 +363,15 @@ fn pdr_stops_and_says_so_when_the_daemon_stops_within_a_stream() {
         );
         std::thread::sleep(Duration::from_millis(10));
     }
+    (node, service, event, publisher, child)
+}
+
+#[test]
+fn pdr_stops_and_says_so_when_the_daemon_stops_within_a_stream() {
+    // It waited for ever, saying nothing, after a daemon's clean stop (a review). Now it waits
+    // --wait-s for the daemon to come back, then fails.
+    let (node, service, event, publisher, mut child) =
+        fake_daemon_and_pdr("eco_cli_pdr_daemon_stops");
     let nav = |stance: u64| NavSample {
         seq: stance - 1,
         stance,
@@ -401,32 +422,8 @@ fn pdr_stops_and_says_so_when_the_daemon_stops_within_a_stream() {
 fn pdr_with_a_daemon_gone_before_any_stream_is_no_daemon_not_a_cut_stream() {
     // It said "daemon stopped: 0 strides received" and "stopped within the stream", exit 1,
     // where no stream had begun (a review): now exit 3, no daemon, as at its start.
-    let name = "eco_cli_pdr_daemon_gone_idle";
-    let domain = Domain::new(name).unwrap();
-    let node = domain
-        .node("eco-fake-idle-daemon-nav", SignalHandlingMode::Disabled)
-        .unwrap();
-    let service = domain
-        .open::<NavSample>(&node, Access::Owner(Delivery::Live))
-        .unwrap();
-    let event = domain
-        .open_event(&node, corridor_shared::services::NAV_SERVICE, true)
-        .unwrap();
-    let publisher = service.publisher_builder().create().unwrap();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_corridor-pdr"))
-        .args(["--domain", name, "--wait-s", "2"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while service.dynamic_config().number_of_subscribers() == 0 {
-        assert!(
-            start.elapsed() < Duration::from_secs(30),
-            "pdr never attached"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    let (node, service, event, publisher, mut child) =
+        fake_daemon_and_pdr("eco_cli_pdr_daemon_gone_idle");
     drop((publisher, event, service, node));
     let start = Instant::now();
     while child.try_wait().unwrap().is_none() {

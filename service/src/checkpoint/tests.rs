@@ -189,18 +189,24 @@ fn a_file_without_an_end_is_read_no_further_than_a_checkpoint_can_be() {
     assert!(e.to_string().contains("longer than any checkpoint"), "{e}");
 }
 
-#[test]
-fn a_path_to_something_else_than_a_file_is_never_moved_aside() {
-    // A FIFO: a cold start, and left where it is (as a device such as /dev/zero is, which the
-    // daemon's move aside would have renamed). Not opened: with no writer, the open waited for
-    // ever, and the daemon never started (a review; a writer was needed here).
-    let d = tmp_dir("fifo");
+/// A FIFO at `bias.ckpt` in a fresh directory named after `name`: the directory and its path.
+fn fifo(name: &str) -> (PathBuf, PathBuf) {
+    let d = tmp_dir(name);
     let p = d.join("bias.ckpt");
     let made = std::process::Command::new("mkfifo")
         .arg(&p)
         .status()
         .unwrap();
     assert!(made.success());
+    (d, p)
+}
+
+#[test]
+fn a_path_to_something_else_than_a_file_is_never_moved_aside() {
+    // A FIFO: a cold start, and left where it is (as a device such as /dev/zero is, which the
+    // daemon's move aside would have renamed). Not opened: with no writer, the open waited for
+    // ever, and the daemon never started (a review; a writer was needed here).
+    let (d, p) = fifo("fifo");
     let (tx, rx) = std::sync::mpsc::channel();
     let q = p.clone();
     std::thread::spawn(move || tx.send(load(&q)).unwrap());
@@ -224,13 +230,7 @@ fn a_save_never_replaces_something_else_than_a_file() {
     // A FIFO (as a device such as /dev/zero) at the path is not moved aside at start; the
     // first save renamed its file over it (a review). Refused, said at start by the probe.
     use std::os::unix::fs::FileTypeExt as _;
-    let d = tmp_dir("fifo-save");
-    let p = d.join("bias.ckpt");
-    let made = std::process::Command::new("mkfifo")
-        .arg(&p)
-        .status()
-        .unwrap();
-    assert!(made.success());
+    let (d, p) = fifo("fifo-save");
     let probed = probe(&p).unwrap_err().to_string();
     let saved = save(&p, &sample()).unwrap_err().to_string();
     assert!(saved.contains("not a file"), "{saved}");

@@ -498,15 +498,21 @@ fn io_errors_name_the_file() {
 
 #[test]
 fn lines_that_end_in_cr_alone_and_utf16_are_named_as_such() {
-    let text = good_file(3).replace('\n', "\r");
-    let err = ImuCsvReader::new(text.as_bytes(), path(), &lenient())
-        .unwrap_err()
-        .to_string();
-    // The header shown stops at its CR: a terminal would return to the line's start there.
-    assert!(
-        err.contains("end in CR alone") && !err.contains('\r'),
-        "{err}"
-    );
+    // Also past the 64 KiB line bound, where a file read as one line is cut: it was called
+    // "longer than 65536 bytes without a line end (a binary file?)", a real log of 1,700 rows
+    // (a review).
+    for rows in [3, 3000] {
+        let text = good_file(rows).replace('\n', "\r");
+        let err = ImuCsvReader::new(text.as_bytes(), path(), &lenient())
+            .unwrap_err()
+            .to_string();
+        // The header shown stops at its CR: a terminal would return to the line's start there.
+        assert!(
+            err.contains("end in CR alone") && !err.contains('\r'),
+            "{rows}: {err}"
+        );
+    }
+    assert!(good_file(3000).len() > super::lines::MAX_LINE_BYTES);
     let utf16: Vec<u8> = [0xff, 0xfe]
         .into_iter()
         .chain(good_file(3).encode_utf16().flat_map(u16::to_le_bytes))

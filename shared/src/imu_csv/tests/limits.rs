@@ -125,18 +125,3 @@ fn a_row_of_exactly_the_bound_is_kept_with_lf_or_crlf_line_ends() {
         assert_eq!(log.rejected[0].line, 100);
     }
 }
-
-#[test]
-fn a_file_whose_lines_end_in_cr_alone_is_named_as_such_at_any_length() {
-    // Read as one line, a file of more than 64 KiB is cut at the bound: it was called "longer
-    // than 65536 bytes without a line end (a binary file?)", a real log of 1,700 rows.
-    let text = good_file(3000).replace('\n', "\r");
-    assert!(text.len() > MAX_LINE_BYTES);
-    let err = ImuCsvReader::new(text.as_bytes(), path(), &lenient())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        err.contains("end in CR alone") && !err.contains('\r'),
-        "{err}"
-    );
-}
