@@ -139,6 +139,7 @@ mod tests {
                 gyro_bias_rw_rad_s_sqrt_s: 7e-4,
                 zupt_m_s: 0.01,
                 stance_yaw_max_sd_rad: f64::INFINITY,
+                covariance_step_s: 0.0,
             },
             Extensions {
                 heading_offset_sd: Some(0.1),

@@ -242,6 +242,11 @@ pub struct EskfFile {
     /// Lever arm between the sensor and the point the foot rolls about at the edges of a
     /// stance (default 0: off): the ZUPT σ of a sample is √(zupt_sd² + (arm·|ω|)²).
     pub zupt_lever_arm_m: Option<f64>,
+    /// Between updates (the swing), the covariance is propagated once per interval of about
+    /// this length on the samples' summed transition, s (default 0.02; 0: on every sample).
+    /// Stance samples, and any sample an update or a covariance read follows, are propagated
+    /// at once.
+    pub covariance_step_s: Option<f64>,
     /// Zero-rate updates: every later rest of at least `alignment.min_rest_s` (its first and
     /// its last `alignment.rest_tail_s` left out) observes the gyro bias like the initial rest,
     /// with σ √(`gyro_bias_prior_sd_rad_s`² + the rest's spread²) (default true).

@@ -168,6 +168,8 @@ pub struct EskfConfig {
     pub initial_tilt_sd_rad: Positive,
     /// ZUPT lever arm (0 = a constant ZUPT σ).
     pub zupt_lever_arm_m: NonNegative,
+    /// The covariance's propagation interval between updates (0 = every sample).
+    pub covariance_step_s: NonNegative,
     /// Zero-rate updates at later rests.
     pub zero_rate_updates: bool,
     /// A long rest is fused every this many seconds of its settled part.

@@ -388,6 +388,13 @@ impl ConfigFile {
                     1.0,
                     "must be in [0, 1] m",
                 )?,
+                covariance_step_s: NonNegative::in_range(
+                    "eskf.covariance_step_s",
+                    k.covariance_step_s.unwrap_or(ESKF_COVARIANCE_STEP_S),
+                    0.0,
+                    0.1,
+                    "must be in [0, 0.1] s",
+                )?,
                 zero_rate_updates: k.zero_rate_updates.unwrap_or(ESKF_ZERO_RATE_UPDATES),
                 zero_rate_interval_s: Positive::in_range(
                     "eskf.zero_rate_interval_s",

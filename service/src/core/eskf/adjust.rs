@@ -8,6 +8,7 @@ use super::*;
 impl Eskf {
     /// Rotates the navigation frame about z by `angle_rad` (used once the map frame is known).
     pub fn rotate_frame(&mut self, angle_rad: f64) {
+        self.settle_covariance();
         let r = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), angle_rad);
         let m = *r.matrix();
         self.p_m = m * self.p_m;
@@ -58,6 +59,7 @@ impl Eskf {
     /// saved (gaps of 600 s at every walk's middle footprint: exp31 1.38 → 4.41 %, exp40 0.40 →
     /// 1.48 % in the map frame).
     pub fn widen_after_gap(&mut self, gap_s: f64, vel_var: f64) {
+        self.settle_covariance();
         let att_var = (self.noise.gyro_rad_s.powi(2) * gap_s).min(GAP_MAX_ATTITUDE_SD_RAD.powi(2));
         for i in 0..3 {
             self.p[ix(V0 + i, V0 + i)] += vel_var;
@@ -69,6 +71,7 @@ impl Eskf {
     /// rotates (position, velocity and the other states stay), and the heading variance grows
     /// by `sd_rad²`. Used when a restored state lacks a turn the gyro measured since.
     pub fn turn_heading(&mut self, angle_rad: f64, sd_rad: f64) {
+        self.settle_covariance();
         let r = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), angle_rad);
         self.nav_from_body = UnitQuaternion::from_rotation_matrix(&r) * self.nav_from_body;
         // The attitude error is in the navigation frame: its block turns with the nominal,
@@ -94,6 +97,7 @@ impl Eskf {
 
     /// The velocity variance grows by `var` on every axis (a bridged gap).
     pub fn widen_velocity(&mut self, var: f64) {
+        self.settle_covariance();
         for i in 0..3 {
             self.p[ix(V0 + i, V0 + i)] += var;
         }
@@ -103,6 +107,7 @@ impl Eskf {
     /// `var_rad2` happened: the attitude covariance grows along that axis (in the navigation
     /// frame). Used for the rotation a clipped gyro axis did not measure.
     pub fn widen_attitude_about(&mut self, axis_body: &Vector3<f64>, var_rad2: f64) {
+        self.settle_covariance();
         let a = self.nav_from_body * axis_body;
         for i in 0..3 {
             for j in i..3 {
@@ -118,17 +123,20 @@ impl Eskf {
 
     /// The heading's variance, rad².
     pub fn heading_variance(&self) -> f64 {
+        debug_assert!(self.covariance_settled(), "a deferred covariance read");
         self.p[ix(TH + 2, TH + 2)]
     }
 
     /// Sets the heading variance (after the map frame is fixed, the heading is known).
     pub fn set_heading_variance(&mut self, var_rad2: f64) {
+        self.settle_covariance();
         self.clear_state(TH + 2, var_rad2);
     }
 
     /// Makes state `i`'s error independent of everything before: variance `var`, no
     /// correlations, no part of the bias-error response.
     pub(super) fn clear_state(&mut self, i: usize, var: f64) {
+        self.settle_covariance();
         for j in 0..self.layout.n {
             self.p[ix(i, j)] = 0.0;
             self.p[ix(j, i)] = 0.0;
@@ -142,6 +150,7 @@ impl Eskf {
     /// Sets the gyro bias and its covariance block (clearing its correlations), when the filter
     /// owns the bias. The bias-error response starts again from here.
     pub fn set_gyro_bias(&mut self, bias_rad_s: Vector3<f64>, cov: &Matrix3<f64>) {
+        self.settle_covariance();
         if !self.estimate_bias {
             return;
         }
@@ -163,11 +172,15 @@ impl Eskf {
     }
 
     /// Covariance block of the gyro bias.
+    /// As of the last covariance step ([`Eskf::covariance_settled`]): between updates it may be
+    /// up to [`EskfNoise::covariance_step_s`] old.
     pub fn gyro_bias_cov(&self) -> Matrix3<f64> {
         Matrix3::from_fn(|i, j| self.p[ix(BG + i, BG + j)])
     }
 
     /// σ of the gyro-bias states.
+    /// As of the last covariance step ([`Eskf::covariance_settled`]): between updates it may be
+    /// up to [`EskfNoise::covariance_step_s`] old.
     pub fn gyro_bias_sd(&self) -> Vector3<f64> {
         Vector3::from_fn(|i, _| self.p[ix(BG + i, BG + i)].max(0.0).sqrt())
     }

@@ -127,20 +127,78 @@ fn propagate_base(
     }
 }
 
-/// The blocks of one step's transition `F = I + G` (see
-/// [`Eskf::propagate_covariance_from`]).
-struct Transition {
+/// The blocks of the transition `F = I + G` over one covariance step (see
+/// [`Eskf::propagate_covariance_from`]): one sample's, or the sum of the samples' whose steps
+/// were deferred, with the process noise they add. Every block is linear in its sample's
+/// interval, so an interval of a few samples is `I` plus the sum of their `G`: first order, as
+/// each sample's own `F` is (the products of two samples' blocks, `p←θ` and `v←b`, of order
+/// dt², are left out, as within a sample).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(super) struct Pending {
+    /// Samples summed (0: none deferred).
+    samples: u32,
     dt: f64,
     /// v←θ: −[f]×·dt.
     fvt: [[f64; 3]; 3],
     /// θ←b: −C·dt (zero when the bias is frozen).
     ftb: [[f64; 3]; 3],
-    /// θ←s: −C·diag(ω)·dt.
+    /// θ←s: −C·diag(ω)·dt (scale-factor states only).
     fts: [[f64; 3]; 3],
-    /// θ←k: −C·diag(f)·dt.
+    /// θ←k: −C·diag(f)·dt (g-sensitivity states only).
     ftk: [[f64; 3]; 3],
-    /// θ←m: the z column of −C·dt times ω_x, ω_y.
+    /// θ←m: the z column of −C·dt times ω_x, ω_y (coupling states only).
     ftm: [[f64; 2]; 3],
+    /// The attitude's process noise, Σ σ²·dt (the swing's or the rest's σ, per sample).
+    gyro_var: f64,
+    /// The velocity noise of each sample goes into the position over the samples after it, as
+    /// one step per sample would take it: Σ dtᵢ·aᵢ and Σ dtᵢ·aᵢ², aᵢ the interval's time after
+    /// sample i (the position-velocity and position terms of Q, per unit noise density²).
+    accel_pv_s2: f64,
+    accel_pp_s3: f64,
+}
+
+impl Pending {
+    /// `o` (one sample) after the samples summed so far.
+    fn append(&mut self, o: &Pending) {
+        debug_assert_eq!(o.samples, 1);
+        let d = o.dt;
+        self.accel_pp_s3 += d * (2.0 * self.accel_pv_s2 + d * self.dt);
+        self.accel_pv_s2 += d * self.dt;
+        fn add3(a: &mut [[f64; 3]; 3], b: &[[f64; 3]; 3]) {
+            for (ra, rb) in a.iter_mut().zip(b) {
+                for (x, y) in ra.iter_mut().zip(rb) {
+                    *x += y;
+                }
+            }
+        }
+        self.samples += o.samples;
+        self.dt += o.dt;
+        add3(&mut self.fvt, &o.fvt);
+        add3(&mut self.ftb, &o.ftb);
+        add3(&mut self.fts, &o.fts);
+        add3(&mut self.ftk, &o.ftk);
+        for (ra, rb) in self.ftm.iter_mut().zip(&o.ftm) {
+            ra[0] += rb[0];
+            ra[1] += rb[1];
+        }
+        self.gyro_var += o.gyro_var;
+    }
+}
+
+/// Whether a sample's covariance step may wait (see [`Eskf::propagate_into`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CovarianceStep {
+    /// Propagated now, with the steps deferred before it: an update follows (a stance
+    /// sample). Deferred, the first update would bring it up to date anyway, at the cost of a
+    /// copy of the covariance.
+    Now,
+    /// Deferred while the deferred interval stays shorter than the filter's covariance step
+    /// ([`EskfNoise::covariance_step_s`]).
+    MayDefer,
+}
+
+struct Transition {
+    t: Pending,
     lay: Layout,
     /// The bias-rate states, when the bias is estimated.
     b_rate: Option<usize>,
@@ -152,7 +210,7 @@ impl Transition {
     #[inline]
     fn apply(&self, c: &mut [f64]) {
         let dot2 = |m: &[f64; 2], v: [f64; 2]| m[0] * v[0] + m[1] * v[1];
-        let lay = &self.lay;
+        let (lay, t) = (&self.lay, &self.t);
         let v = [c[V0], c[V0 + 1], c[V0 + 2]];
         let th = [c[TH], c[TH + 1], c[TH + 2]];
         let b = [c[BG], c[BG + 1], c[BG + 2]];
@@ -161,21 +219,21 @@ impl Transition {
         let m = lay.coupling.map(|i| [c[i], c[i + 1]]);
         let d = self.b_rate.map(|i| [c[i], c[i + 1], c[i + 2]]);
         for i in 0..3 {
-            c[P0 + i] += self.dt * v[i];
-            c[V0 + i] += dot3(&self.fvt[i], &th);
-            let mut dth = dot3(&self.ftb[i], &b);
+            c[P0 + i] += t.dt * v[i];
+            c[V0 + i] += dot3(&t.fvt[i], &th);
+            let mut dth = dot3(&t.ftb[i], &b);
             if let Some(s) = s {
-                dth += dot3(&self.fts[i], &s);
+                dth += dot3(&t.fts[i], &s);
             }
             if let Some(k) = k {
-                dth += dot3(&self.ftk[i], &k);
+                dth += dot3(&t.ftk[i], &k);
             }
             if let Some(m) = m {
-                dth += dot2(&self.ftm[i], m);
+                dth += dot2(&t.ftm[i], m);
             }
             c[TH + i] += dth;
             if let Some(d) = d {
-                c[BG + i] += self.dt * d[i];
+                c[BG + i] += t.dt * d[i];
             }
         }
     }
@@ -191,6 +249,12 @@ impl Eskf {
     /// instead of the 3,500 of a dense product (the hot path of the core).
     /// `before` is the filter before the step: its covariance and bias-error response
     /// (`response.rs`) are read, `self`'s overwritten.
+    ///
+    /// With [`CovarianceStep::MayDefer`] the step waits, summed with the samples' before it
+    /// (`Pending`), while their interval stays shorter than [`EskfNoise::covariance_step_s`]
+    /// (within half a sample): `self` gets `before`'s covariance, and the first method that
+    /// changes or needs it ([`Eskf::settle_covariance`]) brings it up to date.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn propagate_covariance_from(
         &mut self,
         before: &Eskf,
@@ -199,40 +263,94 @@ impl Eskf {
         omega: &Vector3<f64>,
         f_body: &Vector3<f64>,
         dt: f64,
+        step: CovarianceStep,
     ) {
-        let (p0, response0) = (&before.p, &before.response);
         let lay = self.layout;
-        let n = lay.n;
-        let b_rate = lay.rate.filter(|_| self.estimate_bias);
         let m3 = |m: &Matrix3<f64>| -> [[f64; 3]; 3] {
             std::array::from_fn(|i| std::array::from_fn(|k| m[(i, k)]))
         };
-        let fvt = m3(f_vth);
-        let ftb = if self.estimate_bias {
-            m3(minus_c_dt)
+        let gyro = if self.at_rest {
+            self.noise.rest_gyro_rad_s
         } else {
-            [[0.0; 3]; 3]
+            self.noise.gyro_rad_s
         };
+        let mut t = Pending {
+            samples: 1,
+            dt,
+            fvt: m3(f_vth),
+            gyro_var: gyro * gyro * dt,
+            ..Default::default()
+        };
+        if self.estimate_bias {
+            t.ftb = m3(minus_c_dt);
+        }
+        if !lay.static_extensions_only() {
+            // θ←s and θ←k blocks: −C·diag(ω)·dt and −C·diag(f)·dt.
+            t.fts = m3(&(minus_c_dt * Matrix3::from_diagonal(omega)));
+            t.ftk = m3(&(minus_c_dt * Matrix3::from_diagonal(f_body)));
+            // θ←m rows: (−C·dt)[i, z] · (ω_x, ω_y).
+            t.ftm = std::array::from_fn(|i| {
+                [minus_c_dt[(i, 2)] * omega.x, minus_c_dt[(i, 2)] * omega.y]
+            });
+        }
+        if before.pending.samples > 0 {
+            let mut sum = before.pending;
+            sum.append(&t);
+            t = sum;
+        }
+        if step == CovarianceStep::MayDefer && t.dt + 0.5 * dt < self.noise.covariance_step_s {
+            // The leading n columns in one copy (whole columns: one call, not n).
+            let used = lay.n.min(MAX_N) * MAX_N;
+            self.p[..used].copy_from_slice(&before.p[..used]);
+            self.response = before.response;
+            self.pending = t;
+            return;
+        }
+        self.pending = Pending::default();
+        self.step_covariance(&before.p, &before.response, &t);
+    }
+
+    /// Applies the covariance steps deferred so far (see [`Eskf::propagate_covariance_from`]):
+    /// every method that changes the covariance or decides from it calls this first.
+    #[inline]
+    pub(super) fn settle_covariance(&mut self) {
+        if self.pending.samples > 0 {
+            self.settle_deferred();
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn settle_deferred(&mut self) {
+        let t = std::mem::take(&mut self.pending);
+        let (p0, response0) = (self.p, self.response);
+        self.step_covariance(&p0, &response0, &t);
+    }
+
+    /// Whether no covariance step waits: the covariance is the current one.
+    pub fn covariance_settled(&self) -> bool {
+        self.pending.samples == 0
+    }
+
+    /// `self.p ← F P₀ Fᵀ + Q` and the bias-error response through F, for the transition `t`
+    /// (one sample's or several summed).
+    fn step_covariance(
+        &mut self,
+        p0: &[f64; MAX_N * MAX_N],
+        response0: &response::Response,
+        t: &Pending,
+    ) {
+        let lay = self.layout;
+        let n = lay.n;
+        let b_rate = lay.rate.filter(|_| self.estimate_bias);
+        let dt = t.dt;
         let a = &mut self.p;
         if lay.static_extensions_only() {
-            propagate_base(p0, a, n, &fvt, &ftb, dt);
+            propagate_base(p0, a, n, &t.fvt, &t.ftb, dt);
             // The bias-error response (`response.rs`) goes through F alone.
-            f_times_base(response0, &mut self.response, 3, &fvt, &ftb, dt);
+            f_times_base(response0, &mut self.response, 3, &t.fvt, &t.ftb, dt);
         } else {
-            let tr = Transition {
-                dt,
-                fvt,
-                ftb,
-                // θ←s and θ←k blocks: −C·diag(ω)·dt and −C·diag(f)·dt.
-                fts: m3(&(minus_c_dt * Matrix3::from_diagonal(omega))),
-                ftk: m3(&(minus_c_dt * Matrix3::from_diagonal(f_body))),
-                // θ←m rows: (−C·dt)[i, z] · (ω_x, ω_y).
-                ftm: std::array::from_fn(|i| {
-                    [minus_c_dt[(i, 2)] * omega.x, minus_c_dt[(i, 2)] * omega.y]
-                }),
-                lay,
-                b_rate,
-            };
+            let tr = Transition { t: *t, lay, b_rate };
             self.response = *response0;
             for c in 0..3 {
                 tr.apply(&mut self.response[c * MAX_N..][..MAX_N]);
@@ -254,12 +372,6 @@ impl Eskf {
             }
         }
         let qa = self.noise.accel_m_s2.powi(2) * dt;
-        let gyro = if self.at_rest {
-            self.noise.rest_gyro_rad_s
-        } else {
-            self.noise.gyro_rad_s
-        };
-        let qg = gyro.powi(2) * dt;
         let qb = if self.estimate_bias {
             self.noise.gyro_bias_rw_rad_s_sqrt_s.powi(2) * dt
         } else {
@@ -267,8 +379,16 @@ impl Eskf {
         };
         for i in 0..3 {
             a[ix(V0 + i, V0 + i)] += qa;
-            a[ix(TH + i, TH + i)] += qg;
+            a[ix(TH + i, TH + i)] += t.gyro_var;
             a[ix(BG + i, BG + i)] += qb;
+        }
+        if t.samples > 1 {
+            let q = self.noise.accel_m_s2.powi(2);
+            for i in 0..3 {
+                a[ix(P0 + i, P0 + i)] += q * t.accel_pp_s3;
+                a[ix(P0 + i, V0 + i)] += q * t.accel_pv_s2;
+                a[ix(V0 + i, P0 + i)] += q * t.accel_pv_s2;
+            }
         }
         if let (Some(i), Some(rw)) = (b_rate, self.ext_cfg.bias_rate_rw) {
             for k in 0..3 {

@@ -59,6 +59,10 @@ pub struct EskfNoise {
     /// Above this yaw σ the stance velocity updates leave the yaw alone (a Schmidt update),
     /// rad; infinite: never.
     pub stance_yaw_max_sd_rad: f64,
+    /// Between updates the covariance is propagated once per interval of about this length, s,
+    /// on the samples' summed transition (0: on every sample; see
+    /// [`CovarianceStep::MayDefer`]).
+    pub covariance_step_s: f64,
 }
 
 /// Whether the filter estimates the gyro bias.
@@ -232,6 +236,9 @@ pub struct Eskf {
     /// The closed-loop response to a bias error present when the bias was set
     /// (`response.rs`).
     response: response::Response,
+    /// The covariance steps deferred since `p` and `response` were propagated
+    /// (`covariance.rs`): they are as of that many samples ago.
+    pending: covariance::Pending,
     layout: Layout,
     gravity_m_s2: f64,
     noise: EskfNoise,
@@ -265,6 +272,7 @@ mod covariance;
 mod response;
 mod updates;
 
+pub use covariance::CovarianceStep;
 pub use response::max_row_sum;
 
 impl Eskf {
@@ -291,6 +299,7 @@ impl Eskf {
             footprints_cloned: 0,
             p: [0.0; MAX_N * MAX_N],
             response: [0.0; MAX_N * 3],
+            pending: Default::default(),
             layout,
             gravity_m_s2,
             noise,
@@ -347,6 +356,7 @@ impl Eskf {
             self.p[col..col + n].copy_from_slice(&src.p[col..col + n]);
         }
         self.response = src.response;
+        self.pending = src.pending;
     }
 
     /// Copies everything of `src` but the covariance.
@@ -395,6 +405,7 @@ impl Eskf {
 
     /// Covariance element.
     pub fn cov(&self, r: usize, c: usize) -> f64 {
+        debug_assert!(self.covariance_settled(), "a deferred covariance read");
         self.p[ix(r, c)]
     }
 
@@ -439,19 +450,22 @@ impl Eskf {
     /// per-sample path uses [`Eskf::propagate_into`].
     pub fn propagate(&mut self, omega_rad_s: &Vector3<f64>, f_m_s2: &Vector3<f64>, dt_s: f64) {
         let before = self.clone();
-        before.propagate_into(self, omega_rad_s, f_m_s2, dt_s);
+        before.propagate_into(self, omega_rad_s, f_m_s2, dt_s, CovarianceStep::Now);
     }
 
     /// [`Eskf::propagate`] written into `next` (a copy of this filter, whatever state it holds
     /// now: the configuration must be the same), leaving `self` as it was: the estimator keeps the state before each
     /// sample for its health check this way, without copying it (the copy of the covariance is
     /// part of the propagation's first pass).
+    /// `covariance` says whether the covariance's step may wait for the next ones
+    /// ([`CovarianceStep`]).
     pub fn propagate_into(
         &self,
         next: &mut Eskf,
         omega_rad_s: &Vector3<f64>,
         f_m_s2: &Vector3<f64>,
         dt_s: f64,
+        covariance: CovarianceStep,
     ) {
         // `next` has this filter's configuration (it is a copy of it; nothing changes the
         // configuration after `new`): only the state is copied, what the step changes is
@@ -481,6 +495,7 @@ impl Eskf {
             omega_rad_s,
             f_m_s2,
             dt_s,
+            covariance,
         );
     }
 
@@ -521,6 +536,8 @@ impl Eskf {
 
 #[cfg(test)]
 mod clone_tests;
+#[cfg(test)]
+mod deferral_tests;
 #[cfg(test)]
 mod response_tests;
 #[cfg(test)]

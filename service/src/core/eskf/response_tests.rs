@@ -95,7 +95,7 @@ fn the_bias_error_response_is_what_a_start_error_becomes() {
                 let v_nav = frame * v0;
                 for (f, spare) in [(&mut a, &mut spare_a), (&mut b, &mut spare_b)] {
                     let omega = f.corrected_rate(&w, &f_body, &f.gyro_bias_rad_s.clone());
-                    f.propagate_into(spare, &omega, &f_body, dt);
+                    f.propagate_into(spare, &omega, &f_body, dt, CovarianceStep::Now);
                     std::mem::swap(f, spare);
                     if k == 1_000 {
                         // The frame turned by 0.5 rad, then the heading defined anew (as at the

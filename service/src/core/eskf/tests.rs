@@ -9,6 +9,7 @@ fn noise() -> EskfNoise {
         gyro_bias_rw_rad_s_sqrt_s: 1e-4,
         zupt_m_s: 0.01,
         stance_yaw_max_sd_rad: f64::INFINITY,
+        covariance_step_s: 0.0,
     }
 }
 
@@ -163,7 +164,7 @@ fn propagating_into_a_spare_equals_propagating_in_place() {
         }
         let before = a.clone();
         let (omega, acc) = (Vector3::new(0.5, 3.0, -1.0), Vector3::new(2.0, -1.0, 10.0));
-        a.propagate_into(&mut spare, &omega, &acc, 0.005);
+        a.propagate_into(&mut spare, &omega, &acc, 0.005, CovarianceStep::Now);
         let mut in_place = a.clone();
         in_place.propagate(&omega, &acc, 0.005);
         // `a` is left as it was; the spare is the in-place result, to the bit (the footprint

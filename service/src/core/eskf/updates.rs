@@ -26,6 +26,7 @@ impl Eskf {
         r_var: [f64; M],
         gate_nis: f64,
     ) -> Result<Innovation, Innovation> {
+        self.settle_covariance();
         let n = self.layout.n;
         // PHᵀ (n × M)
         let mut pht = [[0.0; M]; MAX_N];
@@ -104,6 +105,7 @@ impl Eskf {
         expected_m_s: &Vector3<f64>,
         sd_m_s: f64,
     ) -> Innovation {
+        self.settle_covariance();
         let n = self.layout.n;
         let rv = sd_m_s * sd_m_s;
         let r = expected_m_s - self.v_m_s;
@@ -174,13 +176,15 @@ impl Eskf {
 
     /// Whether the stance velocity update's innovation lies beyond `max_z2` times its variance
     /// on some axis: a lower bound of its NIS (`rᵀS⁻¹r ≥ rᵢ²/Sᵢᵢ`), so a cheap test for a
-    /// velocity that cannot be what the filter holds.
+    /// velocity that cannot be what the filter holds. Brings the covariance up to date first
+    /// (a replayed sample's step may wait).
     pub fn stance_velocity_implausible(
-        &self,
+        &mut self,
         expected_m_s: &Vector3<f64>,
         sd_m_s: f64,
         max_z2: f64,
     ) -> bool {
+        self.settle_covariance();
         let r = expected_m_s - self.v_m_s;
         let rv = sd_m_s * sd_m_s;
         (0..3).any(|a| r[a] * r[a] > max_z2 * (self.p[ix(V0 + a, V0 + a)] + rv))
@@ -191,6 +195,7 @@ impl Eskf {
     /// heading kept. The tilt's error becomes independent with variance `tilt_var`, and the
     /// velocity zero with variance `vel_var` (the foot stands).
     pub fn relevel(&mut self, up_body: &Vector3<f64>, tilt_var: f64, vel_var: f64) {
+        self.settle_covariance();
         let up_nav = self.nav_from_body * up_body;
         // Exactly upside down, any horizontal axis will do.
         let turn = UnitQuaternion::rotation_between(&up_nav, &Vector3::z()).unwrap_or_else(|| {
@@ -210,6 +215,7 @@ impl Eskf {
     /// error becomes independent of every other state with variance `var_m2_s2` per axis, so
     /// the next stance update sets it without moving the attitude or the bias.
     pub fn reset_velocity(&mut self, var_m2_s2: f64) {
+        self.settle_covariance();
         for a in 0..3 {
             self.clear_state(V0 + a, var_m2_s2);
         }
@@ -277,6 +283,7 @@ impl Eskf {
 
     /// `H P Hᵀ` of one sparse row: the predicted variance of a scalar observation.
     fn predicted_variance(&self, h: &SparseRow) -> f64 {
+        debug_assert!(self.covariance_settled(), "a deferred covariance read");
         h.iter()
             .map(|&(a, va)| {
                 h.iter()
@@ -298,6 +305,7 @@ impl Eskf {
     /// observed until new ones are cloned. For a filter put back to a copy that no longer
     /// matches the footprints its user recorded.
     pub fn forget_footprints(&mut self) {
+        self.settle_covariance();
         self.footprint_xy_m = [f64::NAN; 2];
         self.prev_footprint_xy_m = [f64::NAN; 2];
     }
@@ -306,6 +314,7 @@ impl Eskf {
     /// with its covariance (rows and columns of the clone copied from those of x and y).
     /// Without the clone states this does nothing.
     pub fn clone_footprint(&mut self) {
+        self.settle_covariance();
         let Some(c) = self.layout.clone else {
             return;
         };

@@ -261,6 +261,7 @@ impl Pipeline {
                 0.0 => f64::INFINITY,
                 sd => sd,
             },
+            covariance_step_s: e.covariance_step_s.get(),
         };
         let m = &self.cfg.model;
         let ext = if own_bias {

@@ -334,7 +334,14 @@ impl Pipeline {
             let s = *self.memory.get(i);
             let t_s = s.t_s + lag.lag_s;
             let (w_avg, f_avg) = ((w + s.gyro_rad_s) * 0.5, (f + s.accel_m_s2) * 0.5);
-            let omega = self.propagate(eskf, &mut spare, t_s - t, &w_avg, &f_avg);
+            let omega = self.propagate(
+                eskf,
+                &mut spare,
+                t_s - t,
+                &w_avg,
+                &f_avg,
+                CovarianceStep::MayDefer,
+            );
             turned *= UnitQuaternion::from_scaled_axis(omega * (t_s - t));
             (t, w, f) = (t_s, s.gyro_rad_s, s.accel_m_s2);
         }

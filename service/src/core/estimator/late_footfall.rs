@@ -304,7 +304,7 @@ impl Pipeline {
             let dt = b.t_s - a.t_s;
             let w_avg = (a.gyro_rad_s + b.gyro_rad_s) * 0.5;
             let f_avg = (a.accel_m_s2 + b.accel_m_s2) * 0.5;
-            self.propagate(eskf, spare, dt, &w_avg, &f_avg);
+            self.propagate(eskf, spare, dt, &w_avg, &f_avg, CovarianceStep::MayDefer);
             // As `navigate` does after each sample with an axis at its rail.
             self.widen_clipped(eskf, b.gyro_rad_s.map(|v| v.abs() >= rail).into(), dt);
         }

@@ -75,8 +75,8 @@ pub use stance_force::{ForceWitness, OffGravity, SPECIFIC_FORCE_TOLERANCE};
 use super::bias_kf::{BiasKf, PaperObserver, RotationAwareObserver};
 use super::clock::SampleClock;
 use super::eskf::{
-    BiasStates, Eskf, EskfInit, EskfNoise, ExtensionEstimates, ExtensionSd, Extensions, Innovation,
-    max_row_sum,
+    BiasStates, CovarianceStep, Eskf, EskfInit, EskfNoise, ExtensionEstimates, ExtensionSd,
+    Extensions, Innovation, max_row_sum,
 };
 use super::heading::{FootprintLine, HeadingAid, Rejection, StraightWalk};
 use super::health::{self, HealthLimits, LastGood};

@@ -18,7 +18,14 @@ impl Pipeline {
         stance: bool,
         stance_age_s: f64,
     ) -> Vector3<f64> {
-        let omega = self.propagate(eskf, spare, dt, w_avg, f_avg);
+        // A stance sample's covariance is needed at once (its velocity update); a swing's
+        // step may wait for the next ones' (`eskf.covariance_step_s`).
+        let covariance = if stance {
+            CovarianceStep::Now
+        } else {
+            CovarianceStep::MayDefer
+        };
+        let omega = self.propagate(eskf, spare, dt, w_avg, f_avg, covariance);
         self.widen_clipped(eskf, self.clipped_gyro_axes, dt);
         if stance {
             self.out.zupt = self.stance_velocity_update(eskf, &omega, true);
@@ -142,6 +149,7 @@ impl Pipeline {
     /// One strapdown step of the filter and of the paper and rotation-aware modes' observers,
     /// on the step's mean rate and force; returns the bias-corrected rate. Propagated into the
     /// spare buffer, which becomes the running filter: `spare` is left with the state before.
+    /// The covariance's step may wait as `covariance` says ([`CovarianceStep`]).
     pub(super) fn propagate(
         &mut self,
         eskf: &mut Box<Eskf>,
@@ -149,6 +157,7 @@ impl Pipeline {
         dt: f64,
         w_avg: &Vector3<f64>,
         f_avg: &Vector3<f64>,
+        covariance: CovarianceStep,
     ) -> Vector3<f64> {
         let bias = self.bias_only(eskf);
         match &mut self.bias {
@@ -165,7 +174,7 @@ impl Pipeline {
             }
         }
         let omega = eskf.corrected_rate(w_avg, f_avg, &bias);
-        eskf.propagate_into(spare, &omega, f_avg, dt);
+        eskf.propagate_into(spare, &omega, f_avg, dt, covariance);
         std::mem::swap(eskf, spare);
         omega
     }
