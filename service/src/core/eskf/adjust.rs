@@ -105,20 +105,14 @@ impl Eskf {
 
     /// A rotation of unknown size about the body axis `axis_body` (unit vector) with variance
     /// `var_rad2` happened: the attitude covariance grows along that axis (in the navigation
-    /// frame). Used for the rotation a clipped gyro axis did not measure.
+    /// frame). Used for the rotation a clipped gyro axis did not measure: process noise, so
+    /// while covariance steps wait it is added with theirs at the interval's end.
     pub fn widen_attitude_about(&mut self, axis_body: &Vector3<f64>, var_rad2: f64) {
-        self.settle_covariance();
         let a = self.nav_from_body * axis_body;
-        for i in 0..3 {
-            for j in i..3 {
-                // One product for both sides of the diagonal: P stays symmetric to the bit.
-                let d = var_rad2 * a[i] * a[j];
-                self.p[ix(TH + i, TH + j)] += d;
-                if i != j {
-                    self.p[ix(TH + j, TH + i)] += d;
-                }
-            }
-        }
+        // One product for both sides of the diagonal: the covariance stays symmetric to the bit.
+        let var =
+            std::array::from_fn(|j| std::array::from_fn(|i| var_rad2 * a[i.min(j)] * a[i.max(j)]));
+        self.widen_attitude(&var);
     }
 
     /// The heading's variance, rad².

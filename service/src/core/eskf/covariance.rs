@@ -1,4 +1,5 @@
-//! `P ← F P Fᵀ + Q`, written out on the column-major storage for the sparse transition.
+//! `P ← F P Fᵀ + Q`, written out on the column-major storage for the sparse transition, and
+//! the steps that wait between updates (`eskf.covariance_step_s`), summed into one.
 
 use super::*;
 
@@ -150,11 +151,23 @@ pub(super) struct Pending {
     ftm: [[f64; 2]; 3],
     /// The attitude's process noise, Σ σ²·dt (the swing's or the rest's σ, per sample).
     gyro_var: f64,
+    /// Attitude noise about particular axes (navigation frame, rad²): the rotation a clipped
+    /// gyro axis did not measure ([`Eskf::widen_attitude_about`]), added with the rest of the
+    /// interval's noise.
+    attitude_var: [[f64; 3]; 3],
     /// The velocity noise of each sample goes into the position over the samples after it, as
     /// one step per sample would take it: Σ dtᵢ·aᵢ and Σ dtᵢ·aᵢ², aᵢ the interval's time after
     /// sample i (the position-velocity and position terms of Q, per unit noise density²).
     accel_pv_s2: f64,
     accel_pp_s3: f64,
+}
+
+fn add3(a: &mut [[f64; 3]; 3], b: &[[f64; 3]; 3]) {
+    for (ra, rb) in a.iter_mut().zip(b) {
+        for (x, y) in ra.iter_mut().zip(rb) {
+            *x += y;
+        }
+    }
 }
 
 impl Pending {
@@ -164,24 +177,27 @@ impl Pending {
         let d = o.dt;
         self.accel_pp_s3 += d * (2.0 * self.accel_pv_s2 + d * self.dt);
         self.accel_pv_s2 += d * self.dt;
-        fn add3(a: &mut [[f64; 3]; 3], b: &[[f64; 3]; 3]) {
-            for (ra, rb) in a.iter_mut().zip(b) {
-                for (x, y) in ra.iter_mut().zip(rb) {
-                    *x += y;
-                }
-            }
-        }
         self.samples += o.samples;
         self.dt += o.dt;
         add3(&mut self.fvt, &o.fvt);
         add3(&mut self.ftb, &o.ftb);
         add3(&mut self.fts, &o.fts);
         add3(&mut self.ftk, &o.ftk);
+        add3(&mut self.attitude_var, &o.attitude_var);
         for (ra, rb) in self.ftm.iter_mut().zip(&o.ftm) {
             ra[0] += rb[0];
             ra[1] += rb[1];
         }
         self.gyro_var += o.gyro_var;
+    }
+}
+
+/// `p[θ, θ] += var` (column-major `var`, as `p`).
+fn add_attitude_var(p: &mut [f64; MAX_N * MAX_N], var: &[[f64; 3]; 3]) {
+    for (j, col) in var.iter().enumerate() {
+        for (i, v) in col.iter().enumerate() {
+            p[ix(TH + i, TH + j)] += v;
+        }
     }
 }
 
@@ -327,6 +343,16 @@ impl Eskf {
         self.step_covariance(&p0, &response0, &t);
     }
 
+    /// `var` (navigation frame, rad², symmetric) onto the attitude's covariance now, or, while
+    /// covariance steps wait, with their noise at the interval's end (as the gyro noise is).
+    pub(super) fn widen_attitude(&mut self, var: &[[f64; 3]; 3]) {
+        if self.pending.samples > 0 {
+            add3(&mut self.pending.attitude_var, var);
+        } else {
+            add_attitude_var(&mut self.p, var);
+        }
+    }
+
     /// Whether no covariance step waits: the covariance is the current one.
     pub fn covariance_settled(&self) -> bool {
         self.pending.samples == 0
@@ -381,6 +407,11 @@ impl Eskf {
             a[ix(V0 + i, V0 + i)] += qa;
             a[ix(TH + i, TH + i)] += t.gyro_var;
             a[ix(BG + i, BG + i)] += qb;
+        }
+        // The rotation a clipped axis did not measure while the steps waited (one that came
+        // with no step waiting went onto the covariance at once).
+        if t.attitude_var != [[0.0; 3]; 3] {
+            add_attitude_var(a, &t.attitude_var);
         }
         if t.samples > 1 {
             let q = self.noise.accel_m_s2.powi(2);

@@ -236,8 +236,8 @@ pub struct Eskf {
     /// The closed-loop response to a bias error present when the bias was set
     /// (`response.rs`).
     response: response::Response,
-    /// The covariance steps deferred since `p` and `response` were propagated
-    /// (`covariance.rs`): they are as of that many samples ago.
+    /// The covariance steps deferred since `p` and `response` were last propagated
+    /// (`covariance.rs`): those two are as of `pending`'s samples ago.
     pending: covariance::Pending,
     layout: Layout,
     gravity_m_s2: f64,
