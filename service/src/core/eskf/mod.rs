@@ -410,6 +410,11 @@ impl Eskf {
     }
 
     /// The diagonal of the covariance in use (`n` elements).
+    /// As of the last covariance step ([`Eskf::covariance_settled`]): between updates it may be
+    /// up to [`EskfNoise::covariance_step_s`] old. The health check reads it so, without
+    /// settling: a fault the waiting steps would make in it shows at the sample that applies
+    /// them (the step of finite inputs that could make one is beyond what the input checks let
+    /// through; the updates, which can, settle first).
     pub fn cov_diagonal(&self) -> impl Iterator<Item = &f64> {
         // Indexed rather than `step_by`: this runs on every sample (the health check), and
         // `StepBy`'s fold did not inline (6 % of the eskf mode's time in a profile). The bound

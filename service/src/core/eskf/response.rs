@@ -95,6 +95,9 @@ impl Eskf {
     /// The bias rows of the response: row `i`, column `j` is the part of a bias error of axis
     /// `j` (present when the bias was set) still in the estimate of axis `i`. Zero when the
     /// bias is not estimated.
+    /// As of the last covariance step ([`Eskf::covariance_settled`]): between updates it may be
+    /// up to [`EskfNoise::covariance_step_s`] old. It moves between updates only with the
+    /// bias-rate states (b←d), so the convergence flag read from it waits at most that long.
     pub fn unabsorbed_bias_error(&self) -> Matrix3<f64> {
         Matrix3::from_fn(|i, j| self.response[ix(BG + i, j)])
     }
