@@ -244,8 +244,9 @@ pub struct EskfFile {
     pub zupt_lever_arm_m: Option<f64>,
     /// Between updates (the swing), the covariance is propagated once per interval of about
     /// this length on the samples' summed transition, s (default 0.02; 0: on every sample).
-    /// Stance samples, and any sample an update or a covariance read follows, are propagated
-    /// at once.
+    /// Stance samples are propagated at once; an update, or a decision from the covariance,
+    /// brings the waiting steps up to date first (the per-sample health check reads the
+    /// covariance as of the last step).
     pub covariance_step_s: Option<f64>,
     /// Zero-rate updates: every later rest of at least `alignment.min_rest_s` (its first and
     /// its last `alignment.rest_tail_s` left out) observes the gyro bias like the initial rest,
