@@ -330,6 +330,31 @@ mod tests {
     }
 
     #[test]
+    fn a_covariance_step_outside_0_to_0_1_s_is_refused() {
+        for (text, shown) in [
+            ("[eskf]\ncovariance_step_s = -0.01\n", "-0.01"),
+            ("[eskf]\ncovariance_step_s = 0.2\n", "0.2"),
+            ("[eskf]\ncovariance_step_s = nan\n", "NaN"),
+        ] {
+            let f = ConfigFile::parse(text, Path::new("a.toml")).unwrap();
+            let err = f.validate().unwrap_err().to_string();
+            assert!(
+                err.contains("eskf.covariance_step_s") && err.contains(shown),
+                "{text}: {err}"
+            );
+        }
+        for (text, step_s) in [
+            ("", defaults::ESKF_COVARIANCE_STEP_S),
+            ("[eskf]\ncovariance_step_s = 0.0\n", 0.0),
+            ("[eskf]\ncovariance_step_s = 0.1\n", 0.1),
+        ] {
+            let f = ConfigFile::parse(text, Path::new("a.toml")).unwrap();
+            let cfg = f.validate().unwrap();
+            assert_eq!(cfg.eskf.covariance_step_s.get(), step_s, "{text}");
+        }
+    }
+
+    #[test]
     fn a_gap_threshold_beyond_any_foot_imu_is_refused() {
         for (text, shown) in [
             ("[estimator]\nmax_dt_s = 1e9\n", "1e9"),
