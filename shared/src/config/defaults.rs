@@ -221,7 +221,8 @@ pub const ESKF_ZUPT_LEVER_ARM_M: f64 = 0.0;
 
 /// `eskf.covariance_step_s`: between updates the covariance is propagated at about 50 Hz, on
 /// the samples' summed transition (0: on every sample). Chosen in session 46 on the whole
-/// gdins suite against 0 (README, "Results").
+/// gdins suite against 0, 0.01 and 0.04 s (the figures in `configs/gdins.toml`; README, "How
+/// the estimator works").
 pub const ESKF_COVARIANCE_STEP_S: f64 = 0.02;
 
 /// `eskf.zero_rate_updates`.

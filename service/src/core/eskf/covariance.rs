@@ -213,20 +213,20 @@ pub enum CovarianceStep {
     MayDefer,
 }
 
-struct Transition {
-    t: Pending,
+struct Transition<'a> {
+    t: &'a Pending,
     lay: Layout,
     /// The bias-rate states, when the bias is estimated.
     b_rate: Option<usize>,
 }
 
-impl Transition {
+impl Transition<'_> {
     /// `c ← F·c` for one column `c` (the leading `n` elements of a column of P, or of the
     /// bias-error response): rows p, v, θ, b read the old rows v, θ, b/s/k/m, d.
     #[inline]
     fn apply(&self, c: &mut [f64]) {
         let dot2 = |m: &[f64; 2], v: [f64; 2]| m[0] * v[0] + m[1] * v[1];
-        let (lay, t) = (&self.lay, &self.t);
+        let (lay, t) = (&self.lay, self.t);
         let v = [c[V0], c[V0 + 1], c[V0 + 2]];
         let th = [c[TH], c[TH + 1], c[TH + 2]];
         let b = [c[BG], c[BG + 1], c[BG + 2]];
@@ -376,7 +376,7 @@ impl Eskf {
             // The bias-error response (`response.rs`) goes through F alone.
             f_times_base(response0, &mut self.response, 3, &t.fvt, &t.ftb, dt);
         } else {
-            let tr = Transition { t: *t, lay, b_rate };
+            let tr = Transition { t, lay, b_rate };
             self.response = *response0;
             for c in 0..3 {
                 tr.apply(&mut self.response[c * MAX_N..][..MAX_N]);
