@@ -130,10 +130,24 @@ fn fast_gait_footfalls_the_detector_misses_are_updated_late_where_the_footprints
             off.rms_pct
         );
         if name.contains("exp38") {
+            // Better as configured; by more than 0.05 % of path with the peaks its rail cut
+            // off not put back, which made up for part of the missed footfalls' error (the
+            // run without late footfalls 0.79 -> 0.66 %, with them 0.68 -> 0.65 %).
             assert!(
-                on.rms_pct < off.rms_pct - 0.05,
-                "{name}: {:.3} %",
-                on.rms_pct
+                on.rms_pct < off.rms_pct,
+                "{name}: {:.3} % with the late footfalls, {:.3} % without",
+                on.rms_pct,
+                off.rms_pct
+            );
+            let peaks_off = |late| {
+                let mut c = config(late);
+                c.eskf.restore_clipped_peaks = false;
+                run(&log, &truth, &c).rms_pct
+            };
+            let (on, off) = (peaks_off(true), peaks_off(false));
+            assert!(
+                on < off - 0.05,
+                "{name}, peaks not put back: {on:.3} % with the late footfalls, {off:.3} % without"
             );
         }
     }

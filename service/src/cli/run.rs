@@ -208,8 +208,8 @@ pub(super) fn brief(s: &runner::Summary) -> serde_json::Value {
     }
     if s.clipped_samples > 0 {
         notes.push(format!(
-            "{} samples at a sensor rail (clipped)",
-            s.clipped_samples
+            "{} samples at a sensor rail (clipped); gyro peaks cut off by the rail put back: {} (not: {})",
+            s.clipped_samples, s.clipped_peaks_restored, s.clipped_peaks_not_restored
         ));
     }
     let mut brief = serde_json::json!({

@@ -426,8 +426,10 @@ pub fn analyse(
     if let Some(f) = super::clipping::clipping_finding(
         &super::clipping::find_rails(&log.rows),
         cfg.sensor.gyro_range_rad_s(),
-        // the error-state filter widens its attitude at a clipped sample; the paper's does not
-        cfg.eskf.clipped_rate_sd_rad_s.get() > 0.0 && matches!(cfg.mode, Mode::Eskf | Mode::Zupt),
+        // the error-state filter widens its attitude at a clipped sample and puts the peak
+        // back; the paper's does neither
+        (cfg.eskf.clipped_rate_sd_rad_s.get() > 0.0 || cfg.eskf.restore_clipped_peaks)
+            && matches!(cfg.mode, Mode::Eskf | Mode::Zupt),
     ) {
         effects.insert(0, f);
     }

@@ -123,7 +123,8 @@ pub enum Fix {
     RollingStance,
     /// The gyro range at the rail found in the data, so that its samples are flagged as
     /// clipped, with the clipping model on (`sensor.gyro_range_rad_s = rail / 0.99`,
-    /// `eskf.clipped_rate_sd_rad_s` at its default when it was 0).
+    /// `eskf.clipped_rate_sd_rad_s` at its default when it was 0, the peaks put back,
+    /// `eskf.restore_clipped_peaks`, when they were not).
     GyroRail {
         /// The rail, mrad/s.
         milli_rad_s: u32,
@@ -287,6 +288,9 @@ pub fn apply_fix(fix: Fix, file: &mut ConfigFile) -> bool {
             if file.eskf.clipped_rate_sd_rad_s == Some(0.0) {
                 file.eskf.clipped_rate_sd_rad_s = None; // the default
             }
+            if file.eskf.restore_clipped_peaks == Some(false) {
+                file.eskf.restore_clipped_peaks = None; // the default: put back
+            }
         }
         Fix::StrideScale { ratio_ppm } if ratio_ppm != 0 => {
             // The sensor reads (1 + k) × the force and the model divides by (1 + k₀): strides
@@ -420,6 +424,7 @@ mod tests {
         let mut file = ConfigFile::default();
         file.sensor.gyro_range_rad_s = Some(8.727);
         file.eskf.clipped_rate_sd_rad_s = Some(0.0);
+        file.eskf.restore_clipped_peaks = Some(false);
         assert!(apply_fix(rail, &mut file));
         let range = file.sensor.gyro_range_rad_s.unwrap();
         assert!((range - 5.0 / RAIL_OF_RANGE).abs() < 1e-12);
@@ -428,7 +433,8 @@ mod tests {
             "the rail is flagged"
         );
         assert_eq!(file.eskf.clipped_rate_sd_rad_s, None, "the default σ");
-        assert!(file.validate().is_ok());
+        let cfg = file.validate().unwrap();
+        assert!(cfg.eskf.restore_clipped_peaks, "the peaks put back");
         // A range at or below the rail already: nothing to do.
         assert!(!apply_fix(rail, &mut file));
         // A configured σ stays.

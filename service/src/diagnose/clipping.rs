@@ -130,10 +130,11 @@ pub fn clipping_finding(rails: &[Rail], range_rad_s: f64, clip_model_on: bool) -
                  clipped{}",
                 words.join("; "),
                 if clip_model_on {
-                    ", the lost rotation modelled"
+                    ", the lost rotation modelled (eskf.clipped_rate_sd_rad_s, \
+                     eskf.restore_clipped_peaks)"
                 } else {
-                    "; the lost rotation is not modelled (eskf.clipped_rate_sd_rad_s = 0, or \
-                     the paper's filter)"
+                    "; the lost rotation is not modelled (eskf.clipped_rate_sd_rad_s = 0 and \
+                     eskf.restore_clipped_peaks = false, or the paper's filter)"
                 }
             ),
             fix: None,

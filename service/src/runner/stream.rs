@@ -504,6 +504,8 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         ]),
         samples_refused: feed.refused,
         clipped_samples: c.clipped_samples,
+        clipped_peaks_restored: c.clipped_peaks_restored,
+        clipped_peaks_not_restored: c.clipped_peaks_not_restored,
         health_restores: c.health_restores,
         footprints_forgotten: c.footprints_forgotten,
         velocity_resets: c.velocity_resets,

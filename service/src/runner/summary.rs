@@ -75,6 +75,10 @@ pub struct Summary {
     pub samples_refused: Vec<String>,
     /// Accepted samples with an axis at the rail of its range (probably clipped).
     pub clipped_samples: u64,
+    /// Clipped gyro peaks whose cut-off rate was put back (see `Counters`).
+    pub clipped_peaks_restored: u64,
+    /// Clipped gyro peaks not put back, and why they may not be (see `Counters`).
+    pub clipped_peaks_not_restored: u64,
     /// Updates that failed the estimator's health check (the last good state was restored).
     pub health_restores: u64,
     /// Of those, the ones that forgot the cloned footprints (see `Counters`).

@@ -50,8 +50,12 @@ pub fn detector_label(kind: DetectorKind, threshold: f64, adaptive: bool) -> Str
 pub struct FrontEnd {
     /// Samples with a gyro or accelerometer axis at its rail.
     pub clipped_samples: u64,
-    /// The default run with the clipping model off (footprint RMS).
+    /// The default run with the clipping model off (footprint RMS): neither the attitude
+    /// variance about a clipped axis nor the peaks put back.
     pub clipping_off: Footprint,
+    /// The default run with the attitude variance about a clipped axis but the peaks cut off by
+    /// the rail not put back (`eskf.restore_clipped_peaks = false`).
+    pub peaks_not_restored: Footprint,
     /// The default run on the log cut [`KEPT_REST_S`] before its first footprint (the last
     /// [`KEPT_REST_S`] of the initial rest, on a walk that starts with one).
     pub without_rest: Option<Footprint>,
@@ -141,13 +145,14 @@ pub fn front_end_markdown(rows: &[SuiteRow]) -> String {
          starts with a rest leaves the last {KEPT_REST_S} s of it: alignment on that short stance, no rest-mean prior: the bias starts at the configuration's \
          `alignment.typical_gyro_bias_rad_s`, or zero), the same start from a checkpoint (a daemon restarted while the wearer \
          walks: the bias the other walks of the sensor ended with, per axis their median with their spread \
-         as σ, none of this walk's own), and the clipping model (attitude variance about a clipped gyro \
-         axis), footprint RMS, % of path. The start without rest is also scored in the map frame (as the \
+         as σ, none of this walk's own), and the clipping model (the attitude variance about a clipped gyro \
+         axis, and the peaks the rail cut off put back: `eskf.restore_clipped_peaks`) off, and with the \
+         variance alone, footprint RMS, % of path. The start without rest is also scored in the map frame (as the \
          map-frame table above: translated onto the first footprint, its own heading kept), against the \
          default run's map-frame figure: the first-leg alignment turns a run by its heading error at the \
          end of its first 5 m, where a start without a rest is least sure of it.\n\n\
-         | recording | default | without rest | difference | map frame: default | without rest | difference | from a checkpoint | difference | clipped samples | clipping model off |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|\n"
+         | recording | default | without rest | difference | map frame: default | without rest | difference | from a checkpoint | difference | clipped samples | clipping model off | peaks not put back |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n"
     );
     for r in rows {
         let fe = &r.front_end;
@@ -172,7 +177,7 @@ pub fn front_end_markdown(rows: &[SuiteRow]) -> String {
                     )
                 });
         s.push_str(&format!(
-            "| {} | {:.2} % | {} | {} | {map:.2} % | {cut_map} | {diff_map} | {} | {} | {} | {:.2} % |\n",
+            "| {} | {:.2} % | {} | {} | {map:.2} % | {cut_map} | {diff_map} | {} | {} | {} | {:.2} % | {:.2} % |\n",
             r.recording,
             r.best_rest.rms_pct,
             cut,
@@ -180,7 +185,8 @@ pub fn front_end_markdown(rows: &[SuiteRow]) -> String {
             warm,
             diff(fe.without_rest_checkpoint),
             fe.clipped_samples,
-            fe.clipping_off.rms_pct
+            fe.clipping_off.rms_pct,
+            fe.peaks_not_restored.rms_pct
         ));
     }
     s.push_str(

@@ -502,7 +502,12 @@ impl<'a> Ctx<'a> {
         clipped_samples: u64,
         every_stride: bool,
     ) -> Result<FrontEnd, RunError> {
+        // The clipping model off: neither the attitude variance nor the peaks put back; then
+        // the variance alone (the model before the peaks were put back).
         let mut off = self.config.clone();
+        off.eskf.restore_clipped_peaks = Some(false);
+        let (_, peaks_not_restored) =
+            self.run_with(&off, mode, BiasPrior::RestMean, BiasInjection::default())?;
         off.eskf.clipped_rate_sd_rad_s = Some(0.0);
         let (_, clipping_off) =
             self.run_with(&off, mode, BiasPrior::RestMean, BiasInjection::default())?;
@@ -518,6 +523,7 @@ impl<'a> Ctx<'a> {
         Ok(FrontEnd {
             clipped_samples,
             clipping_off,
+            peaks_not_restored,
             without_rest,
             without_rest_map_frame,
             without_rest_checkpoint: None,

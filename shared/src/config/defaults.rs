@@ -30,6 +30,9 @@ pub const ALIGNMENT_START_STANCE_TILT_SD_RAD: f64 = 0.035;
 /// 0.44 rad/s.
 pub const ESKF_CLIPPED_RATE_SD_RAD_S: f64 = 0.5;
 
+/// `eskf.restore_clipped_peaks`: a peak a gyro rail cut off is put back (`rail_peaks.rs`).
+pub const ESKF_RESTORE_CLIPPED_PEAKS: bool = true;
+
 /// `daemon.delivery`: a slow consumer loses the oldest samples, never stalls the daemon.
 pub const DAEMON_DELIVERY: &str = "live";
 

@@ -275,6 +275,11 @@ pub struct EskfFile {
     /// attitude variance grows about that axis by (this σ × dt)² per clipped sample, rad/s
     /// (default 0.5; 0: no clipping model).
     pub clipped_rate_sd_rad_s: Option<f64>,
+    /// The peak a gyro rail cut off is put back: a parabola through the two samples before and
+    /// the two after each run of samples at the rail gives the rate the rail cut off, and the
+    /// filter propagates again through those samples with it, two samples after the run's end
+    /// (default true).
+    pub restore_clipped_peaks: Option<bool>,
 }
 
 /// `[bias_kf]` section: the paper's 3-state bias filter.

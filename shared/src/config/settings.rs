@@ -182,6 +182,8 @@ pub struct EskfConfig {
     pub zupt_rolling_height_m: NonNegative,
     /// σ of the true rate's excess over a clipped gyro axis.
     pub clipped_rate_sd_rad_s: NonNegative,
+    /// Peaks cut off by a gyro rail put back (a parabola through the samples around each run).
+    pub restore_clipped_peaks: bool,
 }
 
 /// Validated `[bias_kf]`.

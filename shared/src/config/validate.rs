@@ -435,6 +435,9 @@ impl ConfigFile {
                     100.0,
                     "must be in [0, 100] rad/s",
                 )?,
+                restore_clipped_peaks: k
+                    .restore_clipped_peaks
+                    .unwrap_or(ESKF_RESTORE_CLIPPED_PEAKS),
             },
             bias_kf: BiasKfConfig {
                 tilt_sd_rad: Positive::in_range(

@@ -87,7 +87,7 @@ impl Pipeline {
                 mount_yaw_rad, forward_body, mount_sum, last_footprint, footprint_yaw_rad,
                 prev_footprint_yaw_rad, footprint_t_s, line_before, heading_suspect,
                 off_direction, reacquiring, line, stance_events, stance_edge, stances_seen,
-                resumed_look, was_stance, clock, late, undo, zero_rate_applied, clipped_gyro_axes,
+                resumed_look, was_stance, clock, late, undo, zero_rate_applied, clipped_gyro_axes, rails,
                 stance_obs_done, stance_f_sum, pending_heading, headings_queued, last_queued,
                 stance_force,
                 warm_start, converged_at_s, out;

@@ -176,6 +176,7 @@ impl Pipeline {
             t_s: t_clock,
             gyro_rad_s: *w,
             accel_m_s2: *f,
+            restored_rad_s: Vector3::zeros(),
         });
     }
 
@@ -329,11 +330,12 @@ impl Pipeline {
         let mut spare = take_spare(&mut self.before, eskf);
         let v_before = eskf.v_m_s;
         let mut turned = UnitQuaternion::identity();
-        let (mut t, mut w, mut f) = (newest.t_s, newest.gyro_rad_s, newest.accel_m_s2);
+        // The rates as integrated: with what a rail cut off put back (`rail_peaks.rs`).
+        let (mut t, mut w, mut f) = (newest.t_s, newest.rate_rad_s(), newest.accel_m_s2);
         for i in lag.from..lag.to {
             let s = *self.memory.get(i);
             let t_s = s.t_s + lag.lag_s;
-            let (w_avg, f_avg) = ((w + s.gyro_rad_s) * 0.5, (f + s.accel_m_s2) * 0.5);
+            let (w_avg, f_avg) = ((w + s.rate_rad_s()) * 0.5, (f + s.accel_m_s2) * 0.5);
             let omega = self.propagate(
                 eskf,
                 &mut spare,
@@ -343,7 +345,7 @@ impl Pipeline {
                 CovarianceStep::MayDefer,
             );
             turned *= UnitQuaternion::from_scaled_axis(omega * (t_s - t));
-            (t, w, f) = (t_s, s.gyro_rad_s, s.accel_m_s2);
+            (t, w, f) = (t_s, s.rate_rad_s(), s.accel_m_s2);
         }
         self.before = Some(spare);
         if !self.healthy(eskf) {

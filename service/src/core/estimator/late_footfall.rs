@@ -290,8 +290,9 @@ impl Pipeline {
     }
 
     /// Propagates the filter through the remembered samples after index `from` up to `to`, as
-    /// `navigate` did when they came (no stance among them).
-    fn propagate_remembered(
+    /// `navigate` did when they came (no stance among them), with what a rail cut off them put
+    /// back (`rail_peaks.rs`).
+    pub(super) fn propagate_remembered(
         &mut self,
         eskf: &mut Box<Eskf>,
         spare: &mut Box<Eskf>,
@@ -302,7 +303,7 @@ impl Pipeline {
         for i in from + 1..=to {
             let (a, b) = (*self.memory.get(i - 1), *self.memory.get(i));
             let dt = b.t_s - a.t_s;
-            let w_avg = (a.gyro_rad_s + b.gyro_rad_s) * 0.5;
+            let w_avg = (a.rate_rad_s() + b.rate_rad_s()) * 0.5;
             let f_avg = (a.accel_m_s2 + b.accel_m_s2) * 0.5;
             self.propagate(eskf, spare, dt, &w_avg, &f_avg, CovarianceStep::MayDefer);
             // As `navigate` does after each sample with an axis at its rail.

@@ -32,7 +32,8 @@
 //! `stride_memory.rs` the last strides' samples and footfalls that fill one;
 //! `late_footfall.rs` a footfall the detector missed (a short dip of its statistic, or a stride
 //! cycle without a stance), updated late from the stride memory; `stance_force.rs` the quiet
-//! stances' specific force held against gravity (an accelerometer scale gone wrong); `recovery.rs`
+//! stances' specific force held against gravity (an accelerometer scale gone wrong);
+//! `rail_peaks.rs` the peaks a gyro rail cut off, put back and propagated again; `recovery.rs`
 //! what it does when the state or the input goes bad (health check, velocity reset, a first
 //! time stamp that was an outlier, a glitched one); `gap_copy.rs` the copy of the estimator
 //! that undoes a glitched one; `tests.rs` its unit tests.
@@ -46,6 +47,7 @@ mod gaps;
 mod late_footfall;
 mod navigation;
 mod observations;
+mod rail_peaks;
 mod reacquire;
 mod recovery;
 mod rest;
@@ -223,6 +225,8 @@ struct Pipeline {
     zero_rate_applied: bool,
     /// Gyro axes of the current sample at their rail.
     clipped_gyro_axes: [bool; 3],
+    /// The open clipped peak and the filter before it (`rail_peaks.rs`).
+    rails: rail_peaks::RailPeaks,
     stance_obs_done: bool,
     stance_f_sum: (Vector3<f64>, u64),
     pending_heading: Option<QueuedHeading>,
@@ -283,6 +287,7 @@ impl Estimator {
             resumed_look: false,
             was_stance: false,
             clipped_gyro_axes: [false; 3],
+            rails: rail_peaks::RailPeaks::default(),
             clock: SampleClock::default(),
             stance_force: stance_force::StanceForce::default(),
             memory: stride_memory::StrideMemory::default(),
@@ -588,6 +593,8 @@ impl Estimator {
         }
         self.p.warm_start = Some(ws);
         self.warm_start_since_copy = true;
+        // A clipped peak open now would be propagated again from before the warm start.
+        self.p.drop_rail_peak();
         if let Stage::Running(eskf) = &mut self.stage {
             self.p.apply_warm_start(eskf, &ws);
         }

@@ -32,6 +32,7 @@ impl Pipeline {
         let (t_prev, w_prev, f_prev) = match gap {
             Gap::NewSegment => {
                 self.memory.clear();
+                self.drop_rail_peak();
                 if self.stance_edge == StanceEdge::Began {
                     self.memory.footfall(t_clock);
                 }
@@ -103,12 +104,19 @@ impl Pipeline {
         }
         if failed {
             self.late.drop_pending();
+            self.drop_rail_peak();
         } else {
             self.check_specific_force(dt, stance, w, f);
             self.remember(t_clock, w, f);
+            self.follow_rail_peaks(eskf, t_prev, stance);
             let began = self.stance_edge == StanceEdge::Began;
             let flags = (decision.raw, stance, began, decision.statistic);
             self.follow_footfalls(eskf, t_clock, flags, &omega);
+            if self.out.late_footfall_t_s.is_some() {
+                // Propagated again from before the late footfall's update, an open peak
+                // would lose it.
+                self.drop_rail_peak();
+            }
         }
         self.counters.velocity_resets += u64::from(self.out.velocity_reset);
         self.counters.heading_reacquisitions += u64::from(self.out.heading_reacquired.is_some());

@@ -20,12 +20,21 @@ const MATCH_SAMPLES: usize = 30;
 /// The stride lag is searched within this fraction of the last stride period either way.
 const LAG_SPAN: f64 = 0.2;
 
-/// One remembered sample: sample-clock time, gyro and specific force (sensor axes).
+/// One remembered sample: sample-clock time, gyro and specific force (sensor axes) as they
+/// came, and the rate a gyro rail cut off it, put back (`rail_peaks.rs`; zero unless).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Remembered {
     pub t_s: f64,
     pub gyro_rad_s: Vector3<f64>,
     pub accel_m_s2: Vector3<f64>,
+    pub restored_rad_s: Vector3<f64>,
+}
+
+impl Remembered {
+    /// The rate the filter integrates: the reading and what its rail cut off.
+    pub fn rate_rad_s(&self) -> Vector3<f64> {
+        self.gyro_rad_s + self.restored_rad_s
+    }
 }
 
 /// A fixed ring of the last [`MEMORY_SAMPLES`] samples and the last two footfall times.
@@ -62,6 +71,7 @@ impl Default for StrideMemory {
             t_s: f64::NAN,
             gyro_rad_s: Vector3::zeros(),
             accel_m_s2: Vector3::zeros(),
+            restored_rad_s: Vector3::zeros(),
         };
         Self {
             ring: vec![zero; MEMORY_SAMPLES],
@@ -114,6 +124,12 @@ impl StrideMemory {
     /// The `i`-th remembered sample, 0 = oldest.
     pub fn get(&self, i: usize) -> &Remembered {
         &self.ring[(self.head + i) % self.ring.len()]
+    }
+
+    /// The `i`-th remembered sample, 0 = oldest, to put back what a rail cut off.
+    pub fn get_mut(&mut self, i: usize) -> &mut Remembered {
+        let cap = self.ring.len();
+        &mut self.ring[(self.head + i) % cap]
     }
 
     pub fn len(&self) -> usize {
@@ -270,6 +286,7 @@ mod tests {
                 t_s,
                 gyro_rad_s: gait(t_s, period_s),
                 accel_m_s2: Vector3::new(0.0, 0.0, 9.81),
+                restored_rad_s: Vector3::zeros(),
             });
             // The sample nearest to 60 % of each stride.
             if ((t_s / period_s).fract() - 0.6).abs() * period_s < 0.5 * DT {
@@ -330,6 +347,7 @@ mod tests {
                 t_s,
                 gyro_rad_s: gait(t_s, 1.0),
                 accel_m_s2: Vector3::zeros(),
+                restored_rad_s: Vector3::zeros(),
             });
         }
         // No footfall yet.
@@ -348,6 +366,7 @@ mod tests {
                 t_s: 10.2 + k as f64 * DT,
                 gyro_rad_s: Vector3::zeros(),
                 accel_m_s2: Vector3::zeros(),
+                restored_rad_s: Vector3::zeros(),
             });
         }
         assert_eq!(stopped.stride_lag(12.9, &Vector3::zeros(), MAX_STEP), None);
@@ -434,6 +453,7 @@ mod tests {
                 t_s: k as f64,
                 gyro_rad_s: Vector3::zeros(),
                 accel_m_s2: Vector3::zeros(),
+                restored_rad_s: Vector3::zeros(),
             });
         }
         assert_eq!(m.len(), MEMORY_SAMPLES);

@@ -173,6 +173,14 @@ pub struct Counters {
     pub rejected_time_jump: u64,
     /// Accepted samples with an axis at the rail of its range (probably clipped).
     pub clipped_samples: u64,
+    /// Clipped gyro peaks (samples with an axis at its rail, up to two samples without) whose
+    /// cut-off rate was put back and the filter propagated again (`eskf.restore_clipped_peaks`).
+    pub clipped_peaks_restored: u64,
+    /// Clipped gyro peaks that were not put back: a stance, a gap, a health fault, a late
+    /// footfall or a warm start came before their end, they lasted longer than
+    /// `rail_peaks::MAX_PEAK_SAMPLES`, no run had two samples off the rail either side, or
+    /// the filter propagated again failed the health check.
+    pub clipped_peaks_not_restored: u64,
     /// Samples after which the state failed the health check: the first few in a row undo
     /// the sample's update (the state before it), further ones restore the state of the last
     /// healthy stance.

@@ -396,6 +396,8 @@ impl<'a> EstState<'a> {
         p.rejected_implausible += c.rejected_implausible;
         p.rejected_time_jump += c.rejected_time_jump;
         p.clipped_samples += c.clipped_samples;
+        p.clipped_peaks_restored += c.clipped_peaks_restored;
+        p.clipped_peaks_not_restored += c.clipped_peaks_not_restored;
         p.health_restores += c.health_restores;
         p.footprints_forgotten += c.footprints_forgotten;
         p.velocity_resets += c.velocity_resets;

@@ -1,0 +1,361 @@
+//! Peaks a gyro rail cut off, put back (`eskf.restore_clipped_peaks`).
+//!
+//! A gyro axis at its rail reads the rail while the foot turns faster: the rotation beyond it
+//! is lost to the attitude, and through the tilt to the velocity and the stride. At the
+//! 3DM-GX5-25's ±8.7 rad/s that is little (110 runs in the 16 gdins walks, a median 0.6 mrad
+//! each); a sensor set to a smaller range loses radians per walk (the same walks clipped at
+//! ±5 rad/s: 3,200 runs, 190 rad).
+//!
+//! A peak opens at a swing sample with a gyro axis at its rail: the filter before that sample
+//! is kept (one copy, its buffer reused). It closes when [`OFF_RAIL_AFTER`] samples in a row
+//! have no axis at the rail. Then, on each axis, each run of samples at the rail gets the
+//! parabola (least squares) through the two samples before it and the two after it, the
+//! continuation of the rate's own curve over the top; what the parabola has beyond a
+//! sample's reading, at most [`MAX_EXCESS_OF_RAIL`] of the rail, is the rate the rail cut off.
+//! It is remembered beside the reading (`Remembered::restored_rad_s`), and the filter goes
+//! back to the kept copy and propagates again through the peak's samples with it, as a late
+//! footfall does (`late_footfall.rs`); later replays from the stride memory integrate it too.
+//! The samples stay clipped samples: the attitude variance about the axis still grows by
+//! `eskf.clipped_rate_sd_rad_s` (what the parabola cannot know). What the estimator output in
+//! between stays as it was: the peak is put back two samples (10 ms at 200 Hz) after its end.
+//!
+//! The parabola was checked on peaks the rail did not cut, without footprints: the 16 walks'
+//! rates clipped at 7, 5 and 4 rad/s (`docs/experiments/rail-peaks.py`). It takes the RMS
+//! error of a run's lost rotation from 22 to 10 mrad at 7 rad/s, 89 to 48 at 5, 154 to 59 at 4,
+//! and puts back 81, 104 and 96 % of the rotation lost; the cap at half the rail keeps a fit
+//! over a long run from running away (without it 60 and 99 mrad at 5 and 4 rad/s).
+//!
+//! Not put back, and counted (`Counters::clipped_peaks_not_restored`): a peak with a stance, a
+//! gap, a health fault, a late footfall or a warm start before its end, one longer than
+//! [`MAX_PEAK_SAMPLES`], one none of whose runs has two samples off the rail either side
+//! (remembered), and one whose filter propagated again fails the health check. The paper's and
+//! the rotation-aware modes keep their bias outside the filter and are left as they were.
+
+use super::late_footfall::{Anchor, keep, restore};
+use super::stride_memory::StrideMemory;
+use super::*;
+
+/// Samples in a row with no gyro axis at its rail that close a peak: the parabola's two after
+/// each run.
+const OFF_RAIL_AFTER: usize = 2;
+
+/// A peak's samples at most, from the one before its first to its end (0.5 s at 200 Hz; the
+/// longest run of the 16 walks clipped at 4 rad/s is 58 samples).
+pub(super) const MAX_PEAK_SAMPLES: usize = 100;
+
+/// The rate put back at most, as a fraction of the rail.
+const MAX_EXCESS_OF_RAIL: f64 = 0.5;
+
+/// The open peak.
+#[derive(Debug, Clone, Copy)]
+struct Peak {
+    /// The sample before its first, sample clock: the filter kept is the one at it.
+    anchor_t_s: f64,
+    /// Samples since that one.
+    samples: usize,
+    /// Samples in a row with no axis at the rail, at its end.
+    off_rail: usize,
+}
+
+/// The clipped peaks: the open one and the filter before it.
+#[derive(Debug, Clone, Default)]
+pub(super) struct RailPeaks {
+    open: Option<Peak>,
+    anchor: LastGood<Anchor>,
+}
+
+impl Pipeline {
+    /// Follows the clipped peaks after a navigated sample whose health check passed and which
+    /// is remembered: opens a peak at a swing sample with a gyro axis at its rail (the filter
+    /// `before` it kept, at `t_prev_s`), drops it at a stance or a gap, and puts it back when
+    /// [`OFF_RAIL_AFTER`] samples in a row are off the rail.
+    pub(super) fn follow_rail_peaks(&mut self, eskf: &mut Box<Eskf>, t_prev_s: f64, stance: bool) {
+        if !self.cfg.eskf.restore_clipped_peaks || !matches!(self.bias, BiasFilter::InEskf) {
+            return;
+        }
+        let clipped = self.clipped_gyro_axes.contains(&true);
+        let interrupted = stance || self.out.gap_s.is_some();
+        let Some(peak) = &mut self.rails.open else {
+            if clipped
+                && !interrupted
+                && let Some(before) = self.before.as_deref()
+            {
+                keep(&mut self.rails.anchor, before, &self.bias, t_prev_s);
+                self.rails.open = Some(Peak {
+                    anchor_t_s: t_prev_s,
+                    samples: 1,
+                    off_rail: 0,
+                });
+            }
+            return;
+        };
+        peak.samples += 1;
+        peak.off_rail = if clipped { 0 } else { peak.off_rail + 1 };
+        if interrupted || peak.samples > MAX_PEAK_SAMPLES {
+            self.drop_rail_peak();
+        } else if peak.off_rail == OFF_RAIL_AFTER {
+            let anchor_t_s = peak.anchor_t_s;
+            self.rails.open = None;
+            self.restore_rail_peak(eskf, anchor_t_s);
+        }
+    }
+
+    /// The open peak is not put back (something came between it and its end), and counted.
+    pub(super) fn drop_rail_peak(&mut self) {
+        if self.rails.open.take().is_some() {
+            self.counters.clipped_peaks_not_restored += 1;
+        }
+    }
+
+    /// Puts back the peak after the remembered sample at `anchor_t_s` (the newest remembered
+    /// sample ends it) and propagates the filter kept there again through it.
+    fn restore_rail_peak(&mut self, eskf: &mut Box<Eskf>, anchor_t_s: f64) {
+        let n = self.memory.len();
+        let rail = CLIP_FRACTION * self.cfg.sensor.gyro_range_rad_s();
+        let from = (0..n).rev().find(|&i| self.memory.get(i).t_s == anchor_t_s);
+        let restored = from.is_some_and(|from| put_back_runs(&mut self.memory, from, rail));
+        let (true, Some(from)) = (restored, from) else {
+            self.counters.clipped_peaks_not_restored += 1;
+            return;
+        };
+        // The filter as it is, to go back to (this sample's health check is made already).
+        keep(&mut self.undo, eskf, &self.bias, f64::NAN);
+        let mut replay = take_spare(&mut self.before, eskf);
+        restore(&self.rails.anchor, &mut replay, &mut self.bias);
+        let mut spare = std::mem::replace(eskf, replay);
+        self.propagate_remembered(eskf, &mut spare, from, n - 1);
+        self.before = Some(spare);
+        if !self.healthy(eskf) {
+            restore(&self.undo, eskf, &mut self.bias);
+            for i in from..n {
+                self.memory.get_mut(i).restored_rad_s = Vector3::zeros();
+            }
+            self.counters.clipped_peaks_not_restored += 1;
+            return;
+        }
+        self.counters.clipped_peaks_restored += 1;
+    }
+}
+
+/// Puts back, in the remembered samples after `from`, the rate cut off each run of samples
+/// at the `rail` on each axis; whether any run was put back.
+fn put_back_runs(memory: &mut StrideMemory, from: usize, rail: f64) -> bool {
+    let n = memory.len();
+    let mut any = false;
+    for axis in 0..3 {
+        let mut i = from + 1;
+        while i < n {
+            let sign = memory.get(i).gyro_rad_s[axis].signum();
+            if memory.get(i).gyro_rad_s[axis].abs() < rail {
+                i += 1;
+                continue;
+            }
+            let start = i;
+            while i < n && memory.get(i).gyro_rad_s[axis] * sign >= rail {
+                i += 1;
+            }
+            any |= put_back_run(memory, axis, (start, i), rail, sign);
+        }
+    }
+    any
+}
+
+/// The parabola (least squares) through the two samples before the run `start..end` on `axis`
+/// and the two after it; what it has beyond each run sample's reading (towards `sign`), at most
+/// [`MAX_EXCESS_OF_RAIL`] of the `rail`, put back. False, and nothing put back, without two
+/// samples off the rail either side.
+fn put_back_run(
+    memory: &mut StrideMemory,
+    axis: usize,
+    (start, end): (usize, usize),
+    rail: f64,
+    sign: f64,
+) -> bool {
+    if start < 2 || end + 2 > memory.len() {
+        return false;
+    }
+    let around = [start - 2, start - 1, end, end + 1];
+    if around
+        .iter()
+        .any(|&i| memory.get(i).gyro_rad_s[axis].abs() >= rail)
+    {
+        return false;
+    }
+    // Time from the run's first sample, in units of the span the four samples cover (the
+    // normal equations stay well conditioned at any sample rate).
+    let t0_s = memory.get(start).t_s;
+    let span_s = memory.get(end + 1).t_s - memory.get(start - 2).t_s;
+    if span_s <= 0.0 {
+        return false;
+    }
+    let x_of = |t_s: f64| (t_s - t0_s) / span_s;
+    let (mut ata, mut aty) = (Matrix3::zeros(), Vector3::zeros());
+    for &i in &around {
+        let m = memory.get(i);
+        let x = x_of(m.t_s);
+        let row = Vector3::new(1.0, x, x * x);
+        ata += row * row.transpose();
+        aty += row * m.gyro_rad_s[axis];
+    }
+    let Some(c) = ata.lu().solve(&aty) else {
+        return false;
+    };
+    let max_excess = MAX_EXCESS_OF_RAIL * rail;
+    for i in start..end {
+        let m = memory.get_mut(i);
+        let x = x_of(m.t_s);
+        let fit = c[0] + c[1] * x + c[2] * x * x;
+        let excess = (sign * (fit - m.gyro_rad_s[axis])).clamp(0.0, max_excess);
+        m.restored_rad_s[axis] = sign * excess;
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::stride_memory::Remembered;
+    use super::*;
+    use corridor_shared::config::{Config, ConfigFile};
+
+    const DT_S: f64 = 0.005;
+
+    /// A memory of `n` samples of the rate `w(t)` on axis y, read through a `rail`.
+    fn clipped_memory(n: usize, rail: f64, w: impl Fn(f64) -> f64) -> StrideMemory {
+        let mut m = StrideMemory::default();
+        for k in 0..n {
+            let t_s = k as f64 * DT_S;
+            m.push(Remembered {
+                t_s,
+                gyro_rad_s: Vector3::new(0.0, w(t_s).min(rail), 0.0),
+                accel_m_s2: Vector3::new(0.0, 0.0, 9.81),
+                restored_rad_s: Vector3::zeros(),
+            });
+        }
+        m
+    }
+
+    #[test]
+    fn a_parabolic_peak_is_put_back_exactly_and_a_runaway_fit_is_capped() {
+        let peak = |t_s: f64| 10.0 - 2000.0 * (t_s - 0.1).powi(2);
+        let rail = 8.5;
+        let mut m = clipped_memory(41, rail, peak);
+        assert!(put_back_runs(&mut m, 0, rail));
+        let mut clipped = 0;
+        for i in 0..m.len() {
+            let s = m.get(i);
+            let truth = peak(s.t_s);
+            if truth >= rail {
+                clipped += 1;
+                assert!((s.rate_rad_s()[1] - truth).abs() < 1e-9, "{i}: {s:?}");
+            } else {
+                assert_eq!(s.restored_rad_s, Vector3::zeros(), "{i}");
+            }
+        }
+        assert_eq!(
+            clipped, 11,
+            "the peak lies up to 1.5 rad/s over the rail for 55 ms"
+        );
+        // At a rail of 3 rad/s the peak lies 7 rad/s over it: put back up to half the rail.
+        let mut m = clipped_memory(41, 3.0, peak);
+        assert!(put_back_runs(&mut m, 0, 3.0));
+        let top = (0..m.len()).map(|i| m.get(i).rate_rad_s()[1]);
+        assert_eq!(top.fold(f64::MIN, f64::max), 4.5);
+    }
+
+    #[test]
+    fn a_run_without_two_samples_off_the_rail_on_either_side_is_left_as_read() {
+        let rail = 8.5;
+        // The peak's top at the memory's second sample: one sample before it.
+        let early = |t_s: f64| 10.0 - 2000.0 * (t_s - 0.005).powi(2);
+        let mut m = clipped_memory(12, rail, early);
+        assert!(!put_back_runs(&mut m, 0, rail));
+        // Ends one sample before the memory does.
+        let late = |t_s: f64| 10.0 - 2000.0 * (t_s - 0.05).powi(2);
+        let mut m = clipped_memory(13, rail, late);
+        assert!(!put_back_runs(&mut m, 0, rail));
+        assert!((0..m.len()).all(|i| m.get(i).restored_rad_s == Vector3::zeros()));
+    }
+
+    /// The defaults with the gdins gyro's range (±8.727 rad/s).
+    fn gdins_range() -> Config {
+        let mut f = ConfigFile::default();
+        f.sensor.gyro_range_rad_s = Some(8.727);
+        f.validate().unwrap()
+    }
+
+    /// The attitude's rotation over a half-sine lobe about y of peak `peak_rad_s` lasting
+    /// 0.2 s (after an aligning rest), and the estimator's counters.
+    fn lobe(restore: bool, peak_rad_s: f64) -> (f64, Counters) {
+        let mut cfg = gdins_range();
+        cfg.eskf.restore_clipped_peaks = restore;
+        let rail = cfg.sensor.gyro_range_rad_s();
+        let mut est = Estimator::new(cfg, HeadingAid::None);
+        let level = [0.0, 0.0, 9.81];
+        let mut t_s = 0.0;
+        let mut step = |est: &mut Estimator, w_y: f64| {
+            let s = ImuInput {
+                t_s,
+                gyro_rad_s: [0.0, w_y.clamp(-rail, rail), 0.0],
+                accel_m_s2: level,
+            };
+            t_s += DT_S;
+            *est.step(&s).unwrap()
+        };
+        for _ in 0..600 {
+            step(&mut est, 0.0);
+        }
+        // Moving: the filter aligns, and runs from here.
+        step(&mut est, 0.5);
+        let before = step(&mut est, 0.5).nav_from_body;
+        for k in 1..40 {
+            step(
+                &mut est,
+                peak_rad_s * (std::f64::consts::PI * k as f64 / 40.0).sin(),
+            );
+        }
+        // Back to the lobe's start rate: closes the peak (two samples off the rail).
+        for _ in 0..3 {
+            step(&mut est, 0.5);
+        }
+        let after = est.last_estimate().nav_from_body;
+        let q = |a: [f64; 4]| {
+            UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(a[0], a[1], a[2], a[3]))
+        };
+        ((q(before).inverse() * q(after)).angle(), *est.counters())
+    }
+
+    #[test]
+    fn a_peak_cut_off_by_the_rail_is_put_back_into_the_attitude() {
+        let range = gdins_range().sensor.gyro_range_rad_s();
+        let peak = 1.25 * range;
+        // The rotation the lobe and the samples around it make, and the part the range cuts.
+        let rate = |k: usize| peak * (std::f64::consts::PI * k as f64 / 40.0).sin();
+        let truth: f64 = (0..=40).map(|k| rate(k) * DT_S).sum::<f64>() + 3.0 * 0.5 * DT_S;
+        let lost: f64 = (1..40).map(|k| (rate(k) - range).max(0.0) * DT_S).sum();
+        assert!(lost > 0.03, "{lost}");
+        let (off, c_off) = lobe(false, peak);
+        let (on, c_on) = lobe(true, peak);
+        assert!(c_on.clipped_samples > 5 && c_on.clipped_samples == c_off.clipped_samples);
+        assert_eq!(
+            (c_on.clipped_peaks_restored, c_on.clipped_peaks_not_restored),
+            (1, 0)
+        );
+        assert_eq!(
+            (
+                c_off.clipped_peaks_restored,
+                c_off.clipped_peaks_not_restored
+            ),
+            (0, 0)
+        );
+        // Without: the rotation the rail cut is missing (the trapezoid's ends aside).
+        assert!(
+            (truth - off - lost).abs() < 0.1 * lost,
+            "{truth} {off} {lost}"
+        );
+        // With: within a tenth of it (a sine is no parabola).
+        assert!((truth - on).abs() < 0.1 * lost, "{truth} {on} {lost}");
+        // Under the rail, nothing to put back.
+        let (_, c) = lobe(true, 0.9 * CLIP_FRACTION * range);
+        assert_eq!((c.clipped_samples, c.clipped_peaks_restored), (0, 0));
+    }
+}
