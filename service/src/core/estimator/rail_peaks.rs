@@ -26,7 +26,8 @@
 //! over a long run from running away (without it 60 and 99 mrad at 5 and 4 rad/s).
 //!
 //! Not put back, and counted (`Counters::clipped_peaks_not_restored`): a peak with a stance, a
-//! gap, a health fault, a late footfall or a warm start before its end, one longer than
+//! gap, a health fault, a late footfall or a warm start before its end, one that begins at a
+//! stance's end (counted if it goes on past that sample: see `follow_rail_peaks`), one longer than
 //! [`MAX_PEAK_SAMPLES`], one none of whose runs has two samples off the rail either side
 //! (remembered), and one whose filter propagated again fails the health check. The paper's and
 //! the rotation-aware modes keep their bias outside the filter and are left as they were.
@@ -68,13 +69,24 @@ impl Pipeline {
     /// Follows the clipped peaks after a navigated sample whose health check passed and which
     /// is remembered: opens a peak at a swing sample with a gyro axis at its rail (the filter
     /// `before` it kept, at `t_prev_s`), drops it at a stance or a gap, and puts it back when
-    /// [`OFF_RAIL_AFTER`] samples in a row are off the rail.
-    pub(super) fn follow_rail_peaks(&mut self, eskf: &mut Box<Eskf>, t_prev_s: f64, stance: bool) {
+    /// [`OFF_RAIL_AFTER`] samples in a row are off the rail. `stance_ended`: the sample ended a
+    /// stance, and no peak opens at it: the filter before it still has the stance's rest noise,
+    /// and the rest fused at the stance's end (`navigate`) is only in the filter after it.
+    /// Propagated again from before it, both were lost, the update counted as made (a knock
+    /// at the rail ending a rest took the z bias 0.006 -> 0 rad/s). Such a run is not put back:
+    /// if it goes on, a peak opens at its next sample, which has no two samples off the rail
+    /// before it (counted as not put back).
+    pub(super) fn follow_rail_peaks(
+        &mut self,
+        eskf: &mut Box<Eskf>,
+        t_prev_s: f64,
+        (stance, stance_ended): (bool, bool),
+    ) {
         if !self.cfg.eskf.restore_clipped_peaks || !matches!(self.bias, BiasFilter::InEskf) {
             return;
         }
         let clipped = self.clipped_gyro_axes.contains(&true);
-        let interrupted = stance || self.out.gap_s.is_some();
+        let interrupted = stance || stance_ended || self.out.gap_s.is_some();
         let Some(peak) = &mut self.rails.open else {
             if clipped
                 && !interrupted
@@ -357,5 +369,62 @@ mod tests {
         // Under the rail, nothing to put back.
         let (_, c) = lobe(true, 0.9 * CLIP_FRACTION * range);
         assert_eq!((c.clipped_samples, c.clipped_peaks_restored), (0, 0));
+    }
+
+    /// `n` samples of `gyro` and `accel` from `t0_s`; the time after them.
+    fn feed(est: &mut Estimator, t0_s: f64, n: usize, gyro: [f64; 3], accel: [f64; 3]) -> f64 {
+        for k in 0..n {
+            let t_s = t0_s + k as f64 * DT_S;
+            est.step(&ImuInput {
+                t_s,
+                gyro_rad_s: gyro,
+                accel_m_s2: accel,
+            })
+            .unwrap();
+        }
+        t0_s + n as f64 * DT_S
+    }
+
+    #[test]
+    fn a_rest_fused_where_a_peak_begins_is_not_undone_by_putting_the_peak_back() {
+        // A 2 s rest ends at a sample with the y axis at its rail (a knock): that sample fuses
+        // the rest (the zero-rate update at a stance's end) and ends its rest noise. A peak
+        // opened there kept the filter before it, and putting the peak back propagated again
+        // from there: the update was lost (counted as made) and the rest noise ran on into
+        // the swing.
+        let bias = [0.004, -0.002, 0.006];
+        let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
+        let mut runs = Vec::new();
+        for restore in [false, true] {
+            let mut cfg = gdins_range();
+            cfg.alignment.gyro_bias_prior = BiasPrior::None;
+            cfg.eskf.zero_rate_updates = true;
+            cfg.eskf.restore_clipped_peaks = restore;
+            let rail = cfg.sensor.gyro_range_rad_s();
+            let mut est = Estimator::new(cfg, HeadingAid::None);
+            let t = feed(&mut est, 0.0, 200, bias, level);
+            let t = feed(&mut est, t, 10, bias, pushed);
+            let t = feed(&mut est, t, 400, bias, level);
+            let zero_rate = est.counters().zero_rate_updates;
+            let t = feed(&mut est, t, 1, [bias[0], rail, bias[2]], level);
+            assert_eq!(
+                est.counters().zero_rate_updates,
+                zero_rate + 1,
+                "fused there"
+            );
+            let t = feed(&mut est, t, 3, bias, pushed);
+            feed(&mut est, t, 1, bias, level);
+            runs.push((*est.last_estimate(), *est.counters()));
+        }
+        let [(off, c_off), (on, c_on)] = runs.try_into().unwrap();
+        assert_eq!(c_on.zero_rate_updates, c_off.zero_rate_updates);
+        // The run's fit has nothing over the rail to put back: the estimate is as without.
+        assert_eq!(on.gyro_bias_rad_s, off.gyro_bias_rad_s);
+        assert_eq!(on.nav_from_body, off.nav_from_body);
+        assert_eq!(
+            (c_on.clipped_peaks_restored, c_on.clipped_peaks_not_restored),
+            (0, 0),
+            "not opened where a stance ended"
+        );
     }
 }

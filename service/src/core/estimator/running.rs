@@ -56,6 +56,8 @@ impl Pipeline {
             _ => self.before_bias.save(&self.bias),
         }
         let mut before = take_spare(&mut self.before, eskf);
+        // A stance ends at this sample: `navigate` ends its rest noise and may fuse the rest.
+        let stance_ended = self.was_stance && !stance;
         let used_before = (self.counters.heading_used, self.counters.stride_used);
         let external_pending = self.pending_heading.is_some();
         let expired_before = self.counters.headings_expired;
@@ -108,7 +110,7 @@ impl Pipeline {
         } else {
             self.check_specific_force(dt, stance, w, f);
             self.remember(t_clock, w, f);
-            self.follow_rail_peaks(eskf, t_prev, stance);
+            self.follow_rail_peaks(eskf, t_prev, (stance, stance_ended));
             let began = self.stance_edge == StanceEdge::Began;
             let flags = (decision.raw, stance, began, decision.statistic);
             self.follow_footfalls(eskf, t_clock, flags, &omega);
