@@ -63,6 +63,9 @@ struct Peak {
 pub(super) struct RailPeaks {
     open: Option<Peak>,
     anchor: LastGood<Anchor>,
+    /// A peak longer than [`MAX_PEAK_SAMPLES`] was dropped: none opens until a sample is off
+    /// the rail (it would be the same peak, counted twice).
+    wait_off_rail: bool,
 }
 
 impl Pipeline {
@@ -87,6 +90,10 @@ impl Pipeline {
         }
         let clipped = self.clipped_gyro_axes.contains(&true);
         let interrupted = stance || stance_ended || self.out.gap_s.is_some();
+        if self.rails.wait_off_rail {
+            self.rails.wait_off_rail = clipped;
+            return;
+        }
         let Some(peak) = &mut self.rails.open else {
             if clipped
                 && !interrupted
@@ -104,6 +111,7 @@ impl Pipeline {
         peak.samples += 1;
         peak.off_rail = if clipped { 0 } else { peak.off_rail + 1 };
         if interrupted || peak.samples > MAX_PEAK_SAMPLES {
+            self.rails.wait_off_rail = !interrupted && clipped;
             self.drop_rail_peak();
         } else if peak.off_rail == OFF_RAIL_AFTER {
             let anchor_t_s = peak.anchor_t_s;
@@ -125,8 +133,10 @@ impl Pipeline {
         let n = self.memory.len();
         let rail = CLIP_FRACTION * self.cfg.sensor.gyro_range_rad_s();
         let from = (0..n).rev().find(|&i| self.memory.get(i).t_s == anchor_t_s);
-        let restored = from.is_some_and(|from| put_back_runs(&mut self.memory, from, rail));
-        let (true, Some(from)) = (restored, from) else {
+        // Nothing to put back (no run with two samples off the rail either side, or a
+        // parabola under every reading): no propagation again.
+        let put_back = from.is_some_and(|from| put_back_runs(&mut self.memory, from, rail));
+        let (true, Some(from)) = (put_back, from) else {
             self.counters.clipped_peaks_not_restored += 1;
             return;
         };
@@ -150,7 +160,7 @@ impl Pipeline {
 }
 
 /// Puts back, in the remembered samples after `from`, the rate cut off each run of samples
-/// at the `rail` on each axis; whether any run was put back.
+/// at the `rail` on each axis; whether any rate was put back.
 fn put_back_runs(memory: &mut StrideMemory, from: usize, rail: f64) -> bool {
     let n = memory.len();
     let mut any = false;
@@ -174,8 +184,8 @@ fn put_back_runs(memory: &mut StrideMemory, from: usize, rail: f64) -> bool {
 
 /// The parabola (least squares) through the two samples before the run `start..end` on `axis`
 /// and the two after it; what it has beyond each run sample's reading (towards `sign`), at most
-/// [`MAX_EXCESS_OF_RAIL`] of the `rail`, put back. False, and nothing put back, without two
-/// samples off the rail either side.
+/// [`MAX_EXCESS_OF_RAIL`] of the `rail`, put back. Whether anything was: not without two
+/// samples off the rail either side, nor where the parabola lies under every reading.
 fn put_back_run(
     memory: &mut StrideMemory,
     axis: usize,
@@ -213,14 +223,16 @@ fn put_back_run(
         return false;
     };
     let max_excess = MAX_EXCESS_OF_RAIL * rail;
+    let mut any = false;
     for i in start..end {
         let m = memory.get_mut(i);
         let x = x_of(m.t_s);
         let fit = c[0] + c[1] * x + c[2] * x * x;
         let excess = (sign * (fit - m.gyro_rad_s[axis])).clamp(0.0, max_excess);
         m.restored_rad_s[axis] = sign * excess;
+        any |= excess > 0.0;
     }
-    true
+    any
 }
 
 #[cfg(test)]
@@ -286,6 +298,52 @@ mod tests {
         let mut m = clipped_memory(13, rail, late);
         assert!(!put_back_runs(&mut m, 0, rail));
         assert!((0..m.len()).all(|i| m.get(i).restored_rad_s == Vector3::zeros()));
+        // A plateau at the rail whose neighbours fall away steeply enough that the parabola
+        // through them lies under it: nothing to put back.
+        let plateau = |t_s: f64| {
+            if (t_s - 0.05).abs() < 0.006 {
+                rail
+            } else {
+                0.0
+            }
+        };
+        let mut m = clipped_memory(21, rail, plateau);
+        assert!(!put_back_runs(&mut m, 0, rail));
+    }
+
+    #[test]
+    fn a_peak_longer_than_the_limit_is_counted_once_as_not_put_back() {
+        let mut est = Estimator::new(gdins_range(), HeadingAid::None);
+        let rail = est.config().sensor.gyro_range_rad_s();
+        let mut t_s = 0.0;
+        let mut step = |est: &mut Estimator, w_y: f64| {
+            est.step(&ImuInput {
+                t_s,
+                gyro_rad_s: [0.0, w_y, 0.0],
+                accel_m_s2: [0.0, 0.0, 9.81],
+            })
+            .unwrap();
+            t_s += DT_S;
+        };
+        for _ in 0..600 {
+            step(&mut est, 0.0);
+        }
+        for _ in 0..5 {
+            step(&mut est, 0.5);
+        }
+        // Twice the limit at the rail, then off it.
+        for _ in 0..2 * MAX_PEAK_SAMPLES {
+            step(&mut est, rail);
+        }
+        for _ in 0..5 {
+            step(&mut est, 0.5);
+        }
+        let c = est.counters();
+        assert_eq!(c.clipped_samples, 2 * MAX_PEAK_SAMPLES as u64);
+        assert_eq!(
+            (c.clipped_peaks_restored, c.clipped_peaks_not_restored),
+            (0, 1)
+        );
     }
 
     /// The defaults with the gdins gyro's range (±8.727 rad/s).
