@@ -171,7 +171,10 @@ fn add3(a: &mut [[f64; 3]; 3], b: &[[f64; 3]; 3]) {
 }
 
 impl Pending {
-    /// `o` (one sample) after the samples summed so far.
+    /// `o` (one sample) after the samples summed so far. Inline: out of line (as the code
+    /// around it changed in session 47) the sample's blocks went through `memcpy`, 3.5 % more
+    /// instructions per sample.
+    #[inline(always)]
     fn append(&mut self, o: &Pending) {
         debug_assert_eq!(o.samples, 1);
         let d = o.dt;
