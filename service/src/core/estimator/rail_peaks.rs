@@ -2,9 +2,9 @@
 //!
 //! A gyro axis at its rail reads the rail while the foot turns faster: the rotation beyond it
 //! is lost to the attitude, and through the tilt to the velocity and the stride. At the
-//! 3DM-GX5-25's ±8.7 rad/s that is little (110 runs in the 16 gdins walks, a median 0.6 mrad
-//! each); a sensor set to a smaller range loses radians per walk (the same walks clipped at
-//! ±5 rad/s: 3,200 runs, 190 rad).
+//! 3DM-GX5-25's ±8.7 rad/s that is little (110 runs in the 16 gdins walks, a median 1.2 mrad
+//! each by the parabola below); a sensor set to a smaller range loses radians per walk (the
+//! same walks clipped at ±5 rad/s: 3,200 runs, 190 rad).
 //!
 //! A peak opens at a swing sample with a gyro axis at its rail: the filter before that sample
 //! is kept (one copy, its buffer reused). It closes when [`OFF_RAIL_AFTER`] samples in a row
@@ -23,14 +23,15 @@
 //! rates clipped at 7, 5 and 4 rad/s (`docs/experiments/rail-peaks.py`). It takes the RMS
 //! error of a run's lost rotation from 22 to 10 mrad at 7 rad/s, 89 to 48 at 5, 154 to 59 at 4,
 //! and puts back 81, 104 and 96 % of the rotation lost; the cap at half the rail keeps a fit
-//! over a long run from running away (without it 60 and 99 mrad at 5 and 4 rad/s).
+//! over a long run from running away (without it 61 and 100 mrad at 5 and 4 rad/s).
 //!
 //! Not put back, and counted (`Counters::clipped_peaks_not_restored`): a peak with a stance, a
 //! gap, a health fault, a late footfall or a warm start before its end, one that begins at a
-//! stance's end (counted if it goes on past that sample: see `follow_rail_peaks`), one longer than
-//! [`MAX_PEAK_SAMPLES`], one none of whose runs has two samples off the rail either side
-//! (remembered), and one whose filter propagated again fails the health check. The paper's and
-//! the rotation-aware modes keep their bias outside the filter and are left as they were.
+//! stance's end (counted if it goes on past that sample and has no other run put back: see
+//! `follow_rail_peaks`), one longer than [`MAX_PEAK_SAMPLES`], one none of whose runs has two
+//! samples off the rail either side (remembered), and one whose filter propagated again fails
+//! the health check. The paper's and the rotation-aware modes keep their bias outside the
+//! filter and are left as they were.
 
 use super::late_footfall::{Anchor, keep, restore};
 use super::stride_memory::StrideMemory;
@@ -40,8 +41,10 @@ use super::*;
 /// each run.
 const OFF_RAIL_AFTER: usize = 2;
 
-/// A peak's samples at most, from the one before its first to its end (0.5 s at 200 Hz; the
-/// longest run of the 16 walks clipped at 4 rad/s is 58 samples).
+/// A peak's samples at most, after the one before its first up to its end (0.5 s at 200 Hz;
+/// the longest run of the 16 walks clipped at 4 rad/s is 58 samples, but a peak spans the runs
+/// of every axis until two samples are off the rail: offline, without the stances that drop
+/// one, the longest such peak there is 99 samples, just under the limit).
 pub(super) const MAX_PEAK_SAMPLES: usize = 100;
 
 /// The rate put back at most, as a fraction of the rail.
@@ -78,7 +81,7 @@ impl Pipeline {
     /// Propagated again from before it, both were lost, the update counted as made (a knock
     /// at the rail ending a rest took the z bias 0.006 -> 0 rad/s). Such a run is not put back:
     /// if it goes on, a peak opens at its next sample, which has no two samples off the rail
-    /// before it (counted as not put back).
+    /// before it (the peak counted as not put back, unless another of its runs is put back).
     pub(super) fn follow_rail_peaks(
         &mut self,
         eskf: &mut Box<Eskf>,
