@@ -6,7 +6,9 @@ Two checks, neither fitted to footprints:
 1. The parabola on peaks the rail did not cut (no footprints): the 16 gdins walks' rates clipped
    at lower rails (7, 5, 4 rad/s by default), each run of samples at the rail reconstructed as the
    estimator does it (least squares through the two samples before and the two after, at most
-   half the rail above it), against the rates that were recorded there. Prints, per rail, the
+   half the rail above it), against the rates that were recorded there. (The runs here are the
+   samples at the rail itself; the estimator takes every sample within 2 % of its configured
+   range, which the suite below sets to rail / 0.99, so samples from 0.99 × the rail on.) Prints, per rail, the
    runs, the RMS of a run's lost rotation without and with the reconstruction, the share of the
    lost rotation put back, and the rate's error per clipped sample (what `eskf.
    clipped_rate_sd_rad_s` stands for).

@@ -134,13 +134,16 @@ impl Pipeline {
     /// sample ends it) and propagates the filter kept there again through it.
     fn restore_rail_peak(&mut self, eskf: &mut Box<Eskf>, anchor_t_s: f64) {
         let n = self.memory.len();
-        let rail = CLIP_FRACTION * self.cfg.sensor.gyro_range_rad_s();
+        let rail_rad_s = CLIP_FRACTION * self.cfg.sensor.gyro_range_rad_s();
         let from = (0..n).rev().find(|&i| self.memory.get(i).t_s == anchor_t_s);
-        // Nothing to put back (no run with two samples off the rail either side, or a
-        // parabola under every reading): no propagation again.
-        let put_back = from.is_some_and(|from| put_back_runs(&mut self.memory, from, rail));
-        let (true, Some(from)) = (put_back, from) else {
-            self.counters.clipped_peaks_not_restored += 1;
+        let put_back = from.map(|from| put_back_runs(&mut self.memory, from, rail_rad_s));
+        let (Some(PutBack::Some), Some(from)) = (put_back, from) else {
+            // Not put back, and counted; but a peak whose parabolas all lie under their
+            // readings lost nothing (readings within 2 % of the range, not at it): in neither
+            // count. No propagation again either way.
+            if put_back != Some(PutBack::NothingAbove) {
+                self.counters.clipped_peaks_not_restored += 1;
+            }
             return;
         };
         // The filter as it is, to go back to (this sample's health check is made already).
@@ -162,56 +165,75 @@ impl Pipeline {
     }
 }
 
-/// Puts back, in the remembered samples after `from`, the rate cut off each run of samples
-/// at the `rail` on each axis; whether any rate was put back.
-fn put_back_runs(memory: &mut StrideMemory, from: usize, rail: f64) -> bool {
+/// What a peak's runs at the rail allowed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum PutBack {
+    /// No run had two samples off the rail either side: nothing could be put back.
+    NoFit,
+    /// Every parabola lay under its readings: nothing was cut off.
+    NothingAbove,
+    /// A rate was put back.
+    Some,
+}
+
+/// Puts back, in the remembered samples after `from`, the rate cut off each run of samples at
+/// the rail (`rail_rad_s`) on each axis.
+fn put_back_runs(memory: &mut StrideMemory, from: usize, rail_rad_s: f64) -> PutBack {
     let n = memory.len();
-    let mut any = false;
+    let mut result = PutBack::NoFit;
     for axis in 0..3 {
         let mut i = from + 1;
         while i < n {
             let sign = memory.get(i).gyro_rad_s[axis].signum();
-            if memory.get(i).gyro_rad_s[axis].abs() < rail {
+            if memory.get(i).gyro_rad_s[axis].abs() < rail_rad_s {
                 i += 1;
                 continue;
             }
             let start = i;
-            while i < n && memory.get(i).gyro_rad_s[axis] * sign >= rail {
+            while i < n && memory.get(i).gyro_rad_s[axis] * sign >= rail_rad_s {
                 i += 1;
             }
-            any |= put_back_run(memory, axis, (start, i), rail, sign);
+            result = match (
+                put_back_run(memory, axis, (start, i), rail_rad_s, sign),
+                result,
+            ) {
+                (Some(true), _) | (_, PutBack::Some) => PutBack::Some,
+                (Some(false), _) | (None, PutBack::NothingAbove) => PutBack::NothingAbove,
+                (None, PutBack::NoFit) => PutBack::NoFit,
+            };
         }
     }
-    any
+    result
 }
 
 /// The parabola (least squares) through the two samples before the run `start..end` on `axis`
 /// and the two after it; what it has beyond each run sample's reading (towards `sign`), at most
-/// [`MAX_EXCESS_OF_RAIL`] of the `rail`, put back. Whether anything was: not without two
-/// samples off the rail either side, nor where the parabola lies under every reading.
+/// [`MAX_EXCESS_OF_RAIL`] of the rail (`rail_rad_s`), put back. `None` (nothing put back)
+/// without two samples off the rail either side; else whether the parabola rose above any
+/// reading.
 fn put_back_run(
     memory: &mut StrideMemory,
     axis: usize,
     (start, end): (usize, usize),
-    rail: f64,
+    rail_rad_s: f64,
     sign: f64,
-) -> bool {
+) -> Option<bool> {
     if start < 2 || end + 2 > memory.len() {
-        return false;
+        return None;
     }
     let around = [start - 2, start - 1, end, end + 1];
     if around
         .iter()
-        .any(|&i| memory.get(i).gyro_rad_s[axis].abs() >= rail)
+        .any(|&i| memory.get(i).gyro_rad_s[axis].abs() >= rail_rad_s)
     {
-        return false;
+        return None;
     }
     // Time from the run's first sample, in units of the span the four samples cover (the
     // normal equations stay well conditioned at any sample rate).
     let t0_s = memory.get(start).t_s;
     let span_s = memory.get(end + 1).t_s - memory.get(start - 2).t_s;
     if span_s <= 0.0 {
-        return false;
+        return None;
     }
     let x_of = |t_s: f64| (t_s - t0_s) / span_s;
     let (mut ata, mut aty) = (Matrix3::zeros(), Vector3::zeros());
@@ -222,20 +244,18 @@ fn put_back_run(
         ata += row * row.transpose();
         aty += row * m.gyro_rad_s[axis];
     }
-    let Some(c) = ata.lu().solve(&aty) else {
-        return false;
-    };
-    let max_excess = MAX_EXCESS_OF_RAIL * rail;
+    let c = ata.lu().solve(&aty)?;
+    let max_excess_rad_s = MAX_EXCESS_OF_RAIL * rail_rad_s;
     let mut any = false;
     for i in start..end {
         let m = memory.get_mut(i);
         let x = x_of(m.t_s);
-        let fit = c[0] + c[1] * x + c[2] * x * x;
-        let excess = (sign * (fit - m.gyro_rad_s[axis])).clamp(0.0, max_excess);
-        m.restored_rad_s[axis] = sign * excess;
-        any |= excess > 0.0;
+        let fit_rad_s = c[0] + c[1] * x + c[2] * x * x;
+        let excess_rad_s = (sign * (fit_rad_s - m.gyro_rad_s[axis])).clamp(0.0, max_excess_rad_s);
+        m.restored_rad_s[axis] = sign * excess_rad_s;
+        any |= excess_rad_s > 0.0;
     }
-    any
+    Some(any)
 }
 
 #[cfg(test)]
@@ -266,7 +286,7 @@ mod tests {
         let peak = |t_s: f64| 10.0 - 2000.0 * (t_s - 0.1).powi(2);
         let rail = 8.5;
         let mut m = clipped_memory(41, rail, peak);
-        assert!(put_back_runs(&mut m, 0, rail));
+        assert_eq!(put_back_runs(&mut m, 0, rail), PutBack::Some);
         let mut clipped = 0;
         for i in 0..m.len() {
             let s = m.get(i);
@@ -284,7 +304,7 @@ mod tests {
         );
         // At a rail of 3 rad/s the peak lies 7 rad/s over it: put back up to half the rail.
         let mut m = clipped_memory(41, 3.0, peak);
-        assert!(put_back_runs(&mut m, 0, 3.0));
+        assert_eq!(put_back_runs(&mut m, 0, 3.0), PutBack::Some);
         let top = (0..m.len()).map(|i| m.get(i).rate_rad_s()[1]);
         assert_eq!(top.fold(f64::MIN, f64::max), 4.5);
     }
@@ -295,11 +315,11 @@ mod tests {
         // The peak's top at the memory's second sample: one sample before it.
         let early = |t_s: f64| 10.0 - 2000.0 * (t_s - 0.005).powi(2);
         let mut m = clipped_memory(12, rail, early);
-        assert!(!put_back_runs(&mut m, 0, rail));
+        assert_eq!(put_back_runs(&mut m, 0, rail), PutBack::NoFit);
         // Ends one sample before the memory does.
         let late = |t_s: f64| 10.0 - 2000.0 * (t_s - 0.05).powi(2);
         let mut m = clipped_memory(13, rail, late);
-        assert!(!put_back_runs(&mut m, 0, rail));
+        assert_eq!(put_back_runs(&mut m, 0, rail), PutBack::NoFit);
         assert!((0..m.len()).all(|i| m.get(i).restored_rad_s == Vector3::zeros()));
         // A plateau at the rail whose neighbours fall away steeply enough that the parabola
         // through them lies under it: nothing to put back.
@@ -311,7 +331,7 @@ mod tests {
             }
         };
         let mut m = clipped_memory(21, rail, plateau);
-        assert!(!put_back_runs(&mut m, 0, rail));
+        assert_eq!(put_back_runs(&mut m, 0, rail), PutBack::NothingAbove);
     }
 
     #[test]
@@ -449,10 +469,10 @@ mod tests {
     #[test]
     fn a_rest_fused_where_a_peak_begins_is_not_undone_by_putting_the_peak_back() {
         // A 2 s rest ends at a sample with the y axis at its rail (a knock): that sample fuses
-        // the rest (the zero-rate update at a stance's end) and ends its rest noise. A peak
-        // opened there kept the filter before it, and putting the peak back propagated again
-        // from there: the update was lost (counted as made) and the rest noise ran on into
-        // the swing.
+        // the rest (the zero-rate update at a stance's end) and ends its rest noise. The x axis
+        // swings over its rail from the next sample on. A peak opened at the knock kept the filter before it, and
+        // putting the x peak back propagated again from there: the update was lost (counted
+        // as made) and the rest noise ran on into the swing.
         let bias = [0.004, -0.002, 0.006];
         let (level, pushed) = ([0.0, 0.0, 9.81], [30.0, 0.0, 9.81]);
         let mut runs = Vec::new();
@@ -461,31 +481,44 @@ mod tests {
             cfg.alignment.gyro_bias_prior = BiasPrior::None;
             cfg.eskf.zero_rate_updates = true;
             cfg.eskf.restore_clipped_peaks = restore;
-            let rail = cfg.sensor.gyro_range_rad_s();
+            let range = cfg.sensor.gyro_range_rad_s();
             let mut est = Estimator::new(cfg, HeadingAid::None);
             let t = feed(&mut est, 0.0, 200, bias, level);
             let t = feed(&mut est, t, 10, bias, pushed);
-            let t = feed(&mut est, t, 400, bias, level);
+            let mut t = feed(&mut est, t, 400, bias, level);
             let zero_rate = est.counters().zero_rate_updates;
-            let t = feed(&mut est, t, 1, [bias[0], rail, bias[2]], level);
+            // x: a parabola through 0.6 × the range at the knock, up to 1.3 × it three samples
+            // later and down, read through the range (at the rail from the next sample on, so
+            // that one peak holds the knock and x's run).
+            let x = |j: f64| (1.3 - 0.7 / 9.0 * (j - 3.0).powi(2)).max(0.0) * range;
+            t = feed(&mut est, t, 1, [x(0.0), range, bias[2]], level);
             assert_eq!(
                 est.counters().zero_rate_updates,
                 zero_rate + 1,
                 "fused there"
             );
-            let t = feed(&mut est, t, 3, bias, pushed);
-            feed(&mut est, t, 1, bias, level);
+            for j in 1..=8 {
+                let x_rad_s = x(f64::from(j)).min(range);
+                t = feed(&mut est, t, 1, [x_rad_s, bias[1], bias[2]], pushed);
+            }
+            feed(&mut est, t, 3, bias, pushed);
             runs.push((*est.last_estimate(), *est.counters()));
         }
         let [(off, c_off), (on, c_on)] = runs.try_into().unwrap();
         assert_eq!(c_on.zero_rate_updates, c_off.zero_rate_updates);
-        // The run's fit has nothing over the rail to put back: the estimate is as without.
-        assert_eq!(on.gyro_bias_rad_s, off.gyro_bias_rad_s);
-        assert_eq!(on.nav_from_body, off.nav_from_body);
         assert_eq!(
-            (c_on.clipped_peaks_restored, c_on.clipped_peaks_not_restored),
-            (0, 0),
-            "not opened where a stance ended"
+            (c_off.clipped_peaks_restored, c_on.clipped_peaks_restored),
+            (0, 1)
+        );
+        // The x peak was put back from the filter after the rest was fused: its bias is the
+        // rest's (nothing but the zero-rate update moved it since), as without the peaks.
+        assert_eq!(on.gyro_bias_rad_s, off.gyro_bias_rad_s);
+        for (b, want) in on.gyro_bias_rad_s.iter().zip(bias) {
+            assert!((b - want).abs() < 5e-4, "{:?}", on.gyro_bias_rad_s);
+        }
+        assert_ne!(
+            on.nav_from_body, off.nav_from_body,
+            "the x peak was put back"
         );
     }
 }

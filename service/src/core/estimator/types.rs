@@ -178,9 +178,10 @@ pub struct Counters {
     pub clipped_peaks_restored: u64,
     /// Clipped gyro peaks that were not put back: a stance, a gap, a health fault, a late
     /// footfall or a warm start came before their end, they lasted longer than
-    /// `rail_peaks::MAX_PEAK_SAMPLES`, no run had two samples off the rail either side, the
-    /// parabola lay under every reading (nothing to put back), or the filter propagated again
-    /// failed the health check. A peak still open when the stream ends is in neither count.
+    /// `rail_peaks::MAX_PEAK_SAMPLES`, no run had two samples off the rail either side, or the
+    /// filter propagated again failed the health check. In neither count: a peak whose
+    /// parabolas all lie under their readings (nothing was cut off: readings within 2 % of the
+    /// range, not at it), and a peak still open when the stream ends.
     pub clipped_peaks_not_restored: u64,
     /// Samples after which the state failed the health check: the first few in a row undo
     /// the sample's update (the state before it), further ones restore the state of the last
