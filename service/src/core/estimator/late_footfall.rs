@@ -299,7 +299,7 @@ impl Pipeline {
         from: usize,
         to: usize,
     ) {
-        let rail = CLIP_FRACTION * self.cfg.sensor.gyro_range_rad_s();
+        let rail = self.gyro_rail_rad_s();
         for i in from + 1..=to {
             let (a, b) = (*self.memory.get(i - 1), *self.memory.get(i));
             let dt = b.t_s - a.t_s;

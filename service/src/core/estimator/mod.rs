@@ -500,7 +500,7 @@ impl Estimator {
         p.counters.clipped_samples += u64::from(clipped);
         // A gyro axis at its rail read less than the true rate: the attitude variance grows
         // about that axis in `navigate`.
-        let rail = CLIP_FRACTION * p.cfg.sensor.gyro_range_rad_s();
+        let rail = p.gyro_rail_rad_s();
         p.clipped_gyro_axes = if clipped {
             w.map(|v| v.abs() >= rail).into()
         } else {

@@ -99,6 +99,11 @@ impl Pipeline {
         omega
     }
 
+    /// A gyro reading at or beyond this magnitude is at its rail (probably clipped), rad/s.
+    pub(super) fn gyro_rail_rad_s(&self) -> f64 {
+        CLIP_FRACTION * self.cfg.sensor.gyro_range_rad_s()
+    }
+
     /// The attitude variance about each gyro axis at its rail grows by the clipped rate's σ
     /// over the step: the rotation the rail cut off.
     pub(super) fn widen_clipped(&self, eskf: &mut Eskf, clipped_axes: [bool; 3], dt: f64) {

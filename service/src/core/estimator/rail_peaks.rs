@@ -30,7 +30,8 @@
 //! stance's end (counted if it goes on past that sample and has no other run put back: see
 //! `follow_rail_peaks`), one longer than [`MAX_PEAK_SAMPLES`], one none of whose runs has two
 //! samples off the rail either side (remembered), and one whose filter propagated again fails
-//! the health check. The paper's and the rotation-aware modes keep their bias outside the
+//! the health check. A peak whose parabolas all lie under their readings lost nothing and is
+//! in neither count. The paper's and the rotation-aware modes keep their bias outside the
 //! filter and are left as they were.
 
 use super::late_footfall::{Anchor, keep, restore};
@@ -134,7 +135,7 @@ impl Pipeline {
     /// sample ends it) and propagates the filter kept there again through it.
     fn restore_rail_peak(&mut self, eskf: &mut Box<Eskf>, anchor_t_s: f64) {
         let n = self.memory.len();
-        let rail_rad_s = CLIP_FRACTION * self.cfg.sensor.gyro_range_rad_s();
+        let rail_rad_s = self.gyro_rail_rad_s();
         let from = (0..n).rev().find(|&i| self.memory.get(i).t_s == anchor_t_s);
         let put_back = from.map(|from| put_back_runs(&mut self.memory, from, rail_rad_s));
         let (Some(PutBack::Some), Some(from)) = (put_back, from) else {

@@ -21,7 +21,7 @@ const MATCH_SAMPLES: usize = 30;
 const LAG_SPAN: f64 = 0.2;
 
 /// One remembered sample: sample-clock time, gyro and specific force (sensor axes) as they
-/// came, and the rate a gyro rail cut off it, put back (`rail_peaks.rs`; zero unless).
+/// came, and the rate a gyro rail cut off it, put back (`rail_peaks.rs`; zero where nothing was).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Remembered {
     pub t_s: f64,
