@@ -317,7 +317,8 @@ impl<'a> Feed<'a> {
     }
 
     /// The outcome, with the trace kept by the caller.
-    fn outcome(self, trace: Trace) -> RunOutcome {
+    fn outcome(mut self, trace: Trace) -> RunOutcome {
+        self.est.end_stream();
         RunOutcome {
             trace,
             counters: *self.est.counters(),

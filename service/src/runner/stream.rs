@@ -375,6 +375,7 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
     est_w.flush().map_err(io_at(&est_path))?;
     inn_w.flush().map_err(io_at(&inn_path))?;
     drop((est_w, inn_w));
+    feed.est.end_stream();
     let c = *feed.est.counters();
     let refused = c.refused();
     // The counts go to summary.json only when the run succeeds: these lines point at it then,

@@ -33,10 +33,10 @@ use super::*;
 /// dip or cycle, not one per quieter sample.
 #[derive(Debug, Clone)]
 pub(super) struct Anchor {
-    eskf: Eskf,
+    pub(super) eskf: Eskf,
     bias: BiasFilter,
     /// Its time on the sample clock (as the stride memory holds it).
-    t_s: f64,
+    pub(super) t_s: f64,
 }
 
 /// A candidate's quietest sample so far: time (sample clock), statistic, bias-corrected rate
@@ -115,6 +115,12 @@ impl LateFootfall {
         self.dip = None;
         self.pending = None;
         self.armed = false;
+    }
+
+    /// The two filters kept for a late update (the dip's and the cycle's, in that order): a
+    /// clipped peak put back before they are used keeps them again (`rail_peaks.rs`).
+    pub(super) fn anchors_mut(&mut self) -> [&mut LastGood<Anchor>; 2] {
+        [&mut self.dip_anchor, &mut self.anchor]
     }
 
     fn footfall(&mut self, t_s: f64) {

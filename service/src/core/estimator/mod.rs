@@ -441,6 +441,16 @@ impl Estimator {
         }
     }
 
+    /// The stream has ended: what waited for samples that will not come is counted, not
+    /// dropped silently: an external heading waiting for a stance (`headings_expired`, see
+    /// [`Estimator::expire_pending_heading`]) and a clipped peak still open, which has no two
+    /// samples off the rail after it to be put back with (`clipped_peaks_not_restored`). Called
+    /// by every runner at the end of its stream (offline, the suite's, the daemon's).
+    pub fn end_stream(&mut self) {
+        self.expire_pending_heading();
+        self.p.drop_rail_peak();
+    }
+
     /// Processes one sample. On error nothing changed and the sample is counted as rejected.
     pub fn step(&mut self, s: &ImuInput) -> Result<&Estimate, SampleError> {
         let w = Vector3::from(s.gyro_rad_s);

@@ -383,9 +383,11 @@ impl<'a> EstState<'a> {
         b.flags |= FLAG_END_OF_STREAM;
         let ok = out.bias.publish(|v, q| v.seq = q, b);
         self.count(ok);
+        // What waited for samples that will not come, counted before the stream's last
+        // diagnostics say the counts.
+        self.est.end_stream();
         self.publish_diagnostics(out, rx, FLAG_END_OF_STREAM);
         self.save_checkpoint(cfg);
-        self.est.expire_pending_heading();
         // A new stream: fresh estimator (warm-started from the state just saved), counters
         // carried over.
         let c = *self.est.counters();
@@ -568,8 +570,9 @@ pub(super) fn estimator_thread(
             next_checkpoint = Instant::now() + cfg.checkpoint_period;
         }
     }
-    // A heading still waiting for a stance will not be used.
-    st.est.expire_pending_heading();
+    // A heading still waiting for a stance will not be used, nor a clipped peak still open put
+    // back: both counted.
+    st.est.end_stream();
     st.publish_diagnostics(&mut out, counters, FLAG_SHUTDOWN);
     st.save_checkpoint(cfg);
     let mut diagnostics = st.diagnostics(counters, FLAG_SHUTDOWN);
