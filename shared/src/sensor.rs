@@ -12,6 +12,9 @@
 //!   A single axis beyond [`AXIS_ABSURD_FACTOR`] × its range is absurd too, whatever the norm:
 //!   the sensor cannot output it.
 //!
+//! Each limit is bounded by what a foot IMU can be (the `MIN_*`/`MAX_*` constants below say
+//! what and why): a range of 1e30 rad/s was taken and switched clipping and plausibility off.
+//!
 //! There is no rate-of-change limit: with every axis bounded, a sample-to-sample change is bounded
 //! by the plausible magnitude already, and a tighter bound would need the sensor's bandwidth and
 //! would reject real heel strikes (tens of g within one sample).
@@ -49,6 +52,33 @@ pub const DEFAULT_MAX_ACCEL_M_S2: f64 = 540.0;
 /// Default largest plausible gyro bias: 0.2 rad/s (11 °/s), above the turn-on bias of any MEMS
 /// gyro worth mounting on a foot (datasheets give 0.04–5 °/s).
 pub const DEFAULT_MAX_GYRO_BIAS_RAD_S: f64 = 0.2;
+/// Narrowest `sensor.gyro_range_rad_s`, rad/s: below the narrowest MEMS gyro full scale
+/// (±125 °/s, 2.2 rad/s). A range narrower than this flags a walking foot's every turn as
+/// clipped and refuses its swings as beyond the sensor.
+pub const MIN_GYRO_RANGE_RAD_S: f64 = 1.0;
+/// Widest `sensor.gyro_range_rad_s`, rad/s (5730 °/s): above the widest MEMS gyro full scale
+/// (±4000 °/s, 70 rad/s); a foot's swing peaks near 15 rad/s. Beyond it the range is a unit
+/// mix-up or a typo, and it switched the clipping model and the plausibility check off without
+/// a word (1e30 was taken: no sample of the gdins walks, railed at 8.7 rad/s, was flagged).
+pub const MAX_GYRO_RANGE_RAD_S: f64 = 100.0;
+/// Narrowest `sensor.accel_range_m_s2`, m/s²: below the narrowest MEMS accelerometer full
+/// scale (±2 g, 19.6 m/s²) and above gravity, which an axis at rest must read inside its rail.
+pub const MIN_ACCEL_RANGE_M_S2: f64 = 15.0;
+/// Widest `sensor.accel_range_m_s2`, m/s² (about ±400 g): the widest MEMS accelerometers, the
+/// high-g ones made for impacts, reach ±400 g; a heel strike reads tens of g.
+pub const MAX_ACCEL_RANGE_M_S2: f64 = 4000.0;
+/// Largest `sensor.max_gyro_rad_s` and `sensor.max_accel_m_s2`, as a multiple of the widest
+/// range: [`AXIS_ABSURD_FACTOR`] × √3 (about 3.46; `2 * 3f64.sqrt()`, written out). A sample
+/// within every axis's limit never has a larger norm, so a larger limit checks nothing.
+pub const MAX_NORM_FACTOR: f64 = 3.464_101_615_137_754_4;
+/// Largest `sensor.min_dt_s`, s: the step of a 1 kHz sensor. The rule refuses duplicated and
+/// near-duplicated stamps, which lie far below any foot IMU's sample period (1–10 ms); a
+/// larger one refuses the samples of a fast sensor as "not increasing".
+pub const MAX_MIN_DT_S: f64 = 1e-3;
+/// Largest `sensor.max_dt_s`, s: a step beyond it waits for the next sample to confirm it. Ten
+/// seconds are a thousand samples lost at 100 Hz; a longer bound takes a single corrupt stamp
+/// that far ahead for a gap, and holds the samples after it as a run that may yet be dropped.
+pub const MAX_MAX_DT_S: f64 = 10.0;
 /// Default smallest time step: 1 µs (no IMU samples at 1 MHz), s.
 pub const DEFAULT_MIN_DT_S: f64 = 1e-6;
 /// Default largest time step accepted without confirmation, s.
@@ -75,8 +105,11 @@ pub struct SensorFile {
     pub max_dt_s: Option<f64>,
 }
 
-/// Validated `[sensor]`: every limit finite and positive, ranges below the plausible magnitudes,
-/// `min_dt_s < max_dt_s`.
+/// Validated `[sensor]`: every limit finite and positive and within the bounds above (ranges in
+/// [`MIN_GYRO_RANGE_RAD_S`, `MAX_GYRO_RANGE_RAD_S`] and [`MIN_ACCEL_RANGE_M_S2`,
+/// `MAX_ACCEL_RANGE_M_S2`], plausible magnitudes from the range to [`MAX_NORM_FACTOR`] × the
+/// widest range, `min_dt_s` ≤ [`MAX_MIN_DT_S`], `max_dt_s` ≤ [`MAX_MAX_DT_S`]), ranges below
+/// the plausible magnitudes, `min_dt_s < max_dt_s`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct SensorLimits {
     gyro_range_rad_s: f64,
@@ -158,6 +191,55 @@ impl SensorFile {
                 rule,
             })
         };
+        // What no foot IMU can be (see the bounds' documentation).
+        for (key, value, lo, hi, r) in [
+            (
+                "sensor.gyro_range_rad_s",
+                l.gyro_range_rad_s,
+                MIN_GYRO_RANGE_RAD_S,
+                MAX_GYRO_RANGE_RAD_S,
+                "must be in [1, 100] rad/s (a MEMS gyro's full scale is ±125 to ±4000 °/s)",
+            ),
+            (
+                "sensor.accel_range_m_s2",
+                l.accel_range_m_s2,
+                MIN_ACCEL_RANGE_M_S2,
+                MAX_ACCEL_RANGE_M_S2,
+                "must be in [15, 4000] m/s² (a MEMS accelerometer's full scale is ±2 to ±400 g)",
+            ),
+            (
+                "sensor.max_gyro_rad_s",
+                l.max_gyro_rad_s,
+                0.0,
+                MAX_NORM_FACTOR * MAX_GYRO_RANGE_RAD_S,
+                "must be at most 346.4 rad/s (2 × √3 × the widest gyro range, 100 rad/s)",
+            ),
+            (
+                "sensor.max_accel_m_s2",
+                l.max_accel_m_s2,
+                0.0,
+                MAX_NORM_FACTOR * MAX_ACCEL_RANGE_M_S2,
+                "must be at most 13856.4 m/s² (2 × √3 × the widest accelerometer range, 4000 m/s²)",
+            ),
+            (
+                "sensor.min_dt_s",
+                l.min_dt_s,
+                0.0,
+                MAX_MIN_DT_S,
+                "must be at most 0.001 s (it refuses duplicated stamps, not a sensor's period)",
+            ),
+            (
+                "sensor.max_dt_s",
+                l.max_dt_s,
+                0.0,
+                MAX_MAX_DT_S,
+                "must be at most 10 s (a longer step waits for the next sample to confirm it)",
+            ),
+        ] {
+            if !(lo..=hi).contains(&value) {
+                return rule(key, value, r);
+            }
+        }
         // A rule between two keys names both values: either may be the one mistyped.
         let between = |key, value: f64, other: &str, other_value: f64, rule| {
             Err(SensorKeyError {

@@ -304,3 +304,108 @@ fn bad_limits_name_the_key() {
     let l = SensorLimits::default();
     assert_eq!(l.max_dt_s(), DEFAULT_MAX_DT_S);
 }
+
+#[test]
+fn limits_no_foot_imu_can_have_are_refused_with_key_and_value() {
+    // A review: 1e30 rad/s was taken as the gyro range (and its plausible magnitude), which
+    // turned the clipping flag and the plausibility check off without a word.
+    let cases: [(SensorFile, &str, &str); 9] = [
+        (
+            SensorFile {
+                gyro_range_rad_s: Some(1e30),
+                max_gyro_rad_s: Some(1e30),
+                ..Default::default()
+            },
+            "sensor.gyro_range_rad_s",
+            "1e30",
+        ),
+        (
+            SensorFile {
+                gyro_range_rad_s: Some(0.5),
+                ..Default::default()
+            },
+            "sensor.gyro_range_rad_s",
+            "0.5",
+        ),
+        (
+            SensorFile {
+                accel_range_m_s2: Some(1e30),
+                max_accel_m_s2: Some(1e30),
+                ..Default::default()
+            },
+            "sensor.accel_range_m_s2",
+            "1e30",
+        ),
+        (
+            SensorFile {
+                accel_range_m_s2: Some(9.81),
+                ..Default::default()
+            },
+            "sensor.accel_range_m_s2",
+            "9.81",
+        ),
+        (
+            SensorFile {
+                max_gyro_rad_s: Some(1e30),
+                ..Default::default()
+            },
+            "sensor.max_gyro_rad_s",
+            "1e30",
+        ),
+        (
+            SensorFile {
+                max_accel_m_s2: Some(2e4),
+                ..Default::default()
+            },
+            "sensor.max_accel_m_s2",
+            "20000",
+        ),
+        (
+            SensorFile {
+                min_dt_s: Some(0.005),
+                ..Default::default()
+            },
+            "sensor.min_dt_s",
+            "0.005",
+        ),
+        (
+            SensorFile {
+                max_dt_s: Some(1e30),
+                ..Default::default()
+            },
+            "sensor.max_dt_s",
+            "1e30",
+        ),
+        (
+            SensorFile {
+                gyro_range_rad_s: Some(f64::INFINITY),
+                ..Default::default()
+            },
+            "sensor.gyro_range_rad_s",
+            "inf",
+        ),
+    ];
+    for (f, key, shown) in cases {
+        let e = f.validate().unwrap_err();
+        assert_eq!(e.key, key, "{f:?}: {e:?}");
+        assert!(e.value.starts_with(shown), "{f:?}: {e:?}");
+    }
+    // The bounds themselves pass, and the widest sensor with its largest magnitudes.
+    let widest = SensorFile {
+        gyro_range_rad_s: Some(MAX_GYRO_RANGE_RAD_S),
+        accel_range_m_s2: Some(MAX_ACCEL_RANGE_M_S2),
+        max_gyro_rad_s: Some(MAX_NORM_FACTOR * MAX_GYRO_RANGE_RAD_S),
+        max_accel_m_s2: Some(MAX_NORM_FACTOR * MAX_ACCEL_RANGE_M_S2),
+        min_dt_s: Some(MAX_MIN_DT_S),
+        max_dt_s: Some(MAX_MAX_DT_S),
+        ..Default::default()
+    };
+    widest.validate().unwrap();
+    let narrowest = SensorFile {
+        gyro_range_rad_s: Some(MIN_GYRO_RANGE_RAD_S),
+        accel_range_m_s2: Some(MIN_ACCEL_RANGE_M_S2),
+        ..Default::default()
+    };
+    narrowest.validate().unwrap();
+    assert_eq!(MAX_NORM_FACTOR, AXIS_ABSURD_FACTOR * 3f64.sqrt());
+}

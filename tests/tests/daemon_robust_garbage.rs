@@ -37,17 +37,19 @@ fn absurd_samples_never_reach_the_published_bias_or_the_checkpoint() {
     let _one = one_daemon_at_a_time();
     let name = "test_robust_daemon_garbage";
     let clean = clean_final_bias();
+    use corridor_shared::sensor::{MAX_ACCEL_RANGE_M_S2, MAX_GYRO_RANGE_RAD_S, MAX_NORM_FACTOR};
     let wide = corridor_shared::sensor::SensorFile {
-        max_accel_m_s2: Some(1e301),
-        max_gyro_rad_s: Some(1e301),
-        // The per-axis limit (twice the range) lifted too.
-        accel_range_m_s2: Some(1e300),
-        gyro_range_rad_s: Some(1e300),
+        // The widest the configuration takes (1e300 was taken before the ranges were
+        // bounded): a single axis passes up to twice the range.
+        max_accel_m_s2: Some(MAX_NORM_FACTOR * MAX_ACCEL_RANGE_M_S2),
+        max_gyro_rad_s: Some(MAX_NORM_FACTOR * MAX_GYRO_RANGE_RAD_S),
+        accel_range_m_s2: Some(MAX_ACCEL_RANGE_M_S2),
+        gyro_range_rad_s: Some(MAX_GYRO_RANGE_RAD_S),
         ..Default::default()
     }
     .validate()
     .unwrap();
-    for (limits, accel, gyro) in [(None, 1e30, 1e300), (Some(wide), 1e4, 0.0)] {
+    for (limits, accel, gyro) in [(None, 1e30, 1e300), (Some(wide), 7.9e3, 0.0)] {
         cleanup_domain(name);
         let dir = temp_dir("test-robust-daemon-garbage");
         let ckpt = dir.join("checkpoint.bin");

@@ -226,6 +226,9 @@ pub fn with_path(err: ConfigError, path: &Path) -> ConfigError {
 }
 
 #[cfg(test)]
+mod bounds_tests;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 
@@ -305,12 +308,13 @@ mod tests {
 
     #[test]
     fn a_rule_between_two_keys_names_both_values() {
-        // The range given as 1e300: the error is the maximum's rule, and it shows the 1e300.
+        // A plausible magnitude below its range: the error is the maximum's rule, and it shows
+        // the range too.
         for (text, key, other) in [
             (
-                "[sensor]\ngyro_range_rad_s = 1e300\n",
+                "[sensor]\ngyro_range_rad_s = 50\nmax_gyro_rad_s = 40\n",
                 "sensor.max_gyro_rad_s",
-                "sensor.gyro_range_rad_s = 1e300",
+                "sensor.gyro_range_rad_s = 50",
             ),
             (
                 "[sensor]\nmax_dt_s = 1e-9\n",
