@@ -55,3 +55,56 @@ fn a_sensor_limit_beyond_any_foot_imu_is_refused_naming_key_and_value() {
         );
     }
 }
+
+#[test]
+fn a_sigma_below_any_real_sensor_or_observation_is_refused_and_its_floor_taken() {
+    use defaults::*;
+    // (section, key, floor as written): 1e-300 was taken for each (its square is 0), and the
+    // floor itself passes.
+    for (section, key, floor) in [
+        ("eskf", "accel_noise_m_s2", ACCEL_NOISE_MIN_M_S2),
+        ("eskf", "gyro_noise_rad_s", GYRO_NOISE_MIN_RAD_S),
+        ("eskf", "rest_gyro_noise_rad_s", GYRO_NOISE_MIN_RAD_S),
+        ("eskf", "gyro_bias_initial_sd_rad_s", GYRO_BIAS_SD_MIN_RAD_S),
+        ("eskf", "gyro_bias_prior_sd_rad_s", GYRO_BIAS_SD_MIN_RAD_S),
+        ("eskf", "zupt_sd_m_s", ZUPT_SD_MIN_M_S),
+        ("eskf", "initial_tilt_sd_rad", TILT_SD_MIN_RAD),
+        ("bias_kf", "tilt_sd_rad", TILT_SD_MIN_RAD),
+        ("alignment", "start_stance_tilt_sd_rad", TILT_SD_MIN_RAD),
+        ("heading", "sigma_deg", FOOT_AXIS_SD_MIN_DEG),
+        ("heading", "stride_sigma_deg", STRIDE_SD_MIN_DEG),
+        ("heading", "start_heading_sd_deg", STRIDE_SD_MIN_DEG),
+    ] {
+        let err = error_of(&format!("[{section}]\n{key} = 1e-300\n"));
+        assert!(
+            err.contains(&format!("`{section}.{key}` = 1e-300:")),
+            "{key}: {err}"
+        );
+        let err = error_of(&format!("[{section}]\n{key} = {:e}\n", floor * 0.5));
+        assert!(
+            err.contains(&format!("`{section}.{key}` = ")),
+            "{key}: {err}"
+        );
+        let text = format!("[{section}]\n{key} = {floor:e}\n");
+        ConfigFile::parse(&text, Path::new("b.toml"))
+            .unwrap()
+            .validate()
+            .unwrap_or_else(|e| panic!("{text}: {e}"));
+    }
+    // The typical bias's σ, which comes with the bias.
+    let typical = |sd: &str| {
+        format!(
+            "[alignment]\ntypical_gyro_bias_rad_s = [0.0, 0.0, 0.0]\n\
+             typical_gyro_bias_sd_rad_s = {sd}\n"
+        )
+    };
+    let err = error_of(&typical("1e-300"));
+    assert!(
+        err.contains("`alignment.typical_gyro_bias_sd_rad_s` = 1e-300:"),
+        "{err}"
+    );
+    ConfigFile::parse(&typical("1e-6"), Path::new("b.toml"))
+        .unwrap()
+        .validate()
+        .unwrap();
+}

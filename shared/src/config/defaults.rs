@@ -244,6 +244,47 @@ pub const ESKF_STANCE_YAW_MAX_SD_RAD: f64 = 0.0;
 /// `eskf.zupt_rolling_height_m` (0: a plain zero-velocity update).
 pub const ESKF_ZUPT_ROLLING_HEIGHT_M: f64 = 0.0;
 
+// The floors of the σ keys. A σ only had to be > 0: one whose square underflows (below
+// about 1.5e-154) is a variance of exactly 0: with the `[eskf]` and `[heading]` σ at 1e-300
+// (and no bias random walk) exp36's filter froze, its bias σ exactly 0, one heading used in
+// 3089 stances, 17 % of path off, nothing said (an update whose S is singular changes
+// nothing). An observation σ far below what the measurement can
+// be made the rotation-aware filter trust it to ruin without a health restore to show for it
+// (`bias_kf.tilt_sd_rad` = 1e-4: exp36 30 % of path; `heading.sigma_deg` = 0.1: exp17 15 %,
+// bias 0.08 rad/s; at 1e-5 rad and 1e-3° two restores, bias 0.17 rad/s). Each floor lies
+// below any real sensor or observation; within them a filter can be tuned badly, not broken.
+
+/// Smallest tilt σ (`eskf.initial_tilt_sd_rad`, `bias_kf.tilt_sd_rad`,
+/// `alignment.start_stance_tilt_sd_rad`), rad (0.06°): a tilt from the specific force is known
+/// no better than the accelerometer's bias allows, about 1 mg (1e-3 rad) once calibrated.
+pub const TILT_SD_MIN_RAD: f64 = 1e-3;
+
+/// Smallest `eskf.accel_noise_m_s2`, m/s²/√Hz (10 µg/√Hz): below the quietest MEMS
+/// accelerometers (about 20 µg/√Hz).
+pub const ACCEL_NOISE_MIN_M_S2: f64 = 1e-4;
+
+/// Smallest `eskf.gyro_noise_rad_s` and `eskf.rest_gyro_noise_rad_s`, rad/s/√Hz
+/// (0.0006 °/s/√Hz): below the quietest MEMS gyros (about 0.002 °/s/√Hz, 3.5e-5).
+pub const GYRO_NOISE_MIN_RAD_S: f64 = 1e-5;
+
+/// Smallest gyro-bias σ of a prior (`eskf.gyro_bias_initial_sd_rad_s`,
+/// `eskf.gyro_bias_prior_sd_rad_s`, `alignment.typical_gyro_bias_sd_rad_s`), rad/s (0.2 °/h):
+/// below the bias stability of the best MEMS gyros.
+pub const GYRO_BIAS_SD_MIN_RAD_S: f64 = 1e-6;
+
+/// Smallest `eskf.zupt_sd_m_s`, m/s: a foot on the floor is still to about a millimetre per
+/// second (it rolls), not to 0.1 mm/s.
+pub const ZUPT_SD_MIN_M_S: f64 = 1e-4;
+
+/// Smallest `heading.sigma_deg`, degrees: a walker's foot axis varies from one stance to the
+/// next by degrees about the corridor's direction, not by half a degree.
+pub const FOOT_AXIS_SD_MIN_DEG: f64 = 0.5;
+
+/// Smallest `heading.stride_sigma_deg` and `heading.start_heading_sd_deg`, degrees: a stride's
+/// direction between two footprints 1.4 m apart, each placed to about 2 cm, is known to about
+/// 1°; ten times better is no stride.
+pub const STRIDE_SD_MIN_DEG: f64 = 0.1;
+
 /// `bias_kf.tilt_sd_rad` (1°).
 pub const BIAS_KF_TILT_SD_RAD: f64 = std::f64::consts::PI / 180.0;
 

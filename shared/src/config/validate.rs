@@ -220,9 +220,9 @@ impl ConfigFile {
                     "alignment.start_stance_tilt_sd_rad",
                     a.start_stance_tilt_sd_rad
                         .unwrap_or(ALIGNMENT_START_STANCE_TILT_SD_RAD),
-                    0.0,
+                    TILT_SD_MIN_RAD,
                     1.0,
-                    "must be in (0, 1] rad",
+                    "must be in [0.001, 1] rad",
                 )?,
                 max_prior_rate_rad_s: a
                     .max_prior_rate_rad_s
@@ -332,16 +332,16 @@ impl ConfigFile {
                 accel_noise_m_s2: Positive::in_range(
                     "eskf.accel_noise_m_s2",
                     k.accel_noise_m_s2.unwrap_or(ESKF_ACCEL_NOISE_M_S2),
-                    0.0,
+                    ACCEL_NOISE_MIN_M_S2,
                     100.0,
-                    "must be in (0, 100] m/s²",
+                    "must be in [1e-4, 100] m/s²/√Hz",
                 )?,
                 gyro_noise_rad_s: Positive::in_range(
                     "eskf.gyro_noise_rad_s",
                     k.gyro_noise_rad_s.unwrap_or(ESKF_GYRO_NOISE_RAD_S),
-                    0.0,
+                    GYRO_NOISE_MIN_RAD_S,
                     10.0,
-                    "must be in (0, 10] rad/s",
+                    "must be in [1e-5, 10] rad/s/√Hz",
                 )?,
                 gyro_bias_rw_rad_s_sqrt_s: NonNegative::in_range(
                     "eskf.gyro_bias_rw_rad_s_sqrt_s",
@@ -355,31 +355,31 @@ impl ConfigFile {
                     "eskf.gyro_bias_initial_sd_rad_s",
                     k.gyro_bias_initial_sd_rad_s
                         .unwrap_or(ESKF_GYRO_BIAS_INITIAL_SD_RAD_S),
-                    0.0,
+                    GYRO_BIAS_SD_MIN_RAD_S,
                     10.0,
-                    "must be in (0, 10] rad/s",
+                    "must be in [1e-6, 10] rad/s",
                 )?,
                 gyro_bias_prior_sd_rad_s: Positive::in_range(
                     "eskf.gyro_bias_prior_sd_rad_s",
                     k.gyro_bias_prior_sd_rad_s
                         .unwrap_or(ESKF_GYRO_BIAS_PRIOR_SD_RAD_S),
-                    0.0,
+                    GYRO_BIAS_SD_MIN_RAD_S,
                     10.0,
-                    "must be in (0, 10] rad/s",
+                    "must be in [1e-6, 10] rad/s",
                 )?,
                 zupt_sd_m_s: Positive::in_range(
                     "eskf.zupt_sd_m_s",
                     k.zupt_sd_m_s.unwrap_or(ESKF_ZUPT_SD_M_S),
-                    0.0,
+                    ZUPT_SD_MIN_M_S,
                     10.0,
-                    "must be in (0, 10] m/s",
+                    "must be in [1e-4, 10] m/s",
                 )?,
                 initial_tilt_sd_rad: Positive::in_range(
                     "eskf.initial_tilt_sd_rad",
                     k.initial_tilt_sd_rad.unwrap_or(ESKF_INITIAL_TILT_SD_RAD),
-                    0.0,
+                    TILT_SD_MIN_RAD,
                     std::f64::consts::PI,
-                    "must be in (0, π] rad",
+                    "must be in [0.001, π] rad",
                 )?,
                 zupt_lever_arm_m: NonNegative::in_range(
                     "eskf.zupt_lever_arm_m",
@@ -407,9 +407,9 @@ impl ConfigFile {
                     "eskf.rest_gyro_noise_rad_s",
                     k.rest_gyro_noise_rad_s
                         .unwrap_or(ESKF_REST_GYRO_NOISE_RAD_S),
-                    0.0,
+                    GYRO_NOISE_MIN_RAD_S,
                     10.0,
-                    "must be in (0, 10] rad/s",
+                    "must be in [1e-5, 10] rad/s/√Hz",
                 )?,
                 stance_yaw_max_sd_rad: NonNegative::in_range(
                     "eskf.stance_yaw_max_sd_rad",
@@ -443,9 +443,9 @@ impl ConfigFile {
                 tilt_sd_rad: Positive::in_range(
                     "bias_kf.tilt_sd_rad",
                     b.tilt_sd_rad.unwrap_or(BIAS_KF_TILT_SD_RAD),
-                    0.0,
+                    TILT_SD_MIN_RAD,
                     std::f64::consts::PI,
-                    "must be in (0, π] rad",
+                    "must be in [0.001, π] rad",
                 )?,
                 bias_rw_rad_s_sqrt_s: NonNegative::in_range(
                     "bias_kf.bias_rw_rad_s_sqrt_s",
@@ -461,9 +461,9 @@ impl ConfigFile {
                 sigma_rad: Positive::from_degrees_in_range(
                     "heading.sigma_deg",
                     h.sigma_deg.unwrap_or(HEADING_SIGMA_DEG),
-                    0.0,
+                    FOOT_AXIS_SD_MIN_DEG,
                     90.0,
-                    "must be in (0, 90]°",
+                    "must be in [0.5, 90]°",
                 )?,
                 grid_rad: Finite::from_degrees_in_range(
                     "heading.grid_deg",
@@ -518,17 +518,17 @@ impl ConfigFile {
                     "heading.start_heading_sd_deg",
                     h.start_heading_sd_deg
                         .unwrap_or(HEADING_START_HEADING_SD_DEG),
-                    0.0,
+                    STRIDE_SD_MIN_DEG,
                     180.0,
-                    "must be in (0, 180]°",
+                    "must be in [0.1, 180]°",
                 )?,
                 observations: h.observations.unwrap_or(HEADING_OBSERVATIONS),
                 stride_sigma_rad: Positive::from_degrees_in_range(
                     "heading.stride_sigma_deg",
                     h.stride_sigma_deg.unwrap_or(HEADING_STRIDE_SIGMA_DEG),
-                    0.0,
+                    STRIDE_SD_MIN_DEG,
                     90.0,
-                    "must be in (0, 90]°",
+                    "must be in [0.1, 90]°",
                 )?,
                 min_stride_m: Positive::in_range(
                     "heading.min_stride_m",
@@ -620,7 +620,13 @@ fn typical_gyro_bias(
             }
             Ok(Some(TypicalGyroBias {
                 rad_s: b,
-                sd_rad_s: Positive::in_range(SD_KEY, sd, 0.0, 0.1, "must be in (0, 0.1] rad/s")?,
+                sd_rad_s: Positive::in_range(
+                    SD_KEY,
+                    sd,
+                    GYRO_BIAS_SD_MIN_RAD_S,
+                    0.1,
+                    "must be in [1e-6, 0.1] rad/s",
+                )?,
             }))
         }
     }
