@@ -108,3 +108,56 @@ fn a_sigma_below_any_real_sensor_or_observation_is_refused_and_its_floor_taken()
         .validate()
         .unwrap();
 }
+
+#[test]
+fn a_stance_threshold_that_takes_full_scale_motion_for_a_stance_is_refused() {
+    // A review: `threshold = 1e300` was taken (and 1e8 with gdins.toml's sensor): every sample
+    // was a stance, and the run ended in "no initial rest followed by motion", naming no key.
+    let gdins = "[sensor]\ngyro_range_rad_s = 8.727\naccel_range_m_s2 = 78.45\nmax_gyro_rad_s = 30.0\n\
+                 max_accel_m_s2 = 300.0\n[detector]\nsigma_gyro_rad_s = 0.001745\n\
+                 sigma_accel_m_s2 = 0.01\n";
+    let bound = (8.727f64 / 0.001745).powi(2); // 2.5e7
+    for (extra, key, shown) in [
+        (
+            "threshold = 1e300\n",
+            "detector.threshold",
+            "1e300 (with sensor.gyro_range_rad_s = 8.727 and detector.sigma_gyro_rad_s = 0.001745",
+        ),
+        ("threshold = 1e8\n", "detector.threshold", "1e8 (with"),
+        (
+            "adaptive_factor = 3.0\nadaptive_max_threshold = 1e300\n",
+            "detector.adaptive_max_threshold",
+            "1e300 (with",
+        ),
+        // The accelerometer's statistic, the accelerometer's bound: (78.45 / 0.01)² = 6.2e7.
+        (
+            "kind = \"mv\"\nthreshold = 1e8\n",
+            "detector.threshold",
+            "1e8 (with sensor.accel_range_m_s2 = 78.45 and detector.sigma_accel_m_s2 = 0.01",
+        ),
+    ] {
+        let err = error_of(&format!("{gdins}{extra}"));
+        assert!(
+            err.contains(&format!("`{key}` = {shown}")) && err.contains("full scale"),
+            "{extra}: {err}"
+        );
+    }
+    // Up to the bound it is taken; the default adaptive cap (ten times the threshold) stays
+    // within it, where it used to overflow to inf and name a key the file did not set.
+    let c = ConfigFile::parse(
+        &format!("{gdins}threshold = {bound:e}\n"),
+        Path::new("b.toml"),
+    )
+    .unwrap()
+    .validate()
+    .unwrap();
+    assert_eq!(c.detector.threshold.get(), bound);
+    assert_eq!(c.detector.adaptive_max_threshold.get(), bound);
+    let c = ConfigFile::parse(&format!("{gdins}threshold = 1e5\n"), Path::new("b.toml"))
+        .unwrap()
+        .validate()
+        .unwrap();
+    assert_eq!(c.detector.adaptive_max_threshold.get(), 1e6);
+    let err = error_of("[detector]\nthreshold = 1e308\n");
+    assert!(err.contains("`detector.threshold` = 1e308 (with"), "{err}");
+}

@@ -187,7 +187,10 @@ pub struct DetectorFile {
     pub kind: Option<DetectorKind>,
     /// Window length in samples (default 5).
     pub window: Option<usize>,
-    /// Threshold on the statistic (default 1e5 for SHOE with the default σ: about 0.6 rad/s of rotation).
+    /// Threshold on the statistic (default 1e5 for SHOE with the default σ: about 0.6 rad/s of
+    /// rotation); at most (`sensor.gyro_range_rad_s` / `sigma_gyro_rad_s`)², for `mv`
+    /// (`sensor.accel_range_m_s2` / `sigma_accel_m_s2`)²: beyond it a foot turning at the
+    /// sensor's full scale would be a stance.
     pub threshold: Option<f64>,
     /// Accelerometer noise σ used by the statistic (default 0.01 m/s²).
     pub sigma_accel_m_s2: Option<f64>,
@@ -203,7 +206,7 @@ pub struct DetectorFile {
     pub adaptive_factor: Option<f64>,
     /// Look-back of the adaptive threshold, about one stride cycle (default 1.5 s).
     pub adaptive_window_s: Option<f64>,
-    /// Largest adaptive threshold (default 10 × `threshold`).
+    /// Largest adaptive threshold (default 10 × `threshold`), within the bound of `threshold`.
     pub adaptive_max_threshold: Option<f64>,
     /// A late footfall: a dip of the statistic below the threshold at least this long but
     /// shorter than `min_stance_s`, with no stance within `merge_gap_s` before or after it, is a

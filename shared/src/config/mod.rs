@@ -95,6 +95,16 @@ pub(crate) fn invalid(key: &str, value: impl std::fmt::Display, rule: &'static s
     }
 }
 
+/// A number as [`invalid`] shows it (1e300 and 1e-12 so, not as their 301 digits or 12 zeros),
+/// for a value shown with more text.
+pub(crate) fn shown(v: f64) -> String {
+    if v != 0.0 && (v.abs() >= 1e6 || v.abs() < 1e-4) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
+    }
+}
+
 /// [`invalid`] for a count, shown with all its digits (`invalid` showed a channel capacity of
 /// 16777216 as 1.6777216e7, and `usize::MAX` rounded).
 pub(crate) fn invalid_count(key: &str, value: u64, rule: &'static str) -> ConfigError {

@@ -3,6 +3,7 @@
 
 use super::defaults::*;
 use super::*;
+use crate::sensor::SensorLimits;
 use std::path::Path;
 
 impl ConfigFile {
@@ -119,6 +120,36 @@ impl ConfigFile {
             .validate()
             .map_err(|e| invalid(e.key, e.value, e.rule))?;
         let typical_gyro_bias = typical_gyro_bias(a, sensor.max_gyro_bias_rad_s())?;
+        // The statistic's σ before the thresholds, whose bound is in its units.
+        let sigma_accel_m_s2 = Positive::in_range(
+            "detector.sigma_accel_m_s2",
+            d.sigma_accel_m_s2.unwrap_or(DETECTOR_SIGMA_ACCEL_M_S2),
+            1e-06,
+            100.0,
+            "must be in [1e-6, 100] m/s²",
+        )?;
+        let sigma_gyro_rad_s = Positive::in_range(
+            "detector.sigma_gyro_rad_s",
+            d.sigma_gyro_rad_s.unwrap_or(DETECTOR_SIGMA_GYRO_RAD_S),
+            1e-06,
+            10.0,
+            "must be in [1e-6, 10] rad/s",
+        )?;
+        let kind = d.kind.unwrap_or(DETECTOR_KIND);
+        let bound = threshold_bound(kind, &sensor, sigma_accel_m_s2, sigma_gyro_rad_s);
+        let threshold = stance_threshold(
+            "detector.threshold",
+            d.threshold.unwrap_or(DETECTOR_THRESHOLD),
+            &bound,
+        )?;
+        let adaptive_max_threshold = match d.adaptive_max_threshold {
+            Some(v) => stance_threshold("detector.adaptive_max_threshold", v, &bound)?,
+            // Ten times the threshold, within the bound: beyond it nothing more is a stance.
+            None => Positive::new(
+                "detector.adaptive_max_threshold",
+                (DETECTOR_ADAPTIVE_MAX_FACTOR * threshold.get()).min(bound.0),
+            )?,
+        };
         Ok(Config {
             model,
             mode: e.mode.unwrap_or(ESTIMATOR_MODE),
@@ -239,26 +270,11 @@ impl ConfigFile {
                 typical_gyro_bias,
             },
             detector: DetectorConfig {
-                kind: d.kind.unwrap_or(DETECTOR_KIND),
+                kind,
                 window,
-                threshold: Positive::new(
-                    "detector.threshold",
-                    d.threshold.unwrap_or(DETECTOR_THRESHOLD),
-                )?,
-                sigma_accel_m_s2: Positive::in_range(
-                    "detector.sigma_accel_m_s2",
-                    d.sigma_accel_m_s2.unwrap_or(DETECTOR_SIGMA_ACCEL_M_S2),
-                    1e-06,
-                    100.0,
-                    "must be in [1e-6, 100] m/s²",
-                )?,
-                sigma_gyro_rad_s: Positive::in_range(
-                    "detector.sigma_gyro_rad_s",
-                    d.sigma_gyro_rad_s.unwrap_or(DETECTOR_SIGMA_GYRO_RAD_S),
-                    1e-06,
-                    10.0,
-                    "must be in [1e-6, 10] rad/s",
-                )?,
+                threshold,
+                sigma_accel_m_s2,
+                sigma_gyro_rad_s,
                 min_stance_s: NonNegative::in_range(
                     "detector.min_stance_s",
                     d.min_stance_s.unwrap_or(DETECTOR_MIN_STANCE_S),
@@ -284,12 +300,7 @@ impl ConfigFile {
                     60.0,
                     "must be in (0, 60] s",
                 )?,
-                adaptive_max_threshold: Positive::new(
-                    "detector.adaptive_max_threshold",
-                    d.adaptive_max_threshold.unwrap_or(
-                        DETECTOR_ADAPTIVE_MAX_FACTOR * d.threshold.unwrap_or(DETECTOR_THRESHOLD),
-                    ),
-                )?,
+                adaptive_max_threshold,
                 late_stance_min_s: d
                     .late_stance_min_s
                     .map(|v| {
@@ -630,4 +641,51 @@ fn typical_gyro_bias(
             }))
         }
     }
+}
+
+/// The largest threshold of the stance detector (on its σ-normalised statistic,
+/// `core/stance.rs`): the statistic of a foot turning at the gyro's full scale, (range / σ)²,
+/// or for `mv` of an accelerometer spread of its full scale. Above it every sample the sensor
+/// can output is a stance: `threshold = 1e300` was taken, and no rest followed by motion was
+/// ever found (1e8 did the same on exp36; the bound of gdins.toml is 2.5e7). With the keys
+/// it comes from, for the error.
+fn threshold_bound(
+    kind: DetectorKind,
+    sensor: &SensorLimits,
+    sigma_accel: Positive,
+    sigma_gyro: Positive,
+) -> (f64, String) {
+    let (range, range_key, sd, sd_key) = match kind {
+        DetectorKind::Mv => (
+            sensor.accel_range_m_s2(),
+            "sensor.accel_range_m_s2",
+            sigma_accel.get(),
+            "detector.sigma_accel_m_s2",
+        ),
+        DetectorKind::Shoe | DetectorKind::Are => (
+            sensor.gyro_range_rad_s(),
+            "sensor.gyro_range_rad_s",
+            sigma_gyro.get(),
+            "detector.sigma_gyro_rad_s",
+        ),
+    };
+    let bound = (range / sd).powi(2);
+    (
+        bound,
+        format!("with {range_key} = {range} and {sd_key} = {sd}: at most {bound:.4e}"),
+    )
+}
+
+/// A threshold `value` under `key`, positive and within `bound` ([`threshold_bound`]).
+fn stance_threshold(key: &str, value: f64, bound: &(f64, String)) -> Result<Positive, ConfigError> {
+    let t = Positive::new(key, value)?;
+    if value > bound.0 {
+        return Err(invalid(
+            key,
+            format!("{} ({})", shown(value), bound.1),
+            "must be at most (range / σ)² of the statistic's sensor (the gyro's; the \
+             accelerometer's for kind = \"mv\"): above it a foot turning at full scale is a stance",
+        ));
+    }
+    Ok(t)
 }
