@@ -248,3 +248,28 @@ fn eval_sweep_reports_each_value_and_names_a_bad_key() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("set by the suite"), "{err}");
 }
+
+#[test]
+fn eval_says_a_directory_given_as_the_suite_or_sweep_is_one() {
+    // It said "no such file" of a directory that was there.
+    let dir = tmp("dir");
+    std::fs::create_dir_all(&*dir).unwrap();
+    let d = dir.to_str().unwrap();
+    let o = corridor(&["eval", "--suite", d]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("--suite {d}: is a directory, not a file")),
+        "{err}"
+    );
+    let suite = suite_of(&dir, &[("gdins_exp17_rect_loop_small", "normal")]);
+    let o = corridor(&["eval", "--suite", suite.to_str().unwrap(), "--sweep", d]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains(&format!("--sweep {d}: is a directory, not a file")),
+        "{err}"
+    );
+    let o = corridor(&["eval", "--suite", &format!("{d}/nope.toml")]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("nope.toml: no such file"), "{err}");
+}

@@ -31,9 +31,45 @@ pub fn read_text(path: &Path) -> std::io::Result<String> {
     })
 }
 
+/// Why `path` (followed through links) is not a file a command can read, or `None` when it is
+/// one: "no such file", "is a directory, not a file", "is not a regular file" (a FIFO, a
+/// device), or the OS error (no permission to look). An existing directory was reported as
+/// "no such file".
+pub fn not_a_file(path: &Path) -> Option<String> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() => None,
+        Ok(m) if m.is_dir() => Some("is a directory, not a file".to_owned()),
+        Ok(_) => Some("is not a regular file".to_owned()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Some("no such file".to_owned()),
+        Err(e) => Some(e.to_string()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn what_is_not_a_file_says_what_it_is() {
+        let dir = std::env::temp_dir().join(format!("corridor-not-a-file-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("f.txt");
+        std::fs::write(&file, "x").unwrap();
+        assert_eq!(not_a_file(&file), None);
+        assert_eq!(
+            not_a_file(&dir).as_deref(),
+            Some("is a directory, not a file")
+        );
+        assert_eq!(
+            not_a_file(&dir.join("nope")).as_deref(),
+            Some("no such file")
+        );
+        assert_eq!(
+            not_a_file(Path::new("/dev/null")).as_deref(),
+            Some("is not a regular file")
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn a_file_without_an_end_is_refused_after_its_bound() {

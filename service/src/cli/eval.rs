@@ -33,9 +33,9 @@ pub(super) struct EvalArgs {
 pub(super) fn eval(a: EvalArgs) -> Result<()> {
     for (flag, path) in [("--suite", Some(&a.suite)), ("--sweep", a.sweep.as_ref())] {
         if let Some(p) = path
-            && !p.is_file()
+            && let Some(why) = corridor_shared::text_file::not_a_file(p)
         {
-            anyhow::bail!("{flag} {}: no such file", p.display());
+            anyhow::bail!("{flag} {}: {why}", p.display());
         }
     }
     if let Some(sweep) = &a.sweep {

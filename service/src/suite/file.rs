@@ -238,7 +238,8 @@ pub fn report_dir_name(name: &str) -> String {
 /// One recording as written → checked, with its start heading.
 fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
     // Every file named, before any run: a missing one is named by its key here, not by its
-    // path alone after the recordings before it have run.
+    // path alone after the recordings before it have run. A directory is said to be one (it
+    // was "no such file").
     for (key, file) in [
         ("imu", Some(&r.imu)),
         ("truth", Some(&r.truth)),
@@ -246,10 +247,10 @@ fn resolve(base: &Path, r: RecordingToml) -> Result<SuiteRecording, String> {
         ("baseline_config", r.baseline_config.as_ref()),
     ] {
         if let Some(file) = file
-            && !base.join(file).is_file()
+            && let Some(why) = corridor_shared::text_file::not_a_file(&base.join(file))
         {
             return Err(format!(
-                "recording {}: {key} = {:?}: no such file (relative paths are to the suite file's folder, {})",
+                "recording {}: {key} = {:?}: {why} (relative paths are to the suite file's folder, {})",
                 r.name,
                 file.display().to_string(),
                 base.display()

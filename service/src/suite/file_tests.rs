@@ -76,6 +76,20 @@ fn a_missing_file_is_named_by_its_key_before_any_run() {
         err.contains("baseline_config = \"nope.toml\": no such file"),
         "{err}"
     );
+    // A directory where a file belongs: named as one, with the suite file, the recording, the
+    // key and the path (it was "no such file").
+    std::fs::create_dir_all(dir.join("imu_dir")).unwrap();
+    let suite = write_suite(&dir, truth, "start_heading_deg = 0.0\n");
+    let text = std::fs::read_to_string(&suite)
+        .unwrap()
+        .replace("imu = \"imu.csv\"", "imu = \"imu_dir\"");
+    std::fs::write(&suite, text).unwrap();
+    let err = read_suite(&suite).unwrap_err().to_string();
+    assert!(
+        err.starts_with(&suite.display().to_string())
+            && err.contains("recording walk: imu = \"imu_dir\": is a directory, not a file"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
