@@ -173,6 +173,26 @@ pub fn read_suite(path: &Path) -> Result<SuiteFile, SuiteError> {
             "inject_gyro_bias_rad_s: {v:?} must be a finite number within ±{MAX_INJECTED_BIAS_RAD_S} rad/s"
         )));
     }
+    // A name labels its rows in every table: blank, the rows had no label (`name = ""` was
+    // taken); a '|' or a line break splits a Markdown row.
+    for (i, r) in file.recordings.iter().enumerate() {
+        let why = if r.name.trim().is_empty() {
+            "must not be empty"
+        } else if r.name.contains(|c: char| c == '|' || c.is_control()) {
+            "must not hold a '|' or a control character (it labels a Markdown table row)"
+        } else if r.name.trim() != r.name {
+            "must not begin or end with white space (\"a\" and \"a \" would be two rows that look one)"
+        } else {
+            continue;
+        };
+        return Err(error(format!(
+            "[[recording]] {} of {} (imu = {:?}): name = {:?} {why}",
+            i + 1,
+            file.recordings.len(),
+            r.imu.display().to_string(),
+            r.name
+        )));
+    }
     // Tables and results are keyed by name: two of one name would be one row twice. Reports
     // go into a directory named after the recording (`--loops`): two names of one directory
     // would overwrite, and the loop's removal of an earlier report remove, each other's.

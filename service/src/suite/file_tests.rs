@@ -254,3 +254,36 @@ fn a_recording_without_start_heading_takes_it_from_its_truth() {
     assert!(e.contains("inject_gyro_bias_rad_s: NaN"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_blank_name_or_one_that_splits_a_table_row_is_refused_naming_the_entry() {
+    let dir = std::env::temp_dir().join(format!("corridor-suite-blank-{}", std::process::id()));
+    let truth = "t_s,x_m,y_m,z_m\n0.0,0.0,0.0,0.0\n1.0,0.1,0.9,0.0\n";
+    let suite = write_suite(&dir, truth, "start_heading_deg = 0.0\n");
+    let first = std::fs::read_to_string(&suite).unwrap();
+    for (name, why) in [
+        ("", "must not be empty"),
+        ("   ", "must not be empty"),
+        ("a|b", "'|'"),
+        ("a\nb", "control character"),
+        // "walk" is the first recording's: this one would be a second row that looks the same.
+        ("walk ", "white space"),
+    ] {
+        // The second of two recordings: the entry is named by its place and its log.
+        let text = format!(
+            "{first}[[recording]]\nname = {name:?}\nimu = \"imu.csv\"\ntruth = \"truth.csv\"\n\
+             config = \"c.toml\"\nstart_heading_deg = 0.0\n"
+        );
+        std::fs::write(&suite, text).unwrap();
+        let err = read_suite(&suite).unwrap_err().to_string();
+        assert!(
+            err.starts_with(&suite.display().to_string())
+                && err.contains(&format!(
+                    "[[recording]] 2 of 2 (imu = \"imu.csv\"): name = {name:?} "
+                ))
+                && err.contains(why),
+            "{name:?}: {err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
