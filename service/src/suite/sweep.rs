@@ -406,4 +406,32 @@ mod tests {
         assert!(e.contains("heading.sigma_deg"), "{e}");
         assert!(with_value(&file, "sigma_deg", &toml::Value::Float(1.0)).is_err());
     }
+
+    #[test]
+    fn the_bundled_suite_reads_and_every_bundled_sweep_value_is_valid_on_its_configurations() {
+        // The bounds the configuration keys gained (the sensor limits, the σ floors, the
+        // stance thresholds) leave every bundled file as it was.
+        let eval = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/eval");
+        let suite = read_suite(&eval.join("gdins.toml")).unwrap();
+        let text = std::fs::read_to_string(eval.join("gdins_sweep.toml")).unwrap();
+        let sweep: SweepFile = toml::from_str(&text).unwrap();
+        let mut configs: Vec<&Path> = suite
+            .recordings
+            .iter()
+            .map(|r| r.config.as_path())
+            .collect();
+        configs.sort_unstable();
+        configs.dedup();
+        for config in configs {
+            let file = ConfigFile::read(&eval.join(config)).unwrap();
+            for p in &sweep.parameters {
+                for v in &p.values {
+                    with_value(&file, &p.key, v)
+                        .unwrap()
+                        .validate()
+                        .unwrap_or_else(|e| panic!("{} = {v}: {e}", p.key));
+                }
+            }
+        }
+    }
 }
