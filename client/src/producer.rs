@@ -276,7 +276,8 @@ impl Producer {
 
     /// Sends one angle observation with the next sequence number. Its `t_s` is on the IMU
     /// samples' clock: the daemon uses its heading at the stance that time falls in or the next
-    /// one, within 2 s ([`AngleObservation`]).
+    /// one, within 2 s; one 2 s behind the latest sample when it arrives (`t_s` left at 0) is
+    /// refused and counted ([`AngleObservation`]).
     pub fn send_angles(&mut self, mut obs: AngleObservation) -> Result<usize, ClientError> {
         obs.seq = self.next_angles_seq;
         self.next_angles_seq += 1;

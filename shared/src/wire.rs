@@ -140,7 +140,9 @@ impl From<&ImuRow> for ImuSample {
 /// from a map matcher or a camera. The heading is used when its bit is set in `valid`, instead
 /// of the map, at the stance its `t_s` falls in or the next one: at the first stance observed
 /// from 0.5 s before `t_s` on, and only within 2 s after `t_s` (older, it is counted as expired,
-/// `Diagnostics::headings_expired`); roll and pitch are not fused (see [`ANGLE_ROLL`]).
+/// `Diagnostics::headings_expired`; one already 2 s behind the latest sample when it arrives,
+/// such as `t_s = 0` mid-walk, is refused then, `Diagnostics::headings_refused`); roll and
+/// pitch are not fused (see [`ANGLE_ROLL`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
 #[type_name("corridor_v5_AngleObservation")]
 #[repr(C)]
@@ -148,7 +150,8 @@ pub struct AngleObservation {
     /// Sequence number of the producer.
     pub seq: u64,
     /// Sensor time the observation refers to, s: the clock of the [`ImuSample`]s' `t_s`. Not
-    /// finite: refused (`Diagnostics::headings_refused`).
+    /// finite, more than an hour ahead of the latest sample or more than 2 s behind it:
+    /// refused (`Diagnostics::headings_refused`).
     pub t_s: f64,
     /// Roll, rad.
     pub roll_rad: f64,
@@ -355,8 +358,9 @@ pub struct Diagnostics {
     /// Angle observations carrying roll or pitch, which are not fused (their heading, if any, is
     /// used) (v5; cumulative, as `received`).
     pub angles_ignored: u64,
-    /// External headings refused on arrival: time or heading not finite, or σ not in (0, π]
-    /// (v5; this life, every stream).
+    /// External headings refused on arrival: time or heading not finite, σ not in (0, π], or
+    /// a time more than an hour ahead of the latest sample or more than 2 s behind it (v5;
+    /// this life, every stream).
     pub headings_refused: u64,
     /// External headings replaced by a newer one before the stance that would have used them
     /// (v5; this life).

@@ -141,7 +141,9 @@ class Producer:
         """Sends an external attitude observation with the next `seq`.
 
         Its `t_s` is on the IMU samples' clock: the daemon uses its heading at the stance that
-        time falls in or the next one, within 2 s (older: counted as expired)."""
+        time falls in or the next one, within 2 s (older: counted as expired; one already 2 s
+        behind the latest sample when it arrives, such as t_s left at 0, is refused and counted
+        as headings_refused)."""
         obs.seq = self.next_angles_seq
         self.next_angles_seq += 1
         n = int(self._angles.send_copy(obs))

@@ -113,6 +113,15 @@ impl Plausibility {
         self.time.last_s()
     }
 
+    /// The previous accepted time once no later time can show it to be a glitched stamp: a
+    /// time has followed the first, the last step was no gap still provisional, and no run
+    /// after a jump or a gap is open. `None` otherwise (the time may yet be dropped).
+    pub fn settled_t_s(&self) -> Option<f64> {
+        let t = &self.time;
+        let settled = t.confirmed() && !t.provisional() && t.jump_run().is_none();
+        t.last_s().filter(|_| settled)
+    }
+
     /// The step between the remembered accepted times around `t_s` (newest first).
     #[cold]
     fn step_around(&self, t_s: f64) -> Option<f64> {

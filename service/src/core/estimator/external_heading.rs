@@ -9,7 +9,10 @@ pub const EXTERNAL_HEADING_MAX_NIS: f64 = 16.0;
 
 /// How long after its time an external heading may still be used, s: at the first stance
 /// observed from [`EXTERNAL_HEADING_LEAD_S`] before its `t_s` on, if that stance is observed
-/// within this after it; otherwise it is counted as expired. A stride cycle lasts about 1.1 s on
+/// within this after it; otherwise it is counted as expired. One whose time already lies this
+/// far behind the latest sample when it is handed in is refused then (`headings_refused`): a
+/// producer that sent `t_s = 0` (the field's default) mid-walk had each heading expire at the
+/// next stance, in the place of the one waiting there, with no word of why. A stride cycle lasts about 1.1 s on
 /// the gdins walks, so a heading given during a swing is used at the next stance, and one older
 /// than two seconds describes a foot placement already past (it was fused at whatever stance
 /// came next, however late: a review).
@@ -64,7 +67,7 @@ impl QueuedHeading {
 /// An external heading observation that cannot be fused.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[error(
-    "heading observation refused: t_s {t_s:e} s, heading {heading_rad:e} rad, σ {sd_rad:e} rad (needs a finite heading, σ in (0, π], and a finite t_s on the samples' clock, at most 3600 s ahead of the latest sample)"
+    "heading observation refused: t_s {t_s:e} s, heading {heading_rad:e} rad, σ {sd_rad:e} rad ({why})"
 )]
 pub struct HeadingRefused {
     /// The time given, s.
@@ -73,4 +76,44 @@ pub struct HeadingRefused {
     pub heading_rad: f64,
     /// Its σ.
     pub sd_rad: f64,
+    /// Why.
+    pub why: WhyRefused,
+}
+
+/// Why an external heading was refused on arrival.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WhyRefused {
+    /// A time or heading that is not finite, or a σ not in (0, π].
+    NotANumber,
+    /// Its time lies more than [`EXTERNAL_HEADING_MAX_AHEAD_S`] ahead of the latest sample's.
+    Ahead {
+        /// The latest sample's time, s.
+        latest_s: f64,
+    },
+    /// Its time lies more than [`EXTERNAL_HEADING_MAX_AGE_S`] behind the latest sample's: no
+    /// stance to come can use it.
+    Behind {
+        /// The latest sample's time, s.
+        latest_s: f64,
+    },
+}
+
+impl std::fmt::Display for WhyRefused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            WhyRefused::NotANumber => {
+                f.write_str("needs a finite heading, σ in (0, π], and a finite t_s")
+            }
+            WhyRefused::Ahead { latest_s } => write!(
+                f,
+                "t_s more than {EXTERNAL_HEADING_MAX_AHEAD_S} s ahead of the latest sample, at \
+                 {latest_s} s: on another clock?"
+            ),
+            WhyRefused::Behind { latest_s } => write!(
+                f,
+                "t_s more than {EXTERNAL_HEADING_MAX_AGE_S} s behind the latest sample, at \
+                 {latest_s} s, so no stance to come can use it: stamped on the IMU samples' clock?"
+            ),
+        }
+    }
 }

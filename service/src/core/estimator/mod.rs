@@ -60,7 +60,7 @@ pub use association::association_weight;
 use external_heading::QueuedHeading;
 pub use external_heading::{
     EXTERNAL_HEADING_LEAD_S, EXTERNAL_HEADING_MAX_AGE_S, EXTERNAL_HEADING_MAX_AHEAD_S,
-    EXTERNAL_HEADING_MAX_NIS, HeadingRefused,
+    EXTERNAL_HEADING_MAX_NIS, HeadingRefused, WhyRefused,
 };
 pub use types::{
     Counters, Estimate, GRAVITY_TOLERANCE, GapCrossing, HeadingEvent, ImuInput, Notice, Phase,
@@ -394,8 +394,10 @@ impl Estimator {
     /// `t_s` (the samples' clock) with its σ; it is used instead of the map at the first stance
     /// observed from [`EXTERNAL_HEADING_LEAD_S`] before `t_s` on, and only within
     /// [`EXTERNAL_HEADING_MAX_AGE_S`] after it (else counted, `headings_expired`). A time or
-    /// heading that is not finite, a σ that is not in (0, π], or a time more than
-    /// [`EXTERNAL_HEADING_MAX_AHEAD_S`] ahead of the latest sample, is refused and counted
+    /// heading that is not finite, a σ that is not in (0, π], a time more than
+    /// [`EXTERNAL_HEADING_MAX_AHEAD_S`] ahead of the latest sample, or one more than
+    /// [`EXTERNAL_HEADING_MAX_AGE_S`] behind it (judged once that sample's time can no longer
+    /// be dropped as a glitched stamp: `Plausibility::settled_t_s`), is refused and counted
     /// (`headings_refused`); at the stance, one further than [`EXTERNAL_HEADING_MAX_NIS`] from
     /// the prediction is refused and counted (`headings_outside_gate`): nothing absurd is
     /// fused. Of several before one stance the newest is used, the others counted
@@ -406,22 +408,33 @@ impl Estimator {
         heading_rad: f64,
         sd_rad: f64,
     ) -> Result<(), HeadingRefused> {
-        let ahead_s = if self.p.counters.samples > 0 {
-            t_s - self.p.out.t_s
-        } else {
-            0.0
-        };
-        let sane = t_s.is_finite()
-            && ahead_s <= EXTERNAL_HEADING_MAX_AHEAD_S
+        let latest_s = (self.p.counters.samples > 0).then_some(self.p.out.t_s);
+        let why = if !(t_s.is_finite()
             && heading_rad.is_finite()
             && sd_rad > 0.0
-            && sd_rad <= std::f64::consts::PI;
-        if !sane {
+            && sd_rad <= std::f64::consts::PI)
+        {
+            Some(WhyRefused::NotANumber)
+        } else if let Some(latest_s) = latest_s
+            && t_s - latest_s > EXTERNAL_HEADING_MAX_AHEAD_S
+        {
+            Some(WhyRefused::Ahead { latest_s })
+        } else if let Some(latest_s) = self.p.plausibility.settled_t_s()
+            && latest_s - t_s > EXTERNAL_HEADING_MAX_AGE_S
+        {
+            // No stance to come can use it (one observed later than the latest sample would
+            // find it expired), and it would take the place of the one waiting.
+            Some(WhyRefused::Behind { latest_s })
+        } else {
+            None
+        };
+        if let Some(why) = why {
             self.p.counters.headings_refused += 1;
             return Err(HeadingRefused {
                 t_s,
                 heading_rad,
                 sd_rad,
+                why,
             });
         }
         let queued = QueuedHeading::new(t_s, heading_rad, sd_rad, self.p.clock.offset_s());

@@ -301,10 +301,33 @@ fn an_external_heading_is_used_at_its_own_time() {
     assert!(observed.iter().filter(|&&t| t < now + 4.5).count() >= 3);
     assert_eq!(used_at, first_due, "stances at {observed:?}");
     assert_eq!(c.headings_expired, base.headings_expired);
-    // 3 s old: the next stance finds it expired, counted, and uses the map.
-    let (_, used_at, c) = run(now - 3.0);
+    // 3 s behind the latest sample when handed in: no stance to come can use it. Refused on
+    // arrival, counted, and saying why; the heading waiting for its stance stays. (It used to
+    // wait, take the waiting one's place, counted as superseding it, and expire at the next
+    // stance with no word of why: a producer that left `t_s` at 0, the field's default.)
+    let mut late = est.clone();
+    let latest = late.last_estimate().t_s;
+    late.queue_heading(now + 1.0, 0.2, sd).unwrap();
+    for t_s in [now - 3.0, 0.0] {
+        let err = late.queue_heading(t_s, 0.123, sd).unwrap_err().to_string();
+        assert!(
+            err.contains(&format!(
+                "t_s more than 2 s behind the latest sample, at {latest} s"
+            )),
+            "{err}"
+        );
+    }
+    let c = late.counters();
+    assert_eq!(c.headings_refused, base.headings_refused + 2);
+    assert_eq!(c.headings_superseded, base.headings_superseded);
+    assert_eq!(pending(&late), Some((0.2, sd)));
+    // Just within 2 s when handed in: taken, and the next stance, more than 2 s after its
+    // time, finds it expired, counted, and uses the map.
+    let (observed, used_at, c) = run(now - 1.99);
+    assert!(observed[0] > now - 1.99 + 2.0, "{observed:?}");
     assert_eq!(used_at, None);
     assert_eq!(c.headings_expired, base.headings_expired + 1);
+    assert_eq!(c.headings_refused, base.headings_refused);
     // Half a second old: still the next stance's.
     let (observed, used_at, _) = run(now - 0.5);
     assert_eq!(used_at, observed.first().copied());
