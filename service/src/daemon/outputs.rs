@@ -1,7 +1,7 @@
 //! The output publishers (attitude, bias, nav, diagnostics) and the conversion of an
 //! [`Estimate`] into the wire messages.
 
-use super::stall::StallGuard;
+use super::stall::{StallCounts, StallGuard};
 use super::state::StateFile;
 use super::{DaemonConfig, DaemonError};
 use crate::core::{Estimate, Phase};
@@ -108,6 +108,19 @@ pub(super) struct Outputs {
     pub(super) bias: Out<BiasSample>,
     pub(super) nav: Out<NavSample>,
     pub(super) diagnostics: Out<Diagnostics>,
+}
+
+impl Outputs {
+    /// The stalled consumers of each publisher and the samples they lost: attitude, bias, nav,
+    /// diagnostics.
+    pub(super) fn stall_counts(&self) -> [StallCounts; 4] {
+        [
+            self.attitude.stall.counts(),
+            self.bias.stall.counts(),
+            self.nav.stall.counts(),
+            self.diagnostics.stall.counts(),
+        ]
+    }
 }
 
 pub(super) fn phase_code(p: Phase) -> u32 {

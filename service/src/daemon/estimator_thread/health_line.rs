@@ -2,6 +2,7 @@
 //! counts since the previous line, the bias and the estimator's robustness counters.
 
 use super::super::receive::RxCounters;
+use super::super::stall::StallCounts;
 use super::EstState;
 use crate::core::{ForceWitness, Phase};
 use std::sync::atomic::Ordering;
@@ -58,8 +59,15 @@ impl std::fmt::Display for MicrosFmt {
 }
 
 impl EstState<'_> {
-    /// Logs the one-line health summary and starts a new window.
-    pub(super) fn log_health(&mut self, rx: &RxCounters) {
+    /// Logs the one-line health summary and starts a new window; `stalls`: the publishers'
+    /// stalled consumers (attitude, bias, nav, diagnostics).
+    pub(super) fn log_health(&mut self, rx: &RxCounters, stalls: [StallCounts; 4]) {
+        let line = self.health_line(rx, stalls);
+        tracing::info!("{line}");
+    }
+
+    /// The health line ([`Self::log_health`]), and a new window.
+    fn health_line(&mut self, rx: &RxCounters, stalls: [StallCounts; 4]) -> String {
         let now = Instant::now();
         let d = self.diagnostics(rx, 0);
         let c = self.est.counters();
@@ -89,12 +97,13 @@ impl EstState<'_> {
                 format!("{} rad/s", Vec3Fmt(self.last.gyro_bias_sd_rad_s)),
             )
         };
-        tracing::info!(
+        let line = format!(
             "health: input {rate:.1} Hz ({} received), seq gaps +{} ({}), rejected +{} ({}), \
              dropped +{} ({}), producer changes {}, foreign samples {}, latency p50 {} p99 {}, bias {}, \
-             σ {}, converged {}, phase {}{}, stances {} (map headings used: foot axis {}, strides {}), implausible {}, time jumps {}, clipped {}, \
-             health restores {} (footprints forgotten {}), velocity resets {}, tilts levelled again {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
-             lost in a killed daemon {}, external headings refused {} (superseded {}, outside the gate {}, expired (too old, or at a stream's end) {}, undone by the health check {})",
+             σ {}, converged {}, phase {}{}, stances {} (map headings used: foot axis {}, strides {}), implausible {}, time jumps {}, clipped {} \
+             (gyro peaks put back {}, not put back {}), health restores {} (footprints forgotten {}), velocity resets {}, tilts levelled again {}, headings taken as lost {}, time gaps {} (filled from the stride before {}, clock steps {}), clock steps back {}, IMU head missing {}, missing at restart {}, \
+             lost in a killed daemon {}, external headings refused {} (superseded {}, outside the gate {}, expired (too old, or at a stream's end) {}, undone by the health check {}), \
+             lossless consumers stalled {} (samples they lost {})",
             d.received,
             d.seq_gaps - h.seq_gaps,
             d.seq_gaps,
@@ -144,6 +153,9 @@ impl EstState<'_> {
             self.previous.rejected_implausible + self.est.counters().rejected_implausible,
             self.previous.rejected_time_jump + self.est.counters().rejected_time_jump,
             self.previous.clipped_samples + self.est.counters().clipped_samples,
+            self.previous.clipped_peaks_restored + self.est.counters().clipped_peaks_restored,
+            self.previous.clipped_peaks_not_restored
+                + self.est.counters().clipped_peaks_not_restored,
             self.previous.health_restores + self.est.counters().health_restores,
             self.previous.footprints_forgotten + self.est.counters().footprints_forgotten,
             self.previous.velocity_resets + self.est.counters().velocity_resets,
@@ -161,6 +173,8 @@ impl EstState<'_> {
             d.headings_outside_gate,
             d.headings_expired,
             d.headings_undone,
+            stalls.iter().map(|s| s.stalled_consumers).sum::<u64>(),
+            stalls.iter().map(|s| s.discarded).sum::<u64>(),
         );
         self.latency_health.clear();
         self.health = HealthMark {
@@ -170,5 +184,44 @@ impl EstState<'_> {
             rejected,
             dropped: d.dropped_overflow,
         };
+        line
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::DaemonConfig;
+    use super::*;
+    use crate::core::heading::HeadingAid;
+    use corridor_shared::config::Config;
+    use corridor_shared::services::Domain;
+
+    #[test]
+    fn the_health_line_says_the_clipped_peaks_and_the_stalled_consumers() {
+        // The daemon carried both peak counts over its streams and showed neither (they were
+        // in `corridor run`'s summary only); the publishers' stall losses were in the report
+        // at shutdown only.
+        let rec = RxCounters::default();
+        let domain = Domain::unsecured("test_health_line").unwrap();
+        let cfg = DaemonConfig::new(domain, Config::default(), HeadingAid::None);
+        let mut st = EstState::new(&cfg, &rec);
+        // A finished stream's counts, as the daemon carries them over.
+        st.previous.clipped_samples = 40;
+        st.previous.clipped_peaks_restored = 7;
+        st.previous.clipped_peaks_not_restored = 2;
+        let stalled = |stalled_consumers, discarded| StallCounts {
+            stalled_consumers,
+            discarded,
+        };
+        let stalls = [stalled(1, 30), stalled(0, 0), stalled(2, 5), stalled(0, 0)];
+        let line = st.health_line(&rec, stalls);
+        assert!(
+            line.contains("clipped 40 (gyro peaks put back 7, not put back 2)"),
+            "{line}"
+        );
+        assert!(
+            line.contains("lossless consumers stalled 3 (samples they lost 35)"),
+            "{line}"
+        );
     }
 }

@@ -562,7 +562,7 @@ pub(super) fn estimator_thread(
             next_diag = now + cfg.diagnostics_period;
         }
         if now >= next_health {
-            st.log_health(counters);
+            st.log_health(counters, out.stall_counts());
             next_health = now + cfg.health_period;
         }
         if now >= next_checkpoint {
@@ -584,12 +584,7 @@ pub(super) fn estimator_thread(
         streams_warm_started: st.streams_warm_started,
         checkpoints_saved: st.checkpoints_saved,
         warnings: st.warnings,
-        stalls: [
-            out.attitude.stall.counts(),
-            out.bias.stall.counts(),
-            out.nav.stall.counts(),
-            out.diagnostics.stall.counts(),
-        ],
+        stalls: out.stall_counts(),
         head_missing: counters.head_missing.load(Ordering::Relaxed),
         missing_at_restart: counters.missing_at_restart.load(Ordering::Relaxed),
         estimated: counters.taken.load(Ordering::Relaxed),
