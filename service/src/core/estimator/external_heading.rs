@@ -12,10 +12,10 @@ pub const EXTERNAL_HEADING_MAX_NIS: f64 = 16.0;
 /// within this after it; otherwise it is counted as expired. One whose time already lies this
 /// far behind the latest sample when it is handed in is refused then (`headings_refused`): a
 /// producer that sent `t_s = 0` (the field's default) mid-walk had each heading expire at the
-/// next stance, in the place of the one waiting there, with no word of why. A stride cycle lasts about 1.1 s on
-/// the gdins walks, so a heading given during a swing is used at the next stance, and one older
-/// than two seconds describes a foot placement already past (it was fused at whatever stance
-/// came next, however late: a review).
+/// next stance, in the place of the one waiting there, with no word of why. A stride cycle
+/// lasts about 1.1 s on the gdins walks, so a heading given during a swing is used at the next
+/// stance, and one older than two seconds describes a foot placement already past (it was fused
+/// at whatever stance came next, however late: a review).
 pub const EXTERNAL_HEADING_MAX_AGE_S: f64 = 2.0;
 
 /// How far before an external heading's `t_s` a stance may be observed and still use it, s: a
