@@ -20,7 +20,7 @@
 #define CORRIDOR_ALIGNOF(t) _Alignof(t)
 #endif
 
-#define CORRIDOR_SERVICE_VERSION "v5"
+#define CORRIDOR_SERVICE_VERSION "v6"
 #define CORRIDOR_FLAG_END_OF_STREAM 1u
 #define CORRIDOR_FLAG_BIAS_CORRECTED 2u
 #define CORRIDOR_FLAG_STANCE 4u
@@ -37,11 +37,11 @@
 /* Event (no payload) the daemon notifies, with event id = the producer's publisher id
  * modulo 256, when it has taken that producer's first sample: a producer waits for it
  * before it drops its publisher (client/src/producer.rs). */
-#define CORRIDOR_IMU_ACK_EVENT "corridor/v5/imu_ack"
+#define CORRIDOR_IMU_ACK_EVENT "corridor/v6/imu_ack"
 
 /* One IMU sample, producer -> daemon. */
-#define CORRIDOR_IMU_SAMPLE_SERVICE "corridor/v5/imu"
-#define CORRIDOR_IMU_SAMPLE_TYPE_NAME "corridor_v5_ImuSample"
+#define CORRIDOR_IMU_SAMPLE_SERVICE "corridor/v6/imu"
+#define CORRIDOR_IMU_SAMPLE_TYPE_NAME "corridor_v6_ImuSample"
 typedef struct corridor_ImuSample {
     uint64_t seq;
     double t_s;
@@ -64,8 +64,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_ImuSample, reserved) == 76, "corridor_I
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_ImuSample, sent_ns) == 80, "corridor_ImuSample.sent_ns: offset");
 
 /* An external attitude observation, producer -> daemon. */
-#define CORRIDOR_ANGLE_OBSERVATION_SERVICE "corridor/v5/angles"
-#define CORRIDOR_ANGLE_OBSERVATION_TYPE_NAME "corridor_v5_AngleObservation"
+#define CORRIDOR_ANGLE_OBSERVATION_SERVICE "corridor/v6/angles"
+#define CORRIDOR_ANGLE_OBSERVATION_TYPE_NAME "corridor_v6_AngleObservation"
 typedef struct corridor_AngleObservation {
     uint64_t seq;
     double t_s;
@@ -92,8 +92,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_AngleObservation, valid) == 64, "corrid
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_AngleObservation, reserved) == 68, "corridor_AngleObservation.reserved: offset");
 
 /* The gyro-bias estimate, daemon -> clients. */
-#define CORRIDOR_BIAS_SAMPLE_SERVICE "corridor/v5/bias"
-#define CORRIDOR_BIAS_SAMPLE_TYPE_NAME "corridor_v5_BiasSample"
+#define CORRIDOR_BIAS_SAMPLE_SERVICE "corridor/v6/bias"
+#define CORRIDOR_BIAS_SAMPLE_TYPE_NAME "corridor_v6_BiasSample"
 typedef struct corridor_BiasSample {
     uint64_t seq;
     double t_s;
@@ -116,8 +116,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, converged) == 80, "corridor
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_BiasSample, flags) == 84, "corridor_BiasSample.flags: offset");
 
 /* The attitude after one IMU sample, daemon -> clients. */
-#define CORRIDOR_ATTITUDE_SAMPLE_SERVICE "corridor/v5/attitude"
-#define CORRIDOR_ATTITUDE_SAMPLE_TYPE_NAME "corridor_v5_AttitudeSample"
+#define CORRIDOR_ATTITUDE_SAMPLE_SERVICE "corridor/v6/attitude"
+#define CORRIDOR_ATTITUDE_SAMPLE_TYPE_NAME "corridor_v6_AttitudeSample"
 typedef struct corridor_AttitudeSample {
     uint64_t seq;
     double t_s;
@@ -148,8 +148,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_AttitudeSample, flags) == 132, "corrido
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_AttitudeSample, imu_sent_ns) == 136, "corridor_AttitudeSample.imu_sent_ns: offset");
 
 /* Position and velocity at a footfall, daemon -> clients. */
-#define CORRIDOR_NAV_SAMPLE_SERVICE "corridor/v5/nav"
-#define CORRIDOR_NAV_SAMPLE_TYPE_NAME "corridor_v5_NavSample"
+#define CORRIDOR_NAV_SAMPLE_SERVICE "corridor/v6/nav"
+#define CORRIDOR_NAV_SAMPLE_TYPE_NAME "corridor_v6_NavSample"
 typedef struct corridor_NavSample {
     uint64_t seq;
     double t_s;
@@ -174,8 +174,8 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_NavSample, flags) == 88, "corridor_NavS
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_NavSample, reserved) == 92, "corridor_NavSample.reserved: offset");
 
 /* Counters of the daemon, daemon -> clients. */
-#define CORRIDOR_DIAGNOSTICS_SERVICE "corridor/v5/diagnostics"
-#define CORRIDOR_DIAGNOSTICS_TYPE_NAME "corridor_v5_Diagnostics"
+#define CORRIDOR_DIAGNOSTICS_SERVICE "corridor/v6/diagnostics"
+#define CORRIDOR_DIAGNOSTICS_TYPE_NAME "corridor_v6_Diagnostics"
 typedef struct corridor_Diagnostics {
     uint64_t seq;
     double t_s;
@@ -208,10 +208,15 @@ typedef struct corridor_Diagnostics {
     uint64_t headings_outside_gate;
     uint64_t headings_expired;
     uint64_t headings_undone;
+    uint64_t clipped_samples;
+    uint64_t clipped_peaks_restored;
+    uint64_t clipped_peaks_not_restored;
+    uint64_t stalled_consumers;
+    uint64_t discarded_for_stalled;
     uint32_t phase;
     uint32_t flags;
 } corridor_Diagnostics;
-CORRIDOR_STATIC_ASSERT(sizeof(corridor_Diagnostics) == 256, "corridor_Diagnostics: size");
+CORRIDOR_STATIC_ASSERT(sizeof(corridor_Diagnostics) == 296, "corridor_Diagnostics: size");
 CORRIDOR_STATIC_ASSERT(CORRIDOR_ALIGNOF(corridor_Diagnostics) == 8, "corridor_Diagnostics: alignment");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, seq) == 0, "corridor_Diagnostics.seq: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, t_s) == 8, "corridor_Diagnostics.t_s: offset");
@@ -244,7 +249,12 @@ CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, headings_superseded) == 21
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, headings_outside_gate) == 224, "corridor_Diagnostics.headings_outside_gate: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, headings_expired) == 232, "corridor_Diagnostics.headings_expired: offset");
 CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, headings_undone) == 240, "corridor_Diagnostics.headings_undone: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, phase) == 248, "corridor_Diagnostics.phase: offset");
-CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, flags) == 252, "corridor_Diagnostics.flags: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, clipped_samples) == 248, "corridor_Diagnostics.clipped_samples: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, clipped_peaks_restored) == 256, "corridor_Diagnostics.clipped_peaks_restored: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, clipped_peaks_not_restored) == 264, "corridor_Diagnostics.clipped_peaks_not_restored: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, stalled_consumers) == 272, "corridor_Diagnostics.stalled_consumers: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, discarded_for_stalled) == 280, "corridor_Diagnostics.discarded_for_stalled: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, phase) == 288, "corridor_Diagnostics.phase: offset");
+CORRIDOR_STATIC_ASSERT(offsetof(corridor_Diagnostics, flags) == 292, "corridor_Diagnostics.flags: offset");
 
 #endif /* CORRIDOR_WIRE_H */

@@ -80,8 +80,18 @@ impl Status {
         );
         let _ = writeln!(
             s,
-            "losses:           seq gaps {}, overflow drops {}, undelivered outputs {}",
-            d.seq_gaps, d.dropped_overflow, d.undelivered
+            "clipped:          samples at a rail {} (gyro peaks put back {}, not put back {})",
+            d.clipped_samples, d.clipped_peaks_restored, d.clipped_peaks_not_restored
+        );
+        let _ = writeln!(
+            s,
+            "losses:           seq gaps {}, overflow drops {}, undelivered outputs {}; \
+             consumers stalled {} (outputs discarded for them {})",
+            d.seq_gaps,
+            d.dropped_overflow,
+            d.undelivered,
+            d.stalled_consumers,
+            d.discarded_for_stalled
         );
         let _ = writeln!(
             s,

@@ -91,7 +91,8 @@ fn status_shows_the_daemons_counters_and_final_bias() {
     let _ = std::fs::remove_file(&checkpoint);
     let daemon = Daemon::start(name, &checkpoint);
     let log = read_imu_csv(
-        &root().join("tests/data/gdins_exp36_corridor_out_and_back/imu.csv"),
+        // exp26: 144 samples at the gyro's rail, and peaks put back (the clipping line).
+        &root().join("tests/data/gdins_exp26_narrow_out_and_back/imu.csv"),
         &ImuCsvOptions::default(),
     )
     .unwrap();
@@ -109,9 +110,12 @@ fn status_shows_the_daemons_counters_and_final_bias() {
         .unwrap();
     let aid = heading_aid(&cfg, None).unwrap();
     let mut last = None;
-    run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
+    let offline = run_log(&log, &cfg, &aid, &BiasInjection::default(), |_, e| {
         last = Some(*e)
-    });
+    })
+    .counters;
+    assert!(offline.clipped_samples > 0 && offline.clipped_peaks_restored > 0);
+    let rows = log.rows.len();
     let b = last.unwrap().gyro_bias_rad_s;
     let bias = format!("[{:+.6}, {:+.6}, {:+.6}]", b[0], b[1], b[2]);
 
@@ -129,7 +133,7 @@ fn status_shows_the_daemons_counters_and_final_bias() {
         screen = String::from_utf8_lossy(&o.stdout).into_owned();
         // The final bias is published at the end of the stream, after the count: under load
         // it can come a moment later than the marker's count.
-        if screen.contains("received 14001")
+        if screen.contains(&format!("received {}", rows + 1))
             && screen.contains("s ago")
             && !screen.contains("none published yet")
         {
@@ -138,8 +142,15 @@ fn status_shows_the_daemons_counters_and_final_bias() {
     }
     for want in [
         "domain \"eco_status\": running",
-        "received 14001, accepted 14000",
+        &format!("received {}, accepted {rows}", rows + 1),
         "seq gaps 0, overflow drops 0",
+        "consumers stalled 0 (outputs discarded for them 0)",
+        &format!(
+            "clipped:          samples at a rail {} (gyro peaks put back {}, not put back {})",
+            offline.clipped_samples,
+            offline.clipped_peaks_restored,
+            offline.clipped_peaks_not_restored
+        ),
         "not received:     before the daemon's first message 0, missing at a restart 0, lost in a killed life 0",
         "producers:        changes 0, samples of a second producer refused 0, daemon life 1",
         "angles:           dropped 0, with roll or pitch (not fused) 0; external headings refused 0, superseded 0, outside the gate 0, expired 0, undone 0",

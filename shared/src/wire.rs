@@ -90,9 +90,9 @@ pub mod phase {
     }
 }
 
-/// One IMU sample, producer → daemon (`corridor/v5/imu`).
+/// One IMU sample, producer → daemon (`corridor/v6/imu`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v5_ImuSample")]
+#[type_name("corridor_v6_ImuSample")]
 #[repr(C)]
 pub struct ImuSample {
     /// Sequence number of the producer, +1 per sample (end-of-stream markers included).
@@ -136,7 +136,7 @@ impl From<&ImuRow> for ImuSample {
     }
 }
 
-/// An external attitude observation, producer → daemon (`corridor/v5/angles`), e.g. a heading
+/// An external attitude observation, producer → daemon (`corridor/v6/angles`), e.g. a heading
 /// from a map matcher or a camera. The heading is used when its bit is set in `valid`, instead
 /// of the map, at the stance its `t_s` falls in or the next one: at the first stance observed
 /// from 0.5 s before `t_s` on, and only within 2 s after `t_s` (older, it is counted as expired,
@@ -144,7 +144,7 @@ impl From<&ImuRow> for ImuSample {
 /// such as `t_s = 0` mid-walk, is refused then, `Diagnostics::headings_refused`); roll and
 /// pitch are not fused (see [`ANGLE_ROLL`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v5_AngleObservation")]
+#[type_name("corridor_v6_AngleObservation")]
 #[repr(C)]
 pub struct AngleObservation {
     /// Sequence number of the producer.
@@ -171,10 +171,10 @@ pub struct AngleObservation {
     pub reserved: u32,
 }
 
-/// The gyro-bias estimate, daemon → clients (`corridor/v5/bias`): at each heading observation,
+/// The gyro-bias estimate, daemon → clients (`corridor/v6/bias`): at each heading observation,
 /// at the configured rate and at end of stream.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v5_BiasSample")]
+#[type_name("corridor_v6_BiasSample")]
 #[repr(C)]
 pub struct BiasSample {
     /// Sequence number of the daemon's bias stream.
@@ -214,10 +214,10 @@ impl Default for BiasSample {
     }
 }
 
-/// The attitude after one IMU sample, daemon → clients (`corridor/v5/attitude`): one per
+/// The attitude after one IMU sample, daemon → clients (`corridor/v6/attitude`): one per
 /// accepted IMU sample, plus one end-of-stream marker.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v5_AttitudeSample")]
+#[type_name("corridor_v6_AttitudeSample")]
 #[repr(C)]
 pub struct AttitudeSample {
     /// Sequence number of the daemon's attitude stream.
@@ -248,14 +248,14 @@ pub struct AttitudeSample {
     pub imu_sent_ns: u64,
 }
 
-/// Position and velocity at a footfall, daemon → clients (`corridor/v5/nav`): one per stance
+/// Position and velocity at a footfall, daemon → clients (`corridor/v6/nav`): one per stance
 /// (first sample of the stance), after alignment. A sample whose stamp turns out to be a glitch
 /// is dropped after its nav sample went out; its stance's real first sample then sends one
 /// again, with the same `stance` and a later `imu_seq` (`corridor_client`'s tracker takes it
 /// for the stride it replaces). The stance during which the start heading sets the map frame
 /// (the first stride's) is sent again too, in that frame, flagged [`FLAG_FRAME_SET`].
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v5_NavSample")]
+#[type_name("corridor_v6_NavSample")]
 #[repr(C)]
 pub struct NavSample {
     /// Sequence number of the daemon's nav stream.
@@ -281,7 +281,7 @@ pub struct NavSample {
     pub reserved: u32,
 }
 
-/// Counters of the daemon, daemon → clients (`corridor/v5/diagnostics`): periodically (wall
+/// Counters of the daemon, daemon → clients (`corridor/v6/diagnostics`): periodically (wall
 /// clock), at end of stream and at shutdown. The input counters (`received`, `seq_gaps`,
 /// `rejected_duplicate_seq`, `late`, `dropped_overflow`, `producer_changes`) and `undelivered`
 /// are cumulative over every life of the domain's daemon (they live in its accounting file, so a
@@ -290,7 +290,7 @@ pub struct NavSample {
 /// counts (`accepted`, `rejected_non_finite`, `rejected_time`, `stances`, `heading_used`, the
 /// `headings_*`) over the current life.
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("corridor_v5_Diagnostics")]
+#[type_name("corridor_v6_Diagnostics")]
 #[repr(C)]
 pub struct Diagnostics {
     /// Sequence number of the daemon's diagnostics stream.
@@ -375,6 +375,22 @@ pub struct Diagnostics {
     /// External headings fused in an update the estimator's health check then undid (v5; this
     /// life).
     pub headings_undone: u64,
+    /// Samples with an axis (gyro or accelerometer) at its rail, accepted and flagged as
+    /// clipped (v6; this life).
+    pub clipped_samples: u64,
+    /// Gyro peaks a rail cut off, put back (`eskf.restore_clipped_peaks`) (v6; this life).
+    pub clipped_peaks_restored: u64,
+    /// Gyro peaks a rail cut off that could not be put back (a stance, gap or fault before
+    /// their end, too long, no fit, a failed replay, open when the stream ended) (v6; this
+    /// life).
+    pub clipped_peaks_not_restored: u64,
+    /// Times a consumer held one of the daemon's four publishers (attitude, bias, nav,
+    /// diagnostics) for longer than `daemon.stall_timeout_s`; a consumer that caught up and
+    /// stalled again counts again (v6; this life).
+    pub stalled_consumers: u64,
+    /// Samples of the four outputs discarded for stalled consumers (the other consumers got
+    /// them) (v6; this life).
+    pub discarded_for_stalled: u64,
     /// Estimator phase ([`phase`]).
     pub phase: u32,
     /// Bit set of `FLAG_*` ([`FLAG_END_OF_STREAM`], [`FLAG_SHUTDOWN`]).
@@ -425,7 +441,7 @@ mod tests {
         assert_eq!(size_of::<BiasSample>(), 8 * 3 + 48 + 8 + 8);
         assert_eq!(size_of::<AttitudeSample>(), 8 * 3 + 32 + 24 + 48 + 8 + 8);
         assert_eq!(size_of::<NavSample>(), 8 * 4 + 48 + 8 + 8);
-        assert_eq!(size_of::<Diagnostics>(), 8 * 31 + 8);
+        assert_eq!(size_of::<Diagnostics>(), 8 * 36 + 8);
     }
 
     #[test]

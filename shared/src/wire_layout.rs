@@ -153,7 +153,9 @@ pub fn layouts() -> Vec<TypeLayout> {
             missing_at_restart: u64, lost_in_daemon: u64, angles_dropped: u64, lives: u64,
             foreign_samples: u64, angles_ignored: u64, headings_refused: u64,
             headings_superseded: u64, headings_outside_gate: u64, headings_expired: u64,
-            headings_undone: u64, phase: u32, flags: u32),
+            headings_undone: u64, clipped_samples: u64, clipped_peaks_restored: u64,
+            clipped_peaks_not_restored: u64, stalled_consumers: u64,
+            discarded_for_stalled: u64, phase: u32, flags: u32),
     ]
 }
 

@@ -1,4 +1,4 @@
-//! An external heading (`AngleObservation` over `corridor/v5/angles`, e.g. from a map matcher)
+//! An external heading (`AngleObservation` over `corridor/v6/angles`, e.g. from a map matcher)
 //! reaches the estimator end to end: the daemon's attitude stream is the offline run's with the
 //! same heading queued (to 1e-12, as the replay test compares), and differs in yaw from the run
 //! without it. Handed in before the first sample and stamped later, it waits for its own time.

@@ -17,7 +17,7 @@ LOSSLESS_RETRY_S = 2.0
 
 #: Event service on which the daemon acknowledges a producer when it has taken its first
 #: sample, with the producer's event id (the Rust `IMU_ACK_SERVICE` and `ack_event_id`).
-IMU_ACK_SERVICE = "corridor/v5/imu_ack"
+IMU_ACK_SERVICE = "corridor/v6/imu_ack"
 
 #: How long `close` waits for that acknowledgement, s (the Rust `END_ACK_WAIT`).
 END_ACK_WAIT_S = 5.0

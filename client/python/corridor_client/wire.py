@@ -8,7 +8,7 @@ tests/test_wire_layout.py checks them against the layout the Rust code measures
 import ctypes
 from typing import List, Tuple, Type
 
-SERVICE_VERSION = "v5"
+SERVICE_VERSION = "v6"
 
 FLAG_END_OF_STREAM = 1 << 0
 FLAG_BIAS_CORRECTED = 1 << 1
@@ -57,8 +57,8 @@ class _Wire(ctypes.Structure):
 class ImuSample(_Wire):
     """One IMU sample, producer -> daemon."""
 
-    TYPE_NAME = "corridor_v5_ImuSample"
-    SERVICE = "corridor/v5/imu"
+    TYPE_NAME = "corridor_v6_ImuSample"
+    SERVICE = "corridor/v6/imu"
     _fields_: List[Tuple[str, Type]] = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -74,8 +74,8 @@ class ImuSample(_Wire):
 class AngleObservation(_Wire):
     """An external attitude observation, producer -> daemon."""
 
-    TYPE_NAME = "corridor_v5_AngleObservation"
-    SERVICE = "corridor/v5/angles"
+    TYPE_NAME = "corridor_v6_AngleObservation"
+    SERVICE = "corridor/v6/angles"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -93,8 +93,8 @@ class AngleObservation(_Wire):
 class BiasSample(_Wire):
     """The gyro-bias estimate, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v5_BiasSample"
-    SERVICE = "corridor/v5/bias"
+    TYPE_NAME = "corridor_v6_BiasSample"
+    SERVICE = "corridor/v6/bias"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -110,8 +110,8 @@ class BiasSample(_Wire):
 class AttitudeSample(_Wire):
     """The attitude after one IMU sample, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v5_AttitudeSample"
-    SERVICE = "corridor/v5/attitude"
+    TYPE_NAME = "corridor_v6_AttitudeSample"
+    SERVICE = "corridor/v6/attitude"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -131,8 +131,8 @@ class AttitudeSample(_Wire):
 class NavSample(_Wire):
     """Position and velocity at a footfall, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v5_NavSample"
-    SERVICE = "corridor/v5/nav"
+    TYPE_NAME = "corridor_v6_NavSample"
+    SERVICE = "corridor/v6/nav"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -149,8 +149,8 @@ class NavSample(_Wire):
 class Diagnostics(_Wire):
     """Counters of the daemon, daemon -> clients."""
 
-    TYPE_NAME = "corridor_v5_Diagnostics"
-    SERVICE = "corridor/v5/diagnostics"
+    TYPE_NAME = "corridor_v6_Diagnostics"
+    SERVICE = "corridor/v6/diagnostics"
     _fields_ = [
         ("seq", _u64),
         ("t_s", _f64),
@@ -183,6 +183,11 @@ class Diagnostics(_Wire):
         ("headings_outside_gate", _u64),
         ("headings_expired", _u64),
         ("headings_undone", _u64),
+        ("clipped_samples", _u64),
+        ("clipped_peaks_restored", _u64),
+        ("clipped_peaks_not_restored", _u64),
+        ("stalled_consumers", _u64),
+        ("discarded_for_stalled", _u64),
         ("phase", _u32),
         ("flags", _u32),
     ]

@@ -39,25 +39,25 @@ pub use qos::{Delivery, Qos, Topic};
 
 /// Version of the wire layout; part of every service name. Bump it with any change to
 /// [`crate::wire`].
-pub const SERVICE_VERSION: &str = "v5";
+pub const SERVICE_VERSION: &str = "v6";
 /// IMU samples, producers → daemon.
-pub const IMU_SERVICE: &str = "corridor/v5/imu";
+pub const IMU_SERVICE: &str = "corridor/v6/imu";
 /// External angle observations, producers → daemon.
-pub const ANGLES_SERVICE: &str = "corridor/v5/angles";
+pub const ANGLES_SERVICE: &str = "corridor/v6/angles";
 /// Attitude after every IMU sample, daemon → clients.
-pub const ATTITUDE_SERVICE: &str = "corridor/v5/attitude";
+pub const ATTITUDE_SERVICE: &str = "corridor/v6/attitude";
 /// Gyro-bias estimates, daemon → clients.
-pub const BIAS_SERVICE: &str = "corridor/v5/bias";
+pub const BIAS_SERVICE: &str = "corridor/v6/bias";
 /// Position and velocity at each stance, daemon → clients.
-pub const NAV_SERVICE: &str = "corridor/v5/nav";
+pub const NAV_SERVICE: &str = "corridor/v6/nav";
 /// Daemon counters, daemon → clients.
-pub const DIAGNOSTICS_SERVICE: &str = "corridor/v5/diagnostics";
+pub const DIAGNOSTICS_SERVICE: &str = "corridor/v6/diagnostics";
 /// Event, daemon → producers: notified with [`ack_event_id`] of a producer's IMU publisher when
 /// the daemon has read that producer's first sample (in this daemon life; taken, or refused
 /// because another producer is followed). A producer waits for it before it lets its publisher go: iceoryx2 0.10
 /// attaches the daemon's side of a new connection only when the daemon next receives, and a
 /// publisher dropped before that takes the samples still queued with it.
-pub const IMU_ACK_SERVICE: &str = "corridor/v5/imu_ack";
+pub const IMU_ACK_SERVICE: &str = "corridor/v6/imu_ack";
 
 /// The event id of [`IMU_ACK_SERVICE`] that acknowledges the IMU publisher with this port id
 /// (`UniquePublisherId::value`): one of 256, iceoryx2's default id range (0–255). Two producers
@@ -68,7 +68,7 @@ pub fn ack_event_id(publisher_id: u128) -> usize {
 /// Event service created exclusively by the running daemon: a second daemon on the same domain
 /// fails to create it. Clients must not open it (an open handle would keep it alive after the
 /// daemon exits).
-pub const DAEMON_SERVICE: &str = "corridor/v5/daemon";
+pub const DAEMON_SERVICE: &str = "corridor/v6/daemon";
 
 /// Longest single wait on an event listener. iceoryx2 0.10's event can lose a wake-up: a
 /// listener that has just reset its state to idle empties its socket, swallowing the datagram

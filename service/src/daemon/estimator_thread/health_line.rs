@@ -69,7 +69,7 @@ impl EstState<'_> {
     /// The health line ([`Self::log_health`]), and a new window.
     fn health_line(&mut self, rx: &RxCounters, stalls: [StallCounts; 4]) -> String {
         let now = Instant::now();
-        let d = self.diagnostics(rx, 0);
+        let d = self.diagnostics(rx, stalls, 0);
         let c = self.est.counters();
         let rejected = d.rejected_non_finite
             + d.rejected_time
@@ -152,10 +152,9 @@ impl EstState<'_> {
             self.previous.stride_used + c.stride_used,
             self.previous.rejected_implausible + self.est.counters().rejected_implausible,
             self.previous.rejected_time_jump + self.est.counters().rejected_time_jump,
-            self.previous.clipped_samples + self.est.counters().clipped_samples,
-            self.previous.clipped_peaks_restored + self.est.counters().clipped_peaks_restored,
-            self.previous.clipped_peaks_not_restored
-                + self.est.counters().clipped_peaks_not_restored,
+            d.clipped_samples,
+            d.clipped_peaks_restored,
+            d.clipped_peaks_not_restored,
             self.previous.health_restores + self.est.counters().health_restores,
             self.previous.footprints_forgotten + self.est.counters().footprints_forgotten,
             self.previous.velocity_resets + self.est.counters().velocity_resets,
@@ -173,8 +172,8 @@ impl EstState<'_> {
             d.headings_outside_gate,
             d.headings_expired,
             d.headings_undone,
-            stalls.iter().map(|s| s.stalled_consumers).sum::<u64>(),
-            stalls.iter().map(|s| s.discarded).sum::<u64>(),
+            d.stalled_consumers,
+            d.discarded_for_stalled,
         );
         self.latency_health.clear();
         self.health = HealthMark {

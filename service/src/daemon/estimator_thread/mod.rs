@@ -7,6 +7,7 @@ mod health_line;
 use super::latency::LatencyHistogram;
 use super::outputs::{Out, Outputs, attitude_of, bias_of, flags_of, phase_code};
 use super::receive::{Msg, RxCounters};
+use super::stall::StallCounts;
 use super::state::{OUT_ATTITUDE, OUT_BIAS, OUT_DIAGNOSTICS, OUT_NAV, StateFile};
 use super::{DaemonConfig, DaemonError, DaemonReport};
 use crate::checkpoint::{self, Checkpoint, CheckpointError};
@@ -121,7 +122,9 @@ impl<'a> EstState<'a> {
         self.previous.samples + self.est.counters().samples
     }
 
-    fn diagnostics(&self, rx: &RxCounters, flags: u32) -> Diagnostics {
+    /// The counters as published; `stalls`: the publishers' stalled consumers (attitude, bias,
+    /// nav, diagnostics).
+    fn diagnostics(&self, rx: &RxCounters, stalls: [StallCounts; 4], flags: u32) -> Diagnostics {
         let c = self.est.counters();
         let p = &self.previous;
         Diagnostics {
@@ -156,13 +159,18 @@ impl<'a> EstState<'a> {
             headings_outside_gate: p.headings_outside_gate + c.headings_outside_gate,
             headings_expired: p.headings_expired + c.headings_expired,
             headings_undone: p.headings_undone + c.headings_undone,
+            clipped_samples: p.clipped_samples + c.clipped_samples,
+            clipped_peaks_restored: p.clipped_peaks_restored + c.clipped_peaks_restored,
+            clipped_peaks_not_restored: p.clipped_peaks_not_restored + c.clipped_peaks_not_restored,
+            stalled_consumers: stalls.iter().map(|s| s.stalled_consumers).sum(),
+            discarded_for_stalled: stalls.iter().map(|s| s.discarded).sum(),
             phase: phase_code(self.est.phase()),
             flags,
         }
     }
 
     fn publish_diagnostics(&mut self, out: &mut Outputs, rx: &RxCounters, flags: u32) {
-        let d = self.diagnostics(rx, flags);
+        let d = self.diagnostics(rx, out.stall_counts(), flags);
         let ok = out.diagnostics.publish(|v, q| v.seq = q, d);
         self.count(ok);
         // Late readers of the bias and nav streams get their latest value even while idle.
@@ -575,7 +583,7 @@ pub(super) fn estimator_thread(
     st.est.end_stream();
     st.publish_diagnostics(&mut out, counters, FLAG_SHUTDOWN);
     st.save_checkpoint(cfg);
-    let mut diagnostics = st.diagnostics(counters, FLAG_SHUTDOWN);
+    let mut diagnostics = st.diagnostics(counters, out.stall_counts(), FLAG_SHUTDOWN);
     diagnostics.seq = out.diagnostics.seq.saturating_sub(1);
     Ok(DaemonReport {
         diagnostics,
