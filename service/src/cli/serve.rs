@@ -54,57 +54,69 @@ pub(super) fn serve(a: &ServeArgs) -> Result<()> {
         cfg.checkpoint = Some(p.clone());
     }
     let report = daemon::serve(cfg)?;
-    let d = &report.diagnostics;
-    corridor_client::say!(
-        "{}",
-        serde_json::to_string_pretty(&serde_json::json!({
-            "streams_finished": report.streams_finished,
-            "received": d.received,
-            "accepted": d.accepted,
-            "seq_gaps": d.seq_gaps,
-            "rejected_non_finite": d.rejected_non_finite,
-            "rejected_time": d.rejected_time,
-            "rejected_implausible": d.rejected_implausible,
-            "rejected_time_jump": d.rejected_time_jump,
-            "rejected_duplicate_seq": d.rejected_duplicate_seq,
-            "late": d.late,
-            "dropped_overflow": d.dropped_overflow,
-            "undelivered": d.undelivered,
-            "producer_changes": d.producer_changes,
-            "foreign_samples": d.foreign_samples,
-            "head_missing": report.head_missing,
-            "missing_at_restart": report.missing_at_restart,
-            "estimated": report.estimated,
-            "lost_in_daemon": report.lost_in_daemon,
-            "angles_dropped": report.angles_dropped,
-            "angles_ignored": d.angles_ignored,
-            "headings_refused": d.headings_refused,
-            "headings_superseded": d.headings_superseded,
-            "headings_outside_gate": d.headings_outside_gate,
-            "headings_expired": d.headings_expired,
-            "headings_undone": d.headings_undone,
-            "published": {
-                "attitude": report.published[0],
-                "bias": report.published[1],
-                "nav": report.published[2],
-                "diagnostics": report.published[3],
-            },
-            "stalled_discarded": {
-                "attitude": report.stalls[0].discarded,
-                "bias": report.stalls[1].discarded,
-                "nav": report.stalls[2].discarded,
-                "diagnostics": report.stalls[3].discarded,
-            },
-            "daemon_lives": report.lives,
-            "checkpoints_saved": report.checkpoints_saved,
-            "warm_started": report.warm_started_from.is_some(),
-            "streams_warm_started": report.streams_warm_started,
-            "alignment_not_gravity": report.alignment_not_gravity,
-            "specific_force_off_gravity": report.specific_force_off_gravity,
-            "warnings": report.warnings,
-        }))?
-    );
+    corridor_client::say!("{}", serde_json::to_string_pretty(&report_json(&report))?);
     Ok(())
+}
+
+/// The daemon's report as `corridor serve` prints it at shutdown: every count the last
+/// diagnostics carry, and the per-output counts of the report.
+fn report_json(report: &corridor_service::daemon::DaemonReport) -> serde_json::Value {
+    let d = &report.diagnostics;
+    serde_json::json!({
+        "streams_finished": report.streams_finished,
+        "received": d.received,
+        "accepted": d.accepted,
+        "seq_gaps": d.seq_gaps,
+        "rejected_non_finite": d.rejected_non_finite,
+        "rejected_time": d.rejected_time,
+        "rejected_implausible": d.rejected_implausible,
+        "rejected_time_jump": d.rejected_time_jump,
+        "rejected_duplicate_seq": d.rejected_duplicate_seq,
+        "late": d.late,
+        "dropped_overflow": d.dropped_overflow,
+        "undelivered": d.undelivered,
+        "producer_changes": d.producer_changes,
+        "foreign_samples": d.foreign_samples,
+        "head_missing": report.head_missing,
+        "missing_at_restart": report.missing_at_restart,
+        "estimated": report.estimated,
+        "lost_in_daemon": report.lost_in_daemon,
+        "angles_dropped": report.angles_dropped,
+        "angles_ignored": d.angles_ignored,
+        "headings_refused": d.headings_refused,
+        "headings_superseded": d.headings_superseded,
+        "headings_outside_gate": d.headings_outside_gate,
+        "headings_expired": d.headings_expired,
+        "headings_undone": d.headings_undone,
+        "clipped_samples": d.clipped_samples,
+        "clipped_peaks_restored": d.clipped_peaks_restored,
+        "clipped_peaks_not_restored": d.clipped_peaks_not_restored,
+        "published": {
+            "attitude": report.published[0],
+            "bias": report.published[1],
+            "nav": report.published[2],
+            "diagnostics": report.published[3],
+        },
+        "stalled_consumers": {
+            "attitude": report.stalls[0].stalled_consumers,
+            "bias": report.stalls[1].stalled_consumers,
+            "nav": report.stalls[2].stalled_consumers,
+            "diagnostics": report.stalls[3].stalled_consumers,
+        },
+        "stalled_discarded": {
+            "attitude": report.stalls[0].discarded,
+            "bias": report.stalls[1].discarded,
+            "nav": report.stalls[2].discarded,
+            "diagnostics": report.stalls[3].discarded,
+        },
+        "daemon_lives": report.lives,
+        "checkpoints_saved": report.checkpoints_saved,
+        "warm_started": report.warm_started_from.is_some(),
+        "streams_warm_started": report.streams_warm_started,
+        "alignment_not_gravity": report.alignment_not_gravity,
+        "specific_force_off_gravity": report.specific_force_off_gravity,
+        "warnings": report.warnings,
+    })
 }
 
 /// `--runtime-dir`: an absolute path, any bytes (a usage error otherwise, exit code 2).
@@ -117,4 +129,30 @@ fn absolute_path() -> impl clap::builder::TypedValueParser<Value = PathBuf> {
             Err(format!("{}: must be an absolute path", dir.display()))
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_report_says_the_clipping_counts_and_the_stalled_consumers() {
+        // The report left out the v6 counts the diagnostics carry (the samples at a rail, the
+        // gyro peaks put back or not) and the stalled consumers themselves (only what was
+        // discarded for them), though the DaemonReport holds them.
+        let mut report = corridor_service::daemon::DaemonReport::default();
+        let d = &mut report.diagnostics;
+        (d.clipped_samples, d.clipped_peaks_restored) = (144, 30);
+        d.clipped_peaks_not_restored = 2;
+        report.stalls[0].stalled_consumers = 1;
+        report.stalls[2].stalled_consumers = 3;
+        report.stalls[2].discarded = 40;
+        let j = report_json(&report);
+        assert_eq!(j["clipped_samples"], 144, "{j}");
+        assert_eq!(j["clipped_peaks_restored"], 30, "{j}");
+        assert_eq!(j["clipped_peaks_not_restored"], 2, "{j}");
+        assert_eq!(j["stalled_consumers"]["attitude"], 1, "{j}");
+        assert_eq!(j["stalled_consumers"]["nav"], 3, "{j}");
+        assert_eq!(j["stalled_discarded"]["nav"], 40, "{j}");
+    }
 }
