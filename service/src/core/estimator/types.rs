@@ -179,9 +179,10 @@ pub struct Counters {
     /// Clipped gyro peaks that were not put back: a stance, a gap, a health fault, a late
     /// footfall or a warm start came before their end, they lasted longer than
     /// `rail_peaks::MAX_PEAK_SAMPLES`, no run had two samples off the rail either side, or the
-    /// filter propagated again failed the health check. In neither count: a peak whose
-    /// parabolas all lie under their readings (nothing was cut off: readings within 2 % of the
-    /// range, not at it), and a peak still open when the stream ends.
+    /// filter propagated again failed the health check; and a peak still open when the stream
+    /// ends ([`crate::core::Estimator::end_stream`]). In neither count: a peak whose parabolas
+    /// all lie under their readings (nothing was cut off: readings within 2 % of the range, not
+    /// at it).
     pub clipped_peaks_not_restored: u64,
     /// Samples after which the state failed the health check: the first few in a row undo
     /// the sample's update (the state before it), further ones restore the state of the last
@@ -283,7 +284,10 @@ pub struct Counters {
     /// Samples integrated on the smoothed clock because the time stamps jitter (host arrival
     /// times; see `core/clock.rs`).
     pub jittery_clock_samples: u64,
-    /// External heading observations refused (not finite, or σ not in (0, π]).
+    /// External heading observations refused on arrival: not finite, σ not in (0, π], or a time
+    /// more than [`EXTERNAL_HEADING_MAX_AHEAD_S`](super::EXTERNAL_HEADING_MAX_AHEAD_S) ahead of
+    /// the latest sample or more than [`EXTERNAL_HEADING_MAX_AGE_S`](super::EXTERNAL_HEADING_MAX_AGE_S)
+    /// behind it ([`crate::core::Estimator::queue_heading`]).
     pub headings_refused: u64,
     /// External heading observations replaced by a newer one before the stance that would have
     /// used them (one is kept, the newest).
