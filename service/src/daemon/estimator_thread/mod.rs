@@ -31,8 +31,8 @@ const CLOCK_RESTART_S: f64 = 1.0;
 const MAX_REPORTED_WARNINGS: usize = 64;
 use std::time::Instant;
 
-/// Refused samples per stream that are logged as warnings, and rests or stances refused as no
-/// gravity (the rest at debug level; all counted).
+/// Refused samples per stream that are logged as warnings, rests or stances refused as no
+/// gravity, and external headings refused on arrival (the rest at debug level; all counted).
 const REFUSED_WARNINGS_PER_STREAM: u64 = 10;
 
 /// State of the estimator thread.
@@ -364,6 +364,23 @@ impl<'a> EstState<'a> {
         }
     }
 
+    /// An external heading, handed to the estimator, which refuses and counts one that is
+    /// absurd or can no longer be used. A refusal is said with why; beyond the first
+    /// [`REFUSED_WARNINGS_PER_STREAM`] of a stream at debug level (a producer that leaves `t_s`
+    /// at 0 has every heading refused, each one warned of). Returns whether it was warned of.
+    fn on_heading(&mut self, t_s: f64, heading_rad: f64, sd_rad: f64) -> bool {
+        let Err(e) = self.est.queue_heading(t_s, heading_rad, sd_rad) else {
+            return false;
+        };
+        let warn = self.est.counters().headings_refused <= REFUSED_WARNINGS_PER_STREAM;
+        if warn {
+            tracing::warn!("{e}");
+        } else {
+            tracing::debug!("{e}");
+        }
+        warn
+    }
+
     fn on_end_of_stream(
         &mut self,
         cfg: &DaemonConfig,
@@ -550,10 +567,7 @@ pub(super) fn estimator_thread(
                 heading_rad,
                 sd_rad,
             }) => {
-                // Refused and counted by the estimator when absurd.
-                if let Err(e) = st.est.queue_heading(t_s, heading_rad, sd_rad) {
-                    tracing::warn!("{e}");
-                }
+                st.on_heading(t_s, heading_rad, sd_rad);
             }
             Ok(Msg::NewProducer) => st.producer_changed = true,
             Err(RecvTimeoutError::Timeout) => {}
@@ -647,5 +661,32 @@ fn load_warm_start(cfg: &DaemonConfig, st: &mut EstState<'_>) {
             "{text} (the daemon tries again at each save; the bias is carried across streams in memory meanwhile)"
         ));
         st.last_save_error = Some(text);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::DaemonConfig;
+    use super::*;
+    use crate::core::heading::HeadingAid;
+    use corridor_shared::config::Config;
+    use corridor_shared::services::Domain;
+
+    #[test]
+    fn refused_external_headings_are_warned_of_up_to_a_cap_per_stream_and_all_counted() {
+        // Each one was a warning: a producer that leaves `t_s` at 0 has every heading refused
+        // (more than 2 s behind the latest sample), at its heading rate, for as long as it runs.
+        let rx = RxCounters::default();
+        let domain = Domain::unsecured("test_heading_warnings").unwrap();
+        let cfg = DaemonConfig::new(domain, Config::default(), HeadingAid::None);
+        let mut st = EstState::new(&cfg, &rx);
+        assert!(!st.on_heading(0.0, 0.1, 0.05), "taken: nothing to warn of");
+        let warned: Vec<bool> = (0..15)
+            .map(|_| st.on_heading(f64::NAN, 0.1, 0.05))
+            .collect();
+        let cap = REFUSED_WARNINGS_PER_STREAM as usize;
+        assert!(warned[..cap].iter().all(|&w| w), "{warned:?}");
+        assert!(warned[cap..].iter().all(|&w| !w), "{warned:?}");
+        assert_eq!(st.est.counters().headings_refused, 15);
     }
 }
