@@ -56,8 +56,9 @@ pub const DEFAULT_MAX_GYRO_BIAS_RAD_S: f64 = 0.2;
 /// (±125 °/s, 2.2 rad/s). A range narrower than this flags a walking foot's every turn as
 /// clipped and refuses its swings as beyond the sensor.
 pub const MIN_GYRO_RANGE_RAD_S: f64 = 1.0;
-/// Widest `sensor.gyro_range_rad_s`, rad/s (5730 °/s): above the widest MEMS gyro full scale
-/// (±4000 °/s, 70 rad/s); a foot's swing peaks near 15 rad/s. Beyond it the range is a unit
+/// Widest `sensor.gyro_range_rad_s`, rad/s (5730 °/s): above the full scale of the MEMS IMUs
+/// worn on feet (±2000 to ±4000 °/s, 35–70 rad/s; special high-rate gyros beyond that are no
+/// foot IMU); a foot's swing peaks near 15 rad/s. Beyond it the range is a unit
 /// mix-up or a typo, and it switched the clipping model and the plausibility check off without
 /// a word (1e30 was taken: no sample of the gdins walks, railed at 8.7 rad/s, was flagged).
 pub const MAX_GYRO_RANGE_RAD_S: f64 = 100.0;

@@ -251,8 +251,9 @@ pub const ESKF_ZUPT_ROLLING_HEIGHT_M: f64 = 0.0;
 // nothing). An observation σ far below what the measurement can
 // be made the rotation-aware filter trust it to ruin without a health restore to show for it
 // (`bias_kf.tilt_sd_rad` = 1e-4: exp36 30 % of path; `heading.sigma_deg` = 0.1: exp17 15 %,
-// bias 0.08 rad/s; at 1e-5 rad and 1e-3° two restores, bias 0.17 rad/s). Each floor lies
-// below any real sensor or observation; within them a filter can be tuned badly, not broken.
+// bias 0.08 rad/s; at 1e-5 rad and 1e-3° two restores, bias 0.17 rad/s). Each floor lies at
+// or below what the best sensor or observation of its kind gives (the tilt's at a calibrated
+// accelerometer's 1 mg); within them a filter can be tuned badly, not broken.
 
 /// Smallest tilt σ (`eskf.initial_tilt_sd_rad`, `bias_kf.tilt_sd_rad`,
 /// `alignment.start_stance_tilt_sd_rad`), rad (0.06°): a tilt from the specific force is known
