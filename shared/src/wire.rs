@@ -150,7 +150,7 @@ pub struct AngleObservation {
     /// Sequence number of the producer.
     pub seq: u64,
     /// Sensor time the observation refers to, s: the clock of the [`ImuSample`]s' `t_s`. Not
-    /// finite, more than an hour ahead of the latest sample or more than 2 s behind it:
+    /// finite, more than an hour ahead of the latest sample or at least 2 s behind it:
     /// refused (`Diagnostics::headings_refused`).
     pub t_s: f64,
     /// Roll, rad.
@@ -359,7 +359,7 @@ pub struct Diagnostics {
     /// used) (v5; cumulative, as `received`).
     pub angles_ignored: u64,
     /// External headings refused on arrival: time or heading not finite, σ not in (0, π], or
-    /// a time more than an hour ahead of the latest sample or more than 2 s behind it (v5;
+    /// a time more than an hour ahead of the latest sample or at least 2 s behind it (v5;
     /// this life, every stream).
     pub headings_refused: u64,
     /// External headings replaced by a newer one before the stance that would have used them

@@ -90,8 +90,8 @@ pub enum WhyRefused {
         /// The latest sample's time, s.
         latest_s: f64,
     },
-    /// Its time lies more than [`EXTERNAL_HEADING_MAX_AGE_S`] behind the latest sample's: no
-    /// stance to come can use it.
+    /// Its time lies [`EXTERNAL_HEADING_MAX_AGE_S`] or more behind the latest sample's: no
+    /// stance to come (each later than that sample) can use it.
     Behind {
         /// The latest sample's time, s.
         latest_s: f64,
@@ -111,7 +111,7 @@ impl std::fmt::Display for WhyRefused {
             ),
             WhyRefused::Behind { latest_s } => write!(
                 f,
-                "t_s more than {EXTERNAL_HEADING_MAX_AGE_S} s behind the latest sample, at \
+                "t_s {EXTERNAL_HEADING_MAX_AGE_S} s or more behind the latest sample, at \
                  {latest_s} s, so no stance to come can use it: stamped on the IMU samples' clock?"
             ),
         }

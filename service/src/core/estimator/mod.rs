@@ -395,7 +395,7 @@ impl Estimator {
     /// observed from [`EXTERNAL_HEADING_LEAD_S`] before `t_s` on, and only within
     /// [`EXTERNAL_HEADING_MAX_AGE_S`] after it (else counted, `headings_expired`). A time or
     /// heading that is not finite, a σ that is not in (0, π], a time more than
-    /// [`EXTERNAL_HEADING_MAX_AHEAD_S`] ahead of the latest sample, or one more than
+    /// [`EXTERNAL_HEADING_MAX_AHEAD_S`] ahead of the latest sample, or one at least
     /// [`EXTERNAL_HEADING_MAX_AGE_S`] behind it (judged once that sample's time can no longer
     /// be dropped as a glitched stamp: `Plausibility::settled_t_s`), is refused and counted
     /// (`headings_refused`); at the stance, one further than [`EXTERNAL_HEADING_MAX_NIS`] from
@@ -420,10 +420,11 @@ impl Estimator {
         {
             Some(WhyRefused::Ahead { latest_s })
         } else if let Some(latest_s) = self.p.plausibility.settled_t_s()
-            && latest_s - t_s > EXTERNAL_HEADING_MAX_AGE_S
+            && latest_s - t_s >= EXTERNAL_HEADING_MAX_AGE_S
         {
             // No stance to come can use it (one observed later than the latest sample would
-            // find it expired), and it would take the place of the one waiting.
+            // find it expired, exactly 2 s behind included), and it would take the place of
+            // the one waiting.
             Some(WhyRefused::Behind { latest_s })
         } else {
             None

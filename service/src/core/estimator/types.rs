@@ -286,7 +286,7 @@ pub struct Counters {
     pub jittery_clock_samples: u64,
     /// External heading observations refused on arrival: not finite, σ not in (0, π], or a time
     /// more than [`EXTERNAL_HEADING_MAX_AHEAD_S`](super::EXTERNAL_HEADING_MAX_AHEAD_S) ahead of
-    /// the latest sample or more than [`EXTERNAL_HEADING_MAX_AGE_S`](super::EXTERNAL_HEADING_MAX_AGE_S)
+    /// the latest sample or at least [`EXTERNAL_HEADING_MAX_AGE_S`](super::EXTERNAL_HEADING_MAX_AGE_S)
     /// behind it ([`crate::core::Estimator::queue_heading`]).
     pub headings_refused: u64,
     /// External heading observations replaced by a newer one before the stance that would have

@@ -675,7 +675,7 @@ mod tests {
     #[test]
     fn refused_external_headings_are_warned_of_up_to_a_cap_per_stream_and_all_counted() {
         // Each one was a warning: a producer that leaves `t_s` at 0 has every heading refused
-        // (more than 2 s behind the latest sample), at its heading rate, for as long as it runs.
+        // (2 s or more behind the latest sample), at its heading rate, for as long as it runs.
         let rx = RxCounters::default();
         let domain = Domain::unsecured("test_heading_warnings").unwrap();
         let cfg = DaemonConfig::new(domain, Config::default(), HeadingAid::None);

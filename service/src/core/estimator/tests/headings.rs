@@ -312,7 +312,7 @@ fn an_external_heading_is_used_at_its_own_time() {
         let err = late.queue_heading(t_s, 0.123, sd).unwrap_err().to_string();
         assert!(
             err.contains(&format!(
-                "t_s more than 2 s behind the latest sample, at {latest} s"
+                "t_s 2 s or more behind the latest sample, at {latest} s"
             )),
             "{err}"
         );
@@ -321,6 +321,18 @@ fn an_external_heading_is_used_at_its_own_time() {
     assert_eq!(c.headings_refused, base.headings_refused + 2);
     assert_eq!(c.headings_superseded, base.headings_superseded);
     assert_eq!(pending(&late), Some((0.2, sd)));
+    // Exactly 2 s behind: every stance to come is later than the latest sample, so more than
+    // 2 s after it: refused too (it was taken, took the waiting one's place and expired).
+    let mut edge = est.clone();
+    edge.queue_heading(now + 1.0, 0.2, sd).unwrap();
+    let t_s = latest - EXTERNAL_HEADING_MAX_AGE_S;
+    assert_eq!(latest - t_s, EXTERNAL_HEADING_MAX_AGE_S, "{latest}");
+    assert!(edge.queue_heading(t_s, 0.123, sd).is_err());
+    assert_eq!(pending(&edge), Some((0.2, sd)));
+    assert_eq!(
+        edge.counters().headings_superseded,
+        base.headings_superseded
+    );
     // Just within 2 s when handed in: taken, and the next stance, more than 2 s after its
     // time, finds it expired, counted, and uses the map.
     let (observed, used_at, c) = run(now - 1.99);
