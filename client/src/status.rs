@@ -119,9 +119,10 @@ impl Status {
             // of an earlier life, read as counts that do not add up (a review).
             let _ = writeln!(
                 s,
-                "                  (received, losses, duplicate seq, late, not received, producers \
-                 and angles count over all {} daemon lives of this domain; accepted, stances, \
-                 heading updates, the other rejections and external headings over this life)",
+                "                  (received, losses but the stalled consumers, duplicate seq, late, \
+                 not received, producers and angles count over all {} daemon lives of this \
+                 domain; accepted, stances, heading updates, clipped, the stalled consumers, the \
+                 other rejections and external headings over this life)",
                 d.lives
             );
         }
@@ -629,8 +630,11 @@ mod tests {
         assert!(!status.render("d").contains("daemon lives"));
         status.diagnostics.lives = 3;
         let screen = status.render("d");
+        // The stalled consumers (on the losses line) and the clipping counts are this life's
+        // (the publishers' stall guards and the estimator start again with each life): the
+        // note said every loss spanned the lives.
         assert!(
-            screen.contains("received, losses, duplicate seq, late, not received, producers and angles count over all 3 daemon lives of this domain; accepted, stances, heading updates, the other rejections and external headings over this life"),
+            screen.contains("received, losses but the stalled consumers, duplicate seq, late, not received, producers and angles count over all 3 daemon lives of this domain; accepted, stances, heading updates, clipped, the stalled consumers, the other rejections and external headings over this life"),
             "{screen}"
         );
     }
