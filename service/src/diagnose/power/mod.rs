@@ -570,8 +570,8 @@ pub fn apply_power(effects: &mut Vec<Finding>, power: &[Power], score: bool) {
                 effects.push(Finding {
                     name: p.effect,
                     score: 0.0,
-                    evidence: "residual regression: not tested (too few used heading \
-                               observations, or its regressor did not vary)"
+                    evidence: "not tested (too few used heading observations, or its \
+                               regressor did not vary)"
                         .into(),
                     fix: p.effect.fixes().first().map(|&(fix, _)| fix),
                     mde: None,

@@ -71,6 +71,13 @@ fn a_signature_scores_its_effect_where_the_residual_regression_has_no_finding() 
     assert_eq!(effects[0].score, 30.0);
     assert_eq!(effects[0].fix, Some(super::super::Fix::ScaleFactor));
     assert_eq!(effects[0].mde, Some(0.02));
+    // said once: the report read "residual regression: residual regression: not tested"
+    assert_eq!(
+        effects[0].evidence.matches("residual regression:").count(),
+        1,
+        "{}",
+        effects[0].evidence
+    );
     // timing keeps its own tests: its signature only adds to their evidence
     assert!(effects.iter().all(|f| f.name != Effect::Timing));
     // the bias-filter modes do not score by the signature
