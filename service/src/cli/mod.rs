@@ -179,3 +179,63 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Man => done(docs::man()),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every `corridor …` command in the README's code blocks parses: each flag it names
+    /// exists and has its value (the prose said `corridor eval --suite FILE --sweep`, which
+    /// the parser refuses: `--sweep` takes the sweep file). Optional `[…]` groups are left
+    /// out, comments and redirections cut off.
+    #[test]
+    fn the_readme_commands_parse() {
+        let readme = include_str!("../../../README.md");
+        let mut in_block = false;
+        let mut lines = Vec::new();
+        let mut pending = String::new();
+        for line in readme.lines() {
+            if line.starts_with("```") {
+                in_block = !in_block;
+                continue;
+            }
+            if !in_block {
+                continue;
+            }
+            let line = line.split(" #").next().unwrap_or("").trim_end();
+            match line.strip_suffix('\\') {
+                Some(head) => pending.push_str(head),
+                None => lines.push(std::mem::take(&mut pending) + line),
+            }
+        }
+        let mut checked = 0;
+        for line in &lines {
+            // (an environment set before the command, as CORRIDOR_RUNTIME_DIR=DIR)
+            let command = line.trim_start_matches(|c: char| c != ' ' && c != '=');
+            let command = match command.strip_prefix('=') {
+                Some(rest) => rest.split_once(' ').map_or("", |(_, c)| c),
+                None => line,
+            };
+            if !command.starts_with("corridor ") {
+                continue;
+            }
+            let mut words = Vec::new();
+            let mut depth = 0;
+            for w in command.split_whitespace() {
+                if w == ">" || w == "|" {
+                    break;
+                }
+                depth += w.matches('[').count();
+                if depth == 0 {
+                    words.push(w);
+                }
+                depth -= w.matches(']').count();
+            }
+            if let Err(e) = Cli::try_parse_from(&words) {
+                panic!("README: `{line}` does not parse: {e}");
+            }
+            checked += 1;
+        }
+        assert!(checked >= 8, "only {checked} commands found in the README");
+    }
+}
