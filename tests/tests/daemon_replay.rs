@@ -301,7 +301,7 @@ fn bad_samples_over_ipc_are_rejected_and_counted() {
     assert!(
         matches!(
             &err,
-            daemon::DaemonError::Service(ServiceError::DaemonAlreadyRunning { domain })
+            daemon::DaemonError::Service(ServiceError::DaemonAlreadyRunning { domain, .. })
                 if domain == "test_daemon_reject"
         ),
         "{err}"

@@ -151,9 +151,11 @@ impl Domain {
             detail,
         };
         let mut hold = rd::hold(runtime_dir, name).map_err(|e| match e {
-            rd::HoldError::Locked { .. } => ServiceError::DaemonAlreadyRunning {
-                domain: name.to_owned(),
-            },
+            rd::HoldError::Locked { lock } => ServiceError::daemon_already_running(
+                name,
+                format!("{} is locked", lock.display()),
+                Some(runtime_dir),
+            ),
             rd::HoldError::Dir(e) => dir_err(e.to_string()),
         })?;
         let make = |hold: &rd::DaemonHold| {
@@ -398,9 +400,11 @@ impl Domain {
         };
         claim.map_err(|e| match e {
             EventCreateError::AlreadyExists | EventCreateError::IsBeingCreatedByAnotherInstance => {
-                ServiceError::DaemonAlreadyRunning {
-                    domain: self.name.clone(),
-                }
+                ServiceError::daemon_already_running(
+                    &self.name,
+                    format!("service {DAEMON_SERVICE:?} exists"),
+                    self.hold.as_deref().map(|h| h.runtime_dir.as_path()),
+                )
             }
             e => ServiceError::Open {
                 service: DAEMON_SERVICE,

@@ -1,6 +1,6 @@
 //! The error of a service that could not be opened or used.
 
-use super::{DAEMON_SERVICE, Delivery, Domain};
+use super::{Delivery, Domain, RUNTIME_DIR_ENV};
 use std::fmt::Debug;
 
 /// A service that could not be opened or used. Every variant names the service and the domain.
@@ -71,15 +71,19 @@ pub enum ServiceError {
         detail: String,
     },
     /// Another daemon already serves this domain (said with what to do: it said only that the
-    /// service existed).
+    /// service existed), and the `corridor status` command that reaches it (a secured domain's
+    /// needs its runtime directory: the plain command answered "no corridor daemon answers").
     #[error(
-        "another corridor daemon already serves domain {domain:?} (service {DAEMON_SERVICE:?} \
-         exists): stop it first, or serve another domain (--domain); `corridor status --domain \
-         {domain}` shows it"
+        "another corridor daemon already serves domain {domain:?} ({found}): stop it first, or \
+         serve another domain (--domain); `{status}` shows it"
     )]
     DaemonAlreadyRunning {
         /// Domain.
         domain: String,
+        /// What showed it: the daemon's service exists, or the secured domain's lock is held.
+        found: String,
+        /// The `corridor status` command that reaches that daemon.
+        status: String,
     },
     /// Opening or creating the service failed.
     #[error("service {service:?} ({pattern}) in domain {domain:?}: cannot open: {detail}")]
@@ -120,6 +124,26 @@ pub enum ServiceError {
 }
 
 impl ServiceError {
+    /// [`ServiceError::DaemonAlreadyRunning`] for `domain`, secured under `runtime_dir` if given.
+    pub(crate) fn daemon_already_running(
+        domain: &str,
+        found: String,
+        runtime_dir: Option<&std::path::Path>,
+    ) -> Self {
+        let status = match runtime_dir {
+            Some(dir) => format!(
+                "{RUNTIME_DIR_ENV}={} corridor status --domain {domain}",
+                dir.display()
+            ),
+            None => format!("corridor status --domain {domain}"),
+        };
+        ServiceError::DaemonAlreadyRunning {
+            domain: domain.to_owned(),
+            found,
+            status,
+        }
+    }
+
     /// A failed send, receive, notify or wait ([`ServiceError::Io`]) on `service` in `domain`.
     pub fn io(
         domain: &Domain,

@@ -144,6 +144,24 @@ mod tests {
     }
 
     #[test]
+    fn a_second_daemon_on_a_secured_domain_is_told_how_to_reach_the_first() {
+        // The refusal said `corridor status --domain lab`, which finds no daemon on a secured
+        // domain without CORRIDOR_RUNTIME_DIR (exit code 3).
+        let dir = std::path::PathBuf::from(format!("/tmp/crs{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let first = Domain::serve("lab", Some(&dir)).unwrap();
+        let e = Domain::serve("lab", Some(&dir)).unwrap_err().to_string();
+        drop(first);
+        let _ = std::fs::remove_dir_all(&dir);
+        let status = format!(
+            "`{RUNTIME_DIR_ENV}={} corridor status --domain lab`",
+            dir.display()
+        );
+        assert!(e.contains(&status), "{e}");
+        assert!(e.contains("daemon.lock is locked"), "{e}");
+    }
+
+    #[test]
     fn every_service_name_carries_the_wire_version() {
         let prefix = format!("corridor/{SERVICE_VERSION}/");
         for name in [
