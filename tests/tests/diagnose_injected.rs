@@ -396,6 +396,43 @@ fn a_scale_factor_that_leaves_few_used_observations_is_named_from_every_stance()
     assert!(a < b, "footprint RMS {b:.2} -> {a:.2} m");
 }
 
+/// A 1 % clock error on exp37: its gyro scale factors alone are no clock error at 3σ (the
+/// horizontal axes are barely measured), but a clock running ε fast also stretches every
+/// stride by (1 + ε)², which the footprints show: with them it is named `timing`, without them
+/// a scale factor. The model has the rolling-foot stance update (strides right without a clock
+/// error), as the detection matrix's injected columns on this walk do.
+#[test]
+fn a_one_percent_clock_error_is_told_from_a_scale_factor_by_the_strides_it_stretches() {
+    let (log, truth) = load("gdins_exp37_spiral_and_corridor");
+    let mut cfg = config(0.0, false);
+    cfg.eskf.zupt_rolling_height_m = Some(0.08);
+    let clock = LogInjection::ClockRate { fraction: 0.01 };
+    let t0 = log.rows[0].t_s;
+    let mut injected = log.clone();
+    clock.apply(&mut injected.rows);
+    let truth: Vec<TruthPoint> = truth
+        .iter()
+        .map(|p| TruthPoint {
+            t_s: clock.map_time(t0, p.t_s),
+            ..*p
+        })
+        .collect();
+    let with = run(&injected, &truth, &cfg);
+    assert_eq!(with.top_effect, "timing", "{:#?}", with.effects);
+    let timing = &with.effects[0];
+    assert!(
+        timing.evidence.contains("the strides come out +"),
+        "{}",
+        timing.evidence
+    );
+    let without = run_diagnosis(&injected, &cfg, None, None).unwrap().report;
+    assert_eq!(
+        without.top_effect, "gyro_scale_factor",
+        "{:#?}",
+        without.effects
+    );
+}
+
 /// When nothing is significant the report says what the walk could have shown, not a bare
 /// `none`.
 #[test]

@@ -41,7 +41,8 @@
 //! - `axis_misalignment`: `r` proportional to the total rotation ∫|ω| (cadence), not to the turn,
 //!   or the y→z / x→z coupling signatures; the fix is cross-coupling states into the sensor z
 //!   axis (`model.gyro_coupling_z_sd_deg`);
-//! - `timing`: `r` proportional to the time-step deviations (jitter, gaps);
+//! - `timing`: `r` proportional to the time-step deviations (jitter, gaps), or a scale factor
+//!   that is the same on every gyro axis and, with footprints, in the strides (`clock_rate`);
 //! - `gyro_clipping`: the gyro runs into a rail below its configured range (flat tops in the
 //!   data, `clipping`); the fix sets the range at the rail so its samples are flagged and the
 //!   rotation lost there modelled;
@@ -63,6 +64,8 @@
 //! - `drift_power`: the smallest bias step and ramp the bias-change test detects on the walk,
 //!   from probe injections ([`drift_mde`]);
 //! - `clipping`: rails in the data below the configured gyro range ([`Rail`]);
+//! - `clock_rate`: a clock-rate error told from a gyro scale factor (every axis alike, and the
+//!   strides stretched by (1 + ε)² where footprints show them);
 //! - `power`: the power of the walk for each effect: every stance's residual fitted on the
 //!   effect's signature ([`Power`]);
 //! - `signature_fit`: the regression behind `power`'s fits (weighted least squares of the
@@ -77,6 +80,7 @@ mod analysis;
 mod bias_change;
 mod catalogue;
 mod clipping;
+mod clock_rate;
 mod drift_power;
 mod power;
 mod ranking;

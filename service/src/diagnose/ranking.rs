@@ -3,6 +3,7 @@
 
 use super::analysis::{Analysis, Consistency, HeadingResidual, analyse};
 use super::catalogue::{Effect, Fix, apply_fix};
+use super::clock_rate::split_timing_from_scale;
 use super::{CORROBORATED, SIGNIFICANT};
 use crate::runner::RunError;
 use crate::stats::{self, anova_oneway, cusum, group_means, regress};
@@ -270,76 +271,6 @@ fn add_unexplained(effects: &mut Vec<Finding>, c: &Consistency) {
     }
 }
 
-/// The inverse-variance weighted mean of the per-axis factors `[value, σ]`, and its σ.
-fn weighted_mean(sf: &[[f64; 2]; 3]) -> (f64, f64) {
-    let w = sf.map(|[_, sd]| 1.0 / (sd * sd).max(1e-300));
-    let wsum: f64 = w.iter().sum();
-    let mean = sf.iter().zip(&w).map(|([s, _], w)| s * w).sum::<f64>() / wsum;
-    (mean, (1.0 / wsum).sqrt())
-}
-
-/// Agreement within 2σ is no evidence where two axes hardly see their scale factor (σ of a
-/// percent or more on a walk whose feet roll and pitch little): the common factor `mean` must
-/// also fit the per-axis factors `[value, σ]` better (χ²) than one axis alone, the one that
-/// shows the most, with the others at zero (both one parameter).
-fn common_factor_fits_better(sf: &[[f64; 2]; 3], mean: f64) -> bool {
-    let chi2 = |m: &dyn Fn(usize) -> f64| -> f64 {
-        sf.iter()
-            .enumerate()
-            .map(|(k, [s, sd])| ((s - m(k)) / sd.max(1e-300)).powi(2))
-            .sum()
-    };
-    let z = |k: usize| (sf[k][0] / sf[k][1].max(1e-300)).abs();
-    let lead = (0..3).max_by(|&a, &b| z(a).total_cmp(&z(b))).unwrap_or(2);
-    chi2(&|_| mean) < chi2(&|k| if k == lead { sf[lead][0] } else { 0.0 })
-}
-
-/// A clock running at the wrong rate scales every integrated angle alike: when the scale-factor
-/// model that explains the residuals finds the same factor on all three axes (within 2σ, and
-/// different from zero by 3σ), the effect is `timing` (a clock-rate error), not the gyro's
-/// scale factor. The fix is the same states, which absorb it; the report says which.
-fn split_timing_from_scale(effects: &mut [Finding], candidates: &[Candidate]) {
-    let Some(sf) = candidates
-        .iter()
-        .find(|c| c.effect == Effect::GyroScaleFactor)
-        .and_then(|c| c.analysis.scale_factor)
-    else {
-        return;
-    };
-    let (mean, mean_sd) = weighted_mean(&sf);
-    let agree = sf.iter().all(|[s, sd]| (s - mean).abs() <= 2.0 * sd);
-    let common_fits_better = common_factor_fits_better(&sf, mean);
-    let Some(i) = effects
-        .iter()
-        .position(|e| e.name == Effect::GyroScaleFactor)
-    else {
-        return;
-    };
-    let detail = format!(
-        "scale factors of the fitted model ({:+.4} ± {:.4}, {:+.4} ± {:.4}, {:+.4} ± {:.4})",
-        sf[0][0], sf[0][1], sf[1][0], sf[1][1], sf[2][0], sf[2][1]
-    );
-    if agree && common_fits_better && mean.abs() > 3.0 * mean_sd {
-        let sc = effects[i].score;
-        effects[i].evidence = format!("{}; {detail}: the same on every axis", effects[i].evidence);
-        effects[i].score = 0.5 * sc;
-        if let Some(t) = effects.iter_mut().find(|e| e.name == Effect::Timing) {
-            t.score = sc;
-            t.fix = Some(Fix::ScaleFactor);
-            t.evidence = format!(
-                "{}; every gyro axis shows the same scale factor {:+.4} ± {:.4}: time stamps running {:.2} % {} (a clock-rate error)",
-                t.evidence,
-                mean,
-                mean_sd,
-                100.0 * mean.abs(),
-                if mean > 0.0 { "fast" } else { "slow" }
-            );
-        }
-    } else {
-        effects[i].evidence = format!("{}; {detail}", effects[i].evidence);
-    }
-}
-
 /// A candidate model: an effect's fix applied, and its analysis.
 #[derive(Debug, Clone)]
 pub struct Candidate {
@@ -438,27 +369,8 @@ pub fn score_by_likelihood(
             None => {}
         }
     }
-    split_timing_from_scale(&mut base.effects, &candidates);
+    split_timing_from_scale(base, &mut candidates, file);
     base.effects.sort_by(|a, b| b.score.total_cmp(&a.score));
     add_unexplained(&mut base.effects, &base.consistency);
     Ok(candidates)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{common_factor_fits_better, weighted_mean};
-
-    #[test]
-    fn a_factor_on_one_axis_is_not_a_clock_error_even_when_the_others_hardly_see_it() {
-        // exp24 with a +5 % z scale factor: x and y within 2σ of the mean only because they are
-        // barely measured (%, ± σ). χ² 5.2 for the common factor against 1.2 for z alone.
-        let sf = [[1.49, 1.48], [0.60, 1.39], [4.30, 1.06]];
-        assert!(!common_factor_fits_better(&sf, weighted_mean(&sf).0));
-        // A clock error: the same factor on every well-measured axis.
-        let clock = [[3.1, 0.5], [2.8, 0.6], [3.0, 0.4]];
-        assert!(common_factor_fits_better(&clock, weighted_mean(&clock).0));
-        // A σ of zero does not make a NaN that silently says "no".
-        let exact = [[3.0, 0.0], [3.0, 0.5], [3.0, 0.5]];
-        assert!(common_factor_fits_better(&exact, 3.0));
-    }
 }
