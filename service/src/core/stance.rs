@@ -399,7 +399,7 @@ mod tests {
     }
 
     /// A fast gait: 0.3 s "stances" that still rotate at 0.8 rad/s between 0.5 s swings at
-    /// 6 rad/s. The fixed threshold (about 0.6 rad/s) finds none; the adaptive one finds each.
+    /// 6 rad/s. The fixed threshold (about 0.55 rad/s) finds none; the adaptive one finds each.
     #[test]
     fn the_adaptive_threshold_follows_a_gait_that_never_stops_rotating() {
         let g = Vector3::new(0.0, 0.0, 9.81);
