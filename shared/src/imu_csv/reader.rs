@@ -268,7 +268,9 @@ impl<R: BufRead> ImuCsvReader<R> {
             || !names.iter().zip(REQUIRED_COLUMNS).all(|(a, b)| *a == b)
         {
             Some("does not start with the required columns".into())
-        } else if names.iter().any(|n| n.is_empty()) {
+        } else if names[..names.len() - 1].iter().any(|n| n.is_empty()) {
+            // A last name empty is a trailing comma (spreadsheet exports write one on every
+            // line): an unnamed column, ignored as any other extra one (it refused the file).
             Some("has an empty column name".into())
         } else if names
             .iter()
@@ -353,6 +355,8 @@ impl<R: BufRead> ImuCsvReader<R> {
             return Ok(Some(self.emit(row)));
         }
         let n_fields = self.names.len();
+        // A header that ends in a comma: rows may leave that unnamed last field out.
+        let unnamed_last = self.names.last().is_some_and(String::is_empty);
         loop {
             if !self.read_line()? {
                 // A jump on the last row was never confirmed. A one-row log: its only time had
@@ -401,7 +405,7 @@ impl<R: BufRead> ImuCsvReader<R> {
             let line = std::mem::take(&mut self.line);
             let raw = Self::line_str(&line);
             let text = strip_cr(&raw);
-            let parsed = parse_row(text, line_no, n_fields, self.temp_index);
+            let parsed = parse_row(text, line_no, n_fields, unnamed_last, self.temp_index);
             if let Ok(row) = &parsed {
                 if self.temp_index.is_some() && row.temp_c.is_none() {
                     self.temperature_missing += 1;

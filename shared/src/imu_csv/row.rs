@@ -15,12 +15,14 @@ pub(super) enum RowProblem<'a> {
 }
 
 /// Parses one non-blank data line (without its line end), in one pass over its bytes; time
-/// ordering is checked by the caller.
+/// ordering is checked by the caller. `unnamed_last`: the header's last column has no name (a
+/// trailing comma), and a row may leave it out.
 #[inline]
 pub(super) fn parse_row(
     text: &str,
     line_no: u64,
     n_fields: usize,
+    unnamed_last: bool,
     temp_index: Option<usize>,
 ) -> Result<ImuRow, RowProblem<'_>> {
     let bytes = text.as_bytes();
@@ -65,7 +67,7 @@ pub(super) fn parse_row(
         }
         field_start = field_end + 1;
     }
-    if index != n_fields {
+    if index != n_fields && !(unnamed_last && index + 1 == n_fields) {
         Err(RowProblem::FieldCount(index))
     } else if let Some(p) = problem {
         Err(p)

@@ -252,7 +252,9 @@ fn missing_or_reordered_or_repeated_column_is_a_header_error() {
         "t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,az_m_s2,ay_m_s2",
         "t_s,gy_rad_s,gx_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2",
         "t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2,temp_c,temp_c",
-        "t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2,",
+        // An empty name before the last, or two trailing commas.
+        "t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2,,temp_c",
+        "t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2,,",
     ] {
         let text = format!("{header}\n0,0,0,0,0,0,9.8\n");
         let err = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap_err();
@@ -265,6 +267,24 @@ fn missing_or_reordered_or_repeated_column_is_a_header_error() {
             "{err}"
         );
     }
+}
+
+#[test]
+fn a_trailing_comma_on_every_line_is_an_unnamed_column_ignored() {
+    // As spreadsheet exports write it: the header "has an empty column name" refused the file,
+    // although extra columns are ignored.
+    let text: String = good_file(200).lines().map(|l| format!("{l},\n")).collect();
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(log.rows.len(), 200);
+    assert!(log.rejected.is_empty(), "{:?}", log.rejected);
+    assert_eq!(log.rows[1].t_s, 0.005);
+    assert_eq!(log.rows[1].accel_m_s2, [0.1, 0.2, 9.8]);
+    // The header's comma alone (rows without the empty field), with a temperature column.
+    let header = format!("{HEADER},temp_c,");
+    let text = format!("{header}\n{},21.5\n{},21.5,\n", row(0.0), row(0.005));
+    let log = parse_imu_csv(&text, path(), &ImuCsvOptions::default()).unwrap();
+    assert_eq!(log.rows.len(), 2);
+    assert_eq!(log.rows[1].temp_c, Some(21.5));
 }
 
 #[test]
