@@ -149,6 +149,9 @@ fn an_injection_that_starts_after_the_log_ends_is_said() {
         let summary = read_json(&dir.join(out).join("summary.json"));
         let notes =
             serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["notes"].to_string();
+        // The notes are kept in summary.json too: printed alone, they were lost with the
+        // terminal (a review).
+        assert_eq!(summary["notes"].to_string(), notes);
         (summary["injected_rows"].as_u64().unwrap(), notes)
     };
     let (rows, notes) = brief("1000", "late");

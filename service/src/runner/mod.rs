@@ -22,6 +22,7 @@
 //! - `stream`: [`run`], the streamed run, what it keeps for the summary, its staged outputs;
 //! - `outcome`: [`RunOutcome`], what an in-memory run returns, and its one line on the input;
 //! - `summary`: [`Summary`], what `summary.json` says;
+//! - `notes`: the run's notes in words (printed by `corridor run`, kept in `summary.json`);
 //! - `outputs`: the rows of `estimates.csv` and `innovations.csv`;
 //! - `figures`: the SVG figures of `--plots`.
 
@@ -39,6 +40,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 mod figures;
+mod notes;
 mod outcome;
 mod outputs;
 mod stream;

@@ -537,9 +537,11 @@ pub fn run(opts: &RunOptions) -> Result<Summary, RunError> {
         zero_rate_refused: c.zero_rate_refused,
         late_footfalls: c.late_footfalls,
         late_footfalls_dropped: c.late_footfalls_dropped,
+        notes: Vec::new(),
         eval,
         outputs: Vec::new(),
     };
+    summary.notes = super::notes::notes(&summary);
     let sum_path = staged.stage(opts.out_dir.join("summary.json"));
     summary.outputs = staged
         .files

@@ -141,6 +141,9 @@ pub struct Summary {
     pub late_footfalls: u64,
     /// Late footfalls whose update was not made (see the estimator's counter).
     pub late_footfalls_dropped: u64,
+    /// What the input did that a user should know about, in words (the notes `corridor run`
+    /// prints; they were printed only, and lost with the terminal).
+    pub notes: Vec<String>,
     /// Footprint evaluation (first-leg alignment), when truth was given.
     pub eval: Option<EvalReport>,
     /// The files this run wrote into its output directory (names), this one included: what a
