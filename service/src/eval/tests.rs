@@ -370,6 +370,13 @@ fn errors_carry_the_facts() {
         }
         e => panic!("{e}"),
     }
+    // Said in the README's words, in centimetres (it said "no GCP far enough from GCP0 …
+    // farthest is 11.661903789690601 m").
+    assert_eq!(
+        evaluate(&t, &x, &y, &truth, &far).unwrap_err().to_string(),
+        "no footprint far enough from the first to align the heading on (need 50 m, the \
+         farthest is 11.66 m)"
+    );
     let still = vec![0.0; t.len()];
     match evaluate(&t, &still, &still, &truth, &o).unwrap_err() {
         EvalError::NoMotionToHeadingGcp {

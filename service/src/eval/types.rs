@@ -270,14 +270,16 @@ pub enum EvalError {
         rows: usize,
     },
     /// Fewer than two finite GCPs.
-    #[error("truth needs at least two GCPs ({gcps} finite)")]
+    #[error("the truth needs at least two footprints ({gcps} finite)")]
     TooFewGcps {
         /// Number of GCPs with finite t, x and y.
         gcps: usize,
     },
-    /// First-leg alignment found no GCP far enough from GCP0.
+    /// First-leg alignment found no GCP far enough from GCP0. Said in the README's words
+    /// (footprints, not GCPs) and in centimetres: it said "farthest is 0.7650653566852966 m".
     #[error(
-        "no GCP far enough from GCP0 to align heading (need {min_dist_m} m, farthest is {farthest_m} m)"
+        "no footprint far enough from the first to align the heading on (need {min_dist_m} m, \
+         the farthest is {farthest_m:.2} m)"
     )]
     NoHeadingGcp {
         /// The required distance, metres.
@@ -287,7 +289,8 @@ pub enum EvalError {
     },
     /// The trajectory did not move between GCP0 and the heading GCP.
     #[error(
-        "trajectory did not move between GCP0 and the heading GCP (GCP{heading_gcp_index}, moved {moved_m} m)"
+        "the trajectory did not move between the first footprint and the one the heading is \
+         aligned on (footprint {heading_gcp_index}, counted from 0; moved {moved_m:.2} m)"
     )]
     NoMotionToHeadingGcp {
         /// Index k of the heading GCP.
@@ -299,7 +302,7 @@ pub enum EvalError {
     /// recording, or on another clock): every GCP would be clamped to an end of the trajectory.
     #[error(
         "the truth's times ({truth_from_s} to {truth_to_s} s) lie outside the trajectory's \
-         ({traj_from_s} to {traj_to_s} s; {inside} GCP inside): is it this recording's truth, on its clock?"
+         ({traj_from_s} to {traj_to_s} s; {inside} footprints inside): is it this recording's truth, on its clock?"
     )]
     TruthOutsideTrajectory {
         /// First and last GCP time, s.
