@@ -180,18 +180,18 @@ impl Status {
     }
 }
 
-/// Why a checkpoint path cannot be the daemon's checkpoint; its message is the status's
-/// `last checkpoint:` line.
+/// Why a checkpoint path cannot be the daemon's checkpoint (its message names the path: the
+/// status's `last checkpoint:` line, or its error before any wait for the daemon).
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointPathError {
     /// The path holds something other than a file.
-    #[error("last checkpoint:  {} is not a file (a directory?)", path.display())]
+    #[error("{} is not a file (a directory?)", path.display())]
     NotAFile {
         /// The path.
         path: std::path::PathBuf,
     },
     /// The file is there but cannot be read by this user.
-    #[error("last checkpoint:  {} not readable ({source})", path.display())]
+    #[error("{} not readable ({source})", path.display())]
     Unreadable {
         /// The path.
         path: std::path::PathBuf,
@@ -202,8 +202,8 @@ pub enum CheckpointPathError {
 
 /// The `last checkpoint:` line for the daemon's checkpoint file (`daemon.checkpoint_path` or
 /// `corridor serve --checkpoint`): the daemon does not publish its checkpoints, but it writes
-/// the file atomically at each save, so its modification time is the last save. An error (its
-/// message still the line to print) when the path holds something that cannot be the daemon's
+/// the file atomically at each save, so its modification time is the last save. An error (naming the
+/// path) when the path holds something that cannot be the daemon's
 /// checkpoint: a directory, a file this user cannot read (it said "saved 3.0 s ago" of a
 /// directory, and the status exited 0 whatever it said). A file not there is not an error: a
 /// daemon has none before its first save.

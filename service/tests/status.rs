@@ -170,23 +170,24 @@ fn status_shows_the_daemons_counters_and_final_bias() {
     let dir = std::env::temp_dir();
     let o = status(name, "20", &["--checkpoint", dir.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
-    let screen = String::from_utf8_lossy(&o.stdout);
+    let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        screen.contains(&format!(
-            "last checkpoint:  {} is not a file",
+        err.contains(&format!(
+            "error: --checkpoint: {} is not a file",
             dir.display()
         )),
-        "{screen}"
+        "{err}"
     );
 
     // A file that is not a checkpoint (a config file) is said as such, exit 1.
     let not_one = root().join("configs/gdins.toml");
     let o = status(name, "20", &["--checkpoint", not_one.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1));
-    let screen = String::from_utf8_lossy(&o.stdout);
+    let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        screen.contains("last checkpoint:  not a checkpoint the daemon can start from"),
-        "{screen}"
+        err.contains("error: --checkpoint: not a checkpoint the daemon can start from")
+            && err.contains("gdins.toml"),
+        "{err}"
     );
 
     // --watch redraws at every diagnostics.
@@ -239,6 +240,25 @@ fn status_exits_3_when_no_daemon_answers_and_2_on_a_usage_error() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         err.contains("no corridor daemon answers on domain \"eco_status_nobody\""),
+        "{err}"
+    );
+    // A --checkpoint path that cannot be a checkpoint is said before any wait for a daemon,
+    // exit 1: it waited out the timeout and exited 3, as if only the daemon were missing.
+    let dir = std::env::temp_dir();
+    let start = std::time::Instant::now();
+    let o = status(
+        "eco_status_nobody",
+        "30",
+        &["--checkpoint", dir.to_str().unwrap()],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(start.elapsed() < Duration::from_secs(20), "{err}");
+    assert!(
+        err.contains(&format!(
+            "error: --checkpoint: {} is not a file",
+            dir.display()
+        )),
         "{err}"
     );
     // Without the runtime directory a secured domain's daemon cannot be found: said.

@@ -11,8 +11,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-/// Exit code when the daemon is healthy but `--checkpoint` names something that cannot be its
-/// checkpoint (a directory, a file that cannot be read or is no checkpoint).
+/// Exit code when `--checkpoint` names something that cannot be the daemon's checkpoint (a
+/// directory, a file that cannot be read or is no checkpoint).
 pub(super) const EXIT_BAD_CHECKPOINT: u8 = 1;
 
 #[derive(Args, Debug)]
@@ -33,22 +33,18 @@ pub(super) struct StatusArgs {
     pub(super) watch: bool,
 }
 
-/// The `last checkpoint:` line for `path`, and whether it holds a checkpoint (or none yet). A
-/// file that is there is read as the daemon would (not moved, whatever it holds): a file that
-/// is no checkpoint passed for one ("saved 601.8 s ago", a review).
-fn checkpoint_status(path: &std::path::Path) -> (String, bool) {
-    match checkpoint_line(path) {
-        Err(e) => (format!("{e}\n"), false),
-        Ok(line) => match path
-            .is_file()
-            .then(|| corridor_service::checkpoint::read(path))
-        {
-            Some(Err(e)) => (
-                format!("last checkpoint:  not a checkpoint the daemon can start from: {e}\n"),
-                false,
-            ),
-            _ => (line, true),
-        },
+/// The `last checkpoint:` line for `path`, or what makes the path no checkpoint (naming it)
+/// when it holds neither one nor nothing yet. A file that is there is read as the daemon would
+/// (not moved, whatever it holds): a file that is no checkpoint passed for one ("saved 601.8 s
+/// ago", a review).
+fn checkpoint_status(path: &std::path::Path) -> Result<String, String> {
+    let line = checkpoint_line(path).map_err(|e| e.to_string())?;
+    match path
+        .is_file()
+        .then(|| corridor_service::checkpoint::read(path))
+    {
+        Some(Err(e)) => Err(format!("not a checkpoint the daemon can start from: {e}")),
+        _ => Ok(line),
     }
 }
 
@@ -57,6 +53,12 @@ fn checkpoint_status(path: &std::path::Path) -> (String, bool) {
 pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
     let domain = Domain::new(&a.domain)?;
     let timeout = Duration::from_secs_f64(a.timeout_s);
+    // The path first: with no daemon running, a directory given for it waited out the timeout
+    // and exited 3, as if only the daemon were wrong.
+    if let Some(Err(why)) = a.checkpoint.as_deref().map(checkpoint_status) {
+        eprintln!("error: --checkpoint: {why}");
+        return Ok(ExitCode::from(EXIT_BAD_CHECKPOINT));
+    }
     // The hint on a secured domain's runtime directory only when nothing answered at all (it
     // was added to "the daemon is shutting down" as well, a daemon that had been found).
     let no_daemon = |why: &str, hint: String| {
@@ -97,9 +99,12 @@ pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
         }
         print!("{}", status.render(domain.name()));
         let checkpoint_readable = a.checkpoint.as_deref().is_none_or(|p| {
-            let (line, readable) = checkpoint_status(p);
-            print!("{line}");
-            readable
+            let status = checkpoint_status(p);
+            match &status {
+                Ok(line) => print!("{line}"),
+                Err(why) => println!("last checkpoint:  {why}"),
+            }
+            status.is_ok()
         });
         if !status.healthy() {
             return no_daemon("the daemon is shutting down", String::new());
