@@ -210,6 +210,25 @@ fn status_shows_the_daemons_counters_and_final_bias() {
     let first = rx.recv_timeout(WAIT).expect("a first screen");
     let second = rx.recv_timeout(WAIT).expect("a refreshed screen");
     assert_ne!(first, second);
+    // A watch stopped by SIGTERM says so, exit 0, as every tool does (it said nothing).
+    let mut stopped = corridor()
+        .args(["status", "--watch", "--domain", name])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = std::io::BufReader::new(stopped.stdout.take().unwrap()).lines();
+    assert!(
+        lines.any(|l| l.is_ok_and(|l| l.starts_with("diagnostics seq:"))),
+        "a first screen"
+    );
+    terminate(&mut stopped);
+    assert_eq!(stopped.wait().unwrap().code(), Some(0));
+    let rest: Vec<String> = lines.map_while(Result::ok).collect();
+    assert_eq!(
+        rest.last().map(String::as_str),
+        Some("stopped: interrupted")
+    );
     // The daemon stopping ends the watch with exit code 3, said as a daemon shutting down,
     // without the hint on a secured domain's runtime directory (the daemon was found: the
     // hint sent its reader looking for a directory that had nothing to do with it).

@@ -89,7 +89,12 @@ pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
                 };
                 return no_daemon(&format!("no diagnostics within {timeout:?}"), hint);
             }
-            Err(ClientError::Interrupted) => return Ok(ExitCode::SUCCESS),
+            Err(ClientError::Interrupted) => {
+                // Said as every tool says it (README, exit codes): a watch stopped by Ctrl-C or
+                // SIGTERM ended with exit 0 and nothing, like one that had nothing to say.
+                println!("stopped: interrupted");
+                return Ok(ExitCode::SUCCESS);
+            }
             Err(e) => return Err(e.into()),
         };
         first = false;
