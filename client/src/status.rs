@@ -85,13 +85,18 @@ impl Status {
         );
         let _ = writeln!(
             s,
-            "losses:           seq gaps {}, overflow drops {}, undelivered outputs {}; \
-             consumers stalled {} (outputs discarded for them {})",
-            d.seq_gaps,
-            d.dropped_overflow,
-            d.undelivered,
-            d.stalled_consumers,
-            d.discarded_for_stalled
+            "losses:           seq gaps {}, overflow drops {}; consumers stalled {} (outputs \
+             discarded for them {})",
+            d.seq_gaps, d.dropped_overflow, d.stalled_consumers, d.discarded_for_stalled
+        );
+        // `undelivered` counts the outputs that reached no subscriber, which is every output
+        // while nobody subscribes (the diagnostics of an idle daemon, one a second): said apart
+        // from the losses, under which a fresh daemon without consumers showed "undelivered
+        // outputs 2". What a connected consumer missed is the stalled consumers' count.
+        let _ = writeln!(
+            s,
+            "no subscriber:    outputs published while none was subscribed {} (not a loss)",
+            d.undelivered
         );
         let _ = writeln!(
             s,
@@ -119,8 +124,9 @@ impl Status {
             // of an earlier life, read as counts that do not add up (a review).
             let _ = writeln!(
                 s,
-                "                  (received, losses but the stalled consumers, duplicate seq, late, \
-                 not received, producers and angles count over all {} daemon lives of this \
+                "                  (received, losses but the stalled consumers, no subscriber, \
+                 duplicate seq, late, not received, producers and angles count over all {} \
+                 daemon lives of this \
                  domain; accepted, stances, heading updates, clipped, the stalled consumers, the \
                  other rejections and external headings over this life)",
                 d.lives
@@ -615,6 +621,31 @@ mod tests {
     }
 
     #[test]
+    fn outputs_nobody_subscribed_to_are_not_shown_as_losses() {
+        // A fresh daemon without consumers: its diagnostics reached no subscriber until this
+        // status subscribed. The screen said "losses: … undelivered outputs 2".
+        let status = Status {
+            diagnostics: Diagnostics {
+                undelivered: 2,
+                lives: 1,
+                ..Diagnostics::default()
+            },
+            previous: None,
+            bias: None,
+            missed: 0,
+        };
+        let screen = status.render("d");
+        let losses = screen.lines().find(|l| l.starts_with("losses:")).unwrap();
+        assert!(!losses.contains('2'), "{screen}");
+        assert!(
+            screen.contains(
+                "no subscriber:    outputs published while none was subscribed 2 (not a loss)"
+            ),
+            "{screen}"
+        );
+    }
+
+    #[test]
     fn a_restarted_daemons_screen_says_which_counts_span_its_lives() {
         let mut status = Status {
             diagnostics: Diagnostics {
@@ -634,7 +665,7 @@ mod tests {
         // (the publishers' stall guards and the estimator start again with each life): the
         // note said every loss spanned the lives.
         assert!(
-            screen.contains("received, losses but the stalled consumers, duplicate seq, late, not received, producers and angles count over all 3 daemon lives of this domain; accepted, stances, heading updates, clipped, the stalled consumers, the other rejections and external headings over this life"),
+            screen.contains("received, losses but the stalled consumers, no subscriber, duplicate seq, late, not received, producers and angles count over all 3 daemon lives of this domain; accepted, stances, heading updates, clipped, the stalled consumers, the other rejections and external headings over this life"),
             "{screen}"
         );
     }
