@@ -125,6 +125,21 @@ pub enum TrackStop {
     DaemonStopped,
 }
 
+impl TrackStop {
+    /// In words, for the tools' output (as [`crate::record::RecordStop::describe`]: a pdr
+    /// stopped by Ctrl-C said only "stopped", where the README says every tool says
+    /// "interrupted").
+    pub fn describe(self) -> &'static str {
+        match self {
+            TrackStop::EndOfStream => "end of stream",
+            TrackStop::IdleTimeout => "idle timeout",
+            TrackStop::Interrupted => "interrupted",
+            TrackStop::Aborted => "aborted",
+            TrackStop::DaemonStopped => "daemon stopped",
+        }
+    }
+}
+
 /// What following one stream got.
 #[derive(Debug, Clone, Copy)]
 pub struct Track {

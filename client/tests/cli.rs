@@ -419,6 +419,44 @@ fn pdr_stops_and_says_so_when_the_daemon_stops_within_a_stream() {
 }
 
 #[test]
+fn pdr_stopped_by_sigterm_says_interrupted_and_what_it_got() {
+    // It said "stopped: …", where the README says every tool stopped so says "interrupted".
+    let (node, service, event, publisher, mut child) =
+        fake_daemon_and_pdr("eco_cli_pdr_interrupted");
+    for stance in 1..=2 {
+        publisher
+            .send_copy(NavSample {
+                seq: stance - 1,
+                stance,
+                p_m: [stance as f64, 0.0, 0.0],
+                imu_seq: stance * 100,
+                t_s: stance as f64,
+                ..NavSample::default()
+            })
+            .unwrap();
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    // SAFETY: plain kill(2) on our own child.
+    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGTERM) };
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            panic!("corridor-pdr still runs 30 s after SIGTERM");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    drop((publisher, event, service, node));
+    let o = child.wait_with_output().unwrap();
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert_eq!(o.status.code(), Some(0), "{out}{err}");
+    assert!(out.contains("interrupted: 2 strides received"), "{out}");
+}
+
+#[test]
 fn pdr_with_a_daemon_gone_before_any_stream_is_no_daemon_not_a_cut_stream() {
     // It said "daemon stopped: 0 strides received" and "stopped within the stream", exit 1,
     // where no stream had begun (a review): now exit 3, no daemon, as at its start.

@@ -105,13 +105,7 @@ fn run() -> Result<()> {
             &mut out,
             format_args!(
                 "{}: {} strides received{daemon}, path {:.2} m over them{missed}",
-                if ended {
-                    "end of stream"
-                } else if daemon_stopped {
-                    "daemon stopped"
-                } else {
-                    "stopped"
-                },
+                t.stopped.describe(),
                 t.strides,
                 t.path_m
             ),

@@ -106,7 +106,9 @@ impl FromStr for Interp {
     }
 }
 
-/// Options of [`evaluate`](super::evaluate); [`Default`] gives the script's defaults.
+/// Options of [`evaluate`](super::evaluate); [`Default`] gives the script's defaults. The flags the
+/// fields name (`--align`, `--closed-tol`, …) are those of the reference script
+/// (`shared/tools/eval_traj.py`), not of `corridor`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EvalOptions {
     /// Alignment method (`--align`, default first-leg).
