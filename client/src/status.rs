@@ -95,7 +95,8 @@ impl Status {
         // outputs 2". What a connected consumer missed is the stalled consumers' count.
         let _ = writeln!(
             s,
-            "no subscriber:    outputs published while none was subscribed {} (not a loss)",
+            "no subscriber:    outputs published while none was subscribed {} (not a loss; \
+             a failed publish is warned in the daemon's log)",
             d.undelivered
         );
         let _ = writeln!(
@@ -639,7 +640,8 @@ mod tests {
         assert!(!losses.contains('2'), "{screen}");
         assert!(
             screen.contains(
-                "no subscriber:    outputs published while none was subscribed 2 (not a loss)"
+                "no subscriber:    outputs published while none was subscribed 2 (not a loss; \
+                 a failed publish is warned in the daemon's log)"
             ),
             "{screen}"
         );

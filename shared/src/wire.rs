@@ -320,7 +320,9 @@ pub struct Diagnostics {
     pub dropped_overflow: u64,
     /// Samples the estimator accepted.
     pub accepted: u64,
-    /// Output messages that reached no subscriber.
+    /// Output messages that reached no subscriber: published while none was subscribed, or
+    /// failed to publish (warned in the daemon's log). One discarded for a stalled consumer is
+    /// counted in `discarded_for_stalled` instead.
     pub undelivered: u64,
     /// Stances since the start (over all streams).
     pub stances: u64,

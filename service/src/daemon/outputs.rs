@@ -70,11 +70,13 @@ impl<T: Topic> Out<T> {
         let _ = self.publisher.update_connections();
     }
 
-    /// Publishes `value` with the next `seq`; returns false when nobody received it.
+    /// Publishes `value` with the next `seq`; returns false when nobody received it and no
+    /// stalled consumer's discard accounts for it (the caller counts it undelivered).
     pub(super) fn publish(&mut self, set_seq: impl FnOnce(&mut T, u64), mut value: T) -> bool {
         set_seq(&mut value, self.seq);
         self.seq += 1;
         self.state.out_seq[self.slot].store(self.seq, Ordering::Relaxed);
+        let discarded_before = self.stall.counts().discarded;
         let delivered = match self.publisher.loan_uninit() {
             Ok(slot) => slot.write_payload(value).send(),
             Err(e) => Err(e.into()),
@@ -88,6 +90,12 @@ impl<T: Topic> Out<T> {
             );
         }
         match delivered {
+            // The stall guard discarded it for a stalled consumer, and iceoryx2 0.10 then counts
+            // no receiver when that one was the only one: counted as discarded for it (the
+            // stall counts), not as undelivered as well (a review: 9,905 of exp36's attitude
+            // samples were in both, and `corridor status` shows undelivered outputs as
+            // published while none was subscribed).
+            Ok(0) => self.stall.counts().discarded > discarded_before,
             Ok(n) => n > 0,
             Err(e) => {
                 if !self.failed_once {
