@@ -366,20 +366,38 @@ fn fake_daemon_and_pdr(
     (node, service, event, publisher, child)
 }
 
-#[test]
-fn pdr_stops_and_says_so_when_the_daemon_stops_within_a_stream() {
-    // It waited for ever, saying nothing, after a daemon's clean stop (a review). Now it waits
-    // --wait-s for the daemon to come back, then fails.
-    let (node, service, event, publisher, mut child) =
-        fake_daemon_and_pdr("eco_cli_pdr_daemon_stops");
-    let nav = |stance: u64| NavSample {
+/// The stance-th stride as the daemon would publish it, 1 m apart.
+fn nav(stance: u64) -> NavSample {
+    NavSample {
         seq: stance - 1,
         stance,
         p_m: [stance as f64, 0.0, 0.0],
         imu_seq: stance * 100,
         t_s: stance as f64,
         ..NavSample::default()
-    };
+    }
+}
+
+/// Waits for `child` (a corridor-pdr) to exit, killing it and failing after 30 s; how long it
+/// took.
+fn wait_for_exit(child: &mut std::process::Child, after: &str) -> Duration {
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            panic!("corridor-pdr still runs 30 s {after}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    start.elapsed()
+}
+
+#[test]
+fn pdr_stops_and_says_so_when_the_daemon_stops_within_a_stream() {
+    // It waited for ever, saying nothing, after a daemon's clean stop (a review). Now it waits
+    // --wait-s for the daemon to come back, then fails.
+    let (node, service, event, publisher, mut child) =
+        fake_daemon_and_pdr("eco_cli_pdr_daemon_stops");
     for stance in 1..=2 {
         publisher.send_copy(nav(stance)).unwrap();
     }
@@ -391,20 +409,9 @@ fn pdr_stops_and_says_so_when_the_daemon_stops_within_a_stream() {
     publisher.send_copy(nav(3)).unwrap();
     std::thread::sleep(Duration::from_millis(500));
     drop((publisher, event, service, node));
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(30) {
-            let _ = child.kill();
-            panic!("corridor-pdr still waits 30 s after the daemon stopped");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    let waited = wait_for_exit(&mut child, "after the daemon stopped");
     // Not before --wait-s: a daemon may come back within it.
-    assert!(
-        start.elapsed() >= Duration::from_secs(2),
-        "{:?}",
-        start.elapsed()
-    );
+    assert!(waited >= Duration::from_secs(2), "{waited:?}");
     let o = child.wait_with_output().unwrap();
     let (out, err) = (
         String::from_utf8_lossy(&o.stdout),
@@ -424,28 +431,12 @@ fn pdr_stopped_by_sigterm_says_interrupted_and_what_it_got() {
     let (node, service, event, publisher, mut child) =
         fake_daemon_and_pdr("eco_cli_pdr_interrupted");
     for stance in 1..=2 {
-        publisher
-            .send_copy(NavSample {
-                seq: stance - 1,
-                stance,
-                p_m: [stance as f64, 0.0, 0.0],
-                imu_seq: stance * 100,
-                t_s: stance as f64,
-                ..NavSample::default()
-            })
-            .unwrap();
+        publisher.send_copy(nav(stance)).unwrap();
     }
     std::thread::sleep(Duration::from_millis(500));
     // SAFETY: plain kill(2) on our own child.
     unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGTERM) };
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(30) {
-            let _ = child.kill();
-            panic!("corridor-pdr still runs 30 s after SIGTERM");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    wait_for_exit(&mut child, "after SIGTERM");
     drop((publisher, event, service, node));
     let o = child.wait_with_output().unwrap();
     let (out, err) = (
@@ -463,14 +454,7 @@ fn pdr_with_a_daemon_gone_before_any_stream_is_no_daemon_not_a_cut_stream() {
     let (node, service, event, publisher, mut child) =
         fake_daemon_and_pdr("eco_cli_pdr_daemon_gone_idle");
     drop((publisher, event, service, node));
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(30) {
-            let _ = child.kill();
-            panic!("corridor-pdr still waits 30 s after the daemon left");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    wait_for_exit(&mut child, "after the daemon left");
     let o = child.wait_with_output().unwrap();
     let (out, err) = (
         String::from_utf8_lossy(&o.stdout),
