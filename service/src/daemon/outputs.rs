@@ -28,6 +28,9 @@ pub(super) struct Out<T: Topic> {
     pub(super) failed_once: bool,
     /// Consumers that stalled this publisher (lossless delivery).
     pub(super) stall: StallGuard,
+    /// The guard's discarded count after the last send or refresh (the guard discards only
+    /// within them, so it is the count before the next send).
+    discarded_seen: u64,
 }
 
 impl<T: Topic> Out<T> {
@@ -60,14 +63,17 @@ impl<T: Topic> Out<T> {
             slot,
             failed_once: false,
             stall,
+            discarded_seen: 0,
         })
     }
 
     /// Connects subscribers that joined since the last send and hands them the history (the
     /// latest value), so a late reader of an idle daemon (`corridor status`) gets it too.
-    pub(super) fn refresh(&self) {
+    pub(super) fn refresh(&mut self) {
         use iceoryx2::port::update_connections::UpdateConnections;
         let _ = self.publisher.update_connections();
+        // (A history handed to a full buffer is discarded here, not in a send.)
+        self.discarded_seen = self.stall.counts().discarded;
     }
 
     /// Publishes `value` with the next `seq`; returns false when nobody received it and no
@@ -76,13 +82,15 @@ impl<T: Topic> Out<T> {
         set_seq(&mut value, self.seq);
         self.seq += 1;
         self.state.out_seq[self.slot].store(self.seq, Ordering::Relaxed);
-        let discarded_before = self.stall.counts().discarded;
         let delivered = match self.publisher.loan_uninit() {
             Ok(slot) => slot.write_payload(value).send(),
             Err(e) => Err(e.into()),
         };
         let _ = self.notifier.notify();
-        for port in self.stall.take_new_stalls() {
+        let (new_stalls, discarded) = self.stall.take_new_stalls();
+        let discarded_in_send = discarded > self.discarded_seen;
+        self.discarded_seen = discarded;
+        for port in new_stalls {
             tracing::warn!(
                 service = T::SERVICE,
                 "consumer {port:#x} stalled the publisher for more than the stall bound; it now \
@@ -95,7 +103,7 @@ impl<T: Topic> Out<T> {
             // stall counts), not as undelivered as well (a review: 9,905 of exp36's attitude
             // samples were in both, and `corridor status` shows undelivered outputs as
             // published while none was subscribed).
-            Ok(0) => self.stall.counts().discarded > discarded_before,
+            Ok(0) => discarded_in_send,
             Ok(n) => n > 0,
             Err(e) => {
                 if !self.failed_once {

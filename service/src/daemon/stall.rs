@@ -97,10 +97,11 @@ impl StallGuard {
             .counts
     }
 
-    /// Port ids of consumers that stalled since the last call (for the log).
-    pub(super) fn take_new_stalls(&self) -> Vec<u128> {
+    /// Port ids of consumers that stalled since the last call (for the log), and the samples
+    /// discarded so far (one lock, taken after each send).
+    pub(super) fn take_new_stalls(&self) -> (Vec<u128>, u64) {
         let mut s = self.state.lock().unwrap_or_else(PoisonError::into_inner);
-        std::mem::take(&mut s.unreported)
+        (std::mem::take(&mut s.unreported), s.counts.discarded)
     }
 }
 
@@ -137,8 +138,8 @@ mod tests {
                 discarded: 2
             }
         );
-        assert_eq!(g.take_new_stalls(), vec![7]);
-        assert!(g.take_new_stalls().is_empty());
+        assert_eq!(g.take_new_stalls().0, vec![7]);
+        assert!(g.take_new_stalls().0.is_empty());
     }
 
     #[test]
