@@ -47,6 +47,20 @@ pub(super) fn weighted_association(
 /// ones are candidates too: a junction's four directions make a stride 10° off one of them less
 /// likely aligned than a single corridor's two.
 pub fn association_weight(r_rad: f64, s_rad2: f64, prior: f64, candidates: &Candidates) -> f64 {
+    let (nearest, total) = association_mixture(r_rad, s_rad2, prior, candidates);
+    nearest / total
+}
+
+/// The two densities [`association_weight`] is the ratio of, for residual `r_rad` against the
+/// nearest direction: walking along the nearest direction (its prior times a normal density),
+/// and walking along any candidate or in any direction at all (the mixture's whole density,
+/// rad⁻¹). The diagnosis compares fits by the second's likelihood.
+pub fn association_mixture(
+    r_rad: f64,
+    s_rad2: f64,
+    prior: f64,
+    candidates: &Candidates,
+) -> (f64, f64) {
     let density =
         |r: f64| (-0.5 * r * r / s_rad2).exp() / (2.0 * std::f64::consts::PI * s_rad2).sqrt();
     let nearest = prior * density(r_rad);
@@ -62,7 +76,7 @@ pub fn association_weight(r_rad: f64, s_rad2: f64, prior: f64, candidates: &Cand
                 })
                 .sum();
             let anywhere = (1.0 - prior) / spacing_rad;
-            nearest / (nearest + others + anywhere)
+            (nearest, nearest + others + anywhere)
         }
         Candidates::Listed { offsets_rad, n } => {
             let n = usize::from(n).max(1);
@@ -71,7 +85,7 @@ pub fn association_weight(r_rad: f64, s_rad2: f64, prior: f64, candidates: &Cand
                 .map(|o| prior * density(wrap_pi(r_rad + o)))
                 .sum();
             let anywhere = (1.0 - prior) * n as f64 / std::f64::consts::TAU;
-            nearest / (nearest + others + anywhere)
+            (nearest, nearest + others + anywhere)
         }
     }
 }

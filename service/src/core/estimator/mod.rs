@@ -56,7 +56,7 @@ mod stance_force;
 mod stride_memory;
 mod types;
 
-pub use association::association_weight;
+pub use association::{association_mixture, association_weight};
 use external_heading::QueuedHeading;
 pub use external_heading::{
     EXTERNAL_HEADING_LEAD_S, EXTERNAL_HEADING_MAX_AGE_S, EXTERNAL_HEADING_MAX_AHEAD_S,

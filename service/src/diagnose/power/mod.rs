@@ -30,7 +30,7 @@ use super::analysis::{Analysis, analyse};
 use super::analysis::{ResidualKind, StanceResidual};
 use super::catalogue::Effect;
 use super::ranking::Finding;
-use super::signature_fit::{HAC_LAGS, Row, SignatureFit, fit_signature};
+use super::signature_fit::{HAC_LAGS, Row, SignatureFit, fit_signature, reweighted_fit};
 use crate::runner::RunError;
 use corridor_shared::config::ConfigFile;
 use corridor_shared::imu_csv::ImuLog;
@@ -176,47 +176,6 @@ pub const REFERENCES: [Reference; 5] = [
 
 /// Number of [`REFERENCES`] (the length of [`StanceResidual::signature`]).
 pub const N_REFERENCES: usize = REFERENCES.len();
-
-/// The fit of the residuals on one signature (`pairs`: each stance with its signature value),
-/// refitted [`REWEIGHTS`] times with the association weight of the residual the fit leaves.
-fn reweighted_fit(pairs: &[(&StanceResidual, f64)]) -> (Vec<Row>, Option<SignatureFit>) {
-    let rows_for = |fit: Option<&SignatureFit>| -> Vec<Row> {
-        pairs
-            .iter()
-            .map(|&(s, g)| {
-                let group = usize::from(s.kind == ResidualKind::Stride);
-                // The probability of walking along the direction is that of the residual the
-                // hypothesis leaves: weights from the raw residual would discount the very
-                // stances that carry a large effect.
-                let weight = match fit {
-                    None => s.weight,
-                    Some(f) => crate::core::estimator::association_weight(
-                        s.r_rad - f.intercepts[group] - f.beta * g,
-                        s.sd_rad * s.sd_rad,
-                        super::analysis::DIAGNOSIS_ALIGNED_PRIOR,
-                        &s.candidates,
-                    ),
-                };
-                Row {
-                    group,
-                    weight,
-                    y: s.r_rad,
-                    x: g,
-                }
-            })
-            .collect()
-    };
-    let mut rows = rows_for(None);
-    let mut fit = fit_signature(&rows, HAC_LAGS);
-    for _ in 0..REWEIGHTS {
-        if fit.is_none() {
-            break;
-        }
-        rows = rows_for(fit.as_ref());
-        fit = fit_signature(&rows, HAC_LAGS);
-    }
-    (rows, fit)
-}
 
 /// Placebo fits per walk and effect (see [`placebo_z`]).
 pub const PLACEBO_SHIFTS: usize = 19;
@@ -486,9 +445,6 @@ pub fn calibrate_by_injection(
 /// g-sensitivity act mostly through the turns as a scale factor does (the mounting tilt
 /// projects them onto the vertical), so only what they explain beyond it names them.
 pub const PARTIAL: [Effect; 2] = [Effect::AxisMisalignment, Effect::GSensitivity];
-
-/// Times the association weights are recomputed from the residual the fit leaves.
-pub const REWEIGHTS: usize = 3;
 
 /// The two-sided normal quantile of p = 10⁻³ (the [`SIGNIFICANT`] score): the detectable size
 /// is this many standard errors.
