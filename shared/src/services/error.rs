@@ -130,10 +130,12 @@ impl ServiceError {
         found: String,
         runtime_dir: Option<&std::path::Path>,
     ) -> Self {
+        // The directory shell-quoted, so that the command pastes as it is (a path with a space
+        // was cut in two by the shell: a review). A domain name needs no quotes (its rule).
         let status = match runtime_dir {
             Some(dir) => format!(
                 "{RUNTIME_DIR_ENV}={} corridor status --domain {domain}",
-                dir.display()
+                shell_quoted(&dir.display().to_string())
             ),
             None => format!("corridor status --domain {domain}"),
         };
@@ -172,5 +174,16 @@ impl ServiceError {
             domain: domain.name().to_owned(),
             detail: format!("{detail:?}"),
         }
+    }
+}
+
+/// `text` as one word for a POSIX shell: as it is when it holds only characters no shell
+/// treats specially, else in single quotes (a `'` in it written `'\''`).
+fn shell_quoted(text: &str) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "/._-+,:@%=".contains(c);
+    if !text.is_empty() && text.chars().all(plain) {
+        text.to_owned()
+    } else {
+        format!("'{}'", text.replace('\'', "'\\''"))
     }
 }

@@ -162,6 +162,35 @@ mod tests {
     }
 
     #[test]
+    fn the_status_command_of_a_second_daemon_pastes_into_a_shell_as_it_is() {
+        // A runtime directory with a space (and a quote) was written as it is, and the shell
+        // cut the pasted command in two at the space (a review).
+        let dir = std::path::PathBuf::from(format!("/tmp/crs it's {}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let first = Domain::serve("lab", Some(&dir)).unwrap();
+        let e = Domain::serve("lab", Some(&dir)).unwrap_err().to_string();
+        drop(first);
+        let _ = std::fs::remove_dir_all(&dir);
+        let command = e.split('`').nth(1).unwrap_or_default();
+        let command = command
+            .strip_suffix(" corridor status --domain lab")
+            .expect(&e);
+        // What the shell gives the command in its environment.
+        let shell = std::process::Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "{command} sh -c 'printf %s \"${RUNTIME_DIR_ENV}\"'"
+            ))
+            .output()
+            .unwrap();
+        assert_eq!(
+            String::from_utf8_lossy(&shell.stdout),
+            dir.to_str().unwrap(),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn every_service_name_carries_the_wire_version() {
         let prefix = format!("corridor/{SERVICE_VERSION}/");
         for name in [
