@@ -592,6 +592,7 @@ mod tests {
                 value: "nan".into(),
                 reason,
                 field_counts: None,
+                ends_with_comma: false,
             });
         }
         let report = out.input_report(&log).expect("a report");

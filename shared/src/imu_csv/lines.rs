@@ -124,6 +124,8 @@ impl<R: BufRead> ImuCsvReader<R> {
             value: truncate_chars(value, MAX_VALUE_CHARS),
             reason: RejectReason::Malformed,
             field_counts,
+            // (The line's end was not kept.)
+            ends_with_comma: false,
         }
     }
 }

@@ -205,6 +205,11 @@ pub struct RejectedRow {
     /// the message gives (the row in `value` may be cut before its extra fields).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub field_counts: Option<(usize, usize)>,
+    /// For such a row: it ends with a comma (an empty last field), which the message says (it
+    /// gave "8 fields, the header has 7" for a row of seven numbers and a trailing comma, whose
+    /// comma `value` may have cut off: a review).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub ends_with_comma: bool,
 }
 
 impl RejectedRow {
@@ -220,6 +225,16 @@ impl RejectedRow {
         if self.column.is_empty() {
             write!(f, ": row \"{value}\" {}", self.reason)?;
             match self.field_counts {
+                Some((row, header)) if self.ends_with_comma => write!(
+                    f,
+                    " ({row} fields, the header has {header}: the row ends with a comma, an \
+                     empty field {row}{})",
+                    if row > header {
+                        " the header does not have"
+                    } else {
+                        ""
+                    }
+                )?,
                 Some((row, header)) => write!(f, " ({row} fields, the header has {header})")?,
                 None if self.reason == RejectReason::Malformed => {
                     f.write_str(" (its field count differs from the header's)")?

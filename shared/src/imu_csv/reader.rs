@@ -335,6 +335,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                 value: time_text(row.t_s),
                 reason: RejectReason::TimeGlitch,
                 field_counts: None,
+                ends_with_comma: false,
             };
             // A jumped row with the value as it was read.
             let rejected = match jumped.iter().find(|j| j.line == row.line) {
@@ -389,6 +390,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                         value: String::new(),
                         reason: RejectReason::Malformed,
                         field_counts: None,
+                        ends_with_comma: false,
                     });
                 }
             }
@@ -465,6 +467,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                                     RejectReason::TimeOutlier
                                 },
                                 field_counts: None,
+                                ends_with_comma: false,
                             });
                         }
                         Ok((row, jumped))
@@ -485,6 +488,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                                 RejectReason::TimeNotIncreasing
                             },
                             field_counts: None,
+                            ends_with_comma: false,
                         },
                     )),
                 },
@@ -496,6 +500,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                         value: truncate_chars(text, MAX_VALUE_CHARS),
                         reason: RejectReason::Malformed,
                         field_counts: Some((fields, n_fields)),
+                        ends_with_comma: text.trim_end().ends_with(','),
                     },
                 )),
                 Err(RowProblem::Field {
@@ -510,6 +515,7 @@ impl<R: BufRead> ImuCsvReader<R> {
                         value: truncate_chars(text, MAX_VALUE_CHARS),
                         reason,
                         field_counts: None,
+                        ends_with_comma: false,
                     },
                 )),
             };

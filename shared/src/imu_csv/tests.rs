@@ -14,6 +14,9 @@ mod not_text;
 // The reader's bounds on lines and files, and escaped invisible characters.
 mod limits;
 
+/// Rows whose field count differs from the header's, as the message says them.
+mod field_counts;
+
 fn path() -> &'static Path {
     Path::new("data/imu.csv")
 }
@@ -300,6 +303,7 @@ fn nan_row_is_rejected_and_counted_with_line_and_column() {
             value: "nan".into(),
             reason: RejectReason::NonFinite,
             field_counts: None,
+            ends_with_comma: false,
         }]
     );
     let counts = log.rejected_counts();
