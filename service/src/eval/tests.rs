@@ -377,6 +377,30 @@ fn errors_carry_the_facts() {
         "no footprint far enough from the first to align the heading on (need 50 m, the \
          farthest is 11.66 m)"
     );
+    // A footprint just short of the distance needed reads short of it (it said "need 5 m, the
+    // farthest is 5.00 m" of 4.996 m: a review).
+    let short = [(0.0, 0.0), (4.996, 0.0)];
+    let short_truth: Vec<TruthGcp> = short
+        .iter()
+        .zip([1.0, 9.0])
+        .map(|(&(x_m, y_m), t_s)| TruthGcp {
+            t_s,
+            x_m,
+            y_m,
+            stride: None,
+        })
+        .collect();
+    let five = EvalOptions {
+        heading_min_dist_m: 5.0,
+        ..o
+    };
+    assert_eq!(
+        evaluate(&t, &x, &y, &short_truth, &five)
+            .unwrap_err()
+            .to_string(),
+        "no footprint far enough from the first to align the heading on (need 5 m, the \
+         farthest is 4.996 m)"
+    );
     let still = vec![0.0; t.len()];
     match evaluate(&t, &still, &still, &truth, &o).unwrap_err() {
         EvalError::NoMotionToHeadingGcp {

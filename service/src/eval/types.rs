@@ -278,10 +278,12 @@ pub enum EvalError {
         gcps: usize,
     },
     /// First-leg alignment found no GCP far enough from GCP0. Said in the README's words
-    /// (footprints, not GCPs) and in centimetres: it said "farthest is 0.7650653566852966 m".
+    /// (footprints, not GCPs) and in centimetres: it said "farthest is 0.7650653566852966 m";
+    /// in millimetres or finer where centimetres would round it up to the distance needed (it
+    /// said "need 5 m, the farthest is 5.00 m" of 4.996 m: a review).
     #[error(
         "no footprint far enough from the first to align the heading on (need {min_dist_m} m, \
-         the farthest is {farthest_m:.2} m)"
+         the farthest is {} m)", shown_below(*farthest_m, *min_dist_m)
     )]
     NoHeadingGcp {
         /// The required distance, metres.
@@ -330,4 +332,13 @@ pub enum EvalError {
     /// Unknown interpolation name given to [`Interp::from_str`].
     #[error("unknown --interp {0}")]
     UnknownInterp(String),
+}
+
+/// `value`, which lies below `limit`, with the fewest decimals from two on at which it still
+/// reads below it (as it is, in full, when none up to six does).
+fn shown_below(value: f64, limit: f64) -> String {
+    (2..=6)
+        .map(|decimals| format!("{value:.decimals$}"))
+        .find(|text| text.parse::<f64>().is_ok_and(|shown| shown < limit))
+        .unwrap_or_else(|| value.to_string())
 }
