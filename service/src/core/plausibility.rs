@@ -175,12 +175,22 @@ impl Plausibility {
         if gyro_norm == 0.0 && accel_norm == 0.0 {
             return Err(SampleError::ZeroFill { t_s: s.t_s });
         }
-        for (field, value, limit) in [
-            ("|gyro_rad_s|", gyro_norm, l.max_gyro_rad_s()),
-            ("|accel_m_s2|", accel_norm, l.max_accel_m_s2()),
+        for (first, field, value, limit) in [
+            (0, "|gyro_rad_s|", gyro_norm, l.max_gyro_rad_s()),
+            (3, "|accel_m_s2|", accel_norm, l.max_accel_m_s2()),
         ] {
-            // The components are finite here; a norm that overflowed is +inf and caught too.
+            // The components are finite here; a norm that overflowed is +inf and caught too,
+            // said by its largest axis and that axis's value (it said "|gyro_rad_s| = inf" of a
+            // gy of 1e300: a review).
             if value > limit {
+                let (field, value) = if value.is_finite() {
+                    (field, value)
+                } else {
+                    (first..first + 3).map(|k| (FIELDS[k], values[k])).fold(
+                        (field, 0.0_f64),
+                        |a, b| if b.1.abs() > a.1.abs() { b } else { a },
+                    )
+                };
                 return Err(SampleError::Implausible {
                     t_s: s.t_s,
                     field,
@@ -305,16 +315,23 @@ mod tests {
             }
         ));
         assert!(err.to_string().contains("1e30"), "{err}");
+        // A norm that overflows is said by its largest axis, with its value (it said
+        // "|gyro_rad_s| = inf").
         let err = p
-            .check(&sample(0.005, [0.1, 1e300, 0.1], [0.0, 0.0, 9.8]), no_step)
+            .check(&sample(0.005, [0.1, -1e300, 0.1], [0.0, 0.0, 9.8]), no_step)
             .unwrap_err();
-        assert!(matches!(
-            err,
-            SampleError::Implausible {
-                field: "|gyro_rad_s|",
-                ..
-            }
-        ));
+        assert!(
+            matches!(
+                err,
+                SampleError::Implausible {
+                    field: "gy_rad_s",
+                    value: -1e300,
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        assert!(err.to_string().contains("gy_rad_s = -1e300"), "{err}");
         // One axis beyond twice its range (the norm is within its limit): refused.
         let err = p
             .check(&sample(0.005, [0.1; 3], [0.0, 0.0, 160.0]), no_step)
