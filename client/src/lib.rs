@@ -178,12 +178,39 @@ pub const EXIT_USAGE: u8 = 2;
 /// flag from a daemon that is down, and the tools gave 1, as for any other error.
 pub const EXIT_NO_DAEMON: u8 = 3;
 
-/// The exit of every corridor binary: success, or `error: ...` ([`error_message`]) once on
-/// stderr and a failure code: [`EXIT_NO_DAEMON`] when the cause is that no daemon answered,
-/// 1 otherwise.
+/// The exit code of a tool stopped by Ctrl-C, as a shell gives it (128 + SIGINT's number),
+/// where the tool cannot end by the signal itself.
+pub const EXIT_INTERRUPTED: u8 = 130;
+
+/// A tool stopped by SIGINT or SIGTERM, once it has wound up and said what it got: it ends as
+/// that signal would end it ([`corridor_shared::services::end_as_terminated_by`]: `$?` 130
+/// after Ctrl-C, 143 after SIGTERM); nothing happens without such a request.
+pub fn end_if_interrupted() {
+    if let Some(signal) = corridor_shared::services::termination_signal() {
+        corridor_shared::services::end_as_terminated_by(signal);
+    }
+}
+
+/// The exit of every corridor client tool: success, or `error: ...` ([`error_message`]) once
+/// on stderr and a failure code: [`EXIT_NO_DAEMON`] when the cause is that no daemon answered,
+/// 1 otherwise. A tool that SIGINT or SIGTERM stopped ([`ClientError::Interrupted`], or a
+/// success after one) ends as that signal would ([`end_if_interrupted`]), with `interrupted`
+/// on stderr if it had not got to say so.
 pub fn exit(result: anyhow::Result<()>) -> ExitCode {
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => {
+            end_if_interrupted();
+            ExitCode::SUCCESS
+        }
+        Err(e)
+            if e.chain()
+                .any(|c| matches!(c.downcast_ref(), Some(ClientError::Interrupted))) =>
+        {
+            say_err!("interrupted");
+            end_if_interrupted();
+            // (A request only iceoryx2 saw, and lost: as Ctrl-C.)
+            ExitCode::from(EXIT_INTERRUPTED)
+        }
         Err(e) => {
             say_err!("error: {}", error_message(&e));
             let no_daemon = e

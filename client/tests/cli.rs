@@ -6,6 +6,7 @@ use corridor_shared::services::{Access, Delivery, Domain};
 use corridor_shared::wire::{ImuSample, NavSample};
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
+use std::os::unix::process::ExitStatusExt as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -443,8 +444,63 @@ fn pdr_stopped_by_sigterm_says_interrupted_and_what_it_got() {
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr),
     );
-    assert_eq!(o.status.code(), Some(0), "{out}{err}");
+    // It ends as SIGTERM would (it exited with 0: a review), having said what it got.
+    assert_eq!(o.status.signal(), Some(libc::SIGTERM), "{out}{err}");
     assert!(out.contains("interrupted: 2 strides received"), "{out}");
+    assert!(err.is_empty(), "{err}");
+}
+
+/// Whether process `pid` catches SIGINT (`SigCgt` of /proc/PID/status): its signal latch is in
+/// place.
+fn catches_sigint(pid: u32) -> bool {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("SigCgt:"))
+        .and_then(|mask| u64::from_str_radix(mask.trim(), 16).ok())
+        .is_some_and(|mask| mask & (1 << (libc::SIGINT - 1)) != 0)
+}
+
+#[test]
+fn ctrl_c_while_a_tool_waits_for_a_daemon_ends_it_as_ctrl_c_quietly() {
+    // It said "error: interrupted by a termination request (SIGINT/SIGTERM)" and exited with 1,
+    // where once the daemon had answered it exited with 0 (a review): every tool now ends as
+    // Ctrl-C does (a shell's $? 130), saying "interrupted".
+    let imu = short_log("sigint", 10);
+    let out = std::env::temp_dir().join(format!("corridor-sigint-{}", std::process::id()));
+    for (exe, args) in [
+        (
+            env!("CARGO_BIN_EXE_corridor-replay"),
+            vec!["--imu", imu.to_str().unwrap()],
+        ),
+        (
+            env!("CARGO_BIN_EXE_corridor-log"),
+            vec!["--out", out.to_str().unwrap()],
+        ),
+        (env!("CARGO_BIN_EXE_corridor-pdr"), vec![]),
+    ] {
+        let mut child = Command::new(exe)
+            .args(["--domain", "eco_cli_sigint_nobody", "--wait-s", "60"])
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let start = Instant::now();
+        while !catches_sigint(child.id()) {
+            assert!(start.elapsed() < Duration::from_secs(30), "{exe}: no latch");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        // SAFETY: plain kill(2) on our own child.
+        unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+        wait_for_exit(&mut child, "after SIGINT");
+        let o = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.signal(), Some(libc::SIGINT), "{exe}: {err}");
+        assert_eq!(err.trim_end(), "interrupted", "{exe}");
+    }
+    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_file(&imu);
 }
 
 #[test]

@@ -210,7 +210,8 @@ fn status_shows_the_daemons_counters_and_final_bias() {
     let first = rx.recv_timeout(WAIT).expect("a first screen");
     let second = rx.recv_timeout(WAIT).expect("a refreshed screen");
     assert_ne!(first, second);
-    // A watch stopped by SIGTERM says so, exit 0, as every tool does (it said nothing).
+    // A watch stopped by SIGTERM says so (it said nothing) and ends by the signal, as every
+    // tool does (it exited with 0).
     let mut stopped = corridor()
         .args(["status", "--watch", "--domain", name])
         .stdout(Stdio::piped())
@@ -223,7 +224,10 @@ fn status_shows_the_daemons_counters_and_final_bias() {
         "a first screen"
     );
     terminate(&mut stopped);
-    assert_eq!(stopped.wait().unwrap().code(), Some(0));
+    assert_eq!(
+        std::os::unix::process::ExitStatusExt::signal(&stopped.wait().unwrap()),
+        Some(libc::SIGTERM)
+    );
     let rest: Vec<String> = lines.map_while(Result::ok).collect();
     assert_eq!(
         rest.last().map(String::as_str),

@@ -22,7 +22,7 @@ use std::time::Duration;
     name = "corridor-log",
     version,
     about = "Record the corridor daemon's attitude and bias streams to CSV",
-    after_help = "Examples:\n  corridor-log --domain lab --out out/log\n  corridor-log --domain lab --out out/log --idle-timeout-s 1 --wait-s 60\nExit code: 0 success, 1 error, 2 usage error, 3 no daemon answered within --wait-s."
+    after_help = "Examples:\n  corridor-log --domain lab --out out/log\n  corridor-log --domain lab --out out/log --idle-timeout-s 1 --wait-s 60\nExit code: 0 success, 1 error, 2 usage error, 3 no daemon answered within --wait-s; stopped by Ctrl-C (SIGTERM), it ends as the signal does: 130 (143) in a shell."
 )]
 struct Args {
     /// iceoryx2 domain of the daemon.

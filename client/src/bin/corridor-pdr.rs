@@ -19,7 +19,7 @@ use std::time::Duration;
     name = "corridor-pdr",
     version,
     about = "Print stride-by-stride positions from the corridor daemon (sensor_yaw_deg: the sensor's yaw in the map frame, not the walking direction)",
-    after_help = "Examples:\n  corridor-pdr --domain lab\n  corridor-pdr --domain lab --follow\nExit code: 0 success, 1 error, 2 usage error, 3 no daemon answered within --wait-s."
+    after_help = "Examples:\n  corridor-pdr --domain lab\n  corridor-pdr --domain lab --follow\nExit code: 0 success, 1 error, 2 usage error, 3 no daemon answered within --wait-s; stopped by Ctrl-C (SIGTERM), it ends as the signal does: 130 (143) in a shell."
 )]
 struct Args {
     /// iceoryx2 domain of the daemon.

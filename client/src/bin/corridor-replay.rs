@@ -19,7 +19,7 @@ use std::time::Duration;
     name = "corridor-replay",
     version,
     about = "Replay an IMU CSV log to the corridor daemon",
-    after_help = "Examples:\n  corridor-replay --imu tests/data/gdins_exp36_corridor_out_and_back/imu.csv --domain lab --speed max\n  corridor-replay --imu imu.csv --domain lab --speed 2 --loop 3 --inject-gyro-bias 0.001,0.001,-0.005\n  corridor-replay --imu imu.csv --domain lab --delivery lossless   (fails unless the daemon is lossless)\nExit code: 0 success, 1 error, 2 usage error, 3 no daemon answered within --wait-s."
+    after_help = "Examples:\n  corridor-replay --imu tests/data/gdins_exp36_corridor_out_and_back/imu.csv --domain lab --speed max\n  corridor-replay --imu imu.csv --domain lab --speed 2 --loop 3 --inject-gyro-bias 0.001,0.001,-0.005\n  corridor-replay --imu imu.csv --domain lab --delivery lossless   (fails unless the daemon is lossless)\nExit code: 0 success, 1 error, 2 usage error, 3 no daemon answered within --wait-s; stopped by Ctrl-C (SIGTERM), it ends as the signal does: 130 (143) in a shell."
 )]
 struct Args {
     /// IMU log (CSV: t_s,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2,...).

@@ -61,7 +61,7 @@ const STATUS_EXAMPLES: &str = "Examples:
   corridor status --domain lab
   corridor status --domain lab --watch --checkpoint /var/lib/corridor/bias.bin
   corridor status --domain lab --timeout-s 2 || systemctl restart corridor
-Exit code: 0 healthy, 1 error (a --checkpoint that is no checkpoint, ...), 2 usage error, 3 no daemon answered within the timeout (or it is shutting down).";
+Exit code: 0 healthy, 1 error (a --checkpoint that is no checkpoint, ...), 2 usage error, 3 no daemon answered within the timeout (or it is shutting down); stopped by Ctrl-C (SIGTERM), it ends as the signal does: 130 (143) in a shell.";
 
 const COMPLETIONS_EXAMPLES: &str = "Examples:
   corridor completions bash > ~/.local/share/bash-completion/completions/corridor
@@ -174,7 +174,13 @@ fn dispatch(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Serve(a) => done(serve::serve(&a)),
         Command::Diagnose(a) => done(diagnose::diagnose(&a)),
         Command::Eval(a) => done(eval::eval(a)),
-        Command::Status(a) => status::status(&a),
+        Command::Status(a) => {
+            let code = status::status(&a)?;
+            // A watch that Ctrl-C or SIGTERM stopped ends as the signal would, as every client
+            // tool does (it said "stopped: interrupted").
+            corridor_client::end_if_interrupted();
+            Ok(code)
+        }
         Command::Completions(a) => done(docs::completions(&a)),
         Command::Man => done(docs::man()),
     }

@@ -91,7 +91,8 @@ pub(super) fn status(a: &StatusArgs) -> Result<ExitCode> {
             }
             Err(ClientError::Interrupted) => {
                 // Said as every tool says it (README, exit codes): a watch stopped by Ctrl-C or
-                // SIGTERM ended with exit 0 and nothing, like one that had nothing to say.
+                // SIGTERM ended with exit 0 and nothing, like one that had nothing to say. The
+                // caller then ends as the signal would (`end_if_interrupted`).
                 println!("stopped: interrupted");
                 return Ok(ExitCode::SUCCESS);
             }

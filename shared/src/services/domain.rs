@@ -441,6 +441,22 @@ pub fn node_sleep(node: &Node<ipc::Service>, d: std::time::Duration) -> bool {
     going_on && !super::signals::termination_seen()
 }
 
+/// The signal (SIGINT or SIGTERM) by which this process was asked to end, once one was seen
+/// ([`termination_requested`], [`node_sleep`]; SIGINT when only iceoryx2 reported it); `None`
+/// before. For a tool to end as that signal would, with [`end_as_terminated_by`].
+pub fn termination_signal() -> Option<libc::c_int> {
+    super::signals::termination_signal()
+}
+
+/// Ends the process as `signal` would have ended it without a handler: a tool that a Ctrl-C
+/// stopped, once it has wound up (its files closed, its nodes dropped, what it got said), so
+/// that a shell reads `$?` 130 (143 for SIGTERM) and a script stops, as after any command
+/// Ctrl-C stopped. (The tools exited with 0 then, or with 1 and "error: interrupted by a
+/// termination request" when it came while they waited for a daemon: a review.)
+pub fn end_as_terminated_by(signal: libc::c_int) -> ! {
+    super::signals::end_as_terminated_by(signal)
+}
+
 /// True once SIGINT or SIGTERM was received by this process, as seen through `node` or through
 /// any earlier reader, for every thread. iceoryx2's signal handler clears a signal when it is
 /// read (`SignalHandler::last_signal`), so a second thread that also polled (the replay's watch

@@ -24,10 +24,14 @@
 //! for the process's life.
 
 use std::sync::Once;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI32, AtomicUsize, Ordering};
 
 /// Set by [`latch`] (or by a reader that saw iceoryx2 report a termination request).
 static SEEN: AtomicBool = AtomicBool::new(false);
+
+/// The first SIGINT or SIGTERM [`latch`] took (0 before one, or when only iceoryx2 reported
+/// the request).
+static FIRST_SIGNAL: AtomicI32 = AtomicI32::new(0);
 
 const SIGNALS: [libc::c_int; 3] = [libc::SIGINT, libc::SIGTERM, libc::SIGTSTP];
 
@@ -68,6 +72,35 @@ pub(crate) fn termination_seen() -> bool {
 /// Records a termination request seen another way (iceoryx2's report).
 pub(crate) fn record_termination() {
     SEEN.store(true, Ordering::Relaxed);
+}
+
+/// The signal that asked this process to end: the first SIGINT or SIGTERM, SIGINT when only
+/// iceoryx2 reported the request (it does not say which); `None` without a request.
+pub(crate) fn termination_signal() -> Option<libc::c_int> {
+    termination_seen().then(|| match FIRST_SIGNAL.load(Ordering::Relaxed) {
+        0 => libc::SIGINT,
+        signal => signal,
+    })
+}
+
+/// Ends the process as `signal` would have without a handler (its default action: the process
+/// terminates by that signal, a shell's `$?` is 128 + its number, 130 for Ctrl-C, and systemd
+/// takes a SIGTERM so as a clean stop), once the work it interrupted has been wound up; exit
+/// code 128 + `signal` if it survives that.
+pub(crate) fn end_as_terminated_by(signal: libc::c_int) -> ! {
+    use std::io::Write as _;
+    let _ = std::io::stdout().flush();
+    let _ = std::io::stderr().flush();
+    // SAFETY: the signal's default disposition, unblocked, and raised on this thread.
+    unsafe {
+        libc::signal(signal, libc::SIG_DFL);
+        let mut set: libc::sigset_t = std::mem::zeroed();
+        libc::sigemptyset(&mut set);
+        libc::sigaddset(&mut set, signal);
+        libc::pthread_sigmask(libc::SIG_UNBLOCK, &set, std::ptr::null_mut());
+        libc::raise(signal);
+    }
+    std::process::exit(128 + signal)
 }
 
 /// The current disposition of `signal`, or `None` when it cannot be read.
@@ -162,6 +195,7 @@ extern "C" fn latch(signal: libc::c_int) {
         return;
     }
     if signal != libc::SIGTSTP {
+        let _ = FIRST_SIGNAL.compare_exchange(0, signal, Ordering::Relaxed, Ordering::Relaxed);
         SEEN.store(true, Ordering::Relaxed);
     }
     // iceoryx2's handler, then the host program's from before the first node, if any.
