@@ -245,11 +245,16 @@ pub fn parse_injected_ramp_rad_s2(text: &str) -> Result<[f64; 3], String> {
     within(parse_vec3(text)?, text, MAX_INJECTED_RAMP_RAD_S2, "rad/s²")
 }
 
+/// `v` (parsed from `text` by [`parse_vec3`]) when every component is within ±`limit`; else
+/// the first one beyond, quoted as typed (it was shown as `3e-1` of a `0.3`: a review).
 fn within(v: [f64; 3], text: &str, limit: f64, unit: &str) -> Result<[f64; 3], String> {
-    match v.iter().find(|x| x.abs() > limit) {
-        Some(x) => Err(format!(
-            "{x:e} in {text:?} is beyond ±{limit} {unit} (the largest injection allowed)"
-        )),
+    match v.iter().position(|x| x.abs() > limit) {
+        Some(i) => {
+            let typed = text.split(',').nth(i).map_or("", str::trim);
+            Err(format!(
+                "{typed} in {text:?} is beyond ±{limit} {unit} (the largest injection allowed)"
+            ))
+        }
         None => Ok(v),
     }
 }
@@ -391,6 +396,19 @@ mod tests {
         assert_eq!(parse_injected_ramp_rad_s2("2e-4,0,0").unwrap()[0], 2e-4);
         let e = parse_injected_ramp_rad_s2("0,1e308,0").unwrap_err();
         assert!(e.contains("1e308") && e.contains("rad/s²"), "{e}");
+    }
+
+    #[test]
+    fn an_injection_beyond_the_limit_is_quoted_as_typed() {
+        // `--inject-gyro-bias 0.3,0,0` said "3e-1 in \"0.3,0,0\" is beyond ±0.2 rad/s".
+        assert_eq!(
+            parse_injected_bias_rad_s("0.3,0,0").unwrap_err(),
+            "0.3 in \"0.3,0,0\" is beyond ±0.2 rad/s (the largest injection allowed)"
+        );
+        let e = parse_injected_bias_rad_s("0, 0, -0.250").unwrap_err();
+        assert!(e.starts_with("-0.250 in "), "{e}");
+        let e = parse_injected_ramp_rad_s2("0.02,0,0").unwrap_err();
+        assert!(e.starts_with("0.02 in "), "{e}");
     }
 
     #[test]
