@@ -235,7 +235,18 @@ impl RejectedRow {
                         ""
                     }
                 )?,
-                Some((row, header)) => write!(f, " ({row} fields, the header has {header})")?,
+                Some((row, header)) => {
+                    let fields = if row == 1 { "field" } else { "fields" };
+                    write!(f, " ({row} {fields}, the header has {header}")?;
+                    // One field: the row has no comma (`value` may be cut, but a separator
+                    // other than the comma falls within its first 64 characters).
+                    if row == 1
+                        && let Some(hint) = sniff::other_separator(&self.value, "row")
+                    {
+                        write!(f, ": {hint}")?;
+                    }
+                    f.write_str(")")?
+                }
                 None if self.reason == RejectReason::Malformed => {
                     f.write_str(" (its field count differs from the header's)")?
                 }

@@ -267,7 +267,12 @@ impl<R: BufRead> ImuCsvReader<R> {
         } else if names.len() < REQUIRED_COLUMNS.len()
             || !names.iter().zip(REQUIRED_COLUMNS).all(|(a, b)| *a == b)
         {
-            Some("does not start with the required columns".into())
+            match sniff::other_separator(&header, "header") {
+                Some(hint) => {
+                    Some(format!("does not start with the required columns ({hint})").into())
+                }
+                None => Some("does not start with the required columns".into()),
+            }
         } else if names[..names.len() - 1].iter().any(|n| n.is_empty()) {
             // A last name empty is a trailing comma (spreadsheet exports write one on every
             // line): an unnamed column, ignored as any other extra one (it refused the file).

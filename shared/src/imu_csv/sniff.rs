@@ -1,4 +1,4 @@
-//! Files that are not CSV text, and bytes quoted in messages.
+//! Files that are not CSV text or not separated by commas, and bytes quoted in messages.
 //!
 //! A compressed file is known by its first bytes and named with the command that decompresses
 //! it (a gzipped log was refused as a file whose lines end in CR alone, its bytes printed raw).
@@ -8,6 +8,27 @@
 use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+/// When `line` has no comma but a semicolon or a tab, what the file looks like to its reader:
+/// `"the row has semicolons and no comma: the file looks semicolon-separated, and corridor reads
+/// comma-separated CSV"` (`what` is `row` or `header`). A semicolon-separated export (a
+/// spreadsheet in a locale whose decimal mark is a comma) was refused as rows of "1 fields".
+pub(super) fn other_separator(line: &str, what: &str) -> Option<String> {
+    if line.contains(',') {
+        return None;
+    }
+    let (plural, name) = if line.contains(';') {
+        ("semicolons", "semicolon")
+    } else if line.contains('\t') {
+        ("tabs", "tab")
+    } else {
+        return None;
+    };
+    Some(format!(
+        "the {what} has {plural} and no comma: the file looks {name}-separated, and corridor \
+         reads comma-separated CSV"
+    ))
+}
 
 /// A compressed format that a log may come in.
 struct Compression {
