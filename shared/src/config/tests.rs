@@ -55,6 +55,37 @@ fn unknown_key_is_named() {
 }
 
 #[test]
+fn a_value_of_the_wrong_type_is_named_by_its_dotted_key() {
+    // It gave the line, the column and the quoted line, but not the key (a review).
+    let text = "[estimator]\nmode = \"eskf\"\n\n[eskf]\ngyro_noise_rad_s = \"abc\"\n";
+    let err = ConfigFile::parse(text, Path::new("x.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("x.toml: TOML parse error at line 5, column 20\n"),
+        "{err}"
+    );
+    assert!(err.contains("5 | gyro_noise_rad_s = \"abc\"\n"), "{err}");
+    assert!(
+        err.ends_with("\nkey `eskf.gyro_noise_rad_s`: invalid type: string \"abc\", expected f64"),
+        "{err}"
+    );
+    // An unknown key: its table.
+    let err = ConfigFile::parse("[eskf]\ngyro_nosie_rad_s = 0.01\n", Path::new("x.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("\nin [eskf]: unknown field `gyro_nosie_rad_s`, expected one of"),
+        "{err}"
+    );
+    // A syntax error has no key: the crate's message as it was.
+    let err = ConfigFile::parse("[eskf]\ngyro_noise_rad_s = \n", Path::new("x.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("line 2") && !err.contains("key `"), "{err}");
+}
+
+#[test]
 fn the_removed_convergence_key_names_its_replacement() {
     let f = ConfigFile::parse(
         "[estimator]\nconverged_sd_rad_s = 5e-4\n",
