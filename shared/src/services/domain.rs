@@ -1,5 +1,6 @@
 //! The iceoryx2 namespace of a set of processes, and the functions that open the services.
 
+use super::error::readable;
 use super::*;
 use iceoryx2::prelude::*;
 use iceoryx2::service::builder::event::{EventCreateError, EventOpenError, EventOpenOrCreateError};
@@ -223,14 +224,14 @@ impl Domain {
             node: node_name.to_owned(),
             detail,
         };
-        let name: NodeName = node_name.try_into().map_err(|e| err(format!("{e:?}")))?;
+        let name: NodeName = node_name.try_into().map_err(|e| err(readable(e)))?;
         super::signals::note_before_first_node();
         let node = NodeBuilder::new()
             .name(&name)
             .config(&self.config)
             .signal_handling_mode(signals)
             .create::<ipc::Service>()
-            .map_err(|e| err(format!("{e:?}")))?;
+            .map_err(|e| err(readable(e)))?;
         // A process that asks iceoryx2 to handle SIGINT and SIGTERM gets iceoryx2's handlers at
         // that node's first wait: here instead, with ours over them, once. (A process with only
         // `Disabled` nodes, such as a test binary hosting a daemon, keeps the default actions.)
@@ -257,7 +258,7 @@ impl Domain {
             domain: self.name.clone(),
             detail,
         };
-        let name: ServiceName = service.try_into().map_err(|e| open_err(format!("{e:?}")))?;
+        let name: ServiceName = service.try_into().map_err(|e| open_err(readable(e)))?;
         let builder = node
             .service_builder(&name)
             .publish_subscribe::<T>()
@@ -278,14 +279,14 @@ impl Domain {
                         domain: self.name.clone(),
                         requested: delivery,
                     },
-                    e => open_err(format!("{e:?}")),
+                    e => open_err(readable(e)),
                 }),
             Access::Reader => builder.open().map_err(|e| match e {
                 PublishSubscribeOpenError::DoesNotExist => ServiceError::NotFound {
                     service,
                     domain: self.name.clone(),
                 },
-                e => open_err(format!("{e:?}")),
+                e => open_err(readable(e)),
             }),
         }
     }
@@ -348,7 +349,7 @@ impl Domain {
             domain: self.name.clone(),
             detail,
         };
-        let name: ServiceName = service.try_into().map_err(|e| open_err(format!("{e:?}")))?;
+        let name: ServiceName = service.try_into().map_err(|e| open_err(readable(e)))?;
         let builder = node
             .service_builder(&name)
             .event()
@@ -357,14 +358,14 @@ impl Domain {
         if create {
             builder
                 .open_or_create()
-                .map_err(|e: EventOpenOrCreateError| open_err(format!("{e:?}")))
+                .map_err(|e: EventOpenOrCreateError| open_err(readable(e)))
         } else {
             builder.open().map_err(|e| match e {
                 EventOpenError::DoesNotExist => ServiceError::NotFound {
                     service,
                     domain: self.name.clone(),
                 },
-                e => open_err(format!("{e:?}")),
+                e => open_err(readable(e)),
             })
         }
     }
@@ -378,7 +379,7 @@ impl Domain {
             service: DAEMON_SERVICE,
             pattern: "event",
             domain: self.name.clone(),
-            detail: format!("{e:?}"),
+            detail: readable(e),
         })?;
         let create = || {
             node.service_builder(&name)
@@ -410,7 +411,7 @@ impl Domain {
                 service: DAEMON_SERVICE,
                 pattern: "event",
                 domain: self.name.clone(),
-                detail: format!("{e:?}"),
+                detail: readable(e),
             },
         })
     }

@@ -1,7 +1,7 @@
 //! The error of a service that could not be opened or used.
 
 use super::{Delivery, Domain, RUNTIME_DIR_ENV};
-use std::fmt::Debug;
+use std::fmt::Display;
 
 /// A service that could not be opened or used. Every variant names the service and the domain.
 #[derive(Debug, thiserror::Error)]
@@ -151,13 +151,13 @@ impl ServiceError {
         domain: &Domain,
         service: &'static str,
         operation: &'static str,
-        detail: impl Debug,
+        detail: impl Display,
     ) -> Self {
         ServiceError::Io {
             service,
             operation,
             domain: domain.name().to_owned(),
-            detail: format!("{detail:?}"),
+            detail: readable(detail),
         }
     }
 
@@ -166,15 +166,56 @@ impl ServiceError {
         domain: &Domain,
         service: &'static str,
         port: &'static str,
-        detail: impl Debug,
+        detail: impl Display,
     ) -> Self {
         ServiceError::Port {
             service,
             port,
             domain: domain.name().to_owned(),
-            detail: format!("{detail:?}"),
+            detail: readable(detail),
         }
     }
+}
+
+/// An iceoryx2 error in words: `loan error: out of memory` for `SendError::LoanError(OutOfMemory)`.
+/// iceoryx2 0.10 displays its errors as `Type::{self:?}`, the Rust names of the type and its
+/// variants (a user saw `ExceedsMaxSupportedSubscribers`); every word of them is kept, each
+/// name split at its capitals and lower-cased, a variant's fields after a colon. The type that
+/// leads the text is left out: the message says what was attempted.
+pub(crate) fn readable(detail: impl Display) -> String {
+    let text = detail.to_string();
+    // `SendError::LoanError(OutOfMemory)`: the variant after the type's name.
+    let text = match text.split_once("::") {
+        Some((ty, rest)) if !ty.is_empty() && ty.chars().all(|c| c.is_ascii_alphanumeric()) => rest,
+        _ => text.as_str(),
+    };
+    let mut out = String::with_capacity(text.len() + 8);
+    let mut chars = text.chars().peekable();
+    // The previous character written was a letter or digit of the current name.
+    let mut prev: Option<char> = None;
+    while let Some(c) = chars.next() {
+        if c.is_ascii_uppercase() {
+            // A capital starts a word, but inside a run of capitals (`IPC`), unless it starts
+            // the last word of the run (`IPCPort`: `ipc port`).
+            let next_lower = chars.peek().is_some_and(|n| n.is_ascii_lowercase());
+            let starts_word = match prev {
+                Some(p) if p.is_ascii_lowercase() || p.is_ascii_digit() => true,
+                Some(p) if p.is_ascii_uppercase() => next_lower,
+                _ => false,
+            };
+            if starts_word {
+                out.push(' ');
+            }
+            out.push(c.to_ascii_lowercase());
+        } else if c == '(' {
+            out.push_str(": ");
+        } else if c == ')' {
+        } else {
+            out.push(c);
+        }
+        prev = c.is_ascii_alphanumeric().then_some(c);
+    }
+    out
 }
 
 /// `text` as one word for a POSIX shell: as it is when it holds only characters no shell
@@ -185,5 +226,45 @@ fn shell_quoted(text: &str) -> String {
         text.to_owned()
     } else {
         format!("'{}'", text.replace('\'', "'\\''"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use iceoryx2::port::notifier::NotifierCreateError;
+    use iceoryx2::port::{LoanError, SendError};
+
+    #[test]
+    fn an_iceoryx2_error_is_said_in_words_not_rust_names() {
+        // It showed `LoanError(OutOfMemory)` and `ExceedsMaxSupportedNotifiers` (a review).
+        let domain = Domain::unsecured("readable-errors").unwrap();
+        let e = ServiceError::io(
+            &domain,
+            "imu",
+            "send",
+            SendError::LoanError(LoanError::OutOfMemory),
+        );
+        assert_eq!(
+            e.to_string(),
+            "service \"imu\" in domain \"readable-errors\": send failed: loan error: out of memory"
+        );
+        let e = ServiceError::port(
+            &domain,
+            "imu",
+            "notifier",
+            NotifierCreateError::ExceedsMaxSupportedNotifiers,
+        );
+        assert_eq!(
+            e.to_string(),
+            "service \"imu\" in domain \"readable-errors\": cannot create notifier: exceeds max \
+             supported notifiers"
+        );
+        assert_eq!(
+            readable("X::UnableToGenerateUniqueNotifierId"),
+            "unable to generate unique notifier id"
+        );
+        assert_eq!(readable("IPCPortFailed2Open"), "ipc port failed2 open");
+        assert_eq!(readable("a plain message"), "a plain message");
     }
 }
