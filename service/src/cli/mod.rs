@@ -30,7 +30,7 @@ use std::process::ExitCode;
     name = "corridor",
     version,
     about = "Gyro-bias and attitude estimation for foot-mounted IMUs from map headings",
-    after_help = "Examples:\n  corridor demo\n  corridor run --imu imu.csv --config configs/gdins.toml --out out/run\n  corridor serve --config configs/service.toml --domain lab\n  corridor <COMMAND> --help\nExit code: 0 success, 1 error, 2 usage error, 3 no daemon answered (corridor status)."
+    after_help = "Examples:\n  corridor demo\n  corridor run --imu imu.csv --config configs/gdins.toml --out out/run\n  corridor serve --config configs/service.toml --domain lab\n  corridor <COMMAND> --help\nExit code: 0 success, 1 error, 2 usage error, 3 no daemon answered (corridor status); a command stopped by Ctrl-C (SIGTERM) while it talks to a daemon (status, demo) ends as the signal does: 130 (143) in a shell; serve stopped so exits with 0."
 )]
 struct Cli {
     #[command(subcommand)]

@@ -66,12 +66,13 @@ static INSTALLED: Once = Once::new();
 /// True once SIGINT or SIGTERM reached this process (after the latch was installed), or a
 /// reader recorded iceoryx2's termination request ([`record_termination`]).
 pub(crate) fn termination_seen() -> bool {
-    SEEN.load(Ordering::Relaxed)
+    // Acquire: a reader that sees the request sees the signal recorded before it.
+    SEEN.load(Ordering::Acquire)
 }
 
 /// Records a termination request seen another way (iceoryx2's report).
 pub(crate) fn record_termination() {
-    SEEN.store(true, Ordering::Relaxed);
+    SEEN.store(true, Ordering::Release);
 }
 
 /// The signal that asked this process to end: the first SIGINT or SIGTERM, SIGINT when only
@@ -196,7 +197,9 @@ extern "C" fn latch(signal: libc::c_int) {
     }
     if signal != libc::SIGTSTP {
         let _ = FIRST_SIGNAL.compare_exchange(0, signal, Ordering::Relaxed, Ordering::Relaxed);
-        SEEN.store(true, Ordering::Relaxed);
+        // Release: the signal is recorded before the request is seen (a review: a reader on a
+        // weakly ordered CPU could otherwise take a SIGTERM for a SIGINT).
+        SEEN.store(true, Ordering::Release);
     }
     // iceoryx2's handler, then the host program's from before the first node, if any.
     for handler in [
