@@ -279,13 +279,10 @@ fn a_reader_tool_without_a_daemon_says_so_as_status_does_and_a_bad_out_at_once()
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-#[test]
-fn no_daemon_is_exit_code_3_in_every_tool_a_usage_error_2_and_help_says_so() {
-    // As `corridor status`: they exited 1 for no daemon, as for any error, and status 2, as
-    // for a usage error.
-    let imu = short_log("nodaemon", 10);
-    let out = std::env::temp_dir().join(format!("corridor-nodaemon-{}", std::process::id()));
-    for (exe, args) in [
+/// The three stream tools with the arguments each needs besides its domain: the replay reads
+/// `imu`, the logger writes into `out`.
+fn stream_tools<'a>(imu: &'a Path, out: &'a Path) -> [(&'static str, Vec<&'a str>); 3] {
+    [
         (
             env!("CARGO_BIN_EXE_corridor-replay"),
             vec!["--imu", imu.to_str().unwrap()],
@@ -295,7 +292,16 @@ fn no_daemon_is_exit_code_3_in_every_tool_a_usage_error_2_and_help_says_so() {
             vec!["--out", out.to_str().unwrap()],
         ),
         (env!("CARGO_BIN_EXE_corridor-pdr"), vec![]),
-    ] {
+    ]
+}
+
+#[test]
+fn no_daemon_is_exit_code_3_in_every_tool_a_usage_error_2_and_help_says_so() {
+    // As `corridor status`: they exited 1 for no daemon, as for any error, and status 2, as
+    // for a usage error.
+    let imu = short_log("nodaemon", 10);
+    let out = std::env::temp_dir().join(format!("corridor-nodaemon-{}", std::process::id()));
+    for (exe, args) in stream_tools(&imu, &out) {
         let o = tool(
             exe,
             &[
@@ -468,17 +474,7 @@ fn ctrl_c_while_a_tool_waits_for_a_daemon_ends_it_as_ctrl_c_quietly() {
     // Ctrl-C does (a shell's $? 130), saying "interrupted".
     let imu = short_log("sigint", 10);
     let out = std::env::temp_dir().join(format!("corridor-sigint-{}", std::process::id()));
-    for (exe, args) in [
-        (
-            env!("CARGO_BIN_EXE_corridor-replay"),
-            vec!["--imu", imu.to_str().unwrap()],
-        ),
-        (
-            env!("CARGO_BIN_EXE_corridor-log"),
-            vec!["--out", out.to_str().unwrap()],
-        ),
-        (env!("CARGO_BIN_EXE_corridor-pdr"), vec![]),
-    ] {
+    for (exe, args) in stream_tools(&imu, &out) {
         let mut child = Command::new(exe)
             .args(["--domain", "eco_cli_sigint_nobody", "--wait-s", "60"])
             .args(&args)
