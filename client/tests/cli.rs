@@ -6,7 +6,7 @@ use corridor_shared::services::{Access, Delivery, Domain};
 use corridor_shared::wire::{ImuSample, NavSample};
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
-use std::os::unix::process::ExitStatusExt as _;
+use std::os::unix::process::{CommandExt as _, ExitStatusExt as _};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -475,13 +475,23 @@ fn ctrl_c_while_a_tool_waits_for_a_daemon_ends_it_as_ctrl_c_quietly() {
     let imu = short_log("sigint", 10);
     let out = std::env::temp_dir().join(format!("corridor-sigint-{}", std::process::id()));
     for (exe, args) in stream_tools(&imu, &out) {
-        let mut child = Command::new(exe)
-            .args(["--domain", "eco_cli_sigint_nobody", "--wait-s", "60"])
+        let mut cmd = Command::new(exe);
+        cmd.args(["--domain", "eco_cli_sigint_nobody", "--wait-s", "60"])
             .args(&args)
             .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
+            .stderr(Stdio::piped());
+        // As a terminal starts it: SIGINT at its default. Run from a script's background job
+        // (`cmd &`), the test inherits SIGINT ignored, and the tools keep ignoring what their
+        // starter ignored (signals.rs), so no latch ever came (the fresh-clone CI run, started
+        // with `setsid ... &`).
+        // SAFETY: signal(2) only, between fork and exec.
+        unsafe {
+            cmd.pre_exec(|| {
+                libc::signal(libc::SIGINT, libc::SIG_DFL);
+                Ok(())
+            });
+        }
+        let mut child = cmd.spawn().unwrap();
         let start = Instant::now();
         while !catches_sigint(child.id()) {
             assert!(start.elapsed() < Duration::from_secs(30), "{exe}: no latch");
