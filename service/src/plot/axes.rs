@@ -141,11 +141,17 @@ pub(super) fn equal_axes(
     (axis_exact(gx, step), axis_exact(gy, step))
 }
 
-/// Text for a tick value printed with the precision of `step`.
+/// Text for a tick value printed with the precision of `step`: the digits after the first
+/// that tell ticks `step` apart (a time axis of a log stamped in Unix seconds, 1.7e9 s ticked
+/// every 10 s, read "1.7e9" at every tick); large values ticked a whole unit or more apart in
+/// full ("1700000010").
 pub(super) fn tick_label(v: f64, step: f64) -> String {
     let decimals = (-step.log10() - 1e-9).ceil().max(0.0) as usize;
-    let s = if v != 0.0 && (v.abs() >= 1e6 || step < 1e-4) {
-        format!("{v:.1e}")
+    let digits = (v.abs().log10().floor() - (step.log10() + 1e-9).floor()).max(1.0) as usize;
+    let s = if v != 0.0 && v.abs() >= 1e6 && step >= 1.0 && digits > 1 {
+        format!("{v:.0}")
+    } else if v != 0.0 && (v.abs() >= 1e6 || step < 1e-4) {
+        format!("{v:.digits$e}")
     } else {
         format!("{v:.decimals$}")
     };

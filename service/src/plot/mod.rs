@@ -516,6 +516,33 @@ mod tests {
         assert_eq!(tick_label(2000.0, 500.0), "2000");
     }
 
+    /// A log stamped in Unix seconds (`t_s` from 1.7e9, which the reader takes): every time
+    /// tick of `corridor run --plots` and `corridor diagnose` read "1.7e9" (a review).
+    #[test]
+    fn ticks_of_large_values_a_small_step_apart_are_told_apart() {
+        for (lo, hi) in [
+            (1.7e9, 1.7e9 + 70.0),
+            (1.7e9, 1.7e9 + 0.8),
+            (2.0e6, 2.0e6 + 45.0),
+        ] {
+            let (ticks, step) = nice_ticks(lo, hi, 8);
+            let labels: Vec<String> = ticks.iter().map(|&t| tick_label(t, step)).collect();
+            for (t, l) in ticks.iter().zip(&labels) {
+                let back: f64 = l.parse().unwrap_or(f64::NAN);
+                assert!(
+                    (back - t).abs() < step * 0.01,
+                    "{t} labelled {l:?} (step {step})"
+                );
+            }
+            let mut distinct = labels.clone();
+            distinct.dedup();
+            assert_eq!(distinct.len(), labels.len(), "{labels:?}");
+        }
+        // Large values ticked coarsely keep their short form, small ones theirs.
+        assert_eq!(tick_label(2.0e9, 5.0e8), "2.0e9");
+        assert_eq!(tick_label(1.2e-4, 2.0e-5), "1.2e-4");
+    }
+
     #[test]
     fn decimation_keeps_extremes_and_gaps() {
         let n = 100_000;
