@@ -106,7 +106,8 @@ pub use ranking::{Candidate, Finding, score_by_likelihood};
 pub use report::write_report;
 pub use signature_fit::{HAC_LAGS, Row, SignatureFit, fit_signature};
 pub use stride_length::{
-    MAX_LEG_M, MIN_LEG_M, MIN_LEGS, OUTLIER_SD, StrideLength, StrideLine, stride_length,
+    LegKind, MAX_LEG_M, MIN_CORNER_LEGS, MIN_LEG_M, MIN_LEGS, OUTLIER_SD, StrideLength, StrideLine,
+    stride_length,
 };
 
 use crate::runner::RunError;

@@ -121,8 +121,10 @@ pub fn write_report(
                 .map_or(String::new(), |x| format!("; fix `{}`", x.label()))
         ),
         None => format!(
-            "\nStride length: not tested (no footprints, or fewer than {} surveyed single strides).\n",
-            super::MIN_LEGS
+            "\nStride length: not tested (no footprints, or fewer than {} surveyed single strides \
+             and fewer than {} surveyed legs).\n",
+            super::MIN_LEGS,
+            super::MIN_CORNER_LEGS
         ),
     });
     md.push_str("\n## Loop\n\n| step | effect added | fix | RMS before | RMS after | NIS before | NIS after | whiteness p before | after | kept |\n|---|---|---|---|---|---|---|---|---|---|\n");

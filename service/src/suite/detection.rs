@@ -294,7 +294,8 @@ pub struct MatrixCell {
     /// Effects the loop added and kept.
     pub added: Vec<String>,
     /// The stride-length finding on the cell's starting model (walks with at least
-    /// [`crate::diagnose::MIN_LEGS`] surveyed single strides): estimated / surveyed length, its
+    /// [`crate::diagnose::MIN_LEGS`] surveyed single strides, or
+    /// [`crate::diagnose::MIN_CORNER_LEGS`] surveyed legs): estimated / surveyed length, its
     /// score.
     pub stride_length: Option<StrideFigure>,
 }
@@ -308,6 +309,8 @@ pub struct StrideFigure {
     pub score: f64,
     /// The loop had a fix to try (the model had no rolling-foot stance update).
     pub fixable: bool,
+    /// Fitted on the legs between surveyed corners, not on single strides.
+    pub corner_legs: bool,
 }
 
 /// The whole matrix.
@@ -519,6 +522,7 @@ fn run_cell(
             ratio: l.fit.ratio,
             score: l.fit.score,
             fixable: l.finding.fix.is_some(),
+            corner_legs: l.fit.kind == crate::diagnose::LegKind::CornerLegs,
         }),
         added: report
             .iterations

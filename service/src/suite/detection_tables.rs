@@ -37,10 +37,13 @@ fn stride_markdown(m: &DetectionMatrix) -> String {
     format!(
         "\nStride length on the clean walks (estimated / surveyed leg length; position information, \
          tried after the heading effects, with the rolling-foot stance update as its fix): tested on {} of {} \
-         walks (the others have fewer than {} surveyed single strides), named on {}: {}.\n",
+         walks (on the surveyed single strides where there are {} or more, else on the legs between \
+         surveyed corners where there are {}; corner legs on {}), named on {}: {}.\n",
         tested.len(),
         clean.len(),
         crate::diagnose::MIN_LEGS,
+        crate::diagnose::MIN_CORNER_LEGS,
+        tested.iter().filter(|(_, s)| s.corner_legs).count(),
         named.len(),
         if named.is_empty() {
             "—".to_string()
