@@ -526,6 +526,30 @@ fn median_dt(log: &ImuLog) -> f64 {
     *d.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
+/// The final model in words: [`model_keys`] of `end`, and the settings the gyro rail's fix and
+/// the stride scale's change where they differ from `start`'s (a loop that kept them listed a
+/// final model without them, read as the starting one, a review).
+pub(super) fn final_model_words(start: &ConfigFile, end: &ConfigFile) -> Vec<String> {
+    let mut v = model_keys(end);
+    let mode = v.pop();
+    if let Some(r) = end
+        .sensor
+        .gyro_range_rad_s
+        .filter(|_| end.sensor.gyro_range_rad_s != start.sensor.gyro_range_rad_s)
+    {
+        v.push(format!("gyro_range = {r:.3} rad/s"));
+    }
+    if let Some(k) = end
+        .model
+        .accel_scale_factor
+        .filter(|_| end.model.accel_scale_factor != start.model.accel_scale_factor)
+    {
+        v.push(format!("accel_scale_factor = {:+.2} %", 100.0 * k));
+    }
+    v.extend(mode);
+    v
+}
+
 /// The extension keys switched on in `file`.
 fn model_keys(file: &ConfigFile) -> Vec<String> {
     let m = &file.model;

@@ -419,6 +419,32 @@ mod tests {
     }
 
     #[test]
+    fn every_fix_the_loop_keeps_shows_in_the_final_model() {
+        // `report.md`'s "final model" and `report.json`'s `final_model` list the model the loop
+        // ended with; a review found a kept gyro rail (`sensor.gyro_range_rad_s`) and a kept
+        // stride scale (`model.accel_scale_factor`) missing from it, the final model read as
+        // the starting one.
+        for f in Fix::ALL {
+            let mut file = ConfigFile::default();
+            file.estimator.mode = Some(if f == Fix::RotationAware {
+                Mode::Paper
+            } else {
+                Mode::Eskf
+            });
+            file.sensor.gyro_range_rad_s = Some(8.727);
+            let start = file.clone();
+            let before = super::super::analysis::final_model_words(&start, &file);
+            assert!(apply_fix(f, &mut file), "{f} applies to the default model");
+            let after = super::super::analysis::final_model_words(&start, &file);
+            assert_ne!(
+                after, before,
+                "{f} kept, the final model reads as the starting one"
+            );
+            assert_eq!(after.last().map(|m| m.starts_with("mode = ")), Some(true));
+        }
+    }
+
+    #[test]
     fn the_rail_fix_flags_the_rail_and_turns_the_clipping_model_on() {
         let rail = Fix::GyroRail { milli_rad_s: 5000 };
         let mut file = ConfigFile::default();

@@ -385,7 +385,7 @@ pub fn run_diagnosis(
         after: current.consistency.clone(),
         iterations,
         final_effects: current.effects.clone(),
-        final_model: current.model.clone(),
+        final_model: analysis::final_model_words(start, &file),
         final_estimates: current.estimates_in_words(),
     };
     Ok(Diagnosis {
