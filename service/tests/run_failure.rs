@@ -254,3 +254,38 @@ fn diagnose_refuses_a_log_that_never_aligned() {
     );
     assert!(!out.join("report").exists());
 }
+
+#[test]
+fn diagnose_says_which_footprints_lie_beyond_the_log() {
+    // The first half of exp36's log with all of its footprints: `corridor run` warns in
+    // `summary.json` that the footprints past the log's end were clamped to it; `corridor
+    // diagnose` scored them the same way and said nothing, its footprint RMS before and after
+    // (and the loop's kept/not kept) resting on positions the walk never reached (a review).
+    let out = TempDir::new("eco-diagnose-clamped");
+    let text = std::fs::read_to_string(exp36().join("imu.csv")).unwrap();
+    let n = text.lines().count();
+    let half = out.join("half.csv");
+    std::fs::write(
+        &half,
+        text.lines().take(n / 2).collect::<Vec<_>>().join("\n") + "\n",
+    )
+    .unwrap();
+    let truth = exp36().join("ground_truth.csv");
+    let o = diagnose(&half, Some(&truth), &out.join("report"));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let warning = "GCP time(s) outside the trajectory span, clamped";
+    let md = std::fs::read_to_string(out.join("report/report.md")).unwrap();
+    assert!(md.contains(&format!("Footprints: {warning}")), "{md}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report/report.json")).unwrap())
+            .unwrap();
+    assert!(
+        json["truth_warnings"][0]
+            .as_str()
+            .is_some_and(|w| w.starts_with(warning)),
+        "{}",
+        json["truth_warnings"]
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains(warning), "{err}");
+}

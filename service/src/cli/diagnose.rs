@@ -57,6 +57,11 @@ pub(super) fn diagnose(a: &DiagnoseArgs) -> Result<()> {
     if let Some(input) = &d.before.input {
         tracing::warn!("{}: {input}", imu.display());
     }
+    if let Some(path) = &a.truth {
+        for w in &d.report.truth_warnings {
+            tracing::warn!("{}: {w}", path.display());
+        }
+    }
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     corridor_service::diagnose::write_report(&a.out, &d.report, &d.before, &d.after)?;
     let report = std::fs::read_to_string(a.out.join("report.md"))?;

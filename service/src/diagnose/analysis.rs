@@ -132,6 +132,10 @@ pub struct Analysis {
     /// when they could not: [`super::judge_names`] refuses the diagnosis then.
     #[serde(skip)]
     pub truth_error: Option<crate::eval::EvalError>,
+    /// What the scoring of the footprints warned of (footprints outside the log's span,
+    /// clamped to its ends), as `corridor run`'s `summary.json` gives it.
+    #[serde(skip)]
+    pub truth_warnings: Vec<String>,
     /// What the input cost the run, when anything ([`crate::runner::RunOutcome::input_report`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub input: Option<String>,
@@ -375,6 +379,7 @@ pub fn analyse(
     let evaluated = truth.map(|t| outcome.trace.evaluate(t, &EvalOptions::default()));
     let truth_error = evaluated.as_ref().and_then(|r| r.as_ref().err().cloned());
     let eval = evaluated.and_then(Result::ok);
+    let truth_warnings = eval.as_ref().map_or_else(Vec::new, |e| e.warnings.clone());
     let used: Vec<&HeadingResidual> = res.iter().filter(|r| r.accepted).collect();
     let nis: Vec<f64> = used.iter().map(|r| r.r_rad * r.r_rad / r.s_rad2).collect();
     let z: Vec<f64> = used.iter().map(|r| r.r_rad / r.s_rad2.sqrt()).collect();
@@ -457,6 +462,7 @@ pub fn analyse(
     Ok(Analysis {
         model: model_keys(file),
         truth_error,
+        truth_warnings,
         input: outcome.input_report(log),
         consistency,
         effects,

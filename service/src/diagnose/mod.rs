@@ -165,6 +165,10 @@ pub struct Report {
     /// The stride length against the footprints (with truth only), on the model the heading
     /// effects left: the line the loop's last step acted on.
     pub stride_length: Option<StrideLine>,
+    /// What the scoring of the footprints warned of (e.g. footprints outside the log's span,
+    /// clamped to its ends: the footprint RMS before and after counts them).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub truth_warnings: Vec<String>,
     /// The starting model.
     pub before: Consistency,
     /// The final model.
@@ -380,6 +384,7 @@ pub fn run_diagnosis(
         onset: first.onset,
         bias_change: first.bias_change.clone(),
         stride_length: stride_line,
+        truth_warnings: first.truth_warnings.clone(),
         effects: first.effects.clone(),
         before: first.consistency.clone(),
         after: current.consistency.clone(),

@@ -151,6 +151,11 @@ pub fn write_report(
             }
         ));
     }
+    for w in &report.truth_warnings {
+        md.push_str(&format!(
+            "\nFootprints: {w} (the footprint RMS before and after counts them).\n"
+        ));
+    }
     md.push_str(&format!(
         "\nBefore: {} ; after: {} ; final model: {}.\n",
         describe(&report.before),
