@@ -154,6 +154,10 @@ pub struct Report {
     /// The verdict in words: the top effect, or what the walk could have shown (the detectable
     /// sizes) and what it cannot show.
     pub verdict: String,
+    /// When the top effect's score is the signature fit of a variant this walk cannot show:
+    /// that, in words ([`power::named_but_cannot_show`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub verdict_caveat: Option<String>,
     /// The power of the walk on the starting model, per effect variant.
     pub power: Vec<Power>,
     /// The bias change that came with the onset of walking, on the starting model, with its
@@ -380,6 +384,7 @@ pub fn run_diagnosis(
         } else {
             String::new()
         },
+        verdict_caveat: top.and_then(|e| power::named_but_cannot_show(&first.power, e)),
         power: first.power.clone(),
         onset: first.onset,
         bias_change: first.bias_change.clone(),

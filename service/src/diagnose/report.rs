@@ -54,6 +54,9 @@ pub fn write_report(
         "Top effect on the starting model: **{}**.\n\n",
         report.verdict
     ));
+    if let Some(c) = &report.verdict_caveat {
+        md.push_str(&format!("But {c}.\n\n"));
+    }
     md.push_str("## Effects on the starting model (score = −log₁₀ p; significant from 3)\n\n| effect | score | detectable size on this walk | evidence | fix |\n|---|---|---|---|---|\n");
     for e in &report.effects {
         let variants: Vec<String> = report

@@ -590,6 +590,26 @@ pub fn apply_power(effects: &mut Vec<Finding>, power: &[Power], score: bool) {
     effects.sort_by(|a, b| b.score.total_cmp(&a.score));
 }
 
+/// The caveat for a `named` effect whose score is the signature fit of a variant this walk
+/// cannot show (its detectable size is beyond any plausible one, or its probe injection barely
+/// moves the residuals): the report named it and said, a column further, that the walk cannot
+/// show it (a review: exp38's clean walk named a z scale at 7.2 whose probe moved the residuals
+/// by −53 % of its signature).
+pub fn named_but_cannot_show(power: &[Power], named: &Finding) -> Option<String> {
+    power
+        .iter()
+        .filter(|p| p.effect == named.name && p.score == named.score)
+        .find_map(|p| {
+            p.cannot.as_ref().map(|why| {
+                format!(
+                    "this walk cannot show {} ({why}): the score {:.1} is its signature \
+                     fit's, which no size the walk can show confirms",
+                    p.variant, p.score
+                )
+            })
+        })
+}
+
 /// The verdict when nothing is significant: the detectable sizes of the effects the walk can
 /// show, and the ones it cannot with the reason (the bias-change test's step and ramp where it
 /// applies to the model: `bias_change_applies`).

@@ -134,3 +134,43 @@ fn a_degenerate_fit_scores_nothing_and_says_why() {
     assert!(p.score >= SIGNIFICANT && p.cannot.is_none(), "{p:?}");
     assert!((p.estimate - 0.03).abs() < 0.005, "{p:?}");
 }
+
+#[test]
+fn a_name_whose_variant_the_walk_cannot_show_says_so() {
+    let power = |variant, score, cannot: Option<&str>| Power {
+        effect: Effect::GyroScaleFactor,
+        variant,
+        unit: "fraction",
+        estimate: 0.01,
+        std_err: 0.002,
+        score,
+        mde: cannot.is_none().then_some(0.02),
+        cannot: cannot.map(str::to_string),
+        residuals: 120,
+        response: Some(-0.53),
+        mde_signature: Some(0.018),
+        indistinguishable_from: Vec::new(),
+    };
+    let named = |score| Finding {
+        name: Effect::GyroScaleFactor,
+        score,
+        evidence: String::new(),
+        fix: None,
+        mde: None,
+    };
+    let why =
+        "the model absorbs it: an injected 5.00 % moves the residuals by -53 % of its signature";
+    let p = [power("z scale", 7.2, Some(why))];
+    let caveat = named_but_cannot_show(&p, &named(7.2)).expect("a caveat");
+    assert!(
+        caveat.starts_with(&format!(
+            "this walk cannot show z scale ({why}): the score 7.2"
+        )),
+        "{caveat}"
+    );
+    // a variant the walk can show, or a score that is not the signature's: no caveat
+    let p = [power("z scale", 7.2, None)];
+    assert_eq!(named_but_cannot_show(&p, &named(7.2)), None);
+    let p = [power("z scale", 2.0, Some(why))];
+    assert_eq!(named_but_cannot_show(&p, &named(7.2)), None);
+}
