@@ -63,16 +63,13 @@ pub fn write_report(
             .power
             .iter()
             .filter(|p| p.effect == e.name)
-            .map(|p| match p.mde {
-                Some(m) => format!("{} ≥ {}", p.variant, p.format_size(m)),
-                None => format!("{}: cannot show", p.variant),
-            })
+            .map(|p| variant_words(p, &e.evidence))
             .chain(
                 report
                     .onset
                     .and_then(|o| o.mde)
                     .filter(|_| e.name == Effect::GSensitivity)
-                    .map(|m| format!("at the onset of walking ≥ {m:.2e} rad/s per m/s²")),
+                    .map(onset_words),
             )
             .collect();
         let detectable = if !variants.is_empty() {
@@ -183,6 +180,37 @@ pub fn write_report(
     Ok(())
 }
 
+/// A variant's detectable size in the table, or that the walk cannot show it and why (the
+/// reason the probe injection gave was in `report.json` only: the table said "cannot show"
+/// beside evidence that said "detectable from …", a review), unless `evidence` says it.
+fn variant_words(p: &super::Power, evidence: &str) -> String {
+    match (p.mde, &p.cannot) {
+        (Some(m), _) => format!("{} ≥ {}", p.variant, p.format_size(m)),
+        (None, Some(why)) if !evidence.contains(why.as_str()) => {
+            format!("{}: cannot show ({why})", p.variant)
+        }
+        (None, _) => format!("{}: cannot show", p.variant),
+    }
+}
+
+/// The onset test's detectable g-sensitivity in the table; beyond any plausible one the walk
+/// cannot show it there, as the verdict says (the table gave `≥ 6.59e0 rad/s per m/s²` on a
+/// clipped exp25, a review).
+fn onset_words(m: f64) -> String {
+    let max = super::REFERENCES
+        .iter()
+        .find(|r| r.effect == Effect::GSensitivity)
+        .map_or(f64::INFINITY, |r| r.plausible_max);
+    if m <= max {
+        format!("at the onset of walking ≥ {m:.2e} rad/s per m/s²")
+    } else {
+        format!(
+            "at the onset of walking: cannot show (the smallest size it shows would be {m:.2e} \
+             rad/s per m/s², beyond any plausible {max:.2e})"
+        )
+    }
+}
+
 fn describe(c: &Consistency) -> String {
     format!(
         "footprint RMS {}, NIS {:.2} (band {:.2}–{:.2}), whiteness p {:.2}, bias ({:.5}, {:.5}, {:.5}) ± ({:.1e}, {:.1e}, {:.1e}) rad/s",
@@ -198,4 +226,55 @@ fn describe(c: &Consistency) -> String {
         c.bias_sd_rad_s[1],
         c.bias_sd_rad_s[2]
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_table_says_why_a_walk_cannot_show_a_variant_and_an_onset_size() {
+        let why =
+            "the model absorbs it: an injected 5.00 % moves the residuals by -1 % of its signature";
+        let p = super::super::Power {
+            effect: Effect::GyroScaleFactor,
+            variant: "z scale",
+            unit: "fraction",
+            estimate: -0.018,
+            std_err: 0.006,
+            score: 2.4,
+            mde: None,
+            cannot: Some(why.into()),
+            residuals: 110,
+            response: Some(-0.013),
+            mde_signature: Some(0.0206),
+            indistinguishable_from: Vec::new(),
+        };
+        let evidence = "z scale: signature fit -1.81 % ± 0.62 %, detectable from 2.06 % if the \
+                        residuals follow the signature";
+        assert_eq!(
+            variant_words(&p, evidence),
+            format!("z scale: cannot show ({why})")
+        );
+        // said once: a reason the evidence gives already is not repeated
+        assert_eq!(
+            variant_words(&p, &format!("{evidence}; this walk cannot show it: {why}")),
+            "z scale: cannot show"
+        );
+        let shown = super::super::Power {
+            mde: Some(0.0263),
+            cannot: None,
+            ..p
+        };
+        assert_eq!(variant_words(&shown, evidence), "z scale ≥ 2.63 %");
+        assert_eq!(
+            onset_words(5.86e-3),
+            "at the onset of walking ≥ 5.86e-3 rad/s per m/s²"
+        );
+        assert!(
+            onset_words(6.59).starts_with("at the onset of walking: cannot show"),
+            "{}",
+            onset_words(6.59)
+        );
+    }
 }
