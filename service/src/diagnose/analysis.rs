@@ -148,6 +148,9 @@ pub struct Analysis {
     /// Final cross-couplings into the sensor z axis (from x, from y), rad, with their σ, when
     /// the model estimates them.
     pub coupling_z_rad: Option<[[f64; 2]; 2]>,
+    /// Final g-sensitivity per sensor axis, rad/s per m/s², with its σ, when the model
+    /// estimates it.
+    pub g_sensitivity: Option<[[f64; 2]; 3]>,
     /// The stride scale against the footprints (with truth only).
     pub stride_length: Option<super::StrideLength>,
     /// The residuals (for plots and the report).
@@ -459,6 +462,10 @@ pub fn analyse(
         sd.coupling_z_rad
             .map(|sd| std::array::from_fn(|k| [x.coupling_z_rad[k], sd[k]]))
     });
+    let g_sensitivity = outcome.extensions.and_then(|(x, sd)| {
+        sd.g_sensitivity
+            .map(|sd| std::array::from_fn(|k| [x.g_sensitivity[k], sd[k]]))
+    });
     Ok(Analysis {
         model: model_keys(file),
         truth_error,
@@ -468,6 +475,7 @@ pub fn analyse(
         effects,
         scale_factor,
         coupling_z_rad,
+        g_sensitivity,
         stride_length: truth.and_then(|t| super::stride_length(&outcome.trace, t)),
         residuals: res,
         stances,
@@ -507,6 +515,14 @@ impl Analysis {
                     "z←{from} coupling {:+.2}° ± {:.2}°",
                     c.to_degrees(),
                     sd.to_degrees()
+                ));
+            }
+        }
+        // (a kept g-sensitivity was reported with no estimate, a review)
+        if let Some(g) = self.g_sensitivity {
+            for (axis, [k, sd]) in ["x", "y", "z"].iter().zip(g) {
+                v.push(format!(
+                    "{axis} g-sensitivity {k:+.2e} ± {sd:.2e} rad/s per m/s²"
                 ));
             }
         }

@@ -189,7 +189,15 @@ impl Eskf {
         ExtensionSd {
             scale_factor: self.scale_factor_sd(),
             coupling_z_rad: self.coupling_z_sd(),
+            g_sensitivity: self.g_sensitivity_sd(),
         }
+    }
+
+    /// σ of the g-sensitivity states, rad/s per m/s², when enabled.
+    pub fn g_sensitivity_sd(&self) -> Option<Vector3<f64>> {
+        self.layout
+            .gsens
+            .map(|i| Vector3::from_fn(|k, _| self.p[ix(i + k, i + k)].max(0.0).sqrt()))
     }
 
     /// σ of the cross-coupling states `[m_zx, m_zy]`, rad, when enabled.

@@ -210,6 +210,8 @@ pub struct ExtensionSd {
     pub scale_factor: Option<Vector3<f64>>,
     /// Cross-coupling into the body z axis `[m_zx, m_zy]`, rad.
     pub coupling_z_rad: Option<[f64; 2]>,
+    /// g-sensitivity per body axis, rad/s per m/s².
+    pub g_sensitivity: Option<Vector3<f64>>,
 }
 
 /// The filter.

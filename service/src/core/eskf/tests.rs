@@ -589,6 +589,11 @@ fn g_sensitivity_state_converges_on_a_tumbling_body() {
         "{}",
         f.ext.g_sensitivity
     );
+    // its σ is reported with it (the diagnosis's final estimates), as the other states' are
+    let sd = f.extension_sd().g_sensitivity.expect("the states are on");
+    assert!(sd.z > 0.0 && sd.z < 0.2 * k_true.z, "{sd}");
+    let plain = level_filter(1e-4, Extensions::default());
+    assert_eq!(plain.extension_sd().g_sensitivity, None);
 }
 
 #[test]
