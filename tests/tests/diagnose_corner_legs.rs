@@ -5,11 +5,9 @@
 //! walks had no stride-length line at all.
 
 use corridor_service::diagnose::{Effect, Fix, LegKind, SIGNIFICANT, run_diagnosis};
-use corridor_shared::injection::LogInjection;
-use corridor_shared::truth_csv::TruthPoint;
 
 mod diagnose_common;
-use diagnose_common::{config, load, run};
+use diagnose_common::{clocked, config, load, run};
 
 /// exp28 is surveyed at its nine corners (8 legs of 6-65 m). Under the diagnosis's model (a plain
 /// zero-velocity update) its legs come out about 3 % short, the short strides of the walks
@@ -59,17 +57,7 @@ fn a_clock_error_on_a_walk_surveyed_at_its_corners_is_told_by_the_legs_it_stretc
     let (log, truth) = load("gdins_exp26_narrow_out_and_back");
     let mut cfg = config(0.0, false);
     cfg.eskf.zupt_rolling_height_m = Some(0.08);
-    let clock = LogInjection::ClockRate { fraction: 0.03 };
-    let t0 = log.rows[0].t_s;
-    let mut injected = log.clone();
-    clock.apply(&mut injected.rows);
-    let truth: Vec<TruthPoint> = truth
-        .iter()
-        .map(|p| TruthPoint {
-            t_s: clock.map_time(t0, p.t_s),
-            ..*p
-        })
-        .collect();
+    let (injected, truth) = clocked(&log, &truth, 0.03);
     let with = run(&injected, &truth, &cfg);
     let stride = with.stride_length.as_ref().expect("footprints given");
     assert_eq!(stride.fit.kind, LegKind::CornerLegs, "{stride:?}");

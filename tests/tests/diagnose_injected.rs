@@ -14,7 +14,7 @@ use corridor_shared::injection::{BiasInjection, LogInjection};
 use corridor_shared::truth_csv::TruthPoint;
 
 mod diagnose_common;
-use diagnose_common::{config, load, run};
+use diagnose_common::{clocked, config, load, run};
 
 /// A model that declares a nearly constant bias (random walk 1e-5 rad/s/√s): the bias tests
 /// inject drifts it does not declare.
@@ -340,17 +340,7 @@ fn a_one_percent_clock_error_is_told_from_a_scale_factor_by_the_strides_it_stret
     let (log, truth) = load("gdins_exp37_spiral_and_corridor");
     let mut cfg = config(0.0, false);
     cfg.eskf.zupt_rolling_height_m = Some(0.08);
-    let clock = LogInjection::ClockRate { fraction: 0.01 };
-    let t0 = log.rows[0].t_s;
-    let mut injected = log.clone();
-    clock.apply(&mut injected.rows);
-    let truth: Vec<TruthPoint> = truth
-        .iter()
-        .map(|p| TruthPoint {
-            t_s: clock.map_time(t0, p.t_s),
-            ..*p
-        })
-        .collect();
+    let (injected, truth) = clocked(&log, &truth, 0.01);
     let with = run(&injected, &truth, &cfg);
     assert_eq!(with.top_effect, "timing", "{:#?}", with.effects);
     let timing = &with.effects[0];

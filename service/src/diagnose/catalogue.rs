@@ -393,15 +393,22 @@ mod tests {
         }
     }
 
+    /// The default model in the mode `f` applies to (the rotation-aware bias filter is the
+    /// paper mode's).
+    fn model_for(f: Fix) -> ConfigFile {
+        let mut file = ConfigFile::default();
+        file.estimator.mode = Some(if f == Fix::RotationAware {
+            Mode::Paper
+        } else {
+            Mode::Eskf
+        });
+        file
+    }
+
     #[test]
     fn every_fix_applies_once_then_reports_already_in_the_model() {
         for f in Fix::ALL {
-            let mut file = ConfigFile::default();
-            file.estimator.mode = Some(if f == Fix::RotationAware {
-                Mode::Paper
-            } else {
-                Mode::Eskf
-            });
+            let mut file = model_for(f);
             let before = format!("{file:?}");
             assert!(apply_fix(f, &mut file), "{f} applies to the default model");
             assert_ne!(format!("{file:?}"), before, "{f} changed nothing");
@@ -425,12 +432,7 @@ mod tests {
         // stride scale (`model.accel_scale_factor`) missing from it, the final model read as
         // the starting one.
         for f in Fix::ALL {
-            let mut file = ConfigFile::default();
-            file.estimator.mode = Some(if f == Fix::RotationAware {
-                Mode::Paper
-            } else {
-                Mode::Eskf
-            });
+            let mut file = model_for(f);
             file.sensor.gyro_range_rad_s = Some(8.727);
             let start = file.clone();
             let before = super::super::analysis::final_model_words(&start, &file);

@@ -5,6 +5,7 @@
 use corridor_service::diagnose::{Report, run_diagnosis};
 use corridor_shared::config::{ConfigFile, ConfigOverrides, HeadingObservations};
 use corridor_shared::imu_csv::{ImuCsvOptions, ImuLog, read_imu_csv};
+use corridor_shared::injection::LogInjection;
 use corridor_shared::truth_csv::{TruthPoint, read_truth_csv};
 use std::path::{Path, PathBuf};
 
@@ -74,4 +75,20 @@ pub fn run(log: &ImuLog, truth: &[TruthPoint], cfg: &ConfigFile) -> Report {
         );
     }
     report
+}
+
+/// The walk with its clock running `fraction` fast, and its footprints' times on that clock.
+pub fn clocked(log: &ImuLog, truth: &[TruthPoint], fraction: f64) -> (ImuLog, Vec<TruthPoint>) {
+    let clock = LogInjection::ClockRate { fraction };
+    let t0 = log.rows[0].t_s;
+    let mut injected = log.clone();
+    clock.apply(&mut injected.rows);
+    let truth = truth
+        .iter()
+        .map(|p| TruthPoint {
+            t_s: clock.map_time(t0, p.t_s),
+            ..*p
+        })
+        .collect();
+    (injected, truth)
 }
