@@ -131,16 +131,16 @@ pub fn write_report(
     let rms = |c: &Consistency| c.gcp_rms_m.map_or("—".into(), |v| format!("{v:.2} m"));
     for (i, it) in report.iterations.iter().enumerate() {
         md.push_str(&format!(
-            "| {} | {} | `{}` | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {} |\n",
+            "| {} | {} | `{}` | {} | {} | {} | {} | {} | {} | {} |\n",
             i + 1,
             it.effect,
             it.fix,
             rms(&it.before),
             rms(&it.after),
-            it.before.nis_mean,
-            it.after.nis_mean,
-            it.before.whiteness_p,
-            it.after.whiteness_p,
+            figure(it.before.nis_mean),
+            figure(it.after.nis_mean),
+            figure(it.before.whiteness_p),
+            figure(it.after.whiteness_p),
             match (it.kept, it.held_out_rms_m) {
                 (k, Some([b, a])) => format!(
                     "{} (fitted on the first half of the footprints; the second half {b:.2} → {a:.2} m)",
@@ -211,14 +211,31 @@ fn onset_words(m: f64) -> String {
     }
 }
 
+/// A consistency figure with two decimals, or `—` where there is none (no heading observation
+/// used: the NIS and the whiteness of nothing were printed as `NaN`, a review).
+fn figure(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.2}")
+    } else {
+        "—".into()
+    }
+}
+
 fn describe(c: &Consistency) -> String {
+    let heading = if c.observations == 0 || !c.nis_mean.is_finite() {
+        "no heading observation used (no NIS, no whiteness)".to_string()
+    } else {
+        format!(
+            "NIS {:.2} (band {:.2}–{:.2}), whiteness p {}",
+            c.nis_mean,
+            c.nis_band[0],
+            c.nis_band[1],
+            figure(c.whiteness_p)
+        )
+    };
     format!(
-        "footprint RMS {}, NIS {:.2} (band {:.2}–{:.2}), whiteness p {:.2}, bias ({:.5}, {:.5}, {:.5}) ± ({:.1e}, {:.1e}, {:.1e}) rad/s",
+        "footprint RMS {}, {heading}, bias ({:.5}, {:.5}, {:.5}) ± ({:.1e}, {:.1e}, {:.1e}) rad/s",
         c.gcp_rms_m.map_or("n/a".into(), |v| format!("{v:.2} m")),
-        c.nis_mean,
-        c.nis_band[0],
-        c.nis_band[1],
-        c.whiteness_p,
         c.bias_rad_s[0],
         c.bias_rad_s[1],
         c.bias_rad_s[2],
@@ -231,6 +248,39 @@ fn describe(c: &Consistency) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_model_that_used_no_heading_observation_says_so_not_nan() {
+        // exp17 with a 2e-2 g-sensitivity, exp37 clipped: "NIS NaN (band NaN–NaN), whiteness
+        // p NaN" (a review).
+        let mut c = Consistency {
+            gcp_rms_m: Some(1.25),
+            gcp_rms_pct: Some(3.9),
+            nis_mean: f64::NAN,
+            nis_band: [f64::NAN; 2],
+            whiteness_p: f64::NAN,
+            whiteness_fraction_outside: f64::NAN,
+            observations: 0,
+            rss_rad2: 0.0,
+            nis_too_large: false,
+            nis_p: f64::NAN,
+            bias_rad_s: [1e-3, -2e-3, 3e-3],
+            bias_sd_rad_s: [1e-4; 3],
+        };
+        let text = describe(&c);
+        assert!(!text.contains("NaN"), "{text}");
+        assert!(text.contains("no heading observation used"), "{text}");
+        assert_eq!(figure(f64::NAN), "—");
+        c.observations = 12;
+        c.nis_mean = 0.8;
+        c.nis_band = [0.4, 1.8];
+        c.whiteness_p = 0.35;
+        let text = describe(&c);
+        assert!(
+            text.contains("NIS 0.80 (band 0.40–1.80), whiteness p 0.35"),
+            "{text}"
+        );
+    }
 
     #[test]
     fn the_table_says_why_a_walk_cannot_show_a_variant_and_an_onset_size() {
