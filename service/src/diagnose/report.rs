@@ -109,6 +109,7 @@ pub fn write_report(
             e.fix.map_or("—", Fix::label)
         ));
     }
+    md.push_str(&unlisted_sizes(&report.power, &report.effects));
     md.push_str(&match &report.stride_length {
         Some(super::StrideLine { fit, finding: f }) => format!(
             "\nStride length against the footprints (position information, on the model the heading \
@@ -190,6 +191,26 @@ fn variant_words(p: &super::Power, evidence: &str) -> String {
             format!("{}: cannot show ({why})", p.variant)
         }
         (None, _) => format!("{}: cannot show", p.variant),
+    }
+}
+
+/// The detectable sizes of the measured variants whose effect has no row in the effects table
+/// (no finding of its own on this walk), as a line after it: where the residual regression gave
+/// no `timing` finding, the clock rate's size was in `report.json` only (a review: exp34 clipped).
+fn unlisted_sizes(power: &[super::Power], effects: &[super::Finding]) -> String {
+    let sizes: Vec<String> = power
+        .iter()
+        .filter(|p| !effects.iter().any(|e| e.name == p.effect))
+        .map(|p| variant_words(p, ""))
+        .collect();
+    if sizes.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "\nDetectable sizes of the effects without a row above (no finding of their own on \
+             this walk): {}.\n",
+            sizes.join("; ")
+        )
     }
 }
 
@@ -314,7 +335,7 @@ mod tests {
         let shown = super::super::Power {
             mde: Some(0.0263),
             cannot: None,
-            ..p
+            ..p.clone()
         };
         assert_eq!(variant_words(&shown, evidence), "z scale ≥ 2.63 %");
         assert_eq!(
@@ -326,5 +347,24 @@ mod tests {
             "{}",
             onset_words(6.59)
         );
+        // A variant whose effect has no finding (no `timing` row): its size after the table.
+        let clock = super::super::Power {
+            effect: Effect::Timing,
+            variant: "clock rate",
+            mde: Some(0.0125),
+            cannot: None,
+            ..p.clone()
+        };
+        let sf = super::super::Finding {
+            name: Effect::GyroScaleFactor,
+            score: 4.0,
+            evidence: evidence.into(),
+            fix: None,
+            mde: None,
+        };
+        let line = unlisted_sizes(&[p.clone(), clock.clone()], std::slice::from_ref(&sf));
+        assert!(line.contains(": clock rate ≥ 1.25 %."), "{line}");
+        assert!(!line.contains("z scale"), "{line}");
+        assert_eq!(unlisted_sizes(&[p, clock], &[]).matches("≥").count(), 1);
     }
 }
