@@ -216,7 +216,9 @@ fn improved(before: &Consistency, after: &Consistency) -> bool {
 
 /// The stride scale of `file`'s run fitted on the first half of the footprints (by time), and
 /// the footprint RMS of the second half alone without and with it taken out, m; `None` when the
-/// first half has too few single strides to fit or the second half cannot be scored.
+/// first half has too few legs to fit (fewer than [`MIN_LEGS`] single strides and fewer than
+/// [`MIN_CORNER_LEGS`] legs after the outlier rule: a walk surveyed at its four or five corners
+/// never has enough) or the second half cannot be scored.
 fn stride_scale_out_of_sample(
     log: &ImuLog,
     file: &ConfigFile,
@@ -318,7 +320,7 @@ pub fn run_diagnosis(
     // Then the stride length, which only the footprints show: its fix changes the navigation
     // filter, so it comes after the heading effects were judged on the model they were built on
     // (and last: the heading effects are not tried again on the fixed model).
-    let stride_line = current.stride_line(&file);
+    let mut stride_line = current.stride_line(&file);
     if let Some(top) = stride_line
         .as_ref()
         .map(|l| &l.finding)
@@ -333,7 +335,16 @@ pub fn run_diagnosis(
             (Some(Fix::StrideScale { .. }), Some(t)) => {
                 match stride_scale_out_of_sample(log, &file, t, map)? {
                     Some((fix, rms)) => (Some(fix), Some(rms)),
-                    None => (None, None),
+                    None => {
+                        // Not tried, and said so: the line offers the fix, the loop has no step.
+                        if let Some(l) = stride_line.as_mut() {
+                            l.finding.evidence.push_str(
+                                "; the scale fix is not tried: the first half of the footprints, \
+                                 which it would be fitted on, has too few legs to fit it",
+                            );
+                        }
+                        (None, None)
+                    }
                 }
             }
             (fix, _) => (fix, None),
