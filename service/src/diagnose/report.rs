@@ -123,7 +123,7 @@ pub fn write_report(
         ),
         None => format!(
             "\nStride length: not tested (no footprints, or fewer than {} surveyed single strides \
-             and fewer than {} surveyed legs).\n",
+             and fewer than {} surveyed legs, counted after the outlier rule).\n",
             super::MIN_LEGS,
             super::MIN_CORNER_LEGS
         ),
