@@ -5,6 +5,7 @@
 //! walks had no stride-length line at all.
 
 use corridor_service::diagnose::{Effect, Fix, LegKind, SIGNIFICANT, run_diagnosis};
+use corridor_shared::injection::LogInjection;
 
 mod diagnose_common;
 use diagnose_common::{clocked, config, load, run};
@@ -50,8 +51,9 @@ fn a_walk_surveyed_at_its_corners_shows_its_short_strides_and_the_loop_fixes_the
 /// A clock 3 % fast on exp26 (surveyed at its five corners: 4 legs) stretches every angle by 3 %
 /// and every leg by about 6 %. From the heading residuals alone it is a z scale factor (the
 /// horizontal gyro axes are barely measured); with the legs it is named `timing`. The model has
-/// the rolling-foot stance update, as the clean walk's loop now ends with (before, this walk
-/// had no stride-length line, and the detection matrix named a scale factor here).
+/// the rolling-foot stance update (the matrix's cell starts from the clean walk's model, which
+/// does not have it on exp26: its four legs show the plain update's short strides at score 2.9
+/// only, so there a scale factor is still named).
 #[test]
 fn a_clock_error_on_a_walk_surveyed_at_its_corners_is_told_by_the_legs_it_stretches() {
     let (log, truth) = load("gdins_exp26_narrow_out_and_back");

@@ -2,8 +2,9 @@
 //!
 //! When footprints are given, every surveyed leg (footprint i − 1 → i) has a length the run
 //! estimates (its positions at the two footprint times) and one the survey measured. A stride
-//! scale `k` makes `L̂ = k·L`: the least-squares `k̂ = Σ L̂·L / Σ L²` over the legs, its standard
-//! error from the scatter about that line (n − 1 degrees of freedom), `−log₁₀` of the two-sided
+//! scale `k` makes `L̂ = k·L`: the least-squares `k̂ = Σ w·L̂·L / Σ w·L²` over the legs (equal
+//! weights for single strides; a corner leg's weight falls with its length, [`weight`]), its
+//! standard error from the weighted scatter about that line (n − 1 degrees of freedom), `−log₁₀` of the two-sided
 //! Student-t p of `(k̂ − 1)/se` as the score and `t·se` as the detectable size, `t` the quantile
 //! of p = 10⁻³ (3.29, [`MDE_Z`], for many legs; 5.4 for eight), as for the other effects.
 //! Consecutive legs share a footprint, so a position error at one shortens one leg and
@@ -16,8 +17,9 @@
 //! the legs from [`MIN_LEG_M`] up make the fit when they are at least [`MIN_CORNER_LEGS`]
 //! ([`LegKind`]): a corridor leg's chord is the walked length to within a few hundredths of a
 //! percent (a heading that wanders by 3° along it shortens the chord by 0.04 %), and each leg
-//! averages the strides' scatter. Either way a leg whose ratio lies more than [`OUTLIER_SD`] robust
-//! σ from the median is left out: a footprint the survey placed wrong (exp31's leg 31 measures
+//! averages the strides' scatter. Either way a leg that lies more than [`OUTLIER_SD`] robust σ
+//! from the median scale (its ratio's deviation for single strides; for corner legs its misfit in
+//! metres over its own σ, [`weight`]) is left out: a footprint the survey placed wrong (exp31's leg 31 measures
 //! 0.57 of its surveyed length in every model, a leg its data set's own check flags; exp29's
 //! start footprint, a floor tile from where the walker stood, makes its first corridor 7 %
 //! short) would otherwise decide the fit.
@@ -159,21 +161,30 @@ fn fit(legs: &[(f64, f64)], kind: LegKind) -> Option<StrideLength> {
     }
     let mut ratios: Vec<f64> = legs.iter().map(|(e, s)| e / s).collect();
     let median = crate::stats::median(&mut ratios);
-    let mut dev: Vec<f64> = ratios.iter().map(|r| (r - median).abs()).collect();
+    // Each leg's deviation from the median scale, in units of its own σ (up to a common factor).
+    let deviation = |&(e, s): &(f64, f64)| match kind {
+        LegKind::SingleStrides => e / s - median,
+        LegKind::CornerLegs => (e - median * s) * weight(kind, s).sqrt(),
+    };
+    let mut dev: Vec<f64> = legs.iter().map(|l| deviation(l).abs()).collect();
     let mad = crate::stats::median(&mut dev);
     let limit = OUTLIER_SD * 1.4826 * mad;
     let kept: Vec<(f64, f64)> = legs
         .iter()
         .copied()
-        .filter(|(e, s)| mad == 0.0 || (e / s - median).abs() <= limit)
+        .filter(|l| mad == 0.0 || deviation(l).abs() <= limit)
         .collect();
     let n = kept.len();
     if n < min {
         return None;
     }
-    let sxx: f64 = kept.iter().map(|(_, s)| s * s).sum();
-    let ratio = kept.iter().map(|(e, s)| e * s).sum::<f64>() / sxx;
-    let rss: f64 = kept.iter().map(|(e, s)| (e - ratio * s).powi(2)).sum();
+    let w = |s: f64| weight(kind, s);
+    let sxx: f64 = kept.iter().map(|&(_, s)| w(s) * s * s).sum();
+    let ratio = kept.iter().map(|&(e, s)| w(s) * e * s).sum::<f64>() / sxx;
+    let rss: f64 = kept
+        .iter()
+        .map(|&(e, s)| w(s) * (e - ratio * s).powi(2))
+        .sum();
     let std_err = (rss / (n - 1) as f64 / sxx).sqrt();
     let df = (n - 1) as f64;
     let p = student_t_two_sided_p((ratio - 1.0) / std_err, df);
@@ -191,6 +202,28 @@ fn fit(legs: &[(f64, f64)], kind: LegKind) -> Option<StrideLength> {
         mde: t_critical(df) * std_err,
     })
 }
+
+/// The weight of a leg `surveyed_m` long in the fit, the inverse of its length error's variance up
+/// to a common factor. Single strides are all about one stride long: equal weights. A corner leg's
+/// error has a part from its two end footprints (where the foot stood and where the survey put it,
+/// as for one stride) and a part the filter's position error builds stride by stride along it,
+/// which grows with the distance walked: variance ∝ `L + LEG_END_M`. On the diagnosis's model the
+/// legs' misfits bear this out (exp28: 2–4 cm on its 1.2 m legs, up to 15 cm on its 29 and 65 m
+/// legs).
+/// Unweighted, with the outliers judged by their ratio, the rule threw out good short legs (exp28's
+/// 1.2 m ones, 2-4 cm off being 2-3 % of them) and kept a bad long one (exp20's 31 m corridor,
+/// 53 cm long where the others are within 3 cm: 1.7 % of it), and dropped a leg of exp22's four (a
+/// review).
+fn weight(kind: LegKind, surveyed_m: f64) -> f64 {
+    match kind {
+        LegKind::SingleStrides => 1.0,
+        LegKind::CornerLegs => 1.0 / (surveyed_m + LEG_END_M),
+    }
+}
+
+/// The length over which a corner leg's accumulated error equals the share of its two end
+/// footprints: one stride ([`weight`]). Chosen before looking at the fits, not on them.
+pub const LEG_END_M: f64 = 1.4;
 
 /// The two-sided Student-t quantile of p = 10⁻³ with `df` degrees of freedom (bisection; the
 /// normal's [`MDE_Z`] is its limit).
@@ -305,6 +338,56 @@ mod tests {
         let f = fit_legs(&l).unwrap();
         assert_eq!((f.kind, f.legs), (LegKind::SingleStrides, 20), "{f:?}");
         assert!((f.ratio - 0.98).abs() < 2e-3, "{f:?}");
+    }
+
+    /// Legs `(surveyed, estimated / surveyed)` as a run of a bundled walk gives them.
+    fn measured(legs: &[(f64, f64)]) -> Vec<(f64, f64)> {
+        legs.iter().map(|&(s, r)| (s * r, s)).collect()
+    }
+
+    #[test]
+    fn a_corner_legs_misfit_is_judged_against_its_own_length() {
+        // exp20 on the default model (`configs/gdins.toml`): its 31.2 m corridor comes out 53 cm
+        // long, the other legs within 3 cm (its start footprint's survey). The ratio rule kept
+        // that leg (1.7 % off) and left out the 1.2 m one (3 cm, 2.4 %): scale 1.0096 ± 0.0041
+        // where the legs without the corridor give 1.000 (a review).
+        let exp20 = measured(&[
+            (31.2, 1.017),
+            (10.2, 1.000),
+            (7.2, 1.003),
+            (9.0, 1.003),
+            (24.0, 1.000),
+            (1.2, 1.024),
+        ]);
+        let f = fit_legs(&exp20).unwrap();
+        assert_eq!(
+            (f.kind, f.legs, f.outliers),
+            (LegKind::CornerLegs, 5, 1),
+            "{f:?}"
+        );
+        assert!((f.ratio - 1.0).abs() < 2e-3, "{f:?}");
+        // exp28 on the default model: its 1.2 m legs, 2 and 4 cm off, are as good as its long
+        // ones: kept, where the ratio rule left both out.
+        let exp28 = measured(&[
+            (9.0, 0.994),
+            (7.2, 1.001),
+            (9.0, 1.003),
+            (28.8, 0.999),
+            (1.2, 1.034),
+            (64.5, 1.001),
+            (1.2, 1.017),
+            (28.6, 1.004),
+        ]);
+        let f = fit_legs(&exp28).unwrap();
+        assert_eq!((f.legs, f.outliers), (8, 0), "{f:?}");
+        assert!((f.ratio - 1.001).abs() < 2e-3, "{f:?}");
+        // exp22's four legs on the diagnosis's model (plain zero-velocity update): none left out
+        // (the ratio rule dropped one, and the line with it), the short strides named.
+        let exp22 = measured(&[(26.4, 0.968), (7.2, 0.968), (26.4, 0.970), (7.2, 0.974)]);
+        let f = fit_legs(&exp22).unwrap();
+        assert_eq!((f.legs, f.outliers), (4, 0), "{f:?}");
+        assert!((f.ratio - 0.969).abs() < 2e-3, "{f:?}");
+        assert!(f.score >= 3.0, "{f:?}");
     }
 
     #[test]
