@@ -143,11 +143,11 @@ fn fit_legs(legs: &[(f64, f64)]) -> Option<StrideLength> {
         .copied()
         .filter(|&(_, s)| s <= MAX_LEG_M)
         .collect();
-    if single.len() >= MIN_LEGS {
-        fit(&single, LegKind::SingleStrides)
-    } else {
-        fit(legs, LegKind::CornerLegs)
-    }
+    // (8 single strides of which the outlier rule leaves fewer than 8 fall back on every leg.)
+    (single.len() >= MIN_LEGS)
+        .then(|| fit(&single, LegKind::SingleStrides))
+        .flatten()
+        .or_else(|| fit(legs, LegKind::CornerLegs))
 }
 
 /// The fit over `(estimated, surveyed)` leg lengths of one kind.
@@ -338,6 +338,16 @@ mod tests {
         let f = fit_legs(&l).unwrap();
         assert_eq!((f.kind, f.legs), (LegKind::SingleStrides, 20), "{f:?}");
         assert!((f.ratio - 0.98).abs() < 2e-3, "{f:?}");
+        // Eight single strides, one a misplaced footprint's: the legs between the corners too.
+        let mut l = legs(0.98, 8);
+        l[3].0 *= 0.57;
+        l.extend(corner_legs(0.98, 1));
+        let f = fit_legs(&l).unwrap();
+        assert_eq!(
+            (f.kind, f.legs, f.outliers),
+            (LegKind::CornerLegs, 11, 1),
+            "{f:?}"
+        );
     }
 
     /// Legs `(surveyed, estimated / surveyed)` as a run of a bundled walk gives them.
