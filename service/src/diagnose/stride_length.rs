@@ -4,9 +4,10 @@
 //! estimates (its positions at the two footprint times) and one the survey measured. A stride
 //! scale `k` makes `L̂ = k·L`: the least-squares `k̂ = Σ w·L̂·L / Σ w·L²` over the legs (equal
 //! weights for single strides; a corner leg's weight falls with its length, [`weight`]), its
-//! standard error from the weighted scatter about that line (n − 1 degrees of freedom), `−log₁₀` of the two-sided
-//! Student-t p of `(k̂ − 1)/se` as the score and `t·se` as the detectable size, `t` the quantile
-//! of p = 10⁻³ (3.29, [`MDE_Z`], for many legs; 5.4 for eight), as for the other effects.
+//! standard error from the weighted scatter about that line (n − 1 degrees of freedom),
+//! `−log₁₀` of the two-sided Student-t p of `(k̂ − 1)/se` as the score and `t·se` as the
+//! detectable size, `t` the quantile of p = 10⁻³ (3.29, [`MDE_Z`], for many legs; 5.4 for eight,
+//! 12.9 for four), as for the other effects.
 //! Consecutive legs share a footprint, so a position error at one shortens one leg and
 //! lengthens the next: the plain standard error overstates the scatter of `k̂`, which errs on
 //! the side of naming less.
@@ -18,11 +19,11 @@
 //! ([`LegKind`]): a corridor leg's chord is the walked length to within a few hundredths of a
 //! percent (a heading that wanders by 3° along it shortens the chord by 0.04 %), and each leg
 //! averages the strides' scatter. Either way a leg that lies more than [`OUTLIER_SD`] robust σ
-//! from the median scale (its ratio's deviation for single strides; for corner legs its misfit in
-//! metres over its own σ, [`weight`]) is left out: a footprint the survey placed wrong (exp31's leg 31 measures
-//! 0.57 of its surveyed length in every model, a leg its data set's own check flags; exp29's
-//! start footprint, a floor tile from where the walker stood, makes its first corridor 7 %
-//! short) would otherwise decide the fit.
+//! from the median scale (its ratio's deviation for single strides; for corner legs its misfit
+//! in metres over its own σ, [`weight`]) is left out: a footprint the survey placed wrong
+//! (exp31's leg 31 measures 0.57 of its surveyed length in every model, a leg its data set's own
+//! check flags; exp29's start footprint, a floor tile from where the walker stood, makes its
+//! first corridor 7 % short) would otherwise decide the fit.
 //!
 //! The fix the diagnosis tries is the rolling-foot stance update
 //! (`eskf.zupt_rolling_height_m`), when the model has none: a plain zero-velocity update holds
@@ -42,11 +43,13 @@ use serde::Serialize;
 /// Surveyed legs shorter than this are left out, m.
 pub const MIN_LEG_M: f64 = 0.5;
 
-/// Surveyed legs longer than this (more than one stride) are left out, m.
+/// Surveyed legs longer than this are more than one stride, m: left out where the survey has
+/// [`MIN_LEGS`] single strides.
 pub const MAX_LEG_M: f64 = 2.5;
 
-/// A leg whose ratio (estimated / surveyed) lies more than this many robust σ (1.4826 × the
-/// median absolute deviation) from the median ratio is left out.
+/// A leg that lies more than this many robust σ (1.4826 × the median absolute deviation) from
+/// the median scale is left out: a single stride by its ratio (estimated / surveyed), a corner
+/// leg by its misfit in metres over its own σ ([`weight`]).
 pub const OUTLIER_SD: f64 = 4.0;
 
 /// The fewest single strides the fit needs.
@@ -211,7 +214,7 @@ fn fit(legs: &[(f64, f64)], kind: LegKind) -> Option<StrideLength> {
 /// legs' misfits bear this out (exp28: 2–4 cm on its 1.2 m legs, up to 15 cm on its 29 and 65 m
 /// legs).
 /// Unweighted, with the outliers judged by their ratio, the rule threw out good short legs (exp28's
-/// 1.2 m ones, 2-4 cm off being 2-3 % of them) and kept a bad long one (exp20's 31 m corridor,
+/// 1.2 m ones, 2–4 cm off being 2–3 % of them) and kept a bad long one (exp20's 31 m corridor,
 /// 53 cm long where the others are within 3 cm: 1.7 % of it), and dropped a leg of exp22's four (a
 /// review).
 fn weight(kind: LegKind, surveyed_m: f64) -> f64 {
