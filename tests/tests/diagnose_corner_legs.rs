@@ -4,11 +4,11 @@
 //! error there is told from a gyro scale factor by the legs it stretches. Before, these nine
 //! walks had no stride-length line at all.
 
-use corridor_service::diagnose::{Effect, Fix, LegKind, SIGNIFICANT, run_diagnosis};
+use corridor_service::diagnose::{Effect, Fix, LegKind, SIGNIFICANT};
 use corridor_shared::injection::LogInjection;
 
 mod diagnose_common;
-use diagnose_common::{clocked, config, load, run};
+use diagnose_common::{clock_told_by_its_strides, config, load, run};
 
 /// exp28 is surveyed at its nine corners (8 legs of 6-65 m). Under the diagnosis's model (a plain
 /// zero-velocity update) its legs come out about 3 % short, the short strides of the walks
@@ -56,21 +56,10 @@ fn a_walk_surveyed_at_its_corners_shows_its_short_strides_and_the_loop_fixes_the
 /// only, so there a scale factor is still named).
 #[test]
 fn a_clock_error_on_a_walk_surveyed_at_its_corners_is_told_by_the_legs_it_stretches() {
-    let (log, truth) = load("gdins_exp26_narrow_out_and_back");
-    let mut cfg = config(0.0, false);
-    cfg.eskf.zupt_rolling_height_m = Some(0.08);
-    let (injected, truth) = clocked(&log, &truth, 0.03);
-    let with = run(&injected, &truth, &cfg);
+    let with = clock_told_by_its_strides("gdins_exp26_narrow_out_and_back", 0.03);
     let stride = with.stride_length.as_ref().expect("footprints given");
     assert_eq!(stride.fit.kind, LegKind::CornerLegs, "{stride:?}");
     assert!(stride.fit.ratio > 1.04, "{stride:?}");
-    assert_eq!(with.top_effect, "timing", "{:#?}", with.effects);
-    let without = run_diagnosis(&injected, &cfg, None, None).unwrap().report;
-    assert_eq!(
-        without.top_effect, "gyro_scale_factor",
-        "{:#?}",
-        without.effects
-    );
 }
 
 /// An accelerometer scale error (+2 %) on exp29, whose model has the rolling-foot stance update:

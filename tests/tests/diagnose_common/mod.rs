@@ -77,18 +77,32 @@ pub fn run(log: &ImuLog, truth: &[TruthPoint], cfg: &ConfigFile) -> Report {
     report
 }
 
-/// The walk with its clock running `fraction` fast, and its footprints' times on that clock.
-pub fn clocked(log: &ImuLog, truth: &[TruthPoint], fraction: f64) -> (ImuLog, Vec<TruthPoint>) {
+/// The walk of `name` with its clock running `fraction` fast (its footprints' times on that
+/// clock), diagnosed on the diagnosis's model with the rolling-foot stance update (strides right
+/// without a clock error): with the footprints it must name `timing`, without them a gyro scale
+/// factor, the clock's rotation part alone. Returns the report with the footprints.
+pub fn clock_told_by_its_strides(name: &str, fraction: f64) -> Report {
+    let (log, truth) = load(name);
+    let mut cfg = config(0.0, false);
+    cfg.eskf.zupt_rolling_height_m = Some(0.08);
     let clock = LogInjection::ClockRate { fraction };
     let t0 = log.rows[0].t_s;
     let mut injected = log.clone();
     clock.apply(&mut injected.rows);
-    let truth = truth
+    let truth: Vec<TruthPoint> = truth
         .iter()
         .map(|p| TruthPoint {
             t_s: clock.map_time(t0, p.t_s),
             ..*p
         })
         .collect();
-    (injected, truth)
+    let with = run(&injected, &truth, &cfg);
+    assert_eq!(with.top_effect, "timing", "{:#?}", with.effects);
+    let without = run_diagnosis(&injected, &cfg, None, None).unwrap().report;
+    assert_eq!(
+        without.top_effect, "gyro_scale_factor",
+        "{:#?}",
+        without.effects
+    );
+    with
 }
