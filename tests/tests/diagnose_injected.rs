@@ -4,8 +4,8 @@
 //! must not invent an effect beyond the real one it documents (a heading offset on exp25).
 
 use corridor_service::diagnose::{
-    DriftProbe, Effect, Fix, Report, SIGNIFICANT, analyse, apply_fix, calibrate_drift, judge,
-    judge_names, run_diagnosis,
+    DriftProbe, Effect, Fix, HeldOut, Report, SIGNIFICANT, analyse, apply_fix, calibrate_drift,
+    judge, judge_names, run_diagnosis,
 };
 use corridor_service::runner::{heading_aid, run_log};
 use corridor_shared::config::{ConfigFile, HeadingObservations};
@@ -77,8 +77,13 @@ fn clean_recordings_show_only_the_documented_heading_offset_and_short_strides() 
     let steps: Vec<(Effect, bool)> = r.iterations.iter().map(|i| (i.effect, i.kept)).collect();
     assert_eq!(steps, [(Effect::StrideLength, false)]);
     let it = &r.iterations[0];
-    let [held_before, held_after] = it.held_out_rms_m.expect("judged on the second half");
-    assert!(held_after < held_before, "{:?}", it.held_out_rms_m);
+    let Some(HeldOut::SecondHalf {
+        rms_m: [held_before, held_after],
+    }) = it.held_out
+    else {
+        panic!("judged on the second half: {:?}", it.held_out)
+    };
+    assert!(held_after < held_before, "{:?}", it.held_out);
     let (b, a) = (it.before.gcp_rms_m.unwrap(), it.after.gcp_rms_m.unwrap());
     assert!(a > b, "the whole walk {b:.3} -> {a:.3} m");
 

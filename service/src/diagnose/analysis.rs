@@ -153,6 +153,10 @@ pub struct Analysis {
     pub g_sensitivity: Option<[[f64; 2]; 3]>,
     /// The stride scale against the footprints (with truth only).
     pub stride_length: Option<super::StrideLength>,
+    /// Every surveyed leg's `(estimated, surveyed)` length, m (with truth only;
+    /// [`super::stride_length::leg_lengths`]).
+    #[serde(skip)]
+    pub legs: Vec<Option<(f64, f64)>>,
     /// The residuals (for plots and the report).
     #[serde(skip)]
     pub residuals: Vec<HeadingResidual>,
@@ -477,6 +481,9 @@ pub fn analyse(
         coupling_z_rad,
         g_sensitivity,
         stride_length: truth.and_then(|t| super::stride_length(&outcome.trace, t)),
+        legs: truth.map_or_else(Vec::new, |t| {
+            super::stride_length::leg_lengths(&outcome.trace, t)
+        }),
         residuals: res,
         stances,
         heading_never_held,

@@ -137,11 +137,42 @@ pub struct Iteration {
     pub before: Consistency,
     /// After.
     pub after: Consistency,
-    /// For a fix fitted on the footprints (the stride scale): the footprint RMS of the second
-    /// half of the footprints, before and after, m, the fix fitted on the first half.
-    pub held_out_rms_m: Option<[f64; 2]>,
+    /// For a fix fitted on the footprints (the stride scale): its check on footprints it was
+    /// not fitted on.
+    pub held_out: Option<HeldOut>,
     /// Kept (the error or, without truth, the NIS/whiteness improved).
     pub kept: bool,
+}
+
+/// How a fix fitted on the footprints (the stride scale) was checked on footprints it was not
+/// fitted on: the error there without and with it, m. The loop keeps it only when that fell.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum HeldOut {
+    /// Fitted on the first half of the footprints (by time): the footprint RMS of the second
+    /// half alone.
+    SecondHalf {
+        /// Without and with the fix, m.
+        rms_m: [f64; 2],
+    },
+    /// A walk surveyed at its corners, whose first half has too few legs to fit: each corner
+    /// leg held out in turn, the scale fitted on the others and the walk run with it; the RMS
+    /// over the legs of the held-out leg's length error.
+    EachLeg {
+        /// Legs held out (those the whole walk's fit keeps).
+        legs: usize,
+        /// Without and with the fix, m.
+        rms_m: [f64; 2],
+    },
+}
+
+impl HeldOut {
+    /// The held-out error without and with the fix, m.
+    pub fn rms_m(self) -> [f64; 2] {
+        match self {
+            HeldOut::SecondHalf { rms_m } | HeldOut::EachLeg { rms_m, .. } => rms_m,
+        }
+    }
 }
 
 /// `report.json`.
@@ -218,13 +249,14 @@ fn improved(before: &Consistency, after: &Consistency) -> bool {
 /// the footprint RMS of the second half alone without and with it taken out, m; `None` when the
 /// first half has too few legs to fit (fewer than [`MIN_LEGS`] single strides and fewer than
 /// [`MIN_CORNER_LEGS`] legs after the outlier rule: a walk surveyed at its four or five corners
-/// never has enough) or the second half cannot be scored.
+/// never has enough; [`stride_scale_each_leg_held_out`] checks those) or the second half cannot
+/// be scored.
 fn stride_scale_out_of_sample(
     log: &ImuLog,
     file: &ConfigFile,
     truth: &[TruthPoint],
     map: Option<&Path>,
-) -> Result<Option<(Fix, [f64; 2])>, RunError> {
+) -> Result<Option<(Fix, HeldOut)>, RunError> {
     let mid = truth.len() / 2;
     let (first, second) = (&truth[..=mid], &truth[mid..]);
     let Some(fit) = analyse(log, file, Some(first), map)?.stride_length else {
@@ -238,7 +270,64 @@ fn stride_scale_out_of_sample(
     let rms = |f: &ConfigFile| -> Result<Option<f64>, RunError> {
         Ok(analyse(log, f, Some(second), map)?.consistency.gcp_rms_m)
     };
-    Ok(rms(file)?.zip(rms(&fixed)?).map(|(b, a)| (fix, [b, a])))
+    Ok(rms(file)?
+        .zip(rms(&fixed)?)
+        .map(|(b, a)| (fix, HeldOut::SecondHalf { rms_m: [b, a] })))
+}
+
+/// The stride scale of a walk surveyed at its corners (`current`: `file` analysed on all of
+/// `truth`), fitted on all its legs, and checked leg by leg: each leg the fit keeps is held out
+/// in turn, the scale fitted on the others ([`stride_length::corner_scale`]), the walk run with
+/// that scale taken out, and the held-out leg's length error compared with the run's without it.
+/// `None` when the fit is not a corner-leg fit. Leaving a leg out of four leaves three, fewer
+/// than the fit's test needs but enough to predict the fourth.
+fn stride_scale_each_leg_held_out(
+    log: &ImuLog,
+    file: &ConfigFile,
+    current: &Analysis,
+    truth: &[TruthPoint],
+    map: Option<&Path>,
+) -> Result<Option<(Fix, HeldOut)>, RunError> {
+    let kept = stride_length::kept_corner_legs(&current.legs);
+    let Some(fit) = current
+        .stride_length
+        .filter(|_| kept.len() >= MIN_CORNER_LEGS)
+    else {
+        return Ok(None);
+    };
+    let mut squares = [0.0; 2];
+    for &i in &kept {
+        let others: Vec<(f64, f64)> = kept
+            .iter()
+            .filter(|&&j| j != i)
+            .filter_map(|&j| current.legs[j])
+            .collect();
+        let (Some(ratio), Some((before_m, surveyed_m))) =
+            (stride_length::corner_scale(&others), current.legs[i])
+        else {
+            return Ok(None);
+        };
+        let mut fixed = file.clone();
+        // (a scale of exactly 1 is no change: the leg is what it was)
+        let after_m = if apply_fix(Fix::stride_scale(ratio), &mut fixed) {
+            match analyse(log, &fixed, Some(truth), map)?.legs.get(i) {
+                Some(&Some((e, _))) => e,
+                _ => return Ok(None),
+            }
+        } else {
+            before_m
+        };
+        squares[0] += (before_m - surveyed_m).powi(2);
+        squares[1] += (after_m - surveyed_m).powi(2);
+    }
+    let n = kept.len();
+    Ok(Some((
+        Fix::stride_scale(fit.ratio),
+        HeldOut::EachLeg {
+            legs: n,
+            rms_m: squares.map(|s| (s / n as f64).sqrt()),
+        },
+    )))
 }
 
 /// The first step of the loop: `start` analysed, every fixable effect scored (and its
@@ -307,7 +396,7 @@ pub fn run_diagnosis(
             fix: cand.fix,
             before: current.consistency.clone(),
             after: cand.analysis.consistency.clone(),
-            held_out_rms_m: None,
+            held_out: None,
             kept,
         });
         if !kept {
@@ -333,14 +422,19 @@ pub fn run_diagnosis(
         // is not true by construction.
         let (fix, held_out) = match (top.fix, truth) {
             (Some(Fix::StrideScale { .. }), Some(t)) => {
-                match stride_scale_out_of_sample(log, &file, t, map)? {
-                    Some((fix, rms)) => (Some(fix), Some(rms)),
+                let checked = match stride_scale_out_of_sample(log, &file, t, map)? {
+                    Some(c) => Some(c),
+                    None => stride_scale_each_leg_held_out(log, &file, &current, t, map)?,
+                };
+                match checked {
+                    Some((fix, held_out)) => (Some(fix), Some(held_out)),
                     None => {
                         // Not tried, and said so: the line offers the fix, the loop has no step.
                         if let Some(l) = stride_line.as_mut() {
                             l.finding.evidence.push_str(
-                                "; the scale fix is not tried: the first half of the footprints, \
-                                 which it would be fitted on, has too few legs to fit it",
+                                "; the scale fix is not tried: the footprints it would be \
+                                 fitted on (the first half, or all legs but one) are too few legs \
+                                 to fit it",
                             );
                         }
                         (None, None)
@@ -352,7 +446,7 @@ pub fn run_diagnosis(
         if let Some(fix) = fix.filter(|&fix| apply_fix(fix, &mut f)) {
             let mut a = analyse(log, &f, truth, map)?;
             // (and the whole walk's error must fall too, as for every other fix)
-            let kept = held_out.is_none_or(|[before, after]| after < before)
+            let kept = held_out.is_none_or(|h| h.rms_m()[1] < h.rms_m()[0])
                 && improved(&current.consistency, &a.consistency);
             iterations.push(Iteration {
                 effect: top.name,
@@ -360,7 +454,7 @@ pub fn run_diagnosis(
                 fix,
                 before: current.consistency.clone(),
                 after: a.consistency.clone(),
-                held_out_rms_m: held_out,
+                held_out,
                 kept,
             });
             if kept {

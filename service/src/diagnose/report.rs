@@ -1,8 +1,8 @@
 //! The diagnosis report: `report.md`, `report.json` and the `residuals.svg` figure.
 
-use super::Report;
 use super::analysis::{Analysis, Consistency, HeadingResidual};
 use super::catalogue::{Effect, Fix};
+use super::{HeldOut, Report};
 use crate::runner::RunError;
 use std::path::Path;
 
@@ -142,11 +142,22 @@ pub fn write_report(
             figure(it.after.nis_mean),
             figure(it.before.whiteness_p),
             figure(it.after.whiteness_p),
-            match (it.kept, it.held_out_rms_m) {
-                (k, Some([b, a])) => format!(
-                    "{} (fitted on the first half of the footprints; the second half {b:.2} → {a:.2} m)",
-                    if k { "yes" } else { "no" }
-                ),
+            match (it.kept, it.held_out) {
+                (k, Some(h)) => {
+                    let [b, a] = h.rms_m();
+                    format!(
+                        "{} ({} {b:.2} → {a:.2} m)",
+                        if k { "yes" } else { "no" },
+                        match h {
+                            HeldOut::SecondHalf { .. } =>
+                                "fitted on the first half of the footprints; the second half".into(),
+                            HeldOut::EachLeg { legs, .. } => format!(
+                                "each of {legs} legs held out in turn, fitted on the others; \
+                                 the held-out legs' length error"
+                            ),
+                        }
+                    )
+                }
                 (true, None) => "yes".into(),
                 (false, None) => "no".into(),
             }

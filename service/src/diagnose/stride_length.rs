@@ -114,9 +114,18 @@ pub struct StrideLine {
 /// there are [`MIN_LEGS`] of them, else on every leg from [`MIN_LEG_M`] up when there are
 /// [`MIN_CORNER_LEGS`]; `None` otherwise.
 pub fn stride_length(trace: &Trace, truth: &[TruthPoint]) -> Option<StrideLength> {
-    // The run's position at a footprint time (the first sample at or after it); none for a
-    // footprint outside the run (during the alignment, or after the log's end).
-    let (first, last) = (trace.t_s.first()?, trace.t_s.last()?);
+    let legs: Vec<(f64, f64)> = leg_lengths(trace, truth).into_iter().flatten().collect();
+    fit_legs(&legs)
+}
+
+/// Every surveyed leg's `(estimated, surveyed)` length, m, indexed by its first footprint (leg
+/// `i` runs from footprint `i` to `i + 1`): `None` for a leg shorter than [`MIN_LEG_M`] or with a
+/// footprint outside the run (during the alignment, or after the log's end).
+pub fn leg_lengths(trace: &Trace, truth: &[TruthPoint]) -> Vec<Option<(f64, f64)>> {
+    // The run's position at a footprint time (the first sample at or after it).
+    let (Some(first), Some(last)) = (trace.t_s.first(), trace.t_s.last()) else {
+        return vec![None; truth.len().saturating_sub(1)];
+    };
     let at = |t: f64| {
         if t < *first || t > *last {
             return None;
@@ -126,16 +135,44 @@ pub fn stride_length(trace: &Trace, truth: &[TruthPoint]) -> Option<StrideLength
             .get(trace.t_s.partition_point(|&x| x < t))
             .copied()
     };
-    let legs: Vec<(f64, f64)> = truth
+    truth
         .windows(2)
-        .filter_map(|w| {
+        .map(|w| {
             let surveyed = (w[1].x_m - w[0].x_m).hypot(w[1].y_m - w[0].y_m);
             let (a, b) = (at(w[0].t_s)?, at(w[1].t_s)?);
             let estimated = (b[0] - a[0]).hypot(b[1] - a[1]);
             (surveyed >= MIN_LEG_M && estimated.is_finite()).then_some((estimated, surveyed))
         })
+        .collect()
+}
+
+/// The corner legs a fit over `legs` ([`leg_lengths`]) keeps, by index, when it is a fit on a
+/// walk surveyed at its corners (fewer than [`MIN_LEGS`] single strides); empty otherwise (a
+/// single-stride fit, or too few legs).
+pub fn kept_corner_legs(legs: &[Option<(f64, f64)>]) -> Vec<usize> {
+    let all: Vec<(usize, (f64, f64))> = legs
+        .iter()
+        .enumerate()
+        .filter_map(|(i, l)| l.map(|l| (i, l)))
         .collect();
-    fit_legs(&legs)
+    let values: Vec<(f64, f64)> = all.iter().map(|&(_, l)| l).collect();
+    if fit_legs(&values).is_none_or(|f| f.kind != LegKind::CornerLegs) {
+        return Vec::new();
+    }
+    let kept = kept_mask(&values, LegKind::CornerLegs);
+    all.iter()
+        .zip(kept)
+        .filter_map(|(&(i, _), k)| k.then_some(i))
+        .collect()
+}
+
+/// The weighted least-squares scale over corner legs, without the outlier rule or the least
+/// number of legs: the prediction of a held-out leg from the others ([`kept_corner_legs`] has
+/// already left the outliers out).
+pub fn corner_scale(legs: &[(f64, f64)]) -> Option<f64> {
+    let w = |s: f64| weight(LegKind::CornerLegs, s);
+    let sxx: f64 = legs.iter().map(|&(_, s)| w(s) * s * s).sum();
+    (sxx > 0.0).then(|| legs.iter().map(|&(e, s)| w(s) * e * s).sum::<f64>() / sxx)
 }
 
 /// The fit over the `(estimated, surveyed)` lengths of every leg from [`MIN_LEG_M`] up: on the
@@ -162,20 +199,11 @@ fn fit(legs: &[(f64, f64)], kind: LegKind) -> Option<StrideLength> {
     if legs.len() < min {
         return None;
     }
-    let mut ratios: Vec<f64> = legs.iter().map(|(e, s)| e / s).collect();
-    let median = crate::stats::median(&mut ratios);
-    // Each leg's deviation from the median scale, in units of its own σ (up to a common factor).
-    let deviation = |&(e, s): &(f64, f64)| match kind {
-        LegKind::SingleStrides => e / s - median,
-        LegKind::CornerLegs => (e - median * s) * weight(kind, s).sqrt(),
-    };
-    let mut dev: Vec<f64> = legs.iter().map(|l| deviation(l).abs()).collect();
-    let mad = crate::stats::median(&mut dev);
-    let limit = OUTLIER_SD * 1.4826 * mad;
+    let mask = kept_mask(legs, kind);
     let kept: Vec<(f64, f64)> = legs
         .iter()
-        .copied()
-        .filter(|l| mad == 0.0 || deviation(l).abs() <= limit)
+        .zip(&mask)
+        .filter_map(|(&l, &k)| k.then_some(l))
         .collect();
     let n = kept.len();
     if n < min {
@@ -204,6 +232,23 @@ fn fit(legs: &[(f64, f64)], kind: LegKind) -> Option<StrideLength> {
         },
         mde: t_critical(df) * std_err,
     })
+}
+
+/// Which of `legs` the fit keeps: those within [`OUTLIER_SD`] robust σ of the median scale.
+fn kept_mask(legs: &[(f64, f64)], kind: LegKind) -> Vec<bool> {
+    let mut ratios: Vec<f64> = legs.iter().map(|(e, s)| e / s).collect();
+    let median = crate::stats::median(&mut ratios);
+    // Each leg's deviation from the median scale, in units of its own σ (up to a common factor).
+    let deviation = |&(e, s): &(f64, f64)| match kind {
+        LegKind::SingleStrides => e / s - median,
+        LegKind::CornerLegs => (e - median * s) * weight(kind, s).sqrt(),
+    };
+    let mut dev: Vec<f64> = legs.iter().map(|l| deviation(l).abs()).collect();
+    let mad = crate::stats::median(&mut dev);
+    let limit = OUTLIER_SD * 1.4826 * mad;
+    legs.iter()
+        .map(|l| mad == 0.0 || deviation(l).abs() <= limit)
+        .collect()
 }
 
 /// The weight of a leg `surveyed_m` long in the fit, the inverse of its length error's variance up
@@ -401,6 +446,35 @@ mod tests {
         assert_eq!((f.legs, f.outliers), (4, 0), "{f:?}");
         assert!((f.ratio - 0.969).abs() < 2e-3, "{f:?}");
         assert!(f.score >= 3.0, "{f:?}");
+    }
+
+    #[test]
+    fn the_legs_held_out_in_turn_are_those_the_fit_keeps_and_each_is_predicted_by_the_others() {
+        // exp20's legs with the 31 m corridor 53 cm long, and two legs that are no leg (a turn
+        // on the spot, a footprint outside the run): the corridor is left out, the others kept
+        // by their index.
+        let mut l: Vec<Option<(f64, f64)>> = measured(&[
+            (31.2, 1.017),
+            (10.2, 1.000),
+            (7.2, 1.003),
+            (9.0, 1.003),
+            (24.0, 1.000),
+            (1.2, 1.024),
+        ])
+        .into_iter()
+        .map(Some)
+        .collect();
+        l.insert(2, None);
+        l.push(None);
+        assert_eq!(kept_corner_legs(&l), [1, 3, 4, 5, 6]);
+        // a scale the legs share is predicted from any of them, by the fit's weights
+        let scaled: Vec<(f64, f64)> = [1.2, 7.2, 26.4].iter().map(|&s| (1.02 * s, s)).collect();
+        assert!((corner_scale(&scaled).unwrap() - 1.02).abs() < 1e-12);
+        assert_eq!(corner_scale(&[]), None);
+        // a walk with enough single strides is not a corner-leg fit: nothing to hold out leg by
+        // leg (its first half is fitted instead)
+        let strides: Vec<Option<(f64, f64)>> = legs(0.98, 40).into_iter().map(Some).collect();
+        assert!(kept_corner_legs(&strides).is_empty());
     }
 
     #[test]
