@@ -350,15 +350,32 @@ pub fn score_by_likelihood(
                     e.score = e.score.max(if lr > 0.0 { score(p) } else { 0.0 });
                 }
                 e.fix = Some(cand.fix);
-                e.evidence = format!(
-                    "{}; adding `{}`: F = {:.1} for {} parameter{} (p = {:.1e})",
-                    e.evidence,
-                    cand.fix,
-                    lr,
-                    k,
-                    if k == 1 { "" } else { "s" },
-                    p
+                let (rss0, rss1) = (
+                    base.consistency.rss_rad2,
+                    cand.analysis.consistency.rss_rad2,
                 );
+                // The fix is a change of the filter, not a nested least-squares model: it can
+                // raise the residuals' sum of squares, where an F statistic would come out
+                // negative ("F = -0.3" was printed).
+                e.evidence = if rss1 > rss0 && rss0 > 0.0 {
+                    format!(
+                        "{}; adding `{}` raised the residuals' sum of squares by {:.1} % (no F \
+                         test)",
+                        e.evidence,
+                        cand.fix,
+                        100.0 * (rss1 / rss0 - 1.0)
+                    )
+                } else {
+                    format!(
+                        "{}; adding `{}`: F = {:.1} for {} parameter{} (p = {:.1e})",
+                        e.evidence,
+                        cand.fix,
+                        lr,
+                        k,
+                        if k == 1 { "" } else { "s" },
+                        p
+                    )
+                };
                 candidates.push(cand);
             }
             None if !fixes.is_empty() => {
