@@ -189,7 +189,16 @@ pub fn parse_truth_csv(text: &str, path: &Path) -> Result<Vec<TruthPoint>, Truth
                 line_no,
                 "",
                 line,
-                format!("has {} fields but the header has {n_fields}", fields.len()),
+                format!(
+                    "has {} fields but the header has {n_fields}{}",
+                    fields.len(),
+                    // (as the IMU reader says it: a trailing comma is the usual cause)
+                    if fields.len() == n_fields + 1 && fields[n_fields].is_empty() {
+                        ": the row ends with a comma"
+                    } else {
+                        ""
+                    }
+                ),
             ));
         }
         let mut xyzt = [0.0f64; 4];
@@ -408,6 +417,15 @@ mod tests {
             (
                 format!("{h6}0,0,0,0,0,1\n1,0,0\n"),
                 (3, "", "1,0,0", "has 3 fields but the header has 6"),
+            ),
+            (
+                format!("{h6}0,0,0,0,0,1,\n"),
+                (
+                    2,
+                    "",
+                    "0,0,0,0,0,1,",
+                    "has 7 fields but the header has 6: the row ends with a comma",
+                ),
             ),
             (
                 format!("{h6}0,0,0,inf,0,1\n"),
