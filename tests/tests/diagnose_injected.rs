@@ -474,6 +474,48 @@ fn the_coupling_states_measure_an_injected_axis_misalignment() {
     );
 }
 
+/// A coupling of the y gyro axis into z (8°) on exp26, an out-and-back walk: at its stances the
+/// coupling's heading error builds up with the turns, as a z scale factor's does (their
+/// signatures correlate at +0.93 on this walk), and the z scale is named first. The report
+/// must say that the name cannot be told from the coupling on this walk, not give it as a
+/// confident one (the detection matrix: 21 of its 45 wrong names are such pairs).
+#[test]
+fn a_name_the_walk_cannot_tell_from_the_injected_coupling_says_so() {
+    let (log, truth) = load("gdins_exp26_narrow_out_and_back");
+    let cfg = config(0.0, false);
+    let mut injected = log.clone();
+    LogInjection::GyroCoupling {
+        from: 1,
+        to: 2,
+        coupling_rad: 8f64.to_radians(),
+    }
+    .apply(&mut injected.rows);
+    let d = run_diagnosis(&injected, &cfg, Some(&truth), None).unwrap();
+    let r = &d.report;
+    eprintln!("{} | {:?}", r.verdict, r.top_indistinguishable_from);
+    assert_eq!(r.top_effect, "gyro_scale_factor");
+    assert!(
+        r.top_indistinguishable_from
+            .iter()
+            .any(|a| a.starts_with("axis_misalignment (y→z coupling")),
+        "{:?}",
+        r.top_indistinguishable_from
+    );
+    let dir =
+        std::env::temp_dir().join(format!("corridor-indistinguishable-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    corridor_service::diagnose::write_report(&dir, r, &d.before, &d.after).unwrap();
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(
+        md.lines().any(
+            |l| l.starts_with("On this walk its signature is indistinguishable from")
+                && l.contains("axis_misalignment (y→z coupling")
+        ),
+        "{md}"
+    );
+}
+
 /// An accelerometer scale error (+2 % on every axis) makes the strides 2 % long: an effect only
 /// the footprints show, named on the stride-length line at about its size. The model already has
 /// the rolling-foot stance update, so the fix is the scale itself (`model.accel_scale_factor`),

@@ -185,6 +185,11 @@ pub struct Report {
     /// The verdict in words: the top effect, or what the walk could have shown (the detectable
     /// sizes) and what it cannot show.
     pub verdict: String,
+    /// The effects whose signature on this walk is indistinguishable from the top effect's
+    /// (|ρ| above [`power::INDISTINGUISHABLE_CORRELATION`]), as `effect (variant, ρ)`: the heading
+    /// residuals cannot tell the top effect from these.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub top_indistinguishable_from: Vec<String>,
     /// When the top effect's score is the signature fit of a variant this walk cannot show:
     /// that, in words ([`power::named_but_cannot_show`]).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -490,6 +495,12 @@ pub fn run_diagnosis(
             String::new()
         },
         verdict_caveat: top.and_then(|e| power::named_but_cannot_show(&first.power, e)),
+        top_indistinguishable_from: top.map_or_else(Vec::new, |e| {
+            power::indistinguishable_from_named(&first.power, e)
+                .into_iter()
+                .map(|(effect, variant, rho)| format!("{effect} ({variant}, ρ = {rho:+.2})"))
+                .collect()
+        }),
         power: first.power.clone(),
         onset: first.onset,
         bias_change: first.bias_change.clone(),

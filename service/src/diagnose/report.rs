@@ -57,6 +57,14 @@ pub fn write_report(
     if let Some(c) = &report.verdict_caveat {
         md.push_str(&format!("But {c}.\n\n"));
     }
+    if !report.top_indistinguishable_from.is_empty() {
+        md.push_str(&format!(
+            "On this walk its signature is indistinguishable from {} (|ρ| > {}): its heading \
+             residuals cannot tell these apart.\n\n",
+            report.top_indistinguishable_from.join(", "),
+            super::power::INDISTINGUISHABLE_CORRELATION
+        ));
+    }
     md.push_str("## Effects on the starting model (score = −log₁₀ p; significant from 3)\n\n| effect | score | detectable size on this walk | evidence | fix |\n|---|---|---|---|---|\n");
     for e in &report.effects {
         let variants: Vec<String> = report

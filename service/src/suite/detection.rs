@@ -262,6 +262,10 @@ pub struct MatrixCell {
     pub top_effect: String,
     /// The expected effect is named first.
     pub named_first: bool,
+    /// The effects the diagnosis says the first one is indistinguishable from on this walk
+    /// (`report.json`'s `top_indistinguishable_from`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub top_indistinguishable_from: Vec<String>,
     /// The expected effect scores ≥ 3.
     pub named_at_all: bool,
     /// The starting model already has the expected effect's fix (a state the clean walk needed):
@@ -298,6 +302,19 @@ pub struct MatrixCell {
     /// [`crate::diagnose::MIN_CORNER_LEGS`] surveyed legs): estimated / surveyed length, its
     /// score.
     pub stride_length: Option<StrideFigure>,
+}
+
+impl MatrixCell {
+    /// The injected effect is not the one named first, but the diagnosis says the first is
+    /// indistinguishable from it on this walk.
+    pub fn expected_is_indistinguishable_from_first(&self) -> bool {
+        !self.named_first
+            && self.expected.as_deref().is_some_and(|e| {
+                self.top_indistinguishable_from
+                    .iter()
+                    .any(|a| a.split(' ').next() == Some(e))
+            })
+    }
 }
 
 /// The stride-length finding of a cell.
@@ -510,6 +527,7 @@ fn run_cell(
             .collect(),
         start_model: diagnosis.before.model.clone(),
         top_effect: report.top_effect.clone(),
+        top_indistinguishable_from: report.top_indistinguishable_from.clone(),
         significant: report
             .effects
             .iter()

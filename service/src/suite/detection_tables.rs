@@ -53,12 +53,41 @@ fn stride_markdown(m: &DetectionMatrix) -> String {
     )
 }
 
+/// The wrong names over the injected columns: an effect named first that is not the injected
+/// one, and on how many of those the diagnosis said the first is indistinguishable on that walk
+/// from the injected effect.
+fn wrong_names_markdown(m: &DetectionMatrix) -> String {
+    let injected: Vec<&MatrixCell> = m
+        .cells
+        .iter()
+        .filter(|c| c.expected.is_some() && !c.already_modelled)
+        .filter(|c| c.expected.as_deref() != Some(Effect::StrideLength.name()))
+        .collect();
+    let wrong: Vec<&&MatrixCell> = injected
+        .iter()
+        .filter(|c| !c.named_first && c.top_effect != "none")
+        .collect();
+    let said = wrong
+        .iter()
+        .filter(|c| c.expected_is_indistinguishable_from_first())
+        .count();
+    format!(
+        "\nWrong names (the heading effects' injected columns, stride length aside): an effect other \
+         than the injected one named first on {} of {} cells; on {said} of them the diagnosis says \
+         that on this walk the first one's signature is indistinguishable from the injected \
+         effect's (`sf≈time` below), so {} are wrong names without that caveat.\n",
+        wrong.len(),
+        injected.len(),
+        wrong.len() - said
+    )
+}
+
 /// `detection.md`: per column the counts over the recordings, then the matrix of the effect
 /// named first.
 pub fn matrix_markdown(m: &DetectionMatrix) -> String {
     let n = m.recordings.len();
     let mut md = format!(
-        "The diagnosis on its own model (the sensor configuration without `[model]` extensions, the foot axis observed alone, the plain gate, the baseline's filter noise; see `diagnosis_model`). The clean column runs first; the effects it names are the walk's own, and the injected columns start from the model with their fixes (a column whose effect is already in that model is left out of its counts). Per column, over the {n} normal-gait recordings: the injected effect named first, named at all (score ≥ 3), the footprint error lower after the loop, and, for the clean and out-of-catalogue columns, how many walks name anything. The predicted detectable size is the diagnosis's own for the injected variant on each walk (median over the walks; for the bias ramp and step, the bias-change test's, from its own probe: walks too short for the test are left out of the median).\n\n| injection | expected | named first | named at all | after-error lower | median score | predicted detectable size (median) | size injected |\n|---|---|---|---|---|---|---|---|\n"
+        "The diagnosis on its own model (the sensor configuration without `[model]` extensions, the foot axis observed alone, the plain gate, the baseline's filter noise; see `diagnosis_model`). The clean column runs first; the effects it names are the walk's own, and the injected columns start from the model with their fixes (a column whose effect is already in that model is left out of its counts). Per column, over the {n} normal-gait recordings: the injected effect named first, named first or among the effects the diagnosis says the first is indistinguishable from on that walk (its signature correlating above 0.9: `top_indistinguishable_from`), named at all (score ≥ 3), the footprint error lower after the loop, and, for the clean and out-of-catalogue columns, how many walks name anything. The predicted detectable size is the diagnosis's own for the injected variant on each walk (median over the walks; for the bias ramp and step, the bias-change test's, from its own probe: walks too short for the test are left out of the median).\n\n| injection | expected | named first | named first, or indistinguishable from the first | named at all | after-error lower | median score | predicted detectable size (median) | size injected |\n|---|---|---|---|---|---|---|---|---|\n"
     );
     for case in &m.cases {
         let all: Vec<&MatrixCell> = m.cells.iter().filter(|c| &c.case == case).collect();
@@ -75,12 +104,12 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
         if expected.is_none() {
             let named = count(&|c| c.top_effect != "none");
             md.push_str(&format!(
-                "| {case} | (nothing) | — | named something: {named} of {n} | {lower} of {n} | — | — | — |\n"
+                "| {case} | (nothing) | — | — | named something: {named} of {n} | {lower} of {n} | — | — | — |\n"
             ));
             continue;
         }
         md.push_str(&format!(
-            "| {case} | {}{} | {} of {n} | {} of {n} | {lower} of {n} | {} | {} | {} |\n",
+            "| {case} | {}{} | {} of {n} | {} of {n} | {} of {n} | {lower} of {n} | {} | {} | {} |\n",
             expected.as_deref().unwrap_or("—"),
             if modelled > 0 {
                 format!(" ({modelled} walks left out: already modelled)")
@@ -88,12 +117,14 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
                 String::new()
             },
             count(&|c| c.named_first),
+            count(&|c| c.named_first || c.expected_is_indistinguishable_from_first()),
             count(&|c| c.named_at_all),
             median(&mut scores).map_or("—".into(), |v| format!("{v:.1}")),
             median(&mut mdes).map_or("—".into(), |v| format!("{v:.3e}")),
             format_args!("{size:.3e}"),
         ));
     }
+    md.push_str(&wrong_names_markdown(m));
     md.push_str(&stride_markdown(m));
     md.push_str("\nThe effect named first on each walk (`·` nothing significant; **bold** = the injected effect; in parentheses: the starting model already had the injected effect's state):\n\n| recording |");
     for case in &m.cases {
@@ -117,6 +148,12 @@ pub fn matrix_markdown(m: &DetectionMatrix) -> String {
                     "·".to_string()
                 } else {
                     short(&c.top_effect).to_string()
+                };
+                // the first, and the injected effect it cannot be told from on this walk
+                let name = if c.expected_is_indistinguishable_from_first() {
+                    format!("{name}≈{}", short(c.expected.as_deref().unwrap_or("")))
+                } else {
+                    name
                 };
                 if c.already_modelled {
                     format!("({name})")

@@ -610,6 +610,36 @@ pub fn named_but_cannot_show(power: &[Power], named: &Finding) -> Option<String>
         })
 }
 
+/// The other effects whose signature on this walk is indistinguishable from the `named`
+/// effect's (its best-scoring variant's [`Power::indistinguishable_from`]), as `(effect, variant,
+/// ρ)`, best correlated first: the heading residuals cannot tell the named effect from these, so
+/// the name is no more confident than the alternatives'. Empty for an effect without a signature
+/// fit (a heading offset, a bias drift, clipping).
+pub fn indistinguishable_from_named(
+    power: &[Power],
+    named: &Finding,
+) -> Vec<(Effect, String, f64)> {
+    let Some(best) = power
+        .iter()
+        .filter(|p| p.effect == named.name)
+        .max_by(|a, b| a.score.total_cmp(&b.score))
+    else {
+        return Vec::new();
+    };
+    let mut out: Vec<(Effect, String, f64)> = best
+        .indistinguishable_from
+        .iter()
+        .filter_map(|(variant, rho)| {
+            REFERENCES
+                .iter()
+                .find(|r| r.variant == variant)
+                .map(|r| (r.effect, variant.clone(), *rho))
+        })
+        .collect();
+    out.sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()));
+    out
+}
+
 /// The verdict when nothing is significant: the detectable sizes of the effects the walk can
 /// show, and the ones it cannot with the reason (the bias-change test's step and ramp where it
 /// applies to the model: `bias_change_applies`).

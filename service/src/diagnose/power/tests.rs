@@ -174,3 +174,67 @@ fn a_name_whose_variant_the_walk_cannot_show_says_so() {
     let p = [power("z scale", 2.0, Some(why))];
     assert_eq!(named_but_cannot_show(&p, &named(7.2)), None);
 }
+
+#[test]
+fn a_name_carries_the_effects_its_best_variant_cannot_be_told_from() {
+    // exp18's clean walk: a z scale named at 7.3, its signature the clock rate's (ρ = +1.00) and
+    // the x→z coupling's (−0.94); the y→z coupling's own list does not count, only the variant
+    // that scored.
+    let power = |effect, variant, score, alternatives: &[(&str, f64)]| Power {
+        effect,
+        variant,
+        unit: "fraction",
+        estimate: 0.05,
+        std_err: 0.005,
+        score,
+        mde: Some(0.02),
+        cannot: None,
+        residuals: 120,
+        response: Some(0.9),
+        mde_signature: Some(0.018),
+        indistinguishable_from: alternatives
+            .iter()
+            .map(|&(v, rho)| (v.to_string(), rho))
+            .collect(),
+    };
+    let p = [
+        power(
+            Effect::GyroScaleFactor,
+            "z scale",
+            7.3,
+            &[("x→z coupling", -0.94), ("clock rate", 1.0)],
+        ),
+        power(
+            Effect::AxisMisalignment,
+            "y→z coupling",
+            1.0,
+            &[("g-sensitivity", 0.95)],
+        ),
+        power(Effect::AxisMisalignment, "x→z coupling", 0.5, &[]),
+    ];
+    let named = |name, score| Finding {
+        name,
+        score,
+        evidence: String::new(),
+        fix: None,
+        mde: None,
+    };
+    let alternatives = indistinguishable_from_named(&p, &named(Effect::GyroScaleFactor, 7.3));
+    let effects: Vec<(Effect, &str)> = alternatives
+        .iter()
+        .map(|(e, v, _)| (*e, v.as_str()))
+        .collect();
+    assert_eq!(
+        effects,
+        [
+            (Effect::Timing, "clock rate"),
+            (Effect::AxisMisalignment, "x→z coupling")
+        ]
+    );
+    // a misalignment's best variant here is the y→z coupling
+    let alternatives = indistinguishable_from_named(&p, &named(Effect::AxisMisalignment, 1.0));
+    assert_eq!(alternatives.len(), 1);
+    assert_eq!(alternatives[0].0, Effect::GSensitivity);
+    // an effect without a signature fit carries none
+    assert!(indistinguishable_from_named(&p, &named(Effect::HeadingOffset, 9.0)).is_empty());
+}
