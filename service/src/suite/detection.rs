@@ -262,6 +262,10 @@ pub struct MatrixCell {
     pub top_effect: String,
     /// The expected effect is named first.
     pub named_first: bool,
+    /// The injected variant ([`MatrixCase::variant`]): the one whose signature the first must
+    /// be indistinguishable from for [`MatrixCell::expected_is_indistinguishable_from_first`].
+    #[serde(skip)]
+    pub variant: Option<&'static str>,
     /// The effects the diagnosis says the first one is indistinguishable from on this walk
     /// (`report.json`'s `top_indistinguishable_from`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -306,14 +310,22 @@ pub struct MatrixCell {
 
 impl MatrixCell {
     /// The injected effect is not the one named first, but the diagnosis says the first is
-    /// indistinguishable from it on this walk.
+    /// indistinguishable from it on this walk: from the injected variant where the case has one
+    /// (an x→z coupling injected is not the y→z coupling the first correlates with: exp28's
+    /// x→z 8° cell, whose first, a z scale, correlates at −0.96 with the y→z coupling alone).
     pub fn expected_is_indistinguishable_from_first(&self) -> bool {
+        // `effect (variant, ρ = …)`
+        let Some(prefix) = self.expected.as_deref().map(|e| match self.variant {
+            Some(v) => format!("{e} ({v},"),
+            None => format!("{e} ("),
+        }) else {
+            return false;
+        };
         !self.named_first
-            && self.expected.as_deref().is_some_and(|e| {
-                self.top_indistinguishable_from
-                    .iter()
-                    .any(|a| a.split(' ').next() == Some(e))
-            })
+            && self
+                .top_indistinguishable_from
+                .iter()
+                .any(|a| a.starts_with(&prefix))
     }
 }
 
@@ -527,6 +539,7 @@ fn run_cell(
             .collect(),
         start_model: diagnosis.before.model.clone(),
         top_effect: report.top_effect.clone(),
+        variant: case.variant,
         top_indistinguishable_from: report.top_indistinguishable_from.clone(),
         significant: report
             .effects
@@ -552,4 +565,49 @@ fn run_cell(
     // the grid offset of the heading-offset column is the injection, not part of the model
     with_fixes.heading.grid_deg = Some(r.grid_deg);
     Ok((cell, with_fixes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_first_is_indistinguishable_from_the_injected_variant_not_any_of_its_effect() {
+        // exp28's x→z 8° cell: a z scale named first, its signature the clock rate's and the y→z
+        // coupling's; the x→z coupling injected is not among them
+        let cell = |variant, named_first| MatrixCell {
+            recording: "exp28".into(),
+            case: "x→z 8°".into(),
+            expected: Some(Effect::AxisMisalignment.to_string()),
+            size: 0.14,
+            top_effect: Effect::GyroScaleFactor.to_string(),
+            named_first,
+            variant,
+            top_indistinguishable_from: vec![
+                "timing (clock rate, ρ = +0.99)".into(),
+                "axis_misalignment (y→z coupling, ρ = -0.96)".into(),
+            ],
+            named_at_all: false,
+            already_modelled: false,
+            expected_score: None,
+            expected_mde: None,
+            power_estimate: None,
+            power_score: None,
+            power_response: None,
+            verdict: String::new(),
+            detectable: Vec::new(),
+            start_model: Vec::new(),
+            significant: Vec::new(),
+            rms_before_m: None,
+            rms_after_m: None,
+            added: Vec::new(),
+            stride_length: None,
+        };
+        assert!(!cell(Some("x→z coupling"), false).expected_is_indistinguishable_from_first());
+        assert!(cell(Some("y→z coupling"), false).expected_is_indistinguishable_from_first());
+        // a case without a variant: the effect alone
+        assert!(cell(None, false).expected_is_indistinguishable_from_first());
+        // named first: nothing to excuse
+        assert!(!cell(Some("y→z coupling"), true).expected_is_indistinguishable_from_first());
+    }
 }
