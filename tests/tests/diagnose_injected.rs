@@ -314,6 +314,37 @@ fn a_two_percent_z_scale_factor_is_named_where_the_walk_can_show_it() {
     }
 }
 
+/// The detectable size is checked by injection where it is claimed: at twice the predicted size
+/// an effect is detected almost always, so the walk's own fit there must be significant. On
+/// exp40 (a serpentine: few heading observations held, many associations that flip with the
+/// heading) the probe's response predicted a z scale of 0.91 %, but injected at +2 % and +5 % no
+/// scale factor was named and the report said "nothing above the detectable sizes z scale
+/// 0.41 %" (its fit moved the other way). Now the check fails at every size up to the plausible
+/// limit and the report says the walk cannot show a z scale, naming the sizes tried; on exp25 the
+/// prediction passes its check at once.
+#[test]
+fn a_detectable_size_the_walk_does_not_bear_out_by_injection_is_not_claimed() {
+    let (log, truth) = load("gdins_exp40_serpentine_return");
+    let r = run(&log, &truth, &config(0.0, false));
+    let z = r.power.iter().find(|p| p.variant == "z scale").unwrap();
+    assert_eq!(z.mde, None, "{z:?}");
+    let why = z.cannot.as_deref().unwrap_or_default();
+    assert!(
+        why.starts_with("its signature fit does not bear out the probe: injected at "),
+        "{why}"
+    );
+    assert!(
+        r.verdict
+            .contains("this walk cannot show z scale (its signature fit does not bear out"),
+        "{}",
+        r.verdict
+    );
+    let (log, truth) = load("gdins_exp25_multi_corridor");
+    let r = run(&log, &truth, &config(0.0, true));
+    let z = r.power.iter().find(|p| p.variant == "z scale").unwrap();
+    assert!(z.mde.is_some() && z.mde_check_failed.is_empty(), "{z:?}");
+}
+
 /// A large z scale factor on exp37 (a square spiral: 25 s of turning) pushes its foot axes out
 /// of the gate, so few heading observations are used and the residual regression cannot test
 /// it; the signature fit to every stance's residual can, and names it (before, the report said

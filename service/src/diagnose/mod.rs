@@ -437,9 +437,10 @@ pub fn run_diagnosis(
                         // Not tried, and said so: the line offers the fix, the loop has no step.
                         if let Some(l) = stride_line.as_mut() {
                             l.finding.evidence.push_str(
-                                "; the scale fix is not tried: the footprints it would be \
-                                 fitted on (the first half, or all legs but one) are too few legs \
-                                 to fit it",
+                                "; the scale fix is not tried: it could not be checked on \
+                                 footprints it was not fitted on (the first half of them is too \
+                                 few legs to fit it, and there are no corner legs to hold out in \
+                                 turn)",
                             );
                         }
                         (None, None)

@@ -338,6 +338,7 @@ mod tests {
             residuals: 110,
             response: Some(-0.013),
             mde_signature: Some(0.0206),
+            mde_check_failed: Vec::new(),
             indistinguishable_from: Vec::new(),
         };
         let evidence = "z scale: signature fit -1.81 % ± 0.62 %, detectable from 2.06 % if the \

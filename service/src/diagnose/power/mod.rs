@@ -72,6 +72,11 @@ pub struct Power {
     pub response: Option<f64>,
     /// The detectable size before the response is taken into account (`z·se`).
     pub mde_signature: Option<f64>,
+    /// The sizes (and the injected walk's own score there) at which the check of the detectable
+    /// size by injection failed before `mde` passed it ([`checked_mde`]): empty where the probe's
+    /// prediction passed at once.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub mde_check_failed: Vec<[f64; 2]>,
     /// Other variants whose signature correlates above [`INDISTINGUISHABLE_CORRELATION`] with
     /// this one, with the correlation.
     pub indistinguishable_from: Vec<(String, f64)>,
@@ -331,6 +336,7 @@ pub fn walk_power(base: &[StanceResidual]) -> Vec<Power> {
             }),
             mde: if cannot.is_none() { mde } else { None },
             mde_signature: mde,
+            mde_check_failed: Vec::new(),
             response: None,
             cannot,
             residuals: rows.len(),
@@ -364,7 +370,6 @@ pub fn calibrate_by_injection(
     map: Option<&Path>,
     a: &mut Analysis,
 ) -> Result<(), RunError> {
-    let key = |s: &StanceResidual| (s.sample, s.kind == ResidualKind::Stride);
     for (k, reference) in REFERENCES.iter().enumerate() {
         let mut injected = log.clone();
         (reference.probe)(reference.probe_size).apply(&mut injected.rows);
@@ -375,48 +380,44 @@ pub fn calibrate_by_injection(
             // the onset test's own detectable size, from the same injection
             o.mde = super::bias_change::onset_mde(o, &o_inj, reference.probe_size);
         }
-        let by_key: HashMap<_, f64> = run.stances.iter().map(|s| (key(s), s.r_rad)).collect();
-        let rows: Vec<Row> = a
-            .stances
-            .iter()
-            .filter_map(|s| {
-                let r = by_key.get(&key(s))?;
-                Some(Row {
-                    group: usize::from(s.kind == ResidualKind::Stride),
-                    weight: s.weight,
-                    y: crate::core::rotation::wrap_pi(r - s.r_rad) / reference.probe_size,
-                    x: s.signature[k],
-                })
-            })
-            .filter(|r| r.x.is_finite())
-            .collect();
-        let response = fit_signature(&rows, HAC_LAGS).map_or(0.0, |f| f.beta);
-        let Some(p) = a.power.iter_mut().find(|p| p.variant == reference.variant) else {
+        let response = response_of(a, &run, k, reference.probe_size);
+        let Some(p) = a.power.iter().find(|p| p.variant == reference.variant) else {
             continue;
         };
-        p.response = Some(response);
-        if p.cannot.is_some() {
-            continue;
-        }
-        if response < MIN_RESPONSE {
-            p.mde = None;
-            p.cannot = Some(format!(
+        let verdict = if p.cannot.is_some() {
+            None
+        } else if response < MIN_RESPONSE {
+            Some(Err(format!(
                 "the model absorbs it: an injected {} moves the residuals by {:.0} % of its signature",
                 p.format_size(reference.probe_size),
                 100.0 * response
-            ));
+            )))
         } else {
             let m = p.mde_signature.unwrap_or(f64::NAN) / response;
             if m.is_finite() && m <= reference.plausible_max {
-                p.mde = Some(m);
+                Some(checked_mde(log, file, map, a, k, m)?)
             } else {
-                p.mde = None;
-                p.cannot = Some(format!(
+                Some(Err(format!(
                     "the smallest size it shows would be {} (response {:.2}), beyond any plausible {}",
                     p.format_size(m),
                     response,
                     p.format_size(reference.plausible_max)
-                ));
+                )))
+            }
+        };
+        let Some(p) = a.power.iter_mut().find(|p| p.variant == reference.variant) else {
+            continue;
+        };
+        p.response = Some(response);
+        match verdict {
+            None => {}
+            Some(Ok((m, failed))) => {
+                p.mde = Some(m);
+                p.mde_check_failed = failed;
+            }
+            Some(Err(why)) => {
+                p.mde = None;
+                p.cannot = Some(why);
             }
         }
     }
@@ -438,6 +439,95 @@ pub fn calibrate_by_injection(
     }
     // the bias-change test's own sizes: a step and a ramp on z
     super::drift_power::calibrate_drift(log, file, map, a)
+}
+
+/// The response of the residuals of `a` to the `k`-th reference injected at `size` (`run`: the
+/// injected walk analysed): the fit of their change over the stances both runs have, per unit of
+/// the size, on the signature.
+fn response_of(a: &Analysis, run: &Analysis, k: usize, size: f64) -> f64 {
+    let key = |s: &StanceResidual| (s.sample, s.kind == ResidualKind::Stride);
+    let by_key: HashMap<_, f64> = run.stances.iter().map(|s| (key(s), s.r_rad)).collect();
+    let rows: Vec<Row> = a
+        .stances
+        .iter()
+        .filter_map(|s| {
+            let r = by_key.get(&key(s))?;
+            Some(Row {
+                group: usize::from(s.kind == ResidualKind::Stride),
+                weight: s.weight,
+                y: crate::core::rotation::wrap_pi(r - s.r_rad) / size,
+                x: s.signature[k],
+            })
+        })
+        .filter(|r| r.x.is_finite())
+        .collect();
+    fit_signature(&rows, HAC_LAGS).map_or(0.0, |f| f.beta)
+}
+
+/// What [`checked_mde`] found: the size its check confirms with the sizes that failed it (and the
+/// injected walk's score at each), or why no plausible size passed.
+type CheckedMde = Result<(f64, Vec<[f64; 2]>), String>;
+
+/// The detectable size `m` the `k`-th reference's probe predicts, checked by injection where the
+/// claim is made: at twice `m` an effect "is detected almost always", so injected at twice `m`
+/// (at most [`Reference::plausible_max`]) the walk's own power fit of the variant must score at
+/// least [`SIGNIFICANT`], its estimate moved the injection's way. Where it does not, the filter's
+/// decisions (which observations it takes, which direction each is associated with) change with
+/// the effect, and the probe's linear response overstates what the walk shows: the size is
+/// doubled and checked again, up to the plausible limit (`Ok` with the size the check confirms and
+/// the sizes that failed it, or `Err` with the reason when none does). Before, exp40 reported
+/// "nothing above the detectable sizes z scale 0.41 %" under an injected +2 % z scale (its fit
+/// moved the other way), and the detection matrix's scan found the prediction failing at 4× on
+/// four walks.
+fn checked_mde(
+    log: &ImuLog,
+    file: &ConfigFile,
+    map: Option<&Path>,
+    a: &Analysis,
+    k: usize,
+    m: f64,
+) -> Result<CheckedMde, RunError> {
+    let reference = &REFERENCES[k];
+    let estimate = |a: &Analysis| {
+        a.power
+            .iter()
+            .find(|p| p.variant == reference.variant)
+            .map_or((f64::NAN, 0.0), |p| (p.estimate, p.score))
+    };
+    let clean = estimate(a).0;
+    let mut failed = Vec::new();
+    let mut m = m;
+    loop {
+        let size = (2.0 * m).min(reference.plausible_max);
+        let mut injected = log.clone();
+        (reference.probe)(size).apply(&mut injected.rows);
+        let (e, score) = estimate(&analyse(&injected, file, None, map)?);
+        // (a walk whose own estimate is NaN has no fit: nothing to compare)
+        if score >= SIGNIFICANT && (e - clean > 0.0 || clean.is_nan()) {
+            return Ok(Ok((m, failed)));
+        }
+        failed.push([size, score]);
+        if size >= reference.plausible_max {
+            return Ok(Err(format!(
+                "its signature fit does not bear out the probe: injected at {} it scores {:.1} \
+                 with its estimate moved by {}{}, where twice a size it shows would be detected \
+                 almost always, the injection's way",
+                failed
+                    .iter()
+                    .map(|[s, _]| format_unit(reference.unit, *s))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                score,
+                format_unit(reference.unit, e - clean),
+                if failed.len() > 1 {
+                    " at the largest"
+                } else {
+                    ""
+                }
+            )));
+        }
+        m = size;
+    }
 }
 
 /// Effects tested beyond the first reference (the z scale factor): their signature and the

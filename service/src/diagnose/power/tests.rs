@@ -50,6 +50,7 @@ fn a_signature_scores_its_effect_where_the_residual_regression_has_no_finding() 
         residuals: 120,
         response: Some(0.9),
         mde_signature: Some(0.018),
+        mde_check_failed: Vec::new(),
         indistinguishable_from: Vec::new(),
     };
     let only_unexplained = || {
@@ -149,6 +150,7 @@ fn a_name_whose_variant_the_walk_cannot_show_says_so() {
         residuals: 120,
         response: Some(-0.53),
         mde_signature: Some(0.018),
+        mde_check_failed: Vec::new(),
         indistinguishable_from: Vec::new(),
     };
     let named = |score| Finding {
@@ -192,6 +194,7 @@ fn a_name_carries_the_effects_its_best_variant_cannot_be_told_from() {
         residuals: 120,
         response: Some(0.9),
         mde_signature: Some(0.018),
+        mde_check_failed: Vec::new(),
         indistinguishable_from: alternatives
             .iter()
             .map(|&(v, rho)| (v.to_string(), rho))
