@@ -205,7 +205,27 @@ pub fn write_report(
 /// beside evidence that said "detectable from …", a review), unless `evidence` says it.
 fn variant_words(p: &super::Power, evidence: &str) -> String {
     match (p.mde, &p.cannot) {
-        (Some(m), _) => format!("{} ≥ {}", p.variant, p.format_size(m)),
+        (Some(m), _) if p.mde_check_failed.is_empty() => {
+            format!("{} ≥ {}", p.variant, p.format_size(m))
+        }
+        (Some(m), _) => format!(
+            "{} ≥ {} (raised by its check by injection: {})",
+            p.variant,
+            p.format_size(m),
+            p.mde_check_failed
+                .iter()
+                .map(|&[size, score, moved]| format!(
+                    "at {} its fit scored {score:.1}{}",
+                    p.format_size(size),
+                    if moved > 0.0 {
+                        String::new()
+                    } else {
+                        format!(", moved {}", p.format_size(moved))
+                    }
+                ))
+                .collect::<Vec<_>>()
+                .join("; ")
+        ),
         (None, Some(why)) if !evidence.contains(why.as_str()) => {
             format!("{}: cannot show ({why})", p.variant)
         }
@@ -358,6 +378,17 @@ mod tests {
             ..p.clone()
         };
         assert_eq!(variant_words(&shown, evidence), "z scale ≥ 2.63 %");
+        // a size its check by injection raised says from what (exp32's z scale)
+        let raised = super::super::Power {
+            mde: Some(0.0374),
+            mde_check_failed: vec![[0.0374, 30.0, -0.01]],
+            ..shown.clone()
+        };
+        assert_eq!(
+            variant_words(&raised, evidence),
+            "z scale ≥ 3.74 % (raised by its check by injection: at 3.74 % its fit scored 30.0, \
+             moved -1.00 %)"
+        );
         assert_eq!(
             onset_words(5.86e-3),
             "at the onset of walking ≥ 5.86e-3 rad/s per m/s²"

@@ -72,11 +72,11 @@ pub struct Power {
     pub response: Option<f64>,
     /// The detectable size before the response is taken into account (`z·se`).
     pub mde_signature: Option<f64>,
-    /// The sizes (and the injected walk's own score there) at which the check of the detectable
-    /// size by injection failed before `mde` passed it ([`checked_mde`]): empty where the probe's
-    /// prediction passed at once.
+    /// The sizes at which the check of the detectable size by injection failed before `mde`
+    /// passed it, each with the injected walk's own score and the change of its estimate there
+    /// ([`checked_mde`]): empty where the probe's prediction passed at once.
     #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub mde_check_failed: Vec<[f64; 2]>,
+    pub mde_check_failed: Vec<[f64; 3]>,
     /// Other variants whose signature correlates above [`INDISTINGUISHABLE_CORRELATION`] with
     /// this one, with the correlation.
     pub indistinguishable_from: Vec<(String, f64)>,
@@ -465,8 +465,8 @@ fn response_of(a: &Analysis, run: &Analysis, k: usize, size: f64) -> f64 {
 }
 
 /// What [`checked_mde`] found: the size its check confirms with the sizes that failed it (and the
-/// injected walk's score at each), or why no plausible size passed.
-type CheckedMde = Result<(f64, Vec<[f64; 2]>), String>;
+/// injected walk's score and the change of its estimate at each), or why no plausible size passed.
+type CheckedMde = Result<(f64, Vec<[f64; 3]>), String>;
 
 /// The detectable size `m` the `k`-th reference's probe predicts, checked by injection where the
 /// claim is made: at twice `m` an effect "is detected almost always", so injected at twice `m`
@@ -506,7 +506,7 @@ fn checked_mde(
         if score >= SIGNIFICANT && (e - clean > 0.0 || clean.is_nan()) {
             return Ok(Ok((m, failed)));
         }
-        failed.push([size, score]);
+        failed.push([size, score, e - clean]);
         if size >= reference.plausible_max {
             return Ok(Err(format!(
                 "its signature fit does not bear out the probe: injected at {} it scores {:.1} \
@@ -514,7 +514,7 @@ fn checked_mde(
                  almost always, the injection's way",
                 failed
                     .iter()
-                    .map(|[s, _]| format_unit(reference.unit, *s))
+                    .map(|[s, _, _]| format_unit(reference.unit, *s))
                     .collect::<Vec<_>>()
                     .join(", "),
                 score,
