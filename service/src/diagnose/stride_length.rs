@@ -398,6 +398,19 @@ mod tests {
         );
     }
 
+    /// exp20's legs on the default model (`configs/gdins.toml`): its 31.2 m corridor 53 cm long,
+    /// the other legs within 3 cm (its start footprint's survey).
+    fn exp20_legs() -> Vec<(f64, f64)> {
+        measured(&[
+            (31.2, 1.017),
+            (10.2, 1.000),
+            (7.2, 1.003),
+            (9.0, 1.003),
+            (24.0, 1.000),
+            (1.2, 1.024),
+        ])
+    }
+
     /// Legs `(surveyed, estimated / surveyed)` as a run of a bundled walk gives them.
     fn measured(legs: &[(f64, f64)]) -> Vec<(f64, f64)> {
         legs.iter().map(|&(s, r)| (s * r, s)).collect()
@@ -409,14 +422,7 @@ mod tests {
         // long, the other legs within 3 cm (its start footprint's survey). The ratio rule kept
         // that leg (1.7 % off) and left out the 1.2 m one (3 cm, 2.4 %): scale 1.0096 ± 0.0041
         // where the legs without the corridor give 1.000 (a review).
-        let exp20 = measured(&[
-            (31.2, 1.017),
-            (10.2, 1.000),
-            (7.2, 1.003),
-            (9.0, 1.003),
-            (24.0, 1.000),
-            (1.2, 1.024),
-        ]);
+        let exp20 = exp20_legs();
         let f = fit_legs(&exp20).unwrap();
         assert_eq!(
             (f.kind, f.legs, f.outliers),
@@ -453,17 +459,7 @@ mod tests {
         // exp20's legs with the 31 m corridor 53 cm long, and two legs that are no leg (a turn
         // on the spot, a footprint outside the run): the corridor is left out, the others kept
         // by their index.
-        let mut l: Vec<Option<(f64, f64)>> = measured(&[
-            (31.2, 1.017),
-            (10.2, 1.000),
-            (7.2, 1.003),
-            (9.0, 1.003),
-            (24.0, 1.000),
-            (1.2, 1.024),
-        ])
-        .into_iter()
-        .map(Some)
-        .collect();
+        let mut l: Vec<Option<(f64, f64)>> = exp20_legs().into_iter().map(Some).collect();
         l.insert(2, None);
         l.push(None);
         assert_eq!(kept_corner_legs(&l), [1, 3, 4, 5, 6]);
