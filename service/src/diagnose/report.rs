@@ -215,13 +215,9 @@ fn variant_words(p: &super::Power, evidence: &str) -> String {
             p.mde_check_failed
                 .iter()
                 .map(|&[size, score, moved]| format!(
-                    "at {} its fit scored {score:.1}{}",
+                    "at {} its fit moved {} (score {score:.1})",
                     p.format_size(size),
-                    if moved > 0.0 {
-                        String::new()
-                    } else {
-                        format!(", moved {}", p.format_size(moved))
-                    }
+                    p.format_size(moved)
                 ))
                 .collect::<Vec<_>>()
                 .join("; ")
@@ -386,8 +382,8 @@ mod tests {
         };
         assert_eq!(
             variant_words(&raised, evidence),
-            "z scale ≥ 3.74 % (raised by its check by injection: at 3.74 % its fit scored 30.0, \
-             moved -1.00 %)"
+            "z scale ≥ 3.74 % (raised by its check by injection: at 3.74 % its fit moved -1.00 % \
+             (score 30.0))"
         );
         assert_eq!(
             onset_words(5.86e-3),

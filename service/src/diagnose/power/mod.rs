@@ -73,7 +73,8 @@ pub struct Power {
     /// The detectable size before the response is taken into account (`z·se`).
     pub mde_signature: Option<f64>,
     /// The sizes at which the check of the detectable size by injection failed before `mde`
-    /// passed it, each with the injected walk's own score and the change of its estimate there
+    /// passed it, each with the score of its estimate's shift (on the injected walk's standard
+    /// error) and the shift there
     /// ([`checked_mde`]): empty where the probe's prediction passed at once.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub mde_check_failed: Vec<[f64; 3]>,
@@ -465,13 +466,18 @@ fn response_of(a: &Analysis, run: &Analysis, k: usize, size: f64) -> f64 {
 }
 
 /// What [`checked_mde`] found: the size its check confirms with the sizes that failed it (and the
-/// injected walk's score and the change of its estimate at each), or why no plausible size passed.
+/// score of the shift of its estimate, and the shift, at each), or why no plausible size passed.
 type CheckedMde = Result<(f64, Vec<[f64; 3]>), String>;
 
 /// The detectable size `m` the `k`-th reference's probe predicts, checked by injection where the
 /// claim is made: at twice `m` an effect "is detected almost always", so injected at twice `m`
-/// (at most [`Reference::plausible_max`]) the walk's own power fit of the variant must score at
-/// least [`SIGNIFICANT`], its estimate moved the injection's way. Where it does not, the filter's
+/// (at most [`Reference::plausible_max`]) the walk's own power fit of the variant must move the
+/// injection's way by a shift that scores at least [`SIGNIFICANT`] on its standard error. The
+/// shift, not the injected walk's own score: a walk whose clean fit already shows the variant
+/// the other way (exp24: a z scale of −0.90 % ± 0.14 %, score 10.1) scored 0.0 when an injected
+/// +3.28 % moved its fit by +0.90 % (6.5 standard errors) onto zero, and its detectable size was
+/// raised to 13.13 % beside the −0.90 % it shows; one already showing it the injection's way
+/// passed at any size its fit moved at all. Where it does not, the filter's
 /// decisions (which observations it takes, which direction each is associated with) change with
 /// the effect, and the probe's linear response overstates what the walk shows: the size is
 /// doubled and checked again, up to the plausible limit (`Ok` with the size the check confirms and
@@ -492,33 +498,35 @@ fn checked_mde(
         a.power
             .iter()
             .find(|p| p.variant == reference.variant)
-            .map_or((f64::NAN, 0.0), |p| (p.estimate, p.score))
+            .map_or((f64::NAN, f64::NAN), |p| (p.estimate, p.std_err))
     };
-    let clean = estimate(a).0;
+    // (a walk without a fit of its own shows nothing: the shift is from zero)
+    let clean = Some(estimate(a).0).filter(|c| c.is_finite()).unwrap_or(0.0);
     let mut failed = Vec::new();
     let mut m = m;
     loop {
         let size = (2.0 * m).min(reference.plausible_max);
         let mut injected = log.clone();
         (reference.probe)(size).apply(&mut injected.rows);
-        let (e, score) = estimate(&analyse(&injected, file, None, map)?);
-        // (a walk whose own estimate is NaN has no fit: nothing to compare)
-        if score >= SIGNIFICANT && (e - clean > 0.0 || clean.is_nan()) {
+        let (e, se) = estimate(&analyse(&injected, file, None, map)?);
+        // (no fit of the injected walk: a NaN shift, which fails)
+        let score = score_of((e - clean) / se);
+        if score >= SIGNIFICANT && e - clean > 0.0 {
             return Ok(Ok((m, failed)));
         }
         failed.push([size, score, e - clean]);
         if size >= reference.plausible_max {
             return Ok(Err(format!(
-                "its signature fit does not bear out the probe: injected at {} it scores {:.1} \
-                 with its estimate moved by {}{}, where twice a size it shows would be detected \
+                "its signature fit does not bear out the probe: injected at {} its estimate \
+                 moves by {} (score {:.1}){}, where twice a size it shows would be detected \
                  almost always, the injection's way",
                 failed
                     .iter()
                     .map(|[s, _, _]| format_unit(reference.unit, *s))
                     .collect::<Vec<_>>()
                     .join(", "),
-                score,
                 format_unit(reference.unit, e - clean),
+                score,
                 if failed.len() > 1 {
                     " at the largest"
                 } else {
@@ -535,6 +543,16 @@ fn checked_mde(
 /// g-sensitivity act mostly through the turns as a scale factor does (the mounting tilt
 /// projects them onto the vertical), so only what they explain beyond it names them.
 pub const PARTIAL: [Effect; 2] = [Effect::AxisMisalignment, Effect::GSensitivity];
+
+/// −log₁₀ of the two-sided normal p of `z`, as [`walk_power`] scores a fit (at most 30), and 0
+/// for a NaN `z` (no fit).
+fn score_of(z: f64) -> f64 {
+    if z.is_nan() {
+        return 0.0;
+    }
+    let p = 2.0 * (1.0 - crate::stats::normal_cdf(z.abs()));
+    (-p.max(1e-30).log10()).max(0.0)
+}
 
 /// The two-sided normal quantile of p = 10⁻³ (the [`SIGNIFICANT`] score): the detectable size
 /// is this many standard errors.
