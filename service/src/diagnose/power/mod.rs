@@ -73,8 +73,8 @@ pub struct Power {
     /// The detectable size before the response is taken into account (`z·se`).
     pub mde_signature: Option<f64>,
     /// The sizes at which the check of the detectable size by injection failed before `mde`
-    /// passed it, each with the score of its estimate's shift (on the injected walk's standard
-    /// error) and the shift there
+    /// passed it, each with the score the check took (the injected fit's own, or its shift's
+    /// where the clean fit is significant) and the shift of the estimate there
     /// ([`checked_mde`]): empty where the probe's prediction passed at once.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub mde_check_failed: Vec<[f64; 3]>,
@@ -472,9 +472,10 @@ type CheckedMde = Result<(f64, Vec<[f64; 3]>), String>;
 /// The detectable size `m` the `k`-th reference's probe predicts, checked by injection where the
 /// claim is made: at twice `m` an effect "is detected almost always", so injected at twice `m`
 /// (at most [`Reference::plausible_max`]) the walk's own power fit of the variant must move the
-/// injection's way by a shift that scores at least [`SIGNIFICANT`] on its standard error. The
-/// shift, not the injected walk's own score: a walk whose clean fit already shows the variant
-/// the other way (exp24: a z scale of −0.90 % ± 0.14 %, score 10.1) scored 0.0 when an injected
+/// injection's way and score at least [`SIGNIFICANT`]: the injected fit's own score where the
+/// clean fit shows nothing significant (as the scan judges a detection), the score of its shift
+/// on its standard error where the clean fit is significant already. The shift there, not the
+/// injected walk's own score: a walk whose clean fit already shows the variant the other way (exp24: a z scale of −0.90 % ± 0.14 %, score 10.1) scored 0.0 when an injected
 /// +3.28 % moved its fit by +0.90 % (6.5 standard errors) onto zero, and its detectable size was
 /// raised to 13.13 % beside the −0.90 % it shows; one already showing it the injection's way
 /// passed at any size its fit moved at all. Where it does not, the filter's
@@ -502,6 +503,15 @@ fn checked_mde(
     };
     // (a walk without a fit of its own shows nothing: the shift is from zero)
     let clean = Some(estimate(a).0).filter(|c| c.is_finite()).unwrap_or(0.0);
+    // Where the clean fit shows nothing significant, "detected" is the injected walk's own fit
+    // scoring ≥ 3, as the scan judges it; where it already shows the variant (either way), the
+    // injection is detected by the shift it makes (on the injected fit's standard error), as the
+    // scan leaves such walks out (`(clean s)`).
+    let clean_significant = a
+        .power
+        .iter()
+        .find(|p| p.variant == reference.variant)
+        .is_some_and(|p| p.score >= SIGNIFICANT);
     let mut failed = Vec::new();
     let mut m = m;
     loop {
@@ -509,8 +519,8 @@ fn checked_mde(
         let mut injected = log.clone();
         (reference.probe)(size).apply(&mut injected.rows);
         let (e, se) = estimate(&analyse(&injected, file, None, map)?);
-        // (no fit of the injected walk: a NaN shift, which fails)
-        let score = score_of((e - clean) / se);
+        // (no fit of the injected walk: a NaN, which fails)
+        let score = score_of(if clean_significant { e - clean } else { e } / se);
         if score >= SIGNIFICANT && e - clean > 0.0 {
             return Ok(Ok((m, failed)));
         }
