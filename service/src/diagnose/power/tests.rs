@@ -35,10 +35,9 @@ fn placebo_fits_are_standard_normal_on_white_residuals_and_wide_on_slow_ones() {
     assert!(rms(&z) > 2.0, "slow wave: {z:?}");
 }
 
-#[test]
-fn a_signature_scores_its_effect_where_the_residual_regression_has_no_finding() {
-    // Too few used heading observations: the ranking has only `unexplained`.
-    let power = |effect, variant, score| Power {
+/// A measured variant: a 5 % fit at `score`, detectable from 2 %.
+fn power(effect: Effect, variant: &'static str, score: f64) -> Power {
+    Power {
         effect,
         variant,
         unit: "fraction",
@@ -52,7 +51,12 @@ fn a_signature_scores_its_effect_where_the_residual_regression_has_no_finding() 
         mde_signature: Some(0.018),
         mde_check_failed: Vec::new(),
         indistinguishable_from: Vec::new(),
-    };
+    }
+}
+
+#[test]
+fn a_signature_scores_its_effect_where_the_residual_regression_has_no_finding() {
+    // Too few used heading observations: the ranking has only `unexplained`.
     let only_unexplained = || {
         vec![Finding {
             name: Effect::Unexplained,
@@ -183,22 +187,11 @@ fn a_name_carries_the_effects_its_best_variant_cannot_be_told_from() {
     // the x→z coupling's (−0.94); the y→z coupling's own list does not count, only the variant
     // that scored.
     let power = |effect, variant, score, alternatives: &[(&str, f64)]| Power {
-        effect,
-        variant,
-        unit: "fraction",
-        estimate: 0.05,
-        std_err: 0.005,
-        score,
-        mde: Some(0.02),
-        cannot: None,
-        residuals: 120,
-        response: Some(0.9),
-        mde_signature: Some(0.018),
-        mde_check_failed: Vec::new(),
         indistinguishable_from: alternatives
             .iter()
             .map(|&(v, rho)| (v.to_string(), rho))
             .collect(),
+        ..power(effect, variant, score)
     };
     let p = [
         power(
