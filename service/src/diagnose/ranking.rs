@@ -32,7 +32,8 @@ pub struct Finding {
 /// The largest score (p = 10⁻³⁰).
 pub const MAX_SCORE: f64 = 30.0;
 
-fn score(p: f64) -> f64 {
+/// −log₁₀ `p`, at most [`MAX_SCORE`]; 0 for a NaN `p` (no test).
+pub(super) fn score(p: f64) -> f64 {
     if p.is_nan() {
         0.0
     } else {

@@ -225,11 +225,7 @@ fn fit(legs: &[(f64, f64)], kind: LegKind) -> Option<StrideLength> {
         legs: n,
         kind,
         outliers: legs.len() - n,
-        score: if p.is_nan() {
-            0.0
-        } else {
-            (-p.max(1e-30).log10()).max(0.0)
-        },
+        score: super::ranking::score(p),
         mde: t_critical(df) * std_err,
     })
 }

@@ -29,9 +29,10 @@ pub fn calibrate_by_injection(
             o.mde = crate::diagnose::bias_change::onset_mde(o, &o_inj, reference.probe_size);
         }
         let response = response_of(a, &run, k, reference.probe_size);
-        let Some(p) = a.power.iter().find(|p| p.variant == reference.variant) else {
+        let Some(i) = a.power.iter().position(|p| p.variant == reference.variant) else {
             continue;
         };
+        let p = &a.power[i];
         let verdict = if p.cannot.is_some() {
             None
         } else if response < MIN_RESPONSE {
@@ -53,9 +54,7 @@ pub fn calibrate_by_injection(
                 )))
             }
         };
-        let Some(p) = a.power.iter_mut().find(|p| p.variant == reference.variant) else {
-            continue;
-        };
+        let p = &mut a.power[i];
         p.response = Some(response);
         match verdict {
             None => {}
@@ -146,28 +145,27 @@ fn checked_mde(
         a.power
             .iter()
             .find(|p| p.variant == reference.variant)
-            .map_or((f64::NAN, f64::NAN), |p| (p.estimate, p.std_err))
+            .map_or((f64::NAN, f64::NAN, 0.0), |p| {
+                (p.estimate, p.std_err, p.score)
+            })
     };
+    let (clean, _, clean_score) = estimate(a);
     // (a walk without a fit of its own shows nothing: the shift is from zero)
-    let clean = Some(estimate(a).0).filter(|c| c.is_finite()).unwrap_or(0.0);
+    let clean = if clean.is_finite() { clean } else { 0.0 };
     // Where the clean fit shows nothing significant, "detected" is the injected walk's own fit
     // scoring ≥ 3, as the scan judges it; where it already shows the variant (either way), the
     // injection is detected by the shift it makes (on the injected fit's standard error), as the
     // scan leaves such walks out (`(clean s)`).
-    let clean_significant = a
-        .power
-        .iter()
-        .find(|p| p.variant == reference.variant)
-        .is_some_and(|p| p.score >= SIGNIFICANT);
+    let clean_significant = clean_score >= SIGNIFICANT;
     let mut failed = Vec::new();
     let mut m = m;
     loop {
         let size = (2.0 * m).min(reference.plausible_max);
         let mut injected = log.clone();
         (reference.probe)(size).apply(&mut injected.rows);
-        let (e, se) = estimate(&analyse(&injected, file, None, map)?);
+        let (e, se, _) = estimate(&analyse(&injected, file, None, map)?);
         // (no fit of the injected walk: a NaN, which fails)
-        let score = score_of(if clean_significant { e - clean } else { e } / se);
+        let score = z_score(if clean_significant { e - clean } else { e } / se);
         if score >= SIGNIFICANT && e - clean > 0.0 {
             return Ok(Ok((m, failed)));
         }
@@ -193,14 +191,4 @@ fn checked_mde(
         }
         m = size;
     }
-}
-
-/// −log₁₀ of the two-sided normal p of `z`, as [`super::walk_power`] scores a fit (at most 30), and 0
-/// for a NaN `z` (no fit).
-fn score_of(z: f64) -> f64 {
-    if z.is_nan() {
-        return 0.0;
-    }
-    let p = 2.0 * (1.0 - crate::stats::normal_cdf(z.abs()));
-    (-p.max(1e-30).log10()).max(0.0)
 }

@@ -335,10 +335,7 @@ pub fn walk_power(base: &[StanceResidual]) -> Vec<Power> {
             unit: reference.unit,
             estimate: fit.as_ref().map_or(f64::NAN, |f| f.beta),
             std_err: fit.as_ref().map_or(f64::NAN, |f| f.std_err),
-            score: fit.as_ref().map_or(0.0, |f| {
-                let p = 2.0 * (1.0 - crate::stats::normal_cdf((f.beta / f.std_err).abs()));
-                (-p.max(1e-30).log10()).max(0.0)
-            }),
+            score: fit.as_ref().map_or(0.0, |f| z_score(f.beta / f.std_err)),
             mde: if cannot.is_none() { mde } else { None },
             mde_signature: mde,
             mde_check_failed: Vec::new(),
@@ -349,6 +346,11 @@ pub fn walk_power(base: &[StanceResidual]) -> Vec<Power> {
         });
     }
     out
+}
+
+/// The score of a fit's `z = β̂/se`: −log₁₀ of its two-sided normal p (0 for a NaN `z`: no fit).
+fn z_score(z: f64) -> f64 {
+    super::ranking::score(2.0 * (1.0 - crate::stats::normal_cdf(z.abs())))
 }
 
 /// Fewer stance residuals than this make no signature fit (a 10 s log has 3).
